@@ -1,0 +1,34 @@
+// What a session returns for each frame.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "engine/core/types.h"
+
+namespace localizer::engine {
+
+struct StageTimings {
+  double tdoa_s = 0.0;    // wall time of the TDOA front end for this frame
+  double filter_s = 0.0;  // wall time of predict + update + estimate
+};
+
+struct Estimate {
+  uint64_t frame_index = 0;  // 0, 1, 2, ... within the session
+  uint64_t sequence = 0;     // sequence number of the block that completed this frame
+  // Reception instant at the reference sensor of the frame centre, seconds from the first
+  // sample. The position is where the source was when it emitted the sound that reached
+  // the reference sensor at t_s (emission time = t_s - range / c).
+  double t_s = 0.0;
+  bool initialised = false;    // false until the tracker has a first fix (state then zero)
+  bool reinitialised = false;  // true on the frame the tracker was reset after divergence
+  Vec6 state = Vec6::Zero();   // (x, y, z, vx, vy, vz): m, m/s
+  Mat6 covariance = Mat6::Zero();
+  double ess = 0.0;            // effective sample size after the update (particle filter)
+  double nis = 0.0;            // normalised innovation squared of this frame's TDOAs
+  std::vector<double> delay_s;  // measured TDOA per pair, as in Measurement
+  std::vector<double> quality;  // quality per pair
+  StageTimings timings;
+};
+
+}  // namespace localizer::engine

@@ -1,0 +1,32 @@
+// What the TDOA front end hands the tracker for one frame.
+#pragma once
+
+#include <vector>
+
+namespace localizer::engine {
+
+// One sensor pair (reference, sensor). Sign convention throughout the engine:
+//   delay_s = t_arrival(sensor) - t_arrival(reference) = (|s - m_sensor| - |s - m_ref|) / c,
+// so a positive delay means the source is nearer the reference.
+struct PairMeasurement {
+  int sensor = 0;           // index of the non-reference sensor
+  double delay_s = 0.0;     // TDOA at the interpolated GCC peak
+  double quality = 0.0;     // peak over the largest sidelobe outside the main lobe (>= 1)
+  double peak_value = 0.0;  // GCC value at the peak (PHAT: 1 for a perfect single path)
+  // The GCC function over the searched lag window, at integer lags
+  // first_lag_samples, first_lag_samples + 1, ...; lag in samples = delay_s * sample_rate_hz.
+  // Trackers read it at a candidate's predicted lag (GCC likelihood).
+  int first_lag_samples = 0;
+  std::vector<float> gcc;
+};
+
+struct Measurement {
+  // Reception instant, in seconds from the first sample at the receivers, of the centre of
+  // the frame the pairs were measured on. Pair k describes the emission that reached the
+  // reference at t_s - delay_s / 2 (the centre of the overlap of the two windows).
+  double t_s = 0.0;
+  double sample_rate_hz = 0.0;
+  std::vector<PairMeasurement> pairs;  // one per non-reference sensor, ascending sensor index
+};
+
+}  // namespace localizer::engine

@@ -1,0 +1,80 @@
+// Bootstrap particle filter for one source tracked from TDOAs.
+//
+// State per particle: (x, y, z, vx, vy, vz) in m and m/s, stored as float32
+// structure-of-arrays so every per-particle loop vectorises; weights in the log domain.
+//
+// Predict (constant velocity, piecewise-constant white acceleration a ~ N(0, q I3) per step,
+// Bar-Shalom's discretisation; q = accel_noise_mps2^2):
+//     p <- p + v dt + a dt^2 / 2,     v <- v + a dt
+// Random numbers: a counter-based generator keyed by (seed, step, particle), so a run
+// replays exactly and the loop has no sequential RNG dependency.
+//
+// Update, for pair k with measured delay d_k and sigma = tdoa_sigma_s:
+//   predicted delay at the instant the pair describes (the centre of the two windows'
+//   overlap, d_k / 2 earlier than the frame centre at the reference), to first order:
+//     h_k'(s) = h_k(p) - (d_k / 2) * (dh_k/dp . v)
+//   peak likelihood (the seed's): log w += -1/2 sum_k min(((d_k - h_k') / sigma)^2, clip^2)
+//     (clipped so one pair locked on a reflection cannot wipe out every particle);
+//   GCC likelihood: log w += gcc_sharpness * sum_k g_k(h_k' * fs) / g_k,max
+//     where g_k is the pair's GCC over its lag window, linearly interpolated.
+// Then log-weights are normalised (log-sum-exp), ESS = 1 / sum w^2, and when
+// ESS < resample_threshold * N the particles are resampled systematically (weights reset).
+//
+// Cost per step: O(N * pairs); memory 7 floats per particle, twice (resampling buffer).
+// Not thread-safe; one filter per session.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/array/array_geometry.h"
+#include "engine/filters/tracker.h"
+
+namespace localizer::engine {
+
+enum class Likelihood { kPeak, kGcc };
+StatusOr<Likelihood> ParseLikelihood(const std::string& name);  // "peak" | "gcc"
+const char* LikelihoodName(Likelihood l);
+
+struct ParticleFilterOptions {
+  int particles = 4096;               // N, in [16, 1 << 22]
+  double accel_noise_mps2 = 0.5;      // std of the white acceleration, per axis
+  double tdoa_sigma_s = 50e-6;        // peak likelihood: TDOA noise std
+  double clip_sigmas = 4.0;           // peak likelihood: per-pair clip of |z|
+  double gcc_sharpness = 8.0;         // GCC likelihood: log-likelihood per unit normalised GCC
+  Likelihood likelihood = Likelihood::kPeak;
+  double resample_threshold = 0.8;    // resample when ESS < threshold * N (seed: 0.8)
+  uint64_t seed = 1;
+
+  Status Validate() const;
+};
+
+class ParticleFilter final : public Tracker {
+ public:
+  static StatusOr<std::unique_ptr<ParticleFilter>> Create(const ArrayGeometry& array,
+                                                          const ParticleFilterOptions& options);
+  ~ParticleFilter() override;
+  ParticleFilter(const ParticleFilter&) = delete;
+  ParticleFilter& operator=(const ParticleFilter&) = delete;
+
+  bool initialised() const override;
+  // Particles ~ N(mean, covariance), weights equal.
+  Status Initialise(const TrackState& belief) override;
+  // Particles uniform in the box [min_m, max_m] with velocities ~ N(0, speed_sigma_mps^2 I).
+  Status InitialiseUniform(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps);
+  void Predict(double dt_s) override;
+  StatusOr<UpdateReport> Update(const Measurement& measurement) override;
+  TrackState State() const override;
+
+  int particle_count() const;
+  double ess() const;
+
+ private:
+  struct Impl;
+  explicit ParticleFilter(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace localizer::engine

@@ -1,0 +1,41 @@
+// The tracker interface every filter implements (particle filter now; EKF, UKF, IMM later).
+#pragma once
+
+#include "engine/core/measurement.h"
+#include "engine/core/status.h"
+#include "engine/core/types.h"
+
+namespace localizer::engine {
+
+struct TrackState {
+  Vec6 mean = Vec6::Zero();       // (x, y, z, vx, vy, vz): m, m/s
+  Mat6 covariance = Mat6::Zero();
+};
+
+// What one update tells the caller about the fit of model and measurement.
+struct UpdateReport {
+  // Normalised innovation squared of the pairs' peak TDOAs against the predicted
+  // measurement distribution: sum_p (d_p - E[h_p])^2 / (sigma_p^2 + Var[h_p]).
+  // ~ chi-square with `pair_count` degrees of freedom when the filter is consistent.
+  double nis = 0.0;
+  int pair_count = 0;
+  double ess = 0.0;  // effective sample size after the update (0 for non-particle filters)
+};
+
+class Tracker {
+ public:
+  virtual ~Tracker() = default;
+
+  virtual bool initialised() const = 0;
+  // (Re)start from a Gaussian belief. INVALID_ARGUMENT if mean/covariance are not finite
+  // or the covariance is not positive semi-definite.
+  virtual Status Initialise(const TrackState& belief) = 0;
+  // Propagate the belief by dt_s >= 0 seconds with the motion model.
+  virtual void Predict(double dt_s) = 0;
+  // Condition on one frame's TDOAs (FAILED_PRECONDITION before Initialise;
+  // INVALID_ARGUMENT if the pair count differs from the array's).
+  virtual StatusOr<UpdateReport> Update(const Measurement& measurement) = 0;
+  virtual TrackState State() const = 0;
+};
+
+}  // namespace localizer::engine

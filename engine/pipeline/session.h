@@ -1,0 +1,75 @@
+// A tracking session: samples in, one Estimate per frame out.
+//
+// Blocks of any length are appended to a per-channel ring; every hop_samples a frame of
+// frame_samples (per channel) is cut, the TDOA front end measures it, and the tracker
+// predicts to the frame's instant and updates. Before the tracker has a state, each frame
+// is multilaterated and the first good fix initialises it; a window of normalised innovations
+// far above its chi-square bound re-initialises it from the current frame's fix.
+// Every block is validated first (sequence increasing, channel count, length, finite
+// values); a rejected block leaves the session exactly as it was.
+// A pure function of its config (seed included) and the blocks it was given.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/array/array_geometry.h"
+#include "engine/core/block.h"
+#include "engine/core/estimate.h"
+#include "engine/filters/particle_filter.h"
+#include "engine/tdoa/gcc_phat.h"
+
+namespace localizer::engine {
+
+struct SessionConfig {
+  // Array
+  std::vector<Vec3> sensors_m;        // >= 4, not coplanar
+  double sound_speed_mps = 1500.0;    // > 0 (1500 water, 343 air)
+  int reference_sensor = 0;
+  double sample_rate_hz = 0.0;        // > 0
+  // Framing
+  int frame_samples = 4096;           // per channel, in [64, 1 << 20]
+  int hop_samples = 2048;             // in [1, frame_samples]
+  int64_t max_block_samples = 1 << 22;  // per channel per block
+  // TDOA front end
+  Weighting weighting = Weighting::kPhat;
+  double phat_beta = 0.8;
+  double band_low_hz = 0.0;
+  double band_high_hz = 0.0;          // 0: Nyquist
+  // Tracker
+  ParticleFilterOptions filter;       // filter.seed is overwritten by `seed`
+  double min_pair_quality = 1.5;      // a fix needs every pair's peak/sidelobe above this
+  double max_fix_std_m = 0.0;         // a fix is good when its position std is below this
+                                      // (0: 5 x the array aperture)
+  double init_speed_sigma_mps = 2.0;  // velocity spread at initialisation
+  int divergence_window = 8;          // frames averaged by the divergence test
+  std::string backend = "cpu";        // "cpu" | "gpu" | "auto"
+  uint64_t seed = 1;
+
+  Status Validate() const;  // INVALID_ARGUMENT naming the field
+};
+
+class Session {
+ public:
+  static StatusOr<std::unique_ptr<Session>> Create(const SessionConfig& config);
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  // Validates and consumes one block; appends one Estimate per completed frame to `out`.
+  // On error nothing is consumed and `out` is unchanged.
+  Status Process(const BlockView& block, std::vector<Estimate>* out);
+
+  const SessionConfig& config() const;
+  const ArrayGeometry& array() const;
+  uint64_t frames_processed() const;
+
+ private:
+  struct Impl;
+  explicit Session(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace localizer::engine

@@ -1,0 +1,21 @@
+// The TDOA front end's interface: one multichannel frame in, one Measurement out.
+#pragma once
+
+#include "engine/core/measurement.h"
+#include "engine/core/status.h"
+
+namespace localizer::engine {
+
+class TdoaEstimator {
+ public:
+  virtual ~TdoaEstimator() = default;
+
+  // `frame` is channel-major: channel k (= sensor k) occupies
+  // frame[k * frame_samples, (k + 1) * frame_samples). `frame_samples` must equal the size
+  // the estimator was built for and the channel count the array's. `t_s` is copied into
+  // out->t_s. `out` is overwritten; its vectors are reused so a steady stream allocates
+  // nothing. Not thread-safe: one estimator per session (they hold FFT buffers).
+  virtual Status Estimate(const float* frame, int frame_samples, double t_s, Measurement* out) = 0;
+};
+
+}  // namespace localizer::engine
