@@ -13,12 +13,18 @@
 //   predicted delay at the instant the pair describes (the centre of the two windows'
 //   overlap, d_k / 2 earlier than the frame centre at the reference), to first order:
 //     h_k'(s) = h_k(p) - (d_k / 2) * (dh_k/dp . v)
-//   peak likelihood (the seed's): log w += -1/2 sum_k min(((d_k - h_k') / sigma)^2, clip^2)
-//     (clipped so one pair locked on a reflection cannot wipe out every particle);
+//   peak likelihood (the seed's Gaussian made heavy-tailed): with z_k = (d_k - h_k') / sigma,
+//     log w += -(nu + 1)/2 sum_k log(1 + z_k^2 / nu)        (Student-t, nu = peak_dof)
+//     — near the peak it is the Gaussian; far out it still points the way (a clipped
+//     Gaussian goes flat and the filter coasts), and one pair locked on a reflection
+//     cannot wipe out every particle;
 //   GCC likelihood: log w += gcc_sharpness * sum_k g_k(h_k' * fs) / g_k,max
 //     where g_k is the pair's GCC over its lag window, linearly interpolated.
 // Then log-weights are normalised (log-sum-exp), ESS = 1 / sum w^2, and when
-// ESS < resample_threshold * N the particles are resampled systematically (weights reset).
+// ESS < resample_threshold * N the particles are resampled systematically (weights reset)
+// and moved by a shrunk Gaussian kernel (regularised PF, Liu & West 2001; see
+// particle_set.h) so that a likelihood far narrower than the prior — TDOAs are precise to
+// centimetres — does not collapse the cloud onto a few clones for good.
 //
 // Cost per step: O(N * pairs); memory 7 floats per particle, twice (resampling buffer).
 // Not thread-safe; one filter per session.
@@ -42,10 +48,12 @@ struct ParticleFilterOptions {
   int particles = 4096;               // N, in [16, 1 << 22]
   double accel_noise_mps2 = 0.5;      // std of the white acceleration, per axis
   double tdoa_sigma_s = 50e-6;        // peak likelihood: TDOA noise std
-  double clip_sigmas = 4.0;           // peak likelihood: per-pair clip of |z|
+  double peak_dof = 4.0;              // peak likelihood: Student-t degrees of freedom, > 0
   double gcc_sharpness = 8.0;         // GCC likelihood: log-likelihood per unit normalised GCC
   Likelihood likelihood = Likelihood::kPeak;
   double resample_threshold = 0.8;    // resample when ESS < threshold * N (seed: 0.8)
+  double kernel_scale = 0.5;          // regularisation after resampling, x Silverman's
+                                      // bandwidth (0: plain bootstrap filter)
   uint64_t seed = 1;
 
   Status Validate() const;

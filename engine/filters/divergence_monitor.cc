@@ -1,0 +1,47 @@
+#include "engine/filters/divergence_monitor.h"
+
+#include <cmath>
+
+namespace localizer::engine {
+namespace {
+
+// Standard normal quantile by bisection on erfc; called once per update, so exactness
+// matters more than speed.
+double NormalQuantile(double p) {
+  double lo = -10.0, hi = 10.0;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+double ChiSquareQuantile(double p, int dof) {
+  const double k = dof, z = NormalQuantile(p);
+  const double a = 2.0 / (9.0 * k);
+  const double t = 1.0 - a + z * std::sqrt(a);
+  return k * t * t * t;
+}
+
+bool DivergenceMonitor::Add(double nis, int dof) {
+  entries_.emplace_back(nis, dof);
+  while (static_cast<int>(entries_.size()) > window_) entries_.pop_front();
+  if (static_cast<int>(entries_.size()) < window_ || ratio() <= 1.0) return false;
+  entries_.clear();
+  return true;
+}
+
+double DivergenceMonitor::ratio() const {
+  double sum = 0.0;
+  int dof = 0;
+  for (const auto& [nis, d] : entries_) {
+    sum += nis;
+    dof += d;
+  }
+  if (dof == 0) return 0.0;
+  return sum / (slack_ * ChiSquareQuantile(confidence_, dof));
+}
+
+}  // namespace localizer::engine

@@ -1,0 +1,69 @@
+// The particle filter's storage and per-particle kernels, float32 structure-of-arrays.
+//
+// Positions are stored relative to the array centroid (`origin`), so float32 keeps
+// micrometre resolution tens of metres away. Every loop here runs over contiguous arrays
+// without branches and is written to vectorise (see -fopenmp-simd in CMakeLists.txt);
+// random numbers are counter-based (fast_math.h), keyed by (seed, draw number), so results
+// do not depend on how the loops are vectorised. Internal to engine/filters.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "engine/array/array_geometry.h"
+#include "engine/core/measurement.h"
+#include "engine/filters/particle_filter.h"
+#include "engine/filters/tracker.h"
+
+namespace localizer::engine {
+
+class ParticleSet {
+ public:
+  ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions& options);
+
+  // x = mean + root z, z ~ N(0, I6); weights equal.
+  void SampleGaussian(const Vec6& mean, const Mat6& root);
+  // Position uniform in the box, velocity ~ N(0, speed_sigma^2 I3); weights equal.
+  void SampleUniformBox(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps);
+  // p += v dt + a dt^2/2, v += a dt, a ~ N(0, accel_sigma^2 I3).
+  void Predict(double dt_s, double accel_sigma_mps2);
+  // Adds each particle's log-likelihood of `m` to its log-weight (see particle_filter.h) and
+  // returns the NIS of the peak delays against the prior predicted-delay distribution.
+  double Weigh(const Measurement& m, Likelihood likelihood, double sigma_s, double peak_dof,
+               double gcc_sharpness);
+  // Normalises the weights (log-sum-exp) and returns the ESS = 1 / sum w^2.
+  double NormaliseWeights();
+  // Systematic resampling (one uniform offset, N evenly spaced pointers); weights equal.
+  // Then, when kernel_scale > 0, each copy moves by a Gaussian kernel with Liu & West
+  // shrinkage (a regularised particle filter), which keeps the weighted mean and covariance
+  // and restores the diversity that resampling removes:
+  //     x' = a x + (1 - a) mean + h L z,   a = sqrt(1 - h^2),  L L^T = covariance, z ~ N(0, I)
+  // h = kernel_scale * (4 / (N (d + 2)))^(1 / (d + 4)), d = 6 (Silverman's optimal bandwidth).
+  void ResampleSystematic(double kernel_scale);
+  TrackState MeanAndCovariance() const;
+
+ private:
+  struct Columns {
+    std::vector<float> x, y, z, vx, vy, vz;
+    void Resize(int n);
+  };
+  uint32_t NextKey();  // a fresh random-stream key per use: hash of (seed, use count)
+  void SetEqualWeights();
+  void Regularise(const TrackState& moments, double kernel_scale);
+
+  int n_;
+  uint64_t seed_;
+  uint64_t draws_ = 0;
+  Vec3 origin_m_;
+  std::vector<float> sensor_x_, sensor_y_, sensor_z_;  // relative to origin
+  int reference_;
+  std::vector<int> pair_sensor_;
+  float inv_c_;
+  Columns cur_, next_;
+  std::vector<float> logw_, w_;          // log-weights; normalised linear weights
+  std::vector<float> r_ref_, vr_ref_, loglik_;  // scratch for Weigh
+  std::array<std::vector<float>, 6> noise_;       // scratch for Regularise
+};
+
+}  // namespace localizer::engine

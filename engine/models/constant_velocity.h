@@ -1,0 +1,25 @@
+// Constant-velocity motion with piecewise-constant white acceleration
+// (Bar-Shalom, Li & Kirubarajan, "Estimation with Applications to Tracking", 6.3.3).
+//
+// State (x, y, z, vx, vy, vz). Over a step dt with acceleration a ~ N(0, q I3) held
+// constant during the step, q = accel_noise_mps2^2:
+//     x' = F x + G a,   F = [I  dt I; 0  I],   G = [dt^2/2 I; dt I]
+//     Q  = q G G^T   = q [dt^4/4 I  dt^3/2 I; dt^3/2 I  dt^2 I]
+// The particle filter samples a directly (three normals per particle and step); Kalman
+// filters use F and Q.
+#pragma once
+
+#include "engine/core/status.h"
+#include "engine/core/types.h"
+
+namespace localizer::engine {
+
+struct ConstantVelocity {
+  double accel_noise_mps2 = 0.5;  // std of each acceleration component, >= 0
+
+  Mat6 Transition(double dt_s) const;
+  Mat6 ProcessNoise(double dt_s) const;
+  Status Validate() const;
+};
+
+}  // namespace localizer::engine

@@ -1,0 +1,199 @@
+#include "engine/pipeline/session.h"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "engine/array/multilateration.h"
+#include "engine/filters/divergence_monitor.h"
+#include "engine/pipeline/backend.h"
+#include "engine/pipeline/framer.h"
+
+namespace localizer::engine {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Status ValidateBlock(const BlockView& block, int channels, int64_t max_samples, bool have_last,
+                     uint64_t last_sequence) {
+  if (have_last && block.sequence <= last_sequence) {
+    return InvalidArgument("sequence " + std::to_string(block.sequence) +
+                           " is not greater than the previous block's " + std::to_string(last_sequence));
+  }
+  if (block.channel_count != channels) {
+    return InvalidArgument("channel_count is " + std::to_string(block.channel_count) + "; the array has " +
+                           std::to_string(channels) + " sensors");
+  }
+  if (block.samples_per_channel < 1 || block.samples_per_channel > max_samples) {
+    return InvalidArgument("samples per channel is " + std::to_string(block.samples_per_channel) +
+                           "; must be in [1, " + std::to_string(max_samples) + "]");
+  }
+  if (block.samples == nullptr) return InvalidArgument("samples is null");
+  const int64_t total = block.samples_per_channel * channels;
+  bool finite = true;
+  for (int64_t i = 0; i < total; ++i) finite &= std::isfinite(block.samples[i]);
+  if (!finite) {
+    for (int64_t i = 0; i < total; ++i) {
+      if (!std::isfinite(block.samples[i])) {
+        return InvalidArgument("samples[" + std::to_string(i) + "] (channel " +
+                               std::to_string(i / block.samples_per_channel) + ", sample " +
+                               std::to_string(i % block.samples_per_channel) + ") is not finite");
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+struct Session::Impl {
+  Impl(SessionConfig c, ArrayGeometry a, SessionComponents parts)
+      : config(std::move(c)),
+        array(std::move(a)),
+        components(std::move(parts)),
+        framer(array.sensor_count(), config.frame_samples, config.hop_samples),
+        monitor(config.divergence_window) {}
+
+  void ProcessFrame(const float* frame, int64_t first_sample, uint64_t sequence, std::vector<Estimate>* out);
+  // Multilaterates this frame; true (and *fix set) when the fix is good enough to (re)start.
+  bool GoodFix(const Vec3* hint, Fix* fix) const;
+  double tdoa_sigma_s() const {
+    return config.filter.tdoa_sigma_s > 0.0 ? config.filter.tdoa_sigma_s : 0.5 / config.sample_rate_hz;
+  }
+
+  SessionConfig config;
+  ArrayGeometry array;
+  SessionComponents components;
+  Framer framer;
+  DivergenceMonitor monitor;
+  Measurement measurement;
+  Eigen::VectorXd delays;
+  bool have_sequence = false;
+  uint64_t last_sequence = 0;
+  uint64_t frames = 0;
+  double last_t_s = 0.0;
+};
+
+bool Session::Impl::GoodFix(const Vec3* hint, Fix* fix) const {
+  for (const PairMeasurement& p : measurement.pairs) {
+    if (p.quality < config.min_pair_quality) return false;
+  }
+  MultilaterationOptions options;
+  options.tdoa_sigma_s = tdoa_sigma_s();
+  options.hint_m = hint;
+  auto result = Multilaterate(array, delays, options);
+  if (!result.ok() || !result->converged) return false;
+  const double max_std_m = config.max_fix_std_m > 0.0 ? config.max_fix_std_m : 5.0 * array.aperture_m();
+  if (!(result->position_std_m() <= max_std_m)) return false;
+  *fix = *result;
+  return true;
+}
+
+void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint64_t sequence,
+                                 std::vector<Estimate>* out) {
+  Estimate e;
+  e.frame_index = frames++;
+  e.sequence = sequence;
+  e.t_s = (static_cast<double>(first_sample) + 0.5 * (config.frame_samples - 1)) / config.sample_rate_hz;
+
+  const auto tdoa_start = std::chrono::steady_clock::now();
+  const Status measured = components.estimator->Estimate(frame, config.frame_samples, e.t_s, &measurement);
+  e.timings.tdoa_s = SecondsSince(tdoa_start);
+
+  const auto filter_start = std::chrono::steady_clock::now();
+  Tracker& tracker = *components.tracker;
+  if (measured.ok()) {
+    delays.resize(static_cast<Eigen::Index>(measurement.pairs.size()));
+    for (size_t p = 0; p < measurement.pairs.size(); ++p) {
+      delays(static_cast<Eigen::Index>(p)) = measurement.pairs[p].delay_s;
+      e.delay_s.push_back(measurement.pairs[p].delay_s);
+      e.quality.push_back(measurement.pairs[p].quality);
+    }
+    Fix fix;
+    if (!tracker.initialised()) {
+      if (GoodFix(nullptr, &fix)) {
+        TrackState belief;
+        belief.mean.head<3>() = fix.position_m;
+        belief.covariance.topLeftCorner<3, 3>() = fix.covariance_m2;
+        belief.covariance.bottomRightCorner<3, 3>() =
+            config.init_speed_sigma_mps * config.init_speed_sigma_mps * Mat3::Identity();
+        (void)tracker.Initialise(belief);
+        monitor.Reset();
+      }
+    } else {
+      tracker.Predict(e.t_s - last_t_s);
+      auto report = tracker.Update(measurement);
+      if (report.ok()) {
+        e.nis = report->nis;
+        e.ess = report->ess;
+        if (monitor.Add(report->nis, report->pair_count)) {
+          const TrackState lost = tracker.State();
+          const Vec3 hint = lost.mean.head<3>();
+          if (GoodFix(&hint, &fix)) {
+            TrackState belief = lost;
+            belief.mean.head<3>() = fix.position_m;
+            belief.covariance.topLeftCorner<3, 3>() = fix.covariance_m2;
+            belief.covariance.topRightCorner<3, 3>().setZero();
+            belief.covariance.bottomLeftCorner<3, 3>().setZero();
+            belief.covariance.bottomRightCorner<3, 3>() =
+                config.init_speed_sigma_mps * config.init_speed_sigma_mps * Mat3::Identity();
+            e.reinitialised = tracker.Initialise(belief).ok();
+          }
+        }
+      }
+    }
+  }
+  if (tracker.initialised()) {
+    const TrackState state = tracker.State();
+    e.initialised = true;
+    e.state = state.mean;
+    e.covariance = state.covariance;
+  }
+  last_t_s = e.t_s;
+  e.timings.filter_s = SecondsSince(filter_start);
+  out->push_back(std::move(e));
+}
+
+Session::Session(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Session::~Session() = default;
+
+StatusOr<std::unique_ptr<Session>> Session::Create(const SessionConfig& config) {
+  LOCALIZER_RETURN_IF_ERROR(config.Validate());
+  auto array = ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
+  if (!array.ok()) return array.status();
+  GccOptions gcc;
+  gcc.frame_samples = config.frame_samples;
+  gcc.sample_rate_hz = config.sample_rate_hz;
+  gcc.weighting = config.weighting;
+  gcc.phat_beta = config.phat_beta;
+  gcc.band_low_hz = config.band_low_hz;
+  gcc.band_high_hz = config.band_high_hz;
+  gcc.keep_gcc = config.filter.likelihood == Likelihood::kGcc;
+  ParticleFilterOptions filter = config.filter;
+  filter.seed = config.seed;
+  auto parts = BuildComponents(config.backend, *array, gcc, filter);
+  if (!parts.ok()) return parts.status();
+  return std::unique_ptr<Session>(
+      new Session(std::make_unique<Impl>(config, std::move(array).value(), std::move(parts).value())));
+}
+
+Status Session::Process(const BlockView& block, std::vector<Estimate>* out) {
+  Impl& s = *impl_;
+  LOCALIZER_RETURN_IF_ERROR(ValidateBlock(block, s.array.sensor_count(), s.config.max_block_samples,
+                                          s.have_sequence, s.last_sequence));
+  s.have_sequence = true;
+  s.last_sequence = block.sequence;
+  s.framer.Append(block);
+  const float* frame = nullptr;
+  int64_t first = 0;
+  while (s.framer.Next(&frame, &first)) s.ProcessFrame(frame, first, block.sequence, out);
+  return Status::Ok();
+}
+
+const SessionConfig& Session::config() const { return impl_->config; }
+const ArrayGeometry& Session::array() const { return impl_->array; }
+uint64_t Session::frames_processed() const { return impl_->frames; }
+
+}  // namespace localizer::engine

@@ -1,0 +1,45 @@
+#include <cmath>
+#include <string>
+
+#include "engine/pipeline/session.h"
+
+namespace localizer::engine {
+namespace {
+
+std::string Num(double v) { return std::to_string(v); }
+
+}  // namespace
+
+Status SessionConfig::Validate() const {
+  if (sensors_m.size() < 4) {
+    return InvalidArgument("array.sensors_m has " + std::to_string(sensors_m.size()) +
+                           " sensors; at least 4 are needed");
+  }
+  if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz) || sample_rate_hz > 10e6) {
+    return InvalidArgument("sample_rate_hz must be in (0, 1e7], got " + Num(sample_rate_hz));
+  }
+  if (!(sound_speed_mps > 0.0) || !std::isfinite(sound_speed_mps)) {
+    return InvalidArgument("sound_speed_mps must be positive, got " + Num(sound_speed_mps));
+  }
+  if (frame_samples < 64 || frame_samples > (1 << 20)) {
+    return InvalidArgument("frame_samples must be in [64, 1048576], got " + std::to_string(frame_samples));
+  }
+  if (hop_samples < 1 || hop_samples > frame_samples) {
+    return InvalidArgument("hop_samples must be in [1, frame_samples=" + std::to_string(frame_samples) +
+                           "], got " + std::to_string(hop_samples));
+  }
+  if (max_block_samples < 1) {
+    return InvalidArgument("max_block_samples must be >= 1, got " + std::to_string(max_block_samples));
+  }
+  if (!(min_pair_quality >= 0.0)) return InvalidArgument("min_pair_quality must be >= 0, got " + Num(min_pair_quality));
+  if (!(max_fix_std_m >= 0.0)) return InvalidArgument("max_fix_std_m must be >= 0, got " + Num(max_fix_std_m));
+  if (!(init_speed_sigma_mps >= 0.0)) {
+    return InvalidArgument("init_speed_sigma_mps must be >= 0, got " + Num(init_speed_sigma_mps));
+  }
+  if (divergence_window < 1) {
+    return InvalidArgument("divergence_window must be >= 1, got " + std::to_string(divergence_window));
+  }
+  return filter.Validate();
+}
+
+}  // namespace localizer::engine
