@@ -48,7 +48,7 @@ Fix Refine(const ArrayGeometry& array, Vec3 s, const Eigen::VectorXd& d,
     if (fix.converged) break;
   }
   fix.position_m = s;
-  fix.rms_residual_s = std::sqrt(cost / d.size()) * sigma;
+  fix.rms_residual_s = std::sqrt(cost / static_cast<double>(d.size())) * sigma;
   fix.covariance_m2 = TdoaPositionCrlb(array, s, sigma);
   return fix;
 }
