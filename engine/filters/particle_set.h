@@ -35,12 +35,14 @@ class ParticleSet {
   // Normalises the weights (log-sum-exp) and returns the ESS = 1 / sum w^2.
   double NormaliseWeights();
   // Systematic resampling (one uniform offset, N evenly spaced pointers); weights equal.
-  // Then, when kernel_scale > 0, each copy moves by a Gaussian kernel with Liu & West
+  // Then, when kernel_scale > 0, each copy moves by a kernel with Liu & West
   // shrinkage (a regularised particle filter), which keeps the weighted mean and covariance
   // and restores the diversity that resampling removes:
-  //     x' = a x + (1 - a) mean + h L z,   a = sqrt(1 - h^2),  L L^T = covariance, z ~ N(0, I)
+  //     x' = a x + (1 - a) mean + h L z,   a = sqrt(1 - h^2),  L L^T = covariance,
+  // z with zero mean and unit covariance (a scaled Irwin–Hall draw, see the .cc)
   // h = kernel_scale * (4 / (N (d + 2)))^(1 / (d + 4)), d = 6 (Silverman's optimal bandwidth).
   void ResampleSystematic(double kernel_scale);
+  // Weighted mean and covariance (cached until the particles or weights change).
   TrackState MeanAndCovariance() const;
 
  private:
@@ -62,8 +64,13 @@ class ParticleSet {
   float inv_c_;
   Columns cur_, next_;
   std::vector<float> logw_, w_;          // log-weights; normalised linear weights
-  std::vector<float> r_ref_, vr_ref_, loglik_;  // scratch for Weigh
+  std::vector<float> r_ref_, vr_ref_, loglik_, delay_;  // scratch for Weigh
   std::array<std::vector<float>, 6> noise_;       // scratch for Regularise
+  std::vector<int> index_, first_slot_;           // scratch for ResampleSystematic
+  // Weighted mean and covariance of the current particles, computed on demand and kept
+  // until the particles or weights change (State() and the regulariser share them).
+  mutable TrackState moments_;
+  mutable bool moments_valid_ = false;
 };
 
 }  // namespace localizer::engine
