@@ -90,7 +90,7 @@ inline uint32_t HashMix32(uint32_t x) {
   return x;
 }
 inline float UniformFromCounter(uint32_t key, uint32_t counter) {
-  const uint32_t h = HashMix32(HashMix32(counter ^ key) + key * 0x9e3779b9U);
+  const uint32_t h = HashMix32(counter * 0x9e3779b9U + key);
   // 24 random bits, offset by half a step: never exactly 0 or 1.
   return (static_cast<float>(h >> 8) + 0.5f) * (1.0f / 16777216.0f);
 }
