@@ -101,6 +101,13 @@ Mat3 TdoaPositionCrlb(const ArrayGeometry& array, const Vec3& source_m, double t
   return tdoa_sigma_s * tdoa_sigma_s * info.completeOrthogonalDecomposition().pseudoInverse();
 }
 
+Mat3 TdoaPositionCrlb(const ArrayGeometry& array, const Vec3& source_m, const Eigen::VectorXd& sigma_s) {
+  const Eigen::MatrixXd h = array.TdoaJacobian(source_m);
+  const Eigen::MatrixXd whitened = sigma_s.cwiseInverse().asDiagonal() * h;
+  const Mat3 info = whitened.transpose() * whitened;
+  return info.completeOrthogonalDecomposition().pseudoInverse();
+}
+
 StatusOr<Fix> Multilaterate(const ArrayGeometry& array, const Eigen::VectorXd& tdoa_s,
                             const MultilaterationOptions& options) {
   if (tdoa_s.size() != array.pair_count()) {

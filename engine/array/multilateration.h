@@ -45,5 +45,7 @@ StatusOr<Fix> Multilaterate(const ArrayGeometry& array, const Eigen::VectorXd& t
 // Position covariance that TDOAs of standard deviation sigma allow at `source_m`:
 // sigma^2 (H^T H)^-1, H = dh/ds. Its trace's square root is the per-fix position CRLB.
 Mat3 TdoaPositionCrlb(const ArrayGeometry& array, const Vec3& source_m, double tdoa_sigma_s);
+// The same with one standard deviation per pair (R = diag(sigma_s^2)): (H^T R^-1 H)^-1.
+Mat3 TdoaPositionCrlb(const ArrayGeometry& array, const Vec3& source_m, const Eigen::VectorXd& sigma_s);
 
 }  // namespace localizer::engine

@@ -27,7 +27,7 @@ Status ParticleFilterOptions::Validate() const {
     return InvalidArgument("accel_noise_mps2 must be finite and >= 0, got " + std::to_string(accel_noise_mps2));
   }
   if (!(tdoa_sigma_s >= 0.0) || !std::isfinite(tdoa_sigma_s)) {
-    return InvalidArgument("tdoa_sigma_s must be finite and >= 0 (0: half a sample), got " +
+    return InvalidArgument("tdoa_sigma_s must be finite and >= 0 (0: adaptive), got " +
                            std::to_string(tdoa_sigma_s));
   }
   if (!(peak_dof > 0.0) || !std::isfinite(peak_dof)) {
@@ -45,6 +45,15 @@ Status ParticleFilterOptions::Validate() const {
   return Status::Ok();
 }
 
+namespace {
+// Adaptive TDOA noise (tdoa_sigma_s = 0): start at 0.1 sample, smooth over ~20 frames,
+// keep within [0.01, 2] samples.
+constexpr double kInitialSigmaSamples = 0.1;
+constexpr double kSigmaSmoothing = 0.05;
+constexpr double kMinSigmaSamples = 0.01;
+constexpr double kMaxSigmaSamples = 2.0;
+}  // namespace
+
 struct ParticleFilter::Impl {
   Impl(const ArrayGeometry& a, const ParticleFilterOptions& o) : array(a), options(o), set(a, o) {}
   ArrayGeometry array;
@@ -52,6 +61,8 @@ struct ParticleFilter::Impl {
   ParticleSet set;
   bool initialised = false;
   double ess = 0.0;
+  double sigma_s = 0.0;  // TDOA noise std in use (0 until the first update)
+  std::vector<InnovationMoments> innovations;
 };
 
 ParticleFilter::ParticleFilter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -66,6 +77,7 @@ StatusOr<std::unique_ptr<ParticleFilter>> ParticleFilter::Create(const ArrayGeom
 bool ParticleFilter::initialised() const { return impl_->initialised; }
 int ParticleFilter::particle_count() const { return impl_->options.particles; }
 double ParticleFilter::ess() const { return impl_->ess; }
+double ParticleFilter::tdoa_sigma_s() const { return impl_->sigma_s; }
 
 Status ParticleFilter::Initialise(const TrackState& belief) {
   if (!belief.mean.allFinite() || !belief.covariance.allFinite()) {
@@ -107,10 +119,23 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
   }
   if (!(m.sample_rate_hz > 0.0)) return InvalidArgument("measurement sample_rate_hz must be > 0");
   const ParticleFilterOptions& o = impl_->options;
-  const double sigma_s = o.tdoa_sigma_s > 0.0 ? o.tdoa_sigma_s : 0.5 / m.sample_rate_hz;
+  Impl& s = *impl_;
+  if (s.sigma_s <= 0.0) s.sigma_s = o.tdoa_sigma_s > 0.0 ? o.tdoa_sigma_s : kInitialSigmaSamples / m.sample_rate_hz;
   UpdateReport report;
   report.pair_count = impl_->array.pair_count();
-  report.nis = impl_->set.Weigh(m, o.likelihood, sigma_s, o.peak_dof, o.gcc_sharpness);
+  report.tdoa_sigma_s = s.sigma_s;
+  s.set.Weigh(m, o.likelihood, s.sigma_s, o.peak_dof, o.gcc_sharpness, &s.innovations);
+  double excess_s2 = 0.0;
+  for (const InnovationMoments& in : s.innovations) {
+    report.nis += in.mean_s * in.mean_s / (s.sigma_s * s.sigma_s + in.predicted_var_s2);
+    excess_s2 += in.mean_s * in.mean_s - in.predicted_var_s2;
+  }
+  if (o.tdoa_sigma_s == 0.0) {  // innovation-based adaptive estimate (Mehra 1972)
+    const double frame_var_s2 = std::max(0.0, excess_s2 / static_cast<double>(s.innovations.size()));
+    const double var_s2 = (1.0 - kSigmaSmoothing) * s.sigma_s * s.sigma_s + kSigmaSmoothing * frame_var_s2;
+    s.sigma_s = std::clamp(std::sqrt(var_s2), kMinSigmaSamples / m.sample_rate_hz,
+                           kMaxSigmaSamples / m.sample_rate_hz);
+  }
   report.ess = impl_->set.NormaliseWeights();
   impl_->ess = report.ess;
   if (report.ess < o.resample_threshold * o.particles) impl_->set.ResampleSystematic(o.kernel_scale);

@@ -18,8 +18,14 @@
 //     — near the peak it is the Gaussian; far out it still points the way (a clipped
 //     Gaussian goes flat and the filter coasts), and one pair locked on a reflection
 //     cannot wipe out every particle;
-//   GCC likelihood: log w += gcc_sharpness * sum_k g_k(h_k' * fs) / g_k,max
-//     where g_k is the pair's GCC over its lag window, linearly interpolated.
+//   GCC likelihood: log w += sum_k kappa_k g_k(h_k' * fs), g_k the pair's GCC over its lag
+//     window (Catmull-Rom between integer lags), kappa_k = gcc_sharpness / (sigma^2 * -g_k'')
+//     at the highest peak (sigma in samples): as sharp as the peak likelihood around the
+//     main peak, yet every other peak keeps its height, so the prior chooses between them.
+// sigma is tdoa_sigma_s when set; when 0 it is estimated online from the innovations
+// (Mehra's innovation-based estimate): sigma^2 <- (1 - a) sigma^2 + a mean_k max(0,
+// e_k^2 - Var[h_k']) with e_k = d_k - E[h_k'] under the prior, a = 0.05, starting at 0.1
+// sample and kept within [0.01, 2] samples.
 // Then log-weights are normalised (log-sum-exp), ESS = 1 / sum w^2, and when
 // ESS < resample_threshold * N the particles are resampled systematically (weights reset)
 // and moved by a shrunk Gaussian kernel (regularised PF, Liu & West 2001; see
@@ -46,10 +52,11 @@ const char* LikelihoodName(Likelihood l);
 
 struct ParticleFilterOptions {
   int particles = 4096;               // N, in [16, 1 << 22]
-  double accel_noise_mps2 = 0.5;      // std of the white acceleration, per axis
-  double tdoa_sigma_s = 50e-6;        // peak likelihood: TDOA noise std
+  double accel_noise_mps2 = 1.0;      // std of the white acceleration, per axis (m/s^2)
+  double tdoa_sigma_s = 0.0;          // TDOA noise std; 0: adaptive (below)
   double peak_dof = 4.0;              // peak likelihood: Student-t degrees of freedom, > 0
-  double gcc_sharpness = 8.0;         // GCC likelihood: log-likelihood per unit normalised GCC
+  double gcc_sharpness = 1.0;         // GCC likelihood: curvature at the peak / the peak
+                                      // likelihood's, > 0
   Likelihood likelihood = Likelihood::kPeak;
   double resample_threshold = 0.8;    // resample when ESS < threshold * N (seed: 0.8)
   double kernel_scale = 0.5;          // regularisation after resampling, x Silverman's
@@ -78,6 +85,8 @@ class ParticleFilter final : public Tracker {
 
   int particle_count() const;
   double ess() const;
+  // The TDOA noise std the last update used (0 before the first update).
+  double tdoa_sigma_s() const;
 
  private:
   struct Impl;

@@ -109,8 +109,18 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2) {
   }
 }
 
-double ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, double sigma_s, double peak_dof,
-                          double gcc_sharpness) {
+double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharpness) {
+  size_t peak = 1;
+  for (size_t k = 1; k + 1 < gcc.size(); ++k) {
+    if (gcc[k] > gcc[peak]) peak = k;
+  }
+  const double curvature = std::max(1e-6, 2.0 * gcc[peak] - gcc[peak - 1] - gcc[peak + 1]);
+  return sharpness / (sigma_samples * sigma_samples * curvature);
+}
+
+void ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, double sigma_s, double peak_dof,
+                        double gcc_sharpness, std::vector<InnovationMoments>* innovations) {
+  innovations->resize(m.pairs.size());
   const float* __restrict x = cur_.x.data();
   const float* __restrict y = cur_.y.data();
   const float* __restrict z = cur_.z.data();
@@ -136,7 +146,6 @@ double ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, double si
   const float inv_dof = static_cast<float>(1.0 / peak_dof);
   const float half_dof_plus_1 = static_cast<float>(0.5 * (peak_dof + 1.0));
   const float inv_c = inv_c_;
-  double nis = 0.0;
   for (size_t p = 0; p < m.pairs.size(); ++p) {
     const PairMeasurement& pm = m.pairs[p];
     const int k = pair_sensor_[p];
@@ -145,16 +154,13 @@ double ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, double si
     const float half_d = 0.5f * d;
     // Prior moments of the innovation in sigmas, for the NIS.
     float sum_e = 0.0f, sum_e2 = 0.0f;
-    const bool use_gcc = likelihood == Likelihood::kGcc && pm.gcc.size() >= 2;
+    const bool use_gcc = likelihood == Likelihood::kGcc && pm.gcc.size() >= 4;
     const float* __restrict gcc = use_gcc ? pm.gcc.data() : nullptr;
-    const float last = use_gcc ? static_cast<float>(pm.gcc.size() - 1) - 1e-3f : 0.0f;
+    // Cubic (Catmull-Rom) reads need lags 1 .. size-3 around the interpolation interval.
+    const float first = 1.0f, last = use_gcc ? static_cast<float>(pm.gcc.size() - 3) - 1e-3f : 0.0f;
     const float lag_scale = static_cast<float>(m.sample_rate_hz);
     const float lag0 = static_cast<float>(pm.first_lag_samples);
-    float gmax = 1e-12f;
-    if (use_gcc) {
-      for (float g : pm.gcc) gmax = std::max(gmax, g);
-    }
-    const float gcc_gain = static_cast<float>(gcc_sharpness) / gmax;
+    const float gcc_gain = use_gcc ? static_cast<float>(GccGain(pm.gcc, sigma_s * m.sample_rate_hz, gcc_sharpness)) : 0.0f;
     float* __restrict hk = delay_.data();
 #pragma omp simd reduction(+ : sum_e, sum_e2)
     for (int i = 0; i < n_; ++i) {
@@ -172,10 +178,14 @@ double ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, double si
 #pragma omp simd
       for (int i = 0; i < n_; ++i) {
         float lag = hk[i] * lag_scale - lag0;
-        lag = lag < 0.0f ? 0.0f : (lag > last ? last : lag);
+        lag = lag < first ? first : (lag > last ? last : lag);
         const int i0 = static_cast<int>(lag);
-        const float f = lag - static_cast<float>(i0);
-        ll[i] += gcc_gain * (gcc[i0] + f * (gcc[i0 + 1] - gcc[i0]));
+        const float t = lag - static_cast<float>(i0);
+        const float gm = gcc[i0 - 1], g0 = gcc[i0], g1 = gcc[i0 + 1], g2 = gcc[i0 + 2];
+        // Catmull-Rom: smooth between lags, so no particle is favoured for sitting on one.
+        const float g = g0 + 0.5f * t * ((g1 - gm) + t * ((2.0f * gm - 5.0f * g0 + 4.0f * g1 - g2) +
+                                                            t * (3.0f * (g0 - g1) + g2 - gm)));
+        ll[i] += gcc_gain * g;
       }
     } else {
 #pragma omp simd
@@ -185,12 +195,12 @@ double ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, double si
       }
     }
     const double var = std::max(0.0, static_cast<double>(sum_e2) - static_cast<double>(sum_e) * sum_e);
-    nis += static_cast<double>(sum_e) * sum_e / (1.0 + var);
+    (*innovations)[p].mean_s = static_cast<double>(sum_e) * sigma_s;
+    (*innovations)[p].predicted_var_s2 = var * sigma_s * sigma_s;
   }
   float* __restrict logw = logw_.data();
 #pragma omp simd
   for (int i = 0; i < n_; ++i) logw[i] += ll[i];
-  return nis;
 }
 
 double ParticleSet::NormaliseWeights() {

@@ -18,6 +18,16 @@
 
 namespace localizer::engine {
 
+struct InnovationMoments {
+  double mean_s = 0.0;            // d - E[h'] under the prior weights
+  double predicted_var_s2 = 0.0;  // Var[h'] under the prior weights
+};
+
+// Gain k of the GCC log-likelihood k * g(lag): matched so that near the main peak
+// k * g has the curvature of a Gaussian of sigma_samples (k = sharpness / (sigma^2 * -g'')),
+// while away from it every secondary peak keeps its relative height.
+double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharpness);
+
 class ParticleSet {
  public:
   ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions& options);
@@ -29,9 +39,9 @@ class ParticleSet {
   // p += v dt + a dt^2/2, v += a dt, a ~ N(0, accel_sigma^2 I3).
   void Predict(double dt_s, double accel_sigma_mps2);
   // Adds each particle's log-likelihood of `m` to its log-weight (see particle_filter.h) and
-  // returns the NIS of the peak delays against the prior predicted-delay distribution.
-  double Weigh(const Measurement& m, Likelihood likelihood, double sigma_s, double peak_dof,
-               double gcc_sharpness);
+  // reports, per pair, the innovation of the peak delay against the prior predicted delays.
+  void Weigh(const Measurement& m, Likelihood likelihood, double sigma_s, double peak_dof,
+             double gcc_sharpness, std::vector<InnovationMoments>* innovations);
   // Normalises the weights (log-sum-exp) and returns the ESS = 1 / sum w^2.
   double NormaliseWeights();
   // Systematic resampling (one uniform offset, N evenly spaced pointers); weights equal.

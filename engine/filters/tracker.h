@@ -20,6 +20,7 @@ struct UpdateReport {
   double nis = 0.0;
   int pair_count = 0;
   double ess = 0.0;  // effective sample size after the update (0 for non-particle filters)
+  double tdoa_sigma_s = 0.0;  // TDOA noise std the update assumed
 };
 
 class Tracker {

@@ -59,8 +59,11 @@ struct Session::Impl {
   void ProcessFrame(const float* frame, int64_t first_sample, uint64_t sequence, std::vector<Estimate>* out);
   // Multilaterates this frame; true (and *fix set) when the fix is good enough to (re)start.
   bool GoodFix(const Vec3* hint, Fix* fix) const;
+  // The TDOA noise std for fixes: configured, else the tracker's latest adaptive estimate,
+  // else 0.1 sample.
   double tdoa_sigma_s() const {
-    return config.filter.tdoa_sigma_s > 0.0 ? config.filter.tdoa_sigma_s : 0.5 / config.sample_rate_hz;
+    if (config.filter.tdoa_sigma_s > 0.0) return config.filter.tdoa_sigma_s;
+    return last_sigma_s > 0.0 ? last_sigma_s : 0.1 / config.sample_rate_hz;
   }
 
   SessionConfig config;
@@ -74,6 +77,7 @@ struct Session::Impl {
   uint64_t last_sequence = 0;
   uint64_t frames = 0;
   double last_t_s = 0.0;
+  double last_sigma_s = 0.0;
 };
 
 bool Session::Impl::GoodFix(const Vec3* hint, Fix* fix) const {
@@ -128,6 +132,8 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
       if (report.ok()) {
         e.nis = report->nis;
         e.ess = report->ess;
+        last_sigma_s = report->tdoa_sigma_s;
+        e.tdoa_sigma_s = report->tdoa_sigma_s;
         if (monitor.Add(report->nis, report->pair_count)) {
           const TrackState lost = tracker.State();
           const Vec3 hint = lost.mean.head<3>();

@@ -1,0 +1,87 @@
+// Seeded end-to-end accuracy: simulated scene -> GCC-PHAT -> particle filter, scored
+// against the simulator's truth and the per-frame position Cramer–Rao bound computed from
+// the TDOA spread measured on the same frames (engine/sim/evaluation.h).
+#include <gtest/gtest.h>
+
+#include "engine/pipeline/session.h"
+#include "engine/sim/evaluation.h"
+
+namespace localizer::engine {
+namespace {
+
+struct TrackedRun {
+  std::vector<Estimate> estimates;
+  TrackScore score;
+};
+
+TrackedRun Track(const std::string& scenario_name, uint64_t seed, Likelihood likelihood, bool robust_sigma = false) {
+  const Scenario scenario = *MakeScenario(scenario_name, seed);
+  const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
+  const SimResult sim = *Simulate(array, scenario.sim);
+  SessionConfig config;
+  config.sensors_m = scenario.sensors_m;
+  config.sound_speed_mps = scenario.sound_speed_mps;
+  config.sample_rate_hz = scenario.sim.sample_rate_hz;
+  config.band_low_hz = scenario.sim.band_low_hz;
+  config.band_high_hz = scenario.sim.band_high_hz;
+  config.filter.likelihood = likelihood;
+  config.seed = seed;
+  auto session = std::move(*Session::Create(config));
+  TrackedRun run;
+  const BlockView all{1, sim.channel_count, sim.samples_per_channel, sim.samples.data()};
+  EXPECT_TRUE(session->Process(all, &run.estimates).ok());
+  run.score = ScoreTrack(array, sim, run.estimates, /*skip_s=*/2.0, robust_sigma);
+  return run;
+}
+
+void Print(const std::string& name, const TrackScore& s) {
+  std::printf("%s: scored %d rmse %.3f m median %.3f p95 %.3f max %.3f crlb %.3f ratio %.3f reinit %d\n",
+              name.c_str(), s.scored, s.rmse_m, s.median_m, s.p95_m, s.max_m, s.crlb_m, s.rmse_over_crlb,
+              s.reinitialisations);
+}
+
+// Gaussian-noise scenes: the filter averages ~10 frames through a constant-velocity model,
+// so it must beat a single frame's bound by 2x (the goal; measured 0.07 and 0.35).
+TEST(Accuracy, TetrahedronUnderwaterBeatsHalfThePerFrameCrlb) {
+  const TrackedRun run = Track("tetra-water", 1, Likelihood::kPeak);
+  Print("tetra-water", run.score);
+  EXPECT_GT(run.score.scored, 90);
+  EXPECT_LT(run.score.rmse_over_crlb, 0.5);
+  EXPECT_LT(run.score.p95_m, 3.0 * run.score.rmse_m);
+}
+
+TEST(Accuracy, TetrahedronInAirBeatsHalfThePerFrameCrlb) {
+  const TrackedRun run = Track("tetra-air", 1, Likelihood::kPeak);
+  Print("tetra-air", run.score);
+  EXPECT_GT(run.score.scored, 180);
+  EXPECT_LT(run.score.rmse_over_crlb, 0.5);
+  EXPECT_LT(run.score.p95_m, 3.0 * run.score.rmse_m);
+}
+
+// Turning source, 8 hydrophones, surface echo, 5 dB: no divergence (every scored error
+// well inside the 11-22 m range, at most one re-initialisation) and RMSE within 1.5x the
+// per-frame bound for the peak likelihood (goal 1.0x; measured 1.04), 2x for the GCC
+// likelihood (measured 1.33; it smooths less on clean frames, see BENCHMARKS.md).
+TEST(Accuracy, TurningSourceWithMultipathAt5DbDoesNotDiverge) {
+  struct Case {
+    Likelihood likelihood;
+    double max_error_m, max_ratio;
+  };
+  for (const Case& c : {Case{Likelihood::kPeak, 3.0, 1.5}, Case{Likelihood::kGcc, 5.0, 2.0}}) {
+    const TrackedRun run = Track("turn-multipath", 1, c.likelihood);
+    Print(std::string("turn-multipath/") + LikelihoodName(c.likelihood), run.score);
+    EXPECT_GT(run.score.scored, 130);
+    EXPECT_LT(run.score.max_m, c.max_error_m);
+    EXPECT_LE(run.score.reinitialisations, 1);
+    EXPECT_LT(run.score.rmse_over_crlb, c.max_ratio);
+  }
+}
+
+TEST(Accuracy, SameSeedSameOutput) {
+  const TrackedRun a = Track("tetra-air", 4, Likelihood::kGcc), b = Track("tetra-air", 4, Likelihood::kGcc);
+  ASSERT_EQ(a.estimates.size(), b.estimates.size());
+  for (size_t i = 0; i < a.estimates.size(); ++i) EXPECT_EQ(a.estimates[i].state, b.estimates[i].state);
+}
+
+}  // namespace
+}  // namespace localizer::engine
