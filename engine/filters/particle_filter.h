@@ -19,7 +19,7 @@
 //     Gaussian goes flat and the filter coasts), and one pair locked on a reflection
 //     cannot wipe out every particle;
 //   GCC likelihood: log w += sum_k kappa_k g_k(h_k' * fs), g_k the pair's GCC over its lag
-//     window (Catmull-Rom between integer lags), kappa_k = gcc_sharpness / (sigma^2 * -g_k'')
+//     window (upsampled 8x by a windowed sinc, then Catmull-Rom between fine lags), kappa_k = gcc_sharpness / (sigma^2 * -g_k'')
 //     at the highest peak (sigma in samples): as sharp as the peak likelihood around the
 //     main peak, yet every other peak keeps its height, so the prior chooses between them.
 // sigma is tdoa_sigma_s when set; when 0 it is estimated online from the innovations

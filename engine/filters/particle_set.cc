@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "engine/core/fast_math.h"
+#include "engine/filters/gcc_upsampling.h"
 
 namespace localizer::engine {
 
@@ -155,12 +156,15 @@ void ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, double sigm
     // Prior moments of the innovation in sigmas, for the NIS.
     float sum_e = 0.0f, sum_e2 = 0.0f;
     const bool use_gcc = likelihood == Likelihood::kGcc && pm.gcc.size() >= 4;
-    const float* __restrict gcc = use_gcc ? pm.gcc.data() : nullptr;
-    // Cubic (Catmull-Rom) reads need lags 1 .. size-3 around the interpolation interval.
-    const float first = 1.0f, last = use_gcc ? static_cast<float>(pm.gcc.size() - 3) - 1e-3f : 0.0f;
-    const float lag_scale = static_cast<float>(m.sample_rate_hz);
-    const float lag0 = static_cast<float>(pm.first_lag_samples);
-    const float gcc_gain = use_gcc ? static_cast<float>(GccGain(pm.gcc, sigma_s * m.sample_rate_hz, gcc_sharpness)) : 0.0f;
+    if (use_gcc) UpsampleGcc(pm.gcc, kGccUpsampling, &fine_gcc_);
+    const float* __restrict gcc = use_gcc ? fine_gcc_.data() : nullptr;
+    // Cubic (Catmull-Rom) reads need fine lags 1 .. size-3 around the interval.
+    const float first = 1.0f, last = use_gcc ? static_cast<float>(fine_gcc_.size() - 3) - 1e-3f : 0.0f;
+    const float lag_scale = static_cast<float>(m.sample_rate_hz * kGccUpsampling);
+    const float lag0 = static_cast<float>(pm.first_lag_samples * kGccUpsampling);
+    const float gcc_gain =
+        use_gcc ? static_cast<float>(GccGain(fine_gcc_, sigma_s * m.sample_rate_hz * kGccUpsampling, gcc_sharpness))
+                : 0.0f;
     float* __restrict hk = delay_.data();
 #pragma omp simd reduction(+ : sum_e, sum_e2)
     for (int i = 0; i < n_; ++i) {

@@ -28,6 +28,9 @@ struct InnovationMoments {
 // while away from it every secondary peak keeps its relative height.
 double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharpness);
 
+// The GCC likelihood reads each pair's GCC upsampled this many times (gcc_upsampling.h).
+inline constexpr int kGccUpsampling = 8;
+
 class ParticleSet {
  public:
   ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions& options);
@@ -76,6 +79,7 @@ class ParticleSet {
   std::vector<float> logw_, w_;          // log-weights; normalised linear weights
   std::vector<float> r_ref_, vr_ref_, loglik_, delay_;  // scratch for Weigh
   std::array<std::vector<float>, 6> noise_;       // scratch for Regularise
+  std::vector<float> fine_gcc_;                   // scratch: a pair's GCC upsampled
   std::vector<int> index_, first_slot_;           // scratch for ResampleSystematic
   // Weighted mean and covariance of the current particles, computed on demand and kept
   // until the particles or weights change (State() and the regulariser share them).

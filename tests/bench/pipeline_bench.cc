@@ -1,0 +1,77 @@
+// Whole pipeline (framing, GCC-PHAT, particle filter) on one core: CPU milliseconds per
+// second of audio for 4 channels at 44.1 kHz, 4096-sample frames, 50 % hop, 4096 particles.
+// The goal is <= 2.5 ms; the seed's Jetson TX1 took 18.24 (GPU) / 56.95 (CPU).
+// Run: build/tests/bench/pipeline_bench --benchmark_repetitions=5
+//      --benchmark_report_aggregates_only=true
+#include <benchmark/benchmark.h>
+
+#include "engine/pipeline/session.h"
+#include "engine/sim/simulator.h"
+
+namespace localizer::engine {
+namespace {
+
+const SimResult& Audio(double fs, Scenario* scenario_out) {
+  static Scenario scenario = [] {
+    Scenario s = *MakeScenario("tetra-air", 1);
+    s.sim.sample_rate_hz = 44100.0;
+    s.sim.duration_s = 6.0;
+    return s;
+  }();
+  static const SimResult sim = *Simulate(*ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps), scenario.sim);
+  (void)fs;
+  *scenario_out = scenario;
+  return sim;
+}
+
+void BM_PipelinePerAudioSecond(benchmark::State& state) {
+  Scenario scenario;
+  const SimResult& sim = Audio(44100.0, &scenario);
+  SessionConfig config;
+  config.sensors_m = scenario.sensors_m;
+  config.sound_speed_mps = scenario.sound_speed_mps;
+  config.sample_rate_hz = sim.sample_rate_hz;
+  config.frame_samples = 4096;
+  config.hop_samples = 2048;
+  config.filter.particles = static_cast<int>(state.range(0));
+  config.filter.likelihood = state.range(1) == 0 ? Likelihood::kPeak : Likelihood::kGcc;
+  // 0.1 s blocks, as a streaming client would send them.
+  const int64_t block = 4410;
+  std::vector<std::vector<float>> blocks;
+  for (int64_t at = 0; at + block <= sim.samples_per_channel; at += block) {
+    std::vector<float> b(static_cast<size_t>(block * sim.channel_count));
+    for (int c = 0; c < sim.channel_count; ++c) {
+      std::copy_n(sim.samples.begin() + c * sim.samples_per_channel + at, block, b.begin() + c * block);
+    }
+    blocks.push_back(std::move(b));
+  }
+  const double audio_s = static_cast<double>(blocks.size() * block) / sim.sample_rate_hz;
+  std::vector<Estimate> out;
+  double tdoa_s = 0.0, filter_s = 0.0;
+  size_t frames = 0;
+  for (auto _ : state) {
+    auto session = std::move(*Session::Create(config));
+    out.clear();
+    uint64_t seq = 1;
+    for (const auto& b : blocks) {
+      (void)session->Process({seq++, sim.channel_count, block, b.data()}, &out);
+    }
+    for (const Estimate& e : out) {
+      tdoa_s += e.timings.tdoa_s;
+      filter_s += e.timings.filter_s;
+    }
+    frames += out.size();
+  }
+  const double runs = static_cast<double>(state.iterations());
+  state.counters["ms_per_audio_s"] =
+      benchmark::Counter(runs * audio_s * 1e-3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["tdoa_us_per_frame"] = 1e6 * tdoa_s / static_cast<double>(frames);
+  state.counters["filter_us_per_frame"] = 1e6 * filter_s / static_cast<double>(frames);
+  state.SetLabel(LikelihoodName(config.filter.likelihood));
+}
+BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}})->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace localizer::engine
+
+BENCHMARK_MAIN();
