@@ -1,0 +1,80 @@
+// localizer-cli: simulate a scenario to files, track a recording, score a track.
+// See commands.h for the exit codes; `localizer-cli CMD --help` for each command's flags.
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "clients/cli/commands.h"
+
+namespace localizer::cli {
+namespace {
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(const std::vector<std::string>& args);
+};
+
+constexpr Command kCommands[] = {
+    {"simulate", "simulate a named scenario to signals.wav, array.json and truth.csv", RunSimulate},
+    {"track", "track a source in a multichannel WAV (or one mono WAV per sensor) to a CSV",
+     RunTrack},
+    {"score", "compare an estimates CSV with a truth CSV (rmse, median, p95, max error)", RunScore},
+};
+
+std::string GlobalUsage() {
+  std::string text =
+      "usage: localizer-cli COMMAND [flags]\n\n"
+      "Acoustic source localisation from time differences of arrival (GCC-PHAT + particle\n"
+      "filter), on files.\n\ncommands:\n";
+  for (const Command& c : kCommands) {
+    std::string name = std::string("  ") + c.name;
+    name.resize(12, ' ');
+    text += name + c.summary + "\n";
+  }
+  text +=
+      "\n'localizer-cli COMMAND --help' lists a command's flags, defaults and units.\n"
+      "Exit codes: 0 success, 1 runtime error (file or data), 2 usage error.\n"
+      "Example:\n"
+      "  localizer-cli simulate --scenario tetra-water --out run --duration 6\n"
+      "  localizer-cli track --array run/array.json --wav run/signals.wav --out run/est.csv\n"
+      "  localizer-cli score --truth run/truth.csv --estimates run/est.csv\n";
+  return text;
+}
+
+const Command* FindCommand(const std::string& name) {
+  for (const Command& c : kCommands) {
+    if (name == c.name) return &c;
+  }
+  return nullptr;
+}
+
+int UnknownCommand(const std::string& name) {
+  std::cerr << "localizer-cli: unknown command \"" << name << "\"\n"
+            << "run 'localizer-cli --help' for the list of commands\n";
+  return kExitUsage;
+}
+
+int Main(int argc, char** argv) {
+  if (argc < 2) {
+    std::cerr << GlobalUsage();
+    return kExitUsage;
+  }
+  const std::string name = argv[1];
+  if (name == "help" && argc > 2) {  // "help CMD" is "CMD --help"
+    const Command* command = FindCommand(argv[2]);
+    return command != nullptr ? command->run({"--help"}) : UnknownCommand(argv[2]);
+  }
+  if (name == "--help" || name == "-h" || name == "help") {
+    std::cout << GlobalUsage();
+    return kExitOk;
+  }
+  const Command* command = FindCommand(name);
+  if (command == nullptr) return UnknownCommand(name);
+  return command->run(std::vector<std::string>(argv + 2, argv + argc));
+}
+
+}  // namespace
+}  // namespace localizer::cli
+
+int main(int argc, char** argv) { return localizer::cli::Main(argc, argv); }

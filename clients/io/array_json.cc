@@ -1,0 +1,160 @@
+#include "clients/io/array_json.h"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "clients/io/xav_array.h"
+#include "engine/array/array_geometry.h"
+
+namespace localizer::io {
+
+namespace {
+
+using nlohmann::json;
+
+const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz", "sensors_m",
+                                            "reference_sensor"};
+
+// A finite number at `value`, or an error naming `field`.
+StatusOr<double> FiniteNumber(const json& value, const std::string& source,
+                              const std::string& field) {
+  if (!value.is_number()) {
+    return InvalidArgument(source + ": " + field + " is " + value.dump() + ", not a number");
+  }
+  const double x = value.get<double>();
+  if (!std::isfinite(x)) return InvalidArgument(source + ": " + field + " is not finite");
+  return x;
+}
+
+StatusOr<double> PositiveNumber(const json& value, const std::string& source,
+                                const std::string& field) {
+  auto x = FiniteNumber(value, source, field);
+  if (x.ok() && *x <= 0.0) {
+    return InvalidArgument(source + ": " + field + " is " + value.dump() + ", must be > 0");
+  }
+  return x;
+}
+
+StatusOr<std::vector<engine::Vec3>> ParseSensors(const json& rows, const std::string& source) {
+  if (!rows.is_array()) {
+    return InvalidArgument(source + ": sensors_m must be an array of [x, y, z] rows");
+  }
+  std::vector<engine::Vec3> sensors_m;
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const std::string row_name = "sensors_m[" + std::to_string(k) + "]";
+    if (!rows[k].is_array() || rows[k].size() != 3) {
+      return InvalidArgument(source + ": " + row_name + " is " + rows[k].dump() +
+                             ", not [x, y, z]");
+    }
+    engine::Vec3 position_m;
+    for (int axis = 0; axis < 3; ++axis) {
+      auto x = FiniteNumber(rows[k][axis], source, row_name + "[" + std::to_string(axis) + "]");
+      if (!x.ok()) return x.status();
+      position_m[axis] = *x;
+    }
+    sensors_m.push_back(position_m);
+  }
+  return sensors_m;
+}
+
+StatusOr<int> ParseReference(const json& value, const std::string& source) {
+  if (!value.is_number_integer()) {
+    return InvalidArgument(source + ": reference_sensor is " + value.dump() + ", not an integer");
+  }
+  return static_cast<int>(value.get<int64_t>());
+}
+
+Status CheckFields(const json& root, const std::string& source) {
+  if (!root.is_object()) return InvalidArgument(source + ": top level must be a JSON object");
+  for (const auto& item : root.items()) {
+    if (!kKnownFields.contains(item.key())) {
+      return InvalidArgument(source + ": unknown field \"" + item.key() +
+                             "\" (known: sound_speed_mps, sample_rate_hz, sensors_m, "
+                             "reference_sensor)");
+    }
+  }
+  for (const char* required : {"sound_speed_mps", "sensors_m"}) {
+    if (!root.contains(required)) {
+      return InvalidArgument(source + ": missing required field " + required);
+    }
+  }
+  return Status::Ok();
+}
+
+StatusOr<ArrayFile> FromJson(const json& root, const std::string& source) {
+  LOCALIZER_RETURN_IF_ERROR(CheckFields(root, source));
+  ArrayFile array;
+  auto c = PositiveNumber(root["sound_speed_mps"], source, "sound_speed_mps");
+  if (!c.ok()) return c.status();
+  array.sound_speed_mps = *c;
+  if (root.contains("sample_rate_hz")) {
+    auto rate = PositiveNumber(root["sample_rate_hz"], source, "sample_rate_hz");
+    if (!rate.ok()) return rate.status();
+    array.sample_rate_hz = *rate;
+  }
+  auto sensors = ParseSensors(root["sensors_m"], source);
+  if (!sensors.ok()) return sensors.status();
+  array.sensors_m = std::move(*sensors);
+  if (root.contains("reference_sensor")) {
+    auto reference = ParseReference(root["reference_sensor"], source);
+    if (!reference.ok()) return reference.status();
+    array.reference_sensor = *reference;
+  }
+  return array;
+}
+
+}  // namespace
+
+StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& source) {
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::exception& e) {
+    return InvalidArgument(source + ": not valid JSON: " + e.what());
+  }
+  auto array = FromJson(root, source);
+  if (!array.ok()) return array;
+  // Validate the geometry now so that a bad array fails where the file is named.
+  auto geometry = engine::ArrayGeometry::Create(array->sensors_m, array->sound_speed_mps,
+                                                array->reference_sensor);
+  if (!geometry.ok()) return InvalidArgument(source + ": " + geometry.status().message());
+  return array;
+}
+
+StatusOr<ArrayFile> ReadArrayJson(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return NotFound(path + ": cannot open");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParseArrayJson(text.str(), path);
+}
+
+Status WriteArrayJson(const std::string& path, const ArrayFile& array) {
+  json root;
+  root["sound_speed_mps"] = array.sound_speed_mps;
+  if (array.sample_rate_hz) root["sample_rate_hz"] = *array.sample_rate_hz;
+  root["reference_sensor"] = array.reference_sensor;
+  json rows = json::array();
+  for (const engine::Vec3& m : array.sensors_m) rows.push_back({m.x(), m.y(), m.z()});
+  root["sensors_m"] = std::move(rows);
+  std::ofstream out(path);
+  if (!out) return InvalidArgument(path + ": cannot open for writing");
+  out << root.dump(2) << "\n";
+  out.close();
+  if (!out) return InvalidArgument(path + ": write failed");
+  return Status::Ok();
+}
+
+StatusOr<ArrayFile> ReadArrayFile(const std::string& path) {
+  if (path.size() >= 4 && path.compare(path.size() - 4, 4, ".csv") == 0) {
+    auto xav = ReadXavHydrophoneCsv(path);
+    if (!xav.ok()) return xav.status();
+    return xav->array;
+  }
+  return ReadArrayJson(path);
+}
+
+}  // namespace localizer::io

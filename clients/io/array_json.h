@@ -1,0 +1,41 @@
+// `array.json`: the sensor array a recording was made with.
+//
+//   {
+//     "sound_speed_mps": 1500.0,               required, finite, > 0
+//     "sample_rate_hz": 11025,                 optional, finite, > 0 (a WAV header wins)
+//     "sensors_m": [[x, y, z], ...],           required, metres, one row per sensor/channel
+//     "reference_sensor": 0                    optional integer, default 0
+//   }
+//
+// Reading also builds an engine::ArrayGeometry from the file, so a geometry the engine
+// cannot localise with (fewer than 4 sensors, coplanar, coincident) fails at load time with
+// the engine's message. Unknown fields are rejected so that a misspelt optional field
+// ("reference_sensr") cannot be silently ignored. Every error names the source and field.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/core/status.h"
+#include "engine/core/types.h"
+
+namespace localizer::io {
+
+struct ArrayFile {
+  std::vector<engine::Vec3> sensors_m;
+  double sound_speed_mps = 0.0;
+  std::optional<double> sample_rate_hz;
+  int reference_sensor = 0;
+};
+
+// `source` names the text in messages (usually its path).
+StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& source);
+StatusOr<ArrayFile> ReadArrayJson(const std::string& path);
+Status WriteArrayJson(const std::string& path, const ArrayFile& array);
+
+// Reads an array description by file type: `.csv` is the XAV hydrophone configuration
+// (see xav_array.h), anything else array.json.
+StatusOr<ArrayFile> ReadArrayFile(const std::string& path);
+
+}  // namespace localizer::io

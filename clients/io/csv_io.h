@@ -1,0 +1,62 @@
+// Truth and estimate tables as CSV.
+//
+// truth.csv (one row per truth sample, t_s ascending):
+//   t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps
+// t_s is reception time at the reference sensor, seconds from the first sample; the state
+// is the source's at the emission heard then (engine::TruthRow).
+//
+// estimates.csv (one row per engine::Estimate, i.e. per frame):
+//   t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,      state (same instant convention as truth)
+//   sx_m,sy_m,sz_m,                            position std: sqrt of the covariance diagonal
+//   ess,nis,initialised,reinitialised,         filter health; flags are 0 or 1
+//   tdoa_ms,filter_ms,                         stage wall times of the frame
+//   delay_s_<k>,quality_<k>, ...               per sensor pair (reference, k), k ascending
+// Missing per-pair values are written as nan. Readers look columns up by name, so extra
+// columns are ignored.
+#pragma once
+
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/core/estimate.h"
+#include "engine/core/status.h"
+#include "engine/sim/simulator.h"
+
+namespace localizer::io {
+
+inline constexpr const char* kStateColumns = "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps";
+
+Status WriteTruthCsv(const std::string& path, const std::vector<engine::TruthRow>& truth);
+StatusOr<std::vector<engine::TruthRow>> ReadTruthCsv(const std::string& path);
+
+// The columns of estimates.csv that scoring needs.
+struct EstimateRow {
+  double t_s = 0.0;
+  engine::Vec3 position_m = engine::Vec3::Zero();
+  engine::Vec3 velocity_mps = engine::Vec3::Zero();
+  bool initialised = false;
+};
+
+StatusOr<std::vector<EstimateRow>> ReadEstimatesCsv(const std::string& path);
+
+// Writes estimates.csv row by row, so a long run can stream to disk. Movable.
+class EstimatesCsvWriter {
+ public:
+  // `pair_sensors[p]`: the non-reference sensor of pair p (ArrayGeometry::sensor_of_pair).
+  static StatusOr<EstimatesCsvWriter> Open(const std::string& path,
+                                           const std::vector<int>& pair_sensors);
+  Status Write(const engine::Estimate& estimate);
+  // Flushes and closes; reports a failed write that the stream only notices at the end.
+  Status Close();
+
+ private:
+  EstimatesCsvWriter() = default;
+  std::string path_;
+  size_t pair_count_ = 0;
+  std::unique_ptr<std::ofstream> out_;
+  std::string line_;  // reused per row
+};
+
+}  // namespace localizer::io

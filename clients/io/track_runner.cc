@@ -1,0 +1,154 @@
+#include "clients/io/track_runner.h"
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "clients/io/csv_io.h"
+#include "clients/io/wav_io.h"
+
+namespace localizer::io {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+void Warn(const TrackCallbacks& callbacks, const std::string& message) {
+  if (callbacks.on_warning) callbacks.on_warning(message);
+}
+
+// The session config with the WAV's sample rate, after checking the WAV against the array.
+StatusOr<engine::SessionConfig> ConfigForStream(const TrackJob& job, const WavStream& stream,
+                                                const TrackCallbacks& callbacks) {
+  const int sensors = static_cast<int>(job.config.sensors_m.size());
+  if (stream.channel_count() != sensors) {
+    return InvalidArgument(stream.Describe() + " has " + std::to_string(stream.channel_count()) +
+                           " channels but " + job.array_source + " has " + std::to_string(sensors) +
+                           " sensors; they must match (channel k = "
+                           "sensor k)");
+  }
+  engine::SessionConfig config = job.config;
+  config.sample_rate_hz = stream.sample_rate_hz();
+  if (job.array_sample_rate_hz && *job.array_sample_rate_hz != stream.sample_rate_hz()) {
+    Warn(callbacks, job.array_source + " says sample_rate_hz " +
+                        std::to_string(*job.array_sample_rate_hz) + " but " + stream.Describe() +
+                        " is sampled at " + std::to_string(stream.sample_rate_hz()) +
+                        " Hz; using the WAV header's rate");
+  }
+  return config;
+}
+
+StatusOr<std::unique_ptr<EstimatesCsvWriter>> OpenWriter(const std::string& path,
+                                                         const engine::ArrayGeometry& array) {
+  if (path.empty()) return std::unique_ptr<EstimatesCsvWriter>();
+  std::vector<int> pair_sensors;
+  for (int p = 0; p < array.pair_count(); ++p) pair_sensors.push_back(array.sensor_of_pair(p));
+  auto writer = EstimatesCsvWriter::Open(path, pair_sensors);
+  if (!writer.ok()) return writer.status();
+  return std::make_unique<EstimatesCsvWriter>(std::move(*writer));
+}
+
+// One run: the stream, the session and the writer, fed block by block.
+class TrackRun {
+ public:
+  TrackRun(WavStream stream, std::unique_ptr<engine::Session> session,
+           std::unique_ptr<EstimatesCsvWriter> writer, const TrackCallbacks& callbacks)
+      : stream_(std::move(stream)),
+        session_(std::move(session)),
+        writer_(std::move(writer)),
+        callbacks_(callbacks) {}
+
+  StatusOr<TrackSummary> Run(double block_s) {
+    summary_.sample_rate_hz = stream_.sample_rate_hz();
+    summary_.channel_count = stream_.channel_count();
+    const int64_t block_frames =
+        std::max<int64_t>(1, std::llround(block_s * stream_.sample_rate_hz()));
+    const Clock::time_point start = Clock::now();
+    while (true) {
+      auto frames = stream_.Read(block_frames, &samples_);
+      if (!frames.ok()) return frames.status();
+      if (*frames == 0) break;
+      LOCALIZER_RETURN_IF_ERROR(ProcessBlock(*frames));
+      ReportProgress(start);
+    }
+    if (writer_) LOCALIZER_RETURN_IF_ERROR(writer_->Close());
+    summary_.wall_s = SecondsSince(start);
+    if (summary_.estimates > 0) {
+      summary_.mean_tdoa_s = tdoa_total_s_ / static_cast<double>(summary_.estimates);
+      summary_.mean_filter_s = filter_total_s_ / static_cast<double>(summary_.estimates);
+    }
+    return summary_;
+  }
+
+ private:
+  Status ProcessBlock(int64_t frames) {
+    engine::BlockView block;
+    block.sequence = ++summary_.blocks;
+    block.channel_count = stream_.channel_count();
+    block.samples_per_channel = frames;
+    block.samples = samples_.data();
+    estimates_.clear();
+    const Status status = session_->Process(block, &estimates_);
+    if (!status.ok()) {
+      const double at_s =
+          static_cast<double>(summary_.samples_per_channel) / summary_.sample_rate_hz;
+      return Status(status.code(), stream_.Describe() + ": block " +
+                                       std::to_string(block.sequence) + " at " +
+                                       std::to_string(at_s) + " s rejected: " + status.message());
+    }
+    summary_.samples_per_channel += frames;
+    for (const engine::Estimate& e : estimates_) LOCALIZER_RETURN_IF_ERROR(Consume(e));
+    return Status::Ok();
+  }
+
+  Status Consume(const engine::Estimate& e) {
+    ++summary_.estimates;
+    if (e.initialised) ++summary_.initialised_estimates;
+    tdoa_total_s_ += e.timings.tdoa_s;
+    filter_total_s_ += e.timings.filter_s;
+    if (writer_) LOCALIZER_RETURN_IF_ERROR(writer_->Write(e));
+    if (callbacks_.on_estimate) callbacks_.on_estimate(e);
+    return Status::Ok();
+  }
+
+  void ReportProgress(Clock::time_point start) const {
+    if (!callbacks_.on_progress) return;
+    callbacks_.on_progress(TrackProgress{summary_.samples_per_channel, stream_.total_frames(),
+                                         summary_.sample_rate_hz, SecondsSince(start)});
+  }
+
+  WavStream stream_;
+  std::unique_ptr<engine::Session> session_;
+  std::unique_ptr<EstimatesCsvWriter> writer_;
+  const TrackCallbacks& callbacks_;
+  std::vector<float> samples_;               // one block, channel-major; reused
+  std::vector<engine::Estimate> estimates_;  // one block's estimates; reused
+  TrackSummary summary_;
+  double tdoa_total_s_ = 0.0;
+  double filter_total_s_ = 0.0;
+};
+
+}  // namespace
+
+StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks) {
+  if (!(job.block_s > 0.0 && std::isfinite(job.block_s))) {
+    return InvalidArgument("block_s is " + std::to_string(job.block_s) + ", must be > 0");
+  }
+  auto stream = WavStream::Open(job.wav_paths);
+  if (!stream.ok()) return stream.status();
+  if (!stream->warning().empty()) Warn(callbacks, stream->warning());
+  auto config = ConfigForStream(job, *stream, callbacks);
+  if (!config.ok()) return config.status();
+  auto session = engine::Session::Create(*config);
+  if (!session.ok()) return session.status();
+  auto writer = OpenWriter(job.estimates_csv_path, (*session)->array());
+  if (!writer.ok()) return writer.status();
+  TrackRun run(std::move(*stream), std::move(*session), std::move(*writer), callbacks);
+  return run.Run(job.block_s);
+}
+
+}  // namespace localizer::io

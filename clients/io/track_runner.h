@@ -1,0 +1,68 @@
+// Tracks a recording from WAV files into estimates: the body of `localizer-cli track`,
+// kept in the io library so that tests run exactly the code the command runs.
+//
+// The recording is streamed in blocks of `block_s` seconds through one engine::Session with
+// sequence numbers 1, 2, 3, ...; every Estimate goes to the CSV (when a path is given) and
+// to `on_estimate`. Memory stays at one block plus the session's frame ring, whatever the
+// file length.
+//
+// Sample rate: the WAV header is what the samples were recorded at, so it wins over the
+// array file's sample_rate_hz; a difference is reported through `on_warning`.
+// Channel count must equal the array's sensor count (INVALID_ARGUMENT naming both).
+// A block the session rejects stops the run with the session's message and the block's
+// position in the file.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/core/estimate.h"
+#include "engine/core/status.h"
+#include "engine/pipeline/session.h"
+
+namespace localizer::io {
+
+struct TrackJob {
+  std::vector<std::string> wav_paths;          // one multichannel file or mono files per sensor
+  std::string array_source = "array.json";     // names the array in messages
+  std::optional<double> array_sample_rate_hz;  // from the array file, checked against the WAV
+  engine::SessionConfig config;                // sample_rate_hz is taken from the WAV header
+  std::string estimates_csv_path;              // empty: write no CSV
+  double block_s = 0.25;                       // audio per Session::Process call, > 0
+};
+
+struct TrackProgress {
+  int64_t frames_done = 0;  // samples per channel consumed so far
+  int64_t frames_total = 0;
+  double sample_rate_hz = 0.0;
+  double wall_s = 0.0;  // since the first block
+};
+
+struct TrackSummary {
+  int64_t samples_per_channel = 0;  // consumed
+  double sample_rate_hz = 0.0;
+  int channel_count = 0;
+  uint64_t blocks = 0;
+  uint64_t estimates = 0;  // frames processed
+  uint64_t initialised_estimates = 0;
+  double wall_s = 0.0;       // streaming and processing, excluding setup
+  double mean_tdoa_s = 0.0;  // mean stage wall time per frame
+  double mean_filter_s = 0.0;
+
+  double audio_s() const {
+    return sample_rate_hz > 0 ? static_cast<double>(samples_per_channel) / sample_rate_hz : 0.0;
+  }
+};
+
+struct TrackCallbacks {
+  std::function<void(const std::string&)> on_warning;        // before processing starts
+  std::function<void(const engine::Estimate&)> on_estimate;  // every frame, in order
+  std::function<void(const TrackProgress&)> on_progress;     // after every block
+};
+
+StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});
+
+}  // namespace localizer::io

@@ -1,0 +1,116 @@
+#include "clients/io/array_json.h"
+
+#include <gtest/gtest.h>
+
+#include "clients/io/xav_array.h"
+#include "tests/clients/test_util.h"
+
+namespace localizer::io {
+namespace {
+
+using testing::TempDir;
+
+constexpr const char* kTetra = R"({
+  "sound_speed_mps": 1500.0,
+  "sample_rate_hz": 11025,
+  "sensors_m": [[0, 0, 0], [2, 0, 0], [0, 2, 0], [0, 0, 2]],
+  "reference_sensor": 1
+})";
+
+std::string ErrorOf(const std::string& text) {
+  auto array = ParseArrayJson(text, "test.json");
+  return array.ok() ? "" : array.status().message();
+}
+
+TEST(ArrayJson, ParsesEveryField) {
+  auto array = ParseArrayJson(kTetra, "test.json");
+  ASSERT_TRUE(array.ok()) << array.status().ToString();
+  EXPECT_EQ(array->sound_speed_mps, 1500.0);
+  ASSERT_TRUE(array->sample_rate_hz.has_value());
+  EXPECT_EQ(*array->sample_rate_hz, 11025.0);
+  ASSERT_EQ(array->sensors_m.size(), 4u);
+  EXPECT_EQ(array->sensors_m[3], engine::Vec3(0, 0, 2));
+  EXPECT_EQ(array->reference_sensor, 1);
+}
+
+TEST(ArrayJson, OptionalFieldsDefault) {
+  auto array = ParseArrayJson(
+      R"({"sound_speed_mps": 343, "sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]]})", "t");
+  ASSERT_TRUE(array.ok()) << array.status().ToString();
+  EXPECT_FALSE(array->sample_rate_hz.has_value());
+  EXPECT_EQ(array->reference_sensor, 0);
+}
+
+TEST(ArrayJson, WriteThenReadRoundTrips) {
+  TempDir dir;
+  ArrayFile written;
+  written.sound_speed_mps = 1484.0;
+  written.sample_rate_hz = 32000.0;
+  written.reference_sensor = 2;
+  written.sensors_m = {{0.1, -0.2, 0.3}, {1.0 / 3.0, 0, 0}, {0, 1.7, 0}, {0, 0, 1.1}};
+  ASSERT_TRUE(WriteArrayJson(dir.File("array.json"), written).ok());
+  auto read = ReadArrayJson(dir.File("array.json"));
+  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  EXPECT_EQ(read->sound_speed_mps, written.sound_speed_mps);
+  EXPECT_EQ(read->sample_rate_hz, written.sample_rate_hz);
+  EXPECT_EQ(read->reference_sensor, 2);
+  EXPECT_EQ(read->sensors_m, written.sensors_m);  // doubles survive the text exactly
+}
+
+TEST(ArrayJson, ErrorsNameTheField) {
+  const std::string sensors = R"("sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]])";
+  EXPECT_NE(ErrorOf(R"({"sound_speed_mps": 1500})").find("missing required field sensors_m"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("{" + sensors + "}").find("missing required field sound_speed_mps"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(R"({"sound_speed_mps": "fast", )" + sensors + "}").find("sound_speed_mps"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(R"({"sound_speed_mps": -1, )" + sensors + "}").find("must be > 0"),
+            std::string::npos);
+  const std::string bad_coordinate =
+      ErrorOf(R"({"sound_speed_mps": 1500, "sensors_m": [[0,0,0],[1,"x",0],[0,1,0],[0,0,1]]})");
+  EXPECT_NE(bad_coordinate.find("sensors_m[1][1]"), std::string::npos) << bad_coordinate;
+  EXPECT_NE(bad_coordinate.find("not a number"), std::string::npos) << bad_coordinate;
+  EXPECT_NE(
+      ErrorOf(R"({"sound_speed_mps": 1500, "sensors_m": [[0,0,0],[1,0]]})").find("sensors_m[1]"),
+      std::string::npos);
+  EXPECT_NE(ErrorOf(R"({"sound_speed_mps": 1e999, )" + sensors + "}").find("not valid JSON"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(R"({"sound_speed_mps": 1500, "reference_sensr": 1, )" + sensors + "}")
+                .find("unknown field \"reference_sensr\""),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(R"({"sound_speed_mps": 1500, "reference_sensor": 1.5, )" + sensors + "}")
+                .find("reference_sensor"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("[1, 2]").find("JSON object"), std::string::npos);
+  EXPECT_NE(ErrorOf("{not json").find("not valid JSON"), std::string::npos);
+}
+
+TEST(ArrayJson, GeometryErrorsFlowThroughFromTheEngine) {
+  const std::string three =
+      ErrorOf(R"({"sound_speed_mps": 1500, "sensors_m": [[0,0,0],[1,0,0],[0,1,0]]})");
+  EXPECT_NE(three.find("test.json"), std::string::npos) << three;
+  EXPECT_NE(three.find("at least 4"), std::string::npos) << three;
+  const std::string reference = ErrorOf(
+      R"({"sound_speed_mps": 1500, "reference_sensor": 4,
+          "sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]]})");
+  EXPECT_FALSE(reference.empty());
+}
+
+TEST(ArrayJson, MissingFileIsNotFound) {
+  auto array = ReadArrayJson("/nonexistent/array.json");
+  ASSERT_FALSE(array.ok());
+  EXPECT_EQ(array.status().code(), StatusCode::kNotFound);
+}
+
+TEST(ArrayJson, ReadArrayFileTakesTheXavCsv) {
+  auto array = ReadArrayFile(testing::XavConfigCsv());
+  ASSERT_TRUE(array.ok()) << array.status().ToString();
+  ASSERT_EQ(array->sensors_m.size(), 6u);
+  EXPECT_EQ(array->sound_speed_mps, kXavSoundSpeedMps);
+  EXPECT_EQ(array->reference_sensor, 3);
+  EXPECT_EQ(array->sensors_m[5], engine::Vec3(0.858, 0.86, 0.671));
+}
+
+}  // namespace
+}  // namespace localizer::io

@@ -1,0 +1,104 @@
+#include "clients/io/csv_io.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "tests/clients/test_util.h"
+
+namespace localizer::io {
+namespace {
+
+using testing::TempDir;
+
+std::string FirstLine(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+TEST(CsvIo, TruthRoundTrips) {
+  TempDir dir;
+  std::vector<engine::TruthRow> truth;
+  for (int i = 0; i < 50; ++i) {
+    engine::TruthRow row;
+    row.t_s = 0.01 * i;
+    row.position_m = engine::Vec3(1.0 + 0.123456789 * i, -2.5, 3.0 / 7.0);
+    row.velocity_mps = engine::Vec3(1.5, 0.0, -0.25);
+    truth.push_back(row);
+  }
+  ASSERT_TRUE(WriteTruthCsv(dir.File("truth.csv"), truth).ok());
+  EXPECT_EQ(FirstLine(dir.File("truth.csv")), "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps");
+  auto read = ReadTruthCsv(dir.File("truth.csv"));
+  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  ASSERT_EQ(read->size(), truth.size());
+  for (size_t i = 0; i < truth.size(); ++i) {
+    EXPECT_NEAR((*read)[i].t_s, truth[i].t_s, 1e-12);
+    EXPECT_LT(((*read)[i].position_m - truth[i].position_m).norm(), 1e-8);
+    EXPECT_LT(((*read)[i].velocity_mps - truth[i].velocity_mps).norm(), 1e-8);
+  }
+}
+
+engine::Estimate MakeEstimate(double t_s, bool initialised) {
+  engine::Estimate e;
+  e.t_s = t_s;
+  e.initialised = initialised;
+  e.state << 1, 2, 3, 0.1, 0.2, 0.3;
+  e.covariance = engine::Mat6::Identity() * 0.04;
+  e.ess = 900;
+  e.nis = 2.5;
+  e.delay_s = {1e-4, -2e-4, 3e-4};
+  e.quality = {5, 6, 7};
+  e.timings.tdoa_s = 0.001;
+  e.timings.filter_s = 0.002;
+  return e;
+}
+
+TEST(CsvIo, EstimatesHeaderAndRows) {
+  TempDir dir;
+  auto writer = EstimatesCsvWriter::Open(dir.File("est.csv"), {1, 2, 3});
+  ASSERT_TRUE(writer.ok());
+  ASSERT_TRUE(writer->Write(MakeEstimate(0.25, false)).ok());
+  engine::Estimate short_pairs = MakeEstimate(0.5, true);
+  short_pairs.delay_s.clear();  // an estimate without pair data still writes a full row
+  ASSERT_TRUE(writer->Write(short_pairs).ok());
+  ASSERT_TRUE(writer->Close().ok());
+  EXPECT_EQ(FirstLine(dir.File("est.csv")),
+            "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,sx_m,sy_m,sz_m,ess,nis,initialised,"
+            "reinitialised,tdoa_ms,filter_ms,delay_s_1,quality_1,delay_s_2,quality_2,"
+            "delay_s_3,quality_3");
+  auto rows = ReadEstimatesCsv(dir.File("est.csv"));
+  ASSERT_TRUE(rows.ok()) << rows.status().ToString();
+  ASSERT_EQ(rows->size(), 2u);
+  EXPECT_FALSE((*rows)[0].initialised);
+  EXPECT_TRUE((*rows)[1].initialised);
+  EXPECT_EQ((*rows)[1].t_s, 0.5);
+  EXPECT_EQ((*rows)[1].position_m, engine::Vec3(1, 2, 3));
+  EXPECT_NEAR((*rows)[1].velocity_mps.z(), 0.3, 1e-12);
+}
+
+TEST(CsvIo, ReadErrorsNameFileLineAndColumn) {
+  TempDir dir;
+  {
+    std::ofstream out(dir.File("bad.csv"));
+    out << "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps\n0,1,2,3,0,0,0\n0.1,1,abc,3,0,0,0\n";
+  }
+  auto bad = ReadTruthCsv(dir.File("bad.csv"));
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find("bad.csv:3: column y_m is \"abc\""), std::string::npos)
+      << bad.status().message();
+  {
+    std::ofstream out(dir.File("nocol.csv"));
+    out << "t_s,x_m,y_m\n0,1,2\n";
+  }
+  auto missing = ReadTruthCsv(dir.File("nocol.csv"));
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("no column named z_m"), std::string::npos);
+  auto no_flag = ReadEstimatesCsv(dir.File("bad.csv"));
+  ASSERT_FALSE(no_flag.ok());
+}
+
+}  // namespace
+}  // namespace localizer::io
