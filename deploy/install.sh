@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages localizer needs to build, test and run.
+# Idempotent: when everything is present it only checks (well under a second); it runs
+# `apt-get update` only when something is missing. Needs root (or sudo) to install.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config git
+  libeigen3-dev          # linear algebra (engine/)
+  libfftw3-dev           # GCC-PHAT FFTs, float and double (engine/tdoa)
+  libsndfile1-dev        # WAV in and out, int16/24/32 and float32 (clients/)
+  nlohmann-json3-dev     # array.json (clients/)
+  libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
+  libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler  # service (server/, proto/)
+  libcivetweb-dev        # /metrics HTTP endpoint (server/)
+  python3-grpcio python3-grpc-tools python3-numpy  # Python client and load test (clients/)
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install.sh: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+echo "install.sh: installing ${missing[*]}"
+sudo_cmd=()
+[ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
