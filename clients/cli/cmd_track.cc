@@ -55,8 +55,10 @@ void RegisterFlags(FlagSet& flags, TrackFlags* f) {
                        "sound speed, m/s");
   flags.OptionalInt("reference", &f->reference_sensor, "K", "from the array file",
                     "reference sensor index");
-  flags.Double("band-low", &c.band_low_hz, "HZ", "Hz", "lower edge of the GCC band (0: DC)");
-  flags.Double("band-high", &c.band_high_hz, "HZ", "Hz", "upper edge of the GCC band (0: Nyquist)");
+  flags.Double("band-low", &c.band_low_hz, "HZ", "Hz",
+               "lower edge of the GCC band (0: DC, or the array file's band_hz)");
+  flags.Double("band-high", &c.band_high_hz, "HZ", "Hz",
+               "upper edge of the GCC band (0: Nyquist, or the array file's band_hz)");
   flags.Double("tdoa-sigma-us", &f->tdoa_sigma_us, "US", "us",
                "TDOA noise std of the peak likelihood (0: estimated online from the innovations)");
   flags.Double("accel-noise", &c.filter.accel_noise_mps2, "MPS2", "m/s^2",
@@ -83,6 +85,10 @@ StatusOr<engine::SessionConfig> BuildConfig(const TrackFlags& f, const io::Array
   config.sound_speed_mps = f.sound_speed_mps.value_or(array.sound_speed_mps);
   config.reference_sensor = f.reference_sensor.value_or(array.reference_sensor);
   config.sample_rate_hz = sample_rate_hz;
+  if (config.band_low_hz == 0.0 && config.band_high_hz == 0.0 && array.band_hz) {
+    config.band_low_hz = array.band_hz->first;  // the array file's hint, unless flags say
+    config.band_high_hz = std::min(array.band_hz->second, 0.5 * sample_rate_hz);
+  }
   // Create, not just Validate: some limits (band edges against Nyquist, the backend) are
   // only checked when the stages are built, and a bad flag should fail here as a usage error.
   auto session = engine::Session::Create(config);

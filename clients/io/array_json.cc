@@ -16,7 +16,7 @@ namespace {
 using nlohmann::json;
 
 const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz", "sensors_m",
-                                            "reference_sensor"};
+                                            "reference_sensor", "band_hz"};
 
 // A finite number at `value`, or an error naming `field`.
 StatusOr<double> FiniteNumber(const json& value, const std::string& source,
@@ -73,7 +73,7 @@ Status CheckFields(const json& root, const std::string& source) {
     if (!kKnownFields.contains(item.key())) {
       return InvalidArgument(source + ": unknown field \"" + item.key() +
                              "\" (known: sound_speed_mps, sample_rate_hz, sensors_m, "
-                             "reference_sensor)");
+                             "reference_sensor, band_hz)");
     }
   }
   for (const char* required : {"sound_speed_mps", "sensors_m"}) {
@@ -102,6 +102,14 @@ StatusOr<ArrayFile> FromJson(const json& root, const std::string& source) {
     auto reference = ParseReference(root["reference_sensor"], source);
     if (!reference.ok()) return reference.status();
     array.reference_sensor = *reference;
+  }
+  if (root.contains("band_hz")) {
+    const json& band = root["band_hz"];
+    if (!band.is_array() || band.size() != 2 || !band[0].is_number() || !band[1].is_number() ||
+        !(band[0].get<double>() >= 0.0) || !(band[1].get<double>() > band[0].get<double>())) {
+      return InvalidArgument(source + ": band_hz must be [low, high] with 0 <= low < high, got " + band.dump());
+    }
+    array.band_hz = std::make_pair(band[0].get<double>(), band[1].get<double>());
   }
   return array;
 }
@@ -137,6 +145,7 @@ Status WriteArrayJson(const std::string& path, const ArrayFile& array) {
   root["sound_speed_mps"] = array.sound_speed_mps;
   if (array.sample_rate_hz) root["sample_rate_hz"] = *array.sample_rate_hz;
   root["reference_sensor"] = array.reference_sensor;
+  if (array.band_hz) root["band_hz"] = {array.band_hz->first, array.band_hz->second};
   json rows = json::array();
   for (const engine::Vec3& m : array.sensors_m) rows.push_back({m.x(), m.y(), m.z()});
   root["sensors_m"] = std::move(rows);

@@ -4,7 +4,9 @@
 //     "sound_speed_mps": 1500.0,               required, finite, > 0
 //     "sample_rate_hz": 11025,                 optional, finite, > 0 (a WAV header wins)
 //     "sensors_m": [[x, y, z], ...],           required, metres, one row per sensor/channel
-//     "reference_sensor": 0                    optional integer, default 0
+//     "reference_sensor": 0,                   optional integer, default 0
+//     "band_hz": [300, 3000]                   optional processing hint: the source's band,
+//                                              used as the GCC band when none is given
 //   }
 //
 // Reading also builds an engine::ArrayGeometry from the file, so a geometry the engine
@@ -27,6 +29,7 @@ struct ArrayFile {
   double sound_speed_mps = 0.0;
   std::optional<double> sample_rate_hz;
   int reference_sensor = 0;
+  std::optional<std::pair<double, double>> band_hz;  // (low, high), 0 <= low < high
 };
 
 // `source` names the text in messages (usually its path).

@@ -46,6 +46,7 @@ StatusOr<SimulationFiles> WriteSimulationFiles(const std::string& dir, const Sim
   array.sound_speed_mps = run.scenario.sound_speed_mps;
   array.sample_rate_hz = r.sample_rate_hz;
   array.reference_sensor = run.reference_sensor;
+  array.band_hz = std::make_pair(run.scenario.sim.band_low_hz, run.scenario.sim.band_high_hz);
   LOCALIZER_RETURN_IF_ERROR(WriteArrayJson(files.array_path, array));
   LOCALIZER_RETURN_IF_ERROR(WriteTruthCsv(files.truth_path, r.truth));
   return files;

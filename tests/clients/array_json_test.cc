@@ -48,6 +48,7 @@ TEST(ArrayJson, WriteThenReadRoundTrips) {
   written.sample_rate_hz = 32000.0;
   written.reference_sensor = 2;
   written.sensors_m = {{0.1, -0.2, 0.3}, {1.0 / 3.0, 0, 0}, {0, 1.7, 0}, {0, 0, 1.1}};
+  written.band_hz = std::make_pair(50.0, 1000.0);
   ASSERT_TRUE(WriteArrayJson(dir.File("array.json"), written).ok());
   auto read = ReadArrayJson(dir.File("array.json"));
   ASSERT_TRUE(read.ok()) << read.status().ToString();
@@ -55,6 +56,14 @@ TEST(ArrayJson, WriteThenReadRoundTrips) {
   EXPECT_EQ(read->sample_rate_hz, written.sample_rate_hz);
   EXPECT_EQ(read->reference_sensor, 2);
   EXPECT_EQ(read->sensors_m, written.sensors_m);  // doubles survive the text exactly
+  EXPECT_EQ(read->band_hz, written.band_hz);
+}
+
+TEST(ArrayJson, BandHintMustBeAnOrderedPair) {
+  const std::string head = R"({"sound_speed_mps": 343, "sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]], "band_hz": )";
+  EXPECT_NE(ErrorOf(head + "[3000, 300]}").find("band_hz"), std::string::npos);
+  EXPECT_NE(ErrorOf(head + "[300]}").find("band_hz"), std::string::npos);
+  EXPECT_EQ(ErrorOf(head + "[300, 3000]}"), "");
 }
 
 TEST(ArrayJson, ErrorsNameTheField) {
