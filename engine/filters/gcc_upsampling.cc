@@ -21,25 +21,41 @@ void UpsampleGcc(const std::vector<float>& gcc, int factor, std::vector<float>* 
     out->clear();
     return;
   }
+  constexpr int kSpan = 2 * kGccUpsampleTaps;
   out->resize(static_cast<size_t>((size - 1) * factor + 1));
-  // The kernel weights depend only on the phase j % factor: compute them once per phase.
-  thread_local std::vector<double> weights;
-  weights.resize(static_cast<size_t>(factor * 2 * kGccUpsampleTaps));
-  for (int phase = 0; phase < factor; ++phase) {
-    for (int t = 0; t < 2 * kGccUpsampleTaps; ++t) {
-      const double x = static_cast<double>(phase) / factor - (t - kGccUpsampleTaps + 1);
-      weights[static_cast<size_t>(phase * 2 * kGccUpsampleTaps + t)] = Kernel(x);
+  // Kernel weights depend only on the phase j % factor; the input is zero padded by
+  // kGccUpsampleTaps on both sides so the inner loop has no bounds checks.
+  thread_local std::vector<float> weights, padded;
+  thread_local int weights_factor = 0;
+  if (weights_factor != factor) {  // the kernel table depends only on the factor
+    weights_factor = factor;
+    weights.resize(static_cast<size_t>(factor * kSpan));
+    for (int phase = 0; phase < factor; ++phase) {
+      for (int t = 0; t < kSpan; ++t) {
+        const double x = static_cast<double>(phase) / factor - (t - kGccUpsampleTaps + 1);
+      weights[static_cast<size_t>(phase * kSpan + t)] = static_cast<float>(Kernel(x));
+      }
     }
   }
-  for (int j = 0; j < static_cast<int>(out->size()); ++j) {
-    const int base = j / factor, phase = j % factor;
-    double sum = 0.0;
-    for (int t = 0; t < 2 * kGccUpsampleTaps; ++t) {
-      const int m = base + t - kGccUpsampleTaps + 1;
-      if (m < 0 || m >= size) continue;
-      sum += weights[static_cast<size_t>(phase * 2 * kGccUpsampleTaps + t)] * gcc[static_cast<size_t>(m)];
+  padded.assign(static_cast<size_t>(size + 2 * kGccUpsampleTaps), 0.0f);
+  std::copy(gcc.begin(), gcc.end(), padded.begin() + kGccUpsampleTaps);
+  // One phase at a time, as a short convolution vectorised across output positions, then
+  // interleaved into the fine grid.
+  thread_local std::vector<float> phase_out;
+  const int count = static_cast<int>(out->size());
+  const int per_phase = (count + factor - 1) / factor;  // outputs of phase 0; others <= that
+  phase_out.resize(static_cast<size_t>(per_phase));
+  for (int phase = 0; phase < factor; ++phase) {
+    const int outputs = (count - phase + factor - 1) / factor;
+    float* __restrict acc = phase_out.data();
+    std::fill(acc, acc + outputs, 0.0f);
+    for (int t = 0; t < kSpan; ++t) {
+      const float w = weights[static_cast<size_t>(phase * kSpan + t)];
+      const float* __restrict x = padded.data() + 1 + t;  // output b reads x[b]
+#pragma omp simd
+      for (int b = 0; b < outputs; ++b) acc[b] += w * x[b];
     }
-    (*out)[static_cast<size_t>(j)] = static_cast<float>(sum);
+    for (int b = 0; b < outputs; ++b) (*out)[static_cast<size_t>(b * factor + phase)] = acc[b];
   }
 }
 

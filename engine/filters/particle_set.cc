@@ -240,21 +240,22 @@ void ParticleSet::ResampleSystematic(double kernel_scale) {
   // non-empty), a running max spreads the marks over the ranges, then one vectorised
   // gather per column copies the states.
   const float u0 = UniformFromCounter(NextKey(), 0);
+  const int n = n_;  // a local bound: stores through int* could alias the member
   int* __restrict index = index_.data();
   int* __restrict first_slot = first_slot_.data();
   double cumulative = 0.0;
-  for (int i = 0; i < n_; ++i) {
+  for (int i = 0; i < n; ++i) {
     cumulative += w_[i];
-    first_slot[i] = static_cast<int>(std::ceil(cumulative * n_ - u0));
+    first_slot[i] = static_cast<int>(std::ceil(cumulative * n - u0));
   }
-  std::fill(index, index + n_, 0);
+  std::fill(index, index + n, 0);
   int start_slot = 0;
-  for (int i = 0; i < n_; ++i) {
-    if (start_slot < n_) index[start_slot] = i;
-    start_slot = std::clamp(first_slot[i], start_slot, n_);
+  for (int i = 0; i < n; ++i) {
+    if (start_slot < n) index[start_slot] = i;
+    start_slot = std::clamp(first_slot[i], start_slot, n);
   }
   int running = 0;
-  for (int m = 0; m < n_; ++m) {
+  for (int m = 0; m < n; ++m) {
     running = std::max(running, index[m]);
     index[m] = running;
   }
@@ -265,7 +266,7 @@ void ParticleSet::ResampleSystematic(double kernel_scale) {
     const float* __restrict src = from->data();
     float* __restrict dst = to->data();
 #pragma omp simd
-    for (int m = 0; m < n_; ++m) dst[m] = src[index[m]];
+    for (int m = 0; m < n; ++m) dst[m] = src[index[m]];
   }
   std::swap(cur_, next_);
   SetEqualWeights();
