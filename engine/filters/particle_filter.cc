@@ -95,7 +95,7 @@ Status ParticleFilter::Initialise(const TrackState& belief) {
   return Status::Ok();
 }
 
-Status ParticleFilter::InitialiseUniform(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps) {
+Status ParticleFilter::InitialiseRegion(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps) {
   if (!min_m.allFinite() || !max_m.allFinite() || (max_m - min_m).minCoeff() < 0.0 ||
       !(speed_sigma_mps >= 0.0)) {
     return InvalidArgument("initial region must be a finite box with min <= max and speed sigma >= 0");

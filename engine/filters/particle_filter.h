@@ -78,7 +78,7 @@ class ParticleFilter final : public Tracker {
   // Particles ~ N(mean, covariance), weights equal.
   Status Initialise(const TrackState& belief) override;
   // Particles uniform in the box [min_m, max_m] with velocities ~ N(0, speed_sigma_mps^2 I).
-  Status InitialiseUniform(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps);
+  Status InitialiseRegion(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps) override;
   void Predict(double dt_s) override;
   StatusOr<UpdateReport> Update(const Measurement& measurement) override;
   TrackState State() const override;

@@ -31,6 +31,20 @@ class Tracker {
   // (Re)start from a Gaussian belief. INVALID_ARGUMENT if mean/covariance are not finite
   // or the covariance is not positive semi-definite.
   virtual Status Initialise(const TrackState& belief) = 0;
+  // (Re)start knowing only that the source is inside the box [min_m, max_m] with velocity
+  // ~ N(0, speed_sigma_mps^2 I). The default matches the box's mean and covariance with a
+  // Gaussian; a particle filter samples the box itself.
+  virtual Status InitialiseRegion(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps) {
+    if (!min_m.allFinite() || !max_m.allFinite() || (max_m - min_m).minCoeff() < 0.0 ||
+        !(speed_sigma_mps >= 0.0)) {
+      return InvalidArgument("initial region must be a finite box with min <= max and speed sigma >= 0");
+    }
+    TrackState belief;
+    belief.mean.head<3>() = 0.5 * (min_m + max_m);
+    belief.covariance.topLeftCorner<3, 3>() = ((max_m - min_m).array().square() / 12.0).matrix().asDiagonal();
+    belief.covariance.bottomRightCorner<3, 3>() = speed_sigma_mps * speed_sigma_mps * Mat3::Identity();
+    return Initialise(belief);
+  }
   // Propagate the belief by dt_s >= 0 seconds with the motion model.
   virtual void Predict(double dt_s) = 0;
   // Condition on one frame's TDOAs (FAILED_PRECONDITION before Initialise;

@@ -116,6 +116,11 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
       e.quality.push_back(measurement.pairs[p].quality);
     }
     Fix fix;
+    if (!tracker.initialised() && config.init_region_min_m.allFinite()) {
+      (void)tracker.InitialiseRegion(config.init_region_min_m, config.init_region_max_m,
+                                     config.init_speed_sigma_mps);
+      monitor.Reset();
+    }
     if (!tracker.initialised()) {
       if (GoodFix(nullptr, &fix)) {
         TrackState belief;

@@ -2,8 +2,9 @@
 //
 // Blocks of any length are appended to a per-channel ring; every hop_samples a frame of
 // frame_samples (per channel) is cut, the TDOA front end measures it, and the tracker
-// predicts to the frame's instant and updates. Before the tracker has a state, each frame
-// is multilaterated and the first good fix initialises it; a window of normalised innovations
+// predicts to the frame's instant and updates. Before the tracker has a state, it starts
+// from the configured region if there is one, else each frame is multilaterated and the
+// first good fix initialises it; a window of normalised innovations
 // far above its chi-square bound re-initialises it from the current frame's fix.
 // Every block is validated first (sequence increasing, channel count, length, finite
 // values); a rejected block leaves the session exactly as it was.
@@ -11,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -44,6 +46,10 @@ struct SessionConfig {
   double max_fix_std_m = 0.0;         // a fix is good when its position std is below this
                                       // (0: 5 x the array aperture)
   double init_speed_sigma_mps = 2.0;  // velocity spread at initialisation
+  // A region known to hold the source: when min <= max (all finite), the tracker starts
+  // from it at the first frame instead of waiting for a good fix. Unset by default.
+  Vec3 init_region_min_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  Vec3 init_region_max_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   int divergence_window = 8;          // frames averaged by the divergence test
   std::string backend = "cpu";        // "cpu" | "gpu" | "auto"
   uint64_t seed = 1;

@@ -39,6 +39,11 @@ Status SessionConfig::Validate() const {
   if (divergence_window < 1) {
     return InvalidArgument("divergence_window must be >= 1, got " + std::to_string(divergence_window));
   }
+  const bool region_set = init_region_min_m.allFinite() || init_region_max_m.allFinite();
+  if (region_set && (!init_region_min_m.allFinite() || !init_region_max_m.allFinite() ||
+                     (init_region_max_m - init_region_min_m).minCoeff() < 0.0)) {
+    return InvalidArgument("init_region_min_m/init_region_max_m must both be finite with min <= max");
+  }
   return filter.Validate();
 }
 

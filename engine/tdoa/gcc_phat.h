@@ -3,47 +3,92 @@
 // For the reference channel x_r and channel x_k, both zero padded to N >= 2 * frame (so the
 // correlation is linear, not circular), with spectra X_r, X_k:
 //     G(f)   = X_k(f) conj(X_r(f)) * W(f) * B(f)
-//     R(tau) = IFFT(G)(tau)            peaks at tau = delay (x_k(t) = x_r(t - delay))
+//     R(tau) = IFFT(G)(tau) / S        peaks at tau = delay (x_k(t) = x_r(t - delay))
+// N is the smallest power of two >= 2 * frame_samples. Negative lags wrap to the end of the
+// inverse transform's output.
 // Weightings W(f):
 //     PHAT       1 / |X_k X_r*|                   (default; whitens, sharp peak)
 //     PHAT-beta  1 / |X_k X_r*|^beta               (beta in [0, 1]; 1 = PHAT, 0 = CC)
 //     SCOT       1 / sqrt(|X_k|^2 |X_r|^2)  computed per frame (no averaging)
 //     CC         1                                (plain cross-correlation)
-// B(f) is 1 inside the optional band [band_low_hz, band_high_hz] and 0 outside.
-// A small floor (1e-12 of the frame's mean power) keeps silent bins finite.
+// Per frame, without averaging, SCOT equals PHAT except in floored bins (it floors each
+// auto-spectrum rather than the cross-spectrum). PHAT-beta evaluates |.|^-beta with a
+// vectorised exp2/log2 (fast_math.h, ~2e-7 relative), not powf.
+// B(f) is 1 inside the optional band [band_low_hz, band_high_hz] and 0 outside. Set it to
+// the source's band: PHAT weighs every bin alike, so bins without source energy only add
+// noise (peak_interpolation.h measures the spread with and without it).
+// A small floor (1e-12 of the frame's mean power, in the units of the quantity floored:
+// |X_k X_r*| >= 1e-12 sqrt(E_k E_r), |X_k|^2 >= 1e-12 E_k, E = sum of squared samples, which
+// by Parseval is the mean of |X|^2 over the N bins; never below FLT_MIN) keeps silent bins
+// finite.
 //
-// The peak is searched only over |lag| <= max_delay_s(pair) * fs + lag_margin_samples and
-// refined to a sub-sample lag (see peak_interpolation.h for the method and its measured
-// bias). Quality = peak / largest |R| outside the main lobe within the window.
+// Normalisation: S = sum over all N bins (the full Hermitian spectrum) of |G(f)|. By the
+// triangle inequality |R(tau)| <= 1 for every weighting, and R(delay) = 1 for a perfect
+// single path (X_k = X_r exp(-j 2 pi f delay) in every in-band bin); for PHAT S is the
+// number of in-band bins of the full spectrum (less what the floor removes). On a real frame the peak of a clean delayed copy is about
+// 1 - |delay| / frame (the non-overlapping ends of the windows) less the share of
+// out-of-band bins PHAT whitens. A frame with no energy in the band gives S = 0: every pair
+// then reports delay 0, quality 0, peak_value 0 and an all-zero GCC.
+//
+// The peak (largest R, not |R|) is searched only over |lag| <= L_p,
+//     L_p = min(ceil(max_delay_s(pair) * fs) + lag_margin_samples, N/2 - 1)   [samples]
+// and refined to a sub-sample lag by options.interpolation (see peak_interpolation.h for the
+// methods and their measured bias); the refined offset is at most one sample from the
+// integer peak, so a peak on the window's edge may refine just beyond it.
+// Quality = peak / largest |R| outside the main lobe within the window, where the main lobe
+// is the run of samples either side of the peak that stay positive and keep falling (it ends
+// at the first zero crossing or the first local minimum). When the main lobe fills the whole
+// window, the largest |R| over the rest of the full correlation is used instead. Quality is
+// capped at 1e9 and can fall below 1 when a negative lobe, or (in that fallback) a peak
+// outside the window, is larger than the peak: treat small values as "no clear peak".
+// peak_value is R at the integer peak. With keep_gcc, pair.gcc holds R (same
+// normalisation) at lags -L_p..L_p, so first_lag_samples = -L_p and gcc.size() = 2 L_p + 1.
 //
 // Cost per frame: (channels) real FFTs of N plus (channels - 1) inverse FFTs of N, O(N) for
-// the spectra; plans are made once in Create and reused, so Estimate allocates nothing
-// after the first call.
+// the spectra (one vectorised pass per pair, cross_spectrum.h), O(L_p) for the peak and
+// ~0.2 us per pair for the sinc refinement; plans are made once in Create and reused, so
+// Estimate allocates nothing after the first call (which sizes out->pairs and each pair's
+// gcc). tests/bench/gcc_bench.cc compares Estimate with the bare transforms.
+// out->t_s is the caller's t_s (the frame centre); see measurement.h for the instant each
+// pair describes.
+//
+// FFT plans are FFTW_ESTIMATE by default: planning takes milliseconds and the plan is the same
+// in every process, so a session replays bit for bit. measure_fft_plans = true uses
+// FFTW_MEASURE: on the build machine the N = 8192 transforms ran ~20-25% faster, but
+// planning takes ~0.5 s per new size per process and the chosen plan (hence the last bits of
+// the results) may differ between processes. Caveat: FFTW keeps process-wide wisdom, and an
+// FFTW_ESTIMATE plan reuses what an earlier FFTW_MEASURE plan of the same size found, so
+// replay is bit-exact only if a process never mixes the two (pick one per process).
+// Create and the destructor may run on any thread (FFTW's planner is guarded by a mutex);
+// Estimate on one estimator must not run concurrently with itself.
 #pragma once
 
 #include <memory>
 #include <string>
 
 #include "engine/array/array_geometry.h"
+#include "engine/tdoa/peak_interpolation.h"
 #include "engine/tdoa/tdoa_estimator.h"
 
 namespace localizer::engine {
 
 enum class Weighting { kPhat, kPhatBeta, kScot, kCc };
 
-// Parses "phat", "phat-beta", "scot", "cc".
+// Parses "phat", "phat-beta", "scot", "cc"; anything else is INVALID_ARGUMENT listing them.
 StatusOr<Weighting> ParseWeighting(const std::string& name);
 const char* WeightingName(Weighting w);
 
 struct GccOptions {
-  int frame_samples = 4096;       // samples per channel per frame, >= 64
-  double sample_rate_hz = 0.0;    // > 0
+  int frame_samples = 4096;       // samples per channel per frame, in [64, 2^20]
+  double sample_rate_hz = 0.0;    // > 0, finite
   Weighting weighting = Weighting::kPhat;
-  double phat_beta = 0.8;         // only for kPhatBeta, in [0, 1]
-  double band_low_hz = 0.0;       // 0: from DC
-  double band_high_hz = 0.0;      // 0: up to Nyquist
+  double phat_beta = 0.8;         // only used by kPhatBeta; must be in [0, 1]
+  double band_low_hz = 0.0;       // 0: from DC; in [0, fs/2), < band_high_hz when that is set
+  double band_high_hz = 0.0;      // 0: up to Nyquist; else in (band_low_hz, fs/2]
   int lag_margin_samples = 2;     // searched beyond the physical maximum delay, >= 0
   bool keep_gcc = true;           // copy the GCC over the lag window into the Measurement
+  PeakInterpolation interpolation = PeakInterpolation::kSinc;  // sub-sample refinement
+  bool measure_fft_plans = false; // FFTW_MEASURE instead of FFTW_ESTIMATE (see above)
 
   // OK, or INVALID_ARGUMENT naming the field and value.
   Status Validate() const;
@@ -51,16 +96,21 @@ struct GccOptions {
 
 class GccPhatEstimator final : public TdoaEstimator {
  public:
+  // INVALID_ARGUMENT when options.Validate() fails or the band holds no FFT bin; INTERNAL
+  // when FFTW cannot plan.
   static StatusOr<std::unique_ptr<GccPhatEstimator>> Create(const ArrayGeometry& array,
                                                             const GccOptions& options);
   ~GccPhatEstimator() override;
   GccPhatEstimator(const GccPhatEstimator&) = delete;
   GccPhatEstimator& operator=(const GccPhatEstimator&) = delete;
 
+  // INVALID_ARGUMENT (naming the value) when frame or out is null, frame_samples differs from
+  // options().frame_samples, or a channel holds a non-finite sample; `out` is then untouched.
   Status Estimate(const float* frame, int frame_samples, double t_s, Measurement* out) override;
 
   const GccOptions& options() const;
-  int fft_size() const;
+  int fft_size() const;                    // N
+  int max_lag_samples(int pair) const;     // L_p, the half-width of the searched window
 
  private:
   struct Impl;

@@ -182,3 +182,70 @@ TEST(Session, GpuWithoutOneIsAClearErrorNeverAFallback) {
 
 }  // namespace
 }  // namespace localizer::engine
+
+namespace localizer::engine {
+namespace {
+
+// The 8-hydrophone array of turn-multipath (no mirror ambiguity as with 4 sensors), without
+// the surface echo, at 20 dB.
+Scenario EightHydrophones() {
+  Scenario s = *MakeScenario("turn-multipath", 1);
+  s.sim.surface_reflection_enabled = false;
+  s.sim.snr_db = 20.0;
+  return s;
+}
+
+// A stationary broadband source at `source_m` heard by `base`'s array for `duration_s`.
+SimResult StationaryScene(const Scenario& base, const Vec3& source_m, double duration_s, uint64_t seed) {
+  SimOptions o = base.sim;
+  o.trajectory = Trajectory{};
+  o.trajectory.position_m = source_m;
+  o.duration_s = duration_s;
+  o.seed = seed;
+  return *Simulate(*ArrayGeometry::Create(base.sensors_m, base.sound_speed_mps), o);
+}
+
+TEST(Session, StartsFromAConfiguredRegionWithoutWaitingForAFix) {
+  const Scenario base = EightHydrophones();
+  const Vec3 source(3.0, 2.0, -6.0);
+  const SimResult sim = StationaryScene(base, source, 4.0, 5);
+  SessionConfig c = ConfigFor(base);
+  c.band_low_hz = base.sim.band_low_hz;
+  c.band_high_hz = base.sim.band_high_hz;
+  c.min_pair_quality = 1e9;  // no fix is ever good enough: only the region can start it
+  c.filter.particles = 16384;  // a 20 x 20 x 14 m box needs them to find a 2 cm TDOA peak
+  c.init_region_min_m = Vec3(-10, -10, -15);
+  c.init_region_max_m = Vec3(10, 10, -1);
+  const std::vector<Estimate> out = RunInBlocks(c, sim, {4096});
+  ASSERT_FALSE(out.empty());
+  EXPECT_TRUE(out.front().initialised);
+  EXPECT_LT((out.back().state.head<3>() - source).norm(), 0.5) << out.back().state.transpose();
+
+  c.init_region_max_m.x() = -11;  // min > max
+  EXPECT_EQ(Session::Create(c).status().code(), StatusCode::kInvalidArgument);
+}
+
+// The source "jumps" (one recording cut into another): the innovations explode, the
+// divergence test fires and the filter restarts from a fix near the new position.
+TEST(Session, DivergenceReinitialisesFromTheCurrentFix) {
+  const Scenario base = EightHydrophones();
+  const Vec3 first(3.0, 2.0, -6.0), second(-3.0, -2.5, -12.0);
+  const SimResult a = StationaryScene(base, first, 4.0, 6), b = StationaryScene(base, second, 4.0, 7);
+  SessionConfig c = ConfigFor(base);
+  c.band_low_hz = base.sim.band_low_hz;
+  c.band_high_hz = base.sim.band_high_hz;
+  auto session = std::move(*Session::Create(c));
+  std::vector<Estimate> out;
+  const std::vector<float> pa = Slice(a, 0, a.samples_per_channel), pb = Slice(b, 0, b.samples_per_channel);
+  ASSERT_TRUE(session->Process({1, 8, a.samples_per_channel, pa.data()}, &out).ok());
+  ASSERT_LT((out.back().state.head<3>() - first).norm(), 0.5);
+  const size_t before = out.size();
+  ASSERT_TRUE(session->Process({2, 8, b.samples_per_channel, pb.data()}, &out).ok());
+  int reinitialisations = 0;
+  for (size_t i = before; i < out.size(); ++i) reinitialisations += out[i].reinitialised ? 1 : 0;
+  EXPECT_GE(reinitialisations, 1);
+  EXPECT_LT((out.back().state.head<3>() - second).norm(), 0.5);
+}
+
+}  // namespace
+}  // namespace localizer::engine

@@ -1,0 +1,125 @@
+// The weighted cross-spectrum G = W(f) X_k(f) conj(X_r(f)) over a range of bins: the one
+// O(N) loop of GCC besides the FFTs (internal to the tdoa stage; see gcc_phat.h for the maths).
+//
+// Spectra are interleaved (re, im) floats, as FFTW writes them. Each weighting is a small
+// functor that, given X_k conj(X_r) at bin b, returns W and |W X_k conj(X_r)|. WeighBins
+// works through the bins in L1-sized blocks, two passes per block:
+//   1. one fused pass: cross product, magnitude, W (sqrt and divide), G = W X_k conj(X_r)
+//      into planar (re[], im[]) scratch, and the normalising sum of |G| kept in kLanes
+//      partial sums (GCC will not vectorise a single float accumulator without
+//      -fassociative-math);
+//   2. interleave the scratch into the c2r input.
+// Why planar scratch rather than storing interleaved pairs from pass 1: GCC vectorises a
+// loop that stores (re, im) pairs by keeping re and im in alternate lanes, so the sqrt and
+// divide ran on every value twice. Measured on the Zen 4 build machine (AVX-512), PHAT over
+// 4097 bins: fused interleaved 3.5 us, planar scratch 1.6 us.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/tdoa/fast_math.h"
+
+namespace localizer::engine {
+
+inline constexpr int kLanes = 16;              // one 512-bit register of floats
+inline constexpr double kRelativeFloor = 1e-12;  // of the frame's mean power; see gcc_phat.h
+
+struct CrossBin {
+  float re;
+  float im;
+};
+
+// X_k conj(X_r) at bin i.
+inline CrossBin CrossAt(const float* xr, const float* xk, int i) {
+  const float r_re = xr[2 * i];
+  const float r_im = xr[2 * i + 1];
+  const float k_re = xk[2 * i];
+  const float k_im = xk[2 * i + 1];
+  return {k_re * r_re + k_im * r_im, k_im * r_re - k_re * r_im};
+}
+
+// What a weighting gives for one bin: W, and |W G| for the normalising sum.
+struct BinWeight {
+  float weight;
+  float weighted_mag;
+};
+
+inline float Magnitude(CrossBin c) { return std::sqrt(c.re * c.re + c.im * c.im); }
+
+// W = 1 / max(|G|, floor).
+struct PhatWeight {
+  float floor_mag;
+  BinWeight operator()(CrossBin c, const float*, const float*, int) const {
+    const float mag = Magnitude(c);
+    const float weight = 1.0f / std::max(mag, floor_mag);
+    return {weight, mag * weight};
+  }
+};
+
+// W = max(|G|, floor)^-beta.
+struct PhatBetaWeight {
+  float floor_mag;
+  float beta;
+  BinWeight operator()(CrossBin c, const float*, const float*, int) const {
+    const float mag = Magnitude(c);
+    const float weight = FastPowNegative(std::max(mag, floor_mag), beta);
+    return {weight, mag * weight};
+  }
+};
+
+// W = 1 / sqrt(max(|X_k|^2, floor_k) max(|X_r|^2, floor_r)); two square roots so the
+// product of two floors (each >= FLT_MIN) cannot underflow to zero.
+struct ScotWeight {
+  float floor_ref_power;
+  float floor_sensor_power;
+  BinWeight operator()(CrossBin c, const float* xr, const float* xk, int i) const {
+    const float p_ref = xr[2 * i] * xr[2 * i] + xr[2 * i + 1] * xr[2 * i + 1];
+    const float p_sensor = xk[2 * i] * xk[2 * i] + xk[2 * i + 1] * xk[2 * i + 1];
+    const float weight = 1.0f / (std::sqrt(std::max(p_ref, floor_ref_power)) *
+                                 std::sqrt(std::max(p_sensor, floor_sensor_power)));
+    return {weight, Magnitude(c) * weight};
+  }
+};
+
+// W = 1.
+struct CcWeight {
+  BinWeight operator()(CrossBin c, const float*, const float*, int) const {
+    return {1.0f, Magnitude(c)};
+  }
+};
+
+inline constexpr int kBlockBins = 128;  // 2 spectra x 1 KiB + 1 KiB of scratch: in L1
+
+// Writes the weighted cross-spectrum for bins [lo, hi) and returns the sum of |G| over them.
+template <typename Weight>
+float WeighBins(const float* xr, const float* xk, int lo, int hi, const Weight& weight, float* g) {
+  alignas(64) float g_re[kBlockBins];
+  alignas(64) float g_im[kBlockBins];
+  float lanes[kLanes] = {};
+  for (int first = lo; first < hi; first += kBlockBins) {
+    const int count = std::min(kBlockBins, hi - first);
+    const auto weigh = [&](int j, int lane) {
+      const int b = first + j;
+      const CrossBin c = CrossAt(xr, xk, b);
+      const BinWeight w = weight(c, xr, xk, b);
+      g_re[j] = c.re * w.weight;
+      g_im[j] = c.im * w.weight;
+      lanes[lane] += w.weighted_mag;
+    };
+    int j = 0;
+    for (; j + kLanes <= count; j += kLanes) {
+      for (int l = 0; l < kLanes; ++l) weigh(j + l, l);
+    }
+    for (; j < count; ++j) weigh(j, 0);
+    for (int k = 0; k < count; ++k) {
+      g[2 * (first + k)] = g_re[k];
+      g[2 * (first + k) + 1] = g_im[k];
+    }
+  }
+  float sum = 0.0f;
+  for (float lane : lanes) sum += lane;
+  return sum;
+}
+
+}  // namespace localizer::engine

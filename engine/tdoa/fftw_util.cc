@@ -1,0 +1,52 @@
+#include "engine/tdoa/fftw_util.h"
+
+#include <cstdlib>
+#include <cstring>
+
+namespace localizer::engine {
+
+std::mutex& FftwPlannerMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+FftwFloats AllocateFftwFloats(std::size_t count) {
+  auto* p = static_cast<float*>(fftwf_malloc(count * sizeof(float)));
+  if (p == nullptr) std::abort();  // out of memory, as operator new would report it
+  std::memset(p, 0, count * sizeof(float));
+  return FftwFloats(p);
+}
+
+FftwPlan& FftwPlan::operator=(FftwPlan&& other) noexcept {
+  if (this != &other) {
+    Reset();
+    plan_ = other.plan_;
+    other.plan_ = nullptr;
+  }
+  return *this;
+}
+
+void FftwPlan::Reset() {
+  if (plan_ == nullptr) return;
+  std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  fftwf_destroy_plan(plan_);
+  plan_ = nullptr;
+}
+
+FftwPlan PlanRealForward(int n, float* in, float* out_interleaved, unsigned flags) {
+  std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  return FftwPlan(fftwf_plan_dft_r2c_1d(n, in, AsComplex(out_interleaved), flags));
+}
+
+FftwPlan PlanRealInverse(int n, float* in_interleaved, float* out, unsigned flags) {
+  std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  return FftwPlan(fftwf_plan_dft_c2r_1d(n, AsComplex(in_interleaved), out, flags));
+}
+
+int NextPowerOfTwo(int n) {
+  int p = 1;
+  while (p < n) p <<= 1;
+  return p;
+}
+
+}  // namespace localizer::engine

@@ -1,0 +1,370 @@
+#include "engine/tdoa/gcc_phat.h"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "engine/tdoa/cross_spectrum.h"
+#include "engine/tdoa/fftw_util.h"
+
+namespace localizer::engine {
+namespace {
+
+constexpr int kMinFrameSamples = 64;
+constexpr int kMaxFrameSamples = 1 << 20;
+constexpr float kQualityCap = 1e9f;
+
+std::string Value(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
+
+Status BadOption(const char* field, const std::string& value, const std::string& rule) {
+  return InvalidArgument(std::string("GccOptions.") + field + " is " + value + "; " + rule);
+}
+Status BadOption(const char* field, double value, const std::string& rule) {
+  return BadOption(field, Value(value), rule);
+}
+Status BadOption(const char* field, int value, const std::string& rule) {
+  return BadOption(field, std::to_string(value), rule);
+}
+
+// Copies one channel into the zero-padded transform input and returns its energy (sum of
+// squares, double so that no finite input overflows). Partial sums in kLanes lanes let the
+// compiler vectorise the reduction without reassociating a single float sum.
+double CopyChannel(const float* src, int n, float* dst) {
+  double lanes[kLanes] = {};
+  int i = 0;
+  for (; i + kLanes <= n; i += kLanes) {
+    for (int j = 0; j < kLanes; ++j) {
+      const float v = src[i + j];
+      dst[i + j] = v;
+      lanes[j] += static_cast<double>(v) * v;
+    }
+  }
+  double energy = 0.0;
+  for (; i < n; ++i) {
+    dst[i] = src[i];
+    energy += static_cast<double>(src[i]) * src[i];
+  }
+  for (double lane : lanes) energy += lane;
+  return energy;
+}
+
+int ArgMax(std::span<const float> r) {
+  return static_cast<int>(std::max_element(r.begin(), r.end()) - r.begin());
+}
+
+// Main lobe around `peak`: the samples either side that stay positive and keep falling.
+// Returns the first and last index of the lobe within `r`.
+std::pair<int, int> MainLobe(std::span<const float> r, int peak) {
+  int first = peak;
+  while (first > 0 && r[first - 1] > 0.0f && r[first - 1] <= r[first]) --first;
+  int last = peak;
+  const int end = static_cast<int>(r.size()) - 1;
+  while (last < end && r[last + 1] > 0.0f && r[last + 1] <= r[last]) ++last;
+  return {first, last};
+}
+
+float MaxAbs(std::span<const float> r) {
+  float best = 0.0f;
+  for (float v : r) best = std::max(best, std::abs(v));
+  return best;
+}
+
+// The fallback for a window that is all main lobe: the same lobe rule on the full circular
+// correlation (n a power of two), and the largest |R| outside it.
+float LargestOutsideLobe(const float* corr, int n, int peak_lag) {
+  const int mask = n - 1;
+  const auto at = [&](int lag) { return corr[lag & mask]; };
+  int first = peak_lag;
+  int last = peak_lag;
+  while (last - first < n - 1 && at(first - 1) > 0.0f && at(first - 1) <= at(first)) --first;
+  while (last - first < n - 1 && at(last + 1) > 0.0f && at(last + 1) <= at(last)) ++last;
+  float best = 0.0f;
+  for (int lag = last + 1; lag < first + n; ++lag) best = std::max(best, std::abs(at(lag)));
+  return best;
+}
+
+float QualityRatio(float peak, float sidelobe) {
+  if (!(sidelobe > 0.0f)) return peak > 0.0f ? kQualityCap : 0.0f;
+  return std::min(peak / sidelobe, kQualityCap);
+}
+
+}  // namespace
+
+// ---- Names and options ------------------------------------------------------------------
+
+StatusOr<Weighting> ParseWeighting(const std::string& name) {
+  if (name == "phat") return Weighting::kPhat;
+  if (name == "phat-beta") return Weighting::kPhatBeta;
+  if (name == "scot") return Weighting::kScot;
+  if (name == "cc") return Weighting::kCc;
+  return InvalidArgument("weighting \"" + name +
+                         "\" is not one of \"phat\", \"phat-beta\", \"scot\", \"cc\"");
+}
+
+const char* WeightingName(Weighting w) {
+  switch (w) {
+    case Weighting::kPhat: return "phat";
+    case Weighting::kPhatBeta: return "phat-beta";
+    case Weighting::kScot: return "scot";
+    case Weighting::kCc: return "cc";
+  }
+  return "unknown";
+}
+
+Status GccOptions::Validate() const {
+  if (frame_samples < kMinFrameSamples || frame_samples > kMaxFrameSamples) {
+    return BadOption("frame_samples", frame_samples,
+                     "must be in [" + std::to_string(kMinFrameSamples) + ", " +
+                         std::to_string(kMaxFrameSamples) + "]");
+  }
+  if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
+    return BadOption("sample_rate_hz", sample_rate_hz, "must be positive and finite");
+  }
+  const double nyquist_hz = 0.5 * sample_rate_hz;
+  if (!(band_low_hz >= 0.0) || !(band_low_hz < nyquist_hz)) {
+    return BadOption("band_low_hz", band_low_hz,
+                     "must be in [0, sample_rate_hz / 2 = " + Value(nyquist_hz) + ")");
+  }
+  if (!(band_high_hz >= 0.0) || !(band_high_hz <= nyquist_hz)) {
+    return BadOption("band_high_hz", band_high_hz,
+                     "must be 0 (up to Nyquist) or in (band_low_hz, sample_rate_hz / 2 = " +
+                         Value(nyquist_hz) + "]");
+  }
+  if (band_high_hz > 0.0 && !(band_high_hz > band_low_hz)) {
+    return BadOption("band_high_hz", band_high_hz,
+                     "must exceed band_low_hz = " + Value(band_low_hz));
+  }
+  if (!(phat_beta >= 0.0 && phat_beta <= 1.0)) {
+    return BadOption("phat_beta", phat_beta, "must be in [0, 1]");
+  }
+  if (lag_margin_samples < 0) {
+    return BadOption("lag_margin_samples", lag_margin_samples, "must be >= 0");
+  }
+  return Status::Ok();
+}
+
+// ---- Estimator ----------------------------------------------------------------------------
+
+struct GccPhatEstimator::Impl {
+  Impl(const ArrayGeometry& geometry, const GccOptions& opts) : array(geometry), options(opts) {}
+
+  Status Init();
+  Status TransformChannel(const float* samples, int channel);
+  float WeighCrossSpectrum(int pair);
+  void MeasurePair(int pair, PairMeasurement* out);
+  void GatherWindow(int max_lag, float scale);
+
+  ArrayGeometry array;
+  GccOptions options;
+  int fft_size = 0;         // N
+  int bin_count = 0;        // N/2 + 1
+  int spectrum_stride = 0;  // floats from one channel's spectrum to the next (64-byte multiple)
+  int band_first_bin = 0;   // bins [band_first_bin, band_end_bin) are in the band
+  int band_end_bin = 0;
+  std::vector<int> max_lag_samples;  // L_p per pair
+  std::vector<double> energy;        // sum of squares per channel, this frame
+  std::vector<float> window;         // scaled R at lags -(L + K) .. L + K, K = kPeakHalfWidth
+  FftwFloats padded;                 // N: one channel, zero padded
+  FftwFloats spectra;                // channels * spectrum_stride: interleaved X per channel
+  FftwFloats cross;                  // 2 * bin_count: weighted cross-spectrum (c2r input)
+  FftwFloats corr;                   // N: inverse transform output, lag l at index l mod N
+  FftwPlan forward;
+  FftwPlan inverse;
+};
+
+Status GccPhatEstimator::Impl::Init() {
+  const double fs = options.sample_rate_hz;
+  fft_size = NextPowerOfTwo(2 * options.frame_samples);
+  bin_count = fft_size / 2 + 1;
+  spectrum_stride = (2 * bin_count + 15) / 16 * 16;
+
+  const double bins_per_hz = fft_size / fs;
+  band_first_bin = static_cast<int>(std::ceil(options.band_low_hz * bins_per_hz));
+  band_end_bin = options.band_high_hz > 0.0
+                     ? static_cast<int>(std::floor(options.band_high_hz * bins_per_hz)) + 1
+                     : bin_count;
+  band_end_bin = std::min(band_end_bin, bin_count);
+  if (band_first_bin >= band_end_bin) {
+    return InvalidArgument("band [" + Value(options.band_low_hz) + ", " +
+                           Value(options.band_high_hz) + "] Hz holds no FFT bin (bin spacing " +
+                           Value(fs / fft_size) + " Hz)");
+  }
+
+  int widest_lag = 0;
+  for (int p = 0; p < array.pair_count(); ++p) {
+    // In double: a physical delay or margin near INT_MAX must clamp, not overflow.
+    const double wanted = std::ceil(array.max_delay_s(p) * fs) + options.lag_margin_samples;
+    const int lag = static_cast<int>(std::min(wanted, fft_size / 2 - 1.0));
+    max_lag_samples.push_back(lag);
+    widest_lag = std::max(widest_lag, lag);
+  }
+  window.assign(2 * (widest_lag + kPeakHalfWidth) + 1, 0.0f);
+  energy.assign(array.sensor_count(), 0.0);
+
+  padded = AllocateFftwFloats(fft_size);
+  spectra = AllocateFftwFloats(static_cast<std::size_t>(spectrum_stride) * array.sensor_count());
+  cross = AllocateFftwFloats(2 * bin_count);
+  corr = AllocateFftwFloats(fft_size);
+  const unsigned flags = options.measure_fft_plans ? FFTW_MEASURE : FFTW_ESTIMATE;
+  forward = PlanRealForward(fft_size, padded.get(), spectra.get(), flags);
+  inverse = PlanRealInverse(fft_size, cross.get(), corr.get(), flags);
+  if (!forward || !inverse) {
+    return Internal("FFTW could not plan real transforms of size " + std::to_string(fft_size));
+  }
+  // FFTW_MEASURE scribbles on the arrays while planning; the padding must start at zero.
+  std::memset(padded.get(), 0, sizeof(float) * fft_size);
+  return Status::Ok();
+}
+
+// r2c of one channel into its slot in `spectra`. The padded tail stays zero: out-of-place
+// r2c preserves its input, and only the first frame_samples are ever written.
+Status GccPhatEstimator::Impl::TransformChannel(const float* samples, int channel) {
+  const double e = CopyChannel(samples, options.frame_samples, padded.get());
+  if (!std::isfinite(e)) {
+    return InvalidArgument("channel " + std::to_string(channel) +
+                           " holds a non-finite sample (NaN or Inf)");
+  }
+  energy[channel] = e;
+  fftwf_execute_dft_r2c(forward.get(), padded.get(),
+                        AsComplex(spectra.get() + static_cast<std::size_t>(channel) * spectrum_stride));
+  return Status::Ok();
+}
+
+// Fills `cross` with G = W X_k conj(X_r) B and returns S, the sum of |G| over all N bins.
+float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
+  const int ref = array.reference_sensor();
+  const int sensor = array.sensor_of_pair(pair);
+  const float* xr = spectra.get() + static_cast<std::size_t>(ref) * spectrum_stride;
+  const float* xk = spectra.get() + static_cast<std::size_t>(sensor) * spectrum_stride;
+  float* g = cross.get();
+  // Out-of-band bins are zeroed every time: c2r destroys its input.
+  std::memset(g, 0, sizeof(float) * 2 * band_first_bin);
+  std::memset(g + 2 * band_end_bin, 0, sizeof(float) * 2 * (bin_count - band_end_bin));
+
+  const double e_ref = energy[ref];
+  const double e_sensor = energy[sensor];
+  const auto floor_of = [](double power) {  // within [FLT_MIN, FLT_MAX] whatever the input
+    return static_cast<float>(
+        std::clamp(kRelativeFloor * power, static_cast<double>(FLT_MIN), static_cast<double>(FLT_MAX)));
+  };
+  const float floor_mag = floor_of(std::sqrt(e_ref * e_sensor));
+  const int lo = band_first_bin;
+  const int hi = band_end_bin;
+  float half_sum = 0.0f;
+  switch (options.weighting) {
+    case Weighting::kPhat:
+      half_sum = WeighBins(xr, xk, lo, hi, PhatWeight{floor_mag}, g);
+      break;
+    case Weighting::kPhatBeta:
+      half_sum = WeighBins(xr, xk, lo, hi,
+                           PhatBetaWeight{floor_mag, static_cast<float>(options.phat_beta)}, g);
+      break;
+    case Weighting::kScot:
+      half_sum = WeighBins(xr, xk, lo, hi, ScotWeight{floor_of(e_ref), floor_of(e_sensor)}, g);
+      break;
+    case Weighting::kCc:
+      half_sum = WeighBins(xr, xk, lo, hi, CcWeight{}, g);
+      break;
+  }
+  // Bins 1..N/2-1 stand for two bins of the full spectrum; DC and Nyquist (real) for one.
+  return 2.0f * half_sum - std::abs(g[0]) - std::abs(g[2 * (bin_count - 1)]);
+}
+
+// window[i] = R(i - L - K) * scale: the searched lags plus kPeakHalfWidth either side for
+// the interpolator. Lags wrap modulo N; L + K < N keeps both runs inside `corr`.
+void GccPhatEstimator::Impl::GatherWindow(int max_lag, float scale) {
+  const int reach = max_lag + kPeakHalfWidth;
+  const float* negative = corr.get() + fft_size - reach;  // lags -reach .. -1
+  float* w = window.data();
+  for (int i = 0; i < reach; ++i) w[i] = negative[i] * scale;
+  const float* positive = corr.get();  // lags 0 .. reach
+  for (int i = 0; i <= reach; ++i) w[reach + i] = positive[i] * scale;
+}
+
+void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
+  const int max_lag = max_lag_samples[pair];
+  const int searched_count = 2 * max_lag + 1;
+  out->sensor = array.sensor_of_pair(pair);
+  out->first_lag_samples = -max_lag;
+
+  const float norm = WeighCrossSpectrum(pair);
+  if (!(norm > 0.0f)) {  // no energy in the band: nothing to measure
+    out->delay_s = 0.0;
+    out->quality = 0.0;
+    out->peak_value = 0.0;
+    if (options.keep_gcc) out->gcc.assign(searched_count, 0.0f);
+    else out->gcc.clear();
+    return;
+  }
+  fftwf_execute(inverse.get());
+  const float scale = 1.0f / norm;
+  GatherWindow(max_lag, scale);
+
+  const std::span<const float> searched(window.data() + kPeakHalfWidth, searched_count);
+  const int peak = ArgMax(searched);
+  const float peak_value = searched[peak];
+  const std::span<const float, kPeakSamples> around(window.data() + peak, kPeakSamples);
+  const double offset_samples = InterpolatePeak(options.interpolation, around);
+  const int peak_lag = peak - max_lag;
+
+  const auto [first, last] = MainLobe(searched, peak);
+  float sidelobe = 0.0f;
+  if (first > 0 || last < searched_count - 1) {
+    sidelobe = std::max(MaxAbs(searched.first(first)), MaxAbs(searched.subspan(last + 1)));
+  } else {
+    sidelobe = scale * LargestOutsideLobe(corr.get(), fft_size, peak_lag);
+  }
+
+  out->delay_s = (peak_lag + offset_samples) / options.sample_rate_hz;
+  out->peak_value = peak_value;
+  out->quality = QualityRatio(peak_value, sidelobe);
+  if (options.keep_gcc) out->gcc.assign(searched.begin(), searched.end());
+  else out->gcc.clear();
+}
+
+GccPhatEstimator::GccPhatEstimator(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+GccPhatEstimator::~GccPhatEstimator() = default;
+
+StatusOr<std::unique_ptr<GccPhatEstimator>> GccPhatEstimator::Create(const ArrayGeometry& array,
+                                                                     const GccOptions& options) {
+  LOCALIZER_RETURN_IF_ERROR(options.Validate());
+  auto impl = std::make_unique<Impl>(array, options);
+  LOCALIZER_RETURN_IF_ERROR(impl->Init());
+  return std::unique_ptr<GccPhatEstimator>(new GccPhatEstimator(std::move(impl)));
+}
+
+Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double t_s,
+                                  Measurement* out) {
+  Impl& s = *impl_;
+  if (frame == nullptr) return InvalidArgument("frame is null");
+  if (out == nullptr) return InvalidArgument("out (the Measurement to fill) is null");
+  if (frame_samples != s.options.frame_samples) {
+    return InvalidArgument("frame_samples is " + std::to_string(frame_samples) +
+                           "; the estimator was created for frame_samples = " +
+                           std::to_string(s.options.frame_samples));
+  }
+  for (int ch = 0; ch < s.array.sensor_count(); ++ch) {
+    LOCALIZER_RETURN_IF_ERROR(
+        s.TransformChannel(frame + static_cast<std::size_t>(ch) * frame_samples, ch));
+  }
+  out->t_s = t_s;
+  out->sample_rate_hz = s.options.sample_rate_hz;
+  out->pairs.resize(s.array.pair_count());
+  for (int p = 0; p < s.array.pair_count(); ++p) s.MeasurePair(p, &out->pairs[p]);
+  return Status::Ok();
+}
+
+const GccOptions& GccPhatEstimator::options() const { return impl_->options; }
+int GccPhatEstimator::fft_size() const { return impl_->fft_size; }
+int GccPhatEstimator::max_lag_samples(int pair) const { return impl_->max_lag_samples[pair]; }
+
+}  // namespace localizer::engine
