@@ -61,7 +61,7 @@ struct ParticleFilter::Impl {
   ParticleSet set;
   bool initialised = false;
   double ess = 0.0;
-  double sigma_s = 0.0;  // TDOA noise std in use (0 until the first update)
+  std::vector<double> sigmas_s;  // TDOA noise std per pair (empty until the first update)
   std::vector<InnovationMoments> innovations;
 };
 
@@ -77,7 +77,11 @@ StatusOr<std::unique_ptr<ParticleFilter>> ParticleFilter::Create(const ArrayGeom
 bool ParticleFilter::initialised() const { return impl_->initialised; }
 int ParticleFilter::particle_count() const { return impl_->options.particles; }
 double ParticleFilter::ess() const { return impl_->ess; }
-double ParticleFilter::tdoa_sigma_s() const { return impl_->sigma_s; }
+double ParticleFilter::tdoa_sigma_s() const {
+  double sum_s2 = 0.0;
+  for (double sigma_s : impl_->sigmas_s) sum_s2 += sigma_s * sigma_s;
+  return impl_->sigmas_s.empty() ? 0.0 : std::sqrt(sum_s2 / static_cast<double>(impl_->sigmas_s.size()));
+}
 
 Status ParticleFilter::Initialise(const TrackState& belief) {
   if (!belief.mean.allFinite() || !belief.covariance.allFinite()) {
@@ -120,22 +124,27 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
   if (!(m.sample_rate_hz > 0.0)) return InvalidArgument("measurement sample_rate_hz must be > 0");
   const ParticleFilterOptions& o = impl_->options;
   Impl& s = *impl_;
-  if (s.sigma_s <= 0.0) s.sigma_s = o.tdoa_sigma_s > 0.0 ? o.tdoa_sigma_s : kInitialSigmaSamples / m.sample_rate_hz;
+  if (s.sigmas_s.size() != m.pairs.size()) {
+    s.sigmas_s.assign(m.pairs.size(),
+                      o.tdoa_sigma_s > 0.0 ? o.tdoa_sigma_s : kInitialSigmaSamples / m.sample_rate_hz);
+  }
   UpdateReport report;
   report.pair_count = impl_->array.pair_count();
-  report.tdoa_sigma_s = s.sigma_s;
-  s.set.Weigh(m, o.likelihood, s.sigma_s, o.peak_dof, o.gcc_sharpness, &s.innovations);
-  double excess_s2 = 0.0;
-  for (const InnovationMoments& in : s.innovations) {
-    report.nis += in.mean_s * in.mean_s / (s.sigma_s * s.sigma_s + in.predicted_var_s2);
-    excess_s2 += in.mean_s * in.mean_s - in.predicted_var_s2;
-  }
-  if (o.tdoa_sigma_s == 0.0) {  // innovation-based adaptive estimate (Mehra 1972)
-    const double frame_var_s2 = std::max(0.0, excess_s2 / static_cast<double>(s.innovations.size()));
-    const double var_s2 = (1.0 - kSigmaSmoothing) * s.sigma_s * s.sigma_s + kSigmaSmoothing * frame_var_s2;
-    s.sigma_s = std::clamp(std::sqrt(var_s2), kMinSigmaSamples / m.sample_rate_hz,
+  s.set.Weigh(m, o.likelihood, s.sigmas_s, o.peak_dof, o.gcc_sharpness, &s.innovations);
+  double mean_var_s2 = 0.0;
+  for (size_t p = 0; p < s.innovations.size(); ++p) {
+    const InnovationMoments& in = s.innovations[p];
+    double& sigma_s = s.sigmas_s[p];
+    report.nis += in.mean_s * in.mean_s / (sigma_s * sigma_s + in.predicted_var_s2);
+    mean_var_s2 += sigma_s * sigma_s / static_cast<double>(s.innovations.size());
+    if (o.tdoa_sigma_s == 0.0) {  // innovation-based adaptive estimate (Mehra 1972), per pair
+      const double excess_s2 = std::max(0.0, in.mean_s * in.mean_s - in.predicted_var_s2);
+      const double var_s2 = (1.0 - kSigmaSmoothing) * sigma_s * sigma_s + kSigmaSmoothing * excess_s2;
+      sigma_s = std::clamp(std::sqrt(var_s2), kMinSigmaSamples / m.sample_rate_hz,
                            kMaxSigmaSamples / m.sample_rate_hz);
+    }
   }
+  report.tdoa_sigma_s = std::sqrt(mean_var_s2);
   report.ess = impl_->set.NormaliseWeights();
   impl_->ess = report.ess;
   if (report.ess < o.resample_threshold * o.particles) impl_->set.ResampleSystematic(o.kernel_scale);

@@ -119,7 +119,7 @@ double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharp
   return sharpness / (sigma_samples * sigma_samples * curvature);
 }
 
-void ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, double sigma_s, double peak_dof,
+void ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, const std::vector<double>& sigmas_s, double peak_dof,
                         double gcc_sharpness, std::vector<InnovationMoments>* innovations) {
   innovations->resize(m.pairs.size());
   const float* __restrict x = cur_.x.data();
@@ -143,12 +143,13 @@ void ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, double sigm
       ll[i] = 0.0f;
     }
   }
-  const float inv_sigma = static_cast<float>(1.0 / sigma_s);
   const float inv_dof = static_cast<float>(1.0 / peak_dof);
   const float half_dof_plus_1 = static_cast<float>(0.5 * (peak_dof + 1.0));
   const float inv_c = inv_c_;
   for (size_t p = 0; p < m.pairs.size(); ++p) {
     const PairMeasurement& pm = m.pairs[p];
+    const double sigma_s = sigmas_s[p];
+    const float inv_sigma = static_cast<float>(1.0 / sigma_s);
     const int k = pair_sensor_[p];
     const float sx = sensor_x_[k], sy = sensor_y_[k], sz = sensor_z_[k];
     const float d = static_cast<float>(pm.delay_s);

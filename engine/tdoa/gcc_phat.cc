@@ -162,6 +162,8 @@ struct GccPhatEstimator::Impl {
   float WeighCrossSpectrum(int pair);
   void MeasurePair(int pair, PairMeasurement* out);
   void GatherWindow(int max_lag, float scale);
+  float LargestSidelobe(std::span<const float> searched, int peak, int peak_lag,
+                        float scale) const;
 
   ArrayGeometry array;
   GccOptions options;
@@ -234,8 +236,8 @@ Status GccPhatEstimator::Impl::TransformChannel(const float* samples, int channe
                            " holds a non-finite sample (NaN or Inf)");
   }
   energy[channel] = e;
-  fftwf_execute_dft_r2c(forward.get(), padded.get(),
-                        AsComplex(spectra.get() + static_cast<std::size_t>(channel) * spectrum_stride));
+  float* spectrum = spectra.get() + static_cast<std::size_t>(channel) * spectrum_stride;
+  fftwf_execute_dft_r2c(forward.get(), padded.get(), AsComplex(spectrum));
   return Status::Ok();
 }
 
@@ -253,8 +255,8 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
   const double e_ref = energy[ref];
   const double e_sensor = energy[sensor];
   const auto floor_of = [](double power) {  // within [FLT_MIN, FLT_MAX] whatever the input
-    return static_cast<float>(
-        std::clamp(kRelativeFloor * power, static_cast<double>(FLT_MIN), static_cast<double>(FLT_MAX)));
+    return static_cast<float>(std::clamp(kRelativeFloor * power, static_cast<double>(FLT_MIN),
+                                         static_cast<double>(FLT_MAX)));
   };
   const float floor_mag = floor_of(std::sqrt(e_ref * e_sensor));
   const int lo = band_first_bin;
@@ -290,6 +292,17 @@ void GccPhatEstimator::Impl::GatherWindow(int max_lag, float scale) {
   for (int i = 0; i <= reach; ++i) w[reach + i] = positive[i] * scale;
 }
 
+// Largest |R| outside the main lobe within the window, or, when the lobe fills the window,
+// outside it in the whole correlation (scaled like the window).
+float GccPhatEstimator::Impl::LargestSidelobe(std::span<const float> searched, int peak,
+                                              int peak_lag, float scale) const {
+  const auto [first, last] = MainLobe(searched, peak);
+  if (first > 0 || last + 1 < static_cast<int>(searched.size())) {
+    return std::max(MaxAbs(searched.first(first)), MaxAbs(searched.subspan(last + 1)));
+  }
+  return scale * LargestOutsideLobe(corr.get(), fft_size, peak_lag);
+}
+
 void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
   const int max_lag = max_lag_samples[pair];
   const int searched_count = 2 * max_lag + 1;
@@ -316,17 +329,9 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
   const double offset_samples = InterpolatePeak(options.interpolation, around);
   const int peak_lag = peak - max_lag;
 
-  const auto [first, last] = MainLobe(searched, peak);
-  float sidelobe = 0.0f;
-  if (first > 0 || last < searched_count - 1) {
-    sidelobe = std::max(MaxAbs(searched.first(first)), MaxAbs(searched.subspan(last + 1)));
-  } else {
-    sidelobe = scale * LargestOutsideLobe(corr.get(), fft_size, peak_lag);
-  }
-
   out->delay_s = (peak_lag + offset_samples) / options.sample_rate_hz;
   out->peak_value = peak_value;
-  out->quality = QualityRatio(peak_value, sidelobe);
+  out->quality = QualityRatio(peak_value, LargestSidelobe(searched, peak, peak_lag, scale));
   if (options.keep_gcc) out->gcc.assign(searched.begin(), searched.end());
   else out->gcc.clear();
 }

@@ -12,8 +12,8 @@
 //     SCOT       1 / sqrt(|X_k|^2 |X_r|^2)  computed per frame (no averaging)
 //     CC         1                                (plain cross-correlation)
 // Per frame, without averaging, SCOT equals PHAT except in floored bins (it floors each
-// auto-spectrum rather than the cross-spectrum). PHAT-beta evaluates |.|^-beta with a
-// vectorised exp2/log2 (fast_math.h, ~2e-7 relative), not powf.
+// auto-spectrum rather than the cross-spectrum). PHAT-beta evaluates |.|^-beta with the
+// vectorised FastExp/FastLog of engine/core/fast_math.h (~1e-5 relative), not powf.
 // B(f) is 1 inside the optional band [band_low_hz, band_high_hz] and 0 outside. Set it to
 // the source's band: PHAT weighs every bin alike, so bins without source energy only add
 // noise (peak_interpolation.h measures the spread with and without it).
@@ -25,10 +25,12 @@
 // Normalisation: S = sum over all N bins (the full Hermitian spectrum) of |G(f)|. By the
 // triangle inequality |R(tau)| <= 1 for every weighting, and R(delay) = 1 for a perfect
 // single path (X_k = X_r exp(-j 2 pi f delay) in every in-band bin); for PHAT S is the
-// number of in-band bins of the full spectrum (less what the floor removes). On a real frame the peak of a clean delayed copy is about
-// 1 - |delay| / frame (the non-overlapping ends of the windows) less the share of
-// out-of-band bins PHAT whitens. A frame with no energy in the band gives S = 0: every pair
-// then reports delay 0, quality 0, peak_value 0 and an all-zero GCC.
+// number of in-band bins of the full spectrum (less what the floor removes). On a real
+// frame a clean delayed copy peaks a little lower: by |delay| / frame (the windows' ends
+// that do not overlap), by the share of bins without source energy that PHAT whitens, and
+// because peak_value is read at the integer lag (0.4 sample off the true delay, a
+// 200..4000 Hz GCC at 11025 Hz is down to 0.86). A frame with no energy in the band gives
+// S = 0: every pair then reports delay 0, quality 0, peak_value 0 and an all-zero GCC.
 //
 // The peak (largest R, not |R|) is searched only over |lag| <= L_p,
 //     L_p = min(ceil(max_delay_s(pair) * fs) + lag_margin_samples, N/2 - 1)   [samples]

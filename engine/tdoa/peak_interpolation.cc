@@ -38,7 +38,7 @@ struct SincValue {
 
 // With u = x - j for tap j: sin(pi u) = (-1)^j sin(pi x), cos(pi u) = (-1)^j cos(pi x), and
 // the window's cos/sin(pi u / K) follow from the angle difference with the tap table, so one
-// evaluation needs two sin/cos pairs whatever the number of taps.
+// evaluation needs one sin/cos pair whatever the number of taps.
 //   sinc'  = (cos(pi u) - sinc) / u          sinc'' = -pi^2 sinc - 2 sinc' / u
 //   hann   = (1 + cos(pi u / K)) / 2         hann'  = -(pi / 2K) sin(pi u / K)
 //   hann'' = -(pi^2 / 2K^2) cos(pi u / K)

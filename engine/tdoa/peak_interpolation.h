@@ -15,12 +15,13 @@
 //   kSinc       band-limited reconstruction of R between samples,
 //                 R(peak + x) = sum_m samples[m] k(x - (m - K)),
 //                 k(u) = sinc(u) (1 + cos(pi u / K)) / 2 for |u| < K, else 0
-//               (Hann-windowed sinc), maximised by Newton steps on its analytic first and
-//               second derivatives, started at the kParabolic estimate (2-3 steps, to 1e-4
-//               sample). Accurate while the correlation's spectrum stays well inside
-//               fs/2 (the windowed kernel's pass band), as it does for a GCC over a
-//               band-limited source. Cost: about 0.2 us per peak (one sin/cos pair and 17
-//               taps per step) against 3 ns for kParabolic.
+//               (Hann-windowed sinc, sinc(u) = sin(pi u) / (pi u)), maximised by Newton
+//               steps on its analytic first and second derivatives, started at the
+//               kParabolic estimate (2-3 steps, to 1e-4 sample). Accurate while the
+//               correlation's spectrum stays well inside fs/2 (the windowed kernel's pass
+//               band), as it does for a GCC over a band-limited source. Cost: about 0.2 us
+//               per peak (one sin/cos pair and 17 taps per step) against 3 ns for
+//               kParabolic.
 //
 // Measured by tests/tdoa/peak_interpolation_test.cc: GCC-PHAT with the band set to the
 // source's band, band-limited Gaussian noise (fs 11025 Hz, 200..4000 Hz, frame 4096), true
