@@ -8,6 +8,7 @@
 
 #include "engine/pipeline/session.h"
 #include "engine/sim/evaluation.h"
+#include "tests/pipeline/scenario_run.h"
 
 namespace localizer::engine {
 namespace {
@@ -15,24 +16,6 @@ namespace {
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-TrackScore RunOnce(const std::string& name, uint64_t seed, Likelihood likelihood) {
-  const Scenario scenario = *MakeScenario(name, seed);
-  const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
-  const SimResult sim = *Simulate(array, scenario.sim);
-  SessionConfig config;
-  config.sensors_m = scenario.sensors_m;
-  config.sound_speed_mps = scenario.sound_speed_mps;
-  config.sample_rate_hz = scenario.sim.sample_rate_hz;
-  config.band_low_hz = scenario.sim.band_low_hz;
-  config.band_high_hz = scenario.sim.band_high_hz;
-  config.filter.likelihood = likelihood;
-  config.seed = seed;
-  auto session = std::move(*Session::Create(config));
-  std::vector<Estimate> estimates;
-  (void)session->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &estimates);
-  return ScoreTrack(array, sim, estimates, 2.0);
 }
 
 }  // namespace
@@ -47,7 +30,7 @@ int main(int argc, char** argv) {
     for (Likelihood likelihood : {Likelihood::kPeak, Likelihood::kGcc}) {
       std::vector<double> ratios, tails;
       for (int seed = 1; seed <= seeds; ++seed) {
-        const TrackScore s = RunOnce(name, static_cast<uint64_t>(seed), likelihood);
+        const TrackScore s = TrackScenario(name, static_cast<uint64_t>(seed), likelihood).score;
         std::printf("%-16s %-5s %5d %8.3f %8.3f %8.3f %8.3f %7.2f %6d\n", name.c_str(), LikelihoodName(likelihood),
                     seed, s.rmse_m, s.p95_m, s.crlb_m, s.rmse_over_crlb, s.p95_m / s.rmse_m, s.reinitialisations);
         ratios.push_back(s.rmse_over_crlb);

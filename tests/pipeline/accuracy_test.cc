@@ -5,32 +5,16 @@
 
 #include "engine/pipeline/session.h"
 #include "engine/sim/evaluation.h"
+#include "tests/pipeline/scenario_run.h"
 
 namespace localizer::engine {
 namespace {
 
-struct TrackedRun {
-  std::vector<Estimate> estimates;
-  TrackScore score;
-};
+using TrackedRun = ScenarioRun;
 
-TrackedRun Track(const std::string& scenario_name, uint64_t seed, Likelihood likelihood, bool robust_sigma = false) {
-  const Scenario scenario = *MakeScenario(scenario_name, seed);
-  const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
-  const SimResult sim = *Simulate(array, scenario.sim);
-  SessionConfig config;
-  config.sensors_m = scenario.sensors_m;
-  config.sound_speed_mps = scenario.sound_speed_mps;
-  config.sample_rate_hz = scenario.sim.sample_rate_hz;
-  config.band_low_hz = scenario.sim.band_low_hz;
-  config.band_high_hz = scenario.sim.band_high_hz;
-  config.filter.likelihood = likelihood;
-  config.seed = seed;
-  auto session = std::move(*Session::Create(config));
-  TrackedRun run;
-  const BlockView all{1, sim.channel_count, sim.samples_per_channel, sim.samples.data()};
-  EXPECT_TRUE(session->Process(all, &run.estimates).ok());
-  run.score = ScoreTrack(array, sim, run.estimates, /*skip_s=*/2.0, robust_sigma);
+TrackedRun Track(const std::string& name, uint64_t seed, Likelihood likelihood) {
+  TrackedRun run = TrackScenario(name, seed, likelihood);
+  EXPECT_FALSE(run.estimates.empty());
   return run;
 }
 

@@ -1,0 +1,37 @@
+// Simulates a named scenario and tracks it through one Session with the scenario's band:
+// shared by the accuracy tests and tests/bench/accuracy_report.cc.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "engine/pipeline/session.h"
+#include "engine/sim/evaluation.h"
+
+namespace localizer::engine {
+
+struct ScenarioRun {
+  std::vector<Estimate> estimates;
+  TrackScore score;  // estimates from 2 s on, against the simulator's truth
+};
+
+inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelihood likelihood) {
+  const Scenario scenario = *MakeScenario(name, seed);
+  const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
+  const SimResult sim = *Simulate(array, scenario.sim);
+  SessionConfig config;
+  config.sensors_m = scenario.sensors_m;
+  config.sound_speed_mps = scenario.sound_speed_mps;
+  config.sample_rate_hz = scenario.sim.sample_rate_hz;
+  config.band_low_hz = scenario.sim.band_low_hz;
+  config.band_high_hz = scenario.sim.band_high_hz;
+  config.filter.likelihood = likelihood;
+  config.seed = seed;
+  auto session = std::move(*Session::Create(config));
+  ScenarioRun run;
+  (void)session->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &run.estimates);
+  run.score = ScoreTrack(array, sim, run.estimates, /*skip_s=*/2.0);
+  return run;
+}
+
+}  // namespace localizer::engine
