@@ -11,7 +11,8 @@ namespace localizer::engine {
 struct PairMeasurement {
   int sensor = 0;           // index of the non-reference sensor
   double delay_s = 0.0;     // TDOA at the interpolated GCC peak
-  double quality = 0.0;     // peak over the largest sidelobe outside the main lobe (>= 1)
+  double quality = 0.0;     // peak over the largest sidelobe outside the main lobe (small,
+                            // even < 1, means no clear peak; see gcc_phat.h)
   double peak_value = 0.0;  // GCC value at the peak (PHAT: 1 for a perfect single path)
   // The GCC function over the searched lag window, at integer lags
   // first_lag_samples, first_lag_samples + 1, ...; lag in samples = delay_s * sample_rate_hz.
