@@ -36,7 +36,7 @@
 // falls 35x (noiseless) and 13x (20 dB). Without the band set, on a noiseless band-limited
 // source PHAT whitens the out-of-band leakage of the frame edges and every method scatters
 // by 0.12-0.17 sample; at 20 dB without the band, kSinc gives 0.005 bias / 0.018 std and
-// kParabolic 0.057 / 0.023 (DISABLED_BiasAndSpreadWithoutTheBand reproduces these).
+// kParabolic 0.057 / 0.023 (LeavingOutTheBandSpreadsTheEstimates checks the spread).
 #pragma once
 
 #include <span>

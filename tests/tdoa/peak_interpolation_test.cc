@@ -153,17 +153,14 @@ TEST(PeakInterpolation, BiasAndSpreadOnGccPhatAtTwentyDb) {
   EXPECT_LT(sinc.max_std, parabolic.max_std);
 }
 
-// Reproduces the "without the band" remark in peak_interpolation.h (run with
-// --gtest_also_run_disabled_tests); no assertions: it documents a configuration to avoid.
-TEST(PeakInterpolation, DISABLED_BiasAndSpreadWithoutTheBand) {
-  for (double snr_db : {kNoiseless, 20.0}) {
-    for (auto method : {PeakInterpolation::kParabolic, PeakInterpolation::kGaussian,
-                        PeakInterpolation::kSinc}) {
-      const BiasStats s = MeasureBias(method, 16, snr_db, false, false);
-      std::printf("no band, snr %5.1f dB: %-9s max|bias| %.5f max std %.5f rms %.5f\n", snr_db,
-                  PeakInterpolationName(method), s.max_abs_bias, s.max_std, s.rms);
-    }
-  }
+// The "without the band" remark in peak_interpolation.h: PHAT whitening the bins that hold
+// no source energy spreads the estimates, whatever the interpolator (measured: sinc std
+// 0.018 sample without the band against 0.003 with it, at 20 dB).
+TEST(PeakInterpolation, LeavingOutTheBandSpreadsTheEstimates) {
+  const BiasStats with_band = MeasureBias(PeakInterpolation::kSinc, 16, 20.0, true, false);
+  const BiasStats without_band = MeasureBias(PeakInterpolation::kSinc, 16, 20.0, false, true);
+  EXPECT_GT(without_band.max_std, 3.0 * with_band.max_std);
+  EXPECT_GT(without_band.rms, 3.0 * with_band.rms);
 }
 
 }  // namespace
