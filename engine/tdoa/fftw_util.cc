@@ -1,3 +1,4 @@
+#include <algorithm>
 #include "engine/tdoa/fftw_util.h"
 
 #include <cstdlib>
@@ -43,10 +44,15 @@ FftwPlan PlanRealInverse(int n, float* in_interleaved, float* out, unsigned flag
   return FftwPlan(fftwf_plan_dft_c2r_1d(n, AsComplex(in_interleaved), out, flags));
 }
 
-int NextPowerOfTwo(int n) {
-  int p = 1;
-  while (p < n) p <<= 1;
-  return p;
+int NextFastFftSize(int n) {
+  int best = 1;
+  while (best < n) best <<= 1;
+  for (int odd : {3, 5}) {
+    int candidate = odd;
+    while (candidate < n) candidate <<= 1;
+    best = std::min(best, candidate);
+  }
+  return best;
 }
 
 }  // namespace localizer::engine

@@ -79,10 +79,9 @@ float MaxAbs(std::span<const float> r) {
 }
 
 // The fallback for a window that is all main lobe: the same lobe rule on the full circular
-// correlation (n a power of two), and the largest |R| outside it.
+// correlation of length n, and the largest |R| outside it.
 float LargestOutsideLobe(const float* corr, int n, int peak_lag) {
-  const int mask = n - 1;
-  const auto at = [&](int lag) { return corr[lag & mask]; };
+  const auto at = [&](int lag) { return corr[((lag % n) + n) % n]; };
   int first = peak_lag;
   int last = peak_lag;
   while (last - first < n - 1 && at(first - 1) > 0.0f && at(first - 1) <= at(first)) --first;
@@ -185,7 +184,16 @@ struct GccPhatEstimator::Impl {
 
 Status GccPhatEstimator::Impl::Init() {
   const double fs = options.sample_rate_hz;
-  fft_size = NextPowerOfTwo(2 * options.frame_samples);
+  // Lags the stage reads: the physical window plus the margin, plus the interpolator's reach.
+  double widest_wanted = 0.0;
+  for (int p = 0; p < array.pair_count(); ++p) {
+    widest_wanted = std::max(widest_wanted, std::ceil(array.max_delay_s(p) * fs) + options.lag_margin_samples);
+  }
+  // Zero padding to N >= frame + reach + 1 makes the circular correlation equal the linear one
+  // at every lag |l| <= reach (the alias of lag l sits at l -/+ N, beyond the frame). Twice
+  // the frame would also be linear at lags nobody reads, at twice the FFT cost.
+  const double reach = std::min(widest_wanted, static_cast<double>(options.frame_samples)) + kPeakHalfWidth;
+  fft_size = NextFastFftSize(options.frame_samples + static_cast<int>(reach) + 1);
   bin_count = fft_size / 2 + 1;
   spectrum_stride = (2 * bin_count + 15) / 16 * 16;
 
@@ -205,7 +213,8 @@ Status GccPhatEstimator::Impl::Init() {
   for (int p = 0; p < array.pair_count(); ++p) {
     // In double: a physical delay or margin near INT_MAX must clamp, not overflow.
     const double wanted = std::ceil(array.max_delay_s(p) * fs) + options.lag_margin_samples;
-    const int lag = static_cast<int>(std::min(wanted, fft_size / 2 - 1.0));
+    // Keep the window and the interpolator's reach inside half the transform.
+    const int lag = static_cast<int>(std::min(wanted, fft_size / 2 - 1.0 - kPeakHalfWidth));
     max_lag_samples.push_back(lag);
     widest_lag = std::max(widest_lag, lag);
   }

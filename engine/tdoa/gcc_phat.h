@@ -1,11 +1,15 @@
 // Generalised cross-correlation TDOA estimation (Knapp & Carter 1976) with FFTW3, float.
 //
-// For the reference channel x_r and channel x_k, both zero padded to N >= 2 * frame (so the
-// correlation is linear, not circular), with spectra X_r, X_k:
+// For the reference channel x_r and channel x_k, both zero padded to N samples, with
+// spectra X_r, X_k:
 //     G(f)   = X_k(f) conj(X_r(f)) * W(f) * B(f)
 //     R(tau) = IFFT(G)(tau) / S        peaks at tau = delay (x_k(t) = x_r(t - delay))
-// N is the smallest power of two >= 2 * frame_samples. Negative lags wrap to the end of the
-// inverse transform's output.
+// N is the smallest 2^a, 3 * 2^a or 5 * 2^a >= frame_samples + max_p L_p + kPeakHalfWidth + 1
+// (fftw_util.h): the circular correlation then equals the linear one at every lag the stage
+// reads (an alias of lag l lies at l -/+ N, beyond the frame), at about half the cost of
+// N = 2 * frame (5120 instead of 8192 for a 4096 frame). Negative lags wrap to the end of the inverse
+// transform's output; lags far outside the window are circular and only the quality
+// fallback below looks at them.
 // Weightings W(f):
 //     PHAT       1 / |X_k X_r*|                   (default; whitens, sharp peak)
 //     PHAT-beta  1 / |X_k X_r*|^beta               (beta in [0, 1]; 1 = PHAT, 0 = CC)
@@ -33,7 +37,7 @@
 // S = 0: every pair then reports delay 0, quality 0, peak_value 0 and an all-zero GCC.
 //
 // The peak (largest R, not |R|) is searched only over |lag| <= L_p,
-//     L_p = min(ceil(max_delay_s(pair) * fs) + lag_margin_samples, N/2 - 1)   [samples]
+//     L_p = min(ceil(max_delay_s(pair) * fs) + lag_margin_samples, N/2 - 1 - kPeakHalfWidth)   [samples]
 // and refined to a sub-sample lag by options.interpolation (see peak_interpolation.h for the
 // methods and their measured bias); the refined offset is at most one sample from the
 // integer peak, so a peak on the window's edge may refine just beyond it.

@@ -54,8 +54,9 @@ void SetCounters(benchmark::State& state) {
 // The transforms Estimate cannot avoid, on the estimator's buffer layout and plan flags.
 class BareFftw {
  public:
-  BareFftw(unsigned flags, const std::vector<float>& frame)
-      : n_(NextPowerOfTwo(2 * kFrameSamples)),
+  // n: the estimator's transform size (GccPhatEstimator::fft_size()).
+  BareFftw(unsigned flags, const std::vector<float>& frame, int n)
+      : n_(n),
         stride_((2 * (n_ / 2 + 1) + 15) / 16 * 16),  // as the estimator lays out its spectra
         padded_(AllocateFftwFloats(n_)),
         spectra_(AllocateFftwFloats(static_cast<std::size_t>(stride_) * kChannels)),
@@ -101,7 +102,13 @@ std::unique_ptr<GccPhatEstimator> MakeStage(const benchmark::State& state,
 }
 
 void BM_BareFftw(benchmark::State& state) {
-  BareFftw bare(PlannerFlags(state), BenchFrame(static_cast<double>(state.range(0)), BenchArray()));
+  const ArrayGeometry array = BenchArray();
+  auto gcc = MakeStage(state, array);
+  if (!gcc) {
+    state.SkipWithError("GccPhatEstimator::Create failed");
+    return;
+  }
+  BareFftw bare(PlannerFlags(state), BenchFrame(static_cast<double>(state.range(0)), array), gcc->fft_size());
   for (auto _ : state) bare.Run();
   SetCounters(state);
 }
@@ -134,7 +141,7 @@ void BM_StageOverBare(benchmark::State& state) {
     return;
   }
   const std::vector<float> frame = BenchFrame(static_cast<double>(state.range(0)), array);
-  BareFftw bare(PlannerFlags(state), frame);
+  BareFftw bare(PlannerFlags(state), frame, gcc->fft_size());
   Measurement m;
   double bare_s = 0.0;
   double stage_s = 0.0;

@@ -280,17 +280,17 @@ TEST(GccPhatEstimator, PeakBeyondThePhysicalWindowIsNotPicked) {
 
 TEST(GccPhatEstimator, WindowIsClampedBelowHalfTheTransform) {
   SignalSpec spec;
-  spec.frame_samples = 64;  // N = 128
+  spec.frame_samples = 64;  // the window is clamped to 64 + 8: N = 160 (5 * 2^5)
   GccOptions options = SourceBandOptions(spec, Weighting::kPhat);
   options.lag_margin_samples = std::numeric_limits<int>::max();  // clamps, never overflows
   auto gcc = MakeEstimator(Tetrahedron(), options);
-  ASSERT_EQ(gcc->fft_size(), 128);
-  EXPECT_EQ(gcc->max_lag_samples(0), 63);
+  ASSERT_EQ(gcc->fft_size(), 160);
+  EXPECT_EQ(gcc->max_lag_samples(0), 71);
   const std::vector<double> delays = {0, 2.5, -3.0, 6.0};
   const auto frame = DelayedNoiseFrame(spec, delays, kNoiseless, 3);
   Measurement m;
   ASSERT_TRUE(gcc->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
-  EXPECT_EQ(m.pairs[0].gcc.size(), 127u);
+  EXPECT_EQ(m.pairs[0].gcc.size(), 143u);
   // 0.2 sample: a 64-sample frame loses up to 6 / 64 of its overlap to the delay.
   EXPECT_LT(WorstLagError(m, delays, spec.sample_rate_hz), 0.2);
 }

@@ -41,7 +41,7 @@ inline std::vector<float> MultipathFrame(const SignalSpec& spec,
                                          const std::vector<std::vector<Path>>& channels,
                                          double snr_db, uint64_t seed) {
   const int frame = spec.frame_samples;
-  const int length = NextPowerOfTwo(8 * frame);
+  const int length = NextFastFftSize(8 * frame);
   const int bins = length / 2 + 1;
   std::mt19937_64 rng(seed);
   std::normal_distribution<float> gauss(0.0f, 1.0f);
