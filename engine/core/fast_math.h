@@ -1,9 +1,11 @@
 // Branch-free float32 exp, log and inverse normal CDF that the compiler vectorises inside
 // particle loops (libm's expf/logf calls block vectorisation without -ffast-math).
 // Accuracy, measured against double precision in tests/core/fast_math_test.cc:
-//   FastExp: relative error < 2e-7 on [-87, 88]; returns 0 below -87 (no denormals).
-//   FastLog: absolute error < 3e-7 on normal positive floats.
-//   NormalFromUniform: |error| < 2e-5 (in sigmas) for u in (0, 1); tails reach ~±5.3.
+//   FastExp: relative error < 3e-7 on [-87, 88]; clamps below -87 (no denormals, never 0).
+//   FastLog: |error| < 3e-7 * max(1, |ln x|) on normal positive floats (float rounding of
+//     the result dominates for large |ln x|).
+//   NormalFromUniform: |error| < 2e-5 sigma for u in [1e-3, 1 - 1e-3], < 2e-3 sigma beyond
+//     (u itself is float); the counter draws' extremes map to about +-5.3.
 #pragma once
 
 #include <bit>
@@ -50,7 +52,8 @@ inline float FastLog(float x) {
 // single-precision erfinv ("Approximating the erfinv function", GPU Computing Gems, 2011).
 inline float NormalFromUniform(float u) {
   const float x = 2.0f * u - 1.0f;
-  float w = -FastLog((1.0f - x) * (1.0f + x));
+  // 1 - x^2 written as 4u(1 - u): exact enough in the tails, where 1 - x cancels.
+  float w = -FastLog(4.0f * u * (1.0f - u));
   float p;
   if (w < 5.0f) {
     w = w - 2.5f;
@@ -91,8 +94,9 @@ inline uint32_t HashMix32(uint32_t x) {
 }
 inline float UniformFromCounter(uint32_t key, uint32_t counter) {
   const uint32_t h = HashMix32(counter * 0x9e3779b9U + key);
-  // 24 random bits, offset by half a step: never exactly 0 or 1.
-  return (static_cast<float>(h >> 8) + 0.5f) * (1.0f / 16777216.0f);
+  // 23 random bits, offset by half a step: (k + 0.5) / 2^23 needs 24 significant bits, which
+  // float has, so the result is never exactly 0 or 1 (24 bits would round the top to 1).
+  return (static_cast<float>(h >> 9) + 0.5f) * (1.0f / 8388608.0f);
 }
 
 }  // namespace localizer::engine
