@@ -234,49 +234,27 @@ double ParticleSet::NormaliseWeights() {
 }
 
 void ParticleSet::ResampleSystematic(double kernel_scale) {
-  const TrackState before = kernel_scale > 0.0 ? MeanAndCovariance() : TrackState{};
-  // Branch-free systematic resampling: particle i owns the pointers (u0 + m) / N that fall
-  // in (C_{i-1}, C_i], i.e. slots [k_{i-1}, k_i) with k_i = ceil(N C_i - u0). Each particle
-  // marks the first slot of its range (the last writer of a slot is the one whose range is
-  // non-empty), a running max spreads the marks over the ranges, then one vectorised
-  // gather per column copies the states.
-  const float u0 = UniformFromCounter(NextKey(), 0);
-  const int n = n_;  // a local bound: stores through int* could alias the member
-  int* __restrict index = index_.data();
-  int* __restrict first_slot = first_slot_.data();
-  double cumulative = 0.0;
-  for (int i = 0; i < n; ++i) {
-    cumulative += w_[i];
-    first_slot[i] = static_cast<int>(std::ceil(cumulative * n - u0));
-  }
-  std::fill(index, index + n, 0);
-  int start_slot = 0;
-  for (int i = 0; i < n; ++i) {
-    if (start_slot < n) index[start_slot] = i;
-    start_slot = std::clamp(first_slot[i], start_slot, n);
-  }
-  int running = 0;
-  for (int m = 0; m < n; ++m) {
-    running = std::max(running, index[m]);
-    index[m] = running;
-  }
-  const std::array<std::pair<std::vector<float>*, std::vector<float>*>, 6> columns = {{
-      {&cur_.x, &next_.x}, {&cur_.y, &next_.y}, {&cur_.z, &next_.z},
-      {&cur_.vx, &next_.vx}, {&cur_.vy, &next_.vy}, {&cur_.vz, &next_.vz}}};
-  for (const auto& [from, to] : columns) {
-    const float* __restrict src = from->data();
-    float* __restrict dst = to->data();
+  SystematicIndices();
+  const int n = n_;
+  const int* __restrict index = index_.data();
+  float* from[6] = {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()};
+  float* to[6] = {next_.x.data(), next_.y.data(), next_.z.data(), next_.vx.data(), next_.vy.data(), next_.vz.data()};
+  if (kernel_scale <= 0.0) {
+    for (int r = 0; r < 6; ++r) {
+      const float* __restrict src = from[r];
+      float* __restrict dst = to[r];
 #pragma omp simd
-    for (int m = 0; m < n; ++m) dst[m] = src[index[m]];
+      for (int m = 0; m < n; ++m) dst[m] = src[index[m]];
+    }
+    std::swap(cur_, next_);
+    SetEqualWeights();
+    return;
   }
-  std::swap(cur_, next_);
-  SetEqualWeights();
-  if (kernel_scale > 0.0) Regularise(before, kernel_scale);
-}
-
-void ParticleSet::Regularise(const TrackState& moments, double kernel_scale) {
+  // Copy and kernel move in one pass per column:
+  //   x'_m = a x_index[m] + (1 - a) mean + h L z_m
+  const TrackState moments = MeanAndCovariance();
   const double d = 6.0;
-  const double h = std::min(0.95, kernel_scale * std::pow(4.0 / (n_ * (d + 2.0)), 1.0 / (d + 4.0)));
+  const double h = std::min(0.95, kernel_scale * std::pow(4.0 / (n * (d + 2.0)), 1.0 / (d + 4.0)));
   const double a = std::sqrt(1.0 - h * h);
   const Eigen::SelfAdjointEigenSolver<Mat6> eig(moments.covariance);
   const Mat6 root = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
@@ -285,22 +263,7 @@ void ParticleSet::Regularise(const TrackState& moments, double kernel_scale) {
   centre.head<3>() -= origin_m_;
   const Eigen::Matrix<float, 6, 1> shift = ((1.0 - a) * centre).cast<float>();
   const float fa = static_cast<float>(a);
-  const uint32_t key = NextKey();
-  // Kernel draws: the sum of the four bytes of one hash (Irwin–Hall of 4 uniforms, scaled to
-  // unit variance): a smooth bounded kernel, |z| <= 3.46, at a quarter of the cost of an
-  // exact normal; the kernel's shape matters little (Epanechnikov's is the optimum).
-  constexpr float kBytesToUnitVariance = 1.0f / 147.8f;  // sqrt(4 * (256^2 - 1) / 12)
-  for (int k = 0; k < 6; ++k) {
-    float* __restrict zk = noise_[k].data();
-    const uint32_t offset = static_cast<uint32_t>(k) * static_cast<uint32_t>(n_);
-#pragma omp simd
-    for (int i = 0; i < n_; ++i) {
-      const uint32_t bits = HashMix32((offset + static_cast<uint32_t>(i)) * 0x9e3779b9U + key);
-      const uint32_t bytes = (bits & 0xffU) + ((bits >> 8) & 0xffU) + ((bits >> 16) & 0xffU) + (bits >> 24);
-      zk[i] = (static_cast<float>(static_cast<int32_t>(bytes)) - 510.0f) * kBytesToUnitVariance;
-    }
-  }
-  float* cols[6] = {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()};
+  DrawKernelNoise();
   const float* __restrict z0 = noise_[0].data();
   const float* __restrict z1 = noise_[1].data();
   const float* __restrict z2 = noise_[2].data();
@@ -308,18 +271,90 @@ void ParticleSet::Regularise(const TrackState& moments, double kernel_scale) {
   const float* __restrict z4 = noise_[4].data();
   const float* __restrict z5 = noise_[5].data();
   for (int r = 0; r < 6; ++r) {
-    float* __restrict col = cols[r];
+    const float* __restrict src = from[r];
+    float* __restrict dst = to[r];
     const float lr0 = l(r, 0), lr1 = l(r, 1), lr2 = l(r, 2), lr3 = l(r, 3), lr4 = l(r, 4), lr5 = l(r, 5);
     const float sr = shift(r);
 #pragma omp simd
-    for (int i = 0; i < n_; ++i) {
-      col[i] = fa * col[i] + sr + lr0 * z0[i] + lr1 * z1[i] + lr2 * z2[i] + lr3 * z3[i] + lr4 * z4[i] + lr5 * z5[i];
+    for (int m = 0; m < n; ++m) {
+      dst[m] = fa * src[index[m]] + sr + lr0 * z0[m] + lr1 * z1[m] + lr2 * z2[m] + lr3 * z3[m] + lr4 * z4[m] +
+               lr5 * z5[m];
     }
   }
-  // Shrinkage and kernel keep the mean and covariance (Liu & West): the cached moments
-  // stay the estimate.
+  std::swap(cur_, next_);
+  SetEqualWeights();
+  // Shrinkage and kernel keep the mean and covariance (Liu & West): the moments computed
+  // before resampling stay the estimate.
   moments_ = moments;
   moments_valid_ = true;
+}
+
+void ParticleSet::SystematicIndices() {
+  // Branch-free systematic resampling: particle i owns the pointers (u0 + m) / N that fall
+  // in (C_{i-1}, C_i], i.e. slots [k_{i-1}, k_i) with k_i = ceil(N C_i - u0). Each particle
+  // marks the first slot of its range (the last writer of a slot is the one whose range is
+  // non-empty) and a running max spreads the marks over the ranges.
+  const float u0 = UniformFromCounter(NextKey(), 0);
+  const int n = n_;  // a local bound: stores through int* could alias the member
+  const float* __restrict w = w_.data();
+  int* __restrict index = index_.data();
+  int* __restrict first_slot = first_slot_.data();
+  // Prefix sums in kChains interleaved runs so the additions do not wait on each other: run
+  // k covers [k * len, (k + 1) * len) and starts from the sum of the runs before it.
+  constexpr int kChains = 8;
+  const int len = n / kChains;
+  double acc[kChains];
+  double before = 0.0;
+  for (int k = 0; k < kChains; ++k) {
+    acc[k] = before;
+    double run = 0.0;
+#pragma omp simd reduction(+ : run)
+    for (int i = k * len; i < (k + 1) * len; ++i) run += w[i];
+    before += run;
+  }
+  const double scale = n;
+  for (int j = 0; j < len; ++j) {
+    for (int k = 0; k < kChains; ++k) {
+      const int i = k * len + j;
+      acc[k] += w[i];
+      first_slot[i] = static_cast<int>(std::ceil(acc[k] * scale - u0));
+    }
+  }
+  for (int i = kChains * len; i < n; ++i) {  // the remainder, after the last run
+    before += w[i];
+    first_slot[i] = static_cast<int>(std::ceil(before * scale - u0));
+  }
+  // first_slot is non-decreasing (cumulative weights are) and >= 0 (u0 < 1); the last
+  // particle starting at slot s marks it, which is the one whose range is non-empty.
+  std::fill(index, index + n, 0);
+  for (int i = 1; i < n; ++i) {
+    const int start = first_slot[i - 1];
+    if (start < n) index[start] = i;
+  }
+  int running = 0;
+  for (int m = 0; m < n; ++m) {
+    running = std::max(running, index[m]);
+    index[m] = running;
+  }
+}
+
+void ParticleSet::DrawKernelNoise() {
+  // The sum of the four bytes of one hash (Irwin–Hall of 4 uniforms, scaled to unit
+  // variance): a smooth bounded kernel, |z| <= 3.46, at a quarter of the cost of an exact
+  // normal; the kernel's shape matters little (Epanechnikov's is the optimum).
+  constexpr float kBytesToUnitVariance = 1.0f / 147.8f;  // sqrt(4 * (256^2 - 1) / 12)
+  const uint32_t key = NextKey();
+  const int n = n_;
+  for (int k = 0; k < 6; ++k) {
+    float* __restrict zk = noise_[k].data();
+    const uint32_t offset = static_cast<uint32_t>(k) * static_cast<uint32_t>(n);
+#pragma omp simd
+    for (int i = 0; i < n; ++i) {
+      const uint32_t bits = HashMix32((offset + static_cast<uint32_t>(i)) * 0x9e3779b9U + key);
+      const uint32_t bytes = (bits & 0xffU) + ((bits >> 8) & 0xffU) + ((bits >> 16) & 0xffU) + (bits >> 24);
+      zk[i] = (static_cast<float>(static_cast<int32_t>(bytes)) - 510.0f) * kBytesToUnitVariance;
+    }
+  }
 }
 
 TrackState ParticleSet::MeanAndCovariance() const {

@@ -66,7 +66,8 @@ class ParticleSet {
   };
   uint32_t NextKey();  // a fresh random-stream key per use: hash of (seed, use count)
   void SetEqualWeights();
-  void Regularise(const TrackState& moments, double kernel_scale);
+  void SystematicIndices();  // fills index_: the particle each slot copies
+  void DrawKernelNoise();    // fills noise_ with unit-variance kernel draws
 
   int n_;
   uint64_t seed_;
@@ -79,7 +80,7 @@ class ParticleSet {
   Columns cur_, next_;
   std::vector<float> logw_, w_;          // log-weights; normalised linear weights
   std::vector<float> r_ref_, vr_ref_, loglik_, delay_;  // scratch for Weigh
-  std::array<std::vector<float>, 6> noise_;       // scratch for Regularise
+  std::array<std::vector<float>, 6> noise_;       // scratch: kernel draws
   std::vector<float> fine_gcc_;                   // scratch: a pair's GCC upsampled
   std::vector<int> index_, first_slot_;           // scratch for ResampleSystematic
   // Weighted mean and covariance of the current particles, computed on demand and kept
