@@ -10,14 +10,9 @@
 namespace localizer::io {
 namespace {
 
+using testing::FirstLine;
 using testing::TempDir;
 
-std::string FirstLine(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  return line;
-}
 
 TEST(CsvIo, TruthRoundTrips) {
   TempDir dir;

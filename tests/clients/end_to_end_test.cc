@@ -17,14 +17,9 @@
 namespace localizer::io {
 namespace {
 
+using testing::FirstLine;
 using testing::TempDir;
 
-std::string FirstLine(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  return line;
-}
 
 // Callbacks that collect the warnings RunTrack reports.
 TrackCallbacks CollectWarnings(std::vector<std::string>* warnings) {

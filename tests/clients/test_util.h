@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 
@@ -34,6 +35,14 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// The first line of a text file ("" if it cannot be read).
+inline std::string FirstLine(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
 
 inline std::string XavDir() { return std::string(LOCALIZER_DATA_DIR) + "/xav-large-array"; }
 inline std::string XavConfigCsv() { return XavDir() + "/hydrophones_config_07-HI.csv"; }
