@@ -81,6 +81,38 @@ inline float NormalFromUniform(float u) {
   return 1.41421356237f * p * x;
 }
 
+// Box–Muller: two independent standard normals from two uniforms in (0, 1),
+//   r = sqrt(-2 ln u1),  (z1, z2) = r (cos 2 pi u2, sin 2 pi u2),
+// with sin/cos of the quarter-turn fraction by Taylor polynomials (|error| < 1e-7) and the
+// quadrant applied by exchanges and signs. Cheaper per normal than NormalFromUniform when
+// normals are wanted in bulk; same accuracy limits from float u1 in the far tails.
+inline void NormalPairFromUniforms(float u1, float u2, float* z1, float* z2) {
+  const float r = __builtin_sqrtf(-2.0f * FastLog(u1));
+  const float turns = 4.0f * u2;
+  const float quadrant = __builtin_floorf(turns);
+  const float x = (turns - quadrant) * 1.57079632679489662f;  // [0, pi/2)
+  const float x2 = x * x;
+  float sn = -1.0f / 39916800.0f;
+  sn = sn * x2 + 1.0f / 362880.0f;
+  sn = sn * x2 - 1.0f / 5040.0f;
+  sn = sn * x2 + 1.0f / 120.0f;
+  sn = sn * x2 - 1.0f / 6.0f;
+  sn = (sn * x2 + 1.0f) * x;
+  float cs = 1.0f / 479001600.0f;
+  cs = cs * x2 - 1.0f / 3628800.0f;
+  cs = cs * x2 + 1.0f / 40320.0f;
+  cs = cs * x2 - 1.0f / 720.0f;
+  cs = cs * x2 + 1.0f / 24.0f;
+  cs = cs * x2 - 0.5f;
+  cs = cs * x2 + 1.0f;
+  // Rotate by quadrant * 90 degrees: (c, s) -> (-s, c) -> (-c, -s) -> (s, -c).
+  const int q = static_cast<int>(quadrant) & 3;
+  const float c = (q == 0) ? cs : (q == 1) ? -sn : (q == 2) ? -cs : sn;
+  const float sv = (q == 0) ? sn : (q == 1) ? cs : (q == 2) ? -sn : -cs;
+  *z1 = r * c;
+  *z2 = r * sv;
+}
+
 // Counter-based uniform in (0, 1): a stateless hash of (key, counter), so draw i of step k
 // of a session is the same whatever order or thread computes it (replay, vectorisation).
 // 32-bit integer mixing (C. Wellons' "lowbias32" constants) vectorises with AVX2.

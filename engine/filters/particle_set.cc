@@ -31,6 +31,7 @@ ParticleSet::ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions
   for (auto* v : {&logw_, &w_, &r_ref_, &vr_ref_, &loglik_, &delay_}) v->assign(n_, 0.0f);
   for (auto& column : noise_) column.assign(n_, 0.0f);
   index_.assign(n_, 0);
+  accel_.assign(static_cast<size_t>(2 * ((3 * n_ + 1) / 2)), 0.0f);
   first_slot_.assign(n_, 0);
   SetEqualWeights();
 }
@@ -89,6 +90,20 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2) {
   const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
   const uint32_t key = NextKey();
   moments_valid_ = false;
+  const int n = n_;
+  // 3N standard normals, two per Box–Muller draw: accel_[j] and accel_[half + j] come from
+  // uniforms 2j and 2j + 1. Axis k of particle i reads accel_[k * N + i].
+  const int half = static_cast<int>(accel_.size() / 2);
+  float* __restrict first = accel_.data();
+  float* __restrict second = accel_.data() + half;
+#pragma omp simd
+  for (int j = 0; j < half; ++j) {
+    const uint32_t c = 2u * static_cast<uint32_t>(j);
+    NormalPairFromUniforms(UniformFromCounter(key, c), UniformFromCounter(key, c + 1), &first[j], &second[j]);
+  }
+  const float* __restrict ax = accel_.data();
+  const float* __restrict ay = accel_.data() + n;
+  const float* __restrict az = accel_.data() + 2 * n;
   float* __restrict x = cur_.x.data();
   float* __restrict y = cur_.y.data();
   float* __restrict z = cur_.z.data();
@@ -96,17 +111,13 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2) {
   float* __restrict vy = cur_.vy.data();
   float* __restrict vz = cur_.vz.data();
 #pragma omp simd
-  for (int i = 0; i < n_; ++i) {
-    const uint32_t c = 3u * static_cast<uint32_t>(i);
-    const float ax = NormalFromUniform(UniformFromCounter(key, c));
-    const float ay = NormalFromUniform(UniformFromCounter(key, c + 1));
-    const float az = NormalFromUniform(UniformFromCounter(key, c + 2));
-    x[i] += vx[i] * dt + a_to_p * ax;
-    y[i] += vy[i] * dt + a_to_p * ay;
-    z[i] += vz[i] * dt + a_to_p * az;
-    vx[i] += a_to_v * ax;
-    vy[i] += a_to_v * ay;
-    vz[i] += a_to_v * az;
+  for (int i = 0; i < n; ++i) {
+    x[i] += vx[i] * dt + a_to_p * ax[i];
+    y[i] += vy[i] * dt + a_to_p * ay[i];
+    z[i] += vz[i] * dt + a_to_p * az[i];
+    vx[i] += a_to_v * ax[i];
+    vy[i] += a_to_v * ay[i];
+    vz[i] += a_to_v * az[i];
   }
 }
 

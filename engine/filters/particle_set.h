@@ -81,6 +81,7 @@ class ParticleSet {
   std::vector<float> logw_, w_;          // log-weights; normalised linear weights
   std::vector<float> r_ref_, vr_ref_, loglik_, delay_;  // scratch for Weigh
   std::array<std::vector<float>, 6> noise_;       // scratch: kernel draws
+  std::vector<float> accel_;                      // scratch: 3N process-noise normals
   std::vector<float> fine_gcc_;                   // scratch: a pair's GCC upsampled
   std::vector<int> index_, first_slot_;           // scratch for ResampleSystematic
   // Weighted mean and covariance of the current particles, computed on demand and kept
