@@ -350,20 +350,23 @@ void ParticleSet::SystematicIndices() {
 }
 
 void ParticleSet::DrawKernelNoise() {
-  // The sum of the four bytes of one hash (Irwin–Hall of 4 uniforms, scaled to unit
-  // variance): a smooth bounded kernel, |z| <= 3.46, at a quarter of the cost of an exact
+  // Each 32-bit hash gives two draws, each the sum of two of its bytes scaled to unit
+  // variance: a triangular kernel, |z| <= 2.44, at a fraction of the cost of an exact
   // normal; the kernel's shape matters little (Epanechnikov's is the optimum).
-  constexpr float kBytesToUnitVariance = 1.0f / 147.8f;  // sqrt(4 * (256^2 - 1) / 12)
+  constexpr float kTwoBytesToUnitVariance = 1.0f / 104.5f;  // sqrt(2 * (256^2 - 1) / 12)
   const uint32_t key = NextKey();
   const int n = n_;
-  for (int k = 0; k < 6; ++k) {
-    float* __restrict zk = noise_[k].data();
+  for (int k = 0; k < 6; k += 2) {
+    float* __restrict za = noise_[k].data();
+    float* __restrict zb = noise_[k + 1].data();
     const uint32_t offset = static_cast<uint32_t>(k) * static_cast<uint32_t>(n);
 #pragma omp simd
     for (int i = 0; i < n; ++i) {
       const uint32_t bits = HashMix32((offset + static_cast<uint32_t>(i)) * 0x9e3779b9U + key);
-      const uint32_t bytes = (bits & 0xffU) + ((bits >> 8) & 0xffU) + ((bits >> 16) & 0xffU) + (bits >> 24);
-      zk[i] = (static_cast<float>(static_cast<int32_t>(bytes)) - 510.0f) * kBytesToUnitVariance;
+      const uint32_t low = (bits & 0xffU) + ((bits >> 8) & 0xffU);
+      const uint32_t high = ((bits >> 16) & 0xffU) + (bits >> 24);
+      za[i] = (static_cast<float>(static_cast<int32_t>(low)) - 255.0f) * kTwoBytesToUnitVariance;
+      zb[i] = (static_cast<float>(static_cast<int32_t>(high)) - 255.0f) * kTwoBytesToUnitVariance;
     }
   }
 }

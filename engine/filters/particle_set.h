@@ -53,7 +53,7 @@ class ParticleSet {
   // shrinkage (a regularised particle filter), which keeps the weighted mean and covariance
   // and restores the diversity that resampling removes:
   //     x' = a x + (1 - a) mean + h L z,   a = sqrt(1 - h^2),  L L^T = covariance,
-  // z with zero mean and unit covariance (a scaled Irwin–Hall draw, see the .cc)
+  // z with zero mean and unit covariance (triangular draws from hash bytes, see the .cc)
   // h = kernel_scale * (4 / (N (d + 2)))^(1 / (d + 4)), d = 6 (Silverman's optimal bandwidth).
   void ResampleSystematic(double kernel_scale);
   // Weighted mean and covariance (cached until the particles or weights change).
