@@ -1,8 +1,8 @@
 // The particle filter's storage and per-particle kernels, float32 structure-of-arrays.
 //
 // Positions are stored relative to the array centroid (`origin`), so float32 keeps
-// micrometre resolution tens of metres away. Every loop here runs over contiguous arrays
-// without branches and is written to vectorise (see -fopenmp-simd in CMakeLists.txt);
+// micrometre resolution tens of metres away. The per-particle loops run over contiguous
+// arrays without branches and are written to vectorise (see -fopenmp-simd in CMakeLists.txt);
 // random numbers are counter-based (fast_math.h), keyed by (seed, draw number), so results
 // do not depend on how the loops are vectorised. Internal to engine/filters.
 #pragma once
