@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <utility>
 
 #include "engine/core/fast_math.h"
 #include "engine/filters/gcc_upsampling.h"
@@ -244,6 +247,37 @@ double ParticleSet::NormaliseWeights() {
   return 1.0 / static_cast<double>(sum_w2);
 }
 
+namespace {
+
+// A lower-triangular L with L L^T = covariance: Cholesky when the covariance is positive
+// definite, else (a collapsed dimension) the QR-triangularised eigen square root.
+Mat6 CovarianceRoot(const Mat6& covariance) {
+  const Eigen::LLT<Mat6> llt(covariance);
+  if (llt.info() == Eigen::Success) return llt.matrixL();
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(covariance);
+  const Mat6 root = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  // root root^T = (R^T Q^T)(Q R) = R^T R for root^T = Q R, so L = R^T is a triangular root.
+  const Mat6 r = Eigen::HouseholderQR<Mat6>(root.transpose()).matrixQR().triangularView<Eigen::Upper>();
+  return r.transpose();
+}
+
+// dst[m] = a src[index[m]] + shift + sum_{k <= kRow} l_row[k * stride] z_k[m]: one state
+// column resampled and moved by the kernel in one pass.
+template <int kRow>
+void MoveRow(int n, const int* __restrict index, const float* __restrict src, float* __restrict dst, float a,
+             float shift, const float* l_row, Eigen::Index stride, const std::array<const float*, 6>& z) {
+  float coeff[kRow + 1];
+  for (int k = 0; k <= kRow; ++k) coeff[k] = l_row[k * stride];
+#pragma omp simd
+  for (int m = 0; m < n; ++m) {
+    float v = a * src[index[m]] + shift;
+    for (int k = 0; k <= kRow; ++k) v += coeff[k] * z[k][m];
+    dst[m] = v;
+  }
+}
+
+}  // namespace
+
 void ParticleSet::ResampleSystematic(double kernel_scale) {
   SystematicIndices();
   const int n = n_;
@@ -267,31 +301,18 @@ void ParticleSet::ResampleSystematic(double kernel_scale) {
   const double d = 6.0;
   const double h = std::min(0.95, kernel_scale * std::pow(4.0 / (n * (d + 2.0)), 1.0 / (d + 4.0)));
   const double a = std::sqrt(1.0 - h * h);
-  const Eigen::SelfAdjointEigenSolver<Mat6> eig(moments.covariance);
-  const Mat6 root = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
-  const Eigen::Matrix<float, 6, 6> l = (h * root).cast<float>();
+  const Eigen::Matrix<float, 6, 6> l = (h * CovarianceRoot(moments.covariance)).cast<float>();
   Vec6 centre = moments.mean;
   centre.head<3>() -= origin_m_;
   const Eigen::Matrix<float, 6, 1> shift = ((1.0 - a) * centre).cast<float>();
   const float fa = static_cast<float>(a);
   DrawKernelNoise();
-  const float* __restrict z0 = noise_[0].data();
-  const float* __restrict z1 = noise_[1].data();
-  const float* __restrict z2 = noise_[2].data();
-  const float* __restrict z3 = noise_[3].data();
-  const float* __restrict z4 = noise_[4].data();
-  const float* __restrict z5 = noise_[5].data();
-  for (int r = 0; r < 6; ++r) {
-    const float* __restrict src = from[r];
-    float* __restrict dst = to[r];
-    const float lr0 = l(r, 0), lr1 = l(r, 1), lr2 = l(r, 2), lr3 = l(r, 3), lr4 = l(r, 4), lr5 = l(r, 5);
-    const float sr = shift(r);
-#pragma omp simd
-    for (int m = 0; m < n; ++m) {
-      dst[m] = fa * src[index[m]] + sr + lr0 * z0[m] + lr1 * z1[m] + lr2 * z2[m] + lr3 * z3[m] + lr4 * z4[m] +
-               lr5 * z5[m];
-    }
-  }
+  const std::array<const float*, 6> z = {noise_[0].data(), noise_[1].data(), noise_[2].data(),
+                                         noise_[3].data(), noise_[4].data(), noise_[5].data()};
+  // The root is lower triangular: row r reads z_0 .. z_r only (21 terms, not 36).
+  [&]<int... kRow>(std::integer_sequence<int, kRow...>) {
+    (MoveRow<kRow>(n, index, from[kRow], to[kRow], fa, shift(kRow), l.row(kRow).data(), l.rows(), z), ...);
+  }(std::make_integer_sequence<int, 6>{});
   std::swap(cur_, next_);
   SetEqualWeights();
   // Shrinkage and kernel keep the mean and covariance (Liu & West): the moments computed
