@@ -111,7 +111,7 @@ StatusOr<EstimatesCsvWriter> EstimatesCsvWriter::Open(const std::string& path,
   writer.out_ = std::make_unique<std::ofstream>(path);
   if (!*writer.out_) return InvalidArgument(path + ": cannot open for writing");
   std::string header = std::string(kStateColumns) +
-                       ",sx_m,sy_m,sz_m,ess,nis,initialised,reinitialised,tdoa_ms,filter_ms";
+                       ",sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,reinitialised,tdoa_ms,filter_ms";
   for (int k : pair_sensors) {
     header += ",delay_s_" + std::to_string(k) + ",quality_" + std::to_string(k);
   }
@@ -126,7 +126,8 @@ Status EstimatesCsvWriter::Write(const engine::Estimate& e) {
   for (int axis = 0; axis < 3; ++axis) {
     values.push_back(std::sqrt(std::max(0.0, e.covariance(axis, axis))));
   }
-  values.insert(values.end(), {e.ess, e.nis, e.initialised ? 1.0 : 0.0, e.reinitialised ? 1.0 : 0.0,
+  values.insert(values.end(), {e.ess, e.nis, static_cast<double>(e.pairs_used), e.tdoa_sigma_s * 1e6,
+                               e.initialised ? 1.0 : 0.0, e.reinitialised ? 1.0 : 0.0,
                                e.timings.tdoa_s * 1e3, e.timings.filter_s * 1e3});
   for (size_t p = 0; p < pair_count_; ++p) {
     values.push_back(p < e.delay_s.size() ? e.delay_s[p] : NAN);

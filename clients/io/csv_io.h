@@ -8,7 +8,8 @@
 // estimates.csv (one row per engine::Estimate, i.e. per frame):
 //   t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,      state (same instant convention as truth)
 //   sx_m,sy_m,sz_m,                            position std: sqrt of the covariance diagonal
-//   ess,nis,initialised,reinitialised,         filter health; flags are 0 or 1
+//   ess,nis,pairs_used,tdoa_sigma_us,          filter health: pairs conditioned on, the
+//   initialised,reinitialised,                 TDOA noise assumed; flags are 0 or 1
 //   tdoa_ms,filter_ms,                         stage wall times of the frame
 //   delay_s_<k>,quality_<k>, ...               per sensor pair (reference, k), k ascending
 // Missing per-pair values are written as nan. Readers look columns up by name, so extra

@@ -26,6 +26,7 @@ struct Estimate {
   Mat6 covariance = Mat6::Zero();
   double ess = 0.0;            // effective sample size after the update (particle filter)
   double tdoa_sigma_s = 0.0;   // TDOA noise std the tracker assumed (adaptive by default)
+  int pairs_used = 0;          // pairs the tracker conditioned on (peak_snr high enough)
   double nis = 0.0;            // normalised innovation squared of this frame's TDOAs
   std::vector<double> delay_s;  // measured TDOA per pair, as in Measurement
   std::vector<double> quality;  // quality per pair

@@ -14,6 +14,10 @@ struct PairMeasurement {
   double quality = 0.0;     // peak over the largest sidelobe outside the main lobe (small,
                             // even < 1, means no clear peak; see gcc_phat.h)
   double peak_value = 0.0;  // GCC value at the peak (PHAT: 1 for a perfect single path)
+  // peak_value over the GCC's standard deviation when the channels hold only independent
+  // noise (1 / sqrt(in-band bins of the full spectrum), exact for PHAT): the detection
+  // statistic. Noise alone gives ~2-4 (max over the window); a source far more.
+  double peak_snr = 0.0;
   // The GCC function over the searched lag window, at integer lags
   // first_lag_samples, first_lag_samples + 1, ...; lag in samples = delay_s * sample_rate_hz.
   // Trackers read it at a candidate's predicted lag (GCC likelihood).

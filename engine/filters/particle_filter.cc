@@ -36,6 +36,9 @@ Status ParticleFilterOptions::Validate() const {
   if (!(gcc_sharpness > 0.0) || !std::isfinite(gcc_sharpness)) {
     return InvalidArgument("gcc_sharpness must be finite and > 0, got " + std::to_string(gcc_sharpness));
   }
+  if (!(min_peak_snr >= 0.0) || !std::isfinite(min_peak_snr)) {
+    return InvalidArgument("min_peak_snr must be finite and >= 0, got " + std::to_string(min_peak_snr));
+  }
   if (!(resample_threshold >= 0.0 && resample_threshold <= 1.0)) {
     return InvalidArgument("resample_threshold must be in [0, 1], got " + std::to_string(resample_threshold));
   }
@@ -63,6 +66,7 @@ struct ParticleFilter::Impl {
   double ess = 0.0;
   std::vector<double> sigmas_s;  // TDOA noise std per pair (empty until the first update)
   std::vector<InnovationMoments> innovations;
+  std::vector<int> used;  // per pair: 1 when its peak_snr passes min_peak_snr
 };
 
 ParticleFilter::ParticleFilter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -129,14 +133,24 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
                       o.tdoa_sigma_s > 0.0 ? o.tdoa_sigma_s : kInitialSigmaSamples / m.sample_rate_hz);
   }
   UpdateReport report;
-  report.pair_count = impl_->array.pair_count();
-  s.set.Weigh(m, o.likelihood, s.sigmas_s, o.peak_dof, o.gcc_sharpness, &s.innovations);
+  s.used.resize(m.pairs.size());
+  for (size_t p = 0; p < m.pairs.size(); ++p) {
+    s.used[p] = m.pairs[p].peak_snr >= o.min_peak_snr ? 1 : 0;
+    report.pair_count += s.used[p];
+  }
+  if (report.pair_count == 0) {  // no pair heard a source: nothing to condition on
+    report.ess = impl_->ess;
+    report.tdoa_sigma_s = tdoa_sigma_s();
+    return report;
+  }
+  s.set.Weigh(m, s.used, o.likelihood, s.sigmas_s, o.peak_dof, o.gcc_sharpness, &s.innovations);
   double mean_var_s2 = 0.0;
   for (size_t p = 0; p < s.innovations.size(); ++p) {
-    const InnovationMoments& in = s.innovations[p];
     double& sigma_s = s.sigmas_s[p];
-    report.nis += in.mean_s * in.mean_s / (sigma_s * sigma_s + in.predicted_var_s2);
     mean_var_s2 += sigma_s * sigma_s / static_cast<double>(s.innovations.size());
+    if (!s.used[p]) continue;
+    const InnovationMoments& in = s.innovations[p];
+    report.nis += in.mean_s * in.mean_s / (sigma_s * sigma_s + in.predicted_var_s2);
     if (o.tdoa_sigma_s == 0.0) {  // innovation-based adaptive estimate (Mehra 1972), per pair
       const double excess_s2 = std::max(0.0, in.mean_s * in.mean_s - in.predicted_var_s2);
       const double var_s2 = (1.0 - kSigmaSmoothing) * sigma_s * sigma_s + kSigmaSmoothing * excess_s2;

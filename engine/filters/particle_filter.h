@@ -9,7 +9,8 @@
 // Random numbers: a counter-based generator keyed by (seed, draw number, index), so a run
 // replays exactly and the loops have no sequential RNG dependency; normals by Box–Muller.
 //
-// Update, for pair k with measured delay d_k and sigma = tdoa_sigma_s:
+// Update, for each pair k whose peak_snr >= min_peak_snr (the others carry no source, so
+// they are left out; with none left the update changes nothing), with measured delay d_k:
 //   predicted delay at the instant the pair describes (the centre of the two windows'
 //   overlap, d_k / 2 earlier than the frame centre at the reference), to first order:
 //     h_k'(s) = h_k(p) - (d_k / 2) * (dh_k/dp . v)
@@ -59,6 +60,9 @@ struct ParticleFilterOptions {
   double gcc_sharpness = 1.0;         // GCC likelihood: curvature at the peak / the peak
                                       // likelihood's, > 0
   Likelihood likelihood = Likelihood::kPeak;
+  double min_peak_snr = 5.0;          // pairs whose peak_snr is below are not used: the
+                                      // frame holds no coherent source for them (noise
+                                      // alone stays below ~4 at p99)
   double resample_threshold = 0.8;    // resample when ESS < threshold * N (seed: 0.8)
   double kernel_scale = 0.5;          // regularisation after resampling, x Silverman's
                                       // bandwidth (0: plain bootstrap filter)

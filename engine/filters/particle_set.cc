@@ -133,7 +133,8 @@ double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharp
   return sharpness / (sigma_samples * sigma_samples * curvature);
 }
 
-void ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, const std::vector<double>& sigmas_s, double peak_dof,
+void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Likelihood likelihood,
+                        const std::vector<double>& sigmas_s, double peak_dof,
                         double gcc_sharpness, std::vector<InnovationMoments>* innovations) {
   innovations->resize(m.pairs.size());
   const float* __restrict x = cur_.x.data();
@@ -161,6 +162,7 @@ void ParticleSet::Weigh(const Measurement& m, Likelihood likelihood, const std::
   const float half_dof_plus_1 = static_cast<float>(0.5 * (peak_dof + 1.0));
   const float inv_c = inv_c_;
   for (size_t p = 0; p < m.pairs.size(); ++p) {
+    if (!used[p]) continue;
     const PairMeasurement& pm = m.pairs[p];
     const double sigma_s = sigmas_s[p];
     const float inv_sigma = static_cast<float>(1.0 / sigma_s);

@@ -43,8 +43,9 @@ class ParticleSet {
   void Predict(double dt_s, double accel_sigma_mps2);
   // Adds each particle's log-likelihood of `m` to its log-weight (see particle_filter.h) and
   // reports, per pair, the innovation of the peak delay against the prior predicted delays.
-  // sigmas_s holds one TDOA noise std per pair.
-  void Weigh(const Measurement& m, Likelihood likelihood, const std::vector<double>& sigmas_s, double peak_dof,
+  // sigmas_s holds one TDOA noise std per pair; pairs with used[p] == 0 are skipped.
+  void Weigh(const Measurement& m, const std::vector<int>& used, Likelihood likelihood,
+             const std::vector<double>& sigmas_s, double peak_dof,
              double gcc_sharpness, std::vector<InnovationMoments>* innovations);
   // Normalises the weights (log-sum-exp) and returns the ESS = 1 / sum w^2.
   double NormaliseWeights();

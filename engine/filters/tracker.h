@@ -18,7 +18,7 @@ struct UpdateReport {
   // measurement distribution: sum_p (d_p - E[h_p])^2 / (sigma_p^2 + Var[h_p]).
   // ~ chi-square with `pair_count` degrees of freedom when the filter is consistent.
   double nis = 0.0;
-  int pair_count = 0;
+  int pair_count = 0;  // pairs used (those that heard a source); 0: the update did nothing
   double ess = 0.0;  // effective sample size after the update (0 for non-particle filters)
   double tdoa_sigma_s = 0.0;  // TDOA noise std the update assumed
 };

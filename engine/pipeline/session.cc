@@ -82,7 +82,7 @@ struct Session::Impl {
 
 bool Session::Impl::GoodFix(const Vec3* hint, Fix* fix) const {
   for (const PairMeasurement& p : measurement.pairs) {
-    if (p.quality < config.min_pair_quality) return false;
+    if (p.quality < config.min_pair_quality || p.peak_snr < config.filter.min_peak_snr) return false;
   }
   MultilaterationOptions options;
   options.tdoa_sigma_s = tdoa_sigma_s();
@@ -139,7 +139,8 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
         e.ess = report->ess;
         last_sigma_s = report->tdoa_sigma_s;
         e.tdoa_sigma_s = report->tdoa_sigma_s;
-        if (monitor.Add(report->nis, report->pair_count)) {
+        e.pairs_used = report->pair_count;
+        if (report->pair_count > 0 && monitor.Add(report->nis, report->pair_count)) {
           const TrackState lost = tracker.State();
           const Vec3 hint = lost.mean.head<3>();
           if (GoodFix(&hint, &fix)) {

@@ -171,6 +171,9 @@ struct GccPhatEstimator::Impl {
   int spectrum_stride = 0;  // floats from one channel's spectrum to the next (64-byte multiple)
   int band_first_bin = 0;   // bins [band_first_bin, band_end_bin) are in the band
   int band_end_bin = 0;
+  // 1 / (noise-only std of R) = sqrt(in-band bins of the full spectrum): under PHAT each
+  // bin is a unit phasor of random phase and R is their mean.
+  float noise_floor_inverse = 0.0f;
   std::vector<int> max_lag_samples;  // L_p per pair
   std::vector<double> energy;        // sum of squares per channel, this frame
   std::vector<float> window;         // scaled R at lags -(L + K) .. L + K, K = kPeakHalfWidth
@@ -203,6 +206,7 @@ Status GccPhatEstimator::Impl::Init() {
                      ? static_cast<int>(std::floor(options.band_high_hz * bins_per_hz)) + 1
                      : bin_count;
   band_end_bin = std::min(band_end_bin, bin_count);
+  noise_floor_inverse = static_cast<float>(std::sqrt(2.0 * std::max(1, band_end_bin - band_first_bin)));
   if (band_first_bin >= band_end_bin) {
     return InvalidArgument("band [" + Value(options.band_low_hz) + ", " +
                            Value(options.band_high_hz) + "] Hz holds no FFT bin (bin spacing " +
@@ -323,6 +327,7 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
     out->delay_s = 0.0;
     out->quality = 0.0;
     out->peak_value = 0.0;
+    out->peak_snr = 0.0;
     if (options.keep_gcc) out->gcc.assign(searched_count, 0.0f);
     else out->gcc.clear();
     return;
@@ -340,6 +345,7 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
 
   out->delay_s = (peak_lag + offset_samples) / options.sample_rate_hz;
   out->peak_value = peak_value;
+  out->peak_snr = peak_value * noise_floor_inverse;
   out->quality = QualityRatio(peak_value, LargestSidelobe(searched, peak, peak_lag, scale));
   if (options.keep_gcc) out->gcc.assign(searched.begin(), searched.end());
   else out->gcc.clear();

@@ -47,7 +47,8 @@
 // window, the largest |R| over the rest of the full correlation is used instead. Quality is
 // capped at 1e9 and can fall below 1 when a negative lobe, or (in that fallback) a peak
 // outside the window, is larger than the peak: treat small values as "no clear peak".
-// peak_value is R at the integer peak. With keep_gcc, pair.gcc holds R (same
+// peak_value is R at the integer peak; peak_snr = peak_value * sqrt(2 * in-band bins), its
+// ratio to the noise-only standard deviation of R (measurement.h). With keep_gcc, pair.gcc holds R (same
 // normalisation) at lags -L_p..L_p, so first_lag_samples = -L_p and gcc.size() = 2 L_p + 1.
 //
 // Cost per frame: (channels) real FFTs of N plus (channels - 1) inverse FFTs of N, O(N) for

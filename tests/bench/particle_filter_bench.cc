@@ -40,6 +40,7 @@ void BM_ParticleFilterStep(benchmark::State& state) {
     const Eigen::VectorXd h = array.Tdoa(source);
     for (int p = 0; p < array.pair_count(); ++p) {
       PairMeasurement pm;
+      pm.peak_snr = 40.0;
       pm.delay_s = h(p) + noise(rng);
       const int max_lag = static_cast<int>(std::ceil(array.max_delay_s(p) * fs)) + 2;
       pm.first_lag_samples = -max_lag;

@@ -61,7 +61,7 @@ TEST(CsvIo, EstimatesHeaderAndRows) {
   ASSERT_TRUE(writer->Write(short_pairs).ok());
   ASSERT_TRUE(writer->Close().ok());
   EXPECT_EQ(FirstLine(dir.File("est.csv")),
-            "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,sx_m,sy_m,sz_m,ess,nis,initialised,"
+            "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,"
             "reinitialised,tdoa_ms,filter_ms,delay_s_1,quality_1,delay_s_2,quality_2,"
             "delay_s_3,quality_3");
   auto rows = ReadEstimatesCsv(dir.File("est.csv"));

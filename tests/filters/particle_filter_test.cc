@@ -35,6 +35,7 @@ Measurement MakeMeasurement(const ArrayGeometry& array, const Vec3& p0, const Ve
     pm.sensor = array.sensor_of_pair(p);
     pm.delay_s = d + noise(rng);
     pm.quality = 10.0;
+    pm.peak_snr = 40.0;  // a clearly detected source
     m.pairs.push_back(pm);
   }
   return m;
@@ -135,6 +136,7 @@ TEST(ParticleFilter, GccLikelihoodIgnoresAStrongerFalsePeak) {
   for (int p = 0; p < array.pair_count(); ++p) {
     PairMeasurement pm;
     pm.sensor = array.sensor_of_pair(p);
+    pm.peak_snr = 40.0;
     const int max_lag = static_cast<int>(std::ceil(array.max_delay_s(p) * fs)) + 14;
     pm.first_lag_samples = -max_lag;
     const double true_lag = h(p) * fs, false_lag = true_lag + 12.0;
@@ -154,6 +156,30 @@ TEST(ParticleFilter, GccLikelihoodIgnoresAStrongerFalsePeak) {
   // the estimate's delays sit on the true peak, 12 samples from the false one.
   const Eigen::VectorXd lag_error = (array.Tdoa((*pf)->State().mean.head<3>()) - h) * fs;
   EXPECT_LT(lag_error.cwiseAbs().maxCoeff(), 0.5) << lag_error.transpose();
+}
+
+// Pairs whose GCC peak is no higher than noise alone makes it carry no source: the update
+// must leave the belief as it was; one detected pair is still used.
+TEST(ParticleFilter, PairsWithoutADetectionAreLeftOut) {
+  const ArrayGeometry array = Tetrahedron(2.0, Vec3(0, 0, -10), 1500.0);
+  auto pf = std::move(*ParticleFilter::Create(array, Options()));
+  TrackState belief;
+  belief.mean << 4, 2, -9, 0, 0, 0;
+  belief.covariance.diagonal() << 1, 1, 1, 0.1, 0.1, 0.1;
+  ASSERT_TRUE(pf->Initialise(belief).ok());
+  std::mt19937_64 rng(8);
+  Measurement m = MakeMeasurement(array, Vec3(4.5, 2.5, -9.0), Vec3::Zero(), 0.0, 8e-6, 11025.0, rng);
+  for (PairMeasurement& pm : m.pairs) pm.peak_snr = 3.0;  // noise level
+  const TrackState before = pf->State();
+  auto report = pf->Update(m);
+  ASSERT_TRUE(report.ok());
+  EXPECT_EQ(report->pair_count, 0);
+  EXPECT_EQ(pf->State().mean, before.mean);
+  m.pairs[1].peak_snr = 30.0;
+  report = pf->Update(m);
+  ASSERT_TRUE(report.ok());
+  EXPECT_EQ(report->pair_count, 1);
+  EXPECT_NE(pf->State().mean, before.mean);
 }
 
 TEST(ParticleFilter, ContractErrors) {
