@@ -59,6 +59,11 @@ struct Session::Impl {
   void ProcessFrame(const float* frame, int64_t first_sample, uint64_t sequence, std::vector<Estimate>* out);
   // Multilaterates this frame; true (and *fix set) when the fix is good enough to (re)start.
   bool GoodFix(const Vec3* hint, Fix* fix) const;
+  // A Gaussian belief at the fix, at rest with init_speed_sigma_mps of velocity spread.
+  TrackState BeliefFromFix(const Fix& fix) const;
+  // Conditions the tracker on this frame, fills e's filter fields, and restarts the tracker
+  // from this frame's fix when the divergence test fires.
+  void UpdateAndWatch(Estimate* e);
   // The TDOA noise std for fixes: configured, else the tracker's latest adaptive estimate,
   // else 0.1 sample.
   double tdoa_sigma_s() const {
@@ -95,6 +100,31 @@ bool Session::Impl::GoodFix(const Vec3* hint, Fix* fix) const {
   return true;
 }
 
+TrackState Session::Impl::BeliefFromFix(const Fix& fix) const {
+  TrackState belief;
+  belief.mean.head<3>() = fix.position_m;
+  belief.covariance.topLeftCorner<3, 3>() = fix.covariance_m2;
+  belief.covariance.bottomRightCorner<3, 3>() =
+      config.init_speed_sigma_mps * config.init_speed_sigma_mps * Mat3::Identity();
+  return belief;
+}
+
+void Session::Impl::UpdateAndWatch(Estimate* e) {
+  Tracker& tracker = *components.tracker;
+  auto report = tracker.Update(measurement);
+  if (!report.ok()) return;
+  e->nis = report->nis;
+  e->ess = report->ess;
+  e->tdoa_sigma_s = report->tdoa_sigma_s;
+  e->pairs_used = report->pair_count;
+  last_sigma_s = report->tdoa_sigma_s;
+  if (report->pair_count == 0 || !monitor.Add(report->nis, report->pair_count)) return;
+  // Diverged: restart from this frame's fix (velocity reset too), if it is good enough.
+  const Vec3 hint = tracker.State().mean.head<3>();
+  Fix fix;
+  if (GoodFix(&hint, &fix)) e->reinitialised = tracker.Initialise(BeliefFromFix(fix)).ok();
+}
+
 void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint64_t sequence,
                                  std::vector<Estimate>* out) {
   Estimate e;
@@ -103,60 +133,36 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
   e.t_s = (static_cast<double>(first_sample) + 0.5 * (config.frame_samples - 1)) / config.sample_rate_hz;
 
   const auto tdoa_start = std::chrono::steady_clock::now();
-  const Status measured = components.estimator->Estimate(frame, config.frame_samples, e.t_s, &measurement);
+  const bool measured = components.estimator->Estimate(frame, config.frame_samples, e.t_s, &measurement).ok();
   e.timings.tdoa_s = SecondsSince(tdoa_start);
 
   const auto filter_start = std::chrono::steady_clock::now();
-  Tracker& tracker = *components.tracker;
-  if (measured.ok()) {
+  if (measured) {
     delays.resize(static_cast<Eigen::Index>(measurement.pairs.size()));
     for (size_t p = 0; p < measurement.pairs.size(); ++p) {
       delays(static_cast<Eigen::Index>(p)) = measurement.pairs[p].delay_s;
       e.delay_s.push_back(measurement.pairs[p].delay_s);
       e.quality.push_back(measurement.pairs[p].quality);
     }
+  }
+  Tracker& tracker = *components.tracker;
+  bool update = measured;
+  if (tracker.initialised()) {
+    tracker.Predict(e.t_s - last_t_s);
+  } else if (config.init_region_min_m.allFinite()) {
+    // The region is the belief at this frame; this frame's TDOAs then refine it.
+    (void)tracker.InitialiseRegion(config.init_region_min_m, config.init_region_max_m,
+                                   config.init_speed_sigma_mps);
+    monitor.Reset();
+  } else {
     Fix fix;
-    if (!tracker.initialised() && config.init_region_min_m.allFinite()) {
-      (void)tracker.InitialiseRegion(config.init_region_min_m, config.init_region_max_m,
-                                     config.init_speed_sigma_mps);
+    if (measured && GoodFix(nullptr, &fix)) {
+      (void)tracker.Initialise(BeliefFromFix(fix));
       monitor.Reset();
     }
-    if (!tracker.initialised()) {
-      if (GoodFix(nullptr, &fix)) {
-        TrackState belief;
-        belief.mean.head<3>() = fix.position_m;
-        belief.covariance.topLeftCorner<3, 3>() = fix.covariance_m2;
-        belief.covariance.bottomRightCorner<3, 3>() =
-            config.init_speed_sigma_mps * config.init_speed_sigma_mps * Mat3::Identity();
-        (void)tracker.Initialise(belief);
-        monitor.Reset();
-      }
-    } else {
-      tracker.Predict(e.t_s - last_t_s);
-      auto report = tracker.Update(measurement);
-      if (report.ok()) {
-        e.nis = report->nis;
-        e.ess = report->ess;
-        last_sigma_s = report->tdoa_sigma_s;
-        e.tdoa_sigma_s = report->tdoa_sigma_s;
-        e.pairs_used = report->pair_count;
-        if (report->pair_count > 0 && monitor.Add(report->nis, report->pair_count)) {
-          const TrackState lost = tracker.State();
-          const Vec3 hint = lost.mean.head<3>();
-          if (GoodFix(&hint, &fix)) {
-            TrackState belief = lost;
-            belief.mean.head<3>() = fix.position_m;
-            belief.covariance.topLeftCorner<3, 3>() = fix.covariance_m2;
-            belief.covariance.topRightCorner<3, 3>().setZero();
-            belief.covariance.bottomLeftCorner<3, 3>().setZero();
-            belief.covariance.bottomRightCorner<3, 3>() =
-                config.init_speed_sigma_mps * config.init_speed_sigma_mps * Mat3::Identity();
-            e.reinitialised = tracker.Initialise(belief).ok();
-          }
-        }
-      }
-    }
+    update = false;  // the fix already holds this frame's TDOAs
   }
+  if (update && tracker.initialised()) UpdateAndWatch(&e);
   if (tracker.initialised()) {
     const TrackState state = tracker.State();
     e.initialised = true;
