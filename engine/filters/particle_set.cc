@@ -58,7 +58,7 @@ void ParticleSet::SampleGaussian(const Vec6& mean, const Mat6& root) {
   const Eigen::Matrix<float, 6, 6> l = root.cast<float>();
   const Eigen::Matrix<float, 6, 1> mu = centre.cast<float>();
   const uint32_t key = NextKey();
-  float* cols[6] = {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()};
+  const std::array<float*, 6> cols = cur_.Pointers();
   for (int i = 0; i < n_; ++i) {
     float z[6];
     for (int k = 0; k < 6; ++k) z[k] = NormalFromUniform(UniformFromCounter(key, 6u * i + k));
@@ -284,8 +284,7 @@ void ParticleSet::ResampleSystematic(double kernel_scale) {
   SystematicIndices();
   const int n = n_;
   const int* __restrict index = index_.data();
-  float* from[6] = {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()};
-  float* to[6] = {next_.x.data(), next_.y.data(), next_.z.data(), next_.vx.data(), next_.vy.data(), next_.vz.data()};
+  const std::array<float*, 6> from = cur_.Pointers(), to = next_.Pointers();
   if (kernel_scale <= 0.0) {
     for (int r = 0; r < 6; ++r) {
       const float* __restrict src = from[r];

@@ -64,6 +64,8 @@ class ParticleSet {
   struct Columns {
     std::vector<float> x, y, z, vx, vy, vz;
     void Resize(int n);
+    // The six columns in state order (x, y, z, vx, vy, vz).
+    std::array<float*, 6> Pointers() { return {x.data(), y.data(), z.data(), vx.data(), vy.data(), vz.data()}; }
   };
   uint32_t NextKey();  // a fresh random-stream key per use: hash of (seed, use count)
   void SetEqualWeights();

@@ -89,8 +89,8 @@ class BareFftw {
   FftwPlan forward_, inverse_;
 };
 
-std::unique_ptr<GccPhatEstimator> MakeStage(const benchmark::State& state,
-                                            const ArrayGeometry& array) {
+// The stage for this benchmark's arguments; on failure the benchmark is marked skipped.
+std::unique_ptr<GccPhatEstimator> MakeStage(benchmark::State& state, const ArrayGeometry& array) {
   GccOptions options;
   options.frame_samples = kFrameSamples;
   options.sample_rate_hz = static_cast<double>(state.range(0));
@@ -98,16 +98,15 @@ std::unique_ptr<GccPhatEstimator> MakeStage(const benchmark::State& state,
   options.keep_gcc = true;
   options.measure_fft_plans = state.range(1) != 0;
   auto gcc = GccPhatEstimator::Create(array, options);
-  return gcc.ok() ? std::move(*gcc) : nullptr;
+  if (gcc.ok()) return std::move(*gcc);
+  state.SkipWithError(("GccPhatEstimator::Create failed: " + gcc.status().ToString()).c_str());
+  return nullptr;
 }
 
 void BM_BareFftw(benchmark::State& state) {
   const ArrayGeometry array = BenchArray();
   auto gcc = MakeStage(state, array);
-  if (!gcc) {
-    state.SkipWithError("GccPhatEstimator::Create failed");
-    return;
-  }
+  if (!gcc) return;
   BareFftw bare(PlannerFlags(state), BenchFrame(static_cast<double>(state.range(0)), array), gcc->fft_size());
   for (auto _ : state) bare.Run();
   SetCounters(state);
@@ -116,10 +115,7 @@ void BM_BareFftw(benchmark::State& state) {
 void BM_GccPhatStage(benchmark::State& state) {
   const ArrayGeometry array = BenchArray();
   auto gcc = MakeStage(state, array);
-  if (!gcc) {
-    state.SkipWithError("GccPhatEstimator::Create failed");
-    return;
-  }
+  if (!gcc) return;
   const std::vector<float> frame = BenchFrame(static_cast<double>(state.range(0)), array);
   Measurement m;
   for (auto _ : state) {
@@ -136,10 +132,7 @@ void BM_GccPhatStage(benchmark::State& state) {
 void BM_StageOverBare(benchmark::State& state) {
   const ArrayGeometry array = BenchArray();
   auto gcc = MakeStage(state, array);
-  if (!gcc) {
-    state.SkipWithError("GccPhatEstimator::Create failed");
-    return;
-  }
+  if (!gcc) return;
   const std::vector<float> frame = BenchFrame(static_cast<double>(state.range(0)), array);
   BareFftw bare(PlannerFlags(state), frame, gcc->fft_size());
   Measurement m;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <optional>
 
 #include "clients/io/array_json.h"
 #include "clients/io/csv_io.h"
@@ -98,14 +99,24 @@ TEST(EndToEnd, TetraWaterTracksBelowOneMetreRmse) {
   EXPECT_LT(score->rmse_m, 1.0);
 }
 
-TEST(EndToEnd, TrackRejectsAChannelCountThatDoesNotMatchTheArray) {
-  TempDir dir;
+// One second of tetra-water written to `dir`, and its array.json read back.
+void SimulateOneSecond(const TempDir& dir, std::optional<SimulationFiles>* files,
+                       std::optional<ArrayFile>* array) {
   auto run = SimulateScenario("tetra-water", 1, 1.0);
   ASSERT_TRUE(run.ok());
-  auto files = WriteSimulationFiles(dir.path().string(), *run);
-  ASSERT_TRUE(files.ok());
-  auto array = ReadArrayJson(files->array_path);
-  ASSERT_TRUE(array.ok());
+  auto written = WriteSimulationFiles(dir.path().string(), *run);
+  ASSERT_TRUE(written.ok());
+  auto read = ReadArrayJson(written->array_path);
+  ASSERT_TRUE(read.ok());
+  *files = *written;
+  *array = *read;
+}
+
+TEST(EndToEnd, TrackRejectsAChannelCountThatDoesNotMatchTheArray) {
+  TempDir dir;
+  std::optional<SimulationFiles> files;
+  std::optional<ArrayFile> array;
+  ASSERT_NO_FATAL_FAILURE(SimulateOneSecond(dir, &files, &array));
   array->sensors_m.push_back(engine::Vec3(3, 3, -12));  // 5 sensors, 4 channels
   auto summary = RunTrack(JobFor(*files, *array, ""));
   ASSERT_FALSE(summary.ok());
@@ -116,12 +127,9 @@ TEST(EndToEnd, TrackRejectsAChannelCountThatDoesNotMatchTheArray) {
 
 TEST(EndToEnd, WavRateWinsOverArrayJsonWithAWarning) {
   TempDir dir;
-  auto run = SimulateScenario("tetra-water", 1, 1.0);
-  ASSERT_TRUE(run.ok());
-  auto files = WriteSimulationFiles(dir.path().string(), *run);
-  ASSERT_TRUE(files.ok());
-  auto array = ReadArrayJson(files->array_path);
-  ASSERT_TRUE(array.ok());
+  std::optional<SimulationFiles> files;
+  std::optional<ArrayFile> array;
+  ASSERT_NO_FATAL_FAILURE(SimulateOneSecond(dir, &files, &array));
   array->sample_rate_hz = 8000.0;
   std::vector<std::string> warnings;
   auto summary = RunTrack(JobFor(*files, *array, ""), CollectWarnings(&warnings));
