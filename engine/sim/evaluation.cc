@@ -6,19 +6,8 @@
 #include "engine/array/multilateration.h"
 
 namespace localizer::engine {
-namespace {
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
-  return v[mid];
-}
-
-}  // namespace
-
 TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth,
-                      const std::vector<Estimate>& estimates, double skip_s, bool robust) {
+                      const std::vector<Estimate>& estimates, double skip_s) {
   TrackScore score;
   const int pairs = array.pair_count();
   const double t_end = truth.truth.empty() ? 0.0 : truth.truth.back().t_s;
@@ -37,17 +26,10 @@ TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth,
   if (used.empty()) return score;
   Eigen::VectorXd sigma(pairs);
   for (int p = 0; p < pairs; ++p) {
-    std::vector<double>& err = tdoa_errors[p];
-    if (robust) {
-      const double med = Median(err);
-      std::vector<double> dev;
-      for (double x : err) dev.push_back(std::abs(x - med));
-      sigma(p) = 1.4826 * Median(dev);
-    } else {
-      double ss = 0.0;
-      for (double x : err) ss += x * x;
-      sigma(p) = std::sqrt(ss / static_cast<double>(err.size()));
-    }
+    const std::vector<double>& err = tdoa_errors[p];
+    double ss = 0.0;
+    for (double x : err) ss += x * x;
+    sigma(p) = std::sqrt(ss / static_cast<double>(err.size()));
     sigma(p) = std::max(sigma(p), 1e-9);
     score.tdoa_sigma_s.push_back(sigma(p));
   }

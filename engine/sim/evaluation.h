@@ -3,8 +3,7 @@
 //
 // For each estimate the true TDOA of pair k is h_k at the truth for reception time
 // t_s - d_k / 2 (the instant the pair describes). The measured TDOA spread of pair k,
-// sigma_k, is the RMS of (measured - true) over the scored frames (or, robust = true,
-// 1.4826 x the median absolute deviation, which ignores multipath outliers). The per-frame
+// sigma_k, is the RMS of (measured - true) over the scored frames. The per-frame
 // position CRLB at a frame is sqrt(trace((H^T R^-1 H)^-1)) with R = diag(sigma_k^2) and H the
 // TDOA Jacobian at the true position: the best any unbiased single-frame fix can do. The
 // score reports the RMS of that bound over the scored frames and RMSE / bound.
@@ -31,6 +30,6 @@ struct TrackScore {
 
 // Estimates before skip_s (convergence) are not scored.
 TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth,
-                      const std::vector<Estimate>& estimates, double skip_s, bool robust = false);
+                      const std::vector<Estimate>& estimates, double skip_s);
 
 }  // namespace localizer::engine
