@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "clients/cli/args.h"
+#include "engine/core/flags.h"
 #include "engine/core/status.h"
 
 namespace localizer::cli {

@@ -1,11 +1,11 @@
-#include "clients/cli/args.h"
+#include "engine/core/flags.h"
 
 #include <charconv>
 #include <climits>
 #include <cmath>
 #include <cstdio>
 
-namespace localizer::cli {
+namespace localizer {
 
 StatusOr<int64_t> ParseInteger(const std::string& text) {
   int64_t value = 0;
@@ -248,4 +248,4 @@ std::string FlagSet::Usage() const {
   return text + FlagLine("  --help", "print this help");
 }
 
-}  // namespace localizer::cli
+}  // namespace localizer

@@ -15,7 +15,7 @@
 
 #include "engine/core/status.h"
 
-namespace localizer::cli {
+namespace localizer {
 
 class FlagSet {
  public:
@@ -86,4 +86,4 @@ StatusOr<double> ParseFiniteDouble(const std::string& text);
 // "%g" of a double, for default texts.
 std::string FormatDouble(double value);
 
-}  // namespace localizer::cli
+}  // namespace localizer
