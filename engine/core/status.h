@@ -17,6 +17,9 @@ enum class StatusCode {
   kNotFound,            // a file or named entity does not exist
   kUnavailable,         // a resource is temporarily missing
   kInternal,            // a broken invariant; a bug
+  kPermissionDenied,    // the caller lacks the credential (e.g. a wrong resume token)
+  kResourceExhausted,   // a configured limit is reached (sessions, queue)
+  kCancelled,           // the operation was abandoned (stream closed, session ended)
 };
 
 const char* StatusCodeName(StatusCode code);
@@ -43,6 +46,10 @@ inline Status FailedPrecondition(std::string m) { return {StatusCode::kFailedPre
 inline Status OutOfRange(std::string m) { return {StatusCode::kOutOfRange, std::move(m)}; }
 inline Status NotFound(std::string m) { return {StatusCode::kNotFound, std::move(m)}; }
 inline Status Internal(std::string m) { return {StatusCode::kInternal, std::move(m)}; }
+inline Status Unavailable(std::string m) { return {StatusCode::kUnavailable, std::move(m)}; }
+inline Status PermissionDenied(std::string m) { return {StatusCode::kPermissionDenied, std::move(m)}; }
+inline Status ResourceExhausted(std::string m) { return {StatusCode::kResourceExhausted, std::move(m)}; }
+inline Status Cancelled(std::string m) { return {StatusCode::kCancelled, std::move(m)}; }
 
 // A value or the Status saying why there is none.
 template <typename T>

@@ -33,6 +33,12 @@ void Framer::Append(const BlockView& block) {
   received_ += n;
 }
 
+void Framer::Skip(int64_t samples) {
+  received_ += samples;
+  offset_ = stored_;
+  next_first_ = received_;
+}
+
 bool Framer::Next(const float** frame, int64_t* first_sample) {
   if (pending() < frame_) return false;
   for (int c = 0; c < channels_; ++c) {

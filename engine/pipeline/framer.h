@@ -24,7 +24,12 @@ class Framer {
   // advances by one hop and returns true. `*frame` stays valid until the next call.
   bool Next(const float** frame, int64_t* first_sample);
 
-  int64_t samples_received() const { return received_; }
+  // The stream lost `samples` per channel here: samples buffered so far are dropped (a
+  // frame never spans the gap) and the next frame starts at the first sample appended
+  // after the gap, whose stream index counts the lost ones.
+  void Skip(int64_t samples);
+
+  int64_t samples_received() const { return received_; }  // including skipped ones
 
  private:
   int64_t pending() const { return stored_ - offset_; }

@@ -210,7 +210,16 @@ Status Session::Process(const BlockView& block, std::vector<Estimate>* out) {
   return Status::Ok();
 }
 
+Status Session::Skip(int64_t samples_per_channel) {
+  if (samples_per_channel < 0 || samples_per_channel > (int64_t{1} << 40)) {
+    return InvalidArgument("skipped samples " + std::to_string(samples_per_channel) + " not in [0, 2^40]");
+  }
+  impl_->framer.Skip(samples_per_channel);
+  return Status::Ok();
+}
+
 const SessionConfig& Session::config() const { return impl_->config; }
+const std::string& Session::backend() const { return impl_->components.backend; }
 const ArrayGeometry& Session::array() const { return impl_->array; }
 uint64_t Session::frames_processed() const { return impl_->frames; }
 

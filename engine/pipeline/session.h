@@ -68,7 +68,14 @@ class Session {
   // On error nothing is consumed and `out` is unchanged.
   Status Process(const BlockView& block, std::vector<Estimate>* out);
 
+  // The stream lost `samples_per_channel` samples before the next block (a gap in the
+  // sequence numbers): buffered samples are dropped, the next frame starts after the gap,
+  // and the tracker predicts across the missing time. INVALID_ARGUMENT if negative or
+  // above 2^40.
+  Status Skip(int64_t samples_per_channel);
+
   const SessionConfig& config() const;
+  const std::string& backend() const;  // "cpu" or "gpu": what BuildComponents chose
   const ArrayGeometry& array() const;
   uint64_t frames_processed() const;
 

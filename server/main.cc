@@ -1,0 +1,114 @@
+// localizer-server: the localization service. `localizer-server --help` lists the flags.
+// Exit codes: 0 after a clean shutdown (SIGTERM/SIGINT), 1 when it cannot start (address
+// in use, ...), 2 for a usage error.
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <pthread.h>
+
+#include "engine/core/flags.h"
+#include "engine/pipeline/backend.h"
+#include "server/service/log.h"
+#include "server/service/server.h"
+#include "server/service/version.h"
+
+namespace localizer::server {
+namespace {
+
+constexpr const char* kSummary =
+    "Serves localizer.v1.Localizer over gRPC: sensor arrays stream sample blocks, the server\n"
+    "measures TDOAs (GCC-PHAT), tracks each session's source and streams estimates back.\n"
+    "Also serves grpc.health.v1 (NOT_SERVING while draining) and server reflection, and\n"
+    "Prometheus metrics at http://METRICS-LISTEN/metrics. SIGTERM or SIGINT drains and exits.";
+
+Status WriteReadyFile(const std::string& path, const Server& server) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << "{\"grpc_port\": " << server.grpc_port() << ", \"metrics_port\": " << server.metrics_port()
+        << ", \"pid\": " << getpid() << "}\n";
+    if (!out) return Unavailable("cannot write " + tmp);
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) return Unavailable("cannot rename " + tmp + " to " + path);
+  return Status::Ok();
+}
+
+int Main(int argc, char** argv) {
+  ServerOptions o;
+  int max_block_samples = static_cast<int>(o.max_block_samples);
+  bool version = false;
+  FlagSet flags("localizer-server [flags]", kSummary);
+  flags.String("listen", &o.listen, "HOST:PORT", "gRPC address (port 0: any free port; see --ready-file)");
+  flags.String("metrics-listen", &o.metrics_listen, "HOST:PORT", "Prometheus /metrics address (\"\": off)");
+  flags.String("backend", &o.backend, "auto|cpu|gpu",
+               "compute backend for sessions that do not choose; gpu without a device refuses sessions");
+  flags.Int("max-sessions", &o.max_sessions, "N", "sessions", "open sessions before RESOURCE_EXHAUSTED");
+  flags.Int("workers", &o.workers, "N", "threads", "engine worker threads (0: one per core)");
+  flags.Double("session-ttl", &o.session_ttl_s, "S", "s", "how long a session whose stream broke waits for a resume");
+  flags.Int("max-queue-blocks", &o.max_queue_blocks, "N", "blocks",
+            "blocks queued per session before reading pauses (backpressure)");
+  flags.Int("max-block-samples", &max_block_samples, "N", "samples", "per channel per block");
+  flags.Int("max-channels", &o.max_channels, "N", "sensors", "largest array accepted");
+  flags.Int("max-particles", &o.max_particles, "N", "particles", "largest filter.particles accepted");
+  flags.Int("max-message-bytes", &o.max_message_bytes, "N", "bytes", "largest gRPC message accepted");
+  flags.Double("drain-timeout", &o.drain_timeout_s, "S", "s", "on SIGTERM, time allowed to finish in-flight work");
+  flags.String("ready-file", &o.ready_file, "PATH",
+               "once serving, write {\"grpc_port\", \"metrics_port\", \"pid\"} as JSON here (atomically)");
+  flags.String("log-level", &o.log_level, "LEVEL", "debug | info | warn | error (logfmt lines on stderr)");
+  flags.Bool("version", &version, "print the version and exit");
+  const Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
+  if (flags.help_requested()) {
+    std::cout << flags.Usage();
+    return 0;
+  }
+  if (!parsed.ok()) {
+    std::cerr << "localizer-server: " << parsed.message() << "\nrun 'localizer-server --help' for the flags\n";
+    return 2;
+  }
+  if (version) {
+    std::cout << "localizer-server " << kLocalizerVersion << "\n";
+    return 0;
+  }
+  o.max_block_samples = max_block_samples;
+  if (const Status valid = o.Validate(); !valid.ok()) {
+    std::cerr << "localizer-server: " << valid.message() << "\n";
+    return 2;
+  }
+  if (o.backend == "gpu" && !engine::GpuUnavailableReason().empty()) {
+    LogEvent("warn", "gpu_unavailable", {{"reason", engine::GpuUnavailableReason()}});
+  }
+
+  // Signals are taken by sigwait on this thread; every thread started later inherits the mask.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGTERM);
+  sigaddset(&stop_signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  auto server = Server::Start(o);
+  if (!server.ok()) {
+    LogEvent("error", "start_failed", {{"status", server.status().ToString()}});
+    std::cerr << "localizer-server: " << server.status().ToString() << "\n";
+    return 1;
+  }
+  if (!o.ready_file.empty()) {
+    if (const Status written = WriteReadyFile(o.ready_file, **server); !written.ok()) {
+      std::cerr << "localizer-server: " << written.ToString() << "\n";
+      return 1;
+    }
+  }
+  int signal_number = 0;
+  sigwait(&stop_signals, &signal_number);
+  LogEvent("info", "signal", {{"signal", signal_number == SIGTERM ? "SIGTERM" : "SIGINT"}});
+  (*server)->Shutdown();
+  return 0;
+}
+
+}  // namespace
+}  // namespace localizer::server
+
+int main(int argc, char** argv) { return localizer::server::Main(argc, argv); }

@@ -1,0 +1,62 @@
+// A running localizer server: the gRPC service (with the standard health and reflection
+// services), the worker pool, the session registry, and the /metrics HTTP endpoint.
+//
+//   auto server = Server::Start(options);   // listening when this returns
+//   ... server->grpc_port(), server->metrics_port()
+//   server->Shutdown();                     // graceful: see below
+//
+// Shutdown, in order: health turns NOT_SERVING; new sessions, resumes and Locates get
+// UNAVAILABLE; every attached stream stops reading, and finishes with UNAVAILABLE once the
+// blocks it had accepted are processed and their estimates written (at most
+// drain_timeout_s); then gRPC shuts down (cancelling what is left), the workers stop and
+// /metrics closes. Thread-safe; Shutdown is idempotent and also run by the destructor.
+#pragma once
+
+#include <memory>
+#include <mutex>
+
+#include <grpcpp/grpcpp.h>
+
+#include "server/metrics/http_exposer.h"
+#include "server/metrics/registry.h"
+#include "server/service/localizer_service.h"
+#include "server/service/server_options.h"
+#include "server/service/service_metrics.h"
+#include "server/service/session_registry.h"
+#include "server/service/worker_pool.h"
+
+namespace localizer::server {
+
+class Server final {
+ public:
+  // INVALID_ARGUMENT for bad options; UNAVAILABLE when an address cannot be bound.
+  static StatusOr<std::unique_ptr<Server>> Start(const ServerOptions& options);
+  ~Server();
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  int grpc_port() const { return grpc_port_; }
+  int metrics_port() const { return exposer_ ? exposer_->port() : 0; }
+  int workers() const { return pool_->threads(); }
+  void Shutdown();
+
+  metrics::Registry& registry() { return registry_; }
+  SessionRegistry& sessions() { return *sessions_; }
+
+ private:
+  explicit Server(const ServerOptions& options);
+
+  const ServerOptions options_;
+  metrics::Registry registry_;
+  std::unique_ptr<ServiceMetrics> metrics_;
+  std::unique_ptr<WorkerPool> pool_;
+  std::unique_ptr<SessionRegistry> sessions_;
+  std::unique_ptr<LocalizerService> service_;
+  std::unique_ptr<grpc::Server> grpc_;
+  std::unique_ptr<metrics::HttpExposer> exposer_;
+  int grpc_port_ = 0;
+  std::mutex shutdown_mutex_;
+  bool shut_down_ = false;
+};
+
+}  // namespace localizer::server

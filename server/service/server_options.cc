@@ -1,0 +1,25 @@
+#include "server/service/server_options.h"
+
+namespace localizer::server {
+
+Status ServerOptions::Validate() const {
+  if (listen.empty()) return InvalidArgument("listen is empty");
+  if (backend != "auto" && backend != "cpu" && backend != "gpu") {
+    return InvalidArgument("backend '" + backend + "' is not one of: auto, cpu, gpu");
+  }
+  if (max_sessions < 1) return InvalidArgument("max_sessions must be >= 1");
+  if (workers < 0 || workers > 1024) return InvalidArgument("workers must be in [0, 1024] (0: one per core)");
+  if (!(session_ttl_s >= 0.0)) return InvalidArgument("session_ttl_s must be >= 0");
+  if (max_queue_blocks < 1) return InvalidArgument("max_queue_blocks must be >= 1");
+  if (max_block_samples < 64) return InvalidArgument("max_block_samples must be >= 64");
+  if (max_channels < 4) return InvalidArgument("max_channels must be >= 4");
+  if (max_particles < 16) return InvalidArgument("max_particles must be >= 16");
+  if (max_message_bytes < 1024) return InvalidArgument("max_message_bytes must be >= 1024");
+  if (!(drain_timeout_s >= 0.0)) return InvalidArgument("drain_timeout_s must be >= 0");
+  if (log_level != "debug" && log_level != "info" && log_level != "warn" && log_level != "error") {
+    return InvalidArgument("log_level '" + log_level + "' is not one of: debug, info, warn, error");
+  }
+  return Status::Ok();
+}
+
+}  // namespace localizer::server

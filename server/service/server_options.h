@@ -1,0 +1,33 @@
+// Everything localizer-server can be told, with defaults and units. `localizer-server
+// --help` prints the same table; main.cc binds one flag per field.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "engine/core/status.h"
+
+namespace localizer::server {
+
+struct ServerOptions {
+  std::string listen = "127.0.0.1:50051";          // gRPC address; port 0 picks a free one
+  std::string metrics_listen = "127.0.0.1:9464";   // /metrics HTTP address; "" disables it
+  std::string backend = "auto";                    // default for sessions that leave it ""
+  int max_sessions = 1024;                         // open sessions (attached or detached)
+  int workers = 0;                                 // engine threads; 0: one per core
+  double session_ttl_s = 60.0;                     // a detached session waits this long
+  int max_queue_blocks = 8;                        // blocks queued per session before
+                                                   // reading pauses (backpressure)
+  int64_t max_block_samples = 1 << 22;             // per channel per block (the message
+                                                   // size limit usually binds first)
+  int max_channels = 64;                           // sensors per array
+  int max_particles = 1 << 20;                     // filter.particles allowed
+  int max_message_bytes = 64 << 20;                // largest gRPC message accepted
+  double drain_timeout_s = 10.0;                   // SIGTERM: time to finish in-flight work
+  std::string ready_file;                          // written once serving: JSON with ports
+  std::string log_level = "info";                  // debug | info | warn | error
+
+  Status Validate() const;  // INVALID_ARGUMENT naming the field
+};
+
+}  // namespace localizer::server

@@ -1,0 +1,63 @@
+// The service's metrics, registered once and cached as pointers for the hot paths.
+//
+//   localizer_stage_seconds{stage,backend}   histogram, 10 us .. 1 s:
+//       tdoa    GCC-PHAT of one frame             filter  predict+update of one frame
+//       queue   a block's wait for a worker       total   block received -> its estimates ready
+//   localizer_blocks_total                   blocks accepted into a session
+//   localizer_samples_total                  samples per channel accepted
+//   localizer_estimates_total{backend}       estimates produced
+//   localizer_rejections_total{reason}       blocks refused (BlockRejected.reason)
+//   localizer_sequence_gaps_total            sequence jumps (blocks lost upstream)
+//   localizer_sessions{state}                sessions held now: attached | detached
+//   localizer_sessions_opened_total{how}     open | resume
+//   localizer_sessions_closed_total{reason}  finished | closed | expired | replaced | shutdown
+//   localizer_queue_depth_blocks             blocks waiting for a worker, all sessions
+//   localizer_locate_requests_total{code}    one-shot Locate calls by status code
+//   localizer_build_info{version,grpc_version,default_backend}  always 1
+// Thread-safe: every pointer here is updated lock-free.
+#pragma once
+
+#include <string>
+
+#include "server/metrics/registry.h"
+
+namespace localizer::server {
+
+struct StageHistograms {
+  metrics::Histogram* tdoa = nullptr;
+  metrics::Histogram* filter = nullptr;
+  metrics::Histogram* queue = nullptr;
+  metrics::Histogram* total = nullptr;
+  metrics::Counter* estimates = nullptr;
+};
+
+class ServiceMetrics final {
+ public:
+  // Registers every family in `registry` (which must outlive this).
+  static StatusOr<std::unique_ptr<ServiceMetrics>> Create(metrics::Registry* registry,
+                                                          const std::string& default_backend);
+
+  // Per backend ("cpu" or "gpu"); anything else is counted as "cpu".
+  const StageHistograms& stages(const std::string& backend) const;
+  metrics::Counter* rejections(const std::string& reason);  // looked up (mutex) per call
+  metrics::Counter* sessions_closed(const std::string& reason);
+  metrics::Counter* locate_requests(const std::string& code);
+
+  metrics::Counter* blocks = nullptr;
+  metrics::Counter* samples = nullptr;
+  metrics::Counter* gaps = nullptr;
+  metrics::Counter* opened = nullptr;
+  metrics::Counter* resumed = nullptr;
+  metrics::Gauge* attached = nullptr;
+  metrics::Gauge* detached = nullptr;
+  metrics::Gauge* queue_depth = nullptr;
+
+ private:
+  ServiceMetrics() = default;
+  StageHistograms cpu_, gpu_;
+  metrics::Family<metrics::Counter>* rejections_ = nullptr;
+  metrics::Family<metrics::Counter>* closed_ = nullptr;
+  metrics::Family<metrics::Counter>* locate_ = nullptr;
+};
+
+}  // namespace localizer::server

@@ -1,0 +1,149 @@
+#include "server/service/session_registry.h"
+
+#include "server/service/log.h"
+
+namespace localizer::server {
+namespace {
+
+uint64_t SeedFromDevice() {
+  std::random_device device;
+  return (static_cast<uint64_t>(device()) << 32) ^ device();
+}
+
+}  // namespace
+
+SessionRegistry::SessionRegistry(RegistryOptions options, WorkerPool* pool, ServiceMetrics* metrics)
+    : options_(std::move(options)), pool_(pool), metrics_(metrics), random_(SeedFromDevice()) {
+  sweeper_ = std::thread([this] { SweepLoop(); });
+}
+
+SessionRegistry::~SessionRegistry() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  sweep_wake_.notify_all();
+  sweeper_.join();
+  for (const auto& host : Snapshot()) {
+    host->Close(grpc::Status(grpc::StatusCode::UNAVAILABLE, "server shutting down"));
+  }
+}
+
+std::string SessionRegistry::RandomHex(int digits) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string s;
+  while (static_cast<int>(s.size()) < digits) {
+    uint64_t bits = random_();
+    for (int i = 0; i < 16 && static_cast<int>(s.size()) < digits; ++i, bits >>= 4) s.push_back(kHex[bits & 15]);
+  }
+  return s;
+}
+
+StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionConfig& config) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (draining_) return Unavailable("server is draining; open the session on another instance");
+    if (static_cast<int>(sessions_.size()) >= options_.max_sessions) {
+      return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) +
+                               " sessions");
+    }
+  }
+  auto engine_config = wire::ConfigFromProto(config, options_.policy);
+  if (!engine_config.ok()) return engine_config.status();
+  auto session = engine::Session::Create(*engine_config);  // FFT plans, particles: outside the lock
+  if (!session.ok()) return session.status();
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (static_cast<int>(sessions_.size()) >= options_.max_sessions) {
+    return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) + " sessions");
+  }
+  std::string id;
+  do {
+    id = RandomHex(16);
+  } while (sessions_.count(id) != 0);
+  auto host = std::make_shared<SessionHost>(id, RandomHex(32), config.label(), std::move(session).value(),
+                                            options_.host, pool_, metrics_);
+  sessions_[id] = host;
+  return host;
+}
+
+StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Find(const std::string& id, const std::string& token) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (draining_) return Unavailable("server is draining");
+  const auto it = sessions_.find(id);
+  if (it == sessions_.end()) return NotFound("no session '" + id + "' (unknown, closed or expired)");
+  if (!it->second->TokenMatches(token)) return PermissionDenied("wrong resume_token for session " + id);
+  return it->second;
+}
+
+void SessionRegistry::Remove(const std::string& id, const std::string& reason, const grpc::Status& status) {
+  std::shared_ptr<SessionHost> host;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = sessions_.find(id);
+    if (it == sessions_.end()) return;
+    host = std::move(it->second);
+    sessions_.erase(it);
+  }
+  if (auto* c = metrics_->sessions_closed(reason)) c->Increment();
+  LogEvent("info", "session_closed", {{"session", id}, {"reason", reason}});
+  host->Close(status);
+}
+
+StatusOr<uint64_t> SessionRegistry::Close(const std::string& id, const std::string& token) {
+  std::shared_ptr<SessionHost> host;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = sessions_.find(id);
+    if (it == sessions_.end()) return NotFound("no session '" + id + "'");
+    if (!it->second->TokenMatches(token)) return PermissionDenied("wrong resume_token for session " + id);
+    host = it->second;
+  }
+  const uint64_t frames = host->Info(Clock::now(), options_.ttl_s).frames_processed();
+  Remove(id, "closed", grpc::Status(grpc::StatusCode::CANCELLED, "session closed by CloseSession"));
+  return frames;
+}
+
+std::vector<std::shared_ptr<SessionHost>> SessionRegistry::Snapshot() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<std::shared_ptr<SessionHost>> hosts;
+  for (const auto& [id, host] : sessions_) hosts.push_back(host);
+  return hosts;
+}
+
+std::vector<v1::SessionInfo> SessionRegistry::List() const {
+  const auto now = Clock::now();
+  std::vector<v1::SessionInfo> infos;
+  for (const auto& host : Snapshot()) infos.push_back(host->Info(now, options_.ttl_s));
+  return infos;
+}
+
+size_t SessionRegistry::size() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return sessions_.size();
+}
+
+void SessionRegistry::StartDrain() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  draining_ = true;
+}
+
+void SessionRegistry::SweepLoop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (!stopping_) {
+    sweep_wake_.wait_for(lock, std::chrono::milliseconds(250));
+    if (stopping_) break;
+    const auto now = Clock::now();
+    std::vector<std::string> expired;
+    for (const auto& [id, host] : sessions_) {
+      std::lock_guard<std::mutex> host_lock(host->mutex());
+      if (host->ExpiredLocked(now, options_.ttl_s)) expired.push_back(id);
+    }
+    lock.unlock();
+    for (const std::string& id : expired) {
+      Remove(id, "expired", grpc::Status(grpc::StatusCode::NOT_FOUND, "session expired"));
+    }
+    lock.lock();
+  }
+}
+
+}  // namespace localizer::server

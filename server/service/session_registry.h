@@ -1,0 +1,77 @@
+// The sessions one server instance holds, by id; creates them, finds them for a resume,
+// ends them (CloseSession, expiry, shutdown).
+//
+// A session id is 16 random hex digits; its resume token 32 more, compared in constant
+// time. A detached session (its stream gone) is kept for `ttl_s`, then closed by a sweep
+// that runs every ~0.25 s on a thread of its own.
+// Thread-safe.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "localizer/v1/localizer.pb.h"
+#include "server/service/service_metrics.h"
+#include "server/service/session_host.h"
+#include "server/service/worker_pool.h"
+#include "server/wire/config_wire.h"
+
+namespace localizer::server {
+
+struct RegistryOptions {
+  int max_sessions = 1024;
+  double ttl_s = 60.0;
+  HostLimits host;
+  wire::ConfigPolicy policy;
+};
+
+class SessionRegistry final {
+ public:
+  SessionRegistry(RegistryOptions options, WorkerPool* pool, ServiceMetrics* metrics);
+  ~SessionRegistry();  // stops the sweep; closes every session
+  SessionRegistry(const SessionRegistry&) = delete;
+  SessionRegistry& operator=(const SessionRegistry&) = delete;
+
+  // INVALID_ARGUMENT naming the field; FAILED_PRECONDITION (backend gpu without one);
+  // RESOURCE_EXHAUSTED at max_sessions; UNAVAILABLE while draining.
+  StatusOr<std::shared_ptr<SessionHost>> Open(const v1::SessionConfig& config);
+  // NOT_FOUND unknown or expired; PERMISSION_DENIED wrong token; UNAVAILABLE draining.
+  StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const;
+  // Removes and closes; `reason` labels the closed-sessions metric. No-op if unknown.
+  void Remove(const std::string& id, const std::string& reason, const grpc::Status& status);
+  // CloseSession: NOT_FOUND / PERMISSION_DENIED as Find; returns frames processed.
+  StatusOr<uint64_t> Close(const std::string& id, const std::string& token);
+
+  std::vector<v1::SessionInfo> List() const;
+  size_t size() const;
+  double ttl_s() const { return options_.ttl_s; }
+
+  // Refuse new sessions and resumes from now on (UNAVAILABLE).
+  void StartDrain();
+  std::vector<std::shared_ptr<SessionHost>> Snapshot() const;
+
+ private:
+  void SweepLoop();
+  std::string RandomHex(int digits);  // requires mutex_
+
+  const RegistryOptions options_;
+  WorkerPool* const pool_;
+  ServiceMetrics* const metrics_;
+
+  mutable std::mutex mutex_;
+  std::map<std::string, std::shared_ptr<SessionHost>> sessions_;  // guarded by mutex_
+  std::mt19937_64 random_;  // seeded from std::random_device; ids, not numerics
+  bool draining_ = false;
+  bool stopping_ = false;
+  std::condition_variable sweep_wake_;
+  std::thread sweeper_;
+};
+
+}  // namespace localizer::server

@@ -1,0 +1,188 @@
+#include "server/service/track_reactor.h"
+
+#include "server/service/log.h"
+#include "server/wire/status_wire.h"
+
+namespace localizer::server {
+
+TrackReactor::TrackReactor(grpc::CallbackServerContext* context, SessionRegistry* registry,
+                           ServiceMetrics* metrics)
+    : context_(context), registry_(registry), metrics_(metrics), peer_(context->peer()) {
+  StartRead(&request_);
+}
+
+void TrackReactor::FinishOnce(const grpc::Status& status) {
+  if (finished_) return;
+  finished_ = true;
+  Finish(status);
+}
+
+void TrackReactor::ReadNext() {
+  if (!finished_) StartRead(&request_);
+}
+
+void TrackReactor::OnReadDone(bool ok) {
+  if (!ok) {  // the client half-closed, or the stream broke
+    if (!host_) {
+      FinishOnce(grpc::Status::OK);
+      return;
+    }
+    std::lock_guard<std::mutex> lock(host_->mutex());
+    input_done_ = true;
+    OutputReadyLocked();  // finishes now if everything is already written
+    return;
+  }
+  switch (request_.kind_case()) {
+    case v1::TrackRequest::kOpen: return HandleOpen(request_.open());
+    case v1::TrackRequest::kResume: return HandleResume(request_.resume());
+    case v1::TrackRequest::kBlock: return HandleBlock();
+    default: break;
+  }
+  const grpc::Status status(grpc::StatusCode::INVALID_ARGUMENT, "TrackRequest has no open, resume or block");
+  if (!host_) return FinishOnce(status);
+  std::lock_guard<std::mutex> lock(host_->mutex());
+  FinishOnce(status);
+}
+
+void TrackReactor::HandleOpen(const v1::SessionConfig& config) {
+  if (host_) {
+    std::lock_guard<std::mutex> lock(host_->mutex());
+    return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                                   "this stream already has session " + host_->id() + "; open a new stream"));
+  }
+  auto host = registry_->Open(config);
+  if (!host.ok()) {
+    LogEvent("info", "open_refused", {{"peer", peer_}, {"status", host.status().ToString()}});
+    return FinishOnce(wire::ToGrpcStatus(host.status()));
+  }
+  if (metrics_->opened != nullptr) metrics_->opened->Increment();
+  LogEvent("info", "session_open",
+           {{"session", (*host)->id()}, {"peer", peer_}, {"label", config.label()}, {"backend", (*host)->backend()},
+            {"sensors", std::to_string(config.array().sensors_m_size())},
+            {"sample_rate_hz", std::to_string(config.sample_rate_hz())}});
+  Attach(std::move(host).value(), false, std::nullopt);
+}
+
+void TrackReactor::HandleResume(const v1::ResumeSession& resume) {
+  if (host_) {
+    std::lock_guard<std::mutex> lock(host_->mutex());
+    return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION, "this stream already has a session"));
+  }
+  auto host = registry_->Find(resume.session_id(), resume.resume_token());
+  if (!host.ok()) {
+    LogEvent("info", "resume_refused", {{"peer", peer_}, {"status", host.status().ToString()}});
+    return FinishOnce(wire::ToGrpcStatus(host.status()));
+  }
+  if (metrics_->resumed != nullptr) metrics_->resumed->Increment();
+  LogEvent("info", "session_resume", {{"session", (*host)->id()}, {"peer", peer_}});
+  std::optional<uint64_t> last_frame;
+  if (resume.has_last_frame_received()) last_frame = resume.last_frame_received();
+  Attach(std::move(host).value(), true, last_frame);
+}
+
+void TrackReactor::Attach(std::shared_ptr<SessionHost> host, bool resumed, std::optional<uint64_t> last_frame) {
+  host_ = std::move(host);
+  std::lock_guard<std::mutex> lock(host_->mutex());
+  if (host_->ClosedLocked()) {
+    // Closed between Find and here (CloseSession or expiry raced us).
+    return FinishOnce(grpc::Status(grpc::StatusCode::NOT_FOUND, "session " + host_->id() + " was just closed"));
+  }
+  host_->AttachLocked(this, resumed, last_frame);
+  ReadNext();
+}
+
+void TrackReactor::HandleBlock() {
+  if (!host_) {
+    return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                                   "a block arrived before open or resume; the first request must open a session"));
+  }
+  const auto received = Clock::now();
+  const v1::SampleBlock& block = request_.block();
+  std::string reason;
+  const Status decoded = wire::DecodeBlock(block, host_->block_limits(), &decoded_, &reason);
+  std::lock_guard<std::mutex> lock(host_->mutex());
+  if (finished_ || input_done_) return;  // draining: blocks are no longer accepted
+  if (host_->OfferLocked(&decoded_, decoded, reason, block.sequence(), received)) {
+    ReadNext();
+  } else {
+    read_paused_ = true;
+  }
+}
+
+void TrackReactor::InputSpaceLocked() {
+  if (!read_paused_ || finished_) return;
+  read_paused_ = false;
+  StartRead(&request_);
+}
+
+void TrackReactor::OutputReadyLocked() {
+  if (finished_ || writing_) return;
+  writing_ = host_->NextOutputLocked();
+  if (writing_) {
+    StartWrite(writing_.get());
+    return;
+  }
+  if (input_done_ && host_->IdleLocked()) {
+    if (draining_) {
+      FinishOnce(grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                              "server is shutting down; every accepted block was processed (last sequence in the "
+                              "last estimate); resume or reopen on another instance"));
+      return;
+    }
+    finished_clean_ = true;
+    FinishOnce(grpc::Status::OK);
+  }
+}
+
+void TrackReactor::DrainLocked() {
+  draining_ = true;
+  input_done_ = true;
+  OutputReadyLocked();
+}
+
+void TrackReactor::OnWriteDone(bool ok) {
+  std::lock_guard<std::mutex> lock(host_->mutex());
+  ResponsePtr written = std::move(writing_);
+  writing_.reset();
+  if (!ok) {  // the stream broke: keep the response for a resume
+    host_->RequeueLocked(std::move(written));
+    cancelled_ = true;
+    FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED, "write failed: stream broken"));
+    return;
+  }
+  host_->MarkWrittenLocked(written);
+  OutputReadyLocked();
+}
+
+void TrackReactor::EndLocked(const grpc::Status& status) {
+  // The session forgot this stream already; a write in flight completes on its own.
+  FinishOnce(status);
+}
+
+void TrackReactor::OnCancel() {
+  if (!host_) return;  // OnDone follows; nothing attached
+  std::lock_guard<std::mutex> lock(host_->mutex());
+  cancelled_ = true;
+  FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED, "stream cancelled"));
+}
+
+void TrackReactor::OnDone() {
+  if (host_) {
+    bool close = false;
+    {
+      std::lock_guard<std::mutex> lock(host_->mutex());
+      // A write still marked in flight did not complete: keep it for a resume.
+      if (writing_) host_->RequeueLocked(std::move(writing_));
+      host_->DetachLocked(this);
+      close = finished_clean_ && !cancelled_;
+    }
+    if (close) {
+      registry_->Remove(host_->id(), "finished", grpc::Status::OK);
+    } else if (!host_->closed()) {
+      LogEvent("info", "session_detached", {{"session", host_->id()}, {"peer", peer_}});
+    }
+  }
+  delete this;
+}
+
+}  // namespace localizer::server

@@ -1,0 +1,74 @@
+// One Track stream: the gRPC callback reactor that reads requests, hands blocks to its
+// session and writes the session's responses back (one write in flight at a time).
+//
+// Life of a stream:
+//   read `open` -> SessionRegistry::Open, or `resume` -> SessionRegistry::Find; attach
+//   read `block`s -> decode (here, on the gRPC thread: cheap) -> SessionHost::OfferLocked;
+//     when the session's queue is full, reading pauses until a worker frees a slot, so a
+//     fast client is held back by HTTP/2 flow control, never by memory.
+//   client half-close -> finish with OK once every accepted block has produced its
+//     responses and they are written; the session then closes.
+//   stream broken or cancelled -> finish CANCELLED; the session stays, detached, for
+//     the registry's TTL, its unwritten responses kept for a resume.
+// Thread-safety: gRPC may run OnReadDone, OnWriteDone and OnCancel concurrently; once
+// attached, every field below marked "host" is guarded by the session's mutex. Before
+// attaching only the read path touches the reactor.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <grpcpp/grpcpp.h>
+
+#include "localizer/v1/localizer.grpc.pb.h"
+#include "server/service/session_host.h"
+#include "server/service/session_registry.h"
+#include "server/service/stream_sink.h"
+
+namespace localizer::server {
+
+class TrackReactor final : public grpc::ServerBidiReactor<v1::TrackRequest, v1::TrackResponse>,
+                           public StreamSink {
+ public:
+  TrackReactor(grpc::CallbackServerContext* context, SessionRegistry* registry, ServiceMetrics* metrics);
+
+  // grpc::ServerBidiReactor
+  void OnReadDone(bool ok) override;
+  void OnWriteDone(bool ok) override;
+  void OnCancel() override;
+  void OnDone() override;
+
+  // StreamSink (called with the session's mutex held)
+  void OutputReadyLocked() override;
+  void InputSpaceLocked() override;
+  void EndLocked(const grpc::Status& status) override;
+  void DrainLocked() override;
+
+ private:
+  void HandleOpen(const v1::SessionConfig& config);
+  void HandleResume(const v1::ResumeSession& resume);
+  void HandleBlock();
+  void Attach(std::shared_ptr<SessionHost> host, bool resumed, std::optional<uint64_t> last_frame);
+  // Ends the stream once; before attaching (no lock needed) or with the host's lock held.
+  void FinishOnce(const grpc::Status& status);
+  void ReadNext();
+
+  grpc::CallbackServerContext* const context_;
+  SessionRegistry* const registry_;
+  ServiceMetrics* const metrics_;
+  std::string peer_;
+
+  v1::TrackRequest request_;             // read path only
+  wire::DecodedBlock decoded_;           // read path only
+  std::shared_ptr<SessionHost> host_;    // set once by the read path, before attaching
+
+  ResponsePtr writing_;                  // host: the response in flight, if any
+  bool finished_ = false;                // host: Finish called
+  bool finished_clean_ = false;          // host: finished OK after the client's half-close
+  bool input_done_ = false;              // host: the client half-closed
+  bool read_paused_ = false;             // host: waiting for queue space
+  bool cancelled_ = false;               // host: OnCancel ran or a write failed
+  bool draining_ = false;                // host: the server is shutting down
+};
+
+}  // namespace localizer::server

@@ -1,0 +1,147 @@
+#include "server/wire/config_wire.h"
+
+#include <cmath>
+
+namespace localizer::wire {
+namespace {
+
+using engine::Vec3;
+
+Vec3 FromProto(const v1::Vector3& v) { return {v.x(), v.y(), v.z()}; }
+
+void ToProto(const Vec3& v, v1::Vector3* out) {
+  out->set_x(v.x());
+  out->set_y(v.y());
+  out->set_z(v.z());
+}
+
+engine::Weighting WeightingFromProto(v1::Weighting w) {
+  switch (w) {
+    case v1::WEIGHTING_PHAT_BETA: return engine::Weighting::kPhatBeta;
+    case v1::WEIGHTING_SCOT: return engine::Weighting::kScot;
+    case v1::WEIGHTING_CC: return engine::Weighting::kCc;
+    default: return engine::Weighting::kPhat;
+  }
+}
+
+v1::Weighting WeightingToProto(engine::Weighting w) {
+  switch (w) {
+    case engine::Weighting::kPhatBeta: return v1::WEIGHTING_PHAT_BETA;
+    case engine::Weighting::kScot: return v1::WEIGHTING_SCOT;
+    case engine::Weighting::kCc: return v1::WEIGHTING_CC;
+    case engine::Weighting::kPhat: break;
+  }
+  return v1::WEIGHTING_PHAT;
+}
+
+// Proto field names for the engine's field names in validation messages.
+Status Rename(Status status) {
+  if (status.ok()) return status;
+  std::string m = status.message();
+  const std::pair<const char*, const char*> renames[] = {
+      {"sensors_m", "array.sensors_m"},         {"sound_speed_mps", "array.sound_speed_mps"},
+      {"reference_sensor", "array.reference_sensor"}, {"particles", "filter.particles"},
+      {"accel_noise_mps2", "filter.accel_noise_mps2"}, {"tdoa_sigma_s", "filter.tdoa_sigma_s"},
+      {"resample_threshold", "filter.resample_threshold"}, {"min_peak_snr", "filter.min_peak_snr"},
+  };
+  for (const auto& [from, to] : renames) {
+    const size_t at = m.find(from);
+    if (at != std::string::npos && (at == 0 || m[at - 1] == ' ') && m.find(to) == std::string::npos) {
+      m.replace(at, std::string(from).size(), to);
+      break;
+    }
+  }
+  return {status.code(), m};
+}
+
+}  // namespace
+
+StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, const ConfigPolicy& policy) {
+  engine::SessionConfig c;
+  if (!p.has_array()) return InvalidArgument("array is missing");
+  if (p.array().sensors_m_size() > policy.max_channels) {
+    return InvalidArgument("array.sensors_m has " + std::to_string(p.array().sensors_m_size()) +
+                           " sensors; this server allows at most " + std::to_string(policy.max_channels));
+  }
+  for (const v1::Vector3& s : p.array().sensors_m()) c.sensors_m.push_back(FromProto(s));
+  c.sound_speed_mps = p.array().sound_speed_mps();
+  c.reference_sensor = static_cast<int>(p.array().reference_sensor());
+  c.sample_rate_hz = p.sample_rate_hz();
+  if (p.frame_samples() > (1u << 20)) {
+    return InvalidArgument("frame_samples is " + std::to_string(p.frame_samples()) + "; must be in [64, 1048576]");
+  }
+  if (p.frame_samples() != 0) c.frame_samples = static_cast<int>(p.frame_samples());
+  c.hop_samples = p.hop_samples() != 0 ? static_cast<int>(std::min<uint32_t>(p.hop_samples(), 1u << 21))
+                                       : std::max(1, c.frame_samples / 2);
+  c.weighting = WeightingFromProto(p.weighting());
+  if (p.phat_beta() != 0.0) c.phat_beta = p.phat_beta();
+  c.band_low_hz = p.band_low_hz();
+  c.band_high_hz = p.band_high_hz();
+
+  const v1::FilterConfig& f = p.filter();
+  if (f.particles() > static_cast<uint32_t>(policy.max_particles)) {
+    return InvalidArgument("filter.particles is " + std::to_string(f.particles()) +
+                           "; this server allows at most " + std::to_string(policy.max_particles));
+  }
+  if (f.particles() != 0) c.filter.particles = static_cast<int>(f.particles());
+  if (f.accel_noise_mps2() != 0.0) c.filter.accel_noise_mps2 = f.accel_noise_mps2();
+  c.filter.tdoa_sigma_s = f.tdoa_sigma_s();
+  if (f.likelihood() == v1::LIKELIHOOD_GCC) c.filter.likelihood = engine::Likelihood::kGcc;
+  if (f.min_peak_snr() != 0.0) c.filter.min_peak_snr = f.min_peak_snr();
+  if (f.resample_threshold() != 0.0) c.filter.resample_threshold = f.resample_threshold();
+
+  c.backend = p.backend().empty() ? policy.default_backend : p.backend();
+  if (p.has_seed()) c.seed = p.seed();
+  if (p.has_init_region()) {
+    c.init_region_min_m = FromProto(p.init_region().min_m());
+    c.init_region_max_m = FromProto(p.init_region().max_m());
+    if (!c.init_region_min_m.allFinite() || !c.init_region_max_m.allFinite() ||
+        (c.init_region_min_m.array() > c.init_region_max_m.array()).any()) {
+      return InvalidArgument("init_region: min_m must be finite and <= max_m on every axis");
+    }
+  }
+  if (p.min_pair_quality() != 0.0) c.min_pair_quality = p.min_pair_quality();
+  c.max_fix_std_m = p.max_fix_std_m();
+  if (p.max_block_samples() > policy.max_block_samples) {
+    return InvalidArgument("max_block_samples is " + std::to_string(p.max_block_samples()) +
+                           "; this server allows at most " + std::to_string(policy.max_block_samples));
+  }
+  c.max_block_samples = p.max_block_samples() != 0 ? p.max_block_samples() : policy.max_block_samples;
+  LOCALIZER_RETURN_IF_ERROR(Rename(c.Validate()));
+  return c;
+}
+
+v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::string& label) {
+  v1::SessionConfig p;
+  for (const Vec3& s : c.sensors_m) ToProto(s, p.mutable_array()->add_sensors_m());
+  p.mutable_array()->set_sound_speed_mps(c.sound_speed_mps);
+  p.mutable_array()->set_reference_sensor(static_cast<uint32_t>(c.reference_sensor));
+  p.set_sample_rate_hz(c.sample_rate_hz);
+  p.set_frame_samples(static_cast<uint32_t>(c.frame_samples));
+  p.set_hop_samples(static_cast<uint32_t>(c.hop_samples));
+  p.set_weighting(WeightingToProto(c.weighting));
+  p.set_phat_beta(c.phat_beta);
+  p.set_band_low_hz(c.band_low_hz);
+  p.set_band_high_hz(c.band_high_hz);
+  v1::FilterConfig* f = p.mutable_filter();
+  f->set_type(v1::FILTER_TYPE_PF);
+  f->set_particles(static_cast<uint32_t>(c.filter.particles));
+  f->set_accel_noise_mps2(c.filter.accel_noise_mps2);
+  f->set_tdoa_sigma_s(c.filter.tdoa_sigma_s);
+  f->set_likelihood(c.filter.likelihood == engine::Likelihood::kGcc ? v1::LIKELIHOOD_GCC : v1::LIKELIHOOD_PEAK);
+  f->set_min_peak_snr(c.filter.min_peak_snr);
+  f->set_resample_threshold(c.filter.resample_threshold);
+  p.set_backend(c.backend);
+  p.set_seed(c.seed);
+  p.set_label(label);
+  if (c.init_region_min_m.allFinite() && c.init_region_max_m.allFinite()) {
+    ToProto(c.init_region_min_m, p.mutable_init_region()->mutable_min_m());
+    ToProto(c.init_region_max_m, p.mutable_init_region()->mutable_max_m());
+  }
+  p.set_min_pair_quality(c.min_pair_quality);
+  p.set_max_fix_std_m(c.max_fix_std_m);
+  p.set_max_block_samples(static_cast<uint32_t>(std::min<int64_t>(c.max_block_samples, UINT32_MAX)));
+  return p;
+}
+
+}  // namespace localizer::wire

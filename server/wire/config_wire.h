@@ -1,0 +1,32 @@
+// SessionConfig on the wire <-> engine::SessionConfig.
+//
+// Zero (or "", or unset) proto fields take the defaults the proto lists; ConfigToProto
+// writes every field explicitly, which is what SessionOpened.effective_config carries and
+// what a client sends to reproduce an offline run exactly.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "engine/core/status.h"
+#include "engine/pipeline/session.h"
+#include "localizer/v1/localizer.pb.h"
+
+namespace localizer::wire {
+
+// What the server allows and what it fills in where the client left a field unset.
+struct ConfigPolicy {
+  std::string default_backend = "auto";     // for backend ""
+  int64_t max_block_samples = 1 << 22;      // per channel; also the default
+  int max_channels = 64;
+  int max_particles = 1 << 20;
+};
+
+// INVALID_ARGUMENT naming the proto field ("array.sensors_m", "filter.particles", ...)
+// for anything the engine would refuse or the policy forbids.
+StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& proto, const ConfigPolicy& policy);
+
+// Every field set; `backend` is written as given (the server passes the chosen one).
+v1::SessionConfig ConfigToProto(const engine::SessionConfig& config, const std::string& label);
+
+}  // namespace localizer::wire

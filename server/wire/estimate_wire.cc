@@ -1,0 +1,68 @@
+#include "server/wire/estimate_wire.h"
+
+namespace localizer::wire {
+
+void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& array, const std::string& backend,
+                     v1::Estimate* out) {
+  out->set_sequence(e.sequence);
+  out->set_t_s(e.t_s);
+  v1::Vector3* p = out->mutable_position_m();
+  p->set_x(e.state(0));
+  p->set_y(e.state(1));
+  p->set_z(e.state(2));
+  v1::Vector3* v = out->mutable_velocity_mps();
+  v->set_x(e.state(3));
+  v->set_y(e.state(4));
+  v->set_z(e.state(5));
+  auto* cov = out->mutable_covariance();
+  cov->Resize(36, 0.0);
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) cov->Set(6 * r + c, e.covariance(r, c));
+  }
+  out->set_frame_index(e.frame_index);
+  out->set_initialised(e.initialised);
+  out->set_reinitialised(e.reinitialised);
+  out->set_ess(e.ess);
+  out->set_tdoa_sigma_s(e.tdoa_sigma_s);
+  out->set_pairs_used(static_cast<uint32_t>(e.pairs_used));
+  out->set_nis(e.nis);
+  out->clear_pairs();
+  for (size_t k = 0; k < e.delay_s.size(); ++k) {
+    v1::PairTdoa* pair = out->add_pairs();
+    pair->set_sensor(static_cast<uint32_t>(array.sensor_of_pair(static_cast<int>(k))));
+    pair->set_delay_s(e.delay_s[k]);
+    if (k < e.quality.size()) pair->set_quality(e.quality[k]);
+  }
+  out->mutable_latency()->set_tdoa_s(e.timings.tdoa_s);
+  out->mutable_latency()->set_filter_s(e.timings.filter_s);
+  out->set_backend(backend);
+}
+
+engine::Estimate EstimateFromProto(const v1::Estimate& p) {
+  engine::Estimate e;
+  e.frame_index = p.frame_index();
+  e.sequence = p.sequence();
+  e.t_s = p.t_s();
+  e.initialised = p.initialised();
+  e.reinitialised = p.reinitialised();
+  e.state << p.position_m().x(), p.position_m().y(), p.position_m().z(), p.velocity_mps().x(),
+      p.velocity_mps().y(), p.velocity_mps().z();
+  if (p.covariance_size() == 36) {
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c) e.covariance(r, c) = p.covariance(6 * r + c);
+    }
+  }
+  e.ess = p.ess();
+  e.tdoa_sigma_s = p.tdoa_sigma_s();
+  e.pairs_used = static_cast<int>(p.pairs_used());
+  e.nis = p.nis();
+  for (const v1::PairTdoa& pair : p.pairs()) {
+    e.delay_s.push_back(pair.delay_s());
+    e.quality.push_back(pair.quality());
+  }
+  e.timings.tdoa_s = p.latency().tdoa_s();
+  e.timings.filter_s = p.latency().filter_s();
+  return e;
+}
+
+}  // namespace localizer::wire

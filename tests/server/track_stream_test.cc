@@ -1,0 +1,115 @@
+// A session streamed through the service gives exactly what the engine gives offline,
+// concurrent sessions do not disturb each other, and a finished stream closes its session.
+#include <cmath>
+
+#include "tests/server/service_fixture.h"
+
+namespace localizer::server::testing {
+namespace {
+
+constexpr int64_t kBlock = 2048;
+
+TEST_F(ServiceTest, StreamedScenarioEqualsOfflineTracking) {
+  const Scenario s = MakeScenario("tetra-water", 4.0, 1, kBlock);
+  ASSERT_GT(s.offline.size(), 10u);
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(s.OpenRequest()));
+  for (int64_t k = 1; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(stream.Send(s.BlockRequest(k, kBlock)));
+  const grpc::Status status = stream.Close();
+  ASSERT_TRUE(status.ok()) << status.error_message();
+
+  const auto responses = stream.responses();
+  ASSERT_FALSE(responses.empty());
+  ASSERT_TRUE(responses.front().has_opened());
+  const v1::SessionOpened& opened = responses.front().opened();
+  EXPECT_EQ(opened.session_id().size(), 16u);
+  EXPECT_EQ(opened.resume_token().size(), 32u);
+  EXPECT_EQ(opened.backend(), "cpu");
+  EXPECT_EQ(opened.effective_config().frame_samples(), 4096u);
+  EXPECT_EQ(opened.effective_config().filter().particles(), 1024u);
+
+  const auto estimates = stream.estimates();
+  ASSERT_EQ(estimates.size(), s.offline.size());
+  for (size_t i = 0; i < estimates.size(); ++i) {
+    SCOPED_TRACE(i);
+    ExpectSameEstimate(s.offline[i], estimates[i]);
+    EXPECT_EQ(estimates[i].backend(), "cpu");
+    EXPECT_GT(estimates[i].latency().tdoa_s(), 0.0);
+    EXPECT_GE(estimates[i].latency().total_s(), estimates[i].latency().queue_s());
+  }
+  // Half-close means finished: the session is gone.
+  grpc::ClientContext context;
+  v1::ListSessionsResponse list;
+  ASSERT_TRUE(stub_->ListSessions(&context, {}, &list).ok());
+  EXPECT_EQ(list.sessions_size(), 0);
+}
+
+TEST_F(ServiceTest, Pcm16BlocksTrackTheSource) {
+  const Scenario s = MakeScenario("tetra-water", 4.0, 3, kBlock);
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(s.OpenRequest()));
+  for (int64_t k = 1; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(stream.Send(s.BlockRequest(k, kBlock, true)));
+  ASSERT_TRUE(stream.Close().ok());
+  const auto estimates = stream.estimates();
+  ASSERT_EQ(estimates.size(), s.offline.size());
+  // 16-bit quantisation of a signal at ~0.1-1 full scale is far below the sensor noise:
+  // the last estimate lands where the float run's does, within 5 cm.
+  const v1::Estimate& last = estimates.back();
+  const engine::Estimate& want = s.offline.back();
+  ASSERT_TRUE(last.initialised());
+  const double d = std::hypot(last.position_m().x() - want.state(0), last.position_m().y() - want.state(1),
+                              last.position_m().z() - want.state(2));
+  EXPECT_LT(d, 0.05);
+}
+
+TEST_F(ServiceTest, ConcurrentSessionsWithDifferentArraysDoNotInterfere) {
+  const Scenario a = MakeScenario("tetra-water", 3.0, 5, kBlock);
+  const Scenario b = MakeScenario("turn-multipath", 3.0, 6, kBlock);
+  ASSERT_NE(a.config.sensors_m.size(), b.config.sensors_m.size());
+  TestStream sa(stub_.get());
+  TestStream sb(stub_.get());
+  ASSERT_TRUE(sa.Send(a.OpenRequest()));
+  ASSERT_TRUE(sb.Send(b.OpenRequest()));
+  // Interleave the two streams block by block.
+  const int64_t n = std::max(a.BlockCount(kBlock), b.BlockCount(kBlock));
+  for (int64_t k = 1; k <= n; ++k) {
+    if (k <= a.BlockCount(kBlock)) {
+      ASSERT_TRUE(sa.Send(a.BlockRequest(k, kBlock)));
+    }
+    if (k <= b.BlockCount(kBlock)) {
+      ASSERT_TRUE(sb.Send(b.BlockRequest(k, kBlock)));
+    }
+  }
+  ASSERT_TRUE(sa.Close().ok());
+  ASSERT_TRUE(sb.Close().ok());
+  const auto ea = sa.estimates();
+  const auto eb = sb.estimates();
+  ASSERT_EQ(ea.size(), a.offline.size());
+  ASSERT_EQ(eb.size(), b.offline.size());
+  for (size_t i = 0; i < ea.size(); ++i) ExpectSameEstimate(a.offline[i], ea[i]);
+  for (size_t i = 0; i < eb.size(); ++i) ExpectSameEstimate(b.offline[i], eb[i]);
+  EXPECT_NE(sa.opened().session_id(), sb.opened().session_id());
+}
+
+TEST_F(ServiceTest, ListSessionsShowsAnOpenSession) {
+  const Scenario s = MakeScenario("tetra-water", 2.0, 1, kBlock);
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(s.OpenRequest()));
+  for (int64_t k = 1; k <= 4; ++k) ASSERT_TRUE(stream.Send(s.BlockRequest(k, kBlock)));
+  ASSERT_TRUE(stream.WaitForEstimates(3));
+  grpc::ClientContext context;
+  v1::ListSessionsResponse list;
+  ASSERT_TRUE(stub_->ListSessions(&context, {}, &list).ok());
+  ASSERT_EQ(list.sessions_size(), 1);
+  const v1::SessionInfo& info = list.sessions(0);
+  EXPECT_EQ(info.session_id(), stream.opened().session_id());
+  EXPECT_EQ(info.label(), "test");
+  EXPECT_TRUE(info.attached());
+  EXPECT_EQ(info.channel_count(), 4u);
+  EXPECT_EQ(info.last_sequence(), 4u);
+  EXPECT_EQ(info.blocks_processed(), 4u);
+  ASSERT_TRUE(stream.Close().ok());
+}
+
+}  // namespace
+}  // namespace localizer::server::testing
