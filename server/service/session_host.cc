@@ -36,14 +36,11 @@ SessionHost::SessionHost(std::string id, std::string token, std::string label,
       metrics_(metrics),
       created_(Clock::now()),
       detached_since_(created_),
-      last_block_(created_) {
-  metrics_->detached->Increment();
-}
+      last_block_(created_) {}
 
 SessionHost::~SessionHost() {
   std::lock_guard<std::mutex> lock(mutex_);
   metrics_->queue_depth->Add(-static_cast<double>(queued_blocks_));
-  (sink_ != nullptr ? metrics_->attached : metrics_->detached)->Decrement();
 }
 
 bool SessionHost::TokenMatches(const std::string& token) const {
@@ -71,11 +68,11 @@ void SessionHost::AttachLocked(StreamSink* sink, bool resumed, std::optional<uin
   if (sink_ != nullptr && sink_ != sink) {
     StreamSink* old = sink_;
     sink_ = nullptr;
+    // Its write in flight may never reach the client: it goes first again (the replay
+    // below drops it if the client says it has it).
+    if (ResponsePtr in_flight = old->TakeInFlightLocked()) RequeueLocked(std::move(in_flight));
     old->EndLocked(grpc::Status(grpc::StatusCode::ABORTED, "session " + id_ + " was resumed on another stream"));
     Bump(metrics_->sessions_closed("replaced"));
-  } else if (sink_ == nullptr) {
-    metrics_->detached->Decrement();
-    metrics_->attached->Increment();
   }
   sink_ = sink;
   input_paused_ = false;
@@ -99,8 +96,6 @@ void SessionHost::DetachLocked(StreamSink* sink) {
   if (sink_ != sink || sink == nullptr) return;
   sink_ = nullptr;
   detached_since_ = Clock::now();
-  metrics_->attached->Decrement();
-  metrics_->detached->Increment();
 }
 
 bool SessionHost::attached() const {
@@ -297,6 +292,10 @@ void SessionHost::RequeueLocked(ResponsePtr response) {
 
 void SessionHost::Close(const grpc::Status& status) {
   std::lock_guard<std::mutex> lock(mutex_);
+  CloseLocked(status);
+}
+
+void SessionHost::CloseLocked(const grpc::Status& status) {
   if (closed_) return;
   closed_ = true;
   metrics_->queue_depth->Add(-static_cast<double>(queued_blocks_));
@@ -305,8 +304,6 @@ void SessionHost::Close(const grpc::Status& status) {
   if (sink_ != nullptr) {
     StreamSink* sink = sink_;
     sink_ = nullptr;
-    metrics_->attached->Decrement();
-    metrics_->detached->Increment();
     sink->EndLocked(status);
   }
 }

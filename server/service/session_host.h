@@ -85,6 +85,7 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   // Ends the session: the attached stream (if any) ends with `status`; queued blocks are
   // dropped. Idempotent.
   void Close(const grpc::Status& status);
+  void CloseLocked(const grpc::Status& status);
   bool closed() const;
   bool ClosedLocked() const { return closed_; }
   // Server shutdown: the attached stream stops reading and ends once idle (DrainLocked).

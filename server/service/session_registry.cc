@@ -89,6 +89,15 @@ void SessionRegistry::Remove(const std::string& id, const std::string& reason, c
   host->Close(status);
 }
 
+void SessionRegistry::Forget(const std::string& id, const std::string& reason) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (sessions_.erase(id) == 0) return;
+  }
+  if (auto* c = metrics_->sessions_closed(reason)) c->Increment();
+  LogEvent("info", "session_closed", {{"session", id}, {"reason", reason}});
+}
+
 StatusOr<uint64_t> SessionRegistry::Close(const std::string& id, const std::string& token) {
   std::shared_ptr<SessionHost> host;
   {
@@ -132,13 +141,13 @@ void SessionRegistry::SweepLoop() {
   while (!stopping_) {
     sweep_wake_.wait_for(lock, std::chrono::milliseconds(250));
     if (stopping_) break;
+    lock.unlock();
     const auto now = Clock::now();
     std::vector<std::string> expired;
-    for (const auto& [id, host] : sessions_) {
+    for (const auto& host : Snapshot()) {
       std::lock_guard<std::mutex> host_lock(host->mutex());
-      if (host->ExpiredLocked(now, options_.ttl_s)) expired.push_back(id);
+      if (host->ExpiredLocked(now, options_.ttl_s)) expired.push_back(host->id());
     }
-    lock.unlock();
     for (const std::string& id : expired) {
       Remove(id, "expired", grpc::Status(grpc::StatusCode::NOT_FOUND, "session expired"));
     }

@@ -4,7 +4,8 @@
 // A session id is 16 random hex digits; its resume token 32 more, compared in constant
 // time. A detached session (its stream gone) is kept for `ttl_s`, then closed by a sweep
 // that runs every ~0.25 s on a thread of its own.
-// Thread-safe.
+// Thread-safe. Lock order: a session's mutex may be held when calling Forget; the
+// registry never takes a session's mutex while holding its own.
 #pragma once
 
 #include <atomic>
@@ -46,6 +47,8 @@ class SessionRegistry final {
   StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const;
   // Removes and closes; `reason` labels the closed-sessions metric. No-op if unknown.
   void Remove(const std::string& id, const std::string& reason, const grpc::Status& status);
+  // Removes without touching the session (the caller holds its lock and ends it).
+  void Forget(const std::string& id, const std::string& reason);
   // CloseSession: NOT_FOUND / PERMISSION_DENIED as Find; returns frames processed.
   StatusOr<uint64_t> Close(const std::string& id, const std::string& token);
 

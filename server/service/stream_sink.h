@@ -3,7 +3,11 @@
 // back into the session.
 #pragma once
 
+#include <memory>
+
 #include <grpcpp/support/status.h>
+
+#include "localizer/v1/localizer.pb.h"
 
 namespace localizer::server {
 
@@ -17,6 +21,9 @@ class StreamSink {
   // The session is ending (closed, replaced by a resume elsewhere, server draining): end
   // the stream with `status`. The session forgets the sink before calling this.
   virtual void EndLocked(const grpc::Status& status) = 0;
+  // The response being written now, if any; the sink forgets it (its completion will not
+  // touch the session). Used when a resume replaces this stream.
+  virtual std::shared_ptr<const v1::TrackResponse> TakeInFlightLocked() = 0;
   // The server is shutting down: stop reading, write what the accepted blocks produce,
   // then end the stream with UNAVAILABLE.
   virtual void DrainLocked() = 0;

@@ -28,6 +28,11 @@ void TrackReactor::OnReadDone(bool ok) {
       return;
     }
     std::lock_guard<std::mutex> lock(host_->mutex());
+    if (context_->IsCancelled()) {  // broken, not half-closed: keep the session for a resume
+      cancelled_ = true;
+      FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED, "stream cancelled"));
+      return;
+    }
     input_done_ = true;
     OutputReadyLocked();  // finishes now if everything is already written
     return;
@@ -123,16 +128,26 @@ void TrackReactor::OutputReadyLocked() {
     return;
   }
   if (input_done_ && host_->IdleLocked()) {
+    if (context_->IsCancelled()) {
+      cancelled_ = true;
+      FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED, "stream cancelled"));
+      return;
+    }
     if (draining_) {
       FinishOnce(grpc::Status(grpc::StatusCode::UNAVAILABLE,
                               "server is shutting down; every accepted block was processed (last sequence in the "
                               "last estimate); resume or reopen on another instance"));
       return;
     }
+    // Finished: the session ends before the client sees OK, so nothing can find it after.
     finished_clean_ = true;
+    registry_->Forget(host_->id(), "finished");
+    host_->CloseLocked(grpc::Status::OK);  // its EndLocked finishes this stream with OK
     FinishOnce(grpc::Status::OK);
   }
 }
+
+ResponsePtr TrackReactor::TakeInFlightLocked() { return std::move(writing_); }
 
 void TrackReactor::DrainLocked() {
   draining_ = true;
@@ -144,6 +159,7 @@ void TrackReactor::OnWriteDone(bool ok) {
   std::lock_guard<std::mutex> lock(host_->mutex());
   ResponsePtr written = std::move(writing_);
   writing_.reset();
+  if (!written) return;  // taken by a resume on another stream, which writes it again
   if (!ok) {  // the stream broke: keep the response for a resume
     host_->RequeueLocked(std::move(written));
     cancelled_ = true;
@@ -168,19 +184,13 @@ void TrackReactor::OnCancel() {
 
 void TrackReactor::OnDone() {
   if (host_) {
-    bool close = false;
+    bool detached = false;
     {
       std::lock_guard<std::mutex> lock(host_->mutex());
-      // A write still marked in flight did not complete: keep it for a resume.
-      if (writing_) host_->RequeueLocked(std::move(writing_));
       host_->DetachLocked(this);
-      close = finished_clean_ && !cancelled_;
+      detached = !host_->ClosedLocked();
     }
-    if (close) {
-      registry_->Remove(host_->id(), "finished", grpc::Status::OK);
-    } else if (!host_->closed()) {
-      LogEvent("info", "session_detached", {{"session", host_->id()}, {"peer", peer_}});
-    }
+    if (detached) LogEvent("info", "session_detached", {{"session", host_->id()}, {"peer", peer_}});
   }
   delete this;
 }

@@ -43,6 +43,7 @@ class TrackReactor final : public grpc::ServerBidiReactor<v1::TrackRequest, v1::
   void InputSpaceLocked() override;
   void EndLocked(const grpc::Status& status) override;
   void DrainLocked() override;
+  ResponsePtr TakeInFlightLocked() override;
 
  private:
   void HandleOpen(const v1::SessionConfig& config);

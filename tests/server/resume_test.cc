@@ -28,7 +28,8 @@ TEST_F(ServiceTest, ResumeAfterDisconnectLosesAndRepeatsNothing) {
     ASSERT_TRUE(first.Send(s.OpenRequest()));
     for (int64_t k = 1; k <= 10; ++k) ASSERT_TRUE(first.Send(s.BlockRequest(k, kBlock)));
     ASSERT_TRUE(first.WaitForEstimates(4));
-    EXPECT_EQ(first.Cancel().error_code(), grpc::StatusCode::CANCELLED);
+    const grpc::Status cancelled = first.Cancel();
+    EXPECT_EQ(cancelled.error_code(), grpc::StatusCode::CANCELLED) << cancelled.error_message();
     received = first.estimates();
     opened = first.opened();
   }

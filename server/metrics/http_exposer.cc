@@ -1,0 +1,309 @@
+#include "server/metrics/http_exposer.h"
+
+#include <arpa/inet.h>
+#include <civetweb.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <exception>
+#include <mutex>
+#include <system_error>
+#include <thread>
+
+#include "server/metrics/text_format.h"
+
+namespace localizer::server::metrics {
+namespace {
+
+constexpr int kMaxThreads = 64;
+constexpr char kRequestTimeoutMs[] = "10000";
+
+void InitCivetwebOnce() {
+  static std::once_flag once;
+  // Process-wide and never undone: mg_exit_library would break other users of civetweb.
+  std::call_once(once, [] { mg_init_library(0); });
+}
+
+// Opens a TCP connection to host:port (an IPv4 or bracketed IPv6 literal) without waiting
+// for it to complete, and closes it: enough to make a poll() on the listener return.
+void PokeListener(const std::string& host, int port) {
+  sockaddr_in v4{};
+  sockaddr_in6 v6{};
+  const sockaddr* address = nullptr;
+  socklen_t length = 0;
+  if (host.size() > 2 && host.front() == '[') {
+    v6.sin6_family = AF_INET6;
+    v6.sin6_port = htons(static_cast<uint16_t>(port));
+    if (inet_pton(AF_INET6, host.substr(1, host.size() - 2).c_str(), &v6.sin6_addr) != 1) return;
+    address = reinterpret_cast<const sockaddr*>(&v6);
+    length = sizeof v6;
+  } else {
+    v4.sin_family = AF_INET;
+    v4.sin_port = htons(static_cast<uint16_t>(port));
+    if (inet_pton(AF_INET, host.c_str(), &v4.sin_addr) != 1) return;
+    address = reinterpret_cast<const sockaddr*>(&v4);
+    length = sizeof v4;
+  }
+  const int fd = socket(address->sa_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) return;
+  (void)connect(fd, address, length);  // EINPROGRESS is fine: the SYN is what wakes it
+  close(fd);
+}
+
+// "host:port" -> civetweb's listening_ports syntax ("127.0.0.1:8080", "[::1]:8080").
+StatusOr<std::string> ToCivetwebListeningPort(const std::string& listen) {
+  const auto bad = [&listen](const std::string& why) {
+    return InvalidArgument("listen address \"" + listen + "\" " + why +
+                           " (expected host:port, e.g. 127.0.0.1:9100 or [::1]:0)");
+  };
+  const size_t colon = listen.rfind(':');
+  if (colon == std::string::npos) return bad("has no port");
+  std::string host = listen.substr(0, colon);
+  const std::string port = listen.substr(colon + 1);
+  if (port.empty() || port.size() > 5 ||
+      port.find_first_not_of("0123456789") != std::string::npos || std::stoi(port) > 65535) {
+    return bad("has no port number in 0..65535");
+  }
+  if (host == "localhost") host = "127.0.0.1";
+  unsigned char address[16];
+  if (host.size() > 2 && host.front() == '[' && host.back() == ']') {
+    const std::string inner = host.substr(1, host.size() - 2);
+    if (inet_pton(AF_INET6, inner.c_str(), address) != 1) return bad("has a bad IPv6 host");
+    if (mg_check_feature(MG_FEATURES_IPV6) == 0) {
+      return bad("is IPv6, which this civetweb build does not support");
+    }
+  } else if (inet_pton(AF_INET, host.c_str(), address) != 1) {
+    return bad("has a host that is not an IPv4 literal, [IPv6] literal or localhost");
+  }
+  return host + ":" + port;
+}
+
+bool IsValidPagePath(const std::string& path) {
+  if (path.empty() || path.front() != '/') return false;
+  for (const char c : path) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '/' || c == '.' || c == '_' || c == '~' || c == '-';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+// Writes a complete response; `body` is omitted for HEAD but Content-Length still counts it.
+int SendResponse(mg_connection* connection, int status, const std::string& content_type,
+                 const std::string& body, bool head_only, const char* extra_headers = "") {
+  mg_printf(connection,
+            "HTTP/1.1 %d %s\r\n"
+            "Content-Type: %s\r\n"
+            "Content-Length: %zu\r\n"
+            "Cache-Control: no-store\r\n"
+            "%s"
+            "Connection: close\r\n"
+            "\r\n",
+            status, mg_get_response_code_text(connection, status), content_type.c_str(),
+            body.size(), extra_headers);
+  if (!head_only && !body.empty()) mg_write(connection, body.data(), body.size());
+  return status;
+}
+
+}  // namespace
+
+HttpExposer::HttpExposer(Registry* registry) : registry_(registry) {}
+
+HttpExposer::~HttpExposer() {
+  if (context_ == nullptr) return;
+  // mg_stop sets a flag that civetweb's listener thread reads only when its poll() returns,
+  // which without traffic takes up to 2 s; connecting to ourselves makes it return at once.
+  std::atomic<bool> stopped{false};
+  std::thread waker;
+  try {
+    waker = std::thread([this, &stopped] {
+      while (!stopped.load()) {
+        PokeListener(wake_host_, port_);
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+    });
+  } catch (const std::system_error&) {
+    // No thread to spare: mg_stop still returns, within civetweb's 2 s poll step.
+  }
+  mg_stop(context_);  // joins civetweb's threads; pages_ is still alive meanwhile
+  stopped.store(true);
+  if (waker.joinable()) waker.join();
+}
+
+StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& listen,
+                                                          Registry* registry, int threads) {
+  if (registry == nullptr) return InvalidArgument("HttpExposer needs a registry, got null");
+  if (threads < 1 || threads > kMaxThreads) {
+    return InvalidArgument("HttpExposer threads is " + std::to_string(threads) +
+                           ", must be in 1.." + std::to_string(kMaxThreads));
+  }
+  StatusOr<std::string> listening_ports = ToCivetwebListeningPort(listen);
+  if (!listening_ports.ok()) return listening_ports.status();
+  InitCivetwebOnce();
+
+  std::unique_ptr<HttpExposer> exposer(new HttpExposer(registry));
+  const std::string num_threads = std::to_string(threads);
+  // No document_root: civetweb serves no files; every request goes to HandleRequest.
+  // clang-format off
+  const char* options[] = {"listening_ports",    listening_ports->c_str(),
+                           "num_threads",        num_threads.c_str(),
+                           "request_timeout_ms", kRequestTimeoutMs,
+                           "enable_keep_alive",  "no",
+                           nullptr};
+  // clang-format on
+  mg_callbacks callbacks;
+  std::memset(&callbacks, 0, sizeof callbacks);
+  callbacks.begin_request = &HttpExposer::HandleRequest;
+  callbacks.log_message = &HttpExposer::LogMessage;
+  mg_init_data init;
+  std::memset(&init, 0, sizeof init);
+  init.callbacks = &callbacks;
+  init.user_data = exposer.get();
+  init.configuration_options = options;
+  char error_text[256] = "";
+  unsigned error_code = 0;
+  mg_error_data error;
+  std::memset(&error, 0, sizeof error);
+  error.code = &error_code;
+  error.text = error_text;
+  error.text_buffer_size = sizeof error_text;
+
+  exposer->context_ = mg_start2(&init, &error);
+  std::string log;
+  {
+    std::lock_guard<std::mutex> lock(exposer->log_mutex_);
+    exposer->starting_ = false;
+    log = std::move(exposer->startup_log_);
+  }
+  if (exposer->context_ == nullptr) {
+    // The log says why ("cannot bind to ...: Address already in use"); it ends with the
+    // summary mg_start2 also returns in error_text.
+    const std::string reason = !log.empty()            ? log
+                               : error_text[0] != '\0' ? std::string(error_text)
+                                                       : "civetweb failed to start";
+    return Status(StatusCode::kUnavailable,
+                  "cannot serve metrics on \"" + listen + "\": " + reason);
+  }
+  const std::string host = listening_ports->substr(0, listening_ports->rfind(':'));
+  exposer->wake_host_ = host == "0.0.0.0" ? "127.0.0.1" : host == "[::]" ? "[::1]" : host;
+  mg_server_port ports[4];
+  std::memset(ports, 0, sizeof ports);
+  const int port_count = mg_get_server_ports(exposer->context_, 4, ports);
+  if (port_count < 1 || ports[0].port <= 0) {
+    return Internal("civetweb started on \"" + listen + "\" but reports no listening port");
+  }
+  exposer->port_ = ports[0].port;
+  return exposer;
+}
+
+Status HttpExposer::AddPage(const std::string& path, PageHandler handler,
+                            std::string content_type) {
+  if (!IsValidPagePath(path)) {
+    return InvalidArgument("page path \"" + path +
+                           "\" must start with '/' and use only [A-Za-z0-9/._~-]");
+  }
+  if (!handler) return InvalidArgument("page \"" + path + "\" has an empty handler");
+  if (content_type.empty()) return InvalidArgument("page \"" + path + "\" has no content type");
+  for (const char c : content_type) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      return InvalidArgument("content type of page \"" + path + "\" holds a control character");
+    }
+  }
+  std::lock_guard<std::mutex> lock(pages_mutex_);
+  pages_[path] = Page{std::move(handler), std::move(content_type)};
+  return Status::Ok();
+}
+
+bool HttpExposer::FindPage(const std::string& path, Page* page) const {
+  std::lock_guard<std::mutex> lock(pages_mutex_);
+  const auto it = pages_.find(path);
+  if (it != pages_.end()) {
+    *page = it->second;
+    return true;
+  }
+  if (path == "/metrics") {
+    page->handler = [this] { return std::pair<int, std::string>(200, registry_->Serialize()); };
+    page->content_type = kTextFormatContentType;
+    return true;
+  }
+  if (path == "/") {
+    page->handler = [this] { return std::pair<int, std::string>(200, IndexPage()); };
+    page->content_type = "text/html; charset=utf-8";
+    return true;
+  }
+  return false;
+}
+
+std::string HttpExposer::IndexPage() const {
+  std::string html =
+      "<!DOCTYPE html>\n<html><head><title>localizer</title></head><body>\n"
+      "<h1>localizer</h1>\n<ul>\n<li><a href=\"/metrics\">/metrics</a></li>\n";
+  std::lock_guard<std::mutex> lock(pages_mutex_);
+  for (const auto& [path, page] : pages_) {
+    if (path == "/" || path == "/metrics") continue;
+    // Paths hold only [A-Za-z0-9/._~-] (AddPage checks), so they need no HTML escaping.
+    html += "<li><a href=\"" + path + "\">" + path + "</a></li>\n";
+  }
+  html += "</ul>\n</body></html>\n";
+  return html;
+}
+
+int HttpExposer::LogMessage(const mg_connection* connection, const char* message) {
+  // Once serving, civetweb logs per-connection noise (clients hanging up): dropped.
+  if (connection == nullptr || message == nullptr) return 1;
+  const mg_context* context = mg_get_context(connection);
+  auto* self = context != nullptr ? static_cast<HttpExposer*>(mg_get_user_data(context)) : nullptr;
+  if (self == nullptr) return 1;
+  std::lock_guard<std::mutex> lock(self->log_mutex_);
+  if (self->starting_ && self->startup_log_.size() < 1024) {
+    if (!self->startup_log_.empty()) self->startup_log_ += "; ";
+    self->startup_log_ += message;
+  }
+  return 1;
+}
+
+int HttpExposer::HandleRequest(mg_connection* connection) {
+  // Exceptions must not unwind through civetweb's C frames: everything is caught here.
+  try {
+    auto* self = static_cast<HttpExposer*>(mg_get_user_data(mg_get_context(connection)));
+    const mg_request_info* request = mg_get_request_info(connection);
+    const std::string method = request->request_method != nullptr ? request->request_method : "";
+    const std::string path = request->local_uri != nullptr ? request->local_uri : "";
+    const bool head_only = method == "HEAD";
+
+    Page page;
+    if (!self->FindPage(path, &page)) {
+      return SendResponse(connection, 404, "text/plain; charset=utf-8", "404 not found\n",
+                          head_only);
+    }
+    if (method != "GET" && !head_only) {
+      return SendResponse(connection, 405, "text/plain; charset=utf-8",
+                          "405 method not allowed: " + method + " (use GET or HEAD)\n", false,
+                          "Allow: GET, HEAD\r\n");
+    }
+    std::pair<int, std::string> result;
+    try {
+      result = page.handler();
+    } catch (const std::exception& e) {
+      return SendResponse(connection, 500, "text/plain; charset=utf-8",
+                          std::string("500 page handler failed: ") + e.what() + "\n", head_only);
+    }
+    if (result.first < 100 || result.first > 599) {
+      return SendResponse(connection, 500, "text/plain; charset=utf-8",
+                          "500 page handler returned status " + std::to_string(result.first) + "\n",
+                          head_only);
+    }
+    return SendResponse(connection, result.first, page.content_type, result.second, head_only);
+  } catch (...) {
+    mg_printf(connection,
+              "HTTP/1.1 500 Internal Server Error\r\nContent-Length: 0\r\n"
+              "Connection: close\r\n\r\n");
+    return 500;
+  }
+}
+
+}  // namespace localizer::server::metrics

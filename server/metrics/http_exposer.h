@@ -1,0 +1,99 @@
+// HttpExposer: a small HTTP server (civetweb) that serves a Registry to Prometheus.
+//
+//   GET/HEAD /metrics  200, Registry::Serialize() as
+//                      "text/plain; version=0.0.4; charset=utf-8"
+//   GET/HEAD /         200, a short HTML index linking /metrics and every added page
+//   GET/HEAD <page>    whatever a handler given to AddPage returns (e.g. /healthz)
+//   other paths        404
+//   other methods      405 with "Allow: GET, HEAD" (on a known path)
+// The query string is ignored. No files are ever served (civetweb runs without a document
+// root). Connections are closed after each response (no keep-alive); a request that does
+// not arrive within 10 s is dropped.
+//
+// Lifetime: Start binds and starts `threads` worker threads; the destructor stops the
+// server, waiting for requests in flight (civetweb's listener polls in 2 s steps; the
+// destructor wakes it with a local connection, so stopping takes milliseconds). The
+// Registry (and anything the page handlers use) must outlive the HttpExposer.
+//
+// Thread-safety: port() and AddPage may be called from any thread at any time. Requests are
+// served concurrently by the worker threads, so Registry::Serialize (thread-safe) and page
+// handlers may run in parallel with each other and with the rest of the program.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <utility>
+
+#include "engine/core/status.h"
+#include "server/metrics/registry.h"
+
+struct mg_connection;
+struct mg_context;
+
+namespace localizer::server::metrics {
+
+class HttpExposer final {
+ public:
+  // Returns {HTTP status code (100..599), body}. Runs on a worker thread for every request
+  // to its path; must be thread-safe and quick. An exception escaping it becomes a 500.
+  using PageHandler = std::function<std::pair<int, std::string>()>;
+
+  // Listens on `listen`, "host:port": host is an IPv4 literal ("127.0.0.1", "0.0.0.0" for
+  // every interface), a bracketed IPv6 literal ("[::1]", if civetweb was built with IPv6)
+  // or "localhost" (127.0.0.1); port is 0..65535, 0 picking a free ephemeral port (read
+  // it back with port()). `threads` (1..64) requests are served at once.
+  // Errors: INVALID_ARGUMENT for a malformed address, a null registry or a thread count out
+  // of range; UNAVAILABLE when the server cannot start (port in use, address not local,
+  // permission denied), with the address and civetweb's reason in the message.
+  static StatusOr<std::unique_ptr<HttpExposer>> Start(const std::string& listen, Registry* registry,
+                                                      int threads = 2);
+
+  ~HttpExposer();
+  HttpExposer(const HttpExposer&) = delete;
+  HttpExposer& operator=(const HttpExposer&) = delete;
+
+  // The TCP port the server listens on (the chosen one when Start was given port 0).
+  int port() const { return port_; }
+
+  // Serves `handler`'s result at `path` (exact match) with the given Content-Type,
+  // replacing any page already there, /metrics and / included. INVALID_ARGUMENT when path
+  // does not start with '/' or holds characters other than [A-Za-z0-9/._~-], or when
+  // content_type is empty or holds a control character; nothing changes then.
+  Status AddPage(const std::string& path, PageHandler handler, std::string content_type);
+
+ private:
+  struct Page {
+    PageHandler handler;
+    std::string content_type;
+  };
+
+  explicit HttpExposer(Registry* registry);
+  // civetweb's begin_request callback: answers every request; returns the status sent.
+  static int HandleRequest(mg_connection* connection);
+  // civetweb's log_message callback: keeps what civetweb logs while Start runs (the reason
+  // a port could not be bound) for Start's error message; drops everything later.
+  static int LogMessage(const mg_connection* connection, const char* message);
+  // Copies the page served at `path` into *page; false if there is none ("/" is the
+  // index unless a page replaced it).
+  bool FindPage(const std::string& path, Page* page) const;
+  std::string IndexPage() const;
+
+  Registry* const registry_;
+  mg_context* context_ = nullptr;
+  int port_ = 0;
+  // An address of the listening socket that this process can connect to (loopback for a
+  // wildcard listen address); the destructor connects there to wake civetweb's listener.
+  std::string wake_host_;
+
+  std::mutex log_mutex_;
+  bool starting_ = true;     // guarded by log_mutex_
+  std::string startup_log_;  // guarded by log_mutex_
+
+  mutable std::mutex pages_mutex_;
+  std::map<std::string, Page> pages_;  // path -> page; guarded by pages_mutex_
+};
+
+}  // namespace localizer::server::metrics
