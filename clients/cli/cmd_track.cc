@@ -1,4 +1,5 @@
-// localizer-cli track: stream a recording through an engine::Session into estimates.csv.
+// localizer-cli track: stream a recording through an engine::Session (or, with --server,
+// a session on a localizer-server) into estimates.csv.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -6,6 +7,10 @@
 
 #include "clients/cli/commands.h"
 #include "clients/cli/progress.h"
+#include "clients/cli/server_flags.h"
+#include "clients/cli/session_flags.h"
+#include "clients/grpc/connection.h"
+#include "clients/grpc/remote_track.h"
 #include "clients/io/array_json.h"
 #include "clients/io/track_runner.h"
 #include "clients/io/wav_io.h"
@@ -22,18 +27,13 @@ struct TrackFlags {
   std::string array_path;
   std::vector<std::string> wav_paths;
   std::string out_path;
-  engine::SessionConfig config;
-  std::string weighting = engine::WeightingName(engine::SessionConfig{}.weighting);
-  std::string likelihood = engine::LikelihoodName(engine::SessionConfig{}.filter.likelihood);
-  double tdoa_sigma_us = engine::SessionConfig{}.filter.tdoa_sigma_s * 1e6;
-  std::optional<double> sound_speed_mps;
-  std::optional<int> reference_sensor;
+  SessionFlags session;
+  StreamFlags stream;
   int print_every = 10;
   double block_s = 0.25;
 };
 
 void RegisterFlags(FlagSet& flags, TrackFlags* f) {
-  engine::SessionConfig& c = f->config;
   flags
       .String("array", &f->array_path, "FILE",
               "sensor array: array.json, or the XAV hydrophones_config CSV")
@@ -43,57 +43,13 @@ void RegisterFlags(FlagSet& flags, TrackFlags* f) {
                "one multichannel WAV, or one mono WAV per sensor in sensor order")
       .Required();
   flags.String("out", &f->out_path, "FILE", "estimates CSV to write").Required();
-  flags.Int("frame", &c.frame_samples, "N", "samples", "samples per channel per TDOA frame");
-  flags.Int("hop", &c.hop_samples, "N", "samples", "samples between frame starts");
-  flags.Int("particles", &c.filter.particles, "N", "", "particle count");
-  flags.String("weighting", &f->weighting, "NAME", "GCC weighting: phat|phat-beta|scot|cc");
-  flags.Double("phat-beta", &c.phat_beta, "B", "", "exponent of --weighting phat-beta, in [0, 1]");
-  flags.String("likelihood", &f->likelihood, "NAME",
-               "particle likelihood: peak (TDOA peaks) | gcc (whole GCC functions)");
-  flags.Uint64("seed", &c.seed, "S", "random seed of the particle filter");
-  flags.OptionalDouble("sound-speed", &f->sound_speed_mps, "MPS", "from the array file",
-                       "sound speed, m/s");
-  flags.OptionalInt("reference", &f->reference_sensor, "K", "from the array file",
-                    "reference sensor index");
-  flags.Double("band-low", &c.band_low_hz, "HZ", "Hz",
-               "lower edge of the GCC band (0: DC, or the array file's band_hz)");
-  flags.Double("band-high", &c.band_high_hz, "HZ", "Hz",
-               "upper edge of the GCC band (0: Nyquist, or the array file's band_hz)");
-  flags.Double("tdoa-sigma-us", &f->tdoa_sigma_us, "US", "us",
-               "TDOA noise std of the peak likelihood (0: estimated online from the innovations)");
-  flags.Double("accel-noise", &c.filter.accel_noise_mps2, "MPS2", "m/s^2",
-               "std of the white acceleration driving the motion model, per axis");
-  flags.String("backend", &c.backend, "NAME", "compute backend: cpu|gpu|auto");
-  flags.Double("block", &f->block_s, "S", "s", "audio handed to the session per call");
+  RegisterTrackerFlags(flags, &f->session, "seed");
+  RegisterGccFlags(flags, &f->session);
+  flags.Double("block", &f->block_s, "S", "s", "audio handed to the local session per call");
   flags.Int("print-every", &f->print_every, "N", "frames",
             "print every Nth estimate to stdout (0: none)");
-}
-
-// The session config from the flags and the array file, with the WAV's sample rate,
-// checked by building a session from it.
-StatusOr<engine::SessionConfig> BuildConfig(const TrackFlags& f, const io::ArrayFile& array,
-                                            double sample_rate_hz) {
-  engine::SessionConfig config = f.config;
-  auto weighting = engine::ParseWeighting(f.weighting);
-  if (!weighting.ok()) return InvalidArgument("--weighting: " + weighting.status().message());
-  config.weighting = *weighting;
-  auto likelihood = engine::ParseLikelihood(f.likelihood);
-  if (!likelihood.ok()) return InvalidArgument("--likelihood: " + likelihood.status().message());
-  config.filter.likelihood = *likelihood;
-  config.filter.tdoa_sigma_s = f.tdoa_sigma_us * 1e-6;
-  config.sensors_m = array.sensors_m;
-  config.sound_speed_mps = f.sound_speed_mps.value_or(array.sound_speed_mps);
-  config.reference_sensor = f.reference_sensor.value_or(array.reference_sensor);
-  config.sample_rate_hz = sample_rate_hz;
-  if (config.band_low_hz == 0.0 && config.band_high_hz == 0.0 && array.band_hz) {
-    config.band_low_hz = array.band_hz->first;  // the array file's hint, unless flags say
-    config.band_high_hz = std::min(array.band_hz->second, 0.5 * sample_rate_hz);
-  }
-  // Create, not just Validate: some limits (band edges against Nyquist, the backend) are
-  // only checked when the stages are built, and a bad flag should fail here as a usage error.
-  auto session = engine::Session::Create(config);
-  if (!session.ok()) return session.status();
-  return config;
+  RegisterServerFlag(flags, &f->stream.server, /*required=*/false);
+  RegisterStreamFlags(flags, &f->stream, "max");
 }
 
 void PrintEstimate(const engine::Estimate& e) {
@@ -118,6 +74,29 @@ void PrintSummary(const io::TrackSummary& s, const std::string& out_path) {
       s.mean_tdoa_s * 1e3, s.mean_filter_s * 1e3, out_path.c_str());
 }
 
+// The local run's summary, from what a server stream delivered.
+io::TrackSummary SummaryOf(const client::RemoteTrackResult& r, int channel_count) {
+  io::TrackSummary s;
+  s.samples_per_channel = r.stream.samples_sent_per_channel;
+  s.sample_rate_hz = r.sample_rate_hz;
+  s.channel_count = channel_count;
+  s.blocks = r.stream.blocks_sent;
+  s.estimates = r.stream.estimates.size();
+  s.wall_s = r.stream.wall_s;
+  double tdoa_s = 0.0;
+  double filter_s = 0.0;
+  for (const client::StreamedEstimate& e : r.stream.estimates) {
+    if (e.estimate.initialised) ++s.initialised_estimates;
+    tdoa_s += e.estimate.timings.tdoa_s;
+    filter_s += e.estimate.timings.filter_s;
+  }
+  if (s.estimates > 0) {
+    s.mean_tdoa_s = tdoa_s / static_cast<double>(s.estimates);
+    s.mean_filter_s = filter_s / static_cast<double>(s.estimates);
+  }
+  return s;
+}
+
 io::TrackCallbacks MakeCallbacks(int print_every, ProgressReporter* progress) {
   io::TrackCallbacks callbacks;
   callbacks.on_warning = [](const std::string& message) { Warning(kCommand, message); };
@@ -130,20 +109,78 @@ io::TrackCallbacks MakeCallbacks(int print_every, ProgressReporter* progress) {
   return callbacks;
 }
 
+client::StreamCallbacks RejectionWarnings() {
+  client::StreamCallbacks callbacks;
+  callbacks.on_rejected = [](const client::BlockRejection& r) {
+    Warning(kCommand, "block " + std::to_string(r.sequence) + " rejected: " + r.code + " (" +
+                          r.reason + "): " + r.message);
+  };
+  callbacks.on_gap = [](const v1::SequenceGap& g) {
+    Warning(kCommand, "sequence gap: " + std::to_string(g.missing_blocks()) +
+                          " block(s) missing after " + std::to_string(g.previous_sequence()));
+  };
+  return callbacks;
+}
+
+int RunLocal(const TrackFlags& f, const io::TrackJob& job) {
+  ProgressReporter progress;
+  auto summary = io::RunTrack(job, MakeCallbacks(f.print_every, &progress));
+  progress.Finish();
+  if (!summary.ok()) return RuntimeError(kCommand, summary.status());
+  PrintSummary(*summary, f.out_path);
+  return kExitOk;
+}
+
+int RunOnServer(const TrackFlags& f, const io::TrackJob& job, client::RemoteTrackOptions options) {
+  options.on_opened = PrintOpened;
+  ProgressReporter progress;
+  auto result =
+      client::RunRemoteTrack(client::Connect(f.stream.server), job, options,
+                             MakeCallbacks(f.print_every, &progress), RejectionWarnings());
+  progress.Finish();
+  if (!result.ok()) return RuntimeError(kCommand, result.status());
+  PrintSummary(SummaryOf(*result, static_cast<int>(job.config.sensors_m.size())), f.out_path);
+  PrintStreamTotals(result->stream);
+  const Status status = result->stream.status();
+  if (!status.ok()) return RuntimeError(kCommand, status);
+  return kExitOk;
+}
+
 }  // namespace
 
 int RunTrack(const std::vector<std::string>& args) {
   TrackFlags f;
   FlagSet flags(
-      "localizer-cli track --array FILE --wav FILE [--wav FILE ...] --out FILE [flags]",
+      "localizer-cli track --array FILE --wav FILE [--wav FILE ...] --out FILE [--server "
+      "HOST:PORT] [flags]",
       "Streams a recording through one tracking session (GCC TDOAs + particle filter) and\n"
       "writes one row per frame to the estimates CSV. The WAV header's sample rate wins over\n"
       "the array file's. Progress goes to stderr for recordings over 5 s; every Nth estimate\n"
-      "and a final summary (frames, wall time, mean stage times) to stdout.");
+      "and a final summary (frames, wall time, mean stage times) to stdout.\n"
+      "With --server the session runs on a localizer-server: the same config is sent with\n"
+      "every field explicit, the recording is streamed in blocks of --block-samples, and the\n"
+      "CSV holds the same numbers as a local run with the same flags (the server runs the same\n"
+      "engine; only the stage times differ, and only when both use the same backend). The\n"
+      "summary adds the client latency (block sent -> estimate received) p50/p95/p99 and the\n"
+      "count of blocks the server rejected.");
   RegisterFlags(flags, &f);
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   if (f.print_every < 0) return UsageError(kCommand, "--print-every must be >= 0");
   if (!(f.block_s > 0)) return UsageError(kCommand, "--block must be > 0");
+  const bool remote = !f.stream.server.empty();
+  if (!remote) {
+    for (const std::string& name : StreamFlagNames()) {
+      if (flags.seen(name)) return UsageError(kCommand, "--" + name + " needs --server");
+    }
+  } else if (flags.seen("block")) {
+    return UsageError(kCommand, "--block is for local tracking; with --server use --block-samples");
+  }
+  client::RemoteTrackOptions options;
+  if (remote) {
+    auto parsed = ParseStreamFlags(f.stream);
+    if (!parsed.ok()) return UsageError(kCommand, parsed.status().message());
+    options = std::move(*parsed);
+  }
 
   auto array = io::ReadArrayFile(f.array_path);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
@@ -154,7 +191,8 @@ int RunTrack(const std::vector<std::string>& args) {
     if (!stream.ok()) return RuntimeError(kCommand, stream.status());
     sample_rate_hz = stream->sample_rate_hz();
   }
-  auto config = BuildConfig(f, *array, sample_rate_hz);
+  auto config = BuildSessionConfig(f.session, *array, sample_rate_hz,
+                                   remote ? Runs::kOnServer : Runs::kLocally);
   if (!config.ok()) return UsageError(kCommand, config.status().message());
 
   io::TrackJob job;
@@ -164,12 +202,7 @@ int RunTrack(const std::vector<std::string>& args) {
   job.config = *config;
   job.estimates_csv_path = f.out_path;
   job.block_s = f.block_s;
-  ProgressReporter progress;
-  auto summary = io::RunTrack(job, MakeCallbacks(f.print_every, &progress));
-  progress.Finish();
-  if (!summary.ok()) return RuntimeError(kCommand, summary.status());
-  PrintSummary(*summary, f.out_path);
-  return kExitOk;
+  return remote ? RunOnServer(f, job, std::move(options)) : RunLocal(f, job);
 }
 
 }  // namespace localizer::cli

@@ -1,8 +1,11 @@
 // The commands of localizer-cli and the conventions they share.
 //
 // Exit codes: 0 success; 1 a runtime error (a file missing or malformed, data the engine
-// rejects), reported with the file or field it concerns; 2 a usage error (unknown command
-// or flag, a malformed or out-of-range flag value, a required flag missing).
+// rejects, a server that is unreachable or refuses the call), reported with the file or
+// field it concerns, server errors as "CODE: message" with the gRPC status code name
+// ("localizer-cli track: UNAVAILABLE: failed to connect to all addresses ..."); 2 a usage
+// error (unknown command or flag, a malformed or out-of-range flag value, a required flag
+// missing).
 #pragma once
 
 #include <optional>
@@ -20,6 +23,9 @@ enum ExitCode : int { kExitOk = 0, kExitRuntimeError = 1, kExitUsage = 2 };
 int RunSimulate(const std::vector<std::string>& args);
 int RunTrack(const std::vector<std::string>& args);
 int RunScore(const std::vector<std::string>& args);
+int RunLocate(const std::vector<std::string>& args);
+int RunList(const std::vector<std::string>& args);
+int RunClose(const std::vector<std::string>& args);
 
 // Parses `args` into `flags`. Returns an exit code when the command should stop now:
 // 0 after printing --help to stdout, 2 after reporting a usage error on stderr.

@@ -1,4 +1,5 @@
-// localizer-cli: simulate a scenario to files, track a recording, score a track.
+// localizer-cli: simulate a scenario to files, track a recording, score a track; or do the
+// same through a localizer-server (--server), locate one block, list and close sessions.
 // See commands.h for the exit codes; `localizer-cli CMD --help` for each command's flags.
 #include <iostream>
 #include <string>
@@ -16,17 +17,26 @@ struct Command {
 };
 
 constexpr Command kCommands[] = {
-    {"simulate", "simulate a named scenario to signals.wav, array.json and truth.csv", RunSimulate},
-    {"track", "track a source in a multichannel WAV (or one mono WAV per sensor) to a CSV",
+    {"simulate",
+     "simulate a named scenario to signals.wav, array.json and truth.csv\n"
+     "            (--server: stream it live through a server session and score the track)",
+     RunSimulate},
+    {"track",
+     "track a source in a multichannel WAV (or one mono WAV per sensor) to a CSV\n"
+     "            (--server: on a server session, same CSV, plus latency percentiles)",
      RunTrack},
     {"score", "compare an estimates CSV with a truth CSV (rmse, median, p95, max error)", RunScore},
+    {"locate", "one block of a recording through the server's one-shot Locate: pairs and fix",
+     RunLocate},
+    {"list", "the sessions a server holds, one line each", RunList},
+    {"close", "end a server session (needs its resume token)", RunClose},
 };
 
 std::string GlobalUsage() {
   std::string text =
       "usage: localizer-cli COMMAND [flags]\n\n"
       "Acoustic source localisation from time differences of arrival (GCC-PHAT + particle\n"
-      "filter), on files.\n\ncommands:\n";
+      "filter), on files or through a localizer-server (gRPC).\n\ncommands:\n";
   for (const Command& c : kCommands) {
     std::string name = std::string("  ") + c.name;
     name.resize(12, ' ');
@@ -34,11 +44,19 @@ std::string GlobalUsage() {
   }
   text +=
       "\n'localizer-cli COMMAND --help' lists a command's flags, defaults and units.\n"
-      "Exit codes: 0 success, 1 runtime error (file or data), 2 usage error.\n"
+      "Exit codes: 0 success, 1 runtime error (file, data or server: \"CODE: message\" with the\n"
+      "gRPC status code), 2 usage error.\n"
       "Example:\n"
       "  localizer-cli simulate --scenario tetra-water --out run --duration 6\n"
       "  localizer-cli track --array run/array.json --wav run/signals.wav --out run/est.csv\n"
-      "  localizer-cli score --truth run/truth.csv --estimates run/est.csv\n";
+      "  localizer-cli score --truth run/truth.csv --estimates run/est.csv\n"
+      "With a server (localizer-server --listen 127.0.0.1:50051):\n"
+      "  localizer-cli simulate --scenario tetra-water --duration 6 --server 127.0.0.1:50051\n"
+      "  localizer-cli track --server 127.0.0.1:50051 --array run/array.json \\\n"
+      "      --wav run/signals.wav --out run/est-server.csv\n"
+      "  localizer-cli locate --server 127.0.0.1:50051 --array run/array.json \\\n"
+      "      --wav run/signals.wav --start-s 2 --duration-s 0.5\n"
+      "  localizer-cli list --server 127.0.0.1:50051\n";
   return text;
 }
 

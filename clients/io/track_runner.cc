@@ -1,5 +1,6 @@
 #include "clients/io/track_runner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -40,16 +41,6 @@ StatusOr<engine::SessionConfig> ConfigForStream(const TrackJob& job, const WavSt
                         " Hz; using the WAV header's rate");
   }
   return config;
-}
-
-StatusOr<std::unique_ptr<EstimatesCsvWriter>> OpenWriter(const std::string& path,
-                                                         const engine::ArrayGeometry& array) {
-  if (path.empty()) return std::unique_ptr<EstimatesCsvWriter>();
-  std::vector<int> pair_sensors;
-  for (int p = 0; p < array.pair_count(); ++p) pair_sensors.push_back(array.sensor_of_pair(p));
-  auto writer = EstimatesCsvWriter::Open(path, pair_sensors);
-  if (!writer.ok()) return writer.status();
-  return std::make_unique<EstimatesCsvWriter>(std::move(*writer));
 }
 
 // One run: the stream, the session and the writer, fed block by block.
@@ -138,17 +129,46 @@ StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callb
   if (!(job.block_s > 0.0 && std::isfinite(job.block_s))) {
     return InvalidArgument("block_s is " + std::to_string(job.block_s) + ", must be > 0");
   }
+  auto prepared = PrepareTrack(job, callbacks);
+  if (!prepared.ok()) return prepared.status();
+  auto session = engine::Session::Create(prepared->config);
+  if (!session.ok()) return session.status();
+  auto writer = OpenEstimatesCsv(job.estimates_csv_path, (*session)->array());
+  if (!writer.ok()) return writer.status();
+  TrackRun run(std::move(prepared->stream), std::move(*session), std::move(*writer), callbacks);
+  return run.Run(job.block_s);
+}
+
+engine::SessionConfig TrackConfigFor(engine::SessionConfig config, const ArrayFile& array,
+                                     const ArrayOverrides& overrides, double sample_rate_hz) {
+  config.sensors_m = array.sensors_m;
+  config.sound_speed_mps = overrides.sound_speed_mps.value_or(array.sound_speed_mps);
+  config.reference_sensor = overrides.reference_sensor.value_or(array.reference_sensor);
+  config.sample_rate_hz = sample_rate_hz;
+  if (config.band_low_hz == 0.0 && config.band_high_hz == 0.0 && array.band_hz) {
+    config.band_low_hz = array.band_hz->first;  // the array file's hint, unless flags say
+    config.band_high_hz = std::min(array.band_hz->second, 0.5 * sample_rate_hz);
+  }
+  return config;
+}
+
+StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& callbacks) {
   auto stream = WavStream::Open(job.wav_paths);
   if (!stream.ok()) return stream.status();
   if (!stream->warning().empty()) Warn(callbacks, stream->warning());
   auto config = ConfigForStream(job, *stream, callbacks);
   if (!config.ok()) return config.status();
-  auto session = engine::Session::Create(*config);
-  if (!session.ok()) return session.status();
-  auto writer = OpenWriter(job.estimates_csv_path, (*session)->array());
+  return PreparedTrack{std::move(*stream), std::move(*config)};
+}
+
+StatusOr<std::unique_ptr<EstimatesCsvWriter>> OpenEstimatesCsv(const std::string& path,
+                                                               const engine::ArrayGeometry& array) {
+  if (path.empty()) return std::unique_ptr<EstimatesCsvWriter>();
+  std::vector<int> pair_sensors;
+  for (int p = 0; p < array.pair_count(); ++p) pair_sensors.push_back(array.sensor_of_pair(p));
+  auto writer = EstimatesCsvWriter::Open(path, pair_sensors);
   if (!writer.ok()) return writer.status();
-  TrackRun run(std::move(*stream), std::move(*session), std::move(*writer), callbacks);
-  return run.Run(job.block_s);
+  return std::make_unique<EstimatesCsvWriter>(std::move(*writer));
 }
 
 }  // namespace localizer::io

@@ -15,10 +15,14 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "clients/io/array_json.h"
+#include "clients/io/csv_io.h"
+#include "clients/io/wav_io.h"
 #include "engine/core/estimate.h"
 #include "engine/core/status.h"
 #include "engine/pipeline/session.h"
@@ -64,5 +68,35 @@ struct TrackCallbacks {
 };
 
 StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});
+
+// Flag values that override what the array file says.
+struct ArrayOverrides {
+  std::optional<double> sound_speed_mps;
+  std::optional<int> reference_sensor;
+};
+
+// The session config `localizer-cli track` runs with, locally or on a server: `base` (the
+// user's choices) with the array file's sensors, sound speed and reference sensor unless
+// overridden, `sample_rate_hz` (the WAV header's), and, when `base` leaves both band edges
+// at 0, the array file's band_hz as the GCC band (its high edge capped at Nyquist). Not
+// validated: Session::Create (or the server) does that.
+engine::SessionConfig TrackConfigFor(engine::SessionConfig base, const ArrayFile& array,
+                                     const ArrayOverrides& overrides, double sample_rate_hz);
+
+// The first half of RunTrack, shared with the remote track (clients/grpc/remote_track.h) so
+// that both track a recording with the same session config: opens the WAV(s) (a set's
+// truncation note goes to on_warning), checks the channel count against job.config's array
+// and sets config.sample_rate_hz from the WAV header (a different array-file rate goes to
+// on_warning). The config is not validated here; Session::Create (or the server) does that.
+struct PreparedTrack {
+  WavStream stream;  // positioned at the first sample
+  engine::SessionConfig config;
+};
+StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});
+
+// The estimates CSV for a session over `array`, one pair column group per non-reference
+// sensor; a null writer when `path` is empty.
+StatusOr<std::unique_ptr<EstimatesCsvWriter>> OpenEstimatesCsv(const std::string& path,
+                                                               const engine::ArrayGeometry& array);
 
 }  // namespace localizer::io

@@ -61,6 +61,7 @@ v1::SessionOpened SessionHost::OpenedMessageLocked(bool resumed) const {
   opened.set_resumed(resumed);
   if (last_accepted_) opened.set_last_sequence(*last_accepted_);
   opened.set_frames_processed(frames_);
+  opened.set_session_ttl_s(limits_.ttl_s);
   return opened;
 }
 

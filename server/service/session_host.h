@@ -43,6 +43,7 @@ using ResponsePtr = std::shared_ptr<const v1::TrackResponse>;
 struct HostLimits {
   int max_queue_blocks = 8;
   size_t max_outbox = 256;  // responses waiting to be written before processing pauses
+  double ttl_s = 60.0;      // reported in SessionOpened; the registry enforces it
 };
 
 class SessionHost final : public std::enable_shared_from_this<SessionHost> {

@@ -25,6 +25,7 @@ TEST_F(ServiceTest, StreamedScenarioEqualsOfflineTracking) {
   EXPECT_EQ(opened.session_id().size(), 16u);
   EXPECT_EQ(opened.resume_token().size(), 32u);
   EXPECT_EQ(opened.backend(), "cpu");
+  EXPECT_EQ(opened.session_ttl_s(), 60.0);
   EXPECT_EQ(opened.effective_config().frame_samples(), 4096u);
   EXPECT_EQ(opened.effective_config().filter().particles(), 1024u);
 

@@ -1,0 +1,69 @@
+#include "clients/cli/server_flags.h"
+
+#include <cstdio>
+
+#include "clients/grpc/latency_summary.h"
+
+namespace localizer::cli {
+
+void RegisterServerFlag(FlagSet& flags, std::string* server, bool required) {
+  auto& flag = flags.String("server", server, "HOST:PORT",
+                            required ? "localizer-server address"
+                                     : "run on a localizer-server at this address instead of "
+                                       "locally");
+  if (required) flag.Required();
+}
+
+void RegisterStreamFlags(FlagSet& flags, StreamFlags* f, const std::string& default_rate) {
+  f->rate = default_rate;
+  flags.String("rate", &f->rate, "RATE",
+               "with --server: realtime (each block sent once its audio has elapsed) | max "
+               "(as fast as the server takes them)");
+  flags.Int("block-samples", &f->block_samples, "N", "samples",
+            "with --server: samples per channel per block sent");
+  flags.String("encoding", &f->encoding, "ENC",
+               "with --server: block encoding, float (float32) | pcm16 (16-bit PCM, clipped at "
+               "+-1)");
+  flags.String("label", &f->label, "TEXT", "with --server: session label shown by `list`");
+  flags.String("session-key", &f->session_key, "KEY",
+               "with --server: x-localizer-session-key for session-affine proxies (default: "
+               "random)");
+}
+
+const std::vector<std::string>& StreamFlagNames() {
+  static const std::vector<std::string> names = {"rate", "block-samples", "encoding", "label",
+                                                 "session-key"};
+  return names;
+}
+
+StatusOr<client::RemoteTrackOptions> ParseStreamFlags(const StreamFlags& f) {
+  client::RemoteTrackOptions options;
+  auto pacing = client::ParsePacing(f.rate);
+  if (!pacing.ok()) return InvalidArgument("--rate: " + pacing.status().message());
+  options.pacing = *pacing;
+  auto encoding = client::ParseEncoding(f.encoding);
+  if (!encoding.ok()) return InvalidArgument("--encoding: " + encoding.status().message());
+  options.encoding = *encoding;
+  if (f.block_samples < 1) {
+    return InvalidArgument("--block-samples must be >= 1, got " + std::to_string(f.block_samples));
+  }
+  options.block_samples = f.block_samples;
+  options.label = f.label;
+  options.session_key = f.session_key;
+  return options;
+}
+
+void PrintOpened(const v1::SessionOpened& opened) {
+  std::printf("session=%s token=%s backend=%s resumed=%d ttl_s=%g\n", opened.session_id().c_str(),
+              opened.resume_token().c_str(), opened.backend().c_str(), opened.resumed() ? 1 : 0,
+              opened.session_ttl_s());
+  std::fflush(stdout);
+}
+
+void PrintStreamTotals(const client::StreamResult& result) {
+  const client::LatencySummary latency = client::SummariseLatencies(result.ClientLatencies());
+  std::printf("%s rejections=%zu gaps=%zu\n", client::FormatLatencyMs(latency).c_str(),
+              result.rejections.size(), result.gaps.size());
+}
+
+}  // namespace localizer::cli

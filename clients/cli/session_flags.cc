@@ -1,0 +1,63 @@
+#include "clients/cli/session_flags.h"
+
+namespace localizer::cli {
+
+void RegisterGccFlags(FlagSet& flags, SessionFlags* f) {
+  engine::SessionConfig& c = f->config;
+  flags.OptionalDouble("sound-speed", &f->array.sound_speed_mps, "MPS", "from the array file",
+                       "sound speed, m/s");
+  flags.OptionalInt("reference", &f->array.reference_sensor, "K", "from the array file",
+                    "reference sensor index");
+  flags.String("weighting", &f->weighting, "NAME", "GCC weighting: phat|phat-beta|scot|cc");
+  flags.Double("phat-beta", &c.phat_beta, "B", "", "exponent of --weighting phat-beta, in [0, 1]");
+  flags.Double("band-low", &c.band_low_hz, "HZ", "Hz",
+               "lower edge of the GCC band (0: DC, or the array file's band_hz)");
+  flags.Double("band-high", &c.band_high_hz, "HZ", "Hz",
+               "upper edge of the GCC band (0: Nyquist, or the array file's band_hz)");
+}
+
+void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& seed_flag) {
+  engine::SessionConfig& c = f->config;
+  flags.Int("frame", &c.frame_samples, "N", "samples", "samples per channel per TDOA frame");
+  flags.Int("hop", &c.hop_samples, "N", "samples", "samples between frame starts");
+  flags.Int("particles", &c.filter.particles, "N", "", "particle count");
+  flags.String("likelihood", &f->likelihood, "NAME",
+               "particle likelihood: peak (TDOA peaks) | gcc (whole GCC functions)");
+  flags.Uint64(seed_flag, &c.seed, "S", "random seed of the particle filter");
+  flags.Double("tdoa-sigma-us", &f->tdoa_sigma_us, "US", "us",
+               "TDOA noise std of the peak likelihood (0: estimated online from the innovations)");
+  flags.Double("accel-noise", &c.filter.accel_noise_mps2, "MPS2", "m/s^2",
+               "std of the white acceleration driving the motion model, per axis");
+  flags.String("backend", &c.backend, "NAME",
+               "compute backend: cpu|gpu|auto (with --server: on the server)");
+}
+
+StatusOr<engine::SessionConfig> BuildSessionConfig(const SessionFlags& f,
+                                                   const io::ArrayFile& array,
+                                                   double sample_rate_hz, Runs runs) {
+  engine::SessionConfig base = f.config;
+  auto weighting = engine::ParseWeighting(f.weighting);
+  if (!weighting.ok()) return InvalidArgument("--weighting: " + weighting.status().message());
+  base.weighting = *weighting;
+  auto likelihood = engine::ParseLikelihood(f.likelihood);
+  if (!likelihood.ok()) return InvalidArgument("--likelihood: " + likelihood.status().message());
+  base.filter.likelihood = *likelihood;
+  base.filter.tdoa_sigma_s = f.tdoa_sigma_us * 1e-6;
+  const engine::SessionConfig config =
+      io::TrackConfigFor(std::move(base), array, f.array, sample_rate_hz);
+  engine::SessionConfig check = config;
+  if (runs == Runs::kOnServer) {
+    if (config.backend != "cpu" && config.backend != "gpu" && config.backend != "auto") {
+      return InvalidArgument("--backend: unknown backend \"" + config.backend +
+                             "\"; use cpu, gpu or auto");
+    }
+    check.backend = "cpu";
+  }
+  // Create, not just Validate: some limits (band edges against Nyquist, the backend) are
+  // only checked when the stages are built, and a bad flag should fail here as a usage error.
+  auto session = engine::Session::Create(check);
+  if (!session.ok()) return session.status();
+  return config;
+}
+
+}  // namespace localizer::cli

@@ -1,0 +1,540 @@
+// The C++ client (clients/grpc) and the CLI's server paths against an in-process
+// localizer-server on a loopback port.
+//
+// (a) `track --server` (client::RunRemoteTrack, the function the command calls) gives the
+//     same estimates as offline `track` (io::RunTrack) bit for bit: both build the config
+//     with io::PrepareTrack, the config travels with every field explicit, and the server
+//     runs the same engine on the cpu backend. Only the stage timings differ. The CSVs are
+//     equal column by column except tdoa_ms and filter_ms.
+// (b) A server nobody listens on: UNAVAILABLE, and the CLI exits 1.
+// (c) Locate on a simulated block: each TDOA within 4 sigma of the time-delay CRLB and the
+//     fix within 4 x the position CRLB plus the source's motion over half the block of
+//     the truth (the derivation is in the test); and the server's answer is engine::Locate's.
+// (d) A config with 3 sensors: INVALID_ARGUMENT naming array.sensors_m.
+// Tests marked "CLI" run the localizer-cli executable (LOCALIZER_CLI_BIN) and are skipped
+// when the build does not pass its path.
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "clients/grpc/connection.h"
+#include "clients/grpc/latency_summary.h"
+#include "clients/grpc/remote_track.h"
+#include "clients/grpc/streamer.h"
+#include "clients/grpc/track_stream.h"
+#include "clients/io/array_json.h"
+#include "clients/io/simulation_files.h"
+#include "clients/io/track_runner.h"
+#include "engine/array/multilateration.h"
+#include "engine/pipeline/locate.h"
+#include "localizer/v1/localizer.grpc.pb.h"
+#include "server/service/server.h"
+#include "server/wire/block_wire.h"
+#include "server/wire/config_wire.h"
+#include "server/wire/status_wire.h"
+
+namespace localizer::client {
+namespace {
+
+// A fresh directory under the system temp folder, deleted with everything in it.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::random_device entropy;
+    path_ = std::filesystem::temp_directory_path() /
+            ("localizer_cli_" + std::string(info ? info->name() : "test") + "_" +
+             std::to_string(entropy()));
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string File(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A loopback port nobody listens on: bound, read back and released.
+int UnusedPort() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.sin_port = 0;
+  socklen_t length = sizeof(address);
+  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) != 0 ||
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0) {
+    if (fd >= 0) ::close(fd);
+    return 1;  // port 1 is privileged: nothing listens there either
+  }
+  ::close(fd);
+  return ntohs(address.sin_port);
+}
+
+// Every line of a CSV, with the named columns removed.
+std::vector<std::string> CsvWithout(const std::string& path, const std::vector<std::string>& drop) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  std::vector<bool> keep;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> fields;
+    std::stringstream split(line);
+    for (std::string field; std::getline(split, field, ',');) fields.push_back(field);
+    if (keep.empty()) {
+      for (const std::string& name : fields) {
+        keep.push_back(std::find(drop.begin(), drop.end(), name) == drop.end());
+      }
+    }
+    std::string kept;
+    for (size_t i = 0; i < fields.size(); ++i) {
+      if (i < keep.size() && keep[i]) kept += fields[i] + ",";
+    }
+    lines.push_back(kept);
+  }
+  return lines;
+}
+
+// Every number the engine computed, compared exactly; the stage timings are not.
+void ExpectBitIdentical(const engine::Estimate& want, const engine::Estimate& got) {
+  EXPECT_EQ(got.frame_index, want.frame_index);
+  EXPECT_EQ(got.sequence, want.sequence) << "frame " << want.frame_index;
+  EXPECT_EQ(got.t_s, want.t_s) << "frame " << want.frame_index;
+  EXPECT_EQ(got.initialised, want.initialised);
+  EXPECT_EQ(got.reinitialised, want.reinitialised);
+  for (int i = 0; i < 6; ++i)
+    EXPECT_EQ(got.state(i), want.state(i)) << "frame " << want.frame_index;
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) EXPECT_EQ(got.covariance(r, c), want.covariance(r, c));
+  }
+  EXPECT_EQ(got.ess, want.ess);
+  EXPECT_EQ(got.tdoa_sigma_s, want.tdoa_sigma_s);
+  EXPECT_EQ(got.pairs_used, want.pairs_used);
+  EXPECT_EQ(got.nis, want.nis);
+  EXPECT_EQ(got.delay_s, want.delay_s);
+  EXPECT_EQ(got.quality, want.quality);
+}
+
+class CliStreamTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    server::ServerOptions options;
+    options.listen = "127.0.0.1:0";
+    options.metrics_listen = "";
+    options.workers = 2;
+    options.backend = "cpu";
+    options.log_level = "warn";
+    auto started = server::Server::Start(options);
+    ASSERT_TRUE(started.ok()) << started.status().ToString();
+    server_ = std::move(started).value();
+    target_ = "127.0.0.1:" + std::to_string(server_->grpc_port());
+    channel_ = Connect(target_);
+    const Status connected = WaitConnected(channel_, 10.0);
+    ASSERT_TRUE(connected.ok()) << connected.ToString();
+  }
+  void TearDown() override {
+    if (server_) server_->Shutdown();
+  }
+
+  // tetra-water for `duration_s` written as the files `simulate --out` writes.
+  io::SimulationFiles SimulateToFiles(const TempDir& dir, double duration_s) {
+    auto run = io::SimulateScenario("tetra-water", 1, duration_s);
+    EXPECT_TRUE(run.ok()) << run.status().ToString();
+    auto files = io::WriteSimulationFiles(dir.File("sim"), *run);
+    EXPECT_TRUE(files.ok()) << files.status().ToString();
+    return *files;
+  }
+
+  // The job `track --array A --wav W --out OUT` builds with default flags (cmd_track.cc:
+  // io::TrackConfigFor on engine::SessionConfig's defaults).
+  static io::TrackJob TrackJobFor(const io::SimulationFiles& files, const std::string& out) {
+    auto array = io::ReadArrayFile(files.array_path);
+    EXPECT_TRUE(array.ok()) << array.status().ToString();
+    io::TrackJob job;
+    job.wav_paths = {files.wav_path};
+    job.array_source = files.array_path;
+    job.array_sample_rate_hz = array->sample_rate_hz;
+    job.config = io::TrackConfigFor(engine::SessionConfig{}, *array, {},
+                                    array->sample_rate_hz.value_or(0.0));
+    job.estimates_csv_path = out;
+    return job;
+  }
+
+  std::unique_ptr<server::Server> server_;
+  std::string target_;
+  std::shared_ptr<grpc::Channel> channel_;
+};
+
+// (a) The same seed gives the same numbers through the server as offline.
+TEST_F(CliStreamTest, TrackOverServerIsBitIdenticalToOffline) {
+  TempDir dir;
+  const io::SimulationFiles files = SimulateToFiles(dir, 4.0);
+  constexpr int64_t kBlockSamples = 4096;
+  const double sample_rate_hz = 11025.0;
+
+  // Offline in blocks of exactly kBlockSamples, so that Estimate.sequence matches too.
+  io::TrackJob job = TrackJobFor(files, dir.File("offline.csv"));
+  job.block_s = static_cast<double>(kBlockSamples) / sample_rate_hz;
+  std::vector<engine::Estimate> offline;
+  io::TrackCallbacks collect;
+  collect.on_estimate = [&offline](const engine::Estimate& e) { offline.push_back(e); };
+  auto summary = io::RunTrack(job, collect);
+  ASSERT_TRUE(summary.ok()) << summary.status().ToString();
+  ASSERT_GT(offline.size(), 15u);
+
+  io::TrackJob remote_job = job;
+  remote_job.estimates_csv_path = dir.File("server.csv");
+  RemoteTrackOptions options;
+  options.block_samples = kBlockSamples;
+  options.label = "cli_stream_test";
+  auto remote = RunRemoteTrack(channel_, remote_job, options);
+  ASSERT_TRUE(remote.ok()) << remote->stream.status().ToString();
+  ASSERT_TRUE(remote->stream.status().ok()) << remote->stream.status().ToString();
+  EXPECT_EQ(remote->opened.backend(), "cpu");
+  EXPECT_TRUE(remote->stream.rejections.empty());
+  EXPECT_TRUE(remote->stream.gaps.empty());
+  EXPECT_EQ(remote->stream.samples_sent_per_channel, summary->samples_per_channel);
+
+  const std::vector<engine::Estimate> streamed = remote->stream.Estimates();
+  ASSERT_EQ(streamed.size(), offline.size());
+  for (size_t i = 0; i < offline.size(); ++i) ExpectBitIdentical(offline[i], streamed[i]);
+  for (const double latency_s : remote->stream.ClientLatencies()) {
+    EXPECT_TRUE(std::isfinite(latency_s) && latency_s >= 0.0);
+  }
+
+  // The CSVs: equal except the stage wall times. Offline in its default 0.25 s blocks
+  // too: framing does not depend on how the samples were cut into blocks.
+  const std::vector<std::string> timing_columns = {"tdoa_ms", "filter_ms"};
+  const auto server_csv = CsvWithout(dir.File("server.csv"), timing_columns);
+  EXPECT_EQ(server_csv, CsvWithout(dir.File("offline.csv"), timing_columns));
+  io::TrackJob default_blocks = TrackJobFor(files, dir.File("offline_default.csv"));
+  ASSERT_TRUE(io::RunTrack(default_blocks).ok());
+  EXPECT_EQ(server_csv, CsvWithout(dir.File("offline_default.csv"), timing_columns));
+}
+
+// Real-time pacing: block k leaves once its audio would have been recorded, so the stream
+// cannot end before the audio's duration has elapsed. 16-bit PCM still tracks.
+TEST_F(CliStreamTest, RealtimePacingWithPcm16) {
+  auto run = io::SimulateScenario("tetra-water", 2, 1.5);
+  ASSERT_TRUE(run.ok()) << run.status().ToString();
+  const engine::SimResult& sim = run->result;
+  engine::SessionConfig config;
+  config.sensors_m = run->scenario.sensors_m;
+  config.sound_speed_mps = run->scenario.sound_speed_mps;
+  config.sample_rate_hz = sim.sample_rate_hz;
+  config.band_low_hz = run->scenario.sim.band_low_hz;
+  config.band_high_hz = run->scenario.sim.band_high_hz;
+  config.filter.particles = 1024;
+  auto stream = OpenTrackSession(channel_, config, "realtime", "");
+  ASSERT_TRUE(stream.ok()) << stream.status().ToString();
+  EXPECT_FALSE((*stream)->session_key().empty());
+
+  StreamOptions options;
+  options.channel_count = sim.channel_count;
+  options.sample_rate_hz = sim.sample_rate_hz;
+  options.block_samples = 1024;
+  options.pacing = Pacing::kRealtime;
+  options.encoding = Encoding::kPcm16;
+  int seen = 0;
+  StreamCallbacks callbacks;
+  callbacks.on_estimate = [&seen](const StreamedEstimate&) { ++seen; };
+  const StreamResult result = StreamBlocks(
+      **stream, ChannelMajorSource(sim.samples.data(), sim.channel_count, sim.samples_per_channel),
+      options, callbacks);
+  ASSERT_TRUE(result.status().ok()) << result.status().ToString();
+  const double audio_s = static_cast<double>(sim.samples_per_channel) / sim.sample_rate_hz;
+  EXPECT_EQ(result.samples_sent_per_channel, sim.samples_per_channel);
+  EXPECT_EQ(result.blocks_sent, static_cast<uint64_t>((sim.samples_per_channel + 1023) / 1024));
+  EXPECT_GE(result.wall_s, audio_s);
+  // Frames of 4096 samples every 2048: floor((N - 4096) / 2048) + 1.
+  EXPECT_EQ(result.estimates.size(),
+            static_cast<size_t>((sim.samples_per_channel - 4096) / 2048 + 1));
+  EXPECT_EQ(seen, static_cast<int>(result.estimates.size()));
+  const LatencySummary latency = SummariseLatencies(result.ClientLatencies());
+  EXPECT_EQ(latency.count, static_cast<int64_t>(result.estimates.size()));
+  EXPECT_EQ(latency.unknown, 0);
+  EXPECT_LE(latency.p50_s, latency.p95_s);
+  EXPECT_LE(latency.p95_s, latency.p99_s);
+}
+
+// (b) Nobody listening: UNAVAILABLE with gRPC's own message, before any file is written.
+TEST_F(CliStreamTest, UnreachableServerIsUnavailable) {
+  TempDir dir;
+  const io::SimulationFiles files = SimulateToFiles(dir, 1.0);
+  const std::string nowhere = "127.0.0.1:" + std::to_string(UnusedPort());
+  auto remote = RunRemoteTrack(Connect(nowhere), TrackJobFor(files, dir.File("est.csv")), {});
+  ASSERT_FALSE(remote.ok());
+  EXPECT_EQ(remote.status().code(), StatusCode::kUnavailable);
+  EXPECT_EQ(remote.status().message().rfind("UNAVAILABLE: ", 0), 0u) << remote.status().message();
+
+  const Status waited = WaitConnected(Connect(nowhere), 0.2);
+  EXPECT_EQ(waited.code(), StatusCode::kUnavailable);
+  EXPECT_EQ(waited.message().rfind("UNAVAILABLE: ", 0), 0u) << waited.message();
+}
+
+#ifdef LOCALIZER_CLI_BIN
+// Runs the CLI with `args`; returns its exit code and what it wrote to stderr.
+std::pair<int, std::string> RunCli(const std::string& args, const TempDir& dir) {
+  const std::string err = dir.File("stderr.txt");
+  const std::string command =
+      std::string(LOCALIZER_CLI_BIN) + " " + args + " > " + dir.File("stdout.txt") + " 2> " + err;
+  const int status = std::system(command.c_str());
+  std::ifstream in(err);
+  std::stringstream text;
+  text << in.rdbuf();
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+}
+#endif
+
+// (b) CLI: "localizer-cli track: UNAVAILABLE: ...", exit 1 (a runtime error, not usage).
+TEST_F(CliStreamTest, CliUnreachableServerExitsOne) {
+#ifndef LOCALIZER_CLI_BIN
+  GTEST_SKIP() << "LOCALIZER_CLI_BIN not defined by the build";
+#else
+  TempDir dir;
+  const io::SimulationFiles files = SimulateToFiles(dir, 1.0);
+  const auto [code, err] =
+      RunCli("track --server 127.0.0.1:" + std::to_string(UnusedPort()) + " --array " +
+                 files.array_path + " --wav " + files.wav_path + " --out " + dir.File("e.csv"),
+             dir);
+  EXPECT_EQ(code, 1) << err;
+  EXPECT_EQ(err.rfind("localizer-cli track: UNAVAILABLE: ", 0), 0u) << err;
+  const auto [usage_code, usage_err] =
+      RunCli("track --rate max --array " + files.array_path + " --wav " + files.wav_path +
+                 " --out " + dir.File("e.csv"),
+             dir);
+  EXPECT_EQ(usage_code, 2) << usage_err;  // --rate without --server
+#endif
+}
+
+// CLI: `simulate --server --out DIR` writes what `simulate --out` writes plus an
+// estimates.csv equal to tracking the written files offline (timings aside).
+TEST_F(CliStreamTest, CliSimulateOverServerMatchesOfflineTrack) {
+#ifndef LOCALIZER_CLI_BIN
+  GTEST_SKIP() << "LOCALIZER_CLI_BIN not defined by the build";
+#else
+  TempDir dir;
+  const std::string out = dir.File("live");
+  const auto [code, err] = RunCli(
+      "simulate --scenario tetra-water --duration 3 --rate max "
+      "--print-every 5 --server " +
+          target_ + " --out " + out,
+      dir);
+  ASSERT_EQ(code, 0) << err;
+  io::SimulationFiles files{out + "/signals.wav", out + "/array.json", out + "/truth.csv"};
+  ASSERT_TRUE(io::RunTrack(TrackJobFor(files, dir.File("offline.csv"))).ok());
+  const std::vector<std::string> timing_columns = {"tdoa_ms", "filter_ms"};
+  const auto live = CsvWithout(out + "/estimates.csv", timing_columns);
+  EXPECT_GT(live.size(), 10u);
+  EXPECT_EQ(live, CsvWithout(dir.File("offline.csv"), timing_columns));
+#endif
+}
+
+// (c) One block through Locate: the server's answer is engine::Locate's, and the fix is
+// within a physical bound of the truth.
+TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
+  auto run = io::SimulateScenario("tetra-water", 1, 4.0);
+  ASSERT_TRUE(run.ok()) << run.status().ToString();
+  const engine::SimResult& sim = run->result;
+  engine::SessionConfig config;
+  config.sensors_m = run->scenario.sensors_m;
+  config.sound_speed_mps = run->scenario.sound_speed_mps;
+  config.sample_rate_hz = sim.sample_rate_hz;
+  config.band_low_hz = run->scenario.sim.band_low_hz;
+  config.band_high_hz = run->scenario.sim.band_high_hz;
+
+  // 0.25 s from t = 2 s: samples [22050, 24806) per channel.
+  const int64_t start = 22050;
+  const int64_t n = 2756;
+  std::vector<float> block(static_cast<size_t>(n * sim.channel_count));
+  for (int c = 0; c < sim.channel_count; ++c) {
+    std::copy_n(sim.samples.begin() + c * sim.samples_per_channel + start, n,
+                block.begin() + c * n);
+  }
+  const engine::BlockView view{1, sim.channel_count, n, block.data()};
+  v1::LocateRequest request;
+  *request.mutable_config() = wire::ConfigToProto(config, "");
+  request.mutable_config()->set_max_block_samples(0);
+  wire::EncodeBlock(view, /*pcm16=*/false, request.mutable_block());
+  auto stub = v1::Localizer::NewStub(channel_);
+  grpc::ClientContext context;
+  v1::LocateResponse response;
+  const grpc::Status status = stub->Locate(&context, request, &response);
+  ASSERT_TRUE(status.ok()) << wire::FromGrpcStatus(status).ToString();
+  ASSERT_TRUE(response.fix_found());
+  ASSERT_EQ(response.pairs_size(), 3);
+
+  // The server ran the engine's Locate on the same samples: same delays, same fix.
+  auto local = engine::Locate(config, view);
+  ASSERT_TRUE(local.ok()) << local.status().ToString();
+  for (int p = 0; p < 3; ++p) {
+    EXPECT_EQ(response.pairs(p).delay_s(),
+              local->measurement.pairs[static_cast<size_t>(p)].delay_s);
+  }
+  EXPECT_EQ(response.position_m().x(), local->fix.position_m.x());
+
+  // Tolerance, from the Cramér–Rao bounds. Time delay (Knapp & Carter 1976): over an
+  // observation of T seconds,
+  //   var(tdoa) >= 1 / (2 T integral (2 pi f)^2 gamma^2 / (1 - gamma^2) df),
+  // where gamma^2 / (1 - gamma^2) = s^2 / (1 + 2 s) for an in-band signal-to-noise PSD ratio
+  // s on both channels. The scenario's 20 dB SNR is over the whole band 0..fs/2 (white
+  // noise) while the source fills [300, 3000] Hz, so s = 100 (fs / 2) / 2700. With T = 0.25 s
+  // that gives sigma_tdoa ~ 0.24 us. Position: sqrt(trace(CRLB(sigma_tdoa))) at the true
+  // position (engine::TdoaPositionCrlb). The source moves at 1 m/s, so across the block it
+  // is within v T / 2 = 0.125 m of where it was at the block's centre t_c. Bounds: each
+  // TDOA within 4 sigma_tdoa of the true delay at t_c; the fix within
+  // 4 sqrt(trace(CRLB(sigma_tdoa))) + v T / 2 (about 0.23 m) of the true position at t_c.
+  const double fs = sim.sample_rate_hz;
+  const double duration_s = static_cast<double>(n) / fs;
+  const double band_low_hz = run->scenario.sim.band_low_hz;
+  const double band_high_hz = run->scenario.sim.band_high_hz;
+  const double s =
+      std::pow(10.0, run->scenario.sim.snr_db / 10.0) * (0.5 * fs) / (band_high_hz - band_low_hz);
+  const double two_pi_sq = 4.0 * std::numbers::pi * std::numbers::pi;
+  const double integral = two_pi_sq * (std::pow(band_high_hz, 3) - std::pow(band_low_hz, 3)) / 3.0 *
+                          (s * s / (1.0 + 2.0 * s));
+  const double sigma_tdoa_s = 1.0 / std::sqrt(2.0 * duration_s * integral);
+  const double t_c = (static_cast<double>(start) + 0.5 * static_cast<double>(n)) / fs;
+  const engine::Vec3 truth = sim.TruthAt(t_c).position_m;
+  auto array = engine::ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, 0);
+  ASSERT_TRUE(array.ok());
+  for (int p = 0; p < 3; ++p) {
+    // Arrival at sensor k minus arrival at the reference (engine/core/measurement.h).
+    const int k = array->sensor_of_pair(p);
+    const double true_delay_s =
+        ((truth - array->sensor_m(k)).norm() - (truth - array->sensor_m(0)).norm()) /
+        config.sound_speed_mps;
+    EXPECT_NEAR(response.pairs(p).delay_s(), true_delay_s, 4.0 * sigma_tdoa_s)
+        << "pair " << p << ", sigma_tdoa_s " << sigma_tdoa_s;
+  }
+  const double crlb_m = std::sqrt(engine::TdoaPositionCrlb(*array, truth, sigma_tdoa_s).trace());
+  const double speed_mps = run->scenario.sim.trajectory.velocity_mps.norm();  // 1 m/s, CV
+  const double bound_m = 4.0 * crlb_m + speed_mps * duration_s / 2.0;
+  const engine::Vec3 fix(response.position_m().x(), response.position_m().y(),
+                         response.position_m().z());
+  EXPECT_LT((fix - truth).norm(), bound_m)
+      << "fix " << fix.transpose() << " truth " << truth.transpose() << " crlb_m " << crlb_m;
+}
+
+// (d) The server validates the config: 3 sensors are refused naming the proto field.
+TEST_F(CliStreamTest, ThreeSensorsIsInvalidArgumentNamingTheField) {
+  engine::SessionConfig config;
+  config.sensors_m = {engine::Vec3(0, 0, 0), engine::Vec3(1, 0, 0), engine::Vec3(0, 1, 0)};
+  config.sample_rate_hz = 11025.0;
+  auto stream = TrackStream::Open(channel_, wire::ConfigToProto(config, "three"), "key-3");
+  ASSERT_FALSE(stream.ok());
+  EXPECT_EQ(stream.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(stream.status().message().rfind("INVALID_ARGUMENT: ", 0), 0u)
+      << stream.status().message();
+  EXPECT_NE(stream.status().message().find("array.sensors_m"), std::string::npos)
+      << stream.status().message();
+}
+
+// A stream abandoned after `opened` leaves a resumable session; resuming it with the
+// token works, and with a wrong token is PERMISSION_DENIED.
+TEST_F(CliStreamTest, ResumeAfterCancel) {
+  engine::SessionConfig config;
+  auto scenario = engine::MakeScenario("tetra-water");
+  ASSERT_TRUE(scenario.ok());
+  config.sensors_m = scenario->sensors_m;
+  config.sample_rate_hz = 11025.0;
+  config.filter.particles = 256;
+  std::string id, token;
+  {
+    auto stream = OpenTrackSession(channel_, config, "resume", "key-resume");
+    ASSERT_TRUE(stream.ok()) << stream.status().ToString();
+    id = (*stream)->opened().session_id();
+    token = (*stream)->opened().resume_token();
+    (*stream)->Cancel();
+    v1::TrackResponse ignored;
+    while ((*stream)->Read(&ignored)) {
+    }
+    EXPECT_EQ((*stream)->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  }
+  auto wrong = TrackStream::Resume(channel_, id, token + "x", std::nullopt, "key-resume");
+  ASSERT_FALSE(wrong.ok());
+  EXPECT_EQ(wrong.status().code(), StatusCode::kPermissionDenied) << wrong.status().message();
+  // The server may take a moment to see the cancelled stream detach.
+  StatusOr<std::unique_ptr<TrackStream>> resumed = Internal("not tried");
+  for (int attempt = 0; attempt < 50; ++attempt) {
+    resumed = TrackStream::Resume(channel_, id, token, std::nullopt, "key-resume");
+    if (resumed.ok() || resumed.status().code() != StatusCode::kFailedPrecondition) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(resumed.ok()) << resumed.status().message();
+  EXPECT_TRUE((*resumed)->opened().resumed());
+  EXPECT_EQ((*resumed)->opened().session_id(), id);
+  (*resumed)->WritesDone();
+  v1::TrackResponse ignored;
+  while ((*resumed)->Read(&ignored)) {
+  }
+  EXPECT_TRUE((*resumed)->Finish().ok());
+}
+
+TEST(StatusWire, FromGrpcStatusPrefixesTheCodeName) {
+  const Status s = wire::FromGrpcStatus(grpc::Status(grpc::StatusCode::NOT_FOUND, "no session x"));
+  EXPECT_EQ(s.code(), StatusCode::kNotFound);
+  EXPECT_EQ(s.message(), "NOT_FOUND: no session x");
+  EXPECT_TRUE(wire::FromGrpcStatus(grpc::Status::OK).ok());
+  const Status deadline =
+      wire::FromGrpcStatus(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "late"));
+  EXPECT_EQ(deadline.code(), StatusCode::kUnavailable);
+  EXPECT_EQ(deadline.message(), "DEADLINE_EXCEEDED: late");
+  // Round trip of every StatusCode.
+  for (const Status& original : {InvalidArgument("a"), FailedPrecondition("b"), OutOfRange("c"),
+                                 NotFound("d"), Unavailable("e"), Internal("f"),
+                                 PermissionDenied("g"), ResourceExhausted("h"), Cancelled("i")}) {
+    const Status back = wire::FromGrpcStatus(wire::ToGrpcStatus(original));
+    EXPECT_EQ(back.code(), original.code());
+    EXPECT_EQ(back.message(), original.ToString());
+  }
+}
+
+TEST(LatencySummary, NearestRankPercentiles) {
+  std::vector<double> latencies;
+  for (int i = 100; i >= 1; --i) latencies.push_back(i * 1e-3);  // 1..100 ms, unsorted
+  latencies.push_back(std::numeric_limits<double>::quiet_NaN());
+  const LatencySummary s = SummariseLatencies(latencies);
+  EXPECT_EQ(s.count, 100);
+  EXPECT_EQ(s.unknown, 1);
+  EXPECT_DOUBLE_EQ(s.p50_s, 50e-3);
+  EXPECT_DOUBLE_EQ(s.p95_s, 95e-3);
+  EXPECT_DOUBLE_EQ(s.p99_s, 99e-3);
+  EXPECT_DOUBLE_EQ(s.max_s, 100e-3);
+  EXPECT_EQ(SummariseLatencies({}).count, 0);
+}
+
+TEST(ChannelMajorSource, CutsBlocksAndEnds) {
+  const std::vector<float> samples = {0, 1, 2, 3, 4, 10, 11, 12, 13, 14};  // 2 channels x 5
+  SampleSource source = ChannelMajorSource(samples.data(), 2, 5);
+  std::vector<float> block;
+  ASSERT_EQ(*source(3, &block), 3);
+  EXPECT_EQ(block, (std::vector<float>{0, 1, 2, 10, 11, 12}));
+  ASSERT_EQ(*source(3, &block), 2);
+  EXPECT_EQ(block, (std::vector<float>{3, 4, 13, 14}));
+  EXPECT_EQ(*source(3, &block), 0);
+}
+
+}  // namespace
+}  // namespace localizer::client

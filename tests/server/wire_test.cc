@@ -1,0 +1,187 @@
+// server/wire: frame-major <-> channel-major blocks (float and 16-bit PCM), the rules a
+// bad block breaks, config defaults and round trips, Status -> gRPC codes.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "server/wire/block_wire.h"
+#include "server/wire/config_wire.h"
+#include "server/wire/status_wire.h"
+
+namespace localizer::wire {
+namespace {
+
+v1::SampleBlock InterleavedBlock(int channels, int frames) {
+  v1::SampleBlock block;
+  block.set_sequence(7);
+  block.set_channel_count(static_cast<uint32_t>(channels));
+  for (int i = 0; i < frames; ++i) {
+    for (int c = 0; c < channels; ++c) block.add_samples(static_cast<float>(100 * c + i));
+  }
+  return block;
+}
+
+TEST(BlockWire, DecodeDeinterleavesToChannelMajor) {
+  DecodedBlock out;
+  std::string reason;
+  ASSERT_TRUE(DecodeBlock(InterleavedBlock(4, 5), {4, 1000}, &out, &reason).ok());
+  EXPECT_EQ(out.view.sequence, 7u);
+  EXPECT_EQ(out.view.channel_count, 4);
+  EXPECT_EQ(out.view.samples_per_channel, 5);
+  for (int c = 0; c < 4; ++c) {
+    for (int i = 0; i < 5; ++i) EXPECT_EQ(out.view.samples[c * 5 + i], static_cast<float>(100 * c + i));
+  }
+}
+
+TEST(BlockWire, EncodeThenDecodeIsIdentityForFloats) {
+  std::vector<float> channel_major(3 * 8);
+  for (size_t i = 0; i < channel_major.size(); ++i) channel_major[i] = std::sin(0.37f * static_cast<float>(i));
+  v1::SampleBlock block;
+  EncodeBlock({9, 3, 8, channel_major.data()}, false, &block);
+  EXPECT_EQ(block.samples(1), channel_major[8]);  // frame 0, channel 1
+  DecodedBlock out;
+  std::string reason;
+  ASSERT_TRUE(DecodeBlock(block, {3, 8}, &out, &reason).ok());
+  EXPECT_EQ(out.samples, channel_major);
+}
+
+TEST(BlockWire, Pcm16IsLittleEndianOver32768AndClips) {
+  const std::vector<float> channel_major = {0.5f, -1.0f, 2.0f, -0.25f};  // 2 channels x 2 samples
+  v1::SampleBlock block;
+  EncodeBlock({1, 2, 2, channel_major.data()}, true, &block);
+  ASSERT_EQ(block.pcm_s16le().size(), 8u);
+  EXPECT_EQ(block.samples_size(), 0);
+  // Frame 0: ch0 0.5 -> 16384 = 0x4000, ch1 2.0 clips to 32767 = 0x7fff.
+  EXPECT_EQ(static_cast<unsigned char>(block.pcm_s16le()[0]), 0x00);
+  EXPECT_EQ(static_cast<unsigned char>(block.pcm_s16le()[1]), 0x40);
+  EXPECT_EQ(static_cast<unsigned char>(block.pcm_s16le()[2]), 0xff);
+  EXPECT_EQ(static_cast<unsigned char>(block.pcm_s16le()[3]), 0x7f);
+  DecodedBlock out;
+  std::string reason;
+  ASSERT_TRUE(DecodeBlock(block, {2, 2}, &out, &reason).ok());
+  EXPECT_EQ(out.samples[0], 0.5f);
+  EXPECT_EQ(out.samples[1], -1.0f);
+  EXPECT_EQ(out.samples[2], 32767.0f / 32768.0f);
+  EXPECT_EQ(out.samples[3], -0.25f);
+}
+
+TEST(BlockWire, EachBrokenRuleHasItsReason) {
+  DecodedBlock out;
+  std::string reason;
+  v1::SampleBlock block = InterleavedBlock(4, 5);
+  block.set_channel_count(3);
+  EXPECT_EQ(DecodeBlock(block, {4, 1000}, &out, &reason).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(reason, "channel_count");
+
+  block = InterleavedBlock(4, 5);
+  block.add_samples(1.0f);
+  EXPECT_FALSE(DecodeBlock(block, {4, 1000}, &out, &reason).ok());
+  EXPECT_EQ(reason, "bad_samples");
+
+  block = InterleavedBlock(4, 5);
+  block.set_pcm_s16le(std::string(40, '\0'));
+  EXPECT_FALSE(DecodeBlock(block, {4, 1000}, &out, &reason).ok());
+  EXPECT_EQ(reason, "bad_samples");
+
+  block = InterleavedBlock(4, 5);
+  block.set_samples(13, INFINITY);
+  const Status status = DecodeBlock(block, {4, 1000}, &out, &reason);
+  EXPECT_EQ(reason, "non_finite");
+  EXPECT_NE(status.message().find("samples[13] (frame 3, channel 1)"), std::string::npos) << status.message();
+
+  EXPECT_FALSE(DecodeBlock(InterleavedBlock(4, 5), {4, 4}, &out, &reason).ok());
+  EXPECT_EQ(reason, "oversize");
+
+  block = InterleavedBlock(4, 0);
+  EXPECT_FALSE(DecodeBlock(block, {4, 1000}, &out, &reason).ok());
+  EXPECT_EQ(reason, "empty");
+}
+
+v1::SessionConfig MinimalConfig() {
+  v1::SessionConfig c;
+  const double sensors[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const auto& s : sensors) {
+    v1::Vector3* v = c.mutable_array()->add_sensors_m();
+    v->set_x(s[0]);
+    v->set_y(s[1]);
+    v->set_z(s[2]);
+  }
+  c.mutable_array()->set_sound_speed_mps(1500.0);
+  c.set_sample_rate_hz(48000.0);
+  return c;
+}
+
+TEST(ConfigWire, ZeroFieldsTakeTheEngineDefaults) {
+  ConfigPolicy policy;
+  policy.default_backend = "cpu";
+  auto config = ConfigFromProto(MinimalConfig(), policy);
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  const engine::SessionConfig defaults;
+  EXPECT_EQ(config->frame_samples, defaults.frame_samples);
+  EXPECT_EQ(config->hop_samples, defaults.frame_samples / 2);
+  EXPECT_EQ(config->filter.particles, defaults.filter.particles);
+  EXPECT_EQ(config->filter.accel_noise_mps2, defaults.filter.accel_noise_mps2);
+  EXPECT_EQ(config->filter.min_peak_snr, defaults.filter.min_peak_snr);
+  EXPECT_EQ(config->seed, defaults.seed);
+  EXPECT_EQ(config->backend, "cpu");
+  EXPECT_EQ(config->max_block_samples, policy.max_block_samples);
+  EXPECT_FALSE(config->init_region_min_m.allFinite());
+}
+
+TEST(ConfigWire, EffectiveConfigRoundTrips) {
+  v1::SessionConfig p = MinimalConfig();
+  p.set_frame_samples(2048);
+  p.set_hop_samples(512);
+  p.set_weighting(v1::WEIGHTING_SCOT);
+  p.set_band_low_hz(100.0);
+  p.set_band_high_hz(9000.0);
+  p.mutable_filter()->set_particles(777);
+  p.mutable_filter()->set_likelihood(v1::LIKELIHOOD_GCC);
+  p.set_seed(0);  // explicitly zero: kept, not defaulted
+  p.mutable_init_region()->mutable_min_m()->set_x(-1.0);
+  p.mutable_init_region()->mutable_max_m()->set_x(1.0);
+  auto config = ConfigFromProto(p, {});
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  EXPECT_EQ(config->seed, 0u);
+  const v1::SessionConfig effective = ConfigToProto(*config, "label");
+  auto again = ConfigFromProto(effective, {});
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(ConfigToProto(*again, "label").SerializeAsString(), effective.SerializeAsString());
+  EXPECT_EQ(effective.filter().particles(), 777u);
+  EXPECT_EQ(effective.weighting(), v1::WEIGHTING_SCOT);
+  EXPECT_EQ(effective.hop_samples(), 512u);
+}
+
+TEST(ConfigWire, PolicyLimitsAreInvalidArgumentNamingTheField) {
+  ConfigPolicy policy;
+  policy.max_particles = 1000;
+  policy.max_channels = 4;
+  v1::SessionConfig p = MinimalConfig();
+  p.mutable_filter()->set_particles(1001);
+  auto config = ConfigFromProto(p, policy);
+  EXPECT_EQ(config.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(config.status().message().find("filter.particles"), std::string::npos);
+  p = MinimalConfig();
+  *p.mutable_array()->add_sensors_m() = p.array().sensors_m(1);
+  EXPECT_NE(ConfigFromProto(p, policy).status().message().find("array.sensors_m"), std::string::npos);
+  p = MinimalConfig();
+  p.mutable_array()->clear_sound_speed_mps();
+  EXPECT_NE(ConfigFromProto(p, policy).status().message().find("array.sound_speed_mps"), std::string::npos);
+  p = MinimalConfig();
+  p.clear_array();
+  EXPECT_NE(ConfigFromProto(p, policy).status().message().find("array"), std::string::npos);
+}
+
+TEST(StatusWire, CodesMapByName) {
+  for (StatusCode code : {StatusCode::kInvalidArgument, StatusCode::kFailedPrecondition, StatusCode::kOutOfRange,
+                          StatusCode::kNotFound, StatusCode::kUnavailable, StatusCode::kInternal,
+                          StatusCode::kPermissionDenied, StatusCode::kResourceExhausted, StatusCode::kCancelled}) {
+    const grpc::Status g = ToGrpcStatus(Status(code, "m"));
+    EXPECT_STREQ(GrpcCodeName(g.error_code()), StatusCodeName(code));
+    EXPECT_EQ(g.error_message(), "m");
+  }
+  EXPECT_TRUE(ToGrpcStatus(Status::Ok()).ok());
+}
+
+}  // namespace
+}  // namespace localizer::wire
