@@ -1,0 +1,246 @@
+"""A small client for the localizer gRPC service (proto/localizer/v1/localizer.proto).
+
+    import localizer_client as lc
+    channel = lc.connect("127.0.0.1:50051")
+    config = lc.session_config(lc.synth.tetrahedron(1.5), 44100, sound_speed_mps=1500,
+                               band_hz=(200, 8000), label="array-1")
+    session = lc.TrackSession(channel, config)        # waits for `opened`
+    session.send(block)                               # numpy (frames, channels)
+    session.close()                                   # half-close: the server drains and ends OK
+    for estimate in session.estimates():
+        print(estimate.frame_index, estimate.position_m)
+
+Errors: every call raises ``grpc.RpcError`` when the server ends the call with a status other
+than OK; ``err.code()`` is the ``grpc.StatusCode`` (see the proto for what each means: e.g.
+INVALID_ARGUMENT for a bad config, NOT_FOUND / PERMISSION_DENIED for a bad resume,
+RESOURCE_EXHAUSTED when the server is full, UNAVAILABLE when it drains). A refused block does
+not end the stream: it comes back as a ``rejected`` response.
+
+The generated stubs are found next to this package in the build tree, or through the
+environment variable LOCALIZER_PY_GEN (see ``_stubs``); they are re-exported as ``pb`` (the
+messages) and ``pb_grpc`` (the service stub).
+"""
+import queue
+import uuid
+
+import grpc
+import numpy as np
+
+from ._stubs import pb, pb_grpc  # noqa: F401  (re-exported)
+from . import synth  # noqa: F401  (re-exported)
+
+__all__ = ["pb", "pb_grpc", "synth", "SESSION_KEY_METADATA", "connect", "vector3",
+           "session_config", "sample_block", "pcm16_bytes", "TrackSession", "locate",
+           "list_sessions", "close_session"]
+
+#: Metadata key a proxy routes on, so that a resumed stream reaches the same server instance.
+SESSION_KEY_METADATA = "x-localizer-session-key"
+
+
+def connect(target, *, options=(), credentials=None):
+    """A channel to ``target`` ("host:port"); TLS when ``credentials`` (grpc.ChannelCredentials)."""
+    if credentials is not None:
+        return grpc.secure_channel(target, credentials, options=list(options))
+    return grpc.insecure_channel(target, options=list(options))
+
+
+def vector3(xyz):
+    """A ``pb.Vector3`` from any 3-sequence (metres or m/s)."""
+    x, y, z = (float(v) for v in xyz)
+    return pb.Vector3(x=x, y=y, z=z)
+
+
+def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, reference_sensor=0,
+                   frame_samples=0, hop_samples=0, particles=0, band_hz=None, seed=None,
+                   backend="", label="", init_region=None):
+    """A ``pb.SessionConfig``.
+
+    sensors_m: (C, 3) sensor positions, metres (C >= 4, not coplanar). band_hz: (low, high) of
+    the GCC band or None for the whole spectrum. init_region: ((xmin, ymin, zmin), (xmax, ymax,
+    zmax)) or None. Zero / empty values mean "the server's default" (frame 4096, hop frame/2,
+    4096 particles, seed 1, the server's --backend); SessionOpened.effective_config tells.
+    """
+    config = pb.SessionConfig(
+        array=pb.ArrayGeometry(sensors_m=[vector3(p) for p in np.asarray(sensors_m, float)],
+                               sound_speed_mps=sound_speed_mps,
+                               reference_sensor=reference_sensor),
+        sample_rate_hz=sample_rate_hz, frame_samples=frame_samples, hop_samples=hop_samples,
+        filter=pb.FilterConfig(particles=particles), backend=backend, label=label)
+    if band_hz is not None:
+        config.band_low_hz, config.band_high_hz = (float(f) for f in band_hz)
+    if seed is not None:
+        config.seed = seed
+    if init_region is not None:
+        config.init_region.min_m.CopyFrom(vector3(init_region[0]))
+        config.init_region.max_m.CopyFrom(vector3(init_region[1]))
+    return config
+
+
+def sample_block(sequence, data, *, encoding="float"):
+    """A ``pb.SampleBlock`` from ``data`` of shape (frames, channels), frame-major as on the wire.
+
+    encoding "float": ``samples`` as float32; "pcm16": ``pcm_s16le`` (value * 32768, clipped).
+    """
+    data = np.asarray(data)
+    if data.ndim != 2:
+        raise ValueError(f"data must have shape (frames, channels), got {data.shape}")
+    block = pb.SampleBlock(sequence=sequence, channel_count=data.shape[1])
+    if encoding == "float":
+        block.samples.extend(data.astype(np.float32).ravel().tolist())
+    elif encoding == "pcm16":
+        block.pcm_s16le = pcm16_bytes(data)
+    else:
+        raise ValueError(f"encoding must be 'float' or 'pcm16', got {encoding!r}")
+    return block
+
+
+def pcm16_bytes(data):
+    """16-bit little-endian PCM of ``data`` (any shape, amplitude 1 = full scale), C order."""
+    scaled = np.clip(np.round(np.asarray(data, np.float64) * 32768.0), -32768, 32767)
+    return scaled.astype("<i2").tobytes()
+
+
+class TrackSession:
+    """One Track stream: open (``config``) or resume (``resume``) a session, send blocks, read
+    responses. The constructor waits for the ``opened`` response and raises ``grpc.RpcError``
+    if the stream ends instead (INVALID_ARGUMENT, NOT_FOUND, PERMISSION_DENIED, ...).
+
+    Attributes: ``opened`` (pb.SessionOpened), ``session_id``, ``resume_token``,
+    ``session_key`` (sent as metadata x-localizer-session-key on this and every resumed
+    stream), ``last_frame_received`` (frame_index of the last estimate read, or None),
+    ``next_sequence`` (what ``send`` uses next), ``rejected`` and ``gaps`` (the BlockRejected
+    and SequenceGap responses seen by ``estimates()``).
+
+    Reading and sending may happen on different threads. After a broken stream, ``reattach()``
+    resumes the session on a new stream, asking for the estimates after
+    ``last_frame_received``.
+    """
+
+    def __init__(self, channel, config=None, *, resume=None, session_key=None, timeout=None):
+        if (config is None) == (resume is None):
+            raise ValueError("give exactly one of config (open) and resume")
+        self._channel = channel
+        self.session_key = session_key or (resume.session_id if resume is not None
+                                           else config.label or uuid.uuid4().hex)
+        self.last_frame_received = None
+        if resume is not None and resume.HasField("last_frame_received"):
+            self.last_frame_received = resume.last_frame_received
+        self.rejected, self.gaps = [], []
+        self._requests = queue.SimpleQueue()
+        self._requests.put(pb.TrackRequest(open=config) if config is not None
+                           else pb.TrackRequest(resume=resume))
+        self._call = pb_grpc.LocalizerStub(channel).Track(
+            self._request_iterator(), metadata=[(SESSION_KEY_METADATA, self.session_key)],
+            timeout=timeout)
+        first = next(self._call, None)  # raises grpc.RpcError if the stream ends with an error
+        if first is None or first.WhichOneof("kind") != "opened":
+            self.cancel()
+            raise RuntimeError(f"Track: expected `opened` first, got {first!r}")
+        self.opened = first.opened
+        self.session_id = self.opened.session_id
+        self.resume_token = self.opened.resume_token
+        self.next_sequence = (self.opened.last_sequence + 1
+                              if self.opened.HasField("last_sequence") else 1)
+
+    @classmethod
+    def resume(cls, channel, session_id, resume_token, *, last_frame_received=None,
+               session_key=None, timeout=None):
+        """Resume a detached session (use the session_key it was opened with, if any)."""
+        req = pb.ResumeSession(session_id=session_id, resume_token=resume_token)
+        if last_frame_received is not None:
+            req.last_frame_received = last_frame_received
+        return cls(channel, resume=req, session_key=session_key, timeout=timeout)
+
+    def reattach(self, channel=None, *, timeout=None):
+        """A new TrackSession resuming this one (same session key), e.g. after its stream broke."""
+        return TrackSession.resume(channel or self._channel, self.session_id, self.resume_token,
+                                   last_frame_received=self.last_frame_received,
+                                   session_key=self.session_key, timeout=timeout)
+
+    def _request_iterator(self):
+        while True:
+            request = self._requests.get()
+            if request is None:
+                return
+            yield request
+
+    def send(self, data, *, sequence=None, encoding="float"):
+        """Queue one block (numpy (frames, channels)); returns its sequence number.
+
+        ``sequence`` defaults to ``next_sequence``; either way ``next_sequence`` becomes
+        sequence + 1. Problems with the block come back as a ``rejected`` response.
+        """
+        sequence = self.next_sequence if sequence is None else sequence
+        self.send_block(sample_block(sequence, data, encoding=encoding))
+        return sequence
+
+    def send_block(self, block):
+        """Queue a ready ``pb.SampleBlock`` as is."""
+        self.next_sequence = block.sequence + 1
+        self._requests.put(pb.TrackRequest(block=block))
+
+    def close(self):
+        """Half-close: no more blocks. The server processes what it accepted, sends the
+        remaining estimates, ends the stream OK and closes the session."""
+        self._requests.put(None)
+
+    def cancel(self):
+        """Break the stream; the session stays on the server, detached and resumable."""
+        self._call.cancel()
+        self._requests.put(None)
+
+    def __iter__(self):
+        """Every TrackResponse after `opened`, in order; raises grpc.RpcError on an error end."""
+        try:
+            for response in self._call:
+                if response.WhichOneof("kind") == "estimate":
+                    self.last_frame_received = response.estimate.frame_index
+                yield response
+        finally:
+            self._requests.put(None)  # the stream is over: release the request thread
+
+    def estimates(self):
+        """The ``pb.Estimate`` responses only; rejections and gaps go to .rejected / .gaps."""
+        for response in self:
+            kind = response.WhichOneof("kind")
+            if kind == "estimate":
+                yield response.estimate
+            elif kind == "rejected":
+                self.rejected.append(response.rejected)
+            elif kind == "gap":
+                self.gaps.append(response.gap)
+
+    def code(self):
+        """The stream's final grpc.StatusCode (blocks until it ends)."""
+        return self._call.code()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.cancel() if exc[0] is not None else self.close()
+        return False
+
+
+def locate(channel, config, data, *, encoding="float", session_key=None, timeout=None):
+    """One-shot TDOAs and multilateration fix of one block (numpy (frames, channels)):
+    a ``pb.LocateResponse``. No session is created."""
+    request = pb.LocateRequest(config=config, block=sample_block(1, data, encoding=encoding))
+    metadata = [(SESSION_KEY_METADATA, session_key)] if session_key else None
+    return pb_grpc.LocalizerStub(channel).Locate(request, metadata=metadata, timeout=timeout)
+
+
+def list_sessions(channel, *, timeout=None):
+    """The sessions the server holds (attached or detached): a list of ``pb.SessionInfo``."""
+    response = pb_grpc.LocalizerStub(channel).ListSessions(pb.ListSessionsRequest(),
+                                                            timeout=timeout)
+    return list(response.sessions)
+
+
+def close_session(channel, session_id, resume_token, *, session_key=None, timeout=None):
+    """End a session now (its stream, if any, ends CANCELLED): a ``pb.CloseSessionResponse``.
+    PERMISSION_DENIED with the wrong token, NOT_FOUND if unknown."""
+    metadata = [(SESSION_KEY_METADATA, session_key)] if session_key else None
+    return pb_grpc.LocalizerStub(channel).CloseSession(
+        pb.CloseSessionRequest(session_id=session_id, resume_token=resume_token),
+        metadata=metadata, timeout=timeout)

@@ -1,0 +1,277 @@
+"""The Python client against a real localizer-server over loopback.
+
+Environment (set by tests/python/CMakeLists.txt):
+  LOCALIZER_PY_GEN         the generated stubs (<build>/clients/python/gen)
+  LOCALIZER_PY_CLIENT_DIR  the client library and scripts (<build>/clients/python)
+  LOCALIZER_SERVER         the localizer-server binary; the server tests skip without it
+
+The synthetic recording: a 1.5 m regular tetrahedron of sensors, sound speed 1500 m/s,
+44.1 kHz, a 200-8000 Hz white-noise source 20 dB above independent sensor noise, at the point
+near (2.5, 1.5, -1.0) m whose TDOAs are whole samples (6, 16, 38 samples against sensor 0), so
+the samples are exactly what the geometry gives there. SyntheticSignalTest checks that claim
+independently of the server.
+"""
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import unittest
+from pathlib import Path
+
+CLIENT_DIR = os.environ.get("LOCALIZER_PY_CLIENT_DIR") or str(
+    Path(__file__).resolve().parents[2] / "clients" / "python")
+sys.path.insert(0, CLIENT_DIR)
+
+import grpc  # noqa: E402
+import numpy as np  # noqa: E402
+
+import localizer_client as lc  # noqa: E402
+from localizer_client import synth  # noqa: E402
+
+SERVER = os.environ.get("LOCALIZER_SERVER", "")
+FS_HZ = 44100.0
+SOUND_SPEED_MPS = 1500.0
+FRAME, HOP, BLOCK = 4096, 2048, 4096
+BAND_HZ = (200.0, 8000.0)
+SENSORS_M = synth.tetrahedron(edge_m=1.5)
+SOURCE_M, TDOA_SAMPLES = synth.source_with_integer_tdoas(SENSORS_M, (2.5, 1.5, -1.0),
+                                                         SOUND_SPEED_MPS, FS_HZ)
+# 21 blocks of 4096 = 1.95 s; periodic, so any stretch of it is a valid recording.
+AUDIO = synth.broadband_at_sensors(TDOA_SAMPLES, 21 * BLOCK, FS_HZ, band_hz=BAND_HZ,
+                                   snr_db=20.0, seed=7)
+# Position tolerance. The source is 3.2 m from the array centre, the array 1.5 m across: a
+# TDOA error of half a sample on every pair moves the fix by about 0.2 m (mostly in range,
+# computed with this geometry), and GCC-PHAT on these whole-sample delays at 20 dB SNR over
+# 4096-sample frames errs by well under 0.1 sample. 0.5 m therefore allows more than a sample
+# of error per pair, yet fails on wrong geometry, units, signs or pair order.
+TOLERANCE_M = 0.5
+
+
+def frames_completed(samples):
+    """Frames (FRAME long, every HOP) that fit in the first `samples` samples."""
+    return 0 if samples < FRAME else (samples - FRAME) // HOP + 1
+
+
+def config(label):
+    return lc.session_config(SENSORS_M, FS_HZ, sound_speed_mps=SOUND_SPEED_MPS,
+                             frame_samples=FRAME, hop_samples=HOP, band_hz=BAND_HZ, seed=1,
+                             label=label)
+
+
+class SyntheticSignalTest(unittest.TestCase):
+    """The recording matches the geometry (no server needed)."""
+
+    def test_source_has_the_integer_tdoas(self):
+        ranges = np.linalg.norm(SENSORS_M - SOURCE_M, axis=1)
+        path_difference_m = ranges - ranges[0]
+        np.testing.assert_allclose(path_difference_m, TDOA_SAMPLES * SOUND_SPEED_MPS / FS_HZ,
+                                   atol=1e-9)
+        self.assertEqual(list(TDOA_SAMPLES), [0, 6, 16, 38])
+        self.assertLess(np.linalg.norm(SOURCE_M - np.array([2.5, 1.5, -1.0])), 0.3)
+
+    def test_channels_carry_the_delays(self):
+        # Whole-signal GCC-PHAT in numpy: the peak lag of channel k against channel 0 is the
+        # arrival difference (positive: later at k).
+        spectra = np.fft.rfft(AUDIO.astype(np.float64), axis=0)
+        for k in range(1, 4):
+            cross = spectra[:, k] * np.conj(spectra[:, 0])
+            gcc = np.fft.irfft(cross / np.maximum(np.abs(cross), 1e-12), len(AUDIO))
+            lag = int(np.argmax(gcc))
+            lag = lag - len(AUDIO) if lag > len(AUDIO) // 2 else lag
+            self.assertEqual(lag, TDOA_SAMPLES[k], f"sensor {k}")
+
+    def test_loadtest_encodes_requests_like_protobuf(self):
+        sys.path.insert(0, CLIENT_DIR)
+        import loadtest
+        args = loadtest.parse_args(["--target", "x:1", "--sessions", "2", "--duration", "1",
+                                    "--rate", "max", "--signal-seconds", "0.2"])
+        workload = loadtest.Workload(args)
+        for seq in (1, 127, 128, 300000):
+            raw = workload.block_request(seq, 1)
+            expected = lc.pb.TrackRequest(block=lc.pb.SampleBlock.FromString(workload.bodies[1]))
+            expected.block.sequence = seq
+            self.assertEqual(lc.pb.TrackRequest.FromString(raw), expected)
+        self.assertEqual(len(expected.block.samples), 4 * args.block)
+
+
+@unittest.skipUnless(SERVER and os.access(SERVER, os.X_OK),
+                     f"no localizer-server binary (LOCALIZER_SERVER={SERVER!r})")
+class ServerTest(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="localizer-pytest-")
+        ready = Path(self.tmp) / "ready.json"
+        self.log = open(Path(self.tmp) / "server.log", "wb")
+        self.server = subprocess.Popen(
+            [SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0",
+             "--ready-file", str(ready), "--workers", "2"],
+            stdout=self.log, stderr=subprocess.STDOUT)
+        deadline = time.monotonic() + 30.0
+        while not ready.exists():
+            if self.server.poll() is not None:
+                self.fail(f"server exited with {self.server.returncode}:\n{self.server_log()}")
+            if time.monotonic() > deadline:
+                self.fail(f"server wrote no ready file in 30 s:\n{self.server_log()}")
+            time.sleep(0.05)
+        info = json.loads(ready.read_text())
+        self.target = f"127.0.0.1:{info['grpc_port']}"
+        self.channel = lc.connect(self.target)
+        grpc.channel_ready_future(self.channel).result(timeout=10)
+
+    def tearDown(self):
+        self.channel.close()
+        self.server.send_signal(signal.SIGTERM)
+        try:
+            self.server.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            self.server.kill()
+            self.server.wait()
+            self.log.close()
+            self.fail(f"server ignored SIGTERM for 20 s:\n{self.server_log()}")
+        self.log.close()
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def server_log(self):
+        self.log.flush()
+        return (Path(self.tmp) / "server.log").read_bytes().decode(errors="replace")[-4000:]
+
+    def stream(self, session, blocks, close=True):
+        """Send `blocks` ((sequence, data) pairs) in real time from a thread."""
+        def run():
+            t0 = time.monotonic()
+            for k, (sequence, data) in enumerate(blocks):
+                time.sleep(max(0.0, k * BLOCK / FS_HZ - (time.monotonic() - t0)))
+                session.send(data, sequence=sequence)
+            if close:
+                session.close()
+        thread = threading.Thread(target=run, daemon=True)
+        thread.start()
+        return thread
+
+    def test_track_estimates_in_order_and_on_the_source(self):
+        session = lc.TrackSession(self.channel, config("py-track"), timeout=60)
+        self.assertTrue(session.session_id)
+        self.assertTrue(session.resume_token)
+        self.assertIn(session.opened.backend, ("cpu", "gpu"))
+        self.assertEqual(session.opened.effective_config.frame_samples, FRAME)
+        blocks = [(k + 1, AUDIO[k * BLOCK:(k + 1) * BLOCK]) for k in range(len(AUDIO) // BLOCK)]
+        self.stream(session, blocks)
+        estimates = list(session.estimates())
+        self.assertEqual(session.code(), grpc.StatusCode.OK)
+        self.assertEqual(session.rejected, [])
+        self.assertEqual(session.gaps, [])
+
+        n = frames_completed(len(AUDIO))  # 41: one estimate per completed frame
+        self.assertEqual([e.frame_index for e in estimates], list(range(n)))
+        # Each estimate names the block that completed its frame.
+        self.assertEqual([e.sequence for e in estimates],
+                         [-(-(FRAME + k * HOP) // BLOCK) for k in range(n)])
+        self.assertEqual(session.last_frame_received, n - 1)
+        last = estimates[-1]
+        self.assertTrue(last.initialised)
+        position = np.array([last.position_m.x, last.position_m.y, last.position_m.z])
+        error_m = np.linalg.norm(position - SOURCE_M)
+        self.assertLess(error_m, TOLERANCE_M,
+                        f"final estimate {position} vs source {SOURCE_M}: {error_m:.3f} m")
+
+    def test_bad_block_is_rejected_and_later_blocks_still_estimate(self):
+        session = lc.TrackSession(self.channel, config("py-bad-block"), timeout=60)
+        good = [AUDIO[k * BLOCK:(k + 1) * BLOCK] for k in range(len(AUDIO) // BLOCK)]
+        bad = good[5][:, :3]  # 3 channels for a 4-sensor array
+        blocks = ([(k + 1, good[k]) for k in range(5)] + [(6, bad)] +
+                  [(k + 2, good[k]) for k in range(5, 15)])
+        self.stream(session, blocks)
+        estimates = list(session.estimates())
+        self.assertEqual(session.code(), grpc.StatusCode.OK)
+
+        self.assertEqual(len(session.rejected), 1, session.rejected)
+        rejected = session.rejected[0]
+        self.assertEqual(rejected.sequence, 6)
+        self.assertEqual(rejected.code, "INVALID_ARGUMENT")
+        self.assertEqual(rejected.reason, "channel_count")
+        self.assertIn("channel_count", rejected.message)  # names the field ...
+        self.assertIn("3", rejected.message)              # ... and the value
+        # The session went on: frames stay numbered 0, 1, 2, ... and blocks after the bad one
+        # complete frames. (Whether 5 -> 7 counts as a gap is the server's call.)
+        self.assertEqual([e.frame_index for e in estimates], list(range(len(estimates))))
+        self.assertTrue(any(e.sequence > 6 for e in estimates))
+        self.assertGreaterEqual(len(estimates), frames_completed(15 * BLOCK) - 2)
+
+    def test_list_sessions_shows_the_session(self):
+        session = lc.TrackSession(self.channel, config("py-listed"), timeout=60)
+        self.stream(session, [(k + 1, AUDIO[k * BLOCK:(k + 1) * BLOCK]) for k in range(3)],
+                    close=False).join()
+        responses = iter(session.estimates())
+        next(responses)  # a frame has been processed
+        infos = {s.session_id: s for s in lc.list_sessions(self.channel, timeout=10)}
+        self.assertIn(session.session_id, infos)
+        info = infos[session.session_id]
+        self.assertEqual(info.label, "py-listed")
+        self.assertTrue(info.attached)
+        self.assertEqual(info.channel_count, 4)
+        self.assertEqual(info.sample_rate_hz, FS_HZ)
+        self.assertIn(info.backend, ("cpu", "gpu"))
+        self.assertGreaterEqual(info.frames_processed, 1)
+        session.close()
+        list(responses)
+        self.assertEqual(session.code(), grpc.StatusCode.OK)
+        # A finished session is closed (proto: "ends the stream OK and closes the session").
+        deadline = time.monotonic() + 5.0
+        while session.session_id in {s.session_id for s in lc.list_sessions(self.channel)}:
+            self.assertLess(time.monotonic(), deadline, "finished session still listed after 5 s")
+            time.sleep(0.1)
+
+    def test_bad_config_raises_invalid_argument(self):
+        bad = config("py-bad-config")
+        del bad.array.sensors_m[3]  # 3 sensors cannot give a 3-D fix
+        with self.assertRaises(grpc.RpcError) as caught:
+            lc.TrackSession(self.channel, bad, timeout=30)
+        self.assertEqual(caught.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("sensors", caught.exception.details())
+
+    def test_close_session_needs_the_token_and_cancels_the_stream(self):
+        session = lc.TrackSession(self.channel, config("py-close"), timeout=60)
+        with self.assertRaises(grpc.RpcError) as caught:
+            lc.close_session(self.channel, session.session_id, "wrong-token", timeout=10)
+        self.assertEqual(caught.exception.code(), grpc.StatusCode.PERMISSION_DENIED)
+        lc.close_session(self.channel, session.session_id, session.resume_token, timeout=10)
+        with self.assertRaises(grpc.RpcError) as caught:
+            list(session)
+        self.assertEqual(caught.exception.code(), grpc.StatusCode.CANCELLED)
+        with self.assertRaises(grpc.RpcError) as caught:
+            lc.close_session(self.channel, session.session_id, session.resume_token, timeout=10)
+        self.assertEqual(caught.exception.code(), grpc.StatusCode.NOT_FOUND)
+
+    def test_locate_one_block(self):
+        response = lc.locate(self.channel, config("py-locate"), AUDIO[:2 * BLOCK], timeout=30)
+        self.assertEqual([p.sensor for p in response.pairs], [1, 2, 3])
+        for pair in response.pairs:  # whole-sample delays: measured within half a sample
+            self.assertAlmostEqual(pair.delay_s * FS_HZ, TDOA_SAMPLES[pair.sensor], delta=0.5)
+        self.assertTrue(response.fix_found)
+        position = np.array([response.position_m.x, response.position_m.y, response.position_m.z])
+        self.assertLess(np.linalg.norm(position - SOURCE_M), TOLERANCE_M)
+
+    def test_loadtest_realtime_4_sessions(self):
+        run = subprocess.run(
+            [sys.executable, str(Path(CLIENT_DIR) / "loadtest.py"), "--target", self.target,
+             "--sessions", "4", "--duration", "3", "--rate", "realtime"],
+            capture_output=True, text=True, timeout=120)
+        self.assertEqual(run.returncode, 0, f"stdout:\n{run.stdout}\nstderr:\n{run.stderr}")
+        lines = [line for line in run.stdout.splitlines() if line.startswith("RESULT ")]
+        self.assertEqual(len(lines), 1, run.stdout)
+        result = json.loads(lines[0][len("RESULT "):])
+        self.assertEqual(result["errors"], {})
+        self.assertEqual(result["rejections"], {})
+        self.assertEqual(result["sessions_opened"], 4)
+        blocks_per_session = -(-3.0 * 44100 // 4096)  # one per 4096/44100 s for 3 s: 33
+        self.assertEqual(result["blocks_sent"], 4 * blocks_per_session)
+        self.assertGreater(result["estimates"], 0)
+        self.assertIsNotNone(result["latency_ms"]["p99"])
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
