@@ -39,6 +39,8 @@ StatusOr<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(metrics::Regist
   };
   m->blocks = counter("localizer_blocks_total", "Blocks accepted into a session.");
   m->samples = counter("localizer_samples_total", "Samples per channel accepted into sessions.");
+  m->engine_cpu = counter("localizer_engine_cpu_seconds_total",
+                          "Worker-thread CPU time spent inside the engine (TDOA and filter), seconds.");
   m->gaps = counter("localizer_sequence_gaps_total", "Sequence-number jumps: blocks lost upstream.");
   auto rejections = r->AddCounter("localizer_rejections_total", "Blocks refused, by reason.", {"reason"});
   if (!rejections.ok()) return rejections.status();

@@ -12,6 +12,8 @@
 //   localizer_sessions_opened_total{how}     open | resume
 //   localizer_sessions_closed_total{reason}  finished | closed | expired | replaced | shutdown
 //   localizer_queue_depth_blocks             blocks waiting for a worker, all sessions
+//   localizer_engine_cpu_seconds_total       worker-thread CPU inside Session::Process (the
+//                                            rest of the process CPU is the service's overhead)
 //   localizer_locate_requests_total{code}    one-shot Locate calls by status code
 //   localizer_build_info{version,grpc_version,default_backend}  always 1
 // Thread-safe: every pointer here is updated lock-free.
@@ -46,6 +48,7 @@ class ServiceMetrics final {
   metrics::Counter* blocks = nullptr;
   metrics::Counter* samples = nullptr;
   metrics::Counter* gaps = nullptr;
+  metrics::Counter* engine_cpu = nullptr;
   metrics::Counter* opened = nullptr;
   metrics::Counter* resumed = nullptr;
   metrics::Gauge* attached = nullptr;

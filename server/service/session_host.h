@@ -78,6 +78,7 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   // Writer side: the next response to write, or null. MarkWrittenLocked after a write
   // succeeded; RequeueLocked puts a failed write back at the front.
   ResponsePtr NextOutputLocked();
+  bool HasOutputLocked() const { return !outbox_.empty(); }
   void MarkWrittenLocked(const ResponsePtr& response);
   void RequeueLocked(ResponsePtr response);
   // Nothing queued, nothing processing: every accepted block has produced its responses.

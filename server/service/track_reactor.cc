@@ -124,7 +124,10 @@ void TrackReactor::OutputReadyLocked() {
   if (finished_ || writing_) return;
   writing_ = host_->NextOutputLocked();
   if (writing_) {
-    StartWrite(writing_.get());
+    // More already waiting: let gRPC hold this one and send both in one flush.
+    grpc::WriteOptions options;
+    if (host_->HasOutputLocked()) options.set_buffer_hint();
+    StartWrite(writing_.get(), options);
     return;
   }
   if (input_done_ && host_->IdleLocked()) {

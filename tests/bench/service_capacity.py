@@ -1,0 +1,123 @@
+#!/usr/bin/python3
+"""Service capacity and overhead on this machine: starts localizer-server, drives it with
+clients/python/loadtest.py and reads the server's own CPU time (/proc) and metrics.
+
+For each session count it prints one row: blocks/s, estimate latency p50/p95/p99, errors
+and rejections, and the server's CPU per block split into the engine (worker-thread CPU
+inside Session::Process, localizer_engine_cpu_seconds_total) and everything else
+(decode, queue, encode, gRPC, kernel): the "outside the engine" figure.
+
+  tests/bench/service_capacity.py --build build --sessions 100,200,300 --duration 20
+  tests/bench/service_capacity.py --build build --sessions 4 --rate max --particles 256
+
+A fresh server is started for every row. Exit 0 unless a run failed to start.
+"""
+import argparse
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+
+
+def process_cpu_s(pid):
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    ticks = int(fields[11]) + int(fields[12])  # utime + stime
+    return ticks / os.sysconf("SC_CLK_TCK")
+
+
+def scrape(port):
+    text = urllib.request.urlopen(f"http://127.0.0.1:{port}/metrics", timeout=5).read().decode()
+    def value(series):
+        m = re.search(r"^" + re.escape(series) + r" (\S+)$", text, re.M)
+        return float(m.group(1)) if m else 0.0
+    return {"engine_cpu_s": value("localizer_engine_cpu_seconds_total"),
+            "blocks": value("localizer_blocks_total")}
+
+
+def start_server(binary, workers, extra):
+    ready = tempfile.mktemp(prefix="localizer-ready-")
+    cmd = [binary, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0", "--ready-file", ready,
+           "--log-level", "warn", "--max-sessions", "4096"] + (["--workers", str(workers)] if workers else []) + extra
+    proc = subprocess.Popen(cmd)
+    deadline = time.time() + 20
+    while not os.path.exists(ready):
+        if proc.poll() is not None or time.time() > deadline:
+            raise RuntimeError("server did not start: " + " ".join(cmd))
+        time.sleep(0.05)
+    with open(ready) as f:
+        ports = json.load(f)
+    os.unlink(ready)
+    return proc, ports
+
+
+def run_row(args, sessions):
+    proc, ports = start_server(args.server, args.workers, args.server_arg)
+    try:
+        before = scrape(ports["metrics_port"])
+        cpu0 = process_cpu_s(proc.pid)
+        cmd = ["/usr/bin/python3", args.loadtest, "--target", f"127.0.0.1:{ports['grpc_port']}",
+               "--sessions", str(sessions), "--duration", str(args.duration), "--rate", args.rate,
+               "--particles", str(args.particles), "--ramp", str(args.ramp), "--encoding", args.encoding,
+               "--processes", str(args.processes)]
+        out = subprocess.run(cmd, capture_output=True, text=True)
+        cpu1 = process_cpu_s(proc.pid)
+        after = scrape(ports["metrics_port"])
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=30)
+    result_line = [l for l in out.stdout.splitlines() if l.startswith("RESULT ")]
+    if not result_line:
+        sys.stderr.write(out.stdout + out.stderr)
+        raise RuntimeError("loadtest printed no RESULT line")
+    result = json.loads(result_line[0][len("RESULT "):])
+    blocks = max(1.0, after["blocks"] - before["blocks"])
+    server_cpu = cpu1 - cpu0
+    engine_cpu = after["engine_cpu_s"] - before["engine_cpu_s"]
+    return {
+        "sessions": sessions,
+        "blocks_per_s": result["blocks_per_s"],
+        "p50_ms": result["latency_ms"]["p50"], "p95_ms": result["latency_ms"]["p95"],
+        "p99_ms": result["latency_ms"]["p99"],
+        "errors": sum(result["errors"].values()), "rejections": sum(result["rejections"].values()),
+        "server_cpu_cores": server_cpu / result["wall_s"],
+        "server_us_per_block": 1e6 * server_cpu / blocks,
+        "engine_us_per_block": 1e6 * engine_cpu / blocks,
+        "outside_engine_us_per_block": 1e6 * (server_cpu - engine_cpu) / blocks,
+    }
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--build", default=os.path.join(here, "..", "..", "build"), help="build directory")
+    p.add_argument("--sessions", default="100,200,300", help="comma-separated session counts, one row each")
+    p.add_argument("--duration", type=float, default=20.0, help="seconds of streaming per row")
+    p.add_argument("--ramp", type=float, default=2.0, help="seconds over which sessions start")
+    p.add_argument("--rate", choices=["realtime", "max"], default="realtime")
+    p.add_argument("--particles", type=int, default=4096)
+    p.add_argument("--encoding", choices=["float", "pcm16"], default="float")
+    p.add_argument("--processes", type=int, default=1, help="load-generator processes")
+    p.add_argument("--workers", type=int, default=0, help="server --workers (0: one per core)")
+    p.add_argument("--server-arg", action="append", default=[], help="extra localizer-server flag (repeatable)")
+    args = p.parse_args()
+    args.server = os.path.join(args.build, "server", "localizer-server")
+    args.loadtest = os.path.join(args.build, "clients", "python", "loadtest.py")
+    print(f"# {args.rate}, {args.duration:g} s per row, {args.particles} particles, 4 ch 44.1 kHz, "
+          f"4096-sample blocks and frames, hop 2048, {args.encoding}; {os.cpu_count()} CPUs (load generator included)")
+    print("sessions  blocks/s  p50_ms  p95_ms  p99_ms  errors  rejected  server_cores  us/block  engine_us  outside_us")
+    for n in [int(s) for s in args.sessions.split(",")]:
+        r = run_row(args, n)
+        print(f"{r['sessions']:8d}  {r['blocks_per_s']:8.1f}  {r['p50_ms']:6.1f}  {r['p95_ms']:6.1f}  {r['p99_ms']:6.1f}  "
+              f"{r['errors']:6d}  {r['rejections']:8d}  {r['server_cpu_cores']:12.2f}  {r['server_us_per_block']:8.0f}  "
+              f"{r['engine_us_per_block']:9.0f}  {r['outside_engine_us_per_block']:10.0f}", flush=True)
+        print("RESULT " + json.dumps(r), file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
