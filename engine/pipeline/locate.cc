@@ -44,13 +44,8 @@ StatusOr<LocateResult> Locate(const SessionConfig& config, const BlockView& bloc
   if (!array.ok()) return array.status();
   LOCALIZER_RETURN_IF_ERROR(ValidateLocateBlock(block, array->sensor_count(), checked.max_block_samples));
 
-  GccOptions gcc;
-  gcc.frame_samples = checked.frame_samples;
-  gcc.sample_rate_hz = checked.sample_rate_hz;
-  gcc.weighting = checked.weighting;
-  gcc.phat_beta = checked.phat_beta;
-  gcc.band_low_hz = checked.band_low_hz;
-  gcc.band_high_hz = checked.band_high_hz;
+  GccOptions gcc = checked.GccOptionsFor();
+  gcc.keep_gcc = false;  // no tracker reads it
   auto estimator = GccPhatEstimator::Create(*array, gcc);
   if (!estimator.ok()) return estimator.status();
 

@@ -181,14 +181,7 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const SessionConfig& config) 
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
   auto array = ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
   if (!array.ok()) return array.status();
-  GccOptions gcc;
-  gcc.frame_samples = config.frame_samples;
-  gcc.sample_rate_hz = config.sample_rate_hz;
-  gcc.weighting = config.weighting;
-  gcc.phat_beta = config.phat_beta;
-  gcc.band_low_hz = config.band_low_hz;
-  gcc.band_high_hz = config.band_high_hz;
-  gcc.keep_gcc = config.filter.likelihood == Likelihood::kGcc;
+  const GccOptions gcc = config.GccOptionsFor();
   ParticleFilterOptions filter = config.filter;
   filter.seed = config.seed;
   auto parts = BuildComponents(config.backend, *array, gcc, filter);

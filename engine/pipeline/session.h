@@ -55,6 +55,9 @@ struct SessionConfig {
   uint64_t seed = 1;
 
   Status Validate() const;  // INVALID_ARGUMENT naming the field
+  // The TDOA front end's options: framing, weighting, band; the GCC is kept when the
+  // tracker's likelihood reads it.
+  GccOptions GccOptionsFor() const;
 };
 
 class Session {

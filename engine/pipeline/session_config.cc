@@ -47,4 +47,16 @@ Status SessionConfig::Validate() const {
   return filter.Validate();
 }
 
+GccOptions SessionConfig::GccOptionsFor() const {
+  GccOptions gcc;
+  gcc.frame_samples = frame_samples;
+  gcc.sample_rate_hz = sample_rate_hz;
+  gcc.weighting = weighting;
+  gcc.phat_beta = phat_beta;
+  gcc.band_low_hz = band_low_hz;
+  gcc.band_high_hz = band_high_hz;
+  gcc.keep_gcc = filter.likelihood == Likelihood::kGcc;
+  return gcc;
+}
+
 }  // namespace localizer::engine

@@ -41,6 +41,7 @@
 #include "clients/io/array_json.h"
 #include "clients/io/simulation_files.h"
 #include "clients/io/track_runner.h"
+#include "tests/clients/test_util.h"
 #include "engine/array/multilateration.h"
 #include "engine/pipeline/locate.h"
 #include "localizer/v1/localizer.grpc.pb.h"
@@ -52,28 +53,18 @@
 namespace localizer::client {
 namespace {
 
-// A fresh directory under the system temp folder, deleted with everything in it.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::random_device entropy;
-    path_ = std::filesystem::temp_directory_path() /
-            ("localizer_cli_" + std::string(info ? info->name() : "test") + "_" +
-             std::to_string(entropy()));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::string File(const std::string& name) const { return (path_ / name).string(); }
+using io::testing::TempDir;
 
- private:
-  std::filesystem::path path_;
-};
+// The session config a local run of a simulated scenario uses (its array and band).
+engine::SessionConfig ConfigFor(const io::SimulationRun& run) {
+  engine::SessionConfig config;
+  config.sensors_m = run.scenario.sensors_m;
+  config.sound_speed_mps = run.scenario.sound_speed_mps;
+  config.sample_rate_hz = run.result.sample_rate_hz;
+  config.band_low_hz = run.scenario.sim.band_low_hz;
+  config.band_high_hz = run.scenario.sim.band_high_hz;
+  return config;
+}
 
 // A loopback port nobody listens on: bound, read back and released.
 int UnusedPort() {
@@ -239,12 +230,7 @@ TEST_F(CliStreamTest, RealtimePacingWithPcm16) {
   auto run = io::SimulateScenario("tetra-water", 2, 1.5);
   ASSERT_TRUE(run.ok()) << run.status().ToString();
   const engine::SimResult& sim = run->result;
-  engine::SessionConfig config;
-  config.sensors_m = run->scenario.sensors_m;
-  config.sound_speed_mps = run->scenario.sound_speed_mps;
-  config.sample_rate_hz = sim.sample_rate_hz;
-  config.band_low_hz = run->scenario.sim.band_low_hz;
-  config.band_high_hz = run->scenario.sim.band_high_hz;
+  engine::SessionConfig config = ConfigFor(*run);
   config.filter.particles = 1024;
   auto stream = OpenTrackSession(channel_, config, "realtime", "");
   ASSERT_TRUE(stream.ok()) << stream.status().ToString();
@@ -357,12 +343,7 @@ TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
   auto run = io::SimulateScenario("tetra-water", 1, 4.0);
   ASSERT_TRUE(run.ok()) << run.status().ToString();
   const engine::SimResult& sim = run->result;
-  engine::SessionConfig config;
-  config.sensors_m = run->scenario.sensors_m;
-  config.sound_speed_mps = run->scenario.sound_speed_mps;
-  config.sample_rate_hz = sim.sample_rate_hz;
-  config.band_low_hz = run->scenario.sim.band_low_hz;
-  config.band_high_hz = run->scenario.sim.band_high_hz;
+  engine::SessionConfig config = ConfigFor(*run);
 
   // 0.25 s from t = 2 s: samples [22050, 24806) per channel.
   const int64_t start = 22050;
