@@ -8,7 +8,6 @@
 #include <string>
 #include <vector>
 
-#include <malloc.h>
 #include <pthread.h>
 
 #include "engine/core/flags.h"
@@ -82,11 +81,6 @@ int Main(int argc, char** argv) {
   if (o.backend == "gpu" && !engine::GpuUnavailableReason().empty()) {
     LogEvent("warn", "gpu_unavailable", {{"reason", engine::GpuUnavailableReason()}});
   }
-
-  // 64 KiB blocks arrive and leave all the time: keep freed memory in the heap rather than
-  // returning it to the kernel and faulting it back in (measured: ~3% of server CPU).
-  mallopt(M_MMAP_THRESHOLD, 4 << 20);
-  mallopt(M_TRIM_THRESHOLD, 64 << 20);
 
   // Signals are taken by sigwait on this thread; every thread started later inherits the mask.
   sigset_t stop_signals;
