@@ -67,14 +67,19 @@ Status DecodeBlock(const v1::SampleBlock& block, const BlockLimits& limits, Deco
       for (int64_t c = 0; c < channels; ++c) dst[c * per_channel + i] = frame[c];
     }
   } else {
-    const auto* bytes = reinterpret_cast<const unsigned char*>(block.pcm_s16le().data());
+    // Widen to float in one contiguous (vectorised) pass, then de-interleave as above.
+    const char* bytes = block.pcm_s16le().data();
+    out->interleaved.resize(static_cast<size_t>(values));
+    float* wide = out->interleaved.data();
     constexpr float kScale = 1.0f / 32768.0f;
+    for (int64_t i = 0; i < values; ++i) {
+      const auto lo = static_cast<uint16_t>(static_cast<unsigned char>(bytes[2 * i]));
+      const auto hi = static_cast<uint16_t>(static_cast<unsigned char>(bytes[2 * i + 1]));
+      wide[i] = static_cast<float>(static_cast<int16_t>(static_cast<uint16_t>(lo | (hi << 8)))) * kScale;
+    }
     for (int64_t i = 0; i < per_channel; ++i) {
-      for (int64_t c = 0; c < channels; ++c) {
-        const unsigned char* b = bytes + 2 * (i * channels + c);
-        const auto v = static_cast<int16_t>(static_cast<uint16_t>(b[0] | (b[1] << 8)));
-        dst[c * per_channel + i] = static_cast<float>(v) * kScale;
-      }
+      const float* frame = wide + i * channels;
+      for (int64_t c = 0; c < channels; ++c) dst[c * per_channel + i] = frame[c];
     }
   }
   out->view.sequence = block.sequence();

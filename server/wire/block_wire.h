@@ -25,6 +25,7 @@ struct BlockLimits {
 struct DecodedBlock {
   std::vector<float> samples;  // channel-major; reused between calls to save allocations
   engine::BlockView view;      // points into `samples` after a successful decode
+  std::vector<float> interleaved;  // scratch for pcm_s16le
 };
 
 // On failure returns INVALID_ARGUMENT naming the field and value and sets *reason to one
