@@ -255,6 +255,21 @@ class ServerTest(unittest.TestCase):
         position = np.array([response.position_m.x, response.position_m.y, response.position_m.z])
         self.assertLess(np.linalg.norm(position - SOURCE_M), TOLERANCE_M)
 
+    def test_reflection_lists_the_service_and_health_is_serving(self):
+        # Hand-encoded messages: Debian packages neither grpcio-reflection nor grpcio-health.
+        # ServerReflectionRequest{list_services: ""} is field 7, length 0.
+        reflect = self.channel.stream_stream(
+            "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
+            request_serializer=None, response_deserializer=None)
+        replies = list(reflect(iter([b"\x3a\x00"]), timeout=10))
+        self.assertEqual(len(replies), 1)
+        self.assertIn(b"localizer.v1.Localizer", replies[0])
+        self.assertIn(b"grpc.health.v1.Health", replies[0])
+        # HealthCheckRequest{} -> HealthCheckResponse{status: SERVING (1)}.
+        check = self.channel.unary_unary("/grpc.health.v1.Health/Check",
+                                         request_serializer=None, response_deserializer=None)
+        self.assertEqual(check(b"", timeout=10), b"\x08\x01")
+
     def test_loadtest_realtime_4_sessions(self):
         run = subprocess.run(
             [sys.executable, str(Path(CLIENT_DIR) / "loadtest.py"), "--target", self.target,
