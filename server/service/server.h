@@ -37,11 +37,7 @@ class Server final {
 
   int grpc_port() const { return grpc_port_; }
   int metrics_port() const { return exposer_ ? exposer_->port() : 0; }
-  int workers() const { return pool_->threads(); }
   void Shutdown();
-
-  metrics::Registry& registry() { return registry_; }
-  SessionRegistry& sessions() { return *sessions_; }
 
  private:
   explicit Server(const ServerOptions& options);

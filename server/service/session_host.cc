@@ -113,11 +113,6 @@ bool SessionHost::attached() const {
   return sink_ != nullptr;
 }
 
-bool SessionHost::closed() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return closed_;
-}
-
 void SessionHost::Reject(uint64_t sequence, const std::string& reason, const Status& status,
                          Clock::time_point received) {
   auto response = std::make_shared<v1::TrackResponse>();

@@ -88,7 +88,6 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   // dropped. Idempotent.
   void Close(const grpc::Status& status);
   void CloseLocked(const grpc::Status& status);
-  bool closed() const;
   bool ClosedLocked() const { return closed_; }
   // Server shutdown: the attached stream stops reading and ends once idle (DrainLocked).
   void Drain();

@@ -126,11 +126,6 @@ std::vector<v1::SessionInfo> SessionRegistry::List() const {
   return infos;
 }
 
-size_t SessionRegistry::size() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return sessions_.size();
-}
-
 void SessionRegistry::StartDrain() {
   std::lock_guard<std::mutex> lock(mutex_);
   draining_ = true;

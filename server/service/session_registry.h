@@ -53,8 +53,6 @@ class SessionRegistry final {
   StatusOr<uint64_t> Close(const std::string& id, const std::string& token);
 
   std::vector<v1::SessionInfo> List() const;
-  size_t size() const;
-  double ttl_s() const { return options_.ttl_s; }
 
   // Refuse new sessions and resumes from now on (UNAVAILABLE).
   void StartDrain();

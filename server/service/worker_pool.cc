@@ -31,11 +31,6 @@ void WorkerPool::Shutdown() {
   threads_.clear();
 }
 
-size_t WorkerPool::pending() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return tasks_.size();
-}
-
 void WorkerPool::Run() {
   for (;;) {
     std::function<void()> task;

@@ -26,7 +26,6 @@ class WorkerPool final {
   bool Submit(std::function<void()> task);
   void Shutdown();
   int threads() const { return static_cast<int>(threads_.size()); }
-  size_t pending() const;  // tasks waiting for a thread
 
  private:
   void Run();
