@@ -179,7 +179,8 @@ bool SessionHost::OfferLocked(wire::DecodedBlock* decoded, const Status& decode_
     queue_.push_back(std::move(item));
     ScheduleLocked();
   }
-  const bool room = queued_blocks_ < static_cast<size_t>(limits_.max_queue_blocks);
+  // Rejections occupy slots too: a client sending only bad blocks is held back as well.
+  const bool room = queue_.size() < static_cast<size_t>(limits_.max_queue_blocks);
   input_paused_ = !room;
   return room;
 }
@@ -214,7 +215,7 @@ void SessionHost::RunTurn() {
     }
     for (ResponsePtr& r : responses) PushOutputLocked(std::move(r));
     if (sink_ != nullptr) {
-      if (input_paused_ && queued_blocks_ < static_cast<size_t>(limits_.max_queue_blocks)) {
+      if (input_paused_ && queue_.size() < static_cast<size_t>(limits_.max_queue_blocks)) {
         input_paused_ = false;
         sink_->InputSpaceLocked();
       }

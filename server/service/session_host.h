@@ -2,9 +2,9 @@
 //
 //   reader (gRPC thread) --Offer--> queue --worker--> engine Session --> outbox --> writer
 //
-// * Queue: accepted blocks (and the in-order rejection/gap responses they cause) wait
-//   here for a worker; at most `max_queue_blocks` blocks, then Offer says "stop reading"
-//   and gRPC flow control holds the client back until InputSpaceLocked.
+// * Queue: accepted blocks (and the in-order rejections of bad ones) wait here for a
+//   worker; at most `max_queue_blocks` items, then Offer says "stop reading" and gRPC
+//   flow control holds the client back until InputSpaceLocked.
 // * One worker at a time runs a session (the `scheduled` flag), so its frames are
 //   processed in order; the engine Session is touched only by that worker.
 // * Outbox: responses not yet written to a stream. It survives a broken stream; a
