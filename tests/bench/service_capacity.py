@@ -9,7 +9,11 @@ inside Session::Process, localizer_engine_cpu_seconds_total) and everything else
 
   tests/bench/service_capacity.py --build build --sessions 100,200,300 --duration 20
   tests/bench/service_capacity.py --build build --sessions 4 --rate max --particles 256
+  tests/bench/service_capacity.py --bare --sessions 200    # gRPC alone: the overhead's floor
 
+--bare drives build/tests/bench/bare_stream_server instead: the same Track protocol with no
+engine, no worker pool and no sessions (two small estimates per block, written from the
+gRPC thread), so its CPU per block is what gRPC and the kernel cost by themselves.
 A fresh server is started for every row. Exit 0 unless a run failed to start.
 """
 import argparse
@@ -40,10 +44,12 @@ def scrape(port):
             "blocks": value("localizer_blocks_total")}
 
 
-def start_server(binary, workers, extra):
+def start_server(binary, bare, workers, extra):
     ready = tempfile.mktemp(prefix="localizer-ready-")
-    cmd = [binary, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0", "--ready-file", ready,
-           "--log-level", "warn", "--max-sessions", "4096"] + (["--workers", str(workers)] if workers else []) + extra
+    cmd = [binary, "--listen", "127.0.0.1:0", "--ready-file", ready]
+    if not bare:
+        cmd += ["--metrics-listen", "127.0.0.1:0", "--log-level", "warn", "--max-sessions", "4096"]
+        cmd += (["--workers", str(workers)] if workers else []) + extra
     proc = subprocess.Popen(cmd)
     deadline = time.time() + 20
     while not os.path.exists(ready):
@@ -57,9 +63,10 @@ def start_server(binary, workers, extra):
 
 
 def run_row(args, sessions):
-    proc, ports = start_server(args.server, args.workers, args.server_arg)
+    proc, ports = start_server(args.server, args.bare, args.workers, args.server_arg)
+    no_metrics = {"engine_cpu_s": 0.0, "blocks": 0.0}
     try:
-        before = scrape(ports["metrics_port"])
+        before = scrape(ports["metrics_port"]) if not args.bare else no_metrics
         cpu0 = process_cpu_s(proc.pid)
         cmd = ["/usr/bin/python3", args.loadtest, "--target", f"127.0.0.1:{ports['grpc_port']}",
                "--sessions", str(sessions), "--duration", str(args.duration), "--rate", args.rate,
@@ -67,7 +74,7 @@ def run_row(args, sessions):
                "--processes", str(args.processes)]
         out = subprocess.run(cmd, capture_output=True, text=True)
         cpu1 = process_cpu_s(proc.pid)
-        after = scrape(ports["metrics_port"])
+        after = scrape(ports["metrics_port"]) if not args.bare else no_metrics
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)
@@ -76,7 +83,7 @@ def run_row(args, sessions):
         sys.stderr.write(out.stdout + out.stderr)
         raise RuntimeError("loadtest printed no RESULT line")
     result = json.loads(result_line[0][len("RESULT "):])
-    blocks = max(1.0, after["blocks"] - before["blocks"])
+    blocks = max(1.0, after["blocks"] - before["blocks"] if not args.bare else result["blocks_sent"])
     server_cpu = cpu1 - cpu0
     engine_cpu = after["engine_cpu_s"] - before["engine_cpu_s"]
     return {
@@ -105,8 +112,10 @@ def main():
     p.add_argument("--processes", type=int, default=1, help="load-generator processes")
     p.add_argument("--workers", type=int, default=0, help="server --workers (0: one per core)")
     p.add_argument("--server-arg", action="append", default=[], help="extra localizer-server flag (repeatable)")
+    p.add_argument("--bare", action="store_true", help="drive bare_stream_server (gRPC alone) instead")
     args = p.parse_args()
-    args.server = os.path.join(args.build, "server", "localizer-server")
+    args.server = (os.path.join(args.build, "tests", "bench", "bare_stream_server") if args.bare
+                   else os.path.join(args.build, "server", "localizer-server"))
     args.loadtest = os.path.join(args.build, "clients", "python", "loadtest.py")
     print(f"# {args.rate}, {args.duration:g} s per row, {args.particles} particles, 4 ch 44.1 kHz, "
           f"4096-sample blocks and frames, hop 2048, {args.encoding}; {os.cpu_count()} CPUs (load generator included)")
