@@ -30,6 +30,16 @@ void Bump(metrics::Counter* c, double v = 1.0) {
   if (c != nullptr) c->Increment(v);
 }
 
+ResponsePtr Rejection(uint64_t sequence, const std::string& reason, const Status& status) {
+  auto response = std::make_shared<v1::TrackResponse>();
+  v1::BlockRejected* rejected = response->mutable_rejected();
+  rejected->set_sequence(sequence);
+  rejected->set_code(StatusCodeName(status.code()));
+  rejected->set_message(status.message());
+  rejected->set_reason(reason);
+  return response;
+}
+
 }  // namespace
 
 SessionHost::SessionHost(std::string id, std::string token, std::string label,
@@ -113,21 +123,15 @@ bool SessionHost::attached() const {
   return sink_ != nullptr;
 }
 
-void SessionHost::Reject(uint64_t sequence, const std::string& reason, const Status& status,
-                         Clock::time_point received) {
-  auto response = std::make_shared<v1::TrackResponse>();
-  v1::BlockRejected* rejected = response->mutable_rejected();
-  rejected->set_sequence(sequence);
-  rejected->set_code(StatusCodeName(status.code()));
-  rejected->set_message(status.message());
-  rejected->set_reason(reason);
+void SessionHost::RejectLocked(uint64_t sequence, const std::string& reason, const Status& status,
+                               Clock::time_point received) {
   ++rejections_;
   Bump(metrics_->rejections(reason));
   LogEvent("debug", "block_rejected", {{"session", id_}, {"sequence", std::to_string(sequence)}, {"reason", reason}});
   // In order behind the blocks already queued, so responses keep the blocks' order.
   WorkItem item;
   item.sequence = sequence;
-  item.response = std::move(response);
+  item.response = Rejection(sequence, reason, status);
   item.received = received;
   queue_.push_back(std::move(item));
   ScheduleLocked();
@@ -137,15 +141,15 @@ bool SessionHost::OfferLocked(wire::DecodedBlock* decoded, const Status& decode_
                               uint64_t sequence, Clock::time_point received) {
   if (closed_) return false;
   if (!decode_status.ok()) {
-    Reject(sequence, reason, decode_status, received);
+    RejectLocked(sequence, reason, decode_status, received);
   } else if (last_accepted_ && sequence <= *last_accepted_) {
     const bool duplicate = sequence == *last_accepted_;
-    Reject(sequence, duplicate ? "duplicate" : "out_of_order",
-           InvalidArgument("sequence " + std::to_string(sequence) +
-                           (duplicate ? " repeats the last accepted block's"
-                                      : " is below the last accepted block's ") +
-                           (duplicate ? "" : std::to_string(*last_accepted_)) + "; the block was ignored"),
-           received);
+    const std::string message =
+        "sequence " + std::to_string(sequence) +
+        (duplicate ? " repeats the last accepted block's" : " is below the last accepted block's " +
+                                                                 std::to_string(*last_accepted_)) +
+        "; the block was ignored";
+    RejectLocked(sequence, duplicate ? "duplicate" : "out_of_order", InvalidArgument(message), received);
   } else {
     WorkItem item;
     item.sequence = sequence;
@@ -246,13 +250,8 @@ std::vector<ResponsePtr> SessionHost::Process(WorkItem& item, Clock::time_point 
   Bump(metrics_->engine_cpu, ThreadCpuSeconds() - cpu_start_s);
   if (!status.ok()) {
     // The reader validated the block; the engine refusing it is unexpected but answered.
-    auto response = std::make_shared<v1::TrackResponse>();
-    response->mutable_rejected()->set_sequence(item.sequence);
-    response->mutable_rejected()->set_code(StatusCodeName(status.code()));
-    response->mutable_rejected()->set_message(status.message());
-    response->mutable_rejected()->set_reason("engine");
     Bump(metrics_->rejections("engine"));
-    out.push_back(std::move(response));
+    out.push_back(Rejection(item.sequence, "engine", status));
     return out;
   }
   Bump(metrics_->blocks);

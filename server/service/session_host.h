@@ -116,8 +116,9 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
 
   void ScheduleLocked();
   void PushOutputLocked(ResponsePtr response);
-  void Reject(uint64_t sequence, const std::string& reason, const Status& status,
-              Clock::time_point received);  // requires the lock
+  // Queues a BlockRejected in order behind the blocks already queued.
+  void RejectLocked(uint64_t sequence, const std::string& reason, const Status& status,
+                    Clock::time_point received);
   std::vector<ResponsePtr> Process(WorkItem& item, Clock::time_point started);
 
   const std::string id_;

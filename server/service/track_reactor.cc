@@ -29,9 +29,7 @@ void TrackReactor::OnReadDone(bool ok) {
     }
     std::lock_guard<std::mutex> lock(host_->mutex());
     if (context_->IsCancelled()) {  // broken, not half-closed: keep the session for a resume
-      cancelled_ = true;
-      FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED, "stream cancelled"));
-      return;
+      return CancelLocked();
     }
     input_done_ = true;
     OutputReadyLocked();  // finishes now if everything is already written
@@ -132,9 +130,7 @@ void TrackReactor::OutputReadyLocked() {
   }
   if (input_done_ && host_->IdleLocked()) {
     if (context_->IsCancelled()) {
-      cancelled_ = true;
-      FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED, "stream cancelled"));
-      return;
+      return CancelLocked();
     }
     if (draining_) {
       FinishOnce(grpc::Status(grpc::StatusCode::UNAVAILABLE,
@@ -181,6 +177,10 @@ void TrackReactor::EndLocked(const grpc::Status& status) {
 void TrackReactor::OnCancel() {
   if (!host_) return;  // OnDone follows; nothing attached
   std::lock_guard<std::mutex> lock(host_->mutex());
+  CancelLocked();
+}
+
+void TrackReactor::CancelLocked() {
   cancelled_ = true;
   FinishOnce(grpc::Status(grpc::StatusCode::CANCELLED, "stream cancelled"));
 }

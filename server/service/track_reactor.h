@@ -52,6 +52,8 @@ class TrackReactor final : public grpc::ServerBidiReactor<v1::TrackRequest, v1::
   void Attach(std::shared_ptr<SessionHost> host, bool resumed, std::optional<uint64_t> last_frame);
   // Ends the stream once; before attaching (no lock needed) or with the host's lock held.
   void FinishOnce(const grpc::Status& status);
+  // The stream broke or was cancelled: end it and leave the session resumable.
+  void CancelLocked();
   void ReadNext();
 
   grpc::CallbackServerContext* const context_;

@@ -15,16 +15,22 @@ struct ScenarioRun {
   TrackScore score;  // estimates from 2 s on, against the simulator's truth
 };
 
-inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelihood likelihood) {
-  const Scenario scenario = *MakeScenario(name, seed);
-  const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
-  const SimResult sim = *Simulate(array, scenario.sim);
+// The session config that tracks `scenario`: its array, sample rate and band.
+inline SessionConfig SessionConfigFor(const Scenario& scenario) {
   SessionConfig config;
   config.sensors_m = scenario.sensors_m;
   config.sound_speed_mps = scenario.sound_speed_mps;
   config.sample_rate_hz = scenario.sim.sample_rate_hz;
   config.band_low_hz = scenario.sim.band_low_hz;
   config.band_high_hz = scenario.sim.band_high_hz;
+  return config;
+}
+
+inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelihood likelihood) {
+  const Scenario scenario = *MakeScenario(name, seed);
+  const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
+  const SimResult sim = *Simulate(array, scenario.sim);
+  SessionConfig config = SessionConfigFor(scenario);
   config.filter.likelihood = likelihood;
   config.seed = seed;
   auto session = std::move(*Session::Create(config));

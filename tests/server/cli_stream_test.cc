@@ -42,6 +42,7 @@
 #include "clients/io/simulation_files.h"
 #include "clients/io/track_runner.h"
 #include "tests/clients/test_util.h"
+#include "tests/pipeline/scenario_run.h"
 #include "engine/array/multilateration.h"
 #include "engine/pipeline/locate.h"
 #include "localizer/v1/localizer.grpc.pb.h"
@@ -54,17 +55,6 @@ namespace localizer::client {
 namespace {
 
 using io::testing::TempDir;
-
-// The session config a local run of a simulated scenario uses (its array and band).
-engine::SessionConfig ConfigFor(const io::SimulationRun& run) {
-  engine::SessionConfig config;
-  config.sensors_m = run.scenario.sensors_m;
-  config.sound_speed_mps = run.scenario.sound_speed_mps;
-  config.sample_rate_hz = run.result.sample_rate_hz;
-  config.band_low_hz = run.scenario.sim.band_low_hz;
-  config.band_high_hz = run.scenario.sim.band_high_hz;
-  return config;
-}
 
 // A loopback port nobody listens on: bound, read back and released.
 int UnusedPort() {
@@ -230,7 +220,7 @@ TEST_F(CliStreamTest, RealtimePacingWithPcm16) {
   auto run = io::SimulateScenario("tetra-water", 2, 1.5);
   ASSERT_TRUE(run.ok()) << run.status().ToString();
   const engine::SimResult& sim = run->result;
-  engine::SessionConfig config = ConfigFor(*run);
+  engine::SessionConfig config = engine::SessionConfigFor(run->scenario);
   config.filter.particles = 1024;
   auto stream = OpenTrackSession(channel_, config, "realtime", "");
   ASSERT_TRUE(stream.ok()) << stream.status().ToString();
@@ -343,7 +333,7 @@ TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
   auto run = io::SimulateScenario("tetra-water", 1, 4.0);
   ASSERT_TRUE(run.ok()) << run.status().ToString();
   const engine::SimResult& sim = run->result;
-  engine::SessionConfig config = ConfigFor(*run);
+  engine::SessionConfig config = engine::SessionConfigFor(run->scenario);
 
   // 0.25 s from t = 2 s: samples [22050, 24806) per channel.
   const int64_t start = 22050;

@@ -20,6 +20,7 @@
 #include "server/service/server.h"
 #include "server/wire/block_wire.h"
 #include "server/wire/config_wire.h"
+#include "tests/pipeline/scenario_run.h"
 
 namespace localizer::server::testing {
 
@@ -65,11 +66,7 @@ inline Scenario MakeScenario(const std::string& name, double duration_s, uint64_
   scenario.sim.duration_s = duration_s;
   const auto array = *engine::ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
   s.sim = *engine::Simulate(array, scenario.sim);
-  s.config.sensors_m = scenario.sensors_m;
-  s.config.sound_speed_mps = scenario.sound_speed_mps;
-  s.config.sample_rate_hz = scenario.sim.sample_rate_hz;
-  s.config.band_low_hz = scenario.sim.band_low_hz;
-  s.config.band_high_hz = scenario.sim.band_high_hz;
+  s.config = engine::SessionConfigFor(scenario);
   s.config.filter.particles = particles;
   s.config.seed = seed;
   s.config.backend = "cpu";
