@@ -13,15 +13,11 @@
 
 #include "engine/array/array_geometry.h"
 #include "engine/core/measurement.h"
+#include "engine/filters/pair_noise.h"
 #include "engine/filters/particle_filter.h"
 #include "engine/filters/tracker.h"
 
 namespace localizer::engine {
-
-struct InnovationMoments {
-  double mean_s = 0.0;            // d - E[h'] under the prior weights
-  double predicted_var_s2 = 0.0;  // Var[h'] under the prior weights
-};
 
 // Gain k of the GCC log-likelihood k * g(lag): matched so that near the main peak
 // k * g has the curvature of a Gaussian of sigma_samples (k = sharpness / (sigma^2 * -g'')),

@@ -23,6 +23,19 @@ struct UpdateReport {
   double tdoa_sigma_s = 0.0;  // TDOA noise std the update assumed
 };
 
+// INVALID_ARGUMENT unless [min_m, max_m] is a finite box with min <= max and speed_sigma >= 0.
+inline Status ValidateRegion(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps) {
+  if (!min_m.allFinite() || !max_m.allFinite() || (max_m - min_m).minCoeff() < 0.0 || !(speed_sigma_mps >= 0.0)) {
+    return InvalidArgument("initial region must be a finite box with min <= max and speed sigma >= 0");
+  }
+  return Status::Ok();
+}
+
+// A root R with R R^T = belief.covariance that tolerates semi-definite covariances
+// (V sqrt(max(eigenvalues, 0))); INVALID_ARGUMENT when the mean or covariance is not finite
+// or the covariance is not positive semi-definite. Particle filters sample x = mean + R z.
+StatusOr<Mat6> BeliefRoot(const TrackState& belief);
+
 class Tracker {
  public:
   virtual ~Tracker() = default;
@@ -35,10 +48,7 @@ class Tracker {
   // ~ N(0, speed_sigma_mps^2 I). The default matches the box's mean and covariance with a
   // Gaussian; a particle filter samples the box itself.
   virtual Status InitialiseRegion(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps) {
-    if (!min_m.allFinite() || !max_m.allFinite() || (max_m - min_m).minCoeff() < 0.0 ||
-        !(speed_sigma_mps >= 0.0)) {
-      return InvalidArgument("initial region must be a finite box with min <= max and speed sigma >= 0");
-    }
+    LOCALIZER_RETURN_IF_ERROR(ValidateRegion(min_m, max_m, speed_sigma_mps));
     TrackState belief;
     belief.mean.head<3>() = 0.5 * (min_m + max_m);
     belief.covariance.topLeftCorner<3, 3>() = ((max_m - min_m).array().square() / 12.0).matrix().asDiagonal();

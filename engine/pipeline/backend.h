@@ -1,10 +1,14 @@
 // Builds a session's TDOA estimator and tracker for the requested compute backend.
 //
 //   "cpu"  FFTW3 GCC-PHAT and the CPU particle filter; always available.
-//   "gpu"  the CUDA implementations in gpu/, when this build has them and a device is
-//          present; otherwise FAILED_PRECONDITION saying why — never a silent fallback.
+//   "gpu"  the implementations a registered GPU provider makes (gpu/ registers the CUDA
+//          one at start-up: gpu/backend/gpu_backend.h), when a provider is registered and
+//          says it is usable; otherwise FAILED_PRECONDITION saying why — never a silent
+//          fallback.
 //   "auto" the GPU when available, else the CPU.
 // Only this factory decides between implementations; the session sees the interfaces.
+// The engine knows no GPU code: the provider is an interface that a library linked into
+// the program (server, CLI, tests) hands in.
 #pragma once
 
 #include <memory>
@@ -22,8 +26,27 @@ struct SessionComponents {
   std::string backend;  // what was chosen: "cpu" or "gpu"
 };
 
+// A compute backend other than the CPU's. Implementations must be thread-safe: sessions
+// are created on many threads.
+class BackendProvider {
+ public:
+  virtual ~BackendProvider() = default;
+  // Why this backend cannot be used here (no device, driver too old, ...), or "" when it can.
+  virtual std::string UnavailableReason() const = 0;
+  // Same contracts as GccPhatEstimator::Create / ParticleFilter::Create; errors of the
+  // device (memory exhausted, ...) come back as Status, never as a crash.
+  virtual StatusOr<std::unique_ptr<TdoaEstimator>> MakeEstimator(const ArrayGeometry& array,
+                                                                 const GccOptions& options) = 0;
+  virtual StatusOr<std::unique_ptr<Tracker>> MakeTracker(const ArrayGeometry& array,
+                                                         const ParticleFilterOptions& options) = 0;
+};
+
+// Installs the provider "gpu" and "auto" consult (nullptr removes it). Process-wide; call
+// before sessions are created. Returns the provider it replaced.
+std::shared_ptr<BackendProvider> SetGpuProvider(std::shared_ptr<BackendProvider> provider);
+
 // INVALID_ARGUMENT for an unknown backend name; FAILED_PRECONDITION for "gpu" without one;
-// otherwise whatever the estimator's or filter's options validation says.
+// otherwise whatever the estimator's or filter's options validation (or the provider) says.
 StatusOr<SessionComponents> BuildComponents(const std::string& backend, const ArrayGeometry& array,
                                             const GccOptions& gcc, const ParticleFilterOptions& filter);
 
