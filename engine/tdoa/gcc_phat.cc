@@ -11,6 +11,7 @@
 
 #include "engine/tdoa/cross_spectrum.h"
 #include "engine/tdoa/fftw_util.h"
+#include "engine/tdoa/gcc_layout.h"
 
 namespace localizer::engine {
 namespace {
@@ -166,15 +167,9 @@ struct GccPhatEstimator::Impl {
 
   ArrayGeometry array;
   GccOptions options;
-  int fft_size = 0;         // N
-  int bin_count = 0;        // N/2 + 1
+  // N, bins, band, noise floor and L_p per pair (gcc_layout.h).
+  GccLayout layout;
   int spectrum_stride = 0;  // floats from one channel's spectrum to the next (64-byte multiple)
-  int band_first_bin = 0;   // bins [band_first_bin, band_end_bin) are in the band
-  int band_end_bin = 0;
-  // 1 / (noise-only std of R) = sqrt(in-band bins of the full spectrum): under PHAT each
-  // bin is a unit phasor of random phase and R is their mean.
-  float noise_floor_inverse = 0.0f;
-  std::vector<int> max_lag_samples;  // L_p per pair
   std::vector<double> energy;        // sum of squares per channel, this frame
   std::vector<float> window;         // scaled R at lags -(L + K) .. L + K, K = kPeakHalfWidth
   FftwFloats padded;                 // N: one channel, zero padded
@@ -186,48 +181,18 @@ struct GccPhatEstimator::Impl {
 };
 
 Status GccPhatEstimator::Impl::Init() {
-  const double fs = options.sample_rate_hz;
-  // Lags the stage reads: the physical window plus the margin, plus the interpolator's reach.
-  double widest_wanted = 0.0;
-  for (int p = 0; p < array.pair_count(); ++p) {
-    widest_wanted = std::max(widest_wanted, std::ceil(array.max_delay_s(p) * fs) + options.lag_margin_samples);
-  }
-  // Zero padding to N >= frame + reach + 1 makes the circular correlation equal the linear one
-  // at every lag |l| <= reach (the alias of lag l sits at l -/+ N, beyond the frame). Twice
-  // the frame would also be linear at lags nobody reads, at twice the FFT cost.
-  const double reach = std::min(widest_wanted, static_cast<double>(options.frame_samples)) + kPeakHalfWidth;
-  fft_size = NextFastFftSize(options.frame_samples + static_cast<int>(reach) + 1);
-  bin_count = fft_size / 2 + 1;
-  spectrum_stride = (2 * bin_count + 15) / 16 * 16;
-
-  const double bins_per_hz = fft_size / fs;
-  band_first_bin = static_cast<int>(std::ceil(options.band_low_hz * bins_per_hz));
-  band_end_bin = options.band_high_hz > 0.0
-                     ? static_cast<int>(std::floor(options.band_high_hz * bins_per_hz)) + 1
-                     : bin_count;
-  band_end_bin = std::min(band_end_bin, bin_count);
-  noise_floor_inverse = static_cast<float>(std::sqrt(2.0 * std::max(1, band_end_bin - band_first_bin)));
-  if (band_first_bin >= band_end_bin) {
-    return InvalidArgument("band [" + Value(options.band_low_hz) + ", " +
-                           Value(options.band_high_hz) + "] Hz holds no FFT bin (bin spacing " +
-                           Value(fs / fft_size) + " Hz)");
-  }
-
-  int widest_lag = 0;
-  for (int p = 0; p < array.pair_count(); ++p) {
-    // In double: a physical delay or margin near INT_MAX must clamp, not overflow.
-    const double wanted = std::ceil(array.max_delay_s(p) * fs) + options.lag_margin_samples;
-    // Keep the window and the interpolator's reach inside half the transform.
-    const int lag = static_cast<int>(std::min(wanted, fft_size / 2 - 1.0 - kPeakHalfWidth));
-    max_lag_samples.push_back(lag);
-    widest_lag = std::max(widest_lag, lag);
-  }
+  auto computed = ComputeGccLayout(array, options);
+  if (!computed.ok()) return computed.status();
+  layout = std::move(computed).value();
+  const int fft_size = layout.fft_size;
+  spectrum_stride = (2 * layout.bin_count + 15) / 16 * 16;
+  const int widest_lag = layout.widest_lag();
   window.assign(2 * (widest_lag + kPeakHalfWidth) + 1, 0.0f);
   energy.assign(array.sensor_count(), 0.0);
 
   padded = AllocateFftwFloats(fft_size);
   spectra = AllocateFftwFloats(static_cast<std::size_t>(spectrum_stride) * array.sensor_count());
-  cross = AllocateFftwFloats(2 * bin_count);
+  cross = AllocateFftwFloats(2 * layout.bin_count);
   corr = AllocateFftwFloats(fft_size);
   const unsigned flags = options.measure_fft_plans ? FFTW_MEASURE : FFTW_ESTIMATE;
   forward = PlanRealForward(fft_size, padded.get(), spectra.get(), flags);
@@ -262,8 +227,10 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
   const float* xk = spectra.get() + static_cast<std::size_t>(sensor) * spectrum_stride;
   float* g = cross.get();
   // Out-of-band bins are zeroed every time: c2r destroys its input.
-  std::memset(g, 0, sizeof(float) * 2 * band_first_bin);
-  std::memset(g + 2 * band_end_bin, 0, sizeof(float) * 2 * (bin_count - band_end_bin));
+  const int bin_count = layout.bin_count;
+  std::memset(g, 0, sizeof(float) * 2 * layout.band_first_bin);
+  std::memset(g + 2 * layout.band_end_bin, 0,
+              sizeof(float) * 2 * (bin_count - layout.band_end_bin));
 
   const double e_ref = energy[ref];
   const double e_sensor = energy[sensor];
@@ -272,8 +239,8 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
                                          static_cast<double>(FLT_MAX)));
   };
   const float floor_mag = floor_of(std::sqrt(e_ref * e_sensor));
-  const int lo = band_first_bin;
-  const int hi = band_end_bin;
+  const int lo = layout.band_first_bin;
+  const int hi = layout.band_end_bin;
   float half_sum = 0.0f;
   switch (options.weighting) {
     case Weighting::kPhat:
@@ -298,7 +265,7 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
 // the interpolator. Lags wrap modulo N; L + K < N keeps both runs inside `corr`.
 void GccPhatEstimator::Impl::GatherWindow(int max_lag, float scale) {
   const int reach = max_lag + kPeakHalfWidth;
-  const float* negative = corr.get() + fft_size - reach;  // lags -reach .. -1
+  const float* negative = corr.get() + layout.fft_size - reach;  // lags -reach .. -1
   float* w = window.data();
   for (int i = 0; i < reach; ++i) w[i] = negative[i] * scale;
   const float* positive = corr.get();  // lags 0 .. reach
@@ -313,11 +280,11 @@ float GccPhatEstimator::Impl::LargestSidelobe(std::span<const float> searched, i
   if (first > 0 || last + 1 < static_cast<int>(searched.size())) {
     return std::max(MaxAbs(searched.first(first)), MaxAbs(searched.subspan(last + 1)));
   }
-  return scale * LargestOutsideLobe(corr.get(), fft_size, peak_lag);
+  return scale * LargestOutsideLobe(corr.get(), layout.fft_size, peak_lag);
 }
 
 void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
-  const int max_lag = max_lag_samples[pair];
+  const int max_lag = layout.max_lag_samples[pair];
   const int searched_count = 2 * max_lag + 1;
   out->sensor = array.sensor_of_pair(pair);
   out->first_lag_samples = -max_lag;
@@ -345,7 +312,7 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
 
   out->delay_s = (peak_lag + offset_samples) / options.sample_rate_hz;
   out->peak_value = peak_value;
-  out->peak_snr = peak_value * noise_floor_inverse;
+  out->peak_snr = peak_value * layout.noise_floor_inverse;
   out->quality = QualityRatio(peak_value, LargestSidelobe(searched, peak, peak_lag, scale));
   if (options.keep_gcc) out->gcc.assign(searched.begin(), searched.end());
   else out->gcc.clear();
@@ -384,7 +351,7 @@ Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double 
 }
 
 const GccOptions& GccPhatEstimator::options() const { return impl_->options; }
-int GccPhatEstimator::fft_size() const { return impl_->fft_size; }
-int GccPhatEstimator::max_lag_samples(int pair) const { return impl_->max_lag_samples[pair]; }
+int GccPhatEstimator::fft_size() const { return impl_->layout.fft_size; }
+int GccPhatEstimator::max_lag_samples(int pair) const { return impl_->layout.max_lag_samples[pair]; }
 
 }  // namespace localizer::engine

@@ -1,0 +1,71 @@
+#include "engine/tdoa/gcc_layout.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "engine/tdoa/fftw_util.h"
+#include "engine/tdoa/peak_interpolation.h"
+
+namespace localizer::engine {
+namespace {
+
+std::string Value(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
+
+}  // namespace
+
+int GccLayout::widest_lag() const {
+  int widest = 0;
+  for (int lag : max_lag_samples) widest = std::max(widest, lag);
+  return widest;
+}
+
+StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOptions& options) {
+  LOCALIZER_RETURN_IF_ERROR(options.Validate());
+  GccLayout layout;
+  layout.frame_samples = options.frame_samples;
+  layout.channels = array.sensor_count();
+  const double fs = options.sample_rate_hz;
+  // Lags the stage reads: the physical window plus the margin, plus the interpolator's reach.
+  // In double: a physical delay or margin near INT_MAX must clamp, not overflow.
+  const auto wanted_lag = [&](int pair) {
+    return std::ceil(array.max_delay_s(pair) * fs) + options.lag_margin_samples;
+  };
+  double widest_wanted = 0.0;
+  for (int p = 0; p < array.pair_count(); ++p) widest_wanted = std::max(widest_wanted, wanted_lag(p));
+  // Zero padding to N >= frame + reach + 1 makes the circular correlation equal the linear one
+  // at every lag |l| <= reach (the alias of lag l sits at l -/+ N, beyond the frame). Twice
+  // the frame would also be linear at lags nobody reads, at twice the FFT cost.
+  const double reach =
+      std::min(widest_wanted, static_cast<double>(options.frame_samples)) + kPeakHalfWidth;
+  layout.fft_size = NextFastFftSize(options.frame_samples + static_cast<int>(reach) + 1);
+  layout.bin_count = layout.fft_size / 2 + 1;
+
+  const double bins_per_hz = layout.fft_size / fs;
+  layout.band_first_bin = static_cast<int>(std::ceil(options.band_low_hz * bins_per_hz));
+  layout.band_end_bin = options.band_high_hz > 0.0
+                            ? static_cast<int>(std::floor(options.band_high_hz * bins_per_hz)) + 1
+                            : layout.bin_count;
+  layout.band_end_bin = std::min(layout.band_end_bin, layout.bin_count);
+  if (layout.band_first_bin >= layout.band_end_bin) {
+    return InvalidArgument("band [" + Value(options.band_low_hz) + ", " +
+                           Value(options.band_high_hz) + "] Hz holds no FFT bin (bin spacing " +
+                           Value(fs / layout.fft_size) + " Hz)");
+  }
+  layout.noise_floor_inverse =
+      static_cast<float>(std::sqrt(2.0 * (layout.band_end_bin - layout.band_first_bin)));
+
+  // Keep each window and the interpolator's reach inside half the transform.
+  const double lag_limit = layout.fft_size / 2 - 1.0 - kPeakHalfWidth;
+  for (int p = 0; p < array.pair_count(); ++p) {
+    layout.max_lag_samples.push_back(static_cast<int>(std::min(wanted_lag(p), lag_limit)));
+  }
+  return layout;
+}
+
+}  // namespace localizer::engine

@@ -1,0 +1,416 @@
+#include "gpu/tdoa/gcc_batch.h"
+
+#include <cuda_runtime_api.h>
+#include <cufft.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "engine/tdoa/cross_spectrum.h"
+#include "engine/tdoa/peak_interpolation.h"
+#include "gpu/core/cuda_status.h"
+#include "gpu/core/device.h"
+#include "gpu/core/device_buffer.h"
+#include "gpu/tdoa/cuda_handles.h"
+#include "gpu/tdoa/gcc_kernels.h"
+#include "gpu/tdoa/gcc_math.cuh"
+
+namespace localizer::gpu {
+namespace {
+
+// gcc_math.cuh restates these engine constants for device code; they must not drift.
+static_assert(gcc::kHalfWidth == engine::kPeakHalfWidth);
+static_assert(gcc::kPeakSamples == engine::kPeakSamples);
+static_assert(gcc::kRelativeFloor == engine::kRelativeFloor);
+static_assert(static_cast<int>(engine::Weighting::kPhat) == gcc::kPhat);
+static_assert(static_cast<int>(engine::Weighting::kPhatBeta) == gcc::kPhatBeta);
+static_assert(static_cast<int>(engine::Weighting::kScot) == gcc::kScot);
+static_assert(static_cast<int>(engine::Weighting::kCc) == gcc::kCc);
+static_assert(static_cast<int>(engine::PeakInterpolation::kParabolic) == gcc::kParabolic);
+static_assert(static_cast<int>(engine::PeakInterpolation::kGaussian) == gcc::kGaussian);
+static_assert(static_cast<int>(engine::PeakInterpolation::kSinc) == gcc::kSinc);
+static_assert(sizeof(cufftComplex) == 2 * sizeof(float));
+
+constexpr int kMaxFramesLimit = 1 << 16;
+
+// Milliseconds between two recorded, completed events.
+StatusOr<float> Elapsed(const CudaEvent& from, const CudaEvent& to) {
+  float ms = 0.0f;
+  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaEventElapsedTime(&ms, from.get(), to.get()), "cudaEventElapsedTime");
+  return ms;
+}
+
+// Smallest power of two >= n, capped at max_frames (itself a bucket).
+int BucketFor(int n, int max_frames) {
+  int bucket = 1;
+  while (bucket < n) bucket <<= 1;
+  return bucket < max_frames ? bucket : max_frames;
+}
+
+template <typename T>
+Status AllocateInto(std::size_t count, T* buffer) {
+  auto allocated = T::Allocate(count);
+  if (!allocated.ok()) return allocated.status();
+  *buffer = std::move(allocated).value();
+  return Status::Ok();
+}
+
+// Grows a device/pinned pair to `count` elements (contents not kept).
+template <typename T>
+Status ReservePair(std::size_t count, DeviceBuffer<T>* device, PinnedBuffer<T>* host) {
+  LOCALIZER_RETURN_IF_ERROR(device->Reserve(count));
+  return host->Reserve(count);
+}
+
+}  // namespace
+
+struct GccBatch::Impl {
+  struct FftPlans {
+    CufftPlan forward;  // R2C over bucket * channels rows
+    CufftPlan inverse;  // C2R over bucket * pairs rows
+  };
+  enum Mark { kStart, kCopiedIn, kR2cStart, kR2cEnd, kC2rStart, kC2rEnd, kKernelsDone, kEnd, kMarks };
+
+  Status Init();
+  StatusOr<FftPlans*> PlansFor(int bucket);
+  Status Enqueue(std::span<const GccJob> jobs, int bucket, std::size_t gcc_floats);
+  Status Record(Mark mark);
+  Status ReadTiming();
+  void Fill(const GccJob& job, int frame, Status* first_error);
+
+  GccBatchKey key;
+  int max_frames = 0;
+  bool collect_timing = false;
+  int channels = 0;
+  int pairs = 0;
+  int bins = 0;
+
+  CudaStream stream;
+  PinnedBuffer<float> staged_frames;   // max_frames * channels * frame_samples
+  PinnedBuffer<GccPairTask> staged_tasks;
+  PinnedBuffer<GccPairResult> staged_results;
+  PinnedBuffer<float> staged_gcc;      // grows to the largest batch's windows
+  DeviceBuffer<float> frames;
+  DeviceBuffer<GccPairTask> tasks;
+  DeviceBuffer<double> energy;         // max_frames * channels
+  DeviceBuffer<float> signal;          // max_frames * channels * N
+  DeviceBuffer<float> spectra;         // max_frames * channels * (N/2 + 1) complex
+  DeviceBuffer<float> cross;           // max_frames * pairs * (N/2 + 1) complex
+  DeviceBuffer<float> corr;            // max_frames * pairs * N
+  DeviceBuffer<GccPairResult> results; // max_frames * pairs
+  DeviceBuffer<float> gcc;
+  DeviceBuffer<char> work_area;        // shared by every plan (they run one after another)
+  std::map<int, FftPlans> plans;       // by bucket
+  std::vector<CudaEvent> marks;        // kMarks events with collect_timing, else none
+  Timing timing;
+};
+
+Status GccBatch::Impl::Init() {
+  channels = key.channels;
+  pairs = channels - 1;
+  bins = key.fft_size / 2 + 1;
+  const std::size_t frames_max = static_cast<std::size_t>(max_frames);
+  const std::size_t rows = frames_max * channels;
+  const std::size_t pair_rows = frames_max * pairs;
+  auto created = CudaStream::Create();
+  if (!created.ok()) return created.status();
+  stream = std::move(created).value();
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows * key.frame_samples, &staged_frames));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &staged_tasks));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &staged_results));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows * key.frame_samples, &frames));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &tasks));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows, &energy));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows * key.fft_size, &signal));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows * 2 * bins, &spectra));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows * 2 * bins, &cross));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows * key.fft_size, &corr));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &results));
+  if (collect_timing) {
+    for (int i = 0; i < kMarks; ++i) {
+      auto event = CudaEvent::Create();
+      if (!event.ok()) return event.status();
+      marks.push_back(std::move(event).value());
+    }
+  }
+  // The largest bucket now: its work area bounds the others', and a batch too large for the
+  // device fails here rather than on the first full Run.
+  auto largest = PlansFor(max_frames);
+  return largest.ok() ? Status::Ok() : largest.status();
+}
+
+StatusOr<GccBatch::Impl::FftPlans*> GccBatch::Impl::PlansFor(int bucket) {
+  auto found = plans.find(bucket);
+  if (found != plans.end()) return &found->second;
+  std::size_t forward_work = 0;
+  std::size_t inverse_work = 0;
+  auto forward = CufftPlan::Make(key.fft_size, CUFFT_R2C, static_cast<long long>(bucket) * channels,
+                                 stream.get(), &forward_work);
+  if (!forward.ok()) return forward.status();
+  auto inverse = CufftPlan::Make(key.fft_size, CUFFT_C2R, static_cast<long long>(bucket) * pairs,
+                                 stream.get(), &inverse_work);
+  if (!inverse.ok()) return inverse.status();
+  // The previous Run has completed (Run synchronises), so the old area may be freed.
+  LOCALIZER_RETURN_IF_ERROR(work_area.Reserve(std::max(forward_work, inverse_work)));
+  FftPlans& made = plans[bucket];
+  made.forward = std::move(forward).value();
+  made.inverse = std::move(inverse).value();
+  return &made;
+}
+
+Status GccBatch::Impl::Record(Mark mark) {
+  if (!collect_timing) return Status::Ok();
+  return FromCuda(cudaEventRecord(marks[mark].get(), stream.get()), "cudaEventRecord");
+}
+
+Status GccBatch::Impl::ReadTiming() {
+  if (!collect_timing) return Status::Ok();
+  auto total = Elapsed(marks[kStart], marks[kEnd]);
+  auto r2c = Elapsed(marks[kR2cStart], marks[kR2cEnd]);
+  auto c2r = Elapsed(marks[kC2rStart], marks[kC2rEnd]);
+  auto device = Elapsed(marks[kCopiedIn], marks[kKernelsDone]);
+  for (const auto* t : {&total, &r2c, &c2r, &device}) {
+    if (!t->ok()) return t->status();
+  }
+  timing = {*total, *r2c + *c2r, *device};
+  return Status::Ok();
+}
+
+// Stages the jobs' frames and descriptors and enqueues the whole sequence on the stream.
+Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::size_t gcc_floats) {
+  const int count = static_cast<int>(jobs.size());
+  const std::size_t frame_floats = static_cast<std::size_t>(channels) * key.frame_samples;
+  const int task_count = count * pairs;
+  const std::size_t spectrum_floats = 2 * static_cast<std::size_t>(bins);
+
+  auto found_plans = PlansFor(bucket);
+  if (!found_plans.ok()) return found_plans.status();
+  FftPlans& fft = **found_plans;
+  LOCALIZER_RETURN_IF_ERROR(ReservePair(gcc_floats, &gcc, &staged_gcc));
+
+  std::int64_t gcc_offset = 0;
+  for (int j = 0; j < count; ++j) {
+    const GccJob& job = jobs[j];
+    const GccPlan& plan = *job.plan;
+    std::memcpy(staged_frames.data() + j * frame_floats, job.frame, sizeof(float) * frame_floats);
+    const engine::GccOptions& options = plan.options();
+    const engine::GccLayout& layout = plan.layout();
+    for (int p = 0; p < pairs; ++p) {
+      GccPairTask& t = staged_tasks.data()[j * pairs + p];
+      t.ref_row = j * channels + plan.reference_sensor();
+      t.sensor_row = j * channels + plan.sensor_of_pair(p);
+      t.weighting = static_cast<int32_t>(options.weighting);
+      t.beta = static_cast<float>(options.phat_beta);
+      t.band_first_bin = layout.band_first_bin;
+      t.band_end_bin = layout.band_end_bin;
+      t.max_lag = layout.max_lag_samples[p];
+      t.interpolation = static_cast<int32_t>(options.interpolation);
+      t.gcc_offset = options.keep_gcc ? gcc_offset : -1;
+      if (options.keep_gcc) gcc_offset += 2 * static_cast<std::int64_t>(t.max_lag) + 1;
+    }
+  }
+
+  cudaStream_t s = stream.get();
+  LOCALIZER_RETURN_IF_ERROR(Record(kStart));
+  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(frames.data(), staged_frames.data(),
+                                                 sizeof(float) * frame_floats * count,
+                                                 cudaMemcpyHostToDevice, s),
+                                 "cudaMemcpyAsync(frames)");
+  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(tasks.data(), staged_tasks.data(),
+                                                 sizeof(GccPairTask) * task_count,
+                                                 cudaMemcpyHostToDevice, s),
+                                 "cudaMemcpyAsync(tasks)");
+  LOCALIZER_RETURN_IF_ERROR(Record(kCopiedIn));
+
+  GccPackArgs pack;
+  pack.frames = frames.data();
+  pack.signal = signal.data();
+  pack.energy = energy.data();
+  pack.live_rows = count * channels;
+  pack.rows = bucket * channels;
+  pack.frame_samples = key.frame_samples;
+  pack.fft_size = key.fft_size;
+  LOCALIZER_RETURN_IF_ERROR(LaunchGccPack(pack, s));
+
+  LOCALIZER_RETURN_IF_ERROR(Record(kR2cStart));
+  if (work_area.data() != nullptr) {
+    LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftSetWorkArea(fft.forward.get(), work_area.data()), "cufftSetWorkArea(R2C)");
+  }
+  LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftExecR2C(fft.forward.get(), signal.data(),
+                                               reinterpret_cast<cufftComplex*>(spectra.data())),
+                                  "cufftExecR2C");
+  LOCALIZER_RETURN_IF_ERROR(Record(kR2cEnd));
+
+  GccWeighArgs weigh;
+  weigh.tasks = tasks.data();
+  weigh.spectra = spectra.data();
+  weigh.energy = energy.data();
+  weigh.cross = cross.data();
+  weigh.results = results.data();
+  weigh.task_count = task_count;
+  weigh.fft_size = key.fft_size;
+  LOCALIZER_RETURN_IF_ERROR(LaunchGccWeigh(weigh, s));
+  if (bucket > count) {  // the padding frames' rows: zero, as their signal rows are
+    const std::size_t live = spectrum_floats * task_count;
+    const std::size_t padded = spectrum_floats * (static_cast<std::size_t>(bucket) * pairs);
+    LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemsetAsync(cross.data() + live, 0, sizeof(float) * (padded - live), s),
+                                   "cudaMemsetAsync(cross padding)");
+  }
+
+  LOCALIZER_RETURN_IF_ERROR(Record(kC2rStart));
+  if (work_area.data() != nullptr) {
+    LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftSetWorkArea(fft.inverse.get(), work_area.data()), "cufftSetWorkArea(C2R)");
+  }
+  LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftExecC2R(fft.inverse.get(), reinterpret_cast<cufftComplex*>(cross.data()),
+                                               corr.data()),
+                                  "cufftExecC2R");
+  LOCALIZER_RETURN_IF_ERROR(Record(kC2rEnd));
+
+  GccPeakArgs peak;
+  peak.tasks = tasks.data();
+  peak.corr = corr.data();
+  peak.results = results.data();
+  peak.gcc = gcc.data();
+  peak.task_count = task_count;
+  peak.fft_size = key.fft_size;
+  LOCALIZER_RETURN_IF_ERROR(LaunchGccPeak(peak, s));
+  LOCALIZER_RETURN_IF_ERROR(Record(kKernelsDone));
+
+  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(staged_results.data(), results.data(),
+                                                 sizeof(GccPairResult) * task_count,
+                                                 cudaMemcpyDeviceToHost, s),
+                                 "cudaMemcpyAsync(results)");
+  if (gcc_floats > 0) {
+    LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(staged_gcc.data(), gcc.data(), sizeof(float) * gcc_floats,
+                                                   cudaMemcpyDeviceToHost, s),
+                                   "cudaMemcpyAsync(gcc)");
+  }
+  return Record(kEnd);
+}
+
+// Job `frame`'s results into its Measurement, as GccPhatEstimator::Estimate fills one; a
+// frame with a non-finite sample is reported instead (lowest channel first, as the CPU).
+void GccBatch::Impl::Fill(const GccJob& job, int frame, Status* first_error) {
+  const GccPlan& plan = *job.plan;
+  const GccPairResult* r = staged_results.data() + static_cast<std::size_t>(frame) * pairs;
+  for (int c = 0; c < channels; ++c) {
+    // Channel c's energy: the reference's is in every pair, another's in its own pair.
+    double e = 0.0;
+    if (c == plan.reference_sensor()) {
+      e = r[0].energy_ref;
+    } else {
+      for (int p = 0; p < pairs; ++p) {
+        if (plan.sensor_of_pair(p) == c) e = r[p].energy_sensor;
+      }
+    }
+    if (!std::isfinite(e)) {
+      Status bad = InvalidArgument("channel " + std::to_string(c) + " holds a non-finite sample (NaN or Inf)");
+      if (job.status != nullptr) {
+        *job.status = std::move(bad);
+      } else if (first_error->ok()) {
+        *first_error = InvalidArgument("job " + std::to_string(frame) + ": " + bad.message());
+      }
+      return;
+    }
+  }
+  const engine::GccOptions& options = plan.options();
+  const engine::GccLayout& layout = plan.layout();
+  engine::Measurement* out = job.out;
+  out->t_s = job.t_s;
+  out->sample_rate_hz = options.sample_rate_hz;
+  out->pairs.resize(pairs);
+  for (int p = 0; p < pairs; ++p) {
+    const GccPairResult& result = r[p];
+    const GccPairTask& task = staged_tasks.data()[static_cast<std::size_t>(frame) * pairs + p];
+    engine::PairMeasurement& pair = out->pairs[p];
+    const int max_lag = layout.max_lag_samples[p];
+    pair.sensor = plan.sensor_of_pair(p);
+    pair.first_lag_samples = -max_lag;
+    if (!(result.norm > 0.0f)) {
+      pair.delay_s = 0.0;
+      pair.quality = 0.0;
+      pair.peak_value = 0.0;
+      pair.peak_snr = 0.0;
+    } else {
+      pair.delay_s = (result.peak_lag + result.offset_samples) / options.sample_rate_hz;
+      pair.peak_value = result.peak_value;
+      pair.peak_snr = result.peak_value * layout.noise_floor_inverse;
+      pair.quality = result.quality;
+    }
+    if (task.gcc_offset >= 0) {
+      const float* window = staged_gcc.data() + task.gcc_offset;
+      pair.gcc.assign(window, window + 2 * max_lag + 1);
+    } else {
+      pair.gcc.clear();
+    }
+  }
+  if (job.status != nullptr) *job.status = Status::Ok();
+}
+
+GccBatch::GccBatch(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+GccBatch::~GccBatch() = default;
+
+StatusOr<std::unique_ptr<GccBatch>> GccBatch::Create(const GccPlan::BatchKey& key, int max_frames,
+                                                     bool collect_timing) {
+  if (key.frame_samples < 1 || key.channels < 2 || key.fft_size < key.frame_samples) {
+    return InvalidArgument("GCC batch key " + key.ToString() +
+                           " needs frame_samples >= 1, channels >= 2 and fft_size >= frame_samples");
+  }
+  if (max_frames < 1 || max_frames > kMaxFramesLimit) {
+    return InvalidArgument("GCC batch max_frames is " + std::to_string(max_frames) + "; must be in [1, " +
+                           std::to_string(kMaxFramesLimit) + "]");
+  }
+  if (const std::string& reason = DeviceUnavailableReason(); !reason.empty()) {
+    return FailedPrecondition("no usable GPU for the GCC batch: " + reason);
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->key = key;
+  impl->max_frames = max_frames;
+  impl->collect_timing = collect_timing;
+  LOCALIZER_RETURN_IF_ERROR(impl->Init());
+  return std::unique_ptr<GccBatch>(new GccBatch(std::move(impl)));
+}
+
+Status GccBatch::Run(std::span<const GccJob> jobs) {
+  Impl& s = *impl_;
+  if (jobs.empty() || static_cast<int>(jobs.size()) > s.max_frames) {
+    return InvalidArgument("GCC batch of " + std::to_string(jobs.size()) + " jobs; must be 1.." +
+                           std::to_string(s.max_frames));
+  }
+  std::size_t gcc_floats = 0;
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    const GccJob& job = jobs[j];
+    const std::string which = "GCC batch job " + std::to_string(j);
+    if (job.plan == nullptr || job.frame == nullptr || job.out == nullptr) {
+      return InvalidArgument(which + " has a null plan, frame or out");
+    }
+    if (!(job.plan->key() == s.key)) {
+      return InvalidArgument(which + " has key " + job.plan->key().ToString() + "; the batch's is " +
+                             s.key.ToString());
+    }
+    gcc_floats += job.plan->gcc_floats();
+  }
+  const int count = static_cast<int>(jobs.size());
+  const Status enqueued = s.Enqueue(jobs, BucketFor(count, s.max_frames), gcc_floats);
+  if (!enqueued.ok()) {
+    // Whatever was enqueued must finish before the staging buffers are written again.
+    (void)s.stream.Synchronize();
+    return enqueued;
+  }
+  LOCALIZER_RETURN_IF_ERROR(s.stream.Synchronize());
+  LOCALIZER_RETURN_IF_ERROR(s.ReadTiming());
+  Status first_error;
+  for (int j = 0; j < count; ++j) s.Fill(jobs[j], j, &first_error);
+  return first_error;
+}
+
+GccBatch::Timing GccBatch::last_timing() const { return impl_->timing; }
+const GccPlan::BatchKey& GccBatch::key() const { return impl_->key; }
+int GccBatch::max_frames() const { return impl_->max_frames; }
+
+}  // namespace localizer::gpu

@@ -1,0 +1,90 @@
+// Launchers for the three kernels of the batched GCC-PHAT stage (gcc_kernels.cu), around the
+// two batched cuFFT executions that gcc_batch.cc makes:
+//
+//   frames ──LaunchGccPack──▶ signal, energy ──R2C──▶ spectra ──LaunchGccWeigh──▶ cross, S
+//          ──C2R──▶ corr ──LaunchGccPeak──▶ results, gcc windows
+//
+// Plain C++ (no Eigen, no engine headers with Eigen): the descriptors are POD structs that
+// gcc_batch.cc fills from each session's GccPlan and uploads with the batch. All pointers are
+// device pointers; every launch is asynchronous on `stream` and returns the launch error as
+// a Status (execution errors surface at the next synchronisation). Complex data is
+// interleaved (re, im) float, bit-compatible with cufftComplex. Row r of a buffer of row
+// length n starts at r * n; rows are (frame, channel) = frame * channels + channel for
+// frames/signal/spectra/energy and (frame, pair) = task index for cross/corr/results.
+#pragma once
+
+#include <cuda_runtime_api.h>
+
+#include <cstdint>
+
+#include "engine/core/status.h"
+
+namespace localizer::gpu {
+
+// One (frame, pair) of a batch: what its session's plan says about that pair.
+struct GccPairTask {
+  int32_t ref_row = 0;         // spectrum row of the frame's reference channel
+  int32_t sensor_row = 0;      // spectrum row of the pair's other channel
+  int32_t weighting = 0;       // gcc::WeightingCode
+  float beta = 0.0f;           // PHAT-beta exponent
+  int32_t band_first_bin = 0;  // bins [band_first_bin, band_end_bin) are weighed; others 0
+  int32_t band_end_bin = 0;
+  int32_t max_lag = 0;         // L_p: lags -L_p..L_p are searched
+  int32_t interpolation = 0;   // gcc::InterpolationCode
+  int64_t gcc_offset = -1;     // first float of the pair's window in the gcc output; -1: none
+};
+
+// What the kernels found for one (frame, pair). delay in samples = peak_lag + offset_samples.
+struct GccPairResult {
+  double offset_samples = 0.0;  // sub-sample refinement, [-1, 1]
+  double energy_ref = 0.0;      // sum of squares of the two channels (non-finite: NaN/Inf input)
+  double energy_sensor = 0.0;
+  float norm = 0.0f;            // S, sum of |G| over the full spectrum; <= 0: nothing measured
+  float peak_value = 0.0f;      // R at the integer peak
+  float quality = 0.0f;         // peak over largest sidelobe (gcc_phat.h), capped at 1e9
+  int32_t peak_lag = 0;         // integer lag of the peak, samples
+};
+
+// rows = padded_frames * channels rows of fft_size floats: row r < live_rows gets frame row
+// r (frame_samples floats) then zeros; rows >= live_rows get zeros. energy[r] = sum of
+// squares of row r in double, by a fixed-order block reduction.
+struct GccPackArgs {
+  const float* frames = nullptr;  // live_rows * frame_samples
+  float* signal = nullptr;        // rows * fft_size
+  double* energy = nullptr;       // rows
+  int live_rows = 0;
+  int rows = 0;
+  int frame_samples = 0;
+  int fft_size = 0;
+};
+Status LaunchGccPack(const GccPackArgs& args, cudaStream_t stream);
+
+// Per task t: cross row t = G over bins 0..N/2 (zero outside the band), results[t].norm = S,
+// results[t].energy_* from energy[]. One block per task.
+struct GccWeighArgs {
+  const GccPairTask* tasks = nullptr;  // task_count
+  const float* spectra = nullptr;      // interleaved, (N/2 + 1) complex per row
+  const double* energy = nullptr;      // per spectrum row
+  float* cross = nullptr;              // interleaved, (N/2 + 1) complex per task
+  GccPairResult* results = nullptr;    // task_count
+  int task_count = 0;
+  int fft_size = 0;
+};
+Status LaunchGccWeigh(const GccWeighArgs& args, cudaStream_t stream);
+
+// Per task t, from corr row t (the unnormalised C2R output, lag l at index l mod N) and
+// results[t].norm: the peak, its refinement, quality and peak value into results[t], and
+// R = corr / S at lags -L..L into gcc[tasks[t].gcc_offset ..] when that is >= 0. A task with
+// S <= 0 gets peak_lag 0, offset 0, peak 0, quality 0 and an all-zero window. One block per
+// task.
+struct GccPeakArgs {
+  const GccPairTask* tasks = nullptr;
+  const float* corr = nullptr;       // task_count rows of fft_size
+  GccPairResult* results = nullptr;  // norm in, the rest out
+  float* gcc = nullptr;              // windows of tasks with gcc_offset >= 0
+  int task_count = 0;
+  int fft_size = 0;
+};
+Status LaunchGccPeak(const GccPeakArgs& args, cudaStream_t stream);
+
+}  // namespace localizer::gpu

@@ -1,0 +1,348 @@
+// The batched GPU GCC-PHAT stage (gpu/tdoa/gcc_batch.h) against the CPU estimator
+// (engine::GccPhatEstimator) on the same simulated frames. Needs a device: every test skips
+// with the reason where there is none.
+//
+// Tolerances (the header's promise, with margin): delay within 1e-3 sample, quality, peak
+// value and peak SNR within 1e-3 relative, GCC windows within 1e-4 absolute. cuFFT and FFTW
+// round differently (~1e-6 relative); nothing else should differ.
+#include "gpu/tdoa/gcc_batch.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/sim/simulator.h"
+#include "engine/tdoa/gcc_phat.h"
+#include "tests/gpu/gpu_test_util.h"
+
+namespace localizer::gpu {
+namespace {
+
+using engine::GccOptions;
+using engine::Measurement;
+using engine::PeakInterpolation;
+using engine::Weighting;
+
+constexpr int kFrameSamples = 4096;
+
+// A session: its array and options, the CPU estimator, the GPU plan, and a simulated
+// recording to cut frames from.
+struct Session {
+  Session(const engine::Scenario& scenario, const GccOptions& gcc_options, double duration_s)
+      : array(*engine::ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps)),
+        options(gcc_options),
+        plan(*GccPlan::Create(array, options)) {
+    auto made = engine::GccPhatEstimator::Create(array, options);
+    EXPECT_TRUE(made.ok()) << made.status().ToString();
+    if (made.ok()) cpu = std::move(*made);
+    engine::SimOptions sim_options = scenario.sim;
+    sim_options.duration_s = duration_s;
+    auto simulated = engine::Simulate(array, sim_options);
+    EXPECT_TRUE(simulated.ok()) << simulated.status().ToString();
+    if (simulated.ok()) recording = std::move(*simulated);
+  }
+
+  // Channel-major frame of kFrameSamples starting at sample `start` of every channel.
+  std::vector<float> Frame(int64_t start) const {
+    std::vector<float> frame(static_cast<std::size_t>(recording.channel_count) * kFrameSamples);
+    for (int c = 0; c < recording.channel_count; ++c) {
+      const float* channel = recording.samples.data() + c * recording.samples_per_channel + start;
+      std::copy(channel, channel + kFrameSamples, frame.begin() + static_cast<std::ptrdiff_t>(c) * kFrameSamples);
+    }
+    return frame;
+  }
+  int64_t last_start() const { return recording.samples_per_channel - kFrameSamples; }
+
+  engine::ArrayGeometry array;
+  GccOptions options;
+  GccPlan plan;
+  std::unique_ptr<engine::GccPhatEstimator> cpu;
+  engine::SimResult recording;
+};
+
+GccOptions Options(double sample_rate_hz, Weighting weighting, PeakInterpolation interpolation,
+                   double band_low_hz, double band_high_hz, bool keep_gcc = true) {
+  GccOptions o;
+  o.frame_samples = kFrameSamples;
+  o.sample_rate_hz = sample_rate_hz;
+  o.weighting = weighting;
+  o.interpolation = interpolation;
+  o.band_low_hz = band_low_hz;
+  o.band_high_hz = band_high_hz;
+  o.keep_gcc = keep_gcc;
+  return o;
+}
+
+std::unique_ptr<Session> MakeSession(const std::string& scenario_name, const GccOptions& options,
+                                     double duration_s = 1.0) {
+  auto scenario = engine::MakeScenario(scenario_name, 3);
+  EXPECT_TRUE(scenario.ok());
+  GccOptions o = options;
+  o.sample_rate_hz = scenario->sim.sample_rate_hz;
+  return std::make_unique<Session>(*scenario, o, duration_s);
+}
+
+// One frame to measure, with what the CPU makes of it.
+struct Item {
+  const Session* session;
+  std::vector<float> frame;
+  double t_s;
+  Measurement cpu;
+};
+
+Item MakeItem(Session& session, int64_t start) {
+  Item item{&session, session.Frame(start), static_cast<double>(start + kFrameSamples / 2) / session.options.sample_rate_hz, {}};
+  EXPECT_TRUE(session.cpu->Estimate(item.frame.data(), kFrameSamples, item.t_s, &item.cpu).ok());
+  return item;
+}
+
+// `count` frames of `session`, spread over its recording.
+std::vector<Item> SpreadItems(Session& session, int count) {
+  std::vector<Item> items;
+  for (int i = 0; i < count; ++i) items.push_back(MakeItem(session, session.last_start() * i / std::max(1, count - 1)));
+  return items;
+}
+
+std::vector<Measurement> RunOnGpu(GccBatch& batch, const std::vector<Item>& items) {
+  std::vector<Measurement> out(items.size());
+  std::vector<GccJob> jobs;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    jobs.push_back({&items[i].session->plan, items[i].frame.data(), items[i].t_s, &out[i]});
+  }
+  const Status status = batch.Run(jobs);
+  EXPECT_TRUE(status.ok()) << status.ToString();
+  return out;
+}
+
+double Relative(double a, double b) { return std::abs(a - b) / std::max({std::abs(a), std::abs(b), 1e-12}); }
+
+void ExpectMatchesCpu(const Measurement& gpu, const Measurement& cpu) {
+  EXPECT_EQ(gpu.t_s, cpu.t_s);
+  EXPECT_EQ(gpu.sample_rate_hz, cpu.sample_rate_hz);
+  ASSERT_EQ(gpu.pairs.size(), cpu.pairs.size());
+  const double fs = cpu.sample_rate_hz;
+  for (std::size_t p = 0; p < cpu.pairs.size(); ++p) {
+    SCOPED_TRACE("pair " + std::to_string(p));
+    const engine::PairMeasurement& g = gpu.pairs[p];
+    const engine::PairMeasurement& c = cpu.pairs[p];
+    EXPECT_EQ(g.sensor, c.sensor);
+    EXPECT_EQ(g.first_lag_samples, c.first_lag_samples);
+    EXPECT_NEAR(g.delay_s * fs, c.delay_s * fs, 1e-3);
+    EXPECT_LE(Relative(g.quality, c.quality), 1e-3) << g.quality << " vs " << c.quality;
+    EXPECT_LE(Relative(g.peak_value, c.peak_value), 1e-3) << g.peak_value << " vs " << c.peak_value;
+    EXPECT_LE(Relative(g.peak_snr, c.peak_snr), 1e-3);
+    ASSERT_EQ(g.gcc.size(), c.gcc.size());
+    float worst = 0.0f;
+    for (std::size_t i = 0; i < c.gcc.size(); ++i) worst = std::max(worst, std::abs(g.gcc[i] - c.gcc[i]));
+    EXPECT_LE(worst, 1e-4f);
+  }
+}
+
+void ExpectAllMatchCpu(const std::vector<Measurement>& gpu, const std::vector<Item>& items) {
+  ASSERT_EQ(gpu.size(), items.size());
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    SCOPED_TRACE("job " + std::to_string(i));
+    ExpectMatchesCpu(gpu[i], items[i].cpu);
+  }
+}
+
+void ExpectIdentical(const Measurement& a, const Measurement& b) {
+  EXPECT_EQ(a.t_s, b.t_s);
+  ASSERT_EQ(a.pairs.size(), b.pairs.size());
+  for (std::size_t p = 0; p < a.pairs.size(); ++p) {
+    EXPECT_EQ(a.pairs[p].delay_s, b.pairs[p].delay_s);
+    EXPECT_EQ(a.pairs[p].quality, b.pairs[p].quality);
+    EXPECT_EQ(a.pairs[p].peak_value, b.pairs[p].peak_value);
+    EXPECT_EQ(a.pairs[p].peak_snr, b.pairs[p].peak_snr);
+    EXPECT_EQ(a.pairs[p].gcc, b.pairs[p].gcc);
+  }
+}
+
+std::unique_ptr<GccBatch> MakeBatch(const GccPlan& plan, int max_frames, bool timing = false) {
+  auto batch = GccBatch::Create(plan.key(), max_frames, timing);
+  EXPECT_TRUE(batch.ok()) << batch.status().ToString();
+  return batch.ok() ? std::move(*batch) : nullptr;
+}
+
+TEST(GccBatch, SessionsWithDifferentArraysAndOptionsShareOneBatch) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  // tetra-water (11025 Hz, 2 m) and tetra-air (48 kHz, 0.5 m): both N = 5120, 4 channels.
+  std::vector<std::unique_ptr<Session>> sessions;
+  sessions.push_back(MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000)));
+  sessions.push_back(MakeSession("tetra-water", Options(0, Weighting::kScot, PeakInterpolation::kParabolic, 0, 0, false)));
+  sessions.push_back(MakeSession("tetra-air", Options(0, Weighting::kPhatBeta, PeakInterpolation::kGaussian, 300, 8000)));
+  sessions.push_back(MakeSession("tetra-air", Options(0, Weighting::kCc, PeakInterpolation::kSinc, 0, 0)));
+  GccOptions wide_margin = Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000);
+  wide_margin.lag_margin_samples = 40;
+  sessions.push_back(MakeSession("tetra-water", wide_margin));
+  for (const auto& s : sessions) ASSERT_EQ(s->plan.key(), sessions[0]->plan.key()) << s->plan.key().ToString();
+
+  std::vector<Item> items;
+  for (int round = 0; round < 3; ++round) {  // interleaved, as a dispatcher would collect them
+    for (auto& s : sessions) items.push_back(MakeItem(*s, (round + 1) * s->last_start() / 4));
+  }
+  auto batch = MakeBatch(sessions[0]->plan, 16);
+  ASSERT_NE(batch, nullptr);
+  ExpectAllMatchCpu(RunOnGpu(*batch, items), items);
+}
+
+TEST(GccBatch, BatchesOfOneSevenAndSixtyFourMatchTheCpu) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  auto session = MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000));
+  auto batch = MakeBatch(session->plan, 64);
+  ASSERT_NE(batch, nullptr);
+  for (int count : {1, 7, 64}) {
+    SCOPED_TRACE("batch of " + std::to_string(count));
+    const std::vector<Item> items = SpreadItems(*session, count);
+    ExpectAllMatchCpu(RunOnGpu(*batch, items), items);
+  }
+}
+
+TEST(GccBatch, FullBatchOfACapacityThatIsNotAPowerOfTwo) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  auto session = MakeSession("tetra-air", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 8000));
+  auto batch = MakeBatch(session->plan, 20);
+  ASSERT_NE(batch, nullptr);
+  EXPECT_EQ(batch->max_frames(), 20);
+  for (int count : {20, 17, 9, 20}) {  // buckets 20, 20, 16, then 20 again from the cache
+    SCOPED_TRACE("batch of " + std::to_string(count));
+    const std::vector<Item> items = SpreadItems(*session, count);
+    ExpectAllMatchCpu(RunOnGpu(*batch, items), items);
+  }
+}
+
+TEST(GccBatch, EightChannelArray) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  auto session = MakeSession("turn-multipath", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000));
+  EXPECT_EQ(session->plan.key().channels, 8);
+  auto batch = MakeBatch(session->plan, 8);
+  ASSERT_NE(batch, nullptr);
+  const std::vector<Item> items = SpreadItems(*session, 5);
+  ExpectAllMatchCpu(RunOnGpu(*batch, items), items);
+}
+
+TEST(GccBatch, SilentFrameGivesZeroesLikeTheCpu) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  auto session = MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000));
+  std::vector<Item> items = SpreadItems(*session, 3);
+  items[1].frame.assign(items[1].frame.size(), 0.0f);
+  ASSERT_TRUE(session->cpu->Estimate(items[1].frame.data(), kFrameSamples, items[1].t_s, &items[1].cpu).ok());
+  auto batch = MakeBatch(session->plan, 4);
+  ASSERT_NE(batch, nullptr);
+  const std::vector<Measurement> gpu = RunOnGpu(*batch, items);
+  ExpectAllMatchCpu(gpu, items);
+  for (const engine::PairMeasurement& pair : gpu[1].pairs) {
+    EXPECT_EQ(pair.delay_s, 0.0);
+    EXPECT_EQ(pair.quality, 0.0);
+    EXPECT_EQ(pair.peak_value, 0.0);
+    EXPECT_EQ(pair.peak_snr, 0.0);
+    EXPECT_TRUE(std::all_of(pair.gcc.begin(), pair.gcc.end(), [](float v) { return v == 0.0f; }));
+  }
+}
+
+TEST(GccBatch, SameInputGivesBitIdenticalOutput) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  auto session = MakeSession("tetra-water", Options(0, Weighting::kPhatBeta, PeakInterpolation::kSinc, 300, 3000));
+  auto batch = MakeBatch(session->plan, 16);
+  ASSERT_NE(batch, nullptr);
+  std::vector<Item> items = SpreadItems(*session, 6);
+  items.push_back(items[0]);  // the same frame again in another slot of the same batch
+  const std::vector<Measurement> first = RunOnGpu(*batch, items);
+  const std::vector<Measurement> second = RunOnGpu(*batch, items);
+  for (std::size_t i = 0; i < items.size(); ++i) ExpectIdentical(first[i], second[i]);
+  ExpectIdentical(first[0], first.back());
+}
+
+TEST(GccBatch, ResultsDoNotDependOnTheBatchBucket) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  // gpu_backend.h promises that a frame's result does not depend on which other frames share
+  // its batch. Within one cuFFT plan rows are independent; across buckets (other plans of the
+  // same N, other batch counts) this checks that cuFFT computes each row the same way.
+  auto session = MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000));
+  auto batch = MakeBatch(session->plan, 64);
+  ASSERT_NE(batch, nullptr);
+  const std::vector<Item> items = SpreadItems(*session, 40);
+  const std::vector<Measurement> together = RunOnGpu(*batch, items);  // bucket 64
+  for (int count : {1, 2, 5, 16}) {                                   // buckets 1, 2, 8, 16
+    SCOPED_TRACE("batch of " + std::to_string(count));
+    const std::vector<Item> few(items.begin(), items.begin() + count);
+    const std::vector<Measurement> apart = RunOnGpu(*batch, few);
+    for (int i = 0; i < count; ++i) ExpectIdentical(together[i], apart[i]);
+  }
+}
+
+TEST(GccBatch, NonFiniteSampleFailsOnlyItsJob) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  auto session = MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000));
+  std::vector<Item> items = SpreadItems(*session, 3);
+  items[1].frame[2 * kFrameSamples + 100] = std::numeric_limits<float>::quiet_NaN();  // channel 2
+  auto batch = MakeBatch(session->plan, 4);
+  ASSERT_NE(batch, nullptr);
+
+  std::vector<Measurement> out(3);
+  out[1].t_s = -7.0;  // must stay untouched
+  std::vector<Status> statuses(3);
+  std::vector<GccJob> jobs;
+  for (int i = 0; i < 3; ++i) jobs.push_back({&session->plan, items[i].frame.data(), items[i].t_s, &out[i], &statuses[i]});
+  ASSERT_TRUE(batch->Run(jobs).ok());
+  EXPECT_TRUE(statuses[0].ok());
+  EXPECT_TRUE(statuses[2].ok());
+  EXPECT_EQ(statuses[1].code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(statuses[1].message().find("channel 2"), std::string::npos) << statuses[1].message();
+  EXPECT_EQ(out[1].t_s, -7.0);
+  EXPECT_TRUE(out[1].pairs.empty());
+  ExpectMatchesCpu(out[0], items[0].cpu);
+  ExpectMatchesCpu(out[2], items[2].cpu);
+
+  // Without status pointers the batch reports the job and still fills the others.
+  for (GccJob& job : jobs) job.status = nullptr;
+  out.assign(3, Measurement{});
+  const Status status = batch->Run(jobs);
+  EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(status.message().find("job 1: channel 2"), std::string::npos) << status.message();
+  ExpectMatchesCpu(out[2], items[2].cpu);
+}
+
+TEST(GccBatch, MalformedJobListsAreRejectedBeforeAnyWork) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  auto water = MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000));
+  GccOptions short_frames = Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000);
+  short_frames.frame_samples = 1024;
+  auto other_key = MakeSession("tetra-water", short_frames);
+  auto batch = MakeBatch(water->plan, 2);
+  ASSERT_NE(batch, nullptr);
+  const std::vector<float> frame = water->Frame(0);
+  Measurement m;
+  EXPECT_EQ(batch->Run({}).code(), StatusCode::kInvalidArgument);
+  const GccJob good{&water->plan, frame.data(), 0.0, &m};
+  const std::vector<GccJob> too_many(3, good);
+  EXPECT_EQ(batch->Run(too_many).code(), StatusCode::kInvalidArgument);
+  const GccJob null_out{&water->plan, frame.data(), 0.0, nullptr};
+  EXPECT_EQ(batch->Run({&null_out, 1}).code(), StatusCode::kInvalidArgument);
+  const GccJob wrong_key{&other_key->plan, frame.data(), 0.0, &m};
+  const Status status = batch->Run({&wrong_key, 1});
+  EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(status.message().find("frame_samples=1024"), std::string::npos) << status.message();
+  EXPECT_TRUE(m.pairs.empty());
+}
+
+TEST(GccBatch, TimingIsRecordedWhenAskedFor) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  auto session = MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000));
+  auto batch = MakeBatch(session->plan, 8, /*timing=*/true);
+  ASSERT_NE(batch, nullptr);
+  const std::vector<Item> items = SpreadItems(*session, 8);
+  RunOnGpu(*batch, items);
+  const GccBatch::Timing t = batch->last_timing();
+  EXPECT_GT(t.fft_ms, 0.0f);
+  EXPECT_GE(t.device_ms, t.fft_ms);
+  EXPECT_GE(t.total_ms, t.device_ms);
+}
+
+}  // namespace
+}  // namespace localizer::gpu
