@@ -59,6 +59,11 @@ int Main(int argc, char** argv) {
   flags.String("ready-file", &o.ready_file, "PATH",
                "once serving, write {\"grpc_port\", \"metrics_port\", \"pid\"} as JSON here (atomically)");
   flags.String("log-level", &o.log_level, "LEVEL", "debug | info | warn | error (logfmt lines on stderr)");
+  flags.Double("gpu-batch-window-ms", &o.gpu_batch_window_ms, "MS", "ms",
+               "GPU: longest a frame waits for other sessions' frames before a batch launches");
+  flags.Int("gpu-max-batch", &o.gpu_max_batch, "N", "frames", "GPU: a batch launches as soon as this many wait");
+  flags.Int("gpu-bank-mib", &o.gpu_bank_mib, "N", "MiB",
+            "GPU: device memory for particles (0: 3/4 of free); a session beyond it gets RESOURCE_EXHAUSTED");
   flags.Bool("version", &version, "print the version and exit");
   const Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
   if (flags.help_requested()) {
@@ -77,9 +82,6 @@ int Main(int argc, char** argv) {
   if (const Status valid = o.Validate(); !valid.ok()) {
     std::cerr << "localizer-server: " << valid.message() << "\n";
     return 2;
-  }
-  if (o.backend == "gpu" && !engine::GpuUnavailableReason().empty()) {
-    LogEvent("warn", "gpu_unavailable", {{"reason", engine::GpuUnavailableReason()}});
   }
 
   // Signals are taken by sigwait on this thread; every thread started later inherits the mask.
@@ -105,6 +107,7 @@ int Main(int argc, char** argv) {
   sigwait(&stop_signals, &signal_number);
   LogEvent("info", "signal", {{"signal", signal_number == SIGTERM ? "SIGTERM" : "SIGINT"}});
   (*server)->Shutdown();
+  engine::SetGpuProvider(nullptr);  // stop the GPU dispatchers before static destruction
   return 0;
 }
 

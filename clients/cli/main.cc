@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "clients/cli/commands.h"
+#include "engine/pipeline/backend.h"
+#include "gpu/backend/gpu_backend.h"
 
 namespace localizer::cli {
 namespace {
@@ -89,7 +91,14 @@ int Main(int argc, char** argv) {
   }
   const Command* command = FindCommand(name);
   if (command == nullptr) return UnknownCommand(name);
-  return command->run(std::vector<std::string>(argv + 2, argv + argc));
+  // Local sessions (--backend gpu|auto without --server) use the GPU when there is one.
+  if (const Status gpu = gpu::RegisterGpuBackend(); !gpu.ok()) {
+    std::cerr << "localizer-cli: " << gpu.message() << "\n";
+    return kExitRuntimeError;
+  }
+  const int code = command->run(std::vector<std::string>(argv + 2, argv + argc));
+  engine::SetGpuProvider(nullptr);  // stop the GPU dispatchers before static destruction
+  return code;
 }
 
 }  // namespace

@@ -5,10 +5,44 @@
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 
+#include "engine/pipeline/backend.h"
+#include "gpu/backend/gpu_backend.h"
 #include "server/service/log.h"
 #include "server/service/version.h"
 
 namespace localizer::server {
+namespace {
+
+// localizer_gpu_batches_total{stage} and localizer_gpu_batched_total{stage}, read from the
+// GPU dispatchers at each scrape (zero without GPU sessions).
+Status AddGpuBatchMetrics(metrics::Registry* registry) {
+  auto batches = registry->AddCounter("localizer_gpu_batches_total",
+                                      "GPU launch sequences run, by stage (gcc, filter).", {"stage"});
+  if (!batches.ok()) return batches.status();
+  auto batched = registry->AddCounter(
+      "localizer_gpu_batched_total",
+      "Frames (stage gcc) or filter steps (stage filter) run in GPU batches; divided by "
+      "localizer_gpu_batches_total it is the mean batch size.",
+      {"stage"});
+  if (!batched.ok()) return batched.status();
+  std::vector<metrics::Counter*> series;
+  for (auto* family : {*batches, *batched}) {
+    for (const char* stage : {"gcc", "filter"}) {
+      auto one = family->WithLabels({stage});
+      if (!one.ok()) return one.status();
+      series.push_back(*one);
+    }
+  }
+  registry->AddCollector([series] {
+    const gpu::GpuBatchCounts c = gpu::BatchCounts();
+    const double now[] = {static_cast<double>(c.gcc_batches), static_cast<double>(c.filter_batches),
+                          static_cast<double>(c.gcc_frames), static_cast<double>(c.filter_steps)};
+    for (size_t i = 0; i < series.size(); ++i) series[i]->Increment(now[i] - series[i]->value());
+  });
+  return Status::Ok();
+}
+
+}  // namespace
 
 Server::Server(const ServerOptions& options) : options_(options) {}
 
@@ -19,8 +53,19 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   auto metrics = ServiceMetrics::Create(&s->registry_, options.backend);
   if (!metrics.ok()) return metrics.status();
   s->metrics_ = std::move(metrics).value();
-  const int workers =
-      options.workers > 0 ? options.workers : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  gpu::GpuBackendOptions gpu_options;
+  gpu_options.batch_window_s = options.gpu_batch_window_ms * 1e-3;
+  gpu_options.max_batch_frames = options.gpu_max_batch;
+  gpu_options.bank_limit_bytes = static_cast<std::size_t>(options.gpu_bank_mib) << 20;
+  LOCALIZER_RETURN_IF_ERROR(gpu::RegisterGpuBackend(gpu_options));
+  const std::string gpu_reason = engine::GpuUnavailableReason();
+  const bool gpu_sessions = gpu_reason.empty() && options.backend != "cpu";
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // GPU sessions block their worker while their frame waits in a batch: one worker per
+  // session keeps every session's frame in the next batch.
+  const int workers = options.workers > 0 ? options.workers
+                      : gpu_sessions      ? std::max(cores, std::min(1024, options.max_sessions))
+                                          : cores;
   s->pool_ = std::make_unique<WorkerPool>(workers);
 
   RegistryOptions registry_options;
@@ -46,6 +91,11 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
     m->attached->Set(static_cast<double>(attached));
     m->detached->Set(static_cast<double>(total - attached));
   });
+
+  LOCALIZER_RETURN_IF_ERROR(AddGpuBatchMetrics(&s->registry_));
+  if (options.backend == "gpu" && !gpu_reason.empty()) {
+    LogEvent("warn", "gpu_unavailable", {{"reason", gpu_reason}});
+  }
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -74,7 +124,8 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   LogEvent("info", "server_start",
            {{"version", kLocalizerVersion}, {"grpc_port", std::to_string(s->grpc_port_)},
             {"metrics_port", std::to_string(s->metrics_port())}, {"workers", std::to_string(workers)},
-            {"backend", options.backend}, {"max_sessions", std::to_string(options.max_sessions)}});
+            {"backend", options.backend}, {"max_sessions", std::to_string(options.max_sessions)},
+            {"gpu", gpu_reason.empty() ? gpu::DeviceName() : "none: " + gpu_reason}});
   return s;
 }
 

@@ -19,6 +19,11 @@ Status ServerOptions::Validate() const {
   if (log_level != "debug" && log_level != "info" && log_level != "warn" && log_level != "error") {
     return InvalidArgument("log_level '" + log_level + "' is not one of: debug, info, warn, error");
   }
+  if (!(gpu_batch_window_ms >= 0.0 && gpu_batch_window_ms <= 1000.0)) {
+    return InvalidArgument("gpu_batch_window_ms must be in [0, 1000]");
+  }
+  if (gpu_max_batch < 1 || gpu_max_batch > 65536) return InvalidArgument("gpu_max_batch must be in [1, 65536]");
+  if (gpu_bank_mib < 0) return InvalidArgument("gpu_bank_mib must be >= 0 (0: 3/4 of free device memory)");
   return Status::Ok();
 }
 

@@ -15,6 +15,8 @@ struct ServerOptions {
   std::string backend = "auto";                    // default for sessions that leave it ""
   int max_sessions = 1024;                         // open sessions (attached or detached)
   int workers = 0;                                 // engine threads; 0: one per core
+                                                   // (with a GPU: one per session up
+                                                   // to 1024, as they wait on batches)
   double session_ttl_s = 60.0;                     // a detached session waits this long
   int max_queue_blocks = 8;                        // blocks queued per session before
                                                    // reading pauses (backpressure)
@@ -26,6 +28,10 @@ struct ServerOptions {
   double drain_timeout_s = 10.0;                   // SIGTERM: time to finish in-flight work
   std::string ready_file;                          // written once serving: JSON with ports
   std::string log_level = "info";                  // debug | info | warn | error
+  // GPU backend (gpu/backend/gpu_backend.h); ignored without a device.
+  double gpu_batch_window_ms = 1.0;                // longest a frame waits for others
+  int gpu_max_batch = 1024;                        // frames (or filter steps) per launch
+  int gpu_bank_mib = 0;                            // particle memory; 0: 3/4 of free
 
   Status Validate() const;  // INVALID_ARGUMENT naming the field
 };

@@ -26,13 +26,15 @@ inline SessionConfig SessionConfigFor(const Scenario& scenario) {
   return config;
 }
 
-inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelihood likelihood) {
+inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelihood likelihood,
+                                 const std::string& backend = "cpu") {
   const Scenario scenario = *MakeScenario(name, seed);
   const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
   const SimResult sim = *Simulate(array, scenario.sim);
   SessionConfig config = SessionConfigFor(scenario);
   config.filter.likelihood = likelihood;
   config.seed = seed;
+  config.backend = backend;
   auto session = std::move(*Session::Create(config));
   ScenarioRun run;
   (void)session->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &run.estimates);

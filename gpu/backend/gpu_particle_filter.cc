@@ -1,0 +1,93 @@
+#include "gpu/backend/gpu_particle_filter.h"
+
+#include <string>
+
+namespace localizer::gpu {
+
+StatusOr<std::unique_ptr<GpuParticleFilter>> GpuParticleFilter::Create(std::shared_ptr<GpuRuntime> runtime,
+                                                                       const engine::ArrayGeometry& array,
+                                                                       const engine::ParticleFilterOptions& options) {
+  LOCALIZER_RETURN_IF_ERROR(options.Validate());
+  auto slot = runtime->bank().Open(array, options);
+  if (!slot.ok()) return slot.status();
+  return std::unique_ptr<GpuParticleFilter>(
+      new GpuParticleFilter(std::move(runtime), *slot, array.pair_count(), options));
+}
+
+GpuParticleFilter::~GpuParticleFilter() { runtime_->bank().Close(slot_); }
+
+Status GpuParticleFilter::RefreshMoments() {
+  auto moments = runtime_->bank().Moments(slot_);
+  if (!moments.ok()) return moments.status();
+  state_ = *moments;
+  pending_dt_s_ = 0.0;
+  initialised_ = true;
+  ess_ = options_.particles;
+  return Status::Ok();
+}
+
+Status GpuParticleFilter::Initialise(const engine::TrackState& belief) {
+  const auto root = engine::BeliefRoot(belief);
+  if (!root.ok()) return root.status();
+  LOCALIZER_RETURN_IF_ERROR(runtime_->bank().InitialiseGaussian(slot_, belief.mean, *root));
+  return RefreshMoments();
+}
+
+Status GpuParticleFilter::InitialiseRegion(const engine::Vec3& min_m, const engine::Vec3& max_m,
+                                           double speed_sigma_mps) {
+  LOCALIZER_RETURN_IF_ERROR(engine::ValidateRegion(min_m, max_m, speed_sigma_mps));
+  LOCALIZER_RETURN_IF_ERROR(runtime_->bank().InitialiseRegion(slot_, min_m, max_m, speed_sigma_mps));
+  return RefreshMoments();
+}
+
+void GpuParticleFilter::Predict(double dt_s) {
+  if (initialised_ && dt_s > 0.0) pending_dt_s_ += dt_s;
+}
+
+Status GpuParticleFilter::Step(const engine::Measurement* measurement, ParticleBank::StepResult* result) const {
+  FilterQueueJob job;
+  job.request.slot = slot_;
+  job.request.dt_s = pending_dt_s_;
+  job.request.measurement = measurement;
+  job.request.used = noise_.used().data();
+  job.request.sigmas_s = noise_.sigmas_s().data();
+  runtime_->StepFilter(&job);
+  if (!job.result.status.ok()) return job.result.status;
+  pending_dt_s_ = 0.0;
+  state_ = job.result.state;
+  *result = std::move(job.result);
+  return Status::Ok();
+}
+
+StatusOr<engine::UpdateReport> GpuParticleFilter::Update(const engine::Measurement& m) {
+  if (!initialised_) return FailedPrecondition("particle filter updated before initialisation");
+  if (static_cast<int>(m.pairs.size()) != pairs_) {
+    return InvalidArgument("measurement has " + std::to_string(m.pairs.size()) + " pairs; the array has " +
+                           std::to_string(pairs_));
+  }
+  if (!(m.sample_rate_hz > 0.0)) return InvalidArgument("measurement sample_rate_hz must be > 0");
+  engine::UpdateReport report;
+  report.pair_count = noise_.Select(m, options_.min_peak_snr);
+  ParticleBank::StepResult result;
+  LOCALIZER_RETURN_IF_ERROR(Step(report.pair_count > 0 ? &m : nullptr, &result));
+  if (report.pair_count == 0) {  // predicted only: nothing to condition on
+    report.ess = ess_;
+    report.tdoa_sigma_s = noise_.rms_sigma_s();
+    return report;
+  }
+  noise_.Finish(result.innovations, m.sample_rate_hz, &report);
+  ess_ = result.ess;
+  report.ess = ess_;
+  return report;
+}
+
+engine::TrackState GpuParticleFilter::State() const {
+  if (initialised_ && pending_dt_s_ > 0.0) {
+    ParticleBank::StepResult result;
+    // On a device error the last state stands; the next Update reports the error.
+    (void)Step(nullptr, &result);
+  }
+  return state_;
+}
+
+}  // namespace localizer::gpu

@@ -1,0 +1,54 @@
+// engine::Tracker on the GPU: the CPU particle filter's algorithm (particle_filter.h) with
+// its particles resident in the shared device bank between frames (one slot per session).
+// Predict only records the time step; Update sends the step (predict, likelihood, weights,
+// resampling) through the shared filter dispatcher, so many sessions' updates run as one
+// launch sequence; State() returns the weighted moments the last step brought back (a
+// Predict not yet followed by an Update is applied first). Pair selection, the adaptive
+// TDOA noise and the NIS are the CPU filter's (engine/filters/pair_noise.h).
+// Internal to gpu/backend.
+#pragma once
+
+#include <memory>
+
+#include "engine/array/array_geometry.h"
+#include "engine/filters/pair_noise.h"
+#include "engine/filters/particle_filter.h"
+#include "gpu/backend/gpu_runtime.h"
+
+namespace localizer::gpu {
+
+class GpuParticleFilter final : public engine::Tracker {
+ public:
+  // INVALID_ARGUMENT as ParticleFilter::Create; RESOURCE_EXHAUSTED when the bank is full.
+  static StatusOr<std::unique_ptr<GpuParticleFilter>> Create(std::shared_ptr<GpuRuntime> runtime,
+                                                             const engine::ArrayGeometry& array,
+                                                             const engine::ParticleFilterOptions& options);
+  ~GpuParticleFilter() override;  // frees the slot
+
+  bool initialised() const override { return initialised_; }
+  Status Initialise(const engine::TrackState& belief) override;
+  Status InitialiseRegion(const engine::Vec3& min_m, const engine::Vec3& max_m, double speed_sigma_mps) override;
+  void Predict(double dt_s) override;
+  StatusOr<engine::UpdateReport> Update(const engine::Measurement& measurement) override;
+  engine::TrackState State() const override;
+
+ private:
+  GpuParticleFilter(std::shared_ptr<GpuRuntime> runtime, int slot, int pairs, const engine::ParticleFilterOptions& o)
+      : runtime_(std::move(runtime)), slot_(slot), pairs_(pairs), options_(o), noise_(o.tdoa_sigma_s) {}
+  // Runs one step through the dispatcher (measurement nullptr: predict only).
+  Status Step(const engine::Measurement* measurement, ParticleBank::StepResult* result) const;
+  Status RefreshMoments();
+
+  std::shared_ptr<GpuRuntime> runtime_;
+  int slot_;
+  int pairs_;
+  engine::ParticleFilterOptions options_;
+  engine::PairNoise noise_;
+  bool initialised_ = false;
+  double ess_ = 0.0;
+  // State() is const in the interface but may have to apply a pending prediction.
+  mutable double pending_dt_s_ = 0.0;
+  mutable engine::TrackState state_;
+};
+
+}  // namespace localizer::gpu

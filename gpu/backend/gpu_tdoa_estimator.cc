@@ -1,0 +1,31 @@
+#include "gpu/backend/gpu_tdoa_estimator.h"
+
+#include <string>
+
+namespace localizer::gpu {
+
+StatusOr<std::unique_ptr<GpuTdoaEstimator>> GpuTdoaEstimator::Create(std::shared_ptr<GpuRuntime> runtime,
+                                                                     const engine::ArrayGeometry& array,
+                                                                     const engine::GccOptions& options) {
+  auto plan = GccPlan::Create(array, options);
+  if (!plan.ok()) return plan.status();
+  std::unique_ptr<GpuTdoaEstimator> estimator(
+      new GpuTdoaEstimator(std::move(runtime), std::move(plan).value()));
+  estimator->frame_samples_ = options.frame_samples;
+  return estimator;
+}
+
+Status GpuTdoaEstimator::Estimate(const float* frame, int frame_samples, double t_s, engine::Measurement* out) {
+  if (frame == nullptr) return InvalidArgument("frame is null");
+  if (out == nullptr) return InvalidArgument("out (the Measurement to fill) is null");
+  if (frame_samples != frame_samples_) {
+    return InvalidArgument("frame_samples is " + std::to_string(frame_samples) +
+                           "; the estimator was created for frame_samples = " + std::to_string(frame_samples_));
+  }
+  // Non-finite samples are found while the batch copies the frame (GccJob::status).
+  GccQueueJob job{GccJob{&plan_, frame, t_s, out}, Status::Ok()};
+  runtime_->RunGcc(&job);
+  return job.status;
+}
+
+}  // namespace localizer::gpu

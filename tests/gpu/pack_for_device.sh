@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Packs the GPU tests and benchmarks built here, with the Debian shared libraries they need,
+# into .device/ (git-ignored) for the `device` tool's lent GPU machine, whose image has the
+# CUDA toolkit and driver but none of our Debian packages (gRPC, FFTW, ...). CUDA's own
+# libraries (cudart, cuFFT, cuRAND) are left to the machine's toolkit.
+#
+#   cmake --build build --target gpu_backend_test gcc_batch_test particle_bank_test \
+#       gpu_gcc_bench gpu_pf_bench gpu_sessions_bench
+#   tests/gpu/pack_for_device.sh build
+# then on the device (carry [".device"]): bash .device/run.sh   (writes logs under $OUT)
+set -euo pipefail
+build=${1:-build}
+root=$(cd "$(dirname "$0")/../.." && pwd)
+out="$root/.device"
+grep -qx '/.device/' "$root/.git/info/exclude" 2>/dev/null || echo '/.device/' >>"$root/.git/info/exclude"
+rm -rf "$out" && mkdir -p "$out/bin" "$out/lib"
+for name in gpu_backend_test gcc_batch_test particle_bank_test gcc_math_test pf_math_test batch_queue_test \
+            gpu_gcc_bench gpu_pf_bench gpu_sessions_bench; do
+  for dir in "$build/tests" "$build/tests/bench"; do
+    [[ -x "$dir/$name" ]] && cp "$dir/$name" "$out/bin/"
+  done
+done
+# Shared libraries from Debian's packages (not libc's, not CUDA's).
+for bin in "$out"/bin/*; do
+  ldd "$bin" | awk '/=> \// {print $3}'
+done | sort -u | grep -v -E '/(libc|libm|libpthread|libdl|librt|libgcc_s|libstdc\+\+|ld-linux)[.-]' |
+  grep -v -E 'libcuda|libcudart|libcufft|libcurand|libnvidia' | while read -r lib; do cp -L "$lib" "$out/lib/"; done
+cp "$root/tests/gpu/device_run.sh" "$out/run.sh"
+du -sh "$out"
