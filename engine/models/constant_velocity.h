@@ -11,6 +11,7 @@
 
 #include "engine/core/status.h"
 #include "engine/core/types.h"
+#include "engine/models/motion_model.h"
 
 namespace localizer::engine {
 
@@ -20,6 +21,20 @@ struct ConstantVelocity {
   Mat6 Transition(double dt_s) const;
   Mat6 ProcessNoise(double dt_s) const;
   Status Validate() const;
+};
+
+// The same model behind the MotionModel interface (state (p, v), 6 entries).
+class ConstantVelocityModel final : public MotionModel {
+ public:
+  explicit ConstantVelocityModel(double accel_noise_mps2) : cv_{accel_noise_mps2} {}
+  const char* name() const override { return "cv"; }
+  int state_dim() const override { return 6; }
+  Eigen::VectorXd Propagate(const Eigen::VectorXd& x, double dt_s) const override { return cv_.Transition(dt_s) * x; }
+  Eigen::MatrixXd Jacobian(const Eigen::VectorXd&, double dt_s) const override { return cv_.Transition(dt_s); }
+  Eigen::MatrixXd ProcessNoise(const Eigen::VectorXd&, double dt_s) const override { return cv_.ProcessNoise(dt_s); }
+
+ private:
+  ConstantVelocity cv_;
 };
 
 }  // namespace localizer::engine
