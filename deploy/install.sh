@@ -14,6 +14,7 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler  # service (server/, proto/)
   libcivetweb-dev        # /metrics HTTP endpoint (server/)
   python3-grpcio python3-grpc-tools python3-numpy  # Python client and load test (clients/)
+  python3-scipy          # Nolan's alpha-stable quantile table (tests/sim/alpha_stable_test)
   prometheus             # promtool checks the /metrics text in the tests (server/)
 )
 
