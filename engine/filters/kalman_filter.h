@@ -1,0 +1,73 @@
+// Extended and unscented Kalman filters on the TDOA measurement model, over any motion
+// model (engine/models/motion_model.h): Stone Soup's roles with one class per filter type
+// (the predictor and updater of each variant live in kalman_filter.cc).
+//
+// Measurement: for each pair k whose peak_snr >= min_peak_snr (engine/filters/pair_noise.h),
+// the TDOA at the instant the pair describes (d_k / 2 before the frame centre, as the
+// particle filter), to first order:
+//     h_k(x) = T_k(p) - (d_k / 2) grad T_k(p) . v,   T_k(p) = (|p - m_k| - |p - m_ref|) / c,
+// with noise R = diag(sigma_k^2), sigma_k fixed or adapted online as the particle filter's.
+//   EKF: H = [grad T_k, -(d_k / 2) grad T_k, 0] (the correction's own curvature neglected).
+//   UKF: 2n + 1 sigma points (Wan & van der Merwe's scaled set, alpha 1, beta 2, kappa 0:
+//        all weights non-negative, so P stays positive semi-definite), through both the
+//        motion model and h.
+// Update (both): innovation nu = z - h, S = H P H^T + R, gate: the update is skipped (and
+// UpdateReport.pair_count is 0) when nu^T S^-1 nu exceeds the chi-square quantile gate_p
+// with that many degrees of freedom; else K = P H^T S^-1 and, for the EKF, the Joseph form
+//     P <- (I - K H) P (I - K H)^T + K R K^T,
+// for the UKF P <- P - K S K^T; both then symmetrised, and an eigenvalue floor (1e-12 of the
+// largest) repairs a covariance that rounding pushed indefinite. nis = nu^T S^-1 nu.
+// Cost per update: a few microseconds (n <= 9 states, <= 15 pairs; BENCHMARKS.md).
+// Not thread-safe; one filter per session.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "engine/array/array_geometry.h"
+#include "engine/filters/pair_noise.h"
+#include "engine/filters/tracker.h"
+#include "engine/models/motion_model.h"
+
+namespace localizer::engine {
+
+enum class KalmanVariant { kExtended, kUnscented };
+
+struct KalmanOptions {
+  KalmanVariant variant = KalmanVariant::kExtended;
+  std::string motion_model = "cv";       // cv | ca | ct | singer
+  MotionModelOptions motion;             // its noise parameters
+  double tdoa_sigma_s = 0.0;             // TDOA noise std; 0: adaptive (pair_noise.h)
+  double min_peak_snr = 5.0;             // pairs below are left out
+  double gate_probability = 0.9999;      // chi-square gate on the whole innovation, in (0, 1]; 1: no gate
+  double extra_state_std = 1.0;          // initial std of the model's entries beyond (p, v):
+                                         // m/s^2 for acceleration, rad/s for the turn rate
+
+  Status Validate() const;  // INVALID_ARGUMENT naming the field
+};
+
+class KalmanFilter final : public Tracker {
+ public:
+  static StatusOr<std::unique_ptr<KalmanFilter>> Create(const ArrayGeometry& array, const KalmanOptions& options);
+  ~KalmanFilter() override;
+  KalmanFilter(const KalmanFilter&) = delete;
+  KalmanFilter& operator=(const KalmanFilter&) = delete;
+
+  bool initialised() const override;
+  Status Initialise(const TrackState& belief) override;
+  void Predict(double dt_s) override;
+  StatusOr<UpdateReport> Update(const Measurement& measurement) override;
+  TrackState State() const override;
+
+  // The full state and covariance (state_dim() entries: (p, v) then the model's extras).
+  const Eigen::VectorXd& mean() const;
+  const Eigen::MatrixXd& covariance() const;
+  int state_dim() const;
+
+ private:
+  struct Impl;
+  explicit KalmanFilter(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace localizer::engine
