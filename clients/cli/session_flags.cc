@@ -20,6 +20,10 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
   engine::SessionConfig& c = f->config;
   flags.Int("frame", &c.frame_samples, "N", "samples", "samples per channel per TDOA frame");
   flags.Int("hop", &c.hop_samples, "N", "samples", "samples between frame starts");
+  flags.String("filter", &c.filter_type, "NAME",
+               "tracker: pf (particle filter) | ekf (extended Kalman) | ukf (unscented Kalman)");
+  flags.String("motion-model", &c.motion_model, "NAME",
+               "ekf/ukf motion model: cv | ca | ct (coordinated turn) | singer; pf: cv");
   flags.Int("particles", &c.filter.particles, "N", "", "particle count");
   flags.String("likelihood", &f->likelihood, "NAME",
                "particle likelihood: peak (TDOA peaks) | gcc (whole GCC functions)");

@@ -18,6 +18,22 @@ std::shared_ptr<BackendProvider> CurrentProvider() {
   return ProviderSlot();
 }
 
+// The Kalman filters, whatever the backend.
+StatusOr<std::unique_ptr<Tracker>> MakeKalman(const ArrayGeometry& array, const TrackerOptions& tracker) {
+  KalmanOptions options = tracker.kalman;
+  options.variant = tracker.type == "ukf" ? KalmanVariant::kUnscented : KalmanVariant::kExtended;
+  auto filter = KalmanFilter::Create(array, options);
+  if (!filter.ok()) return filter.status();
+  return std::unique_ptr<Tracker>(std::move(filter).value());
+}
+
+StatusOr<std::unique_ptr<Tracker>> MakeCpuParticleFilter(const ArrayGeometry& array,
+                                                          const ParticleFilterOptions& options) {
+  auto filter = ParticleFilter::Create(array, options);
+  if (!filter.ok()) return filter.status();
+  return std::unique_ptr<Tracker>(std::move(filter).value());
+}
+
 }  // namespace
 
 std::shared_ptr<BackendProvider> SetGpuProvider(std::shared_ptr<BackendProvider> provider) {
@@ -33,10 +49,14 @@ std::string GpuUnavailableReason() {
 }
 
 StatusOr<SessionComponents> BuildComponents(const std::string& backend, const ArrayGeometry& array,
-                                            const GccOptions& gcc, const ParticleFilterOptions& filter) {
+                                            const GccOptions& gcc, const TrackerOptions& tracker) {
   if (backend != "cpu" && backend != "gpu" && backend != "auto") {
     return InvalidArgument("backend '" + backend + "' is not one of: auto, cpu, gpu");
   }
+  if (tracker.type != "pf" && tracker.type != "ekf" && tracker.type != "ukf") {
+    return InvalidArgument("filter '" + tracker.type + "' is not one of: pf, ekf, ukf");
+  }
+  const bool particle = tracker.type == "pf";
   SessionComponents parts;
   if (backend != "cpu") {
     const auto provider = CurrentProvider();
@@ -44,10 +64,10 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
     if (reason.empty()) {
       auto estimator = provider->MakeEstimator(array, gcc);
       if (!estimator.ok()) return estimator.status();
-      auto tracker = provider->MakeTracker(array, filter);
-      if (!tracker.ok()) return tracker.status();
+      auto made = particle ? provider->MakeTracker(array, tracker.particle) : MakeKalman(array, tracker);
+      if (!made.ok()) return made.status();
       parts.estimator = std::move(estimator).value();
-      parts.tracker = std::move(tracker).value();
+      parts.tracker = std::move(made).value();
       parts.backend = "gpu";
       return parts;
     }
@@ -55,10 +75,10 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
   }
   auto estimator = GccPhatEstimator::Create(array, gcc);
   if (!estimator.ok()) return estimator.status();
-  auto tracker = ParticleFilter::Create(array, filter);
-  if (!tracker.ok()) return tracker.status();
+  auto made = particle ? MakeCpuParticleFilter(array, tracker.particle) : MakeKalman(array, tracker);
+  if (!made.ok()) return made.status();
   parts.estimator = std::move(estimator).value();
-  parts.tracker = std::move(tracker).value();
+  parts.tracker = std::move(made).value();
   parts.backend = "cpu";
   return parts;
 }

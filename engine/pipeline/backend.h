@@ -15,6 +15,7 @@
 #include <string>
 
 #include "engine/array/array_geometry.h"
+#include "engine/filters/kalman_filter.h"
 #include "engine/filters/particle_filter.h"
 #include "engine/tdoa/gcc_phat.h"
 
@@ -45,10 +46,18 @@ class BackendProvider {
 // before sessions are created. Returns the provider it replaced.
 std::shared_ptr<BackendProvider> SetGpuProvider(std::shared_ptr<BackendProvider> provider);
 
+// Which tracker a session runs. The particle filter runs on the chosen backend; the Kalman
+// filters (microseconds per update) always run on the CPU, beside a GPU GCC when "gpu".
+struct TrackerOptions {
+  std::string type = "pf";          // "pf" | "ekf" | "ukf"
+  ParticleFilterOptions particle;   // type "pf"
+  KalmanOptions kalman;             // types "ekf", "ukf" (its variant follows the type)
+};
+
 // INVALID_ARGUMENT for an unknown backend name; FAILED_PRECONDITION for "gpu" without one;
 // otherwise whatever the estimator's or filter's options validation (or the provider) says.
 StatusOr<SessionComponents> BuildComponents(const std::string& backend, const ArrayGeometry& array,
-                                            const GccOptions& gcc, const ParticleFilterOptions& filter);
+                                            const GccOptions& gcc, const TrackerOptions& tracker);
 
 // Why the GPU backend cannot be used here, or "" when it can.
 std::string GpuUnavailableReason();

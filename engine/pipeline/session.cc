@@ -182,9 +182,15 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const SessionConfig& config) 
   auto array = ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
   if (!array.ok()) return array.status();
   const GccOptions gcc = config.GccOptionsFor();
-  ParticleFilterOptions filter = config.filter;
-  filter.seed = config.seed;
-  auto parts = BuildComponents(config.backend, *array, gcc, filter);
+  TrackerOptions tracker;
+  tracker.type = config.filter_type;
+  tracker.particle = config.filter;
+  tracker.particle.seed = config.seed;
+  tracker.kalman.motion_model = config.motion_model;
+  tracker.kalman.motion.accel_noise_mps2 = config.filter.accel_noise_mps2;
+  tracker.kalman.tdoa_sigma_s = config.filter.tdoa_sigma_s;
+  tracker.kalman.min_peak_snr = config.filter.min_peak_snr;
+  auto parts = BuildComponents(config.backend, *array, gcc, tracker);
   if (!parts.ok()) return parts.status();
   return std::unique_ptr<Session>(
       new Session(std::make_unique<Impl>(config, std::move(array).value(), std::move(parts).value())));

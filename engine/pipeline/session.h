@@ -41,7 +41,11 @@ struct SessionConfig {
   double band_low_hz = 0.0;
   double band_high_hz = 0.0;          // 0: Nyquist
   // Tracker
-  ParticleFilterOptions filter;       // filter.seed is overwritten by `seed`
+  std::string filter_type = "pf";     // "pf" | "ekf" | "ukf" (engine/filters/kalman_filter.h)
+  std::string motion_model = "cv";    // ekf/ukf: "cv" | "ca" | "ct" | "singer"; pf: "cv"
+  ParticleFilterOptions filter;       // filter.seed is overwritten by `seed`; the Kalman
+                                      // filters read accel_noise_mps2 (their motion noise),
+                                      // tdoa_sigma_s and min_peak_snr from it
   double min_pair_quality = 1.5;      // a fix needs every pair's peak/sidelobe above this
   double max_fix_std_m = 0.0;         // a fix is good when its position std is below this
                                       // (0: 5 x the array aperture)

@@ -11,6 +11,15 @@ std::string Num(double v) { return std::to_string(v); }
 }  // namespace
 
 Status SessionConfig::Validate() const {
+  if (filter_type != "pf" && filter_type != "ekf" && filter_type != "ukf") {
+    return InvalidArgument("filter '" + filter_type + "' is not one of: pf, ekf, ukf");
+  }
+  if (motion_model != "cv" && motion_model != "ca" && motion_model != "ct" && motion_model != "singer") {
+    return InvalidArgument("motion_model '" + motion_model + "' is not one of: cv, ca, ct, singer");
+  }
+  if (filter_type == "pf" && motion_model != "cv") {
+    return InvalidArgument("motion_model '" + motion_model + "' needs filter ekf or ukf (the particle filter is cv)");
+  }
   if (sensors_m.size() < 4) {
     return InvalidArgument("array.sensors_m has " + std::to_string(sensors_m.size()) +
                            " sensors; at least 4 are needed");

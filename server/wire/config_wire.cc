@@ -83,6 +83,14 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
     return InvalidArgument("filter.particles is " + std::to_string(f.particles()) +
                            "; this server allows at most " + std::to_string(policy.max_particles));
   }
+  switch (f.type()) {
+    case v1::FILTER_TYPE_UNSPECIFIED:
+    case v1::FILTER_TYPE_PF: c.filter_type = "pf"; break;
+    case v1::FILTER_TYPE_EKF: c.filter_type = "ekf"; break;
+    case v1::FILTER_TYPE_UKF: c.filter_type = "ukf"; break;
+    default: return InvalidArgument("filter.type " + std::to_string(f.type()) + " is not one of: PF, EKF, UKF");
+  }
+  if (!f.motion_model().empty()) c.motion_model = f.motion_model();
   if (f.particles() != 0) c.filter.particles = static_cast<int>(f.particles());
   if (f.accel_noise_mps2() != 0.0) c.filter.accel_noise_mps2 = f.accel_noise_mps2();
   c.filter.tdoa_sigma_s = f.tdoa_sigma_s();
@@ -124,7 +132,10 @@ v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::strin
   p.set_band_low_hz(c.band_low_hz);
   p.set_band_high_hz(c.band_high_hz);
   v1::FilterConfig* f = p.mutable_filter();
-  f->set_type(v1::FILTER_TYPE_PF);
+  f->set_type(c.filter_type == "ekf"   ? v1::FILTER_TYPE_EKF
+              : c.filter_type == "ukf" ? v1::FILTER_TYPE_UKF
+                                       : v1::FILTER_TYPE_PF);
+  f->set_motion_model(c.motion_model);
   f->set_particles(static_cast<uint32_t>(c.filter.particles));
   f->set_accel_noise_mps2(c.filter.accel_noise_mps2);
   f->set_tdoa_sigma_s(c.filter.tdoa_sigma_s);

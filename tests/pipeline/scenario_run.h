@@ -27,7 +27,8 @@ inline SessionConfig SessionConfigFor(const Scenario& scenario) {
 }
 
 inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelihood likelihood,
-                                 const std::string& backend = "cpu") {
+                                 const std::string& backend = "cpu", const std::string& filter = "pf",
+                                 const std::string& motion_model = "cv") {
   const Scenario scenario = *MakeScenario(name, seed);
   const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
   const SimResult sim = *Simulate(array, scenario.sim);
@@ -35,6 +36,8 @@ inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelih
   config.filter.likelihood = likelihood;
   config.seed = seed;
   config.backend = backend;
+  config.filter_type = filter;
+  config.motion_model = motion_model;
   auto session = std::move(*Session::Create(config));
   ScenarioRun run;
   (void)session->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &run.estimates);

@@ -152,6 +152,34 @@ TEST(ConfigWire, EffectiveConfigRoundTrips) {
   EXPECT_EQ(effective.hop_samples(), 512u);
 }
 
+TEST(ConfigWire, FilterTypeAndMotionModelRoundTrip) {
+  v1::SessionConfig p = MinimalConfig();
+  p.mutable_filter()->set_type(v1::FILTER_TYPE_UKF);
+  p.mutable_filter()->set_motion_model("singer");
+  auto config = ConfigFromProto(p, {});
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  EXPECT_EQ(config->filter_type, "ukf");
+  EXPECT_EQ(config->motion_model, "singer");
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  EXPECT_EQ(effective.filter().type(), v1::FILTER_TYPE_UKF);
+  EXPECT_EQ(effective.filter().motion_model(), "singer");
+  // Defaults: the particle filter with constant velocity.
+  auto plain = ConfigFromProto(MinimalConfig(), {});
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain->filter_type, "pf");
+  EXPECT_EQ(ConfigToProto(*plain, "").filter().motion_model(), "cv");
+  // The particle filter has no turn model; an unknown model is named.
+  p.mutable_filter()->set_type(v1::FILTER_TYPE_PF);
+  p.mutable_filter()->set_motion_model("ct");
+  EXPECT_EQ(ConfigFromProto(p, {}).status().code(), StatusCode::kInvalidArgument);
+  p.mutable_filter()->set_type(v1::FILTER_TYPE_EKF);
+  p.mutable_filter()->set_motion_model("bicycle");
+  EXPECT_NE(ConfigFromProto(p, {}).status().message().find("bicycle"), std::string::npos);
+  p.mutable_filter()->set_motion_model("cv");
+  p.mutable_filter()->set_type(static_cast<v1::FilterType>(42));
+  EXPECT_EQ(ConfigFromProto(p, {}).status().code(), StatusCode::kInvalidArgument);
+}
+
 TEST(ConfigWire, PolicyLimitsAreInvalidArgumentNamingTheField) {
   ConfigPolicy policy;
   policy.max_particles = 1000;
