@@ -1,4 +1,5 @@
 #include "engine/sim/alpha_stable.h"
+#include "engine/sim/invalid_value.h"
 
 #include <cmath>
 #include <cstdint>
@@ -11,15 +12,8 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-std::string Num(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.9g", value);
-  return text;
-}
-
-Status Invalid(const std::string& field, double value, const std::string& requirement) {
-  return InvalidArgument(field + " is " + Num(value) + "; " + requirement);
-}
+using sim_detail::Invalid;
+using sim_detail::Num;
 
 // (k + 1/2) 2^-52 for the top 52 bits k of one engine output: in [2^-53, 1 - 2^-53], never
 // 0 or 1, and exact (k + 1/2 fits a double's 53-bit mantissa).

@@ -9,6 +9,7 @@
 #include "engine/sim/propagation.h"
 #include "engine/sim/seeding.h"
 #include "engine/sim/source_signal.h"
+#include "engine/sim/invalid_value.h"
 
 namespace localizer::engine {
 namespace {
@@ -16,15 +17,8 @@ namespace {
 constexpr double kMaxTotalSamples = 2147483648.0;  // 2^31 float samples: 8 GiB
 constexpr double kMaxSpeedFractionOfSound = 0.5;   // keeps SolveEmission's iteration short
 
-std::string Num(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.9g", value);
-  return text;
-}
-
-Status Invalid(const std::string& field, double value, const std::string& requirement) {
-  return InvalidArgument(field + " is " + Num(value) + "; " + requirement);
-}
+using sim_detail::Invalid;
+using sim_detail::Num;
 
 bool IsPositiveFinite(double value) { return value > 0.0 && std::isfinite(value); }
 
