@@ -216,11 +216,11 @@ StatusOr<UpdateReport> KalmanFilter::Update(const Measurement& m) {
   }
   s.noise.Finish(innovations, m.sample_rate_hz, &report);
   report.nis = nis;  // the joint NIS (Finish summed the per-pair ones)
+  report.pair_count = count;
   if (s.options.gate_probability < 1.0 && nis > ChiSquareQuantile(s.options.gate_probability, count)) {
-    report.pair_count = 0;  // gated out: an outlier frame leaves the state alone
+    report.gated = true;  // an outlier frame leaves the state alone
     return report;
   }
-  report.pair_count = count;
   const MatrixXd gain = s_llt.solve(cross.transpose()).transpose();  // K = P H^T S^-1
   s.x += gain * nu;
   if (s.options.variant == KalmanVariant::kExtended) {

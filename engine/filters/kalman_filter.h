@@ -11,9 +11,10 @@
 //   UKF: 2n + 1 sigma points (Wan & van der Merwe's scaled set, alpha 1, beta 2, kappa 0:
 //        all weights non-negative, so P stays positive semi-definite), through both the
 //        motion model and h.
-// Update (both): innovation nu = z - h, S = H P H^T + R, gate: the update is skipped (and
-// UpdateReport.pair_count is 0) when nu^T S^-1 nu exceeds the chi-square quantile gate_p
-// with that many degrees of freedom; else K = P H^T S^-1 and, for the EKF, the Joseph form
+// Update (both): innovation nu = z - h, S = H P H^T + R, gate: the update is skipped
+// (UpdateReport.gated; nis and pair_count still reported, so a lost track that gates every
+// frame trips the session's divergence test) when nu^T S^-1 nu exceeds the chi-square
+// quantile gate_p with that many degrees of freedom; else K = P H^T S^-1 and, for the EKF, the Joseph form
 //     P <- (I - K H) P (I - K H)^T + K R K^T,
 // for the UKF P <- P - K S K^T; both then symmetrised, and an eigenvalue floor (1e-12 of the
 // largest) repairs a covariance that rounding pushed indefinite. nis = nu^T S^-1 nu.

@@ -21,6 +21,9 @@ struct UpdateReport {
   int pair_count = 0;  // pairs used (those that heard a source); 0: the update did nothing
   double ess = 0.0;  // effective sample size after the update (0 for non-particle filters)
   double tdoa_sigma_s = 0.0;  // TDOA noise std the update assumed
+  // The gate refused the frame (Kalman filters): the state is unchanged, but nis and
+  // pair_count still describe it, so a run of refused frames trips the divergence test.
+  bool gated = false;
 };
 
 // INVALID_ARGUMENT unless [min_m, max_m] is a finite box with min <= max and speed_sigma >= 0.

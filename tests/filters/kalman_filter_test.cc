@@ -210,7 +210,8 @@ TEST(KalmanFilter, AnOutlierFrameIsGatedOut) {
   const Eigen::VectorXd before = ekf->mean();
   auto report = ekf->Update(m);
   ASSERT_TRUE(report.ok());
-  EXPECT_EQ(report->pair_count, 0);
+  EXPECT_TRUE(report->gated);
+  EXPECT_EQ(report->pair_count, 7);  // still reported: the divergence test sees the frame
   EXPECT_GT(report->nis, 1000.0);
   EXPECT_EQ(ekf->mean(), before);
 }
@@ -231,6 +232,27 @@ TEST(KalmanFilter, ContractsMatchTheOtherTrackers) {
   EXPECT_EQ(ekf->Initialise(nan_belief).code(), StatusCode::kInvalidArgument);
   ASSERT_TRUE(ekf->Initialise(Belief({1, 1, 1}, 1, 1)).ok());
   EXPECT_EQ(ekf->Update(m).status().code(), StatusCode::kInvalidArgument);  // 0 pairs, array has 7
+}
+
+}  // namespace
+}  // namespace localizer::engine
+
+namespace localizer::engine {
+namespace {
+
+// A track started far from the source gates every frame; the session's divergence test
+// restarts a tracker only from frames with pair_count > 0 and their NIS, so gated frames
+// must still carry both.
+TEST(KalmanFilter, ALostTrackStillReportsGatedFramesToTheDivergenceTest) {
+  std::mt19937_64 rng(4);
+  const ArrayGeometry array = Cube();
+  auto ekf = std::move(*KalmanFilter::Create(array, Options(KalmanVariant::kExtended, "cv", 2e-6)));
+  ASSERT_TRUE(ekf->Initialise(Belief({-6, 3, 0}, 0.01, 0.01)).ok());  // confident and wrong
+  const Measurement m = Tdoas(array, {5, 5, 0}, Vec3::Zero(), 0.0, 2e-6, &rng);
+  auto report = ekf->Update(m);
+  ASSERT_TRUE(report.ok());
+  EXPECT_TRUE(report->gated);
+  EXPECT_GT(report->pair_count, 0);
 }
 
 }  // namespace
