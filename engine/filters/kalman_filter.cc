@@ -23,7 +23,7 @@ void Repair(MatrixXd* p) {
   *p = eig.eigenvectors() * eig.eigenvalues().cwiseMax(floor).asDiagonal() * eig.eigenvectors().transpose();
 }
 
-// The used pairs' measured delays (z), their noise variances (r), and h at one state.
+// The used pairs: their numbers, measured delays (z) and noise variances (r).
 struct UsedPairs {
   std::vector<int> index;  // pair numbers
   VectorXd z, r;

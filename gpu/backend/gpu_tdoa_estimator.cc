@@ -9,18 +9,16 @@ StatusOr<std::unique_ptr<GpuTdoaEstimator>> GpuTdoaEstimator::Create(std::shared
                                                                      const engine::GccOptions& options) {
   auto plan = GccPlan::Create(array, options);
   if (!plan.ok()) return plan.status();
-  std::unique_ptr<GpuTdoaEstimator> estimator(
-      new GpuTdoaEstimator(std::move(runtime), std::move(plan).value()));
-  estimator->frame_samples_ = options.frame_samples;
-  return estimator;
+  return std::unique_ptr<GpuTdoaEstimator>(new GpuTdoaEstimator(std::move(runtime), std::move(plan).value()));
 }
 
 Status GpuTdoaEstimator::Estimate(const float* frame, int frame_samples, double t_s, engine::Measurement* out) {
   if (frame == nullptr) return InvalidArgument("frame is null");
   if (out == nullptr) return InvalidArgument("out (the Measurement to fill) is null");
-  if (frame_samples != frame_samples_) {
+  const int expected = plan_.options().frame_samples;
+  if (frame_samples != expected) {
     return InvalidArgument("frame_samples is " + std::to_string(frame_samples) +
-                           "; the estimator was created for frame_samples = " + std::to_string(frame_samples_));
+                           "; the estimator was created for frame_samples = " + std::to_string(expected));
   }
   // Non-finite samples are found while the batch copies the frame (GccJob::status).
   GccQueueJob job{GccJob{&plan_, frame, t_s, out}, Status::Ok()};

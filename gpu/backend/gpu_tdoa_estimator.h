@@ -27,7 +27,6 @@ class GpuTdoaEstimator final : public engine::TdoaEstimator {
       : runtime_(std::move(runtime)), plan_(std::move(plan)) {}
   std::shared_ptr<GpuRuntime> runtime_;
   GccPlan plan_;
-  int frame_samples_ = 0;
 };
 
 }  // namespace localizer::gpu
