@@ -14,7 +14,16 @@ StatusOr<std::unique_ptr<GpuParticleFilter>> GpuParticleFilter::Create(std::shar
       new GpuParticleFilter(std::move(runtime), *slot, array.pair_count(), options));
 }
 
-GpuParticleFilter::~GpuParticleFilter() { runtime_->bank().Close(slot_); }
+GpuParticleFilter::GpuParticleFilter(std::shared_ptr<GpuRuntime> runtime, int slot, int pairs,
+                                     const engine::ParticleFilterOptions& options)
+    : runtime_(std::move(runtime)), slot_(slot), pairs_(pairs), options_(options), noise_(options.tdoa_sigma_s) {
+  runtime_->AddProducer(GpuRuntime::Stage::kFilter);
+}
+
+GpuParticleFilter::~GpuParticleFilter() {
+  runtime_->RemoveProducer(GpuRuntime::Stage::kFilter);
+  runtime_->bank().Close(slot_);
+}
 
 Status GpuParticleFilter::RefreshMoments() {
   auto moments = runtime_->bank().Moments(slot_);

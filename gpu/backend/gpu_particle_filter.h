@@ -33,8 +33,8 @@ class GpuParticleFilter final : public engine::Tracker {
   engine::TrackState State() const override;
 
  private:
-  GpuParticleFilter(std::shared_ptr<GpuRuntime> runtime, int slot, int pairs, const engine::ParticleFilterOptions& o)
-      : runtime_(std::move(runtime)), slot_(slot), pairs_(pairs), options_(o), noise_(o.tdoa_sigma_s) {}
+  // Joins the filter dispatcher's producers; the destructor leaves them.
+  GpuParticleFilter(std::shared_ptr<GpuRuntime> runtime, int slot, int pairs, const engine::ParticleFilterOptions& o);
   // Runs one step through the dispatcher (measurement nullptr: predict only).
   Status Step(const engine::Measurement* measurement, ParticleBank::StepResult* result) const;
   Status RefreshMoments();

@@ -52,6 +52,16 @@ GpuRuntime::~GpuRuntime() {
   filter_queue_.reset();
 }
 
+void GpuRuntime::AddProducer(Stage stage) {
+  if (stage == Stage::kGcc) gcc_queue_->AddProducer();
+  else filter_queue_->AddProducer();
+}
+
+void GpuRuntime::RemoveProducer(Stage stage) {
+  if (stage == Stage::kGcc) gcc_queue_->RemoveProducer();
+  else filter_queue_->RemoveProducer();
+}
+
 void GpuRuntime::RunGcc(GccQueueJob* job) { gcc_queue_->Submit(job); }
 void GpuRuntime::StepFilter(FilterQueueJob* job) { filter_queue_->Submit(job); }
 

@@ -38,6 +38,12 @@ class GpuRuntime {
   void RunGcc(GccQueueJob* job);
   void StepFilter(FilterQueueJob* job);
 
+  // A session's estimator or filter joins / leaves a dispatcher's producers
+  // (batch_queue.h): when every one of them waits, the batch runs without the window.
+  enum class Stage { kGcc, kFilter };
+  void AddProducer(Stage stage);
+  void RemoveProducer(Stage stage);
+
   ParticleBank& bank() { return *bank_; }
   BatchQueueStats gcc_stats() const { return gcc_queue_->stats(); }
   BatchQueueStats filter_stats() const { return filter_queue_->stats(); }

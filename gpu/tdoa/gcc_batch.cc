@@ -92,10 +92,11 @@ struct GccBatch::Impl {
 
   CudaStream stream;
   PinnedBuffer<float> staged_frames;   // max_frames * channels * frame_samples
+  PinnedBuffer<const float*> staged_frame_ptrs;  // max_frames: where each frame lies
   PinnedBuffer<GccPairTask> staged_tasks;
   PinnedBuffer<GccPairResult> staged_results;
   PinnedBuffer<float> staged_gcc;      // grows to the largest batch's windows
-  DeviceBuffer<float> frames;
+  DeviceBuffer<const float*> frame_ptrs;
   DeviceBuffer<GccPairTask> tasks;
   DeviceBuffer<double> energy;         // max_frames * channels
   DeviceBuffer<float> signal;          // max_frames * channels * N
@@ -123,7 +124,8 @@ Status GccBatch::Impl::Init() {
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows * key.frame_samples, &staged_frames));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &staged_tasks));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &staged_results));
-  LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows * key.frame_samples, &frames));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(frames_max, &staged_frame_ptrs));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(frames_max, &frame_ptrs));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &tasks));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows, &energy));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows * key.fft_size, &signal));
@@ -197,7 +199,13 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
   for (int j = 0; j < count; ++j) {
     const GccJob& job = jobs[j];
     const GccPlan& plan = *job.plan;
-    std::memcpy(staged_frames.data() + j * frame_floats, job.frame, sizeof(float) * frame_floats);
+    if (job.frame_pinned) {
+      staged_frame_ptrs.data()[j] = job.frame;
+    } else {
+      float* staged = staged_frames.data() + j * frame_floats;
+      std::memcpy(staged, job.frame, sizeof(float) * frame_floats);
+      staged_frame_ptrs.data()[j] = staged;
+    }
     const engine::GccOptions& options = plan.options();
     const engine::GccLayout& layout = plan.layout();
     for (int p = 0; p < pairs; ++p) {
@@ -217,10 +225,9 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
 
   cudaStream_t s = stream.get();
   LOCALIZER_RETURN_IF_ERROR(Record(kStart));
-  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(frames.data(), staged_frames.data(),
-                                                 sizeof(float) * frame_floats * count,
-                                                 cudaMemcpyHostToDevice, s),
-                                 "cudaMemcpyAsync(frames)");
+  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(frame_ptrs.data(), staged_frame_ptrs.data(),
+                                                 sizeof(const float*) * count, cudaMemcpyHostToDevice, s),
+                                 "cudaMemcpyAsync(frame pointers)");
   LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(tasks.data(), staged_tasks.data(),
                                                  sizeof(GccPairTask) * task_count,
                                                  cudaMemcpyHostToDevice, s),
@@ -228,11 +235,12 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
   LOCALIZER_RETURN_IF_ERROR(Record(kCopiedIn));
 
   GccPackArgs pack;
-  pack.frames = frames.data();
+  pack.frames = frame_ptrs.data();
   pack.signal = signal.data();
   pack.energy = energy.data();
   pack.live_rows = count * channels;
   pack.rows = bucket * channels;
+  pack.channels = channels;
   pack.frame_samples = key.frame_samples;
   pack.fft_size = key.fft_size;
   LOCALIZER_RETURN_IF_ERROR(LaunchGccPack(pack, s));

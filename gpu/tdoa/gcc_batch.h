@@ -4,9 +4,12 @@
 // engine::GccPhatEstimator::Estimate gives for each frame alone (see gcc_phat.h for the maths).
 //
 // The sequence on the batch's own stream, for M frames of C channels (P = C - 1 pairs):
-//   1. the frames, copied by the host into pinned staging, go to the device in one copy,
-//      with one small descriptor per (frame, pair) (weighting, band, L_p, interpolation, ...)
-//   2. pack: each channel zero padded to N, its energy (sum of squares, double)
+//   1. one small descriptor per (frame, pair) (weighting, band, L_p, interpolation, ...)
+//      and one pointer per frame go to the device in two small copies; the frames stay in
+//      page-locked host memory (the job's own when frame_pinned, else the batch's staging,
+//      into which the host copies them)
+//   2. pack: each channel read in place over the bus, zero padded to N, its energy (sum of
+//      squares, double)
 //   3. R2C of N over M x C rows (cuFFT, batched)
 //   4. weigh, per (frame, pair): G = W X_k conj(X_r) B with the CPU's weighting and floors,
 //      and S = sum of |G| over the full spectrum
@@ -30,10 +33,10 @@
 // made per call once each bucket has been seen. The plans share one cuFFT work area, sized
 // to the largest of them.
 //
-// Memory (device), about max_frames * (C (F + 2N + 2) + P (2N + 2)) * 4 bytes with
-// F = frame_samples, plus pinned host max_frames * C * F * 4 bytes for staging; e.g. C = 4,
-// F = 4096, N = 5120:
-// ~350 KiB device + 64 KiB pinned per frame of capacity (1024 frames: ~350 MiB + 64 MiB),
+// Memory (device), about max_frames * (C (2N + 2) + P (2N + 2)) * 4 bytes, plus pinned host
+// max_frames * C * F * 4 bytes (F = frame_samples) for staging frames that are not pinned
+// already; e.g. C = 4, F = 4096, N = 5120:
+// ~290 KiB device + 64 KiB pinned per frame of capacity (1024 frames: ~290 MiB + 64 MiB),
 // plus the cuFFT work area. GCC window buffers (device and pinned) grow to the largest
 // batch's windows.
 //
@@ -59,6 +62,10 @@ struct GccJob {
   // Optional: this job's own outcome. OK, or INVALID_ARGUMENT "channel c holds a non-finite
   // sample (NaN or Inf)" (the CPU's message), in which case *out is untouched.
   Status* status = nullptr;
+  // The frame lies in page-locked memory from cudaMallocHost (PinnedBuffer) and stays
+  // unchanged until Run returns: the device reads it in place and the batch skips its own
+  // host copy (a session that stages its frame itself takes that copy off the dispatcher).
+  bool frame_pinned = false;
 };
 
 class GccBatch {
@@ -88,7 +95,8 @@ class GccBatch {
   // A CUDA or cuFFT failure returns its Status (outputs untouched). A job whose frame holds a
   // non-finite sample gets INVALID_ARGUMENT in *job.status and keeps its *out; without a
   // status pointer, Run returns that error ("job j: channel c ...") after filling the other
-  // jobs. Cost: the host copies each frame once into pinned memory; the device work grows
+  // jobs. Cost: the host copies each frame that is not pinned once into pinned memory; the
+  // device reads every frame once over the bus; the device work grows
   // with the bucket (see above). Allocates only when a new bucket's plans are made or the
   // GCC windows outgrow their buffers.
   Status Run(std::span<const GccJob> jobs);

@@ -26,7 +26,9 @@ __global__ void __launch_bounds__(kPackThreads) GccPackKernel(GccPackArgs a) {
   __shared__ typename Reduce::TempStorage scratch;
   const int row = blockIdx.x;
   const bool live = row < a.live_rows;
-  const float* in = a.frames + static_cast<std::size_t>(row) * a.frame_samples;
+  // Rows past the live ones are the bucket's padding frames: zeros, and no frame to read.
+  const float* in = live ? a.frames[row / a.channels] + static_cast<std::size_t>(row % a.channels) * a.frame_samples
+                         : nullptr;
   float* out = a.signal + static_cast<std::size_t>(row) * a.fft_size;
   double energy = 0.0;
   for (int i = threadIdx.x; i < a.fft_size; i += kPackThreads) {

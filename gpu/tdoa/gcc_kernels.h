@@ -49,11 +49,15 @@ struct GccPairResult {
 // r (frame_samples floats) then zeros; rows >= live_rows get zeros. energy[r] = sum of
 // squares of row r in double, by a fixed-order block reduction.
 struct GccPackArgs {
-  const float* frames = nullptr;  // live_rows * frame_samples
+  // Per live frame, its channel-major samples (channels * frame_samples) in page-locked host
+  // memory that the device reads in place (cudaMallocHost: mapped at the same address under
+  // unified addressing), so no separate host-to-device copy of the frames is needed.
+  const float* const* frames = nullptr;
   float* signal = nullptr;        // rows * fft_size
   double* energy = nullptr;       // rows
-  int live_rows = 0;
+  int live_rows = 0;              // live frames * channels
   int rows = 0;
+  int channels = 0;
   int frame_samples = 0;
   int fft_size = 0;
 };

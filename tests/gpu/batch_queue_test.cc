@@ -93,6 +93,44 @@ TEST(BatchQueue, ALoneJobWaitsAtMostTheWindow) {
   EXPECT_LT(waited, std::chrono::seconds(5));
 }
 
+TEST(BatchQueue, WhenEveryProducerWaitsTheBatchRunsWithoutTheWindow) {
+  std::atomic<int> batches{0};
+  std::atomic<size_t> largest{0};
+  // A window far longer than the test: only the producer rule can launch these.
+  BatchQueue<Job> queue([&](std::span<Job* const> jobs) {
+    for (Job* job : jobs) job->output = job->input;
+    largest = std::max(largest.load(), jobs.size());
+    ++batches;
+  }, std::chrono::seconds(30), 64);
+  const auto start = std::chrono::steady_clock::now();
+  queue.AddProducer();  // a lone session: each of its jobs runs at once
+  for (int i = 0; i < 20; ++i) {
+    Job job;
+    job.input = i;
+    queue.Submit(&job);
+    EXPECT_EQ(job.output, i);
+  }
+  EXPECT_EQ(batches.load(), 20);
+  // Three producers: a batch launches when all three wait, not before.
+  queue.AddProducer();
+  queue.AddProducer();
+  std::vector<Job> jobs(3);
+  std::vector<std::thread> threads;
+  for (int i = 0; i < 3; ++i) threads.emplace_back([&, i] { jobs[i].input = 10 + i; queue.Submit(&jobs[i]); });
+  for (auto& thread : threads) thread.join();
+  EXPECT_EQ(largest.load(), 3u);
+  EXPECT_EQ(batches.load(), 21);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(jobs[i].output, 10 + i);
+  // Producers that leave stop being waited for.
+  queue.RemoveProducer();
+  queue.RemoveProducer();
+  Job last;
+  last.input = 99;
+  queue.Submit(&last);
+  EXPECT_EQ(last.output, 99);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+}
+
 TEST(BatchQueue, ZeroWindowRunsAtOnce) {
   BatchQueue<Job> queue([](std::span<Job* const> jobs) { for (Job* job : jobs) job->output = 1; },
                         std::chrono::nanoseconds(0), 64);

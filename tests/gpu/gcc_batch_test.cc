@@ -18,6 +18,7 @@
 
 #include "engine/sim/simulator.h"
 #include "engine/tdoa/gcc_phat.h"
+#include "gpu/core/device_buffer.h"
 #include "tests/gpu/gpu_test_util.h"
 
 namespace localizer::gpu {
@@ -273,6 +274,36 @@ TEST(GccBatch, ResultsDoNotDependOnTheBatchBucket) {
     const std::vector<Item> few(items.begin(), items.begin() + count);
     const std::vector<Measurement> apart = RunOnGpu(*batch, few);
     for (int i = 0; i < count; ++i) ExpectIdentical(together[i], apart[i]);
+  }
+}
+
+TEST(GccBatch, PinnedFramesAreReadInPlaceWithTheSameResults) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  // A session that stages its frame in its own pinned buffer (GpuTdoaEstimator does) gets
+  // exactly what a pageable frame copied by the batch gets, mixed in one batch.
+  auto session = MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000));
+  auto batch = MakeBatch(session->plan, 8);
+  ASSERT_NE(batch, nullptr);
+  const std::vector<Item> items = SpreadItems(*session, 6);
+  const std::vector<Measurement> pageable = RunOnGpu(*batch, items);
+  const std::size_t frame_floats = items[0].frame.size();
+  auto pinned = PinnedBuffer<float>::Allocate(frame_floats * items.size());
+  ASSERT_TRUE(pinned.ok()) << pinned.status().ToString();
+  std::vector<Measurement> out(items.size());
+  std::vector<GccJob> jobs;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    float* frame = pinned->data() + i * frame_floats;
+    std::copy(items[i].frame.begin(), items[i].frame.end(), frame);
+    GccJob job{&session->plan, frame, items[i].t_s, &out[i]};
+    job.frame_pinned = i % 2 == 0;  // every other one: both paths in one batch
+    if (!job.frame_pinned) job.frame = items[i].frame.data();
+    jobs.push_back(job);
+  }
+  ASSERT_TRUE(batch->Run(jobs).ok());
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    SCOPED_TRACE("job " + std::to_string(i));
+    ExpectIdentical(out[i], pageable[i]);
+    ExpectMatchesCpu(out[i], items[i].cpu);
   }
 }
 
