@@ -21,9 +21,16 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
   flags.Int("frame", &c.frame_samples, "N", "samples", "samples per channel per TDOA frame");
   flags.Int("hop", &c.hop_samples, "N", "samples", "samples between frame starts");
   flags.String("filter", &c.filter_type, "NAME",
-               "tracker: pf (particle filter) | ekf (extended Kalman) | ukf (unscented Kalman)");
+               "tracker: pf (particle filter) | ekf (extended Kalman) | ukf (unscented Kalman) | "
+               "mmpf (multiple-model particle filter: cv, manoeuvre, turns) | imm (interacting "
+               "multiple model over --imm-modes)");
   flags.String("motion-model", &c.motion_model, "NAME",
                "ekf/ukf motion model: cv | ca | ct (coordinated turn) | singer; pf: cv");
+  flags.String("imm-modes", &c.imm_modes, "LIST",
+               "imm: comma-separated motion models of its modes, e.g. cv,ct | cv,ca");
+  flags.String("imm-variant", &c.imm_variant, "NAME", "imm: mode filters ekf | ukf");
+  flags.String("robust", &c.robust, "NAME",
+               "ekf/ukf/imm update: none | huber | student-t (down-weight a pair the others contradict)");
   flags.Int("particles", &c.filter.particles, "N", "", "particle count");
   flags.String("likelihood", &f->likelihood, "NAME",
                "particle likelihood: peak (TDOA peaks) | gcc (whole GCC functions)");

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "engine/core/types.h"
@@ -11,6 +12,13 @@ namespace localizer::engine {
 struct StageTimings {
   double tdoa_s = 0.0;    // wall time of the TDOA front end for this frame
   double filter_s = 0.0;  // wall time of predict + update + estimate
+};
+
+// One motion hypothesis of a multiple-model tracker (IMM, multiple-model particle filter)
+// and its posterior probability after this frame's update.
+struct ModelProbability {
+  std::string model;         // the hypothesis' name, e.g. "cv", "ct", "ct-left"
+  double probability = 0.0;  // in [0, 1]; a tracker's list sums to 1
 };
 
 struct Estimate {
@@ -30,6 +38,9 @@ struct Estimate {
   double nis = 0.0;            // normalised innovation squared of this frame's TDOAs
   std::vector<double> delay_s;  // measured TDOA per pair, as in Measurement
   std::vector<double> quality;  // quality per pair
+  // Multiple-model trackers (filter mmpf, imm): each hypothesis' probability after this
+  // frame; empty for single-model filters and before initialisation.
+  std::vector<ModelProbability> model_probabilities;
   StageTimings timings;
 };
 

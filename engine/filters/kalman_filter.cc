@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "engine/filters/divergence_monitor.h"
@@ -29,7 +30,20 @@ struct UsedPairs {
   VectorXd z, r;
 };
 
+// The prior's view of a frame: predicted TDOAs, S = H P H^T + R, P H^T, and (EKF) H.
+struct Innovation {
+  VectorXd predicted;
+  MatrixXd s_cov, cross, h;
+};
+
 }  // namespace
+
+StatusOr<RobustUpdate> ParseRobustUpdate(const std::string& name) {
+  if (name == "none") return RobustUpdate::kNone;
+  if (name == "huber") return RobustUpdate::kHuber;
+  if (name == "student-t") return RobustUpdate::kStudentT;
+  return InvalidArgument("robust '" + name + "' is not one of: none, huber, student-t");
+}
 
 Status KalmanOptions::Validate() const {
   if (!(tdoa_sigma_s >= 0.0) || !std::isfinite(tdoa_sigma_s)) {
@@ -40,6 +54,10 @@ Status KalmanOptions::Validate() const {
   if (!(extra_state_std >= 0.0) || !std::isfinite(extra_state_std)) {
     return InvalidArgument("extra_state_std must be finite and >= 0");
   }
+  if (!(huber_threshold > 0.0) || !std::isfinite(huber_threshold)) {
+    return InvalidArgument("huber_threshold must be finite and > 0");
+  }
+  if (!(student_dof > 0.0) || !std::isfinite(student_dof)) return InvalidArgument("student_dof must be finite and > 0");
   return MakeMotionModel(motion_model, motion).status();
 }
 
@@ -94,6 +112,74 @@ struct KalmanFilter::Impl {
     return points;
   }
 
+  UsedPairs Collect(const Measurement& m, int count) const {
+    UsedPairs used;
+    used.z.resize(count);
+    used.r.resize(count);
+    for (int k = 0, i = 0; k < static_cast<int>(m.pairs.size()); ++k) {
+      if (!noise.used()[k]) continue;
+      used.index.push_back(k);
+      used.z(i) = m.pairs[k].delay_s;
+      used.r(i) = noise.sigmas_s()[k] * noise.sigmas_s()[k];
+      ++i;
+    }
+    return used;
+  }
+  // The predicted TDOAs under the prior, S = H P H^T + R and P H^T (EKF: linearised at the
+  // mean; UKF: over the sigma points).
+  Innovation Innovate(const UsedPairs& used, const MatrixXd& r) const {
+    Innovation in;
+    const int count = static_cast<int>(used.index.size());
+    if (options.variant == KalmanVariant::kExtended) {
+      in.predicted = Measure(x, used);
+      in.h = MeasureJacobian(x, used);
+      in.cross = p * in.h.transpose();
+      in.s_cov = in.h * in.cross + r;
+      return in;
+    }
+    VectorXd wm, wc;
+    const MatrixXd points = SigmaPoints(x, p, &wm, &wc);
+    MatrixXd zs(count, points.cols());
+    for (int i = 0; i < points.cols(); ++i) zs.col(i) = Measure(points.col(i), used);
+    in.predicted = zs * wm;
+    in.s_cov = r;
+    in.cross = MatrixXd::Zero(x.size(), count);
+    for (int i = 0; i < points.cols(); ++i) {
+      const VectorXd dz = zs.col(i) - in.predicted;
+      in.s_cov += wc(i) * dz * dz.transpose();
+      in.cross += wc(i) * (points.col(i) - x) * dz.transpose();
+    }
+    return in;
+  }
+  // Robust reweighting by iterated least squares (see the header): the noise variances
+  // R_k / w_k, w_k from the residual e_k at the reweighted update.
+  double Weight(double e) const {
+    if (options.robust == RobustUpdate::kHuber) return e > options.huber_threshold ? options.huber_threshold / e : 1.0;
+    return std::min(1.0, (options.student_dof + 1.0) / (options.student_dof + e * e));
+  }
+  VectorXd RobustVariances(const UsedPairs& used, const VectorXd& nu, const Innovation& in) const {
+    constexpr int kMaxPasses = 10;
+    constexpr double kTolerance = 1e-3, kMinWeight = 1e-8;
+    const VectorXd sigma = used.r.cwiseSqrt();
+    MatrixXd hph = in.s_cov;
+    hph.diagonal() -= used.r;
+    VectorXd w = VectorXd::Ones(nu.size());
+    for (int pass = 0; pass < kMaxPasses; ++pass) {
+      MatrixXd s_w = hph;
+      s_w.diagonal() += used.r.cwiseQuotient(w);
+      const Eigen::LLT<MatrixXd> llt(s_w);
+      if (llt.info() != Eigen::Success) break;
+      const VectorXd updated = x + in.cross * llt.solve(nu);
+      const VectorXd e = (used.z - Measure(updated, used)).cwiseQuotient(sigma).cwiseAbs();
+      VectorXd next(w.size());
+      for (Eigen::Index k = 0; k < w.size(); ++k) next(k) = std::max(kMinWeight, Weight(e(k)));
+      const double moved = (next - w).cwiseAbs().maxCoeff();
+      w = next;
+      if (moved < kTolerance) break;
+    }
+    return used.r.cwiseQuotient(w);
+  }
+
   void PredictEkf(double dt_s) {
     const MatrixXd f = model->Jacobian(x, dt_s);
     const MatrixXd q = model->ProcessNoise(x, dt_s);
@@ -121,6 +207,7 @@ struct KalmanFilter::Impl {
   bool initialised = false;
   VectorXd x;
   MatrixXd p;
+  double log_likelihood = 0.0;  // of the last update that used pairs
 };
 
 KalmanFilter::KalmanFilter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -137,6 +224,29 @@ bool KalmanFilter::initialised() const { return impl_->initialised; }
 const Eigen::VectorXd& KalmanFilter::mean() const { return impl_->x; }
 const Eigen::MatrixXd& KalmanFilter::covariance() const { return impl_->p; }
 int KalmanFilter::state_dim() const { return impl_->model->state_dim(); }
+const char* KalmanFilter::motion_model_name() const { return impl_->model->name(); }
+double KalmanFilter::last_log_likelihood() const { return impl_->log_likelihood; }
+
+Status KalmanFilter::SetState(const Eigen::VectorXd& mean, const Eigen::MatrixXd& covariance) {
+  const int n = state_dim();
+  if (mean.size() != n || covariance.rows() != n || covariance.cols() != n) {
+    return InvalidArgument("state must have " + std::to_string(n) + " entries and an " + std::to_string(n) + "x" +
+                           std::to_string(n) + " covariance");
+  }
+  if (!mean.allFinite() || !covariance.allFinite()) return InvalidArgument("state mean or covariance is not finite");
+  MatrixXd p = 0.5 * (covariance + covariance.transpose());
+  if (Eigen::LLT<MatrixXd>(p).info() != Eigen::Success) {  // not definite: semi-definite at least?
+    const Eigen::SelfAdjointEigenSolver<MatrixXd> eig(p, Eigen::EigenvaluesOnly);
+    if (eig.eigenvalues().minCoeff() < -1e-9 * std::max(1.0, eig.eigenvalues().maxCoeff())) {
+      return InvalidArgument("state covariance is not positive semi-definite");
+    }
+  }
+  Repair(&p);
+  impl_->x = mean;
+  impl_->p = std::move(p);
+  impl_->initialised = true;
+  return Status::Ok();
+}
 
 Status KalmanFilter::Initialise(const TrackState& belief) {
   LOCALIZER_RETURN_IF_ERROR(BeliefRoot(belief).status());  // finite and PSD
@@ -172,62 +282,47 @@ StatusOr<UpdateReport> KalmanFilter::Update(const Measurement& m) {
     report.tdoa_sigma_s = s.noise.rms_sigma_s();
     return report;
   }
-  UsedPairs used;
-  used.z.resize(count);
-  used.r.resize(count);
-  for (int k = 0, i = 0; k < static_cast<int>(m.pairs.size()); ++k) {
-    if (!s.noise.used()[k]) continue;
-    used.index.push_back(k);
-    used.z(i) = m.pairs[k].delay_s;
-    used.r(i) = s.noise.sigmas_s()[k] * s.noise.sigmas_s()[k];
-    ++i;
-  }
+  const UsedPairs used = s.Collect(m, count);
   const MatrixXd r = used.r.asDiagonal();
-  VectorXd predicted;
-  MatrixXd s_cov, cross, h;  // S, and P H^T (the UKF's cross covariance)
-  if (s.options.variant == KalmanVariant::kExtended) {
-    predicted = s.Measure(s.x, used);
-    h = s.MeasureJacobian(s.x, used);
-    cross = s.p * h.transpose();
-    s_cov = h * cross + r;
-  } else {
-    VectorXd wm, wc;
-    const MatrixXd points = s.SigmaPoints(s.x, s.p, &wm, &wc);
-    MatrixXd zs(count, points.cols());
-    for (int i = 0; i < points.cols(); ++i) zs.col(i) = s.Measure(points.col(i), used);
-    predicted = zs * wm;
-    s_cov = r;
-    cross = MatrixXd::Zero(s.x.size(), count);
-    for (int i = 0; i < points.cols(); ++i) {
-      const VectorXd dz = zs.col(i) - predicted;
-      s_cov += wc(i) * dz * dz.transpose();
-      cross += wc(i) * (points.col(i) - s.x) * dz.transpose();
-    }
-  }
-  const VectorXd nu = used.z - predicted;
-  const Eigen::LLT<MatrixXd> s_llt(s_cov);
+  const Innovation in = s.Innovate(used, r);
+  const VectorXd nu = used.z - in.predicted;
+  const Eigen::LLT<MatrixXd> s_llt(in.s_cov);
   if (s_llt.info() != Eigen::Success) return Internal("innovation covariance is not positive definite");
   const double nis = nu.dot(s_llt.solve(nu));
   // Innovation moments per pair for the NIS and the adaptive noise (prior spread of h).
   std::vector<InnovationMoments> innovations(m.pairs.size());
   for (int i = 0; i < count; ++i) {
     innovations[used.index[i]].mean_s = nu(i);
-    innovations[used.index[i]].predicted_var_s2 = std::max(0.0, s_cov(i, i) - used.r(i));
+    innovations[used.index[i]].predicted_var_s2 = std::max(0.0, in.s_cov(i, i) - used.r(i));
   }
   s.noise.Finish(innovations, m.sample_rate_hz, &report);
   report.nis = nis;  // the joint NIS (Finish summed the per-pair ones)
   report.pair_count = count;
-  if (s.options.gate_probability < 1.0 && nis > ChiSquareQuantile(s.options.gate_probability, count)) {
+  // The noise, S and its factor the correction uses: as measured, or Huber-reweighted.
+  MatrixXd r_used, s_used;
+  Eigen::LLT<MatrixXd> w_llt;
+  const bool robust = s.options.robust != RobustUpdate::kNone;
+  if (robust) {
+    r_used = s.RobustVariances(used, nu, in).asDiagonal();
+    s_used = in.s_cov - r + r_used;
+    w_llt.compute(s_used);
+    if (w_llt.info() != Eigen::Success) return Internal("reweighted innovation covariance is not positive definite");
+  }
+  const Eigen::LLT<MatrixXd>& llt = robust ? w_llt : s_llt;
+  const double gate_nis = robust ? nu.dot(w_llt.solve(nu)) : nis;
+  const double log_det = 2.0 * llt.matrixLLT().diagonal().array().log().sum();
+  s.log_likelihood = -0.5 * (gate_nis + log_det + count * std::log(2.0 * std::numbers::pi));
+  if (s.options.gate_probability < 1.0 && gate_nis > ChiSquareQuantile(s.options.gate_probability, count)) {
     report.gated = true;  // an outlier frame leaves the state alone
     return report;
   }
-  const MatrixXd gain = s_llt.solve(cross.transpose()).transpose();  // K = P H^T S^-1
+  const MatrixXd gain = llt.solve(in.cross.transpose()).transpose();  // K = P H^T S^-1
   s.x += gain * nu;
   if (s.options.variant == KalmanVariant::kExtended) {
-    const MatrixXd i_kh = MatrixXd::Identity(s.x.size(), s.x.size()) - gain * h;
-    s.p = i_kh * s.p * i_kh.transpose() + gain * r * gain.transpose();  // Joseph form
+    const MatrixXd i_kh = MatrixXd::Identity(s.x.size(), s.x.size()) - gain * in.h;
+    s.p = i_kh * s.p * i_kh.transpose() + gain * (robust ? r_used : r) * gain.transpose();  // Joseph form
   } else {
-    s.p -= gain * s_cov * gain.transpose();
+    s.p -= gain * (robust ? s_used : in.s_cov) * gain.transpose();
   }
   Repair(&s.p);
   return report;

@@ -124,6 +124,80 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2) {
   }
 }
 
+void ParticleSet::DrawAccelNormals(uint32_t key) {
+  // As in Predict: accel_[j] and accel_[half + j] come from uniforms 2j and 2j + 1.
+  const int half = static_cast<int>(accel_.size() / 2);
+  float* __restrict first = accel_.data();
+  float* __restrict second = accel_.data() + half;
+#pragma omp simd
+  for (int j = 0; j < half; ++j) {
+    const uint32_t c = 2u * static_cast<uint32_t>(j);
+    NormalPairFromUniforms(UniformFromCounter(key, c), UniformFromCounter(key, c + 1), &first[j], &second[j]);
+  }
+}
+
+void ParticleSet::PredictTurn(double dt_s, double turn_rate_radps, double accel_sigma_mps2, uint32_t key) {
+  // The turn's coefficients in double, once.
+  const double w = turn_rate_radps, wt = w * dt_s;
+  const float s = static_cast<float>(std::sin(wt)), c = static_cast<float>(std::cos(wt));
+  const float a = static_cast<float>(w == 0.0 ? dt_s : std::sin(wt) / w);
+  const float b = static_cast<float>(w == 0.0 ? 0.0 : 2.0 * std::sin(0.5 * wt) * std::sin(0.5 * wt) / w);
+  const float dt = static_cast<float>(dt_s);
+  const float a_to_v = static_cast<float>(accel_sigma_mps2 * dt_s);
+  const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
+  DrawAccelNormals(key);
+  moments_valid_ = false;
+  const int n = n_;
+  const float* __restrict ax = accel_.data();
+  const float* __restrict ay = accel_.data() + n;
+  const float* __restrict az = accel_.data() + 2 * n;
+  float* __restrict x = cur_.x.data();
+  float* __restrict y = cur_.y.data();
+  float* __restrict z = cur_.z.data();
+  float* __restrict vx = cur_.vx.data();
+  float* __restrict vy = cur_.vy.data();
+  float* __restrict vz = cur_.vz.data();
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
+    const float ux = vx[i], uy = vy[i];
+    x[i] += a * ux - b * uy + a_to_p * ax[i];
+    y[i] += b * ux + a * uy + a_to_p * ay[i];
+    z[i] += vz[i] * dt + a_to_p * az[i];
+    vx[i] = c * ux - s * uy + a_to_v * ax[i];
+    vy[i] = s * ux + c * uy + a_to_v * ay[i];
+    vz[i] += a_to_v * az[i];
+  }
+}
+
+void ParticleSet::CopyCloudFrom(const ParticleSet& other) {
+  cur_.x = other.cur_.x;
+  cur_.y = other.cur_.y;
+  cur_.z = other.cur_.z;
+  cur_.vx = other.cur_.vx;
+  cur_.vy = other.cur_.vy;
+  cur_.vz = other.cur_.vz;
+  logw_ = other.logw_;
+  w_ = other.w_;
+  moments_ = other.moments_;
+  moments_valid_ = other.moments_valid_;
+}
+
+double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candidates,
+                                  const std::vector<uint8_t>& choice, const std::vector<float>& log_weights) {
+  moments_valid_ = false;
+  for (int i = 0; i < n_; ++i) {
+    const Columns& from = candidates[choice[i]]->cur_;
+    cur_.x[i] = from.x[i];
+    cur_.y[i] = from.y[i];
+    cur_.z[i] = from.z[i];
+    cur_.vx[i] = from.vx[i];
+    cur_.vy[i] = from.vy[i];
+    cur_.vz[i] = from.vz[i];
+  }
+  logw_ = log_weights;
+  return NormaliseWeights();
+}
+
 double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharpness) {
   size_t peak = 1;
   for (size_t k = 1; k + 1 < gcc.size(); ++k) {

@@ -37,6 +37,30 @@ class ParticleSet {
   void SampleUniformBox(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps);
   // p += v dt + a dt^2/2, v += a dt, a ~ N(0, accel_sigma^2 I3).
   void Predict(double dt_s, double accel_sigma_mps2);
+  // Coordinated turn at a fixed rate omega (rad/s, counter-clockwise seen from +z) in the
+  // x-y plane, constant vz, plus the same white acceleration as Predict, its normals drawn
+  // from `key` (NextKey()): clouds predicted with one key share their noise (common random
+  // numbers). With s = sin(omega dt), c = cos(omega dt), a = s / omega, b = (1 - c) / omega
+  // (a = dt, b = 0 at omega = 0):
+  //   x += a vx - b vy,  y += b vx + a vy,  z += vz dt,  vx' = c vx - s vy,  vy' = s vx + c vy;
+  //   then p += acc dt^2/2, v += acc dt.
+  void PredictTurn(double dt_s, double turn_rate_radps, double accel_sigma_mps2, uint32_t key);
+  // A fresh random-stream key per use: hash of (seed, use count).
+  uint32_t NextKey();
+  // Copies `other`'s particles and weights (same array and particle count; the random
+  // stream stays this set's own).
+  void CopyCloudFrom(const ParticleSet& other);
+  // Particle i becomes particle i of candidates[choice[i]], with log-weight log_weights[i]
+  // (the multiple-model filter's per-particle pick among its hypotheses' predictions);
+  // then the weights are normalised and the ESS returned, as NormaliseWeights.
+  double TakeParticles(const std::vector<const ParticleSet*>& candidates, const std::vector<uint8_t>& choice,
+                     const std::vector<float>& log_weights);
+  // Log-weights as last left (normalised after NormaliseWeights), one per particle.
+  const std::vector<float>& log_weights() const { return logw_; }
+  // Normalised linear weights as of the last NormaliseWeights (or sampling, resampling).
+  const std::vector<float>& weights() const { return w_; }
+  // After ResampleSystematic: slot m now holds a copy of particle resample_index()[m].
+  const std::vector<int>& resample_index() const { return index_; }
   // Adds each particle's log-likelihood of `m` to its log-weight (see particle_filter.h) and
   // reports, per pair, the innovation of the peak delay against the prior predicted delays.
   // sigmas_s holds one TDOA noise std per pair; pairs with used[p] == 0 are skipped.
@@ -63,7 +87,7 @@ class ParticleSet {
     // The six columns in state order (x, y, z, vx, vy, vz).
     std::array<float*, 6> Pointers() { return {x.data(), y.data(), z.data(), vx.data(), vy.data(), vz.data()}; }
   };
-  uint32_t NextKey();  // a fresh random-stream key per use: hash of (seed, use count)
+  void DrawAccelNormals(uint32_t key);  // fills accel_ with 3N standard normals
   void SetEqualWeights();
   void SystematicIndices();  // fills index_: the particle each slot copies
   void DrawKernelNoise();    // fills noise_ with unit-variance kernel draws

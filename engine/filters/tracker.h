@@ -1,6 +1,10 @@
-// The tracker interface every filter implements (particle filter now; EKF, UKF, IMM later).
+// The tracker interface every filter implements: particle filter, EKF/UKF, IMM and the
+// multiple-model particle filter.
 #pragma once
 
+#include <vector>
+
+#include "engine/core/estimate.h"
 #include "engine/core/measurement.h"
 #include "engine/core/status.h"
 #include "engine/core/types.h"
@@ -64,6 +68,10 @@ class Tracker {
   // INVALID_ARGUMENT if the pair count differs from the array's).
   virtual StatusOr<UpdateReport> Update(const Measurement& measurement) = 0;
   virtual TrackState State() const = 0;
+  // Multiple-model trackers: each motion hypothesis and its current probability (summing
+  // to 1; after Predict the predicted, after Update the posterior probabilities). Empty
+  // for single-model filters.
+  virtual std::vector<ModelProbability> ModelProbabilities() const { return {}; }
 };
 
 }  // namespace localizer::engine

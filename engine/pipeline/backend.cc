@@ -27,6 +27,32 @@ StatusOr<std::unique_ptr<Tracker>> MakeKalman(const ArrayGeometry& array, const 
   return std::unique_ptr<Tracker>(std::move(filter).value());
 }
 
+// The multiple-model trackers, whatever the backend.
+StatusOr<std::unique_ptr<Tracker>> MakeMultiModel(const ArrayGeometry& array, const TrackerOptions& tracker) {
+  if (tracker.type == "mmpf") {
+    MultiModelPfOptions options;
+    options.particle = tracker.particle;
+    options.models = tracker.mmpf_models;
+    options.stay_probability = tracker.stay_probability;
+    auto filter = MultiModelParticleFilter::Create(array, options);
+    if (!filter.ok()) return filter.status();
+    return std::unique_ptr<Tracker>(std::move(filter).value());
+  }
+  ImmOptions options;
+  options.kalman = tracker.kalman;
+  options.modes = tracker.imm_modes;
+  options.stay_probability = tracker.stay_probability;
+  auto filter = ImmFilter::Create(array, options);
+  if (!filter.ok()) return filter.status();
+  return std::unique_ptr<Tracker>(std::move(filter).value());
+}
+
+// Every tracker but the plain particle filter: CPU whatever the backend.
+StatusOr<std::unique_ptr<Tracker>> MakeCpuOnly(const ArrayGeometry& array, const TrackerOptions& tracker) {
+  if (tracker.type == "mmpf" || tracker.type == "imm") return MakeMultiModel(array, tracker);
+  return MakeKalman(array, tracker);
+}
+
 StatusOr<std::unique_ptr<Tracker>> MakeCpuParticleFilter(const ArrayGeometry& array,
                                                           const ParticleFilterOptions& options) {
   auto filter = ParticleFilter::Create(array, options);
@@ -53,8 +79,9 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
   if (backend != "cpu" && backend != "gpu" && backend != "auto") {
     return InvalidArgument("backend '" + backend + "' is not one of: auto, cpu, gpu");
   }
-  if (tracker.type != "pf" && tracker.type != "ekf" && tracker.type != "ukf") {
-    return InvalidArgument("filter '" + tracker.type + "' is not one of: pf, ekf, ukf");
+  if (tracker.type != "pf" && tracker.type != "ekf" && tracker.type != "ukf" && tracker.type != "mmpf" &&
+      tracker.type != "imm") {
+    return InvalidArgument("filter '" + tracker.type + "' is not one of: pf, ekf, ukf, mmpf, imm");
   }
   const bool particle = tracker.type == "pf";
   SessionComponents parts;
@@ -64,7 +91,7 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
     if (reason.empty()) {
       auto estimator = provider->MakeEstimator(array, gcc);
       if (!estimator.ok()) return estimator.status();
-      auto made = particle ? provider->MakeTracker(array, tracker.particle) : MakeKalman(array, tracker);
+      auto made = particle ? provider->MakeTracker(array, tracker.particle) : MakeCpuOnly(array, tracker);
       if (!made.ok()) return made.status();
       parts.estimator = std::move(estimator).value();
       parts.tracker = std::move(made).value();
@@ -75,7 +102,7 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
   }
   auto estimator = GccPhatEstimator::Create(array, gcc);
   if (!estimator.ok()) return estimator.status();
-  auto made = particle ? MakeCpuParticleFilter(array, tracker.particle) : MakeKalman(array, tracker);
+  auto made = particle ? MakeCpuParticleFilter(array, tracker.particle) : MakeCpuOnly(array, tracker);
   if (!made.ok()) return made.status();
   parts.estimator = std::move(estimator).value();
   parts.tracker = std::move(made).value();

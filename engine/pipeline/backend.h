@@ -1,6 +1,6 @@
 // Builds a session's TDOA estimator and tracker for the requested compute backend.
 //
-//   "cpu"  FFTW3 GCC-PHAT and the CPU particle filter; always available.
+//   "cpu"  FFTW3 GCC-PHAT and the CPU trackers; always available.
 //   "gpu"  the implementations a registered GPU provider makes (gpu/ registers the CUDA
 //          one at start-up: gpu/backend/gpu_backend.h), when a provider is registered and
 //          says it is usable; otherwise FAILED_PRECONDITION saying why — never a silent
@@ -13,9 +13,12 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "engine/array/array_geometry.h"
+#include "engine/filters/imm_filter.h"
 #include "engine/filters/kalman_filter.h"
+#include "engine/filters/multi_model_pf.h"
 #include "engine/filters/particle_filter.h"
 #include "engine/tdoa/gcc_phat.h"
 
@@ -47,11 +50,17 @@ class BackendProvider {
 std::shared_ptr<BackendProvider> SetGpuProvider(std::shared_ptr<BackendProvider> provider);
 
 // Which tracker a session runs. The particle filter runs on the chosen backend; the Kalman
-// filters (microseconds per update) always run on the CPU, beside a GPU GCC when "gpu".
+// filters (microseconds per update), the IMM and the multiple-model particle filter always
+// run on the CPU, beside a GPU GCC when "gpu" (the GPU provider makes only the plain PF).
 struct TrackerOptions {
-  std::string type = "pf";          // "pf" | "ekf" | "ukf"
-  ParticleFilterOptions particle;   // type "pf"
-  KalmanOptions kalman;             // types "ekf", "ukf" (its variant follows the type)
+  std::string type = "pf";          // "pf" | "ekf" | "ukf" | "mmpf" | "imm"
+  ParticleFilterOptions particle;   // "pf"; "mmpf": particles, likelihood, noise, seed
+  std::vector<ParticleMotion> mmpf_models;  // "mmpf": its hypotheses; empty: the defaults
+                                            // (multi_model_pf.h) for particle.accel_noise_mps2
+  KalmanOptions kalman;             // "ekf", "ukf" (the variant follows the type); "imm":
+                                    // the modes' shared options, variant included
+  std::vector<ImmMode> imm_modes = ImmOptions().modes;  // "imm": cv + ct by default
+  double stay_probability = 0.95;   // "mmpf", "imm": the Markov switching prior per step
 };
 
 // INVALID_ARGUMENT for an unknown backend name; FAILED_PRECONDITION for "gpu" without one;

@@ -168,6 +168,7 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
     e.initialised = true;
     e.state = state.mean;
     e.covariance = state.covariance;
+    e.model_probabilities = tracker.ModelProbabilities();
   }
   last_t_s = e.t_s;
   e.timings.filter_s = SecondsSince(filter_start);
@@ -190,6 +191,11 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const SessionConfig& config) 
   tracker.kalman.motion.accel_noise_mps2 = config.filter.accel_noise_mps2;
   tracker.kalman.tdoa_sigma_s = config.filter.tdoa_sigma_s;
   tracker.kalman.min_peak_snr = config.filter.min_peak_snr;
+  tracker.kalman.robust = *ParseRobustUpdate(config.robust);  // validated above
+  if (config.filter_type == "imm") {
+    tracker.kalman.variant = config.imm_variant == "ukf" ? KalmanVariant::kUnscented : KalmanVariant::kExtended;
+    tracker.imm_modes = *ParseImmModes(config.imm_modes, tracker.kalman.motion);
+  }
   auto parts = BuildComponents(config.backend, *array, gcc, tracker);
   if (!parts.ok()) return parts.status();
   return std::unique_ptr<Session>(

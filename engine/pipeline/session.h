@@ -41,11 +41,20 @@ struct SessionConfig {
   double band_low_hz = 0.0;
   double band_high_hz = 0.0;          // 0: Nyquist
   // Tracker
-  std::string filter_type = "pf";     // "pf" | "ekf" | "ukf" (engine/filters/kalman_filter.h)
-  std::string motion_model = "cv";    // ekf/ukf: "cv" | "ca" | "ct" | "singer"; pf: "cv"
+  // "pf" particle filter (particle_filter.h), "ekf" | "ukf" (kalman_filter.h), "mmpf"
+  // multiple-model particle filter (multi_model_pf.h: cv, cv-manoeuvre, ct-left, ct-right
+  // at 0.1 rad/s), "imm" interacting multiple model (imm_filter.h)
+  std::string filter_type = "pf";
+  std::string motion_model = "cv";    // ekf/ukf: "cv" | "ca" | "ct" | "singer"; others: "cv"
   ParticleFilterOptions filter;       // filter.seed is overwritten by `seed`; the Kalman
-                                      // filters read accel_noise_mps2 (their motion noise),
-                                      // tdoa_sigma_s and min_peak_snr from it
+                                      // filters and the IMM read accel_noise_mps2 (their
+                                      // motion noise), tdoa_sigma_s and min_peak_snr from it;
+                                      // mmpf reads all of it (accel_noise_mps2: the base of
+                                      // its hypotheses' noise)
+  std::string imm_modes = "cv,ct";    // imm: its modes' motion models, comma-separated, unique
+  std::string imm_variant = "ekf";    // imm: mode filters "ekf" | "ukf"
+  std::string robust = "none";        // ekf/ukf/imm update: "none" | "huber" | "student-t"
+                                      // (reweighted pairs, kalman_filter.h)
   double min_pair_quality = 1.5;      // a fix needs every pair's peak/sidelobe above this
   double max_fix_std_m = 0.0;         // a fix is good when its position std is below this
                                       // (0: 5 x the array aperture)

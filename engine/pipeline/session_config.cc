@@ -1,6 +1,9 @@
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
+#include "engine/filters/imm_filter.h"
 #include "engine/pipeline/session.h"
 
 namespace localizer::engine {
@@ -8,18 +11,50 @@ namespace {
 
 std::string Num(double v) { return std::to_string(v); }
 
+bool IsMotionModel(const std::string& name) {
+  return name == "cv" || name == "ca" || name == "ct" || name == "singer";
+}
+
+// The tracker's fields: filter type, motion model, the IMM's modes and variant, robust.
+Status ValidateTracker(const SessionConfig& c) {
+  const std::string& filter_type = c.filter_type;
+  const std::string& motion_model = c.motion_model;
+  const std::string& imm_modes = c.imm_modes;
+  if (filter_type != "pf" && filter_type != "ekf" && filter_type != "ukf" && filter_type != "mmpf" &&
+      filter_type != "imm") {
+    return InvalidArgument("filter '" + filter_type + "' is not one of: pf, ekf, ukf, mmpf, imm");
+  }
+  if (!IsMotionModel(motion_model)) {
+    return InvalidArgument("motion_model '" + motion_model + "' is not one of: cv, ca, ct, singer");
+  }
+  const bool kalman = filter_type == "ekf" || filter_type == "ukf";
+  if (!kalman && motion_model != "cv") {
+    return InvalidArgument("motion_model '" + motion_model + "' needs filter ekf or ukf (pf and mmpf set their " +
+                           "own models, imm takes imm_modes)");
+  }
+  if (c.imm_variant != "ekf" && c.imm_variant != "ukf") {
+    return InvalidArgument("imm_variant '" + c.imm_variant + "' is not one of: ekf, ukf");
+  }
+  LOCALIZER_RETURN_IF_ERROR(ParseRobustUpdate(c.robust).status());
+  auto modes = ParseImmModes(imm_modes, MotionModelOptions{});
+  if (!modes.ok()) return modes.status();
+  std::vector<std::string> seen;
+  for (const ImmMode& mode : *modes) {
+    if (!IsMotionModel(mode.motion_model)) {
+      return InvalidArgument("imm_modes entry '" + mode.motion_model + "' is not one of: cv, ca, ct, singer");
+    }
+    if (std::find(seen.begin(), seen.end(), mode.motion_model) != seen.end()) {
+      return InvalidArgument("imm_modes '" + imm_modes + "' names '" + mode.motion_model + "' twice");
+    }
+    seen.push_back(mode.motion_model);
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status SessionConfig::Validate() const {
-  if (filter_type != "pf" && filter_type != "ekf" && filter_type != "ukf") {
-    return InvalidArgument("filter '" + filter_type + "' is not one of: pf, ekf, ukf");
-  }
-  if (motion_model != "cv" && motion_model != "ca" && motion_model != "ct" && motion_model != "singer") {
-    return InvalidArgument("motion_model '" + motion_model + "' is not one of: cv, ca, ct, singer");
-  }
-  if (filter_type == "pf" && motion_model != "cv") {
-    return InvalidArgument("motion_model '" + motion_model + "' needs filter ekf or ukf (the particle filter is cv)");
-  }
+  LOCALIZER_RETURN_IF_ERROR(ValidateTracker(*this));
   if (sensors_m.size() < 4) {
     return InvalidArgument("array.sensors_m has " + std::to_string(sensors_m.size()) +
                            " sensors; at least 4 are needed");

@@ -43,6 +43,8 @@ Status Rename(Status status) {
       {"reference_sensor", "array.reference_sensor"}, {"particles", "filter.particles"},
       {"accel_noise_mps2", "filter.accel_noise_mps2"}, {"tdoa_sigma_s", "filter.tdoa_sigma_s"},
       {"resample_threshold", "filter.resample_threshold"}, {"min_peak_snr", "filter.min_peak_snr"},
+      {"imm_modes", "filter.imm_modes"},           {"imm_variant", "filter.imm_variant"},
+      {"robust", "filter.robust"},
   };
   for (const auto& [from, to] : renames) {
     const size_t at = m.find(from);
@@ -88,9 +90,15 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
     case v1::FILTER_TYPE_PF: c.filter_type = "pf"; break;
     case v1::FILTER_TYPE_EKF: c.filter_type = "ekf"; break;
     case v1::FILTER_TYPE_UKF: c.filter_type = "ukf"; break;
-    default: return InvalidArgument("filter.type " + std::to_string(f.type()) + " is not one of: PF, EKF, UKF");
+    case v1::FILTER_TYPE_MMPF: c.filter_type = "mmpf"; break;
+    case v1::FILTER_TYPE_IMM: c.filter_type = "imm"; break;
+    default:
+      return InvalidArgument("filter.type " + std::to_string(f.type()) + " is not one of: PF, EKF, UKF, MMPF, IMM");
   }
   if (!f.motion_model().empty()) c.motion_model = f.motion_model();
+  if (!f.imm_modes().empty()) c.imm_modes = f.imm_modes();
+  if (!f.imm_variant().empty()) c.imm_variant = f.imm_variant();
+  if (!f.robust().empty()) c.robust = f.robust();
   if (f.particles() != 0) c.filter.particles = static_cast<int>(f.particles());
   if (f.accel_noise_mps2() != 0.0) c.filter.accel_noise_mps2 = f.accel_noise_mps2();
   c.filter.tdoa_sigma_s = f.tdoa_sigma_s();
@@ -132,10 +140,15 @@ v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::strin
   p.set_band_low_hz(c.band_low_hz);
   p.set_band_high_hz(c.band_high_hz);
   v1::FilterConfig* f = p.mutable_filter();
-  f->set_type(c.filter_type == "ekf"   ? v1::FILTER_TYPE_EKF
-              : c.filter_type == "ukf" ? v1::FILTER_TYPE_UKF
-                                       : v1::FILTER_TYPE_PF);
+  f->set_type(c.filter_type == "ekf"    ? v1::FILTER_TYPE_EKF
+              : c.filter_type == "ukf"  ? v1::FILTER_TYPE_UKF
+              : c.filter_type == "mmpf" ? v1::FILTER_TYPE_MMPF
+              : c.filter_type == "imm"  ? v1::FILTER_TYPE_IMM
+                                        : v1::FILTER_TYPE_PF);
   f->set_motion_model(c.motion_model);
+  f->set_imm_modes(c.imm_modes);
+  f->set_imm_variant(c.imm_variant);
+  f->set_robust(c.robust);
   f->set_particles(static_cast<uint32_t>(c.filter.particles));
   f->set_accel_noise_mps2(c.filter.accel_noise_mps2);
   f->set_tdoa_sigma_s(c.filter.tdoa_sigma_s);

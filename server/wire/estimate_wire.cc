@@ -36,6 +36,12 @@ void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& arr
   out->mutable_latency()->set_tdoa_s(e.timings.tdoa_s);
   out->mutable_latency()->set_filter_s(e.timings.filter_s);
   out->set_backend(backend);
+  out->clear_model_probabilities();
+  for (const engine::ModelProbability& m : e.model_probabilities) {
+    v1::ModelProbability* model = out->add_model_probabilities();
+    model->set_model(m.model);
+    model->set_probability(m.probability);
+  }
 }
 
 engine::Estimate EstimateFromProto(const v1::Estimate& p) {
@@ -62,6 +68,7 @@ engine::Estimate EstimateFromProto(const v1::Estimate& p) {
   }
   e.timings.tdoa_s = p.latency().tdoa_s();
   e.timings.filter_s = p.latency().filter_s();
+  for (const v1::ModelProbability& m : p.model_probabilities()) e.model_probabilities.push_back({m.model(), m.probability()});
   return e;
 }
 

@@ -1,11 +1,13 @@
 // server/wire: frame-major <-> channel-major blocks (float and 16-bit PCM), the rules a
-// bad block breaks, config defaults and round trips, Status -> gRPC codes.
+// bad block breaks, config defaults and round trips (the multiple-model filters' fields
+// included), estimates with model probabilities both ways, Status -> gRPC codes.
 #include <cmath>
 
 #include <gtest/gtest.h>
 
 #include "server/wire/block_wire.h"
 #include "server/wire/config_wire.h"
+#include "server/wire/estimate_wire.h"
 #include "server/wire/status_wire.h"
 
 namespace localizer::wire {
@@ -178,6 +180,69 @@ TEST(ConfigWire, FilterTypeAndMotionModelRoundTrip) {
   p.mutable_filter()->set_motion_model("cv");
   p.mutable_filter()->set_type(static_cast<v1::FilterType>(42));
   EXPECT_EQ(ConfigFromProto(p, {}).status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(ConfigWire, MultipleModelFiltersAndTheirFieldsRoundTrip) {
+  v1::SessionConfig p = MinimalConfig();
+  p.mutable_filter()->set_type(v1::FILTER_TYPE_IMM);
+  p.mutable_filter()->set_imm_modes("cv,ca");
+  p.mutable_filter()->set_imm_variant("ukf");
+  p.mutable_filter()->set_robust("huber");
+  auto config = ConfigFromProto(p, {});
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  EXPECT_EQ(config->filter_type, "imm");
+  EXPECT_EQ(config->imm_modes, "cv,ca");
+  EXPECT_EQ(config->imm_variant, "ukf");
+  EXPECT_EQ(config->robust, "huber");
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  EXPECT_EQ(effective.filter().type(), v1::FILTER_TYPE_IMM);
+  EXPECT_EQ(effective.filter().imm_modes(), "cv,ca");
+  EXPECT_EQ(effective.filter().imm_variant(), "ukf");
+  EXPECT_EQ(effective.filter().robust(), "huber");
+  // Unset fields take the engine defaults and are reported.
+  v1::SessionConfig mmpf = MinimalConfig();
+  mmpf.mutable_filter()->set_type(v1::FILTER_TYPE_MMPF);
+  auto plain = ConfigFromProto(mmpf, {});
+  ASSERT_TRUE(plain.ok()) << plain.status().ToString();
+  EXPECT_EQ(plain->filter_type, "mmpf");
+  const v1::SessionConfig reported = ConfigToProto(*plain, "");
+  EXPECT_EQ(reported.filter().type(), v1::FILTER_TYPE_MMPF);
+  EXPECT_EQ(reported.filter().imm_modes(), "cv,ct");
+  EXPECT_EQ(reported.filter().imm_variant(), "ekf");
+  EXPECT_EQ(reported.filter().robust(), "none");
+  // Bad values name the proto field.
+  p.mutable_filter()->set_imm_modes("cv,warp");
+  EXPECT_NE(ConfigFromProto(p, {}).status().message().find("filter.imm_modes"), std::string::npos);
+  p.mutable_filter()->set_imm_modes("");
+  p.mutable_filter()->set_robust("tukey");
+  EXPECT_NE(ConfigFromProto(p, {}).status().message().find("filter.robust"), std::string::npos);
+}
+
+TEST(EstimateWire, ModelProbabilitiesRoundTrip) {
+  const engine::ArrayGeometry array = *engine::ArrayGeometry::Create(
+      {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, 1500.0);
+  engine::Estimate e;
+  e.frame_index = 4;
+  e.initialised = true;
+  e.state << 1, 2, 3, 0.1, 0.2, 0.3;
+  e.model_probabilities = {{"cv", 0.25}, {"ct", 0.75}};
+  v1::Estimate wire;
+  EstimateToProto(e, array, "cpu", &wire);
+  ASSERT_EQ(wire.model_probabilities_size(), 2);
+  EXPECT_EQ(wire.model_probabilities(1).model(), "ct");
+  EXPECT_EQ(wire.model_probabilities(1).probability(), 0.75);
+  // A reused message is refilled, not appended to.
+  EstimateToProto(e, array, "cpu", &wire);
+  EXPECT_EQ(wire.model_probabilities_size(), 2);
+  const engine::Estimate back = EstimateFromProto(wire);
+  ASSERT_EQ(back.model_probabilities.size(), 2u);
+  EXPECT_EQ(back.model_probabilities[0].model, "cv");
+  EXPECT_EQ(back.model_probabilities[0].probability, 0.25);
+  EXPECT_EQ(back.state, e.state);
+  // Single-model filters: no entries on the wire.
+  e.model_probabilities.clear();
+  EstimateToProto(e, array, "cpu", &wire);
+  EXPECT_EQ(wire.model_probabilities_size(), 0);
 }
 
 TEST(ConfigWire, PolicyLimitsAreInvalidArgumentNamingTheField) {
