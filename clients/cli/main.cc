@@ -32,6 +32,8 @@ constexpr Command kCommands[] = {
      RunLocate},
     {"list", "the sessions a server holds, one line each", RunList},
     {"close", "end a server session (needs its resume token)", RunClose},
+    {"experiment", "reproduce a reference experiment and print its table (pf-vs-ekf-2d)",
+     RunExperiment},
 };
 
 std::string GlobalUsage() {
@@ -41,7 +43,7 @@ std::string GlobalUsage() {
       "filter), on files or through a localizer-server (gRPC).\n\ncommands:\n";
   for (const Command& c : kCommands) {
     std::string name = std::string("  ") + c.name;
-    name.resize(12, ' ');
+    name.resize(name.size() < 11 ? 12 : name.size() + 1, ' ');  // at least one space
     text += name + c.summary + "\n";
   }
   text +=
@@ -52,6 +54,7 @@ std::string GlobalUsage() {
       "  localizer-cli simulate --scenario tetra-water --out run --duration 6\n"
       "  localizer-cli track --array run/array.json --wav run/signals.wav --out run/est.csv\n"
       "  localizer-cli score --truth run/truth.csv --estimates run/est.csv\n"
+      "  localizer-cli experiment pf-vs-ekf-2d --runs 100 --seed 1\n"
       "With a server (localizer-server --listen 127.0.0.1:50051):\n"
       "  localizer-cli simulate --scenario tetra-water --duration 6 --server 127.0.0.1:50051\n"
       "  localizer-cli track --server 127.0.0.1:50051 --array run/array.json \\\n"

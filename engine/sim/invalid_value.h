@@ -1,5 +1,6 @@
 // INVALID_ARGUMENT messages of the simulation stage's option checks: "field is value;
-// requirement", the value printed with 9 significant digits. Internal to engine/sim.
+// requirement", the value printed with 9 significant digits. Internal to engine/sim and
+// engine/experiments (which builds on sim).
 #pragma once
 
 #include <cstdio>
