@@ -13,6 +13,8 @@ namespace localizer::engine {
 struct ScenarioRun {
   std::vector<Estimate> estimates;
   TrackScore score;  // estimates from 2 s on, against the simulator's truth
+  SessionConfig config;
+  SimResult sim;     // the simulated recording and its truth
 };
 
 // The session config that tracks `scenario`: its array, sample rate and band.
@@ -31,7 +33,7 @@ inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelih
                                  const std::string& motion_model = "cv") {
   const Scenario scenario = *MakeScenario(name, seed);
   const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
-  const SimResult sim = *Simulate(array, scenario.sim);
+  SimResult sim = *Simulate(array, scenario.sim);
   SessionConfig config = SessionConfigFor(scenario);
   config.filter.likelihood = likelihood;
   config.seed = seed;
@@ -42,6 +44,8 @@ inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelih
   ScenarioRun run;
   (void)session->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &run.estimates);
   run.score = ScoreTrack(array, sim, run.estimates, /*skip_s=*/2.0);
+  run.config = config;
+  run.sim = std::move(sim);
   return run;
 }
 

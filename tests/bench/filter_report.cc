@@ -1,0 +1,76 @@
+// Every filter through whole sessions (GCC-PHAT + tracker) on every named scenario: RMSE,
+// RMSE over the per-frame position CRLB and over the posterior CRLB (the CV model's, along
+// the true path: tests/pipeline/scenario_bound.h), and NEES per dimension; seeds 1..N,
+// medians per (scenario, filter) last. BENCHMARKS.md quotes it.
+// Run: build/tests/bench/filter_report [N=3] [filters, comma separated; default all]
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/pipeline/scenario_bound.h"
+#include "tests/pipeline/scenario_run.h"
+
+namespace localizer::engine {
+namespace {
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+struct FilterChoice {
+  std::string filter, model;
+};
+
+std::vector<FilterChoice> Choices(const std::string& list) {
+  std::vector<FilterChoice> all;
+  std::stringstream in(list);
+  for (std::string item; std::getline(in, item, ',');) {
+    const auto dash = item.find('-');
+    all.push_back(dash == std::string::npos ? FilterChoice{item, "cv"}
+                                            : FilterChoice{item.substr(0, dash), item.substr(dash + 1)});
+  }
+  return all;
+}
+
+int Main(int argc, char** argv) {
+  const int seeds = argc > 1 ? std::atoi(argv[1]) : 3;
+  const std::string list = argc > 2 ? argv[2] : "pf,ekf,ukf,ekf-ct,ukf-ct,mmpf,imm";
+  std::printf("%-15s %-7s %4s %8s %9s %9s %8s %6s\n", "scenario", "filter", "seed", "rmse_m", "rmse/crlb",
+              "rmse/pcrlb", "nees/dim", "reinit");
+  std::vector<std::string> summary;
+  for (const std::string& name : ScenarioNames()) {
+    for (const FilterChoice& f : Choices(list)) {
+      const std::string label = f.model == "cv" ? f.filter : f.filter + "-" + f.model;
+      std::vector<double> crlb, pcrlb, nees, rmse;
+      for (int seed = 1; seed <= seeds; ++seed) {
+        const ScenarioRun run = TrackScenario(name, seed, Likelihood::kPeak, "cpu", f.filter, f.model);
+        const ArrayGeometry array = *ArrayGeometry::Create(run.config.sensors_m, run.config.sound_speed_mps);
+        const BoundScore b = ScoreAgainstPcrlb(array, run.sim, run.config, run.estimates, run.score, 2.0);
+        std::printf("%-15s %-7s %4d %8.3f %9.3f %9.3f %8.2f %6d\n", name.c_str(), label.c_str(), seed,
+                    run.score.rmse_m, run.score.rmse_over_crlb, b.rmse_over_pcrlb, b.nees_per_dim,
+                    run.score.reinitialisations);
+        std::fflush(stdout);
+        rmse.push_back(run.score.rmse_m);
+        crlb.push_back(run.score.rmse_over_crlb);
+        pcrlb.push_back(b.rmse_over_pcrlb);
+        nees.push_back(b.nees_per_dim);
+      }
+      char line[200];
+      std::snprintf(line, sizeof line, "%-15s %-7s median rmse %.3f m, rmse/crlb %.3f, rmse/pcrlb %.2f, nees/dim %.2f",
+                    name.c_str(), label.c_str(), Median(rmse), Median(crlb), Median(pcrlb), Median(nees));
+      summary.push_back(line);
+    }
+  }
+  std::printf("\n");
+  for (const std::string& line : summary) std::printf("%s\n", line.c_str());
+  return 0;
+}
+
+}  // namespace
+}  // namespace localizer::engine
+
+int main(int argc, char** argv) { return localizer::engine::Main(argc, argv); }
