@@ -33,7 +33,10 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "ekf/ukf/imm update: none | huber | student-t (down-weight a pair the others contradict)");
   flags.Int("particles", &c.filter.particles, "N", "", "particle count");
   flags.String("likelihood", &f->likelihood, "NAME",
-               "particle likelihood: peak (TDOA peaks) | gcc (whole GCC functions)");
+               "particle likelihood: peak (TDOA peaks, Student-t) | gcc (whole GCC functions) | "
+               "mixture (Gaussian + uniform outliers)");
+  flags.Double("outlier-probability", &c.filter.outlier_probability, "P", "",
+               "mixture likelihood: chance that a pair's peak is an outlier, in [0, 1)");
   flags.Uint64(seed_flag, &c.seed, "S", "random seed of the particle filter");
   flags.Double("tdoa-sigma-us", &f->tdoa_sigma_us, "US", "us",
                "TDOA noise std of the peak likelihood (0: estimated online from the innovations)");

@@ -14,10 +14,13 @@ namespace localizer::engine {
 StatusOr<Likelihood> ParseLikelihood(const std::string& name) {
   if (name == "peak") return Likelihood::kPeak;
   if (name == "gcc") return Likelihood::kGcc;
-  return InvalidArgument("likelihood '" + name + "' is not one of: peak, gcc");
+  if (name == "mixture") return Likelihood::kMixture;
+  return InvalidArgument("likelihood '" + name + "' is not one of: peak, gcc, mixture");
 }
 
-const char* LikelihoodName(Likelihood l) { return l == Likelihood::kPeak ? "peak" : "gcc"; }
+const char* LikelihoodName(Likelihood l) {
+  return l == Likelihood::kPeak ? "peak" : l == Likelihood::kGcc ? "gcc" : "mixture";
+}
 
 Status ParticleFilterOptions::Validate() const {
   if (particles < 16 || particles > (1 << 22)) {
@@ -29,6 +32,9 @@ Status ParticleFilterOptions::Validate() const {
   if (!(tdoa_sigma_s >= 0.0) || !std::isfinite(tdoa_sigma_s)) {
     return InvalidArgument("tdoa_sigma_s must be finite and >= 0 (0: adaptive), got " +
                            std::to_string(tdoa_sigma_s));
+  }
+  if (!(outlier_probability >= 0.0 && outlier_probability < 1.0)) {
+    return InvalidArgument("outlier_probability must be in [0, 1), got " + std::to_string(outlier_probability));
   }
   if (!(peak_dof > 0.0) || !std::isfinite(peak_dof)) {
     return InvalidArgument("peak_dof must be finite and > 0, got " + std::to_string(peak_dof));

@@ -19,6 +19,12 @@
 //     — near the peak it is the Gaussian; far out it still points the way (a clipped
 //     Gaussian goes flat and the filter coasts), and one pair locked on a reflection
 //     cannot wipe out every particle;
+//   mixture likelihood (Gaussian + uniform outliers): with eps = outlier_probability and
+//     W_k = 2 max_delay_s(k) the span of delays the pair can measure,
+//     log w += sum_k log((1 - eps) N(z_k; 0, 1) / sigma + eps / W_k)
+//     — a frame's pair is either right (Gaussian) or anywhere it can be (a reflection, a
+//     second source), so an outlier costs every particle the same floor instead of
+//     pulling the cloud;
 //   GCC likelihood: log w += sum_k kappa_k g_k(h_k' * fs), g_k the pair's GCC over its lag
 //     window (upsampled 8x by a windowed sinc, then Catmull-Rom between fine lags),
 //     kappa_k = gcc_sharpness / (sigma_k^2 * -g_k'') at the highest peak (sigma in
@@ -48,8 +54,8 @@
 
 namespace localizer::engine {
 
-enum class Likelihood { kPeak, kGcc };
-StatusOr<Likelihood> ParseLikelihood(const std::string& name);  // "peak" | "gcc"
+enum class Likelihood { kPeak, kGcc, kMixture };
+StatusOr<Likelihood> ParseLikelihood(const std::string& name);  // "peak" | "gcc" | "mixture"
 const char* LikelihoodName(Likelihood l);
 
 struct ParticleFilterOptions {
@@ -59,6 +65,8 @@ struct ParticleFilterOptions {
   double peak_dof = 4.0;              // peak likelihood: Student-t degrees of freedom, > 0
   double gcc_sharpness = 1.0;         // GCC likelihood: curvature at the peak / the peak
                                       // likelihood's, > 0
+  double outlier_probability = 0.05;  // mixture likelihood: eps, the chance a pair's peak
+                                      // is an outlier, in [0, 1)
   Likelihood likelihood = Likelihood::kPeak;
   double min_peak_snr = 5.0;          // pairs whose peak_snr is below are not used: the
                                       // frame holds no coherent source for them (noise

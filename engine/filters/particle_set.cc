@@ -22,13 +22,17 @@ ParticleSet::ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions
       seed_(options.seed),
       origin_m_(array.centroid_m()),
       reference_(array.reference_sensor()),
+      outlier_probability_(static_cast<float>(options.outlier_probability)),
       inv_c_(static_cast<float>(1.0 / array.sound_speed_mps())) {
   for (const Vec3& m : array.sensors_m()) {
     sensor_x_.push_back(static_cast<float>(m.x() - origin_m_.x()));
     sensor_y_.push_back(static_cast<float>(m.y() - origin_m_.y()));
     sensor_z_.push_back(static_cast<float>(m.z() - origin_m_.z()));
   }
-  for (int p = 0; p < array.pair_count(); ++p) pair_sensor_.push_back(array.sensor_of_pair(p));
+  for (int p = 0; p < array.pair_count(); ++p) {
+    pair_sensor_.push_back(array.sensor_of_pair(p));
+    pair_span_s_.push_back(static_cast<float>(2.0 * array.max_delay_s(p)));
+  }
   cur_.Resize(n_);
   next_.Resize(n_);
   for (auto* v : {&logw_, &w_, &r_ref_, &vr_ref_, &loglik_, &delay_}) v->assign(n_, 0.0f);
@@ -281,6 +285,16 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
         const float g = g0 + 0.5f * t * ((g1 - gm) + t * ((2.0f * gm - 5.0f * g0 + 4.0f * g1 - g2) +
                                                             t * (3.0f * (g0 - g1) + g2 - gm)));
         ll[i] += gcc_gain * g;
+      }
+    } else if (likelihood == Likelihood::kMixture) {
+      // log(exp(-e^2 / 2) + floor) is the mixture's log-density up to a constant, with
+      // floor = (eps / W) / ((1 - eps) / (sigma sqrt(2 pi))).
+      const double eps = outlier_probability_;
+      const auto floor = static_cast<float>(eps / pair_span_s_[p] * sigma_s * 2.5066282746310002 / (1.0 - eps));
+#pragma omp simd
+      for (int i = 0; i < n_; ++i) {
+        const float e = (d - hk[i]) * inv_sigma;
+        ll[i] += FastLog(FastExp(-0.5f * e * e) + floor);
       }
     } else {
 #pragma omp simd

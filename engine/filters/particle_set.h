@@ -99,6 +99,8 @@ class ParticleSet {
   std::vector<float> sensor_x_, sensor_y_, sensor_z_;  // relative to origin
   int reference_;
   std::vector<int> pair_sensor_;
+  std::vector<float> pair_span_s_;  // 2 max_delay_s per pair: the mixture's uniform width
+  float outlier_probability_;
   float inv_c_;
   Columns cur_, next_;
   std::vector<float> logw_, w_;          // log-weights; normalised linear weights

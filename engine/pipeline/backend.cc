@@ -91,7 +91,11 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
     if (reason.empty()) {
       auto estimator = provider->MakeEstimator(array, gcc);
       if (!estimator.ok()) return estimator.status();
-      auto made = particle ? provider->MakeTracker(array, tracker.particle) : MakeCpuOnly(array, tracker);
+      // The device kernels weigh by the peak or GCC likelihood; the mixture likelihood's
+      // particle filter runs on the CPU beside the GPU GCC, as the Kalman filters do.
+      const bool on_device = particle && tracker.particle.likelihood != Likelihood::kMixture;
+      auto made = on_device ? provider->MakeTracker(array, tracker.particle)
+                            : particle ? MakeCpuParticleFilter(array, tracker.particle) : MakeCpuOnly(array, tracker);
       if (!made.ok()) return made.status();
       parts.estimator = std::move(estimator).value();
       parts.tracker = std::move(made).value();

@@ -49,7 +49,8 @@ class BackendProvider {
 // before sessions are created. Returns the provider it replaced.
 std::shared_ptr<BackendProvider> SetGpuProvider(std::shared_ptr<BackendProvider> provider);
 
-// Which tracker a session runs. The particle filter runs on the chosen backend; the Kalman
+// Which tracker a session runs. The particle filter runs on the chosen backend (with the
+// mixture likelihood, on the CPU); the Kalman
 // filters (microseconds per update), the IMM and the multiple-model particle filter always
 // run on the CPU, beside a GPU GCC when "gpu" (the GPU provider makes only the plain PF).
 struct TrackerOptions {

@@ -103,6 +103,8 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
   if (f.accel_noise_mps2() != 0.0) c.filter.accel_noise_mps2 = f.accel_noise_mps2();
   c.filter.tdoa_sigma_s = f.tdoa_sigma_s();
   if (f.likelihood() == v1::LIKELIHOOD_GCC) c.filter.likelihood = engine::Likelihood::kGcc;
+  if (f.likelihood() == v1::LIKELIHOOD_MIXTURE) c.filter.likelihood = engine::Likelihood::kMixture;
+  if (f.outlier_probability() != 0.0) c.filter.outlier_probability = f.outlier_probability();
   if (f.min_peak_snr() != 0.0) c.filter.min_peak_snr = f.min_peak_snr();
   if (f.resample_threshold() != 0.0) c.filter.resample_threshold = f.resample_threshold();
 
@@ -152,7 +154,10 @@ v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::strin
   f->set_particles(static_cast<uint32_t>(c.filter.particles));
   f->set_accel_noise_mps2(c.filter.accel_noise_mps2);
   f->set_tdoa_sigma_s(c.filter.tdoa_sigma_s);
-  f->set_likelihood(c.filter.likelihood == engine::Likelihood::kGcc ? v1::LIKELIHOOD_GCC : v1::LIKELIHOOD_PEAK);
+  f->set_likelihood(c.filter.likelihood == engine::Likelihood::kGcc       ? v1::LIKELIHOOD_GCC
+                    : c.filter.likelihood == engine::Likelihood::kMixture ? v1::LIKELIHOOD_MIXTURE
+                                                                          : v1::LIKELIHOOD_PEAK);
+  f->set_outlier_probability(c.filter.outlier_probability);
   f->set_min_peak_snr(c.filter.min_peak_snr);
   f->set_resample_threshold(c.filter.resample_threshold);
   p.set_backend(c.backend);

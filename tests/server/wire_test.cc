@@ -154,6 +154,27 @@ TEST(ConfigWire, EffectiveConfigRoundTrips) {
   EXPECT_EQ(effective.hop_samples(), 512u);
 }
 
+TEST(ConfigWire, MixtureLikelihoodAndItsOutlierProbabilityRoundTrip) {
+  v1::SessionConfig p = MinimalConfig();
+  p.mutable_filter()->set_likelihood(v1::LIKELIHOOD_MIXTURE);
+  auto defaulted = ConfigFromProto(p, {});
+  ASSERT_TRUE(defaulted.ok()) << defaulted.status().ToString();
+  EXPECT_EQ(defaulted->filter.likelihood, engine::Likelihood::kMixture);
+  EXPECT_EQ(defaulted->filter.outlier_probability, 0.05);  // unset: the default
+  p.mutable_filter()->set_outlier_probability(0.2);
+  auto config = ConfigFromProto(p, {});
+  ASSERT_TRUE(config.ok());
+  EXPECT_EQ(config->filter.outlier_probability, 0.2);
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  EXPECT_EQ(effective.filter().likelihood(), v1::LIKELIHOOD_MIXTURE);
+  EXPECT_EQ(effective.filter().outlier_probability(), 0.2);
+  p.mutable_filter()->set_outlier_probability(1.0);
+  auto bad = ConfigFromProto(p, {});
+  const Status status = bad.ok() ? (*bad).Validate() : bad.status();
+  EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(status.message().find("outlier_probability"), std::string::npos) << status.message();
+}
+
 TEST(ConfigWire, FilterTypeAndMotionModelRoundTrip) {
   v1::SessionConfig p = MinimalConfig();
   p.mutable_filter()->set_type(v1::FILTER_TYPE_UKF);
