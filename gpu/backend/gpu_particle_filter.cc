@@ -8,6 +8,10 @@ StatusOr<std::unique_ptr<GpuParticleFilter>> GpuParticleFilter::Create(std::shar
                                                                        const engine::ArrayGeometry& array,
                                                                        const engine::ParticleFilterOptions& options) {
   LOCALIZER_RETURN_IF_ERROR(options.Validate());
+  if (options.likelihood == engine::Likelihood::kMixture) {
+    // BuildComponents keeps such filters on the CPU; the device kernels weigh by peak or GCC.
+    return InvalidArgument("the GPU particle filter has no mixture likelihood (use the CPU filter)");
+  }
   auto slot = runtime->bank().Open(array, options);
   if (!slot.ok()) return slot.status();
   return std::unique_ptr<GpuParticleFilter>(

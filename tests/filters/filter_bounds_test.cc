@@ -12,7 +12,9 @@
 #include <functional>
 #include <memory>
 
+#include "engine/filters/imm_filter.h"
 #include "engine/filters/kalman_filter.h"
+#include "engine/filters/multi_model_pf.h"
 #include "engine/filters/particle_filter.h"
 #include "tests/filters/bound_scenes.h"
 
@@ -62,6 +64,18 @@ std::vector<FilterCase> Filters(double sigma_s) {
                        }});
     }
   }
+  // The multiple-model filters against the CV model's bound (their first mode).
+  cases.push_back({"mmpf", "cv", [sigma_s](const ArrayGeometry& a, uint64_t seed) {
+                     MultiModelPfOptions o;
+                     o.particle.tdoa_sigma_s = sigma_s;
+                     o.particle.seed = seed;
+                     return std::unique_ptr<Tracker>(std::move(*MultiModelParticleFilter::Create(a, o)));
+                   }});
+  cases.push_back({"imm", "cv", [sigma_s](const ArrayGeometry& a, uint64_t) {
+                     ImmOptions o;
+                     o.kalman.tdoa_sigma_s = sigma_s;
+                     return std::unique_ptr<Tracker>(std::move(*ImmFilter::Create(a, o)));
+                   }});
   return cases;
 }
 
