@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
+
 #include <cmath>
 #include <memory>
 #include <random>
@@ -82,6 +84,38 @@ std::unique_ptr<PlanarKalmanFilter> NoiselessKalman(PlanarPredictor predictor, d
   belief.covariance(kHeading, kHeading) = heading_var;
   (*filter)->Initialise(belief);
   return std::move(*filter);
+}
+
+TEST(PlanarKalman, OneUpdateOnTheLinearPositionModelEqualsTheTextbookStep) {
+  // z = H x + n with H = [I2 0]: the update is linear, so EKF and UKF must both give
+  //   K = P H^T (H P H^T + R)^-1,  x = x- + K (z - H x-),  P = (I - K H) P- (I - K H)^T + K R K^T,
+  // computed here by hand from the matrices.
+  PlanarBelief prior;
+  prior.mean << 3.0, -1.0, 0.4;
+  prior.covariance << 0.50, 0.10, 0.02,  //
+      0.10, 0.30, 0.01,                   //
+      0.02, 0.01, 0.04;
+  const Eigen::Vector2d z(3.6, -1.5);
+  const double sigma_m = 0.7;
+  Eigen::Matrix<double, 2, 3> h = Eigen::Matrix<double, 2, 3>::Zero();
+  h(0, 0) = h(1, 1) = 1.0;
+  const Eigen::Matrix2d r = sigma_m * sigma_m * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2d s = h * prior.covariance * h.transpose() + r;
+  const Eigen::Matrix<double, 3, 2> k = prior.covariance * h.transpose() * s.inverse();
+  const Eigen::Vector3d mean = prior.mean + k * (z - h * prior.mean);
+  const Eigen::Matrix3d a = Eigen::Matrix3d::Identity() - k * h;
+  const Eigen::Matrix3d cov = a * prior.covariance * a.transpose() + k * r * k.transpose();
+  for (PlanarPredictor predictor : {PlanarPredictor::kExtended, PlanarPredictor::kUnscented}) {
+    PlanarKalmanOptions options;
+    options.predictor = predictor;
+    options.measurement_sigma_m = sigma_m;
+    auto filter = PlanarKalmanFilter::Create(BicycleModel(), ControlNoise(), options);
+    ASSERT_TRUE(filter.ok()) << filter.status().ToString();
+    (*filter)->Initialise(prior);
+    (*filter)->Update(z);
+    EXPECT_LT(((*filter)->Estimate() - mean).norm(), 1e-12);
+    EXPECT_LT(((*filter)->belief().covariance - cov).norm(), 1e-12);
+  }
 }
 
 TEST(PlanarKalman, UnscentedPredictionCapturesTheHeadingSpread) {
