@@ -95,19 +95,9 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2) {
   const float dt = static_cast<float>(dt_s);
   const float a_to_v = static_cast<float>(accel_sigma_mps2 * dt_s);
   const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
-  const uint32_t key = NextKey();
+  DrawAccelNormals(NextKey());  // axis k of particle i reads accel_[k * N + i]
   moments_valid_ = false;
   const int n = n_;
-  // 3N standard normals, two per Box–Muller draw: accel_[j] and accel_[half + j] come from
-  // uniforms 2j and 2j + 1. Axis k of particle i reads accel_[k * N + i].
-  const int half = static_cast<int>(accel_.size() / 2);
-  float* __restrict first = accel_.data();
-  float* __restrict second = accel_.data() + half;
-#pragma omp simd
-  for (int j = 0; j < half; ++j) {
-    const uint32_t c = 2u * static_cast<uint32_t>(j);
-    NormalPairFromUniforms(UniformFromCounter(key, c), UniformFromCounter(key, c + 1), &first[j], &second[j]);
-  }
   const float* __restrict ax = accel_.data();
   const float* __restrict ay = accel_.data() + n;
   const float* __restrict az = accel_.data() + 2 * n;
@@ -129,7 +119,8 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2) {
 }
 
 void ParticleSet::DrawAccelNormals(uint32_t key) {
-  // As in Predict: accel_[j] and accel_[half + j] come from uniforms 2j and 2j + 1.
+  // 3N standard normals, two per Box–Muller draw: accel_[j] and accel_[half + j] come from
+  // uniforms 2j and 2j + 1.
   const int half = static_cast<int>(accel_.size() / 2);
   float* __restrict first = accel_.data();
   float* __restrict second = accel_.data() + half;

@@ -10,8 +10,8 @@
 //   cv-random  cv's start, then the constant-velocity model's own motion: an acceleration
 //         ~ N(0, accel_std^2 I3) drawn per frame (seeded) and held over it, so the truth is
 //         a draw from the model the CV filters assume and the PCRLB is their expected bound
-// TDOAs as manoeuvre_track.h: exact delays at the instant the filters model, plus
-// N(0, sigma_s^2) from std::mt19937_64(seed).
+// TDOAs by manoeuvre_track.h's TdoaFrame: exact delays at the instant the filters model,
+// plus N(0, sigma_s^2) from std::mt19937_64(seed).
 #pragma once
 
 #include <cmath>
@@ -74,26 +74,6 @@ inline std::vector<PathPoint> MakePath(const BoundScene& scene, uint64_t seed) {
     p.accel_mps2 = a;
   }
   return points;
-}
-
-// A frame of TDOAs for a source at `point`, as manoeuvre_track.h makes them.
-inline Measurement TdoaFrame(const ArrayGeometry& array, const PathPoint& point, double t_s, double sigma_s,
-                             std::mt19937_64& rng) {
-  std::normal_distribution<double> noise(0.0, sigma_s);
-  Measurement m;
-  m.t_s = t_s;
-  m.sample_rate_hz = 48000.0;
-  const Eigen::VectorXd tdoa = array.Tdoa(point.position_m);
-  const Eigen::MatrixXd j = array.TdoaJacobian(point.position_m);
-  for (int k = 0; k < array.pair_count(); ++k) {
-    PairMeasurement pair;
-    pair.sensor = array.sensor_of_pair(k);
-    pair.delay_s = tdoa(k) / (1.0 + 0.5 * j.row(k).dot(point.velocity_mps)) + noise(rng);
-    pair.peak_snr = 50.0;
-    pair.quality = 10.0;
-    m.pairs.push_back(pair);
-  }
-  return m;
 }
 
 // The true state in a motion model's layout: (p, v), then a for ca/singer, the turn rate for ct.

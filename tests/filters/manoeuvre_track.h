@@ -43,6 +43,27 @@ struct TruthStep {
   Measurement measurement;
 };
 
+// A frame of TDOAs for a source at p moving at v: the exact delays at the instant the
+// filters model (d = T - (d/2) grad T . v, to first order) plus a draw of `noise` per pair.
+inline Measurement TdoaFrame(const ArrayGeometry& array, const Vec3& p, const Vec3& v, double t_s,
+                             std::normal_distribution<double>& noise, std::mt19937_64& rng,
+                             double sample_rate_hz = 48000.0) {
+  Measurement m;
+  m.t_s = t_s;
+  m.sample_rate_hz = sample_rate_hz;
+  const Eigen::VectorXd tdoa = array.Tdoa(p);
+  const Eigen::MatrixXd j = array.TdoaJacobian(p);
+  for (int k = 0; k < array.pair_count(); ++k) {
+    PairMeasurement pair;
+    pair.sensor = array.sensor_of_pair(k);
+    pair.delay_s = tdoa(k) / (1.0 + 0.5 * j.row(k).dot(v)) + noise(rng);
+    pair.peak_snr = 50.0;
+    pair.quality = 10.0;
+    m.pairs.push_back(pair);
+  }
+  return m;
+}
+
 // The truth and the frame of every step: step k is at t = (k + 1) dt.
 inline std::vector<TruthStep> MakeManoeuvre(const ArrayGeometry& array, const ManoeuvreScene& scene, uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -56,20 +77,7 @@ inline std::vector<TruthStep> MakeManoeuvre(const ArrayGeometry& array, const Ma
     p += w == 0.0 ? Vec3(v * dt)
                   : Vec3((s * v.x() - (1 - c) * v.y()) / w, ((1 - c) * v.x() + s * v.y()) / w, v.z() * dt);
     v = Vec3(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
-    TruthStep t{p, v, {}};
-    t.measurement.t_s = (step + 1) * dt;
-    t.measurement.sample_rate_hz = scene.sample_rate_hz;
-    const Eigen::VectorXd tdoa = array.Tdoa(p);
-    const Eigen::MatrixXd j = array.TdoaJacobian(p);
-    for (int k = 0; k < array.pair_count(); ++k) {
-      PairMeasurement pair;
-      pair.sensor = array.sensor_of_pair(k);
-      pair.delay_s = tdoa(k) / (1.0 + 0.5 * j.row(k).dot(v)) + noise(rng);  // d = T - (d/2) grad T . v
-      pair.peak_snr = 50.0;
-      pair.quality = 10.0;
-      t.measurement.pairs.push_back(pair);
-    }
-    out.push_back(std::move(t));
+    out.push_back({p, v, TdoaFrame(array, p, v, (step + 1) * dt, noise, rng, scene.sample_rate_hz)});
   }
   return out;
 }
