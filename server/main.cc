@@ -43,7 +43,8 @@ int Main(int argc, char** argv) {
   bool version = false;
   FlagSet flags("localizer-server [flags]", kSummary);
   flags.String("listen", &o.listen, "HOST:PORT", "gRPC address (port 0: any free port; see --ready-file)");
-  flags.String("metrics-listen", &o.metrics_listen, "HOST:PORT", "Prometheus /metrics address (\"\": off)");
+  flags.String("metrics-listen", &o.metrics_listen, "HOST:PORT",
+               "HTTP address of /metrics (Prometheus), / (live view) and /sessions (JSON) (\"\": off)");
   flags.String("backend", &o.backend, "auto|cpu|gpu",
                "compute backend for sessions that do not choose; gpu without a device refuses sessions");
   flags.Int("max-sessions", &o.max_sessions, "N", "sessions", "open sessions before RESOURCE_EXHAUSTED");

@@ -7,7 +7,9 @@
 
 #include "engine/pipeline/backend.h"
 #include "gpu/backend/gpu_backend.h"
+#include "server/service/live_page.h"
 #include "server/service/log.h"
+#include "server/service/sessions_json.h"
 #include "server/service/version.h"
 
 namespace localizer::server {
@@ -115,6 +117,16 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
       return exposer.status();
     }
     s->exposer_ = std::move(exposer).value();
+    // The live view: GET / draws what GET /sessions lists. The exposer is stopped before
+    // the registry is destroyed (Shutdown), so `sessions` outlives every request.
+    const double ttl_s = options.session_ttl_s;
+    auto sessions_page = [sessions, ttl_s] {
+      return std::pair<int, std::string>(200, SessionsJson(sessions->Snapshot(), Clock::now(), ttl_s));
+    };
+    auto live_page = [] { return std::pair<int, std::string>(200, std::string(LivePageHtml())); };
+    LOCALIZER_RETURN_IF_ERROR(
+        s->exposer_->AddPage("/sessions", std::move(sessions_page), "application/json; charset=utf-8"));
+    LOCALIZER_RETURN_IF_ERROR(s->exposer_->AddPage("/", std::move(live_page), "text/html; charset=utf-8"));
   }
   grpc::HealthCheckServiceInterface* health = s->grpc_->GetHealthCheckService();
   if (health != nullptr) {
@@ -155,9 +167,11 @@ void Server::Shutdown() {
   }
   // Streams still open get cancelled after a short grace for their final writes.
   grpc_->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(500));
+  // The HTTP server goes first: its collectors and /sessions read the session registry
+  // (its destructor waits for requests in flight).
+  exposer_.reset();
   sessions_.reset();  // closes what is left
   pool_->Shutdown();
-  exposer_.reset();
   LogEvent("info", "server_stop",
            {{"drain_s", std::to_string(std::chrono::duration<double>(Clock::now() - start).count())}});
 }

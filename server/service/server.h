@@ -1,5 +1,6 @@
 // A running localizer server: the gRPC service (with the standard health and reflection
-// services), the worker pool, the session registry, and the /metrics HTTP endpoint.
+// services), the worker pool, the session registry, and the HTTP endpoint (/metrics, the
+// live view at /, /sessions).
 //
 //   auto server = Server::Start(options);   // listening when this returns
 //   ... server->grpc_port(), server->metrics_port()

@@ -267,6 +267,7 @@ std::vector<ResponsePtr> SessionHost::Process(WorkItem& item, Clock::time_point 
     Observe(stages.filter, e.timings.filter_s);
     Observe(stages.total, Seconds(done - item.received));
     Bump(stages.estimates);
+    track_.Append(e);
     out.push_back(std::move(response));
   }
   return out;

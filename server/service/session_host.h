@@ -32,6 +32,7 @@
 #include "localizer/v1/localizer.pb.h"
 #include "server/service/service_metrics.h"
 #include "server/service/stream_sink.h"
+#include "server/service/track_history.h"
 #include "server/service/worker_pool.h"
 #include "server/wire/block_wire.h"
 
@@ -57,6 +58,10 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   const std::string& id() const { return id_; }
   const std::string& label() const { return label_; }
   const std::string& backend() const { return session_->backend(); }
+  // The session's config (fixed at creation, so readable from any thread).
+  const engine::SessionConfig& config() const { return session_->config(); }
+  // Recent initialised positions for the live view; locks itself (see track_history.h).
+  const TrackHistory& track() const { return track_; }
   bool TokenMatches(const std::string& token) const;  // constant-time comparison
   const wire::BlockLimits& block_limits() const { return block_limits_; }
   std::mutex& mutex() const { return mutex_; }
@@ -131,6 +136,7 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   ServiceMetrics* const metrics_;
   const Clock::time_point created_;
   std::vector<engine::Estimate> estimates_;  // worker scratch
+  TrackHistory track_;                       // appended by the worker; has its own lock
 
   mutable std::mutex mutex_;
   StreamSink* sink_ = nullptr;                // guarded by mutex_

@@ -1,0 +1,166 @@
+#include "server/service/live_page.h"
+
+namespace localizer::server {
+namespace {
+
+// Kept as one readable document; the drawing code is plain DOM + SVG (no libraries).
+constexpr std::string_view kPage = R"html(<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>localizer: live sessions</title>
+<style>
+  body { font: 14px system-ui, sans-serif; margin: 16px; color: #222; background: #fff; }
+  h1 { font-size: 20px; margin: 0 0 4px; }
+  #status { color: #666; margin-bottom: 4px; }
+  .legend { color: #444; margin-bottom: 12px; }
+  .session { border: 1px solid #ccc; border-radius: 6px; padding: 8px 12px; margin-bottom: 14px; }
+  .session h2 { font-size: 16px; margin: 0 0 4px; }
+  .meta { color: #444; font-family: ui-monospace, monospace; font-size: 12px; margin-bottom: 6px; }
+  .panels { display: flex; flex-wrap: wrap; gap: 10px; }
+  svg.plot { width: 520px; height: 400px; border: 1px solid #eee; background: #fcfcfc; }
+  svg .grid { stroke: #e4e4e4; stroke-width: 1; }
+  svg .frame { stroke: #999; fill: none; }
+  svg text { font: 11px system-ui, sans-serif; fill: #555; }
+  svg text.title { font-size: 13px; fill: #222; }
+  svg .sensor { fill: #1f77b4; }
+  svg .track { stroke: #d62728; stroke-width: 2; fill: none; stroke-linejoin: round; }
+  svg .latest { fill: #d62728; stroke: #fff; stroke-width: 1.5; }
+</style>
+</head>
+<body>
+<h1>localizer: live sessions</h1>
+<div id="status">loading /sessions ...</div>
+<div class="legend"><span style="color:#1f77b4">&#9679;</span> sensor &nbsp;
+  <span style="color:#d62728">&#9473;</span> estimated track (last fixes) &nbsp;
+  <span style="color:#d62728">&#9679;</span> latest estimate &nbsp; axes in metres</div>
+<div id="sessions"></div>
+<p><a href="/metrics">/metrics</a> (Prometheus) &middot; <a href="/sessions">/sessions</a> (JSON)</p>
+<script>
+"use strict";
+const SVG_NS = "http://www.w3.org/2000/svg";
+const W = 520, H = 400, LEFT = 56, RIGHT = 14, TOP = 26, BOTTOM = 40;
+
+function el(tag, attrs, parent, text) {
+  const e = tag.startsWith("svg:") ? document.createElementNS(SVG_NS, tag.slice(4)) : document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+  if (text !== undefined) e.textContent = text;
+  if (parent) parent.appendChild(e);
+  return e;
+}
+
+// A round tick step (1, 2 or 5 times a power of ten) giving about eight ticks over `span`.
+function tickStep(span) {
+  const raw = span / 8, p = Math.pow(10, Math.floor(Math.log10(raw)));
+  for (const m of [1, 2, 5, 10]) if (m * p >= raw) return m * p;
+  return 10 * p;
+}
+
+function fmt(v) { return Math.abs(v) < 1e-9 ? "0" : Number(v.toPrecision(4)).toString(); }
+
+// One panel: axes a and b (0 x, 1 y, 2 z) of the sensors and the track, equal scale in metres.
+function drawPanel(svg, title, a, b, sensors, track) {
+  while (svg.firstChild) svg.removeChild(svg.firstChild);
+  const names = ["x", "y", "z"];
+  const pts = sensors.concat(track.map(p => p.position_m)).filter(p => p && p[a] !== null && p[b] !== null);
+  let minA = Infinity, maxA = -Infinity, minB = Infinity, maxB = -Infinity;
+  for (const p of pts) {
+    minA = Math.min(minA, p[a]); maxA = Math.max(maxA, p[a]);
+    minB = Math.min(minB, p[b]); maxB = Math.max(maxB, p[b]);
+  }
+  if (!pts.length) { minA = minB = -1; maxA = maxB = 1; }
+  const span = Math.max(maxA - minA, maxB - minB, 1.0) * 1.15;
+  const plotW = W - LEFT - RIGHT, plotH = H - TOP - BOTTOM;
+  const scale = Math.min(plotW / span, plotH / span);  // pixels per metre, same on both axes
+  const cA = (minA + maxA) / 2, cB = (minB + maxB) / 2;
+  const X = v => LEFT + plotW / 2 + (v - cA) * scale;
+  const Y = v => TOP + plotH / 2 - (v - cB) * scale;
+  const a0 = cA - plotW / 2 / scale, a1 = cA + plotW / 2 / scale;
+  const b0 = cB - plotH / 2 / scale, b1 = cB + plotH / 2 / scale;
+  const step = tickStep(Math.max(a1 - a0, b1 - b0));
+  for (let v = Math.ceil(a0 / step) * step; v <= a1; v += step) {
+    el("svg:line", {class: "grid", x1: X(v), x2: X(v), y1: TOP, y2: TOP + plotH}, svg);
+    el("svg:text", {x: X(v), y: TOP + plotH + 14, "text-anchor": "middle"}, svg, fmt(v));
+  }
+  for (let v = Math.ceil(b0 / step) * step; v <= b1; v += step) {
+    el("svg:line", {class: "grid", x1: LEFT, x2: LEFT + plotW, y1: Y(v), y2: Y(v)}, svg);
+    el("svg:text", {x: LEFT - 5, y: Y(v) + 4, "text-anchor": "end"}, svg, fmt(v));
+  }
+  el("svg:rect", {class: "frame", x: LEFT, y: TOP, width: plotW, height: plotH}, svg);
+  el("svg:text", {class: "title", x: LEFT, y: 17}, svg, title);
+  el("svg:text", {x: LEFT + plotW / 2, y: H - 6, "text-anchor": "middle"}, svg, names[a] + " (m)");
+  el("svg:text", {x: 14, y: TOP + plotH / 2, "text-anchor": "middle",
+                  transform: `rotate(-90 14 ${TOP + plotH / 2})`}, svg, names[b] + " (m)");
+  sensors.forEach((p, i) => {
+    const c = el("svg:circle", {class: "sensor", cx: X(p[a]), cy: Y(p[b]), r: 5}, svg);
+    el("svg:title", {}, c, `sensor ${i}: (${p.map(fmt).join(", ")}) m`);
+  });
+  const line = track.filter(p => p.position_m[a] !== null && p.position_m[b] !== null);
+  if (line.length) {
+    el("svg:polyline", {class: "track", "data-points": line.length,
+                        points: line.map(p => `${X(p.position_m[a]).toFixed(1)},${Y(p.position_m[b]).toFixed(1)}`).join(" ")}, svg);
+    const last = line[line.length - 1].position_m;
+    el("svg:circle", {class: "latest", cx: X(last[a]), cy: Y(last[b]), r: 6}, svg);
+  }
+}
+
+const cards = new Map();  // session id -> {root, heading, meta, xy, xz}
+
+function card(id) {
+  let c = cards.get(id);
+  if (c) return c;
+  const root = el("section", {class: "session", "data-id": id}, document.getElementById("sessions"));
+  c = {root, heading: el("h2", {}, root), meta: el("div", {class: "meta"}, root)};
+  const panels = el("div", {class: "panels"}, root);
+  c.xy = el("svg:svg", {class: "plot xy", viewBox: `0 0 ${W} ${H}`}, panels);
+  c.xz = el("svg:svg", {class: "plot xz", viewBox: `0 0 ${W} ${H}`}, panels);
+  cards.set(id, c);
+  return c;
+}
+
+function render(doc) {
+  const seen = new Set();
+  for (const s of doc.sessions) {
+    seen.add(s.id);
+    const c = card(s.id);
+    c.heading.textContent = (s.label || "(no label)") + "  [" + s.id + "]";
+    const last = s.track.length ? s.track[s.track.length - 1] : null;
+    let meta = `${s.backend} / ${s.filter_type} / ${s.attached ? "attached" : "detached"} / ` +
+               `${s.frames} frames, ${s.track.length} track points`;
+    if (last) meta += ` / t ${fmt(last.t_s)} s at (${last.position_m.map(v => v === null ? "?" : v.toFixed(2)).join(", ")}) m`;
+    if (s.model_probabilities.length) {
+      meta += " / models " + s.model_probabilities.map(m => `${m.model} ${(100 * m.probability).toFixed(0)}%`).join(" ");
+    }
+    c.meta.textContent = meta;
+    drawPanel(c.xy, "x-y (top view)", 0, 1, s.sensors_m, s.track);
+    drawPanel(c.xz, "x-z (side view)", 0, 2, s.sensors_m, s.track);
+  }
+  for (const [id, c] of cards) if (!seen.has(id)) { c.root.remove(); cards.delete(id); }
+  const shown = doc.sessions.length ? `${doc.sessions_total} session(s)` :
+      "no sessions (stream one, e.g. localizer-cli simulate --server HOST:PORT)";
+  document.getElementById("status").textContent =
+      `localizer ${doc.version}: ${shown}; updated ${new Date().toLocaleTimeString()}`;
+}
+
+async function poll() {
+  try {
+    const response = await fetch("/sessions", {cache: "no-store"});
+    if (!response.ok) throw new Error(`/sessions answered ${response.status}`);
+    render(await response.json());
+  } catch (e) {
+    document.getElementById("status").textContent = "cannot read /sessions: " + e.message;
+  } finally {
+    setTimeout(poll, 500);
+  }
+}
+poll();
+</script>
+</body>
+</html>
+)html";
+
+}  // namespace
+
+std::string_view LivePageHtml() { return kPage; }
+
+}  // namespace localizer::server

@@ -1,0 +1,89 @@
+#include "server/service/sessions_json.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "server/service/version.h"
+
+namespace localizer::server {
+namespace {
+
+using nlohmann::json;
+
+// JSON has no NaN or infinity; a reader gets null instead of an unparsable document.
+json Number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json Triple(const double v[3]) { return json::array({Number(v[0]), Number(v[1]), Number(v[2])}); }
+
+json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, bool with_track) {
+  const v1::SessionInfo info = host.Info(now, ttl_s);
+  const engine::SessionConfig& config = host.config();
+  const TrackSnapshot track = host.track().Snapshot();
+  json s;
+  s["id"] = host.id();
+  s["label"] = host.label();
+  s["backend"] = host.backend();
+  s["filter_type"] = config.filter_type;
+  s["attached"] = info.attached();
+  json sensors = json::array();
+  for (const engine::Vec3& p : config.sensors_m) {
+    const double xyz[3] = {p.x(), p.y(), p.z()};
+    sensors.push_back(Triple(xyz));
+  }
+  s["sensors_m"] = std::move(sensors);
+  s["reference_sensor"] = config.reference_sensor;
+  s["sample_rate_hz"] = Number(config.sample_rate_hz);
+  s["sound_speed_mps"] = Number(config.sound_speed_mps);
+  s["blocks"] = info.blocks_processed();
+  s["frames"] = info.frames_processed();
+  s["initialised_frames"] = track.initialised_frames;
+  s["age_s"] = Number(info.age_s());
+  s["idle_s"] = Number(info.idle_s());
+  s["track_capacity"] = track.capacity;
+  s["track_included"] = with_track;
+  json points = json::array();
+  if (with_track) {
+    for (const TrackPoint& p : track.points) {
+      points.push_back({{"frame", p.frame_index},
+                        {"t_s", Number(p.t_s)},
+                        {"position_m", Triple(p.position_m)},
+                        {"velocity_mps", Triple(p.velocity_mps)},
+                        {"position_std_m", Triple(p.position_std_m)},
+                        {"reinitialised", p.reinitialised}});
+    }
+  }
+  s["track"] = std::move(points);
+  json models = json::array();
+  for (const engine::ModelProbability& m : track.model_probabilities) {
+    models.push_back({{"model", m.model}, {"probability", Number(m.probability)}});
+  }
+  s["model_probabilities"] = std::move(models);
+  return s;
+}
+
+}  // namespace
+
+std::string SessionsJson(const std::vector<std::shared_ptr<SessionHost>>& hosts, Clock::time_point now,
+                         double ttl_s, size_t max_track_sessions) {
+  std::vector<std::pair<double, const SessionHost*>> by_age;  // (age_s, host), oldest first
+  by_age.reserve(hosts.size());
+  for (const auto& host : hosts) {
+    if (host) by_age.emplace_back(host->Info(now, ttl_s).age_s(), host.get());
+  }
+  std::stable_sort(by_age.begin(), by_age.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  json doc;
+  doc["version"] = kLocalizerVersion;
+  doc["sessions_total"] = by_age.size();
+  doc["track_sessions_max"] = max_track_sessions;
+  json sessions = json::array();
+  for (size_t i = 0; i < by_age.size(); ++i) {
+    sessions.push_back(SessionJson(*by_age[i].second, now, ttl_s, i < max_track_sessions));
+  }
+  doc["sessions"] = std::move(sessions);
+  // Labels come from clients: bytes that are not UTF-8 are replaced rather than thrown on.
+  return doc.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+}  // namespace localizer::server

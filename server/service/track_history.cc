@@ -1,0 +1,50 @@
+#include "server/service/track_history.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace localizer::server {
+
+TrackHistory::TrackHistory(size_t capacity) : capacity_(std::max<size_t>(1, capacity)) {}
+
+void TrackHistory::Append(const engine::Estimate& estimate) {
+  // Built before taking the lock: the HTTP reader waits only for the copy.
+  TrackPoint point;
+  if (estimate.initialised) {
+    point.frame_index = estimate.frame_index;
+    point.t_s = estimate.t_s;
+    point.reinitialised = estimate.reinitialised;
+    for (int i = 0; i < 3; ++i) {
+      point.position_m[i] = estimate.state(i);
+      point.velocity_mps[i] = estimate.state(3 + i);
+      // A variance below zero is round-off of a collapsed filter: report zero spread.
+      point.position_std_m[i] = std::sqrt(std::max(0.0, estimate.covariance(i, i)));
+    }
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++frames_;
+  model_probabilities_ = estimate.model_probabilities;
+  if (!estimate.initialised) return;
+  ++initialised_frames_;
+  if (ring_.size() < capacity_) {
+    ring_.push_back(point);
+  } else {
+    ring_[next_] = point;
+    next_ = (next_ + 1) % capacity_;
+  }
+}
+
+TrackSnapshot TrackHistory::Snapshot() const {
+  TrackSnapshot snapshot;
+  snapshot.capacity = capacity_;
+  std::lock_guard<std::mutex> lock(mutex_);
+  snapshot.frames = frames_;
+  snapshot.initialised_frames = initialised_frames_;
+  snapshot.model_probabilities = model_probabilities_;
+  snapshot.points.reserve(ring_.size());
+  // Oldest first: once the ring is full, the oldest point sits at next_.
+  for (size_t k = 0; k < ring_.size(); ++k) snapshot.points.push_back(ring_[(next_ + k) % ring_.size()]);
+  return snapshot;
+}
+
+}  // namespace localizer::server

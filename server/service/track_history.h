@@ -1,0 +1,61 @@
+// TrackHistory: a session's recent estimated track for the live web view (GET /sessions).
+//
+// A bounded ring of the last `capacity` initialised positions (with their frame instant
+// t_s) and the latest estimate's model probabilities. Frames before the tracker's first
+// fix carry no position and are only counted. Memory is fixed once the ring is full
+// (capacity x 40 bytes), so a long session costs no more than a short one.
+//
+// Thread-safety: Append runs on the session's worker thread while Snapshot runs on an HTTP
+// thread; a mutex of its own (never held while calling out) keeps them apart without
+// touching the session host's lock, so a slow page read never stalls the stream.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <mutex>
+#include <vector>
+
+#include "engine/core/estimate.h"
+
+namespace localizer::server {
+
+struct TrackPoint {
+  uint64_t frame_index = 0;
+  double t_s = 0.0;              // the estimate's reception instant (engine::Estimate::t_s)
+  double position_m[3] = {};     // x, y, z
+  double velocity_mps[3] = {};   // vx, vy, vz
+  double position_std_m[3] = {};  // square roots of the covariance's position diagonal
+  bool reinitialised = false;     // the tracker restarted from a new fix at this frame
+};
+
+struct TrackSnapshot {
+  std::vector<TrackPoint> points;  // oldest first, at most capacity
+  std::vector<engine::ModelProbability> model_probabilities;  // of the latest estimate
+  uint64_t frames = 0;             // estimates appended, initialised or not
+  uint64_t initialised_frames = 0;
+  size_t capacity = 0;
+};
+
+class TrackHistory final {
+ public:
+  static constexpr size_t kDefaultCapacity = 600;
+
+  explicit TrackHistory(size_t capacity = kDefaultCapacity);  // capacity 0 is taken as 1
+  TrackHistory(const TrackHistory&) = delete;
+  TrackHistory& operator=(const TrackHistory&) = delete;
+
+  void Append(const engine::Estimate& estimate);
+  TrackSnapshot Snapshot() const;
+  size_t capacity() const { return capacity_; }
+
+ private:
+  const size_t capacity_;
+  mutable std::mutex mutex_;
+  std::vector<TrackPoint> ring_;  // guarded by mutex_; grows to capacity_, then wraps
+  size_t next_ = 0;               // guarded by mutex_; slot the next point overwrites once full
+  std::vector<engine::ModelProbability> model_probabilities_;  // guarded by mutex_
+  uint64_t frames_ = 0;              // guarded by mutex_
+  uint64_t initialised_frames_ = 0;  // guarded by mutex_
+};
+
+}  // namespace localizer::server

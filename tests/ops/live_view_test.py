@@ -1,0 +1,212 @@
+"""The live web view end to end: a real localizer-server, a simulated session streamed
+into it by localizer-cli, GET /sessions read as JSON, and Debian's headless Chromium
+loading GET / until the track is drawn (DOM dump, then a screenshot whose pixels are
+decoded and checked for the track's colour).
+
+Environment: LOCALIZER_SERVER and LOCALIZER_CLI (the binaries; set by CTest),
+LOCALIZER_CHROMIUM (optional; else `chromium` or `chromium-browser` on PATH),
+LIVE_VIEW_SCREENSHOT (optional: copy the screenshot there, e.g. docs/live_view.png).
+Standard library only; run with /usr/bin/python3 -m unittest -v live_view_test.
+"""
+import json
+import os
+import re
+import shutil
+import signal
+import struct
+import subprocess
+import tempfile
+import time
+import unittest
+import urllib.request
+import zlib
+from pathlib import Path
+
+SERVER = os.environ.get("LOCALIZER_SERVER", "")
+CLI = os.environ.get("LOCALIZER_CLI", "")
+CHROMIUM = (os.environ.get("LOCALIZER_CHROMIUM") or shutil.which("chromium")
+            or shutil.which("chromium-browser") or "")
+# The flags the headless browser runs with: no sandbox (containers, root), no GPU, and no
+# background traffic (no network for users behind firewalls, none needed here).
+CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                  "--disable-component-update", "--disable-sync", "--no-first-run",
+                  "--disable-default-apps", "--disable-extensions", "--mute-audio",
+                  "--hide-scrollbars", "--window-size=1200,800"]
+TRACK_RGB = (0xd6, 0x27, 0x28)  # svg .track stroke in the page (live_page.cc)
+MIN_TRACK_POINTS = 20
+
+
+def executable(path):
+    return bool(path) and os.access(path, os.X_OK)
+
+
+def get_json(url):
+    with urllib.request.urlopen(url, timeout=5) as response:
+        return response.headers.get("Content-Type", ""), json.loads(response.read())
+
+
+def png_pixels(data):
+    """(width, height, rows of RGB tuples) of an 8-bit RGB/RGBA non-interlaced PNG."""
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        raise ValueError("not a PNG")
+    pos, idat, header = 8, b"", None
+    while pos < len(data):
+        length, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + length]
+        pos += 12 + length
+        if kind == b"IHDR":
+            header = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat += body
+        elif kind == b"IEND":
+            break
+    width, height, depth, colour, _, _, interlace = header
+    if depth != 8 or colour not in (2, 6) or interlace != 0:
+        raise ValueError(f"unsupported PNG (depth {depth}, colour type {colour}, interlace {interlace})")
+    bpp = 3 if colour == 2 else 4
+    raw = zlib.decompress(idat)
+    stride = width * bpp
+    rows, previous = [], bytearray(stride)
+    for y in range(height):
+        kind = raw[y * (stride + 1)]
+        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):  # undo the row filter (PNG spec, section 9)
+            left = line[i - bpp] if i >= bpp else 0
+            up = previous[i]
+            upleft = previous[i - bpp] if i >= bpp else 0
+            if kind == 1:
+                line[i] = (line[i] + left) & 0xff
+            elif kind == 2:
+                line[i] = (line[i] + up) & 0xff
+            elif kind == 3:
+                line[i] = (line[i] + ((left + up) >> 1)) & 0xff
+            elif kind == 4:
+                p = left + up - upleft
+                pa, pb, pc = abs(p - left), abs(p - up), abs(p - upleft)
+                pred = left if pa <= pb and pa <= pc else up if pb <= pc else upleft
+                line[i] = (line[i] + pred) & 0xff
+        rows.append([tuple(line[x * bpp:x * bpp + 3]) for x in range(width)])
+        previous = line
+    return width, height, rows
+
+
+@unittest.skipUnless(executable(SERVER) and executable(CLI),
+                     f"no localizer-server/localizer-cli (LOCALIZER_SERVER={SERVER!r}, LOCALIZER_CLI={CLI!r})")
+class LiveViewTest(unittest.TestCase):
+    """One server and one live simulated session shared by the tests (streaming takes time)."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = Path(tempfile.mkdtemp(prefix="localizer-ops-"))
+        ready = cls.tmp / "ready.json"
+        cls.server_log = open(cls.tmp / "server.log", "wb")
+        cls.server = subprocess.Popen(
+            [SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0",
+             "--ready-file", str(ready), "--workers", "2", "--backend", "cpu"],
+            stdout=cls.server_log, stderr=subprocess.STDOUT)
+        deadline = time.monotonic() + 30.0
+        while not ready.exists():
+            if cls.server.poll() is not None or time.monotonic() > deadline:
+                cls.tearDownClass()
+                raise RuntimeError(f"server did not start:\n{cls.log_tail('server.log')}")
+            time.sleep(0.05)
+        info = json.loads(ready.read_text())
+        cls.base = f"http://127.0.0.1:{info['metrics_port']}"
+        # Real time, long enough to outlast the tests; tearDownClass stops it.
+        cls.cli_log = open(cls.tmp / "cli.log", "wb")
+        cls.cli = subprocess.Popen(
+            [CLI, "simulate", "--scenario", "tetra-water", "--duration", "60",
+             "--server", f"127.0.0.1:{info['grpc_port']}", "--label", "tetra-water (live view test)"],
+            stdout=cls.cli_log, stderr=subprocess.STDOUT)
+
+    @classmethod
+    def tearDownClass(cls):
+        for name in ("cli", "server"):
+            process = getattr(cls, name, None)
+            if process is not None and process.poll() is None:
+                process.send_signal(signal.SIGTERM)
+                try:
+                    process.wait(timeout=20)
+                except subprocess.TimeoutExpired:
+                    process.kill()
+                    process.wait()
+        for name in ("cli_log", "server_log"):
+            if getattr(cls, name, None) is not None:
+                getattr(cls, name).close()
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    @classmethod
+    def log_tail(cls, name):
+        path = cls.tmp / name
+        return path.read_bytes().decode(errors="replace")[-3000:] if path.exists() else ""
+
+    def wait_for_track(self, points, timeout_s=60.0):
+        """The one session's JSON once its track holds `points` fixes."""
+        deadline = time.monotonic() + timeout_s
+        doc = None
+        while time.monotonic() < deadline:
+            if self.cli.poll() is not None:
+                self.fail(f"localizer-cli exited with {self.cli.returncode}:\n{self.log_tail('cli.log')}")
+            _, doc = get_json(self.base + "/sessions")
+            if doc["sessions"] and len(doc["sessions"][0]["track"]) >= points:
+                return doc["sessions"][0]
+            time.sleep(0.25)
+        self.fail(f"no track of {points} points in {timeout_s} s; last /sessions: {json.dumps(doc)[:1000]}\n"
+                  f"cli:\n{self.log_tail('cli.log')}\nserver:\n{self.log_tail('server.log')}")
+
+    def test_sessions_json_lists_the_live_track(self):
+        session = self.wait_for_track(MIN_TRACK_POINTS)
+        content_type, doc = get_json(self.base + "/sessions")
+        self.assertEqual(content_type, "application/json; charset=utf-8")
+        self.assertEqual(doc["sessions_total"], 1)
+        for key in ("id", "label", "backend", "filter_type", "attached", "sensors_m", "frames",
+                    "track", "track_capacity", "model_probabilities"):
+            self.assertIn(key, session)
+        self.assertEqual(session["label"], "tetra-water (live view test)")
+        self.assertEqual(session["backend"], "cpu")
+        self.assertGreaterEqual(len(session["sensors_m"]), 4)
+        self.assertTrue(all(len(p) == 3 for p in session["sensors_m"]))
+        point = session["track"][-1]
+        self.assertEqual(len(point["position_m"]), 3)
+        self.assertTrue(all(isinstance(v, float) for v in point["position_m"]))
+        self.assertLessEqual(len(session["track"]), session["track_capacity"])
+        # Live: more fixes arrive while the client streams.
+        time.sleep(1.5)
+        _, later = get_json(self.base + "/sessions")
+        later_session = later["sessions"][0]
+        self.assertGreater(later_session["frames"], session["frames"])
+        self.assertGreater(later_session["track"][-1]["t_s"], point["t_s"])
+
+    @unittest.skipUnless(CHROMIUM, "no chromium (apt-get install chromium) for the headless browser check")
+    def test_chromium_draws_the_track(self):
+        # The README's copy shows a longer track (about 30 s of streaming).
+        self.wait_for_track(150 if os.environ.get("LIVE_VIEW_SCREENSHOT") else MIN_TRACK_POINTS)
+        profile = self.tmp / "chromium-profile"
+        common = CHROMIUM_FLAGS + [f"--user-data-dir={profile}", "--virtual-time-budget=5000"]
+        env = dict(os.environ, HOME=str(self.tmp))  # Chromium writes caches under HOME
+        dom = subprocess.run([CHROMIUM] + common + ["--dump-dom", self.base + "/"],
+                             capture_output=True, timeout=120, env=env)
+        html = dom.stdout.decode(errors="replace")
+        tracks = re.findall(r'<polyline class="track" data-points="(\d+)"', html)
+        self.assertEqual(len(tracks), 2, f"want the x-y and x-z tracks drawn; DOM:\n{html[:3000]}\n"
+                                         f"chromium stderr:\n{dom.stderr.decode(errors='replace')[-2000:]}")
+        self.assertTrue(all(int(n) >= MIN_TRACK_POINTS for n in tracks), tracks)
+        self.assertEqual(html.count('class="sensor"'), 2 * 4)  # tetra-water: 4 sensors, 2 panels
+
+        shot = self.tmp / "live_view.png"
+        run = subprocess.run([CHROMIUM] + common + [f"--screenshot={shot}", self.base + "/"],
+                             capture_output=True, timeout=120, env=env)
+        self.assertTrue(shot.exists(), f"no screenshot; chromium said:\n{run.stderr.decode(errors='replace')[-2000:]}")
+        width, height, rows = png_pixels(shot.read_bytes())
+        self.assertEqual((width, height), (1200, 800))
+        non_white = sum(1 for row in rows for p in row if min(p) < 235)
+        track = sum(1 for row in rows for p in row
+                    if all(abs(c - t) < 40 for c, t in zip(p, TRACK_RGB)))
+        self.assertGreater(non_white, 5000, "screenshot is (nearly) blank")
+        self.assertGreater(track, 100, "no track-coloured pixels in the screenshot")
+        if os.environ.get("LIVE_VIEW_SCREENSHOT"):
+            shutil.copyfile(shot, os.environ["LIVE_VIEW_SCREENSHOT"])
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)

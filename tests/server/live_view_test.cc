@@ -1,0 +1,128 @@
+// The live web view's data: the per-session track ring (bounded, oldest first, only
+// initialised fixes) and GET /sessions after real traffic (valid JSON of the documented
+// shape, holding the estimates the stream received; client labels escaped), and GET /
+// serving the self-contained page.
+#include <cmath>
+#include <limits>
+
+#include <nlohmann/json.hpp>
+
+#include "server/service/sessions_json.h"
+#include "server/service/track_history.h"
+#include "tests/server/http_client.h"
+#include "tests/server/service_fixture.h"
+
+namespace localizer::server::testing {
+namespace {
+
+constexpr int64_t kBlock = 2048;
+
+engine::Estimate Fix(uint64_t frame, double x) {
+  engine::Estimate e;
+  e.frame_index = frame;
+  e.t_s = 0.1 * static_cast<double>(frame);
+  e.initialised = true;
+  e.state << x, 2.0 * x, -x, 1.0, 0.0, 0.0;
+  e.covariance = engine::Mat6::Identity() * 4.0;
+  return e;
+}
+
+TEST(TrackHistoryTest, KeepsTheLastCapacityFixesOldestFirst) {
+  TrackHistory track(5);
+  for (uint64_t k = 0; k < 12; ++k) track.Append(Fix(k, static_cast<double>(k)));
+  const TrackSnapshot s = track.Snapshot();
+  EXPECT_EQ(s.capacity, 5u);
+  EXPECT_EQ(s.frames, 12u);
+  ASSERT_EQ(s.points.size(), 5u);
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(s.points[i].frame_index, 7 + i);
+    EXPECT_DOUBLE_EQ(s.points[i].position_m[0], static_cast<double>(7 + i));
+    EXPECT_DOUBLE_EQ(s.points[i].position_m[1], 2.0 * static_cast<double>(7 + i));
+    EXPECT_DOUBLE_EQ(s.points[i].position_std_m[2], 2.0);
+  }
+}
+
+TEST(TrackHistoryTest, CountsFramesWithoutAFixButStoresNoPosition) {
+  TrackHistory track(4);
+  engine::Estimate before;  // not initialised
+  before.model_probabilities = {{"cv", 1.0}};
+  track.Append(before);
+  track.Append(before);
+  engine::Estimate fix = Fix(2, 3.0);
+  fix.model_probabilities = {{"cv", 0.25}, {"ct", 0.75}};
+  track.Append(fix);
+  const TrackSnapshot s = track.Snapshot();
+  EXPECT_EQ(s.frames, 3u);
+  EXPECT_EQ(s.initialised_frames, 1u);
+  ASSERT_EQ(s.points.size(), 1u);
+  EXPECT_EQ(s.points[0].frame_index, 2u);
+  ASSERT_EQ(s.model_probabilities.size(), 2u);  // the latest estimate's
+  EXPECT_EQ(s.model_probabilities[1].model, "ct");
+}
+
+TEST(SessionsJsonTest, NoSessionsIsAnEmptyList) {
+  const auto doc = nlohmann::json::parse(SessionsJson({}, Clock::now(), 60.0));
+  EXPECT_EQ(doc.at("sessions_total"), 0);
+  EXPECT_TRUE(doc.at("sessions").is_array());
+  EXPECT_TRUE(doc.at("sessions").empty());
+}
+
+TEST_F(ServiceTest, SessionsJsonListsTheStreamedTrack) {
+  const Scenario s = MakeScenario("tetra-water", 3.0, 1, kBlock, 512);
+  TestStream stream(stub_.get());
+  v1::TrackRequest open = s.OpenRequest();
+  // A label a client may send: quotes, a backslash, markup, a control character.
+  const std::string label = "tank \"A\"\\ <b>\x01";
+  open.mutable_open()->set_label(label);
+  ASSERT_TRUE(stream.Send(open));
+  const int64_t blocks = s.BlockCount(kBlock);
+  for (int64_t k = 1; k <= blocks; ++k) ASSERT_TRUE(stream.Send(s.BlockRequest(k, kBlock)));
+  ASSERT_TRUE(stream.WaitForEstimates(s.offline.size()));
+
+  const auto response = localizer::testing::Request(server_->metrics_port(), "GET", "/sessions");
+  ASSERT_EQ(response.status, 200);
+  EXPECT_EQ(response.headers.at("content-type"), "application/json; charset=utf-8");
+  nlohmann::json doc;
+  ASSERT_NO_THROW(doc = nlohmann::json::parse(response.body)) << response.body.substr(0, 400);
+  ASSERT_EQ(doc.at("sessions").size(), 1u);
+  const auto& session = doc.at("sessions")[0];
+  EXPECT_EQ(session.at("id"), stream.opened().session_id());
+  EXPECT_EQ(session.at("label"), label);
+  EXPECT_EQ(session.at("backend"), "cpu");
+  EXPECT_EQ(session.at("filter_type"), s.config.filter_type);
+  EXPECT_EQ(session.at("frames"), s.offline.size());
+  ASSERT_EQ(session.at("sensors_m").size(), s.config.sensors_m.size());
+  EXPECT_DOUBLE_EQ(session.at("sensors_m")[1][0].get<double>(), s.config.sensors_m[1].x());
+
+  std::vector<v1::Estimate> fixes;
+  for (const auto& e : stream.estimates()) {
+    if (e.initialised()) fixes.push_back(e);
+  }
+  ASSERT_FALSE(fixes.empty());
+  const auto& track = session.at("track");
+  ASSERT_EQ(track.size(), std::min<size_t>(fixes.size(), session.at("track_capacity").get<size_t>()));
+  const v1::Estimate& last = fixes.back();
+  const auto& point = track.back();
+  EXPECT_EQ(point.at("frame"), last.frame_index());
+  EXPECT_DOUBLE_EQ(point.at("t_s").get<double>(), last.t_s());
+  EXPECT_DOUBLE_EQ(point.at("position_m")[0].get<double>(), last.position_m().x());
+  EXPECT_DOUBLE_EQ(point.at("position_m")[2].get<double>(), last.position_m().z());
+  EXPECT_GE(point.at("position_std_m")[0].get<double>(), 0.0);
+  for (size_t i = 1; i < track.size(); ++i) EXPECT_GT(track[i].at("t_s"), track[i - 1].at("t_s"));
+  ASSERT_TRUE(stream.Close().ok());
+}
+
+TEST_F(ServiceTest, RootServesTheSelfContainedLivePage) {
+  const auto response = localizer::testing::Request(server_->metrics_port(), "GET", "/");
+  ASSERT_EQ(response.status, 200);
+  EXPECT_EQ(response.headers.at("content-type"), "text/html; charset=utf-8");
+  EXPECT_NE(response.body.find("fetch(\"/sessions\""), std::string::npos);
+  EXPECT_NE(response.body.find("<a href=\"/metrics\">"), std::string::npos);
+  // Self-contained: nothing loaded from another origin.
+  EXPECT_EQ(response.body.find("src="), std::string::npos);
+  EXPECT_EQ(response.body.find("https://"), std::string::npos);
+  EXPECT_EQ(localizer::testing::Request(server_->metrics_port(), "GET", "/metrics").status, 200);
+}
+
+}  // namespace
+}  // namespace localizer::server::testing
