@@ -16,6 +16,20 @@ INVALID_ARGUMENT for a bad config, NOT_FOUND / PERMISSION_DENIED for a bad resum
 RESOURCE_EXHAUSTED when the server is full, UNAVAILABLE when it drains). A refused block does
 not end the stream: it comes back as a ``rejected`` response.
 
+Session affinity (several server instances behind a proxy, e.g. deploy/nginx/localizer.conf):
+a session lives in one server instance, so every call of a session must reach the same one.
+The client sends the metadata ``x-localizer-session-key`` (``SESSION_KEY_METADATA``) on every
+Track stream, and on ``locate`` / ``close_session`` when given a ``session_key``; the proxy
+routes by consistent hashing of it. ``TrackSession(..., session_key=...)`` sets it (default:
+the config's label, else a random one) and ``reattach()`` resumes with the same key. When
+resuming by hand with ``TrackSession.resume``, pass the ``session_key`` the session was opened
+with: without it the session id is used, which a proxy may route to another instance (the
+resume then fails with NOT_FOUND). Use any stable string, e.g. the array's name; keys that
+differ spread sessions over the instances. If the instance holding a session dies, the
+session is gone: its stream ends with UNAVAILABLE (straight to the server) or, through nginx,
+INTERNAL "Received RST_STREAM with error code 2"; resuming it fails (UNAVAILABLE or NOT_FOUND);
+open a new session (the proxy sends it to a live instance).
+
 The generated stubs are found next to this package in the build tree, or through the
 environment variable LOCALIZER_PY_GEN (see ``_stubs``); they are re-exported as ``pb`` (the
 messages) and ``pb_grpc`` (the service stub).
