@@ -15,7 +15,10 @@ packages=(
   libcivetweb-dev        # /metrics HTTP endpoint (server/)
   python3-grpcio python3-grpc-tools python3-numpy  # Python client and load test (clients/)
   python3-scipy          # Nolan's alpha-stable quantile table (tests/sim/alpha_stable_test)
-  prometheus             # promtool checks the /metrics text in the tests (server/)
+  prometheus             # promtool, and a real Prometheus server in the ops tests (deploy/prometheus)
+  python3-yaml           # the ops tests read the shipped YAML (deploy/prometheus, deploy/k8s)
+  nginx-light            # the session-affine front in the scale-out test (deploy/nginx)
+  chromium               # headless, draws the live view in its test (tests/ops)
 )
 
 missing=()
