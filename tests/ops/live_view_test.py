@@ -22,8 +22,9 @@ import urllib.request
 import zlib
 from pathlib import Path
 
-SERVER = os.environ.get("LOCALIZER_SERVER", "")
-CLI = os.environ.get("LOCALIZER_CLI", "")
+import ops_util
+from ops_util import CLI, SERVER
+
 CHROMIUM = (os.environ.get("LOCALIZER_CHROMIUM") or shutil.which("chromium")
             or shutil.which("chromium-browser") or "")
 # The flags the headless browser runs with: no sandbox (containers, root), no GPU, and no
@@ -34,10 +35,6 @@ CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-back
                   "--hide-scrollbars", "--window-size=1200,800"]
 TRACK_RGB = (0xd6, 0x27, 0x28)  # svg .track stroke in the page (live_page.cc)
 MIN_TRACK_POINTS = 20
-
-
-def executable(path):
-    return bool(path) and os.access(path, os.X_OK)
 
 
 def get_json(url):
@@ -90,7 +87,7 @@ def png_pixels(data):
     return width, height, rows
 
 
-@unittest.skipUnless(executable(SERVER) and executable(CLI),
+@unittest.skipUnless(ops_util.have_binaries(),
                      f"no localizer-server/localizer-cli (LOCALIZER_SERVER={SERVER!r}, LOCALIZER_CLI={CLI!r})")
 class LiveViewTest(unittest.TestCase):
     """One server and one live simulated session shared by the tests (streaming takes time)."""
@@ -98,41 +95,30 @@ class LiveViewTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.tmp = Path(tempfile.mkdtemp(prefix="localizer-ops-"))
-        ready = cls.tmp / "ready.json"
-        cls.server_log = open(cls.tmp / "server.log", "wb")
-        cls.server = subprocess.Popen(
-            [SERVER, "--listen", "127.0.0.1:0", "--metrics-listen", "127.0.0.1:0",
-             "--ready-file", str(ready), "--workers", "2", "--backend", "cpu"],
-            stdout=cls.server_log, stderr=subprocess.STDOUT)
-        deadline = time.monotonic() + 30.0
-        while not ready.exists():
-            if cls.server.poll() is not None or time.monotonic() > deadline:
-                cls.tearDownClass()
-                raise RuntimeError(f"server did not start:\n{cls.log_tail('server.log')}")
-            time.sleep(0.05)
-        info = json.loads(ready.read_text())
-        cls.base = f"http://127.0.0.1:{info['metrics_port']}"
+        try:
+            cls.server = ops_util.Server(cls.tmp, "server", ["--backend", "cpu"])
+        except RuntimeError:
+            shutil.rmtree(cls.tmp, ignore_errors=True)
+            raise
+        cls.base = f"http://{cls.server.metrics_target}"
         # Real time, long enough to outlast the tests; tearDownClass stops it.
         cls.cli_log = open(cls.tmp / "cli.log", "wb")
         cls.cli = subprocess.Popen(
             [CLI, "simulate", "--scenario", "tetra-water", "--duration", "60",
-             "--server", f"127.0.0.1:{info['grpc_port']}", "--label", "tetra-water (live view test)"],
+             "--server", cls.server.grpc_target, "--label", "tetra-water (live view test)"],
             stdout=cls.cli_log, stderr=subprocess.STDOUT)
 
     @classmethod
     def tearDownClass(cls):
-        for name in ("cli", "server"):
-            process = getattr(cls, name, None)
-            if process is not None and process.poll() is None:
-                process.send_signal(signal.SIGTERM)
-                try:
-                    process.wait(timeout=20)
-                except subprocess.TimeoutExpired:
-                    process.kill()
-                    process.wait()
-        for name in ("cli_log", "server_log"):
-            if getattr(cls, name, None) is not None:
-                getattr(cls, name).close()
+        if cls.cli.poll() is None:
+            cls.cli.send_signal(signal.SIGTERM)
+            try:
+                cls.cli.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                cls.cli.kill()
+                cls.cli.wait()
+        cls.cli_log.close()
+        cls.server.stop()
         shutil.rmtree(cls.tmp, ignore_errors=True)
 
     @classmethod
@@ -152,7 +138,7 @@ class LiveViewTest(unittest.TestCase):
                 return doc["sessions"][0]
             time.sleep(0.25)
         self.fail(f"no track of {points} points in {timeout_s} s; last /sessions: {json.dumps(doc)[:1000]}\n"
-                  f"cli:\n{self.log_tail('cli.log')}\nserver:\n{self.log_tail('server.log')}")
+                  f"cli:\n{self.log_tail('cli.log')}\nserver:\n{self.server.tail()}")
 
     def test_sessions_json_lists_the_live_track(self):
         session = self.wait_for_track(MIN_TRACK_POINTS)
