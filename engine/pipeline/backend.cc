@@ -18,13 +18,18 @@ std::shared_ptr<BackendProvider> CurrentProvider() {
   return ProviderSlot();
 }
 
+// A concrete filter's Create result as a Tracker.
+template <typename Filter>
+StatusOr<std::unique_ptr<Tracker>> AsTracker(StatusOr<std::unique_ptr<Filter>> made) {
+  if (!made.ok()) return made.status();
+  return std::unique_ptr<Tracker>(std::move(made).value());
+}
+
 // The Kalman filters, whatever the backend.
 StatusOr<std::unique_ptr<Tracker>> MakeKalman(const ArrayGeometry& array, const TrackerOptions& tracker) {
   KalmanOptions options = tracker.kalman;
   options.variant = tracker.type == "ukf" ? KalmanVariant::kUnscented : KalmanVariant::kExtended;
-  auto filter = KalmanFilter::Create(array, options);
-  if (!filter.ok()) return filter.status();
-  return std::unique_ptr<Tracker>(std::move(filter).value());
+  return AsTracker(KalmanFilter::Create(array, options));
 }
 
 // The multiple-model trackers, whatever the backend.
@@ -34,17 +39,13 @@ StatusOr<std::unique_ptr<Tracker>> MakeMultiModel(const ArrayGeometry& array, co
     options.particle = tracker.particle;
     options.models = tracker.mmpf_models;
     options.stay_probability = tracker.stay_probability;
-    auto filter = MultiModelParticleFilter::Create(array, options);
-    if (!filter.ok()) return filter.status();
-    return std::unique_ptr<Tracker>(std::move(filter).value());
+    return AsTracker(MultiModelParticleFilter::Create(array, options));
   }
   ImmOptions options;
   options.kalman = tracker.kalman;
   options.modes = tracker.imm_modes;
   options.stay_probability = tracker.stay_probability;
-  auto filter = ImmFilter::Create(array, options);
-  if (!filter.ok()) return filter.status();
-  return std::unique_ptr<Tracker>(std::move(filter).value());
+  return AsTracker(ImmFilter::Create(array, options));
 }
 
 // Every tracker but the plain particle filter: CPU whatever the backend.
@@ -55,9 +56,7 @@ StatusOr<std::unique_ptr<Tracker>> MakeCpuOnly(const ArrayGeometry& array, const
 
 StatusOr<std::unique_ptr<Tracker>> MakeCpuParticleFilter(const ArrayGeometry& array,
                                                           const ParticleFilterOptions& options) {
-  auto filter = ParticleFilter::Create(array, options);
-  if (!filter.ok()) return filter.status();
-  return std::unique_ptr<Tracker>(std::move(filter).value());
+  return AsTracker(ParticleFilter::Create(array, options));
 }
 
 }  // namespace

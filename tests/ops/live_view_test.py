@@ -12,7 +12,6 @@ import json
 import os
 import re
 import shutil
-import signal
 import struct
 import subprocess
 import tempfile
@@ -110,13 +109,7 @@ class LiveViewTest(unittest.TestCase):
 
     @classmethod
     def tearDownClass(cls):
-        if cls.cli.poll() is None:
-            cls.cli.send_signal(signal.SIGTERM)
-            try:
-                cls.cli.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                cls.cli.kill()
-                cls.cli.wait()
+        ops_util.stop_process(cls.cli)
         cls.cli_log.close()
         cls.server.stop()
         shutil.rmtree(cls.tmp, ignore_errors=True)

@@ -27,6 +27,18 @@ def free_port():
         return s.getsockname()[1]
 
 
+def stop_process(process, timeout_s=20.0):
+    """SIGTERM (servers drain on it), then SIGKILL if it is still running after timeout_s."""
+    if process.poll() is not None:
+        return
+    process.send_signal(signal.SIGTERM)
+    try:
+        process.wait(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
 class Server:
     """One localizer-server on loopback: gRPC and metrics on ports it picks (--ready-file)."""
 
@@ -60,13 +72,7 @@ class Server:
         return self.log_path.read_bytes().decode(errors="replace")[-3000:]
 
     def stop(self):
-        if self.process.poll() is None:
-            self.process.send_signal(signal.SIGTERM)
-            try:
-                self.process.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
+        stop_process(self.process)
         self.log.close()
 
 

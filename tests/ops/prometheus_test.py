@@ -48,12 +48,8 @@ class RealPrometheusTest(unittest.TestCase):
         self.log = None
 
     def tearDown(self):
-        if self.prometheus is not None and self.prometheus.poll() is None:
-            self.prometheus.terminate()
-            try:
-                self.prometheus.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                self.prometheus.kill()
+        if self.prometheus is not None:
+            ops_util.stop_process(self.prometheus)
         if self.log is not None:
             self.log.close()
         for s in self.servers:
