@@ -38,6 +38,16 @@ std::shared_ptr<grpc::Channel> Connect(const std::string& target) {
   return grpc::CreateCustomChannel(target, grpc::InsecureChannelCredentials(), args);
 }
 
+grpc::Status FromProxyReset(const grpc::Status& status) {
+  if (status.error_code() != grpc::StatusCode::INTERNAL ||
+      status.error_message().find("RST_STREAM with error code 2") == std::string::npos) {
+    return status;
+  }
+  return grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                      "the server instance behind the proxy is gone (the proxy reset the "
+                      "stream: " + status.error_message() + ")");
+}
+
 Status WaitConnected(const std::shared_ptr<grpc::Channel>& channel, double timeout_s) {
   if (!(timeout_s >= 0.0) || !std::isfinite(timeout_s)) {
     return InvalidArgument("connect timeout must be finite and >= 0 s, got " +

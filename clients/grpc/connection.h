@@ -34,6 +34,15 @@ Status WaitConnected(const std::shared_ptr<grpc::Channel>& channel, double timeo
 // Puts `session_key` on `context` as kSessionKeyMetadata (nothing for an empty key).
 void SetSessionKey(grpc::ClientContext* context, const std::string& session_key);
 
+// How a client reads the end of a call that went through a proxy. When the server instance
+// behind an HTTP/2 proxy (deploy/nginx) dies mid-stream, the proxy cannot send gRPC trailers
+// for it; it resets the client's stream (RST_STREAM INTERNAL_ERROR), which gRPC reports as
+// INTERNAL "Received RST_STREAM with error code 2". Our server never ends a call that way (it
+// always sends a status), so that reset means "the instance is gone": returned here as
+// UNAVAILABLE, the code a direct connection reports for the same loss, with the original
+// details kept. Every other status is returned unchanged.
+grpc::Status FromProxyReset(const grpc::Status& status);
+
 // A fresh random key ("cli-" and 16 hex digits) for a client that has no stable name.
 std::string RandomSessionKey();
 

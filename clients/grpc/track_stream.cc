@@ -99,7 +99,7 @@ void TrackStream::WritesDone() { stream_->WritesDone(); }
 
 grpc::Status TrackStream::Finish() {
   finished_ = true;
-  return stream_->Finish();
+  return FromProxyReset(stream_->Finish());
 }
 
 void TrackStream::Cancel() { context_.TryCancel(); }

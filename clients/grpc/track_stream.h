@@ -10,7 +10,8 @@
 //                   when the server has ended the stream.
 //   WritesDone      half-close: "finished". The server processes every accepted block, sends
 //                   the remaining estimates and ends the stream OK; the session closes.
-//   Finish          after Read returned false: the stream's final status.
+//   Finish          after Read returned false: the stream's final status (a proxy's reset
+//                   after its instance died reads as UNAVAILABLE: FromProxyReset).
 //   Cancel          abandon the stream (context TryCancel). The server keeps the session
 //                   detached and resumable for its TTL (SessionOpened.session_ttl_s).
 //

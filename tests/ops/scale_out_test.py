@@ -10,12 +10,17 @@ hashing of the metadata key x-localizer-session-key. The test, over loopback:
   3. cancels one stream, waits until its session is detached, resumes it through nginx with
      its token and the same key, and checks that it is the same instance and estimates go on
      after the last frame received;
-  4. SIGKILLs one instance: the streams of its sessions fail (through nginx: INTERNAL
-     "Received RST_STREAM with error code 2", see transport_failure; a stream opened straight
-     to that instance, for comparison: UNAVAILABLE), the streams on the other two keep
-     producing estimates and then end OK when half-closed; a resume of a lost session through
-     nginx fails (UNAVAILABLE or NOT_FOUND), it never lands quietly elsewhere; a new session
-     with a lost key opens on a live instance.
+  4. SIGKILLs one instance (a crash): the streams of its sessions end with UNAVAILABLE, as
+     does a stream opened straight to that instance for comparison. Through nginx gRPC
+     itself sees the proxy's reset (INTERNAL "Received RST_STREAM with error code 2": stock
+     nginx cannot send trailers for a dead upstream); the client library reads that as
+     UNAVAILABLE (localizer_client.InstanceLost, C++ client::FromProxyReset) and the test
+     checks it did. The streams on the other two keep producing estimates; a resume of a
+     lost session through nginx fails (UNAVAILABLE or NOT_FOUND), it never lands quietly
+     elsewhere; a new session with a lost key opens on a live instance.
+  5. SIGTERMs a second instance (what Kubernetes sends): the server drains, and its streams
+     end with the server's own UNAVAILABLE status, carried through nginx as real trailers
+     (no mapping involved); the last instance's streams go on and end OK when half-closed.
 
 Environment (set by tests/ops/scale_out.cmake):
   LOCALIZER_SERVER         the localizer-server binary
@@ -86,19 +91,6 @@ def wait_until(predicate, timeout_s, what):
         time.sleep(0.05)
 
 
-def transport_failure(code, details):
-    """How a stream ends when the instance behind nginx dies under it.
-
-    Straight to the instance, gRPC reports a lost connection as UNAVAILABLE. Through nginx the
-    client's HTTP/2 connection is to nginx, which stays up: once the response has started,
-    nginx can only reset the client's stream (RST_STREAM INTERNAL_ERROR) -- stock nginx cannot
-    send gRPC trailers for a failed upstream -- and gRPC maps that reset to INTERNAL with
-    "Received RST_STREAM with error code 2". Both mean "the instance is gone"; a server-side
-    INTERNAL (an engine bug) would carry other details and is not accepted here."""
-    return (code == grpc.StatusCode.UNAVAILABLE or
-            (code == grpc.StatusCode.INTERNAL and "RST_STREAM" in (details or "")))
-
-
 class Stream:
     """One Track stream through nginx: a thread sends blocks every BLOCK_PERIOD_S, another
     reads estimates; `code` is the final status once the stream is over."""
@@ -109,6 +101,7 @@ class Stream:
         self.last_frame = None
         self.code = None          # grpc.StatusCode once ended
         self.details = ""
+        self.error = None         # the grpc.RpcError the stream ended with, if any
         self._stop = threading.Event()
         self._ended = threading.Event()
         self._lock = threading.Lock()
@@ -133,6 +126,7 @@ class Stream:
             code, details = grpc.StatusCode.OK, ""
         except grpc.RpcError as err:
             code, details = err.code(), err.details()
+            self.error = err
         self.code, self.details = code, details
         self._ended.set()
 
@@ -345,7 +339,9 @@ class ScaleOutTest(unittest.TestCase):
               f"({direct.details!r})", file=sys.stderr)
         self.assertEqual(direct.code, grpc.StatusCode.UNAVAILABLE, direct.details)
         for session_id, (code, details) in lost_codes.items():
-            self.assertTrue(transport_failure(code, details), f"{session_id}: {code} {details}")
+            self.assertEqual(code, grpc.StatusCode.UNAVAILABLE, f"{session_id}: {details}")
+            self.assertIsInstance(streams[session_id].error, lc.InstanceLost, session_id)
+            self.assertEqual(streams[session_id].session.code(), grpc.StatusCode.UNAVAILABLE)
         time.sleep(2.0)
         after = {s: streams[s].count() for s in kept}
         for session_id in kept:
@@ -373,6 +369,28 @@ class ScaleOutTest(unittest.TestCase):
               f"{where[fresh.session_id][0]}", file=sys.stderr)
         fresh.close()
         list(fresh)
+
+        # 5. SIGTERM a second instance: it drains and ends its streams with its own
+        # UNAVAILABLE, which nginx passes on as trailers.
+        drained_instance, last_instance = survivors
+        drained = [s for s in kept if owner[s] == drained_instance]
+        kept = [s for s in kept if owner[s] == last_instance]
+        before = {s: streams[s].count() for s in kept}
+        proc, _ = self.servers[drained_instance]
+        proc.send_signal(signal.SIGTERM)
+        self.assertEqual(proc.wait(timeout=30), 0, self._tail(f"server-{drained_instance}"))
+        for session_id in drained:
+            stream = streams[session_id]
+            self.assertTrue(stream.ended(20), f"{session_id}: stream still open after SIGTERM")
+            self.assertEqual(stream.code, grpc.StatusCode.UNAVAILABLE, stream.details)
+            self.assertNotIsInstance(stream.error, lc.InstanceLost, stream.details)
+            self.assertIn("shutting down", stream.details)
+        print(f"SIGTERM to instance {drained_instance}: its {len(drained)} streams ended with "
+              f"the server's UNAVAILABLE ({streams[drained[0]].details!r})", file=sys.stderr)
+        time.sleep(1.0)
+        for session_id in kept:
+            self.assertIsNone(streams[session_id].code, f"{session_id} on the last instance ended")
+            self.assertGreater(streams[session_id].count(), before[session_id], session_id)
 
         # The survivors finish cleanly.
         for session_id in kept:

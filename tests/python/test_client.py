@@ -85,6 +85,35 @@ class SyntheticSignalTest(unittest.TestCase):
             lag = lag - len(AUDIO) if lag > len(AUDIO) // 2 else lag
             self.assertEqual(lag, TDOA_SAMPLES[k], f"sensor {k}")
 
+    def test_a_proxy_reset_reads_as_unavailable(self):
+        class Err(grpc.RpcError):
+            def __init__(self, code, details):
+                self._code, self._details = code, details
+
+            def code(self):
+                return self._code
+
+            def details(self):
+                return self._details
+
+            def initial_metadata(self):
+                return ()
+
+            def trailing_metadata(self):
+                return ()
+
+        reset = Err(grpc.StatusCode.INTERNAL, "Received RST_STREAM with error code 2")
+        lost = lc.from_proxy_reset(reset)
+        self.assertIsInstance(lost, lc.InstanceLost)
+        self.assertIsInstance(lost, grpc.RpcError)
+        self.assertEqual(lost.code(), grpc.StatusCode.UNAVAILABLE)
+        self.assertIn("RST_STREAM with error code 2", lost.details())
+        self.assertIs(lost.cause, reset)
+        for other in (Err(grpc.StatusCode.INTERNAL, "engine: non-finite covariance"),
+                      Err(grpc.StatusCode.INTERNAL, "Received RST_STREAM with error code 8"),
+                      Err(grpc.StatusCode.UNAVAILABLE, "server shutting down")):
+            self.assertIs(lc.from_proxy_reset(other), other)
+
     def test_loadtest_encodes_requests_like_protobuf(self):
         sys.path.insert(0, CLIENT_DIR)
         import loadtest

@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "clients/grpc/connection.h"
 #include "clients/grpc/latency_summary.h"
 #include "clients/grpc/streamer.h"
 #include "server/wire/status_wire.h"
@@ -27,6 +28,26 @@ TEST(StatusWire, FromGrpcStatusPrefixesTheCodeName) {
     const Status back = wire::FromGrpcStatus(wire::ToGrpcStatus(original));
     EXPECT_EQ(back.code(), original.code());
     EXPECT_EQ(back.message(), original.ToString());
+  }
+}
+
+TEST(ProxyReset, AResetFromTheProxyReadsAsUnavailableAndNothingElseChanges) {
+  // What gRPC reports when nginx resets a stream because its upstream died.
+  const grpc::Status reset(grpc::StatusCode::INTERNAL, "Received RST_STREAM with error code 2");
+  const grpc::Status mapped = FromProxyReset(reset);
+  EXPECT_EQ(mapped.error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_NE(mapped.error_message().find("instance behind the proxy is gone"), std::string::npos);
+  EXPECT_NE(mapped.error_message().find("RST_STREAM with error code 2"), std::string::npos);
+  // A server's own INTERNAL (an engine failure), other reset codes and other statuses pass.
+  for (const grpc::Status& other :
+       {grpc::Status(grpc::StatusCode::INTERNAL, "engine: non-finite covariance"),
+        grpc::Status(grpc::StatusCode::INTERNAL, "Received RST_STREAM with error code 8"),
+        grpc::Status(grpc::StatusCode::UNAVAILABLE, "server shutting down"),
+        grpc::Status(grpc::StatusCode::CANCELLED, "Received RST_STREAM with error code 2"),
+        grpc::Status::OK}) {
+    const grpc::Status same = FromProxyReset(other);
+    EXPECT_EQ(same.error_code(), other.error_code());
+    EXPECT_EQ(same.error_message(), other.error_message());
   }
 }
 

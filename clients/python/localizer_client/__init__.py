@@ -26,9 +26,12 @@ resuming by hand with ``TrackSession.resume``, pass the ``session_key`` the sess
 with: without it the session id is used, which a proxy may route to another instance (the
 resume then fails with NOT_FOUND). Use any stable string, e.g. the array's name; keys that
 differ spread sessions over the instances. If the instance holding a session dies, the
-session is gone: its stream ends with UNAVAILABLE (straight to the server) or, through nginx,
-INTERNAL "Received RST_STREAM with error code 2"; resuming it fails (UNAVAILABLE or NOT_FOUND);
-open a new session (the proxy sends it to a live instance).
+session is gone: its stream ends with UNAVAILABLE and resuming it fails (UNAVAILABLE or
+NOT_FOUND); open a new session (the proxy sends it to a live instance). Through a proxy,
+gRPC itself reports that loss as INTERNAL "Received RST_STREAM with error code 2" (the
+proxy cannot send trailers for a dead upstream, it resets the stream); ``TrackSession``
+raises it as ``InstanceLost`` (code UNAVAILABLE, the original error in ``.cause``), see
+``from_proxy_reset``.
 
 The generated stubs are found next to this package in the build tree, or through the
 environment variable LOCALIZER_PY_GEN (see ``_stubs``); they are re-exported as ``pb`` (the
@@ -45,7 +48,7 @@ from . import synth  # noqa: F401  (re-exported)
 
 __all__ = ["pb", "pb_grpc", "synth", "SESSION_KEY_METADATA", "connect", "vector3",
            "session_config", "sample_block", "pcm16_bytes", "TrackSession", "locate",
-           "list_sessions", "close_session"]
+           "list_sessions", "close_session", "InstanceLost", "from_proxy_reset"]
 
 #: Metadata key a proxy routes on, so that a resumed stream reaches the same server instance.
 SESSION_KEY_METADATA = "x-localizer-session-key"
@@ -114,6 +117,47 @@ def pcm16_bytes(data):
     return scaled.astype("<i2").tobytes()
 
 
+class InstanceLost(grpc.RpcError):
+    """The server instance behind a proxy died under a call: code() is UNAVAILABLE, as a
+    direct connection reports it; ``cause`` is the proxy's reset as gRPC reported it."""
+
+    def __init__(self, cause):
+        super().__init__(cause)
+        self.cause = cause
+
+    def code(self):
+        return grpc.StatusCode.UNAVAILABLE
+
+    def details(self):
+        return ("the server instance behind the proxy is gone (the proxy reset the stream: "
+                f"{self.cause.details()})")
+
+    def initial_metadata(self):
+        return self.cause.initial_metadata()
+
+    def trailing_metadata(self):
+        return self.cause.trailing_metadata()
+
+    def __str__(self):
+        return f"UNAVAILABLE: {self.details()}"
+
+
+def _is_proxy_reset(code, details):
+    # Our server always ends a call with a status; an HTTP/2 reset with INTERNAL_ERROR (2)
+    # comes from a proxy whose upstream connection broke.
+    return code == grpc.StatusCode.INTERNAL and "RST_STREAM with error code 2" in (details or "")
+
+
+def from_proxy_reset(err):
+    """``err`` (a grpc.RpcError) as ``InstanceLost`` when it is a proxy's reset of a stream
+    whose instance died, else ``err`` itself."""
+    try:
+        code, details = err.code(), err.details()
+    except Exception:  # an RpcError without a status (e.g. raised before the call started)
+        return err
+    return InstanceLost(err) if _is_proxy_reset(code, details) else err
+
+
 class TrackSession:
     """One Track stream: open (``config``) or resume (``resume``) a session, send blocks, read
     responses. The constructor waits for the ``opened`` response and raises ``grpc.RpcError``
@@ -146,7 +190,13 @@ class TrackSession:
         self._call = pb_grpc.LocalizerStub(channel).Track(
             self._request_iterator(), metadata=[(SESSION_KEY_METADATA, self.session_key)],
             timeout=timeout)
-        first = next(self._call, None)  # raises grpc.RpcError if the stream ends with an error
+        try:
+            first = next(self._call, None)  # raises grpc.RpcError if the stream ends with an error
+        except grpc.RpcError as err:
+            mapped = from_proxy_reset(err)
+            if mapped is err:
+                raise
+            raise mapped from err
         if first is None or first.WhichOneof("kind") != "opened":
             self.cancel()
             raise RuntimeError(f"Track: expected `opened` first, got {first!r}")
@@ -204,12 +254,18 @@ class TrackSession:
         self._requests.put(None)
 
     def __iter__(self):
-        """Every TrackResponse after `opened`, in order; raises grpc.RpcError on an error end."""
+        """Every TrackResponse after `opened`, in order; raises grpc.RpcError on an error end
+        (``InstanceLost`` when a proxy reset the stream because its instance died)."""
         try:
             for response in self._call:
                 if response.WhichOneof("kind") == "estimate":
                     self.last_frame_received = response.estimate.frame_index
                 yield response
+        except grpc.RpcError as err:
+            mapped = from_proxy_reset(err)
+            if mapped is err:
+                raise
+            raise mapped from err
         finally:
             self._requests.put(None)  # the stream is over: release the request thread
 
@@ -225,8 +281,10 @@ class TrackSession:
                 self.gaps.append(response.gap)
 
     def code(self):
-        """The stream's final grpc.StatusCode (blocks until it ends)."""
-        return self._call.code()
+        """The stream's final grpc.StatusCode (blocks until it ends); UNAVAILABLE for a
+        proxy's reset after its instance died."""
+        code = self._call.code()
+        return grpc.StatusCode.UNAVAILABLE if _is_proxy_reset(code, self._call.details()) else code
 
     def __enter__(self):
         return self
