@@ -55,6 +55,12 @@ StatusOr<ArrayGeometry> ArrayGeometry::Create(std::vector<Vec3> sensors_m, doubl
   return g;
 }
 
+ArrayGeometry ArrayGeometry::Moved(const Mat3& rotation, const Vec3& translation_m) const {
+  ArrayGeometry moved = *this;
+  for (Vec3& m : moved.sensors_m_) m = rotation * m + translation_m;
+  return moved;
+}
+
 Vec3 ArrayGeometry::centroid_m() const {
   Vec3 c = Vec3::Zero();
   for (const Vec3& m : sensors_m_) c += m;

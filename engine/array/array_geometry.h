@@ -38,6 +38,10 @@ class ArrayGeometry {
   Vec3 centroid_m() const;
   // Largest distance between two sensors.
   double aperture_m() const;
+  // The same array after a rigid motion: m_k -> rotation m_k + translation_m (a platform
+  // carrying the array, `rotation` body -> world). A rigid motion keeps every distance, so
+  // the copy needs no new validation and its pair delay bounds are unchanged.
+  ArrayGeometry Moved(const Mat3& rotation, const Vec3& translation_m) const;
 
   // h(s): TDOA per pair, seconds.
   Eigen::VectorXd Tdoa(const Vec3& source_m) const;

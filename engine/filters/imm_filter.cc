@@ -184,3 +184,14 @@ std::vector<ModelProbability> ImmFilter::ModelProbabilities() const {
 }
 
 }  // namespace localizer::engine
+
+namespace localizer::engine {
+
+Status ImmFilter::SetArray(const ArrayGeometry& array) {
+  LOCALIZER_RETURN_IF_ERROR(ValidateMovedArray(impl_->array, array));
+  impl_->array = array;
+  for (auto& mode : impl_->modes) LOCALIZER_RETURN_IF_ERROR(mode->SetArray(array));
+  return Status::Ok();
+}
+
+}  // namespace localizer::engine

@@ -80,6 +80,7 @@ class ImmFilter final : public Tracker {
   // Every mode starts from the belief (extra entries 0 with kalman.extra_state_std);
   // mode probabilities uniform.
   Status Initialise(const TrackState& belief) override;
+  Status SetArray(const ArrayGeometry& array) override;
   void Predict(double dt_s) override;
   StatusOr<UpdateReport> Update(const Measurement& measurement) override;
   TrackState State() const override;

@@ -337,3 +337,13 @@ TrackState KalmanFilter::State() const {
 }
 
 }  // namespace localizer::engine
+
+namespace localizer::engine {
+
+Status KalmanFilter::SetArray(const ArrayGeometry& array) {
+  LOCALIZER_RETURN_IF_ERROR(ValidateMovedArray(impl_->array, array));
+  impl_->array = array;
+  return Status::Ok();
+}
+
+}  // namespace localizer::engine

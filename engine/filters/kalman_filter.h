@@ -78,6 +78,7 @@ class KalmanFilter final : public Tracker {
 
   bool initialised() const override;
   Status Initialise(const TrackState& belief) override;
+  Status SetArray(const ArrayGeometry& array) override;
   void Predict(double dt_s) override;
   StatusOr<UpdateReport> Update(const Measurement& measurement) override;
   TrackState State() const override;

@@ -287,3 +287,15 @@ std::vector<ModelProbability> MultiModelParticleFilter::ModelProbabilities() con
 }
 
 }  // namespace localizer::engine
+
+namespace localizer::engine {
+
+Status MultiModelParticleFilter::SetArray(const ArrayGeometry& array) {
+  LOCALIZER_RETURN_IF_ERROR(ValidateMovedArray(impl_->array, array));
+  impl_->array = array;
+  impl_->base.SetSensors(array);
+  for (auto& set : impl_->sets) set->SetSensors(array);
+  return Status::Ok();
+}
+
+}  // namespace localizer::engine

@@ -141,3 +141,14 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
 TrackState ParticleFilter::State() const { return impl_->set.MeanAndCovariance(); }
 
 }  // namespace localizer::engine
+
+namespace localizer::engine {
+
+Status ParticleFilter::SetArray(const ArrayGeometry& array) {
+  LOCALIZER_RETURN_IF_ERROR(ValidateMovedArray(impl_->array, array));
+  impl_->array = array;
+  impl_->set.SetSensors(array);
+  return Status::Ok();
+}
+
+}  // namespace localizer::engine

@@ -92,6 +92,7 @@ class ParticleFilter final : public Tracker {
   Status Initialise(const TrackState& belief) override;
   // Particles uniform in the box [min_m, max_m] with velocities ~ N(0, speed_sigma_mps^2 I).
   Status InitialiseRegion(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps) override;
+  Status SetArray(const ArrayGeometry& array) override;
   void Predict(double dt_s) override;
   StatusOr<UpdateReport> Update(const Measurement& measurement) override;
   TrackState State() const override;

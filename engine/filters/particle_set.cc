@@ -13,6 +13,17 @@ void ParticleSet::Columns::Resize(int n) {
   for (auto* c : {&x, &y, &z, &vx, &vy, &vz}) c->assign(n, 0.0f);
 }
 
+void ParticleSet::SetSensors(const ArrayGeometry& array) {
+  sensor_x_.clear();
+  sensor_y_.clear();
+  sensor_z_.clear();
+  for (const Vec3& m : array.sensors_m()) {
+    sensor_x_.push_back(static_cast<float>(m.x() - origin_m_.x()));
+    sensor_y_.push_back(static_cast<float>(m.y() - origin_m_.y()));
+    sensor_z_.push_back(static_cast<float>(m.z() - origin_m_.z()));
+  }
+}
+
 ParticleSet::ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions& options)
     : n_(options.particles),
       seed_(options.seed),
@@ -20,11 +31,7 @@ ParticleSet::ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions
       reference_(array.reference_sensor()),
       outlier_probability_(static_cast<float>(options.outlier_probability)),
       inv_c_(static_cast<float>(1.0 / array.sound_speed_mps())) {
-  for (const Vec3& m : array.sensors_m()) {
-    sensor_x_.push_back(static_cast<float>(m.x() - origin_m_.x()));
-    sensor_y_.push_back(static_cast<float>(m.y() - origin_m_.y()));
-    sensor_z_.push_back(static_cast<float>(m.z() - origin_m_.z()));
-  }
+  SetSensors(array);
   for (int p = 0; p < array.pair_count(); ++p) {
     pair_sensor_.push_back(array.sensor_of_pair(p));
     pair_span_s_.push_back(static_cast<float>(2.0 * array.max_delay_s(p)));

@@ -31,6 +31,9 @@ class ParticleSet {
  public:
   ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions& options);
 
+  // The array moved (tracker.h SetArray): sensor positions relative to the set's fixed
+  // origin (the first pose's centroid) are recomputed; particles are untouched.
+  void SetSensors(const ArrayGeometry& array);
   // x = mean + root z, z ~ N(0, I6); weights equal.
   void SampleGaussian(const Vec6& mean, const Mat6& root);
   // Position uniform in the box, velocity ~ N(0, speed_sigma^2 I3); weights equal.

@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "engine/array/array_geometry.h"
 #include "engine/core/estimate.h"
 #include "engine/core/measurement.h"
 #include "engine/core/status.h"
@@ -38,6 +39,10 @@ inline Status ValidateRegion(const Vec3& min_m, const Vec3& max_m, double speed_
   return Status::Ok();
 }
 
+// OK when `moved` is `current`'s array in another pose (same sensor count, reference and
+// sound speed, the same distances between sensors to 1 mm); INVALID_ARGUMENT naming what differs.
+Status ValidateMovedArray(const ArrayGeometry& current, const ArrayGeometry& moved);
+
 // A root R with R R^T = belief.covariance that tolerates semi-definite covariances
 // (V sqrt(max(eigenvalues, 0))); INVALID_ARGUMENT when the mean or covariance is not finite
 // or the covariance is not positive semi-definite. Particle filters sample x = mean + R z.
@@ -68,6 +73,15 @@ class Tracker {
   // INVALID_ARGUMENT if the pair count differs from the array's).
   virtual StatusOr<UpdateReport> Update(const Measurement& measurement) = 0;
   virtual TrackState State() const = 0;
+  // The array moved (a platform carrying it rotated or travelled): later updates use these
+  // sensor positions; the belief is untouched. `array` must have the same sensors,
+  // reference and sound speed in another pose (ArrayGeometry::Moved); INVALID_ARGUMENT
+  // otherwise. FAILED_PRECONDITION from trackers whose array is fixed at creation (the
+  // GPU particle filter keeps its sensors on the device).
+  virtual Status SetArray(const ArrayGeometry& array) {
+    (void)array;
+    return FailedPrecondition("this tracker cannot follow a moving array");
+  }
   // Multiple-model trackers: each motion hypothesis and its current probability (summing
   // to 1; after Predict the predicted, after Update the posterior probabilities). Empty
   // for single-model filters.

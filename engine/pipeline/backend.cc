@@ -90,9 +90,11 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
     if (reason.empty()) {
       auto estimator = provider->MakeEstimator(array, gcc);
       if (!estimator.ok()) return estimator.status();
-      // The device kernels weigh by the peak or GCC likelihood; the mixture likelihood's
-      // particle filter runs on the CPU beside the GPU GCC, as the Kalman filters do.
-      const bool on_device = particle && tracker.particle.likelihood != Likelihood::kMixture;
+      // The device kernels weigh by the peak or GCC likelihood of a fixed array; the mixture
+      // likelihood's particle filter, and one on a moving array, run on the CPU beside the
+      // GPU GCC, as the Kalman filters do.
+      const bool on_device =
+          particle && tracker.particle.likelihood != Likelihood::kMixture && !tracker.moving_array;
       auto made = on_device ? provider->MakeTracker(array, tracker.particle)
                             : particle ? MakeCpuParticleFilter(array, tracker.particle) : MakeCpuOnly(array, tracker);
       if (!made.ok()) return made.status();

@@ -62,6 +62,10 @@ struct TrackerOptions {
                                     // the modes' shared options, variant included
   std::vector<ImmMode> imm_modes = ImmOptions().modes;  // "imm": cv + ct by default
   double stay_probability = 0.95;   // "mmpf", "imm": the Markov switching prior per step
+  // The array moves (a platform's attitude, Tracker::SetArray every frame). The GPU filter
+  // keeps its sensors on the device, so such a particle filter runs on the CPU beside the
+  // GPU GCC (the GCC's lag window depends only on sensor distances, which do not change).
+  bool moving_array = false;
 };
 
 // INVALID_ARGUMENT for an unknown backend name; FAILED_PRECONDITION for "gpu" without one;
