@@ -2,8 +2,11 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "engine/core/types.h"
 
@@ -19,6 +22,16 @@ struct StageTimings {
 struct ModelProbability {
   std::string model;         // the hypothesis' name, e.g. "cv", "ct", "ct-left"
   double probability = 0.0;  // in [0, 1]; a tracker's list sums to 1
+};
+
+// Where a moving array's platform was at a frame's instant (engine/pipeline/platform_pose.h):
+// body -> world attitude (East-North-Up world), its Euler angles z-y'-x'' and their std, and
+// the body origin in the world.
+struct PlatformAttitude {
+  Eigen::Quaterniond body_to_world = Eigen::Quaterniond::Identity();
+  Vec3 euler_rad = Vec3::Zero();     // (roll, pitch, yaw)
+  Vec3 euler_sd_rad = Vec3::Zero();
+  Vec3 origin_m = Vec3::Zero();
 };
 
 struct Estimate {
@@ -41,6 +54,9 @@ struct Estimate {
   // Multiple-model trackers (filter mmpf, imm): each hypothesis' probability after this
   // frame; empty for single-model filters and before initialisation.
   std::vector<ModelProbability> model_probabilities;
+  // Sessions whose array rides a platform (SessionConfig::array_in_body_frame): the pose the
+  // frame's TDOA model used; unset for fixed arrays and before the first IMU sample.
+  std::optional<PlatformAttitude> platform;
   StageTimings timings;
 };
 

@@ -8,6 +8,7 @@
 #include "engine/filters/divergence_monitor.h"
 #include "engine/pipeline/backend.h"
 #include "engine/pipeline/framer.h"
+#include "engine/pipeline/platform_pose.h"
 
 namespace localizer::engine {
 namespace {
@@ -49,9 +50,11 @@ Status ValidateBlock(const BlockView& block, int channels, int64_t max_samples, 
 }  // namespace
 
 struct Session::Impl {
-  Impl(SessionConfig c, ArrayGeometry a, SessionComponents parts)
+  Impl(SessionConfig c, ArrayGeometry a, SessionComponents parts, std::unique_ptr<PlatformPose> pose)
       : config(std::move(c)),
+        body_array(a),
         array(std::move(a)),
+        platform(std::move(pose)),
         components(std::move(parts)),
         framer(array.sensor_count(), config.frame_samples, config.hop_samples),
         monitor(config.divergence_window) {}
@@ -71,8 +74,14 @@ struct Session::Impl {
     return last_sigma_s > 0.0 ? last_sigma_s : 0.1 / config.sample_rate_hz;
   }
 
+  // Moving arrays: moves `array` and the tracker to the platform's pose at t_s; false
+  // when there is no pose yet (no IMU sample).
+  bool MoveArray(double t_s, Estimate* e);
+
   SessionConfig config;
-  ArrayGeometry array;
+  ArrayGeometry body_array;  // as configured (the body frame, for a moving array)
+  ArrayGeometry array;       // in the world at the current frame
+  std::unique_ptr<PlatformPose> platform;  // moving arrays only
   SessionComponents components;
   Framer framer;
   DivergenceMonitor monitor;
@@ -125,6 +134,15 @@ void Session::Impl::UpdateAndWatch(Estimate* e) {
   if (GoodFix(&hint, &fix)) e->reinitialised = tracker.Initialise(BeliefFromFix(fix)).ok();
 }
 
+bool Session::Impl::MoveArray(double t_s, Estimate* e) {
+  auto pose = platform->At(t_s);
+  if (!pose) return false;
+  array = body_array.Moved(pose->body_to_world.toRotationMatrix(), pose->origin_m);
+  if (!components.tracker->SetArray(array).ok()) return false;  // a rigid motion: cannot fail
+  e->platform = *pose;
+  return true;
+}
+
 void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint64_t sequence,
                                  std::vector<Estimate>* out) {
   Estimate e;
@@ -137,6 +155,8 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
   e.timings.tdoa_s = SecondsSince(tdoa_start);
 
   const auto filter_start = std::chrono::steady_clock::now();
+  // A moving array without a pose yet: the frame is measured but cannot be tracked.
+  const bool posed = platform == nullptr || MoveArray(e.t_s, &e);
   if (measured) {
     delays.resize(static_cast<Eigen::Index>(measurement.pairs.size()));
     for (size_t p = 0; p < measurement.pairs.size(); ++p) {
@@ -146,8 +166,10 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
     }
   }
   Tracker& tracker = *components.tracker;
-  bool update = measured;
-  if (tracker.initialised()) {
+  bool update = measured && posed;
+  if (!posed) {
+    // Nothing to do until the platform's pose is known.
+  } else if (tracker.initialised()) {
     tracker.Predict(e.t_s - last_t_s);
   } else if (config.init_region_min_m.allFinite()) {
     // The region is the belief at this frame; this frame's TDOAs then refine it.
@@ -196,10 +218,17 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const SessionConfig& config) 
     tracker.kalman.variant = config.imm_variant == "ukf" ? KalmanVariant::kUnscented : KalmanVariant::kExtended;
     tracker.imm_modes = *ParseImmModes(config.imm_modes, tracker.kalman.motion);
   }
+  tracker.moving_array = config.array_in_body_frame;
+  std::unique_ptr<PlatformPose> pose;
+  if (config.array_in_body_frame) {
+    auto made = PlatformPose::Create(config.attitude, config.platform_origin_m);
+    if (!made.ok()) return made.status();
+    pose = std::move(made).value();
+  }
   auto parts = BuildComponents(config.backend, *array, gcc, tracker);
   if (!parts.ok()) return parts.status();
-  return std::unique_ptr<Session>(
-      new Session(std::make_unique<Impl>(config, std::move(array).value(), std::move(parts).value())));
+  return std::unique_ptr<Session>(new Session(
+      std::make_unique<Impl>(config, std::move(array).value(), std::move(parts).value(), std::move(pose))));
 }
 
 Status Session::Process(const BlockView& block, std::vector<Estimate>* out) {
@@ -221,6 +250,21 @@ Status Session::Skip(int64_t samples_per_channel) {
   }
   impl_->framer.Skip(samples_per_channel);
   return Status::Ok();
+}
+
+Status Session::AddImu(const std::vector<ImuSample>& samples) {
+  if (impl_->platform == nullptr) {
+    return FailedPrecondition("IMU samples for a session whose array is fixed in the world "
+                              "(open it with the array in the platform's body frame)");
+  }
+  return impl_->platform->Add(samples);
+}
+
+Status Session::SetPlatformOrigin(const Vec3& origin_m) {
+  if (impl_->platform == nullptr) {
+    return FailedPrecondition("platform origin for a session whose array is fixed in the world");
+  }
+  return impl_->platform->SetOrigin(origin_m);
 }
 
 const SessionConfig& Session::config() const { return impl_->config; }

@@ -8,7 +8,10 @@
 // far above its chi-square bound re-initialises it from the current frame's fix.
 // Every block is validated first (sequence increasing, channel count, length, finite
 // values); a rejected block leaves the session exactly as it was.
-// A pure function of its config (seed included) and the blocks it was given.
+// A moving array (config.array_in_body_frame) is moved, every frame, to where its platform's
+// attitude (from the IMU samples given with AddImu) puts it; until the first IMU sample its
+// frames are measured but not tracked (the array's pose is unknown).
+// A pure function of its config (seed included) and the blocks (and IMU samples) it was given.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +21,8 @@
 #include <vector>
 
 #include "engine/array/array_geometry.h"
+#include "engine/attitude/attitude_filter.h"
+#include "engine/core/imu.h"
 #include "engine/core/block.h"
 #include "engine/core/estimate.h"
 #include "engine/filters/particle_filter.h"
@@ -64,6 +69,13 @@ struct SessionConfig {
   Vec3 init_region_min_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   Vec3 init_region_max_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   int divergence_window = 8;          // frames averaged by the divergence test
+  // Moving array (platform_pose.h): sensors_m are in the platform's body frame (the IMU's
+  // axes) and the session is fed IMU samples (AddImu); each frame's TDOA model uses the
+  // sensors rotated by the platform's attitude at that frame and moved to its origin.
+  // Estimates carry the platform pose. The particle filter then runs on the CPU.
+  bool array_in_body_frame = false;
+  AttitudeFilterOptions attitude;     // the platform's attitude filter
+  Vec3 platform_origin_m = Vec3::Zero();  // body origin in the world until SetPlatformOrigin
   std::string backend = "cpu";        // "cpu" | "gpu" | "auto"
   uint64_t seed = 1;
 
@@ -89,6 +101,14 @@ class Session {
   // and the tracker predicts across the missing time. INVALID_ARGUMENT if negative or
   // above 2^40.
   Status Skip(int64_t samples_per_channel);
+
+  // Moving arrays (config.array_in_body_frame): IMU samples, in time order, on the session
+  // clock (seconds from the first sample); send those of a block before the block. All are
+  // validated first: INVALID_ARGUMENT (naming the sample and field) consumes none.
+  // FAILED_PRECONDITION on a session whose array is fixed in the world.
+  Status AddImu(const std::vector<ImuSample>& samples);
+  // Moving arrays: the platform's body origin in the world from now on (finite).
+  Status SetPlatformOrigin(const Vec3& origin_m);
 
   const SessionConfig& config() const;
   const std::string& backend() const;  // "cpu" or "gpu": what BuildComponents chose

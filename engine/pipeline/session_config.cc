@@ -55,6 +55,10 @@ Status ValidateTracker(const SessionConfig& c) {
 
 Status SessionConfig::Validate() const {
   LOCALIZER_RETURN_IF_ERROR(ValidateTracker(*this));
+  if (array_in_body_frame) {
+    if (const Status s = attitude.Validate(); !s.ok()) return InvalidArgument("platform.attitude: " + s.message());
+    if (!platform_origin_m.allFinite()) return InvalidArgument("platform.origin_m must be finite");
+  }
   if (sensors_m.size() < 4) {
     return InvalidArgument("array.sensors_m has " + std::to_string(sensors_m.size()) +
                            " sensors; at least 4 are needed");

@@ -8,8 +8,13 @@
 namespace localizer::engine {
 TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth,
                       const std::vector<Estimate>& estimates, double skip_s) {
+  return ScoreTrack([&array](double) { return array; }, truth, estimates, skip_s);
+}
+
+TrackScore ScoreTrack(const std::function<ArrayGeometry(double)>& array_at, const SimResult& truth,
+                      const std::vector<Estimate>& estimates, double skip_s) {
   TrackScore score;
-  const int pairs = array.pair_count();
+  const int pairs = array_at(0.0).pair_count();
   const double t_end = truth.truth.empty() ? 0.0 : truth.truth.back().t_s;
   std::vector<const Estimate*> used;
   std::vector<std::vector<double>> tdoa_errors(pairs);
@@ -17,6 +22,7 @@ TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth,
     if (e.reinitialised) ++score.reinitialisations;
     if (!e.initialised || e.t_s < skip_s || e.t_s > t_end) continue;
     used.push_back(&e);
+    const ArrayGeometry array = array_at(e.t_s);
     for (int p = 0; p < pairs && p < static_cast<int>(e.delay_s.size()); ++p) {
       const Vec3 at = truth.TruthAt(e.t_s - 0.5 * e.delay_s[p]).position_m;
       tdoa_errors[p].push_back(e.delay_s[p] - array.Tdoa(at)(p));
@@ -40,7 +46,7 @@ TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth,
     const double err = (e->state.head<3>() - at).norm();
     errors.push_back(err);
     se += err * err;
-    crlb2 += TdoaPositionCrlb(array, at, sigma).trace();
+    crlb2 += TdoaPositionCrlb(array_at(e->t_s), at, sigma).trace();
   }
   const double n = static_cast<double>(errors.size());
   score.rmse_m = std::sqrt(se / n);

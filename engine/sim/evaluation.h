@@ -9,6 +9,8 @@
 // score reports the RMS of that bound over the scored frames and RMSE / bound.
 #pragma once
 
+#include <functional>
+
 #include <vector>
 
 #include "engine/core/estimate.h"
@@ -30,6 +32,10 @@ struct TrackScore {
 
 // Estimates before skip_s (convergence) are not scored.
 TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth,
+                      const std::vector<Estimate>& estimates, double skip_s);
+// The same for an array that moves: array_at(t_s) is where it was at reception time t_s
+// (a moving array's true pose: ArrayGeometry::Moved by the platform's attitude).
+TrackScore ScoreTrack(const std::function<ArrayGeometry(double)>& array_at, const SimResult& truth,
                       const std::vector<Estimate>& estimates, double skip_s);
 
 }  // namespace localizer::engine

@@ -130,9 +130,17 @@ Status ValidateAgainstArray(const ArrayGeometry& array, const SimOptions& o,
   return Status::Ok();
 }
 
-// out[n] = gain * s(te_n) / max(r_n, 1 m) for the sound reaching `sensor_m` at t_n = n / fs
+// Where one sensor is at reception time t: fixed, or carried by the platform.
+struct SensorTrack {
+  Vec3 body_m;
+  const AttitudeTrajectory* platform = nullptr;  // null: fixed at body_m in the world
+  Vec3 origin_m = Vec3::Zero();
+  Vec3 At(double t_s) const { return platform == nullptr ? body_m : platform->At(t_s) * body_m + origin_m; }
+};
+
+// out[n] = gain * s(te_n) / max(r_n, 1 m) for the sound reaching `sensor` at t_n = n / fs
 // along `path`: a time-varying fractional delay with spherical spreading.
-void RenderPath(const Trajectory& path, const Vec3& sensor_m, double sound_speed_mps, double gain,
+void RenderPath(const Trajectory& path, const SensorTrack& sensor, double sound_speed_mps, double gain,
                 const SourceWaveform& source, const FractionalDelayInterpolator& interpolator,
                 std::vector<double>& out) {
   const auto size = static_cast<int64_t>(source.samples.size());
@@ -146,7 +154,7 @@ void RenderPath(const Trajectory& path, const Vec3& sensor_m, double sound_speed
     const double guess_s = n == 0   ? t_s
                            : n == 1 ? te_last_s + period_s
                                     : 2.0 * te_last_s - te_before_s;
-    const Emission e = SolveEmission(path, sensor_m, sound_speed_mps, t_s, guess_s);
+    const Emission e = SolveEmission(path, sensor.At(t_s), sound_speed_mps, t_s, guess_s);
     te_before_s = te_last_s;
     te_last_s = e.time_s;
     const double s =
@@ -172,14 +180,13 @@ void AddChannelNoise(const SimOptions& o, int channel, double signal_power,
   for (double& v : x) v += normal(engine);
 }
 
-std::vector<TruthRow> MakeTruth(const ArrayGeometry& array, const SimOptions& o) {
-  const Vec3& reference_m = array.sensor_m(array.reference_sensor());
+std::vector<TruthRow> MakeTruth(const ArrayGeometry& array, const SimOptions& o, const SensorTrack& reference) {
   const auto rows = static_cast<int64_t>(std::floor(o.duration_s / o.truth_step_s + 1e-9)) + 1;
   std::vector<TruthRow> truth(rows);
   for (int64_t i = 0; i < rows; ++i) {
     TruthRow& row = truth[i];
     row.t_s = static_cast<double>(i) * o.truth_step_s;
-    const Emission e = SolveEmission(o.trajectory, reference_m, array.sound_speed_mps(), row.t_s);
+    const Emission e = SolveEmission(o.trajectory, reference.At(row.t_s), array.sound_speed_mps(), row.t_s);
     row.position_m = o.trajectory.PositionAt(e.time_s);
     row.velocity_mps = o.trajectory.VelocityAt(e.time_s);
   }
@@ -189,6 +196,7 @@ std::vector<TruthRow> MakeTruth(const ArrayGeometry& array, const SimOptions& o)
 }  // namespace
 
 Status SimOptions::Validate() const {
+  if (!platform_origin_m.allFinite()) return InvalidArgument("platform_origin_m must be finite");
   LOCALIZER_RETURN_IF_ERROR(ValidateTiming(*this));
   LOCALIZER_RETURN_IF_ERROR(ValidateSignal(*this));
   return ValidateGeometry(*this);
@@ -215,7 +223,19 @@ StatusOr<SimResult> Simulate(const ArrayGeometry& array, const SimOptions& optio
   const double c = array.sound_speed_mps();
   const double fs = options.sample_rate_hz;
   const std::vector<Trajectory> paths = SourcePaths(options);
-  const double travel_bound_s = MaxTravelTimeBound(paths, array.sensors_m(), c, options.duration_s);
+  std::optional<AttitudeTrajectory> platform;
+  if (options.platform_attitude) platform.emplace(*options.platform_attitude);
+  std::vector<SensorTrack> sensors;
+  double reach_m = 0.0;  // a moving sensor stays within this of the platform origin
+  for (const Vec3& m : array.sensors_m()) {
+    sensors.push_back({m, platform ? &*platform : nullptr, options.platform_origin_m});
+    reach_m = std::max(reach_m, m.norm());
+  }
+  // A moving sensor is at most reach_m from the origin, which adds at most
+  // reach_m / (c - |v|) < 2 reach_m / c (|v| < c / 2) to any travel time.
+  const double travel_bound_s =
+      platform ? MaxTravelTimeBound(paths, {options.platform_origin_m}, c, options.duration_s) + 2.0 * reach_m / c
+               : MaxTravelTimeBound(paths, array.sensors_m(), c, options.duration_s);
   LOCALIZER_RETURN_IF_ERROR(ValidateAgainstArray(array, options, travel_bound_s));
 
   // Emission time never exceeds reception time, and precedes it by at most the travel bound;
@@ -233,11 +253,11 @@ StatusOr<SimResult> Simulate(const ArrayGeometry& array, const SimOptions& optio
   std::vector<double> channel(result.samples_per_channel);
   std::vector<double> reflected(options.surface_reflection_enabled ? channel.size() : 0);
   for (int k = 0; k < result.channel_count; ++k) {
-    const Vec3& sensor_m = array.sensor_m(k);
-    RenderPath(paths[0], sensor_m, c, 1.0, source, interpolator, channel);
+    const SensorTrack& sensor = sensors[static_cast<size_t>(k)];
+    RenderPath(paths[0], sensor, c, 1.0, source, interpolator, channel);
     const double direct_power = MeanPower(channel);  // the SNR reference
     if (options.surface_reflection_enabled) {
-      RenderPath(paths[1], sensor_m, c, options.surface_reflection, source, interpolator,
+      RenderPath(paths[1], sensor, c, options.surface_reflection, source, interpolator,
                  reflected);
       for (size_t n = 0; n < channel.size(); ++n) channel[n] += reflected[n];
     }
@@ -245,7 +265,7 @@ StatusOr<SimResult> Simulate(const ArrayGeometry& array, const SimOptions& optio
     float* out = result.samples.data() + static_cast<size_t>(k) * channel.size();
     for (size_t n = 0; n < channel.size(); ++n) out[n] = static_cast<float>(channel[n]);
   }
-  result.truth = MakeTruth(array, options);
+  result.truth = MakeTruth(array, options, sensors[static_cast<size_t>(array.reference_sensor())]);
   return result;
 }
 

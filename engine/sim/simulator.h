@@ -5,7 +5,9 @@
 // transitions, band_pass_fir.h) with unit expected RMS, or a train of band-limited clicks
 // (impulsive scenes), sampled at the simulation rate over the emission times the run needs.
 // Propagation: for each sensor k and output sample time t = n / fs, the emission time te solves
-//     te + |p(te) - m_k| / c = t        (fixed-point iteration, converges since |v| << c)
+//     te + |p(te) - m_k(t)| / c = t     (fixed-point iteration, converges since |v| << c)
+// with m_k(t) the sensor's position at reception (fixed, or carried by a rotating platform:
+// SimOptions::platform_attitude)
 // and the received value is s(te) / max(|p(te) - m_k|, 1 m) — spherical 1/r spreading and
 // a time-varying fractional delay, evaluated by windowed-sinc interpolation of s
 // (fractional_delay.h: 32 taps, RMS error ~1e-5 of the signal RMS for content below 0.4 fs).
@@ -23,10 +25,12 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "engine/array/array_geometry.h"
+#include "engine/sim/platform_motion.h"
 #include "engine/sim/trajectory.h"
 
 namespace localizer::engine {
@@ -52,6 +56,12 @@ struct SimOptions {
   double surface_reflection = -0.9; // pressure-release surface: negative, |r| <= 1
   double truth_step_s = 0.01;       // spacing of truth rows, >= 1 / fs
   uint64_t seed = 1;
+  // A moving array: the sensors given to Simulate are in the platform's body frame and
+  // sensor k receives at time t at  At(t) m_k + platform_origin_m  (platform_motion.h); the
+  // sound reaching it at t left the source when it left it for that position. Unset: the
+  // sensors are fixed in the world.
+  std::optional<AttitudeTrajectoryOptions> platform_attitude;
+  Vec3 platform_origin_m = Vec3::Zero();
 
   // INVALID_ARGUMENT naming the field and its value when an option is out of range or not
   // finite (including the trajectory's); OK otherwise.
