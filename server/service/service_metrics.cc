@@ -68,7 +68,7 @@ StatusOr<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(metrics::Regist
   if (!info.ok()) return info.status();
   if (auto* g = Series(*info, {kLocalizerVersion, grpc::Version(), default_backend})) g->Set(1.0);
   for (const char* reason : {"channel_count", "non_finite", "empty", "oversize", "bad_samples", "duplicate",
-                             "out_of_order"}) {
+                             "out_of_order", "imu", "not_moving"}) {
     (void)m->rejections(reason);  // exported at 0 from the start, so rate() works at once
   }
   return m;

@@ -6,7 +6,7 @@
 //   localizer_blocks_total                   blocks accepted into a session
 //   localizer_samples_total                  samples per channel accepted
 //   localizer_estimates_total{backend}       estimates produced
-//   localizer_rejections_total{reason}       blocks refused (BlockRejected.reason)
+//   localizer_rejections_total{reason}       blocks and IMU batches refused (BlockRejected.reason)
 //   localizer_sequence_gaps_total            sequence jumps (blocks lost upstream)
 //   localizer_sessions{state}                sessions held now: attached | detached
 //   localizer_sessions_opened_total{how}     open | resume

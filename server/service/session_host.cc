@@ -30,9 +30,11 @@ void Bump(metrics::Counter* c, double v = 1.0) {
   if (c != nullptr) c->Increment(v);
 }
 
-ResponsePtr Rejection(uint64_t sequence, const std::string& reason, const Status& status) {
+ResponsePtr Rejection(uint64_t sequence, const std::string& reason, const Status& status,
+                      const char* request = "block") {
   auto response = std::make_shared<v1::TrackResponse>();
   v1::BlockRejected* rejected = response->mutable_rejected();
+  rejected->set_request(request);
   rejected->set_sequence(sequence);
   rejected->set_code(StatusCodeName(status.code()));
   rejected->set_message(status.message());
@@ -189,6 +191,31 @@ bool SessionHost::OfferLocked(wire::DecodedBlock* decoded, const Status& decode_
   return room;
 }
 
+bool SessionHost::OfferImuLocked(StatusOr<wire::DecodedImu> decoded, uint64_t batch_sequence,
+                                 Clock::time_point received) {
+  if (closed_) return false;
+  WorkItem item;
+  item.received = received;
+  if (!session_->config().array_in_body_frame) {
+    Bump(metrics_->rejections("not_moving"));
+    item.response = Rejection(batch_sequence, "not_moving",
+                              FailedPrecondition("imu batch for a session whose array is fixed in the world (open "
+                                                 "it with SessionConfig.platform)"),
+                              "imu");
+  } else if (!decoded.ok()) {
+    Bump(metrics_->rejections("imu"));
+    item.response = Rejection(batch_sequence, "imu", decoded.status(), "imu");
+  } else {
+    item.imu = std::move(decoded).value();
+    item.imu_sequence = batch_sequence;
+  }
+  queue_.push_back(std::move(item));
+  ScheduleLocked();
+  const bool room = queue_.size() < static_cast<size_t>(limits_.max_queue_blocks);
+  input_paused_ = !room;
+  return room;
+}
+
 void SessionHost::ScheduleLocked() {
   if (scheduled_ || closed_ || queue_.empty() || outbox_.size() >= limits_.max_outbox) return;
   scheduled_ = true;
@@ -235,6 +262,16 @@ void SessionHost::RunTurn() {
 std::vector<ResponsePtr> SessionHost::Process(WorkItem& item, Clock::time_point started) {
   std::vector<ResponsePtr> out;
   if (item.response) out.push_back(item.response);
+  if (item.imu) {
+    // Ordering against the previous batch is the engine's check (the reader cannot know).
+    Status status = session_->AddImu(item.imu->samples);
+    if (status.ok() && item.imu->origin_m) status = session_->SetPlatformOrigin(*item.imu->origin_m);
+    if (!status.ok()) {
+      Bump(metrics_->rejections("imu"));
+      out.push_back(Rejection(item.imu_sequence, "imu", status, "imu"));
+    }
+    return out;
+  }
   if (item.samples_per_channel == 0) return out;
   const StageHistograms& stages = metrics_->stages(session_->backend());
   Observe(stages.queue, Seconds(started - item.received));

@@ -35,6 +35,7 @@
 #include "server/service/track_history.h"
 #include "server/service/worker_pool.h"
 #include "server/wire/block_wire.h"
+#include "server/wire/imu_wire.h"
 
 namespace localizer::server {
 
@@ -80,6 +81,11 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   bool OfferLocked(wire::DecodedBlock* decoded, const Status& decode_status, const std::string& reason,
                    uint64_t sequence, Clock::time_point received);
 
+  // A decoded IMU batch of a moving-array session (or the rejection its decoding produced),
+  // queued in order with the blocks: the engine takes its samples before the blocks sent
+  // after it. Same flow control as OfferLocked.
+  bool OfferImuLocked(StatusOr<wire::DecodedImu> decoded, uint64_t batch_sequence, Clock::time_point received);
+
   // Writer side: the next response to write, or null. MarkWrittenLocked after a write
   // succeeded; RequeueLocked puts a failed write back at the front.
   ResponsePtr NextOutputLocked();
@@ -117,6 +123,8 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
     int64_t skip_samples = 0;        // gap before this block
     ResponsePtr response;            // emitted in order before the block (gap/rejection)
     Clock::time_point received;
+    std::optional<wire::DecodedImu> imu;  // an IMU batch instead of a block
+    uint64_t imu_sequence = 0;
   };
 
   void ScheduleLocked();

@@ -39,6 +39,7 @@ void TrackReactor::OnReadDone(bool ok) {
     case v1::TrackRequest::kOpen: return HandleOpen(request_.open());
     case v1::TrackRequest::kResume: return HandleResume(request_.resume());
     case v1::TrackRequest::kBlock: return HandleBlock();
+    case v1::TrackRequest::kImu: return HandleImu();
     default: break;
   }
   const grpc::Status status(grpc::StatusCode::INVALID_ARGUMENT, "TrackRequest has no open, resume or block");
@@ -106,6 +107,22 @@ void TrackReactor::HandleBlock() {
   std::lock_guard<std::mutex> lock(host_->mutex());
   if (finished_ || input_done_) return;  // draining: blocks are no longer accepted
   if (host_->OfferLocked(&decoded_, decoded, reason, block.sequence(), received)) {
+    ReadNext();
+  } else {
+    read_paused_ = true;
+  }
+}
+
+void TrackReactor::HandleImu() {
+  if (!host_) {
+    return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                                   "an imu batch arrived before open or resume; the first request must open a session"));
+  }
+  const auto received = Clock::now();
+  auto decoded = wire::DecodeImuBatch(request_.imu());
+  std::lock_guard<std::mutex> lock(host_->mutex());
+  if (finished_ || input_done_) return;
+  if (host_->OfferImuLocked(std::move(decoded), request_.imu().sequence(), received)) {
     ReadNext();
   } else {
     read_paused_ = true;

@@ -125,6 +125,17 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
                            "; this server allows at most " + std::to_string(policy.max_block_samples));
   }
   c.max_block_samples = p.max_block_samples() != 0 ? p.max_block_samples() : policy.max_block_samples;
+  if (p.has_platform()) {
+    const v1::PlatformConfig& platform = p.platform();
+    c.array_in_body_frame = true;
+    auto kind = engine::ParseAttitudeFilterKind(platform.attitude_filter().empty() ? "quaternion"
+                                                                                 : platform.attitude_filter());
+    if (!kind.ok()) return InvalidArgument("platform.attitude_filter: " + kind.status().message());
+    c.attitude.kind = *kind;
+    c.attitude.use_mag = platform.use_magnetometer();
+    c.attitude.mag_declination_rad = platform.mag_declination_rad();
+    c.platform_origin_m = FromProto(platform.origin_m());
+  }
   LOCALIZER_RETURN_IF_ERROR(Rename(c.Validate()));
   return c;
 }
@@ -170,6 +181,13 @@ v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::strin
   p.set_min_pair_quality(c.min_pair_quality);
   p.set_max_fix_std_m(c.max_fix_std_m);
   p.set_max_block_samples(static_cast<uint32_t>(std::min<int64_t>(c.max_block_samples, UINT32_MAX)));
+  if (c.array_in_body_frame) {
+    v1::PlatformConfig* platform = p.mutable_platform();
+    platform->set_attitude_filter(engine::AttitudeFilterKindName(c.attitude.kind));
+    platform->set_use_magnetometer(c.attitude.use_mag);
+    platform->set_mag_declination_rad(c.attitude.mag_declination_rad);
+    ToProto(c.platform_origin_m, platform->mutable_origin_m());
+  }
   return p;
 }
 

@@ -42,6 +42,23 @@ void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& arr
     model->set_model(m.model);
     model->set_probability(m.probability);
   }
+  out->clear_platform();
+  if (e.platform) {
+    v1::PlatformPose* pose = out->mutable_platform();
+    const Eigen::Quaterniond& q = e.platform->body_to_world;
+    pose->mutable_body_to_world()->set_w(q.w());
+    pose->mutable_body_to_world()->set_x(q.x());
+    pose->mutable_body_to_world()->set_y(q.y());
+    pose->mutable_body_to_world()->set_z(q.z());
+    const auto set = [](const engine::Vec3& v, v1::Vector3* to) {
+      to->set_x(v.x());
+      to->set_y(v.y());
+      to->set_z(v.z());
+    };
+    set(e.platform->euler_rad, pose->mutable_euler_rad());
+    set(e.platform->euler_sd_rad, pose->mutable_euler_sd_rad());
+    set(e.platform->origin_m, pose->mutable_origin_m());
+  }
 }
 
 engine::Estimate EstimateFromProto(const v1::Estimate& p) {
@@ -69,6 +86,17 @@ engine::Estimate EstimateFromProto(const v1::Estimate& p) {
   e.timings.tdoa_s = p.latency().tdoa_s();
   e.timings.filter_s = p.latency().filter_s();
   for (const v1::ModelProbability& m : p.model_probabilities()) e.model_probabilities.push_back({m.model(), m.probability()});
+  if (p.has_platform()) {
+    const v1::PlatformPose& pose = p.platform();
+    const auto get = [](const v1::Vector3& v) { return engine::Vec3(v.x(), v.y(), v.z()); };
+    engine::PlatformAttitude a;
+    a.body_to_world = Eigen::Quaterniond(pose.body_to_world().w(), pose.body_to_world().x(),
+                                         pose.body_to_world().y(), pose.body_to_world().z());
+    a.euler_rad = get(pose.euler_rad());
+    a.euler_sd_rad = get(pose.euler_sd_rad());
+    a.origin_m = get(pose.origin_m());
+    e.platform = a;
+  }
   return e;
 }
 
