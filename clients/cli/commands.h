@@ -27,6 +27,8 @@ int RunLocate(const std::vector<std::string>& args);
 int RunList(const std::vector<std::string>& args);
 int RunClose(const std::vector<std::string>& args);
 int RunExperiment(const std::vector<std::string>& args);
+int RunAttitude(const std::vector<std::string>& args);       // cmd_attitude.cc
+int RunAttitudeScore(const std::vector<std::string>& args);  // cmd_attitude.cc
 
 // Parses `args` into `flags`. Returns an exit code when the command should stop now:
 // 0 after printing --help to stdout, 2 after reporting a usage error on stderr.

@@ -34,6 +34,12 @@ constexpr Command kCommands[] = {
     {"close", "end a server session (needs its resume token)", RunClose},
     {"experiment", "reproduce a reference experiment and print its table (pf-vs-ekf-2d)",
      RunExperiment},
+    {"attitude", "orientation from an IMU CSV (gyro + accelerometer [+ magnetometer]) to a CSV",
+     RunAttitude},
+    {"attitude-score",
+     "orientation CSV against the IMU CSV's motion-capture truth (BROAD's total, heading,\n"
+     "            inclination RMSE in degrees)",
+     RunAttitudeScore},
 };
 
 std::string GlobalUsage() {
@@ -55,6 +61,8 @@ std::string GlobalUsage() {
       "  localizer-cli track --array run/array.json --wav run/signals.wav --out run/est.csv\n"
       "  localizer-cli score --truth run/truth.csv --estimates run/est.csv\n"
       "  localizer-cli experiment pf-vs-ekf-2d --runs 100 --seed 1\n"
+      "  localizer-cli attitude --imu trial.csv --out orientation.csv --mag\n"
+      "  localizer-cli attitude-score --imu trial.csv --estimates orientation.csv\n"
       "With a server (localizer-server --listen 127.0.0.1:50051):\n"
       "  localizer-cli simulate --scenario tetra-water --duration 6 --server 127.0.0.1:50051\n"
       "  localizer-cli track --server 127.0.0.1:50051 --array run/array.json \\\n"

@@ -1,0 +1,103 @@
+#include "engine/attitude/attitude_filter.h"
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "engine/attitude/euler_ekf.h"
+#include "engine/attitude/quaternion_ekf.h"
+
+namespace localizer::engine {
+namespace {
+
+// Ten significant digits: enough to tell two sample times apart in a message.
+std::string FormatDouble(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.10g", value);
+  return text;
+}
+
+Status CheckPositive(const char* name, double value) {
+  if (!std::isfinite(value) || value <= 0.0) {
+    return InvalidArgument(std::string(name) + " is " + FormatDouble(value) +
+                           ", must be finite and > 0");
+  }
+  return Status::Ok();
+}
+
+Status CheckNonNegative(const char* name, double value) {
+  if (!std::isfinite(value) || value < 0.0) {
+    return InvalidArgument(std::string(name) + " is " + FormatDouble(value) +
+                           ", must be finite and >= 0");
+  }
+  return Status::Ok();
+}
+
+Status CheckFinite(const char* field, const Eigen::Vector3d& v, double t_s) {
+  if (v.allFinite()) return Status::Ok();
+  return InvalidArgument(std::string("IMU sample at t_s=") + FormatDouble(t_s) + ": " + field +
+                         " is not finite (" + FormatDouble(v.x()) + ", " + FormatDouble(v.y()) +
+                         ", " + FormatDouble(v.z()) + ")");
+}
+
+}  // namespace
+
+StatusOr<AttitudeFilterKind> ParseAttitudeFilterKind(const std::string& name) {
+  if (name == "quaternion") return AttitudeFilterKind::kQuaternion;
+  if (name == "euler") return AttitudeFilterKind::kEuler;
+  return InvalidArgument("attitude filter \"" + name + "\" is unknown (quaternion | euler)");
+}
+
+const char* AttitudeFilterKindName(AttitudeFilterKind kind) {
+  return kind == AttitudeFilterKind::kEuler ? "euler" : "quaternion";
+}
+
+Status AttitudeFilterOptions::Validate() const {
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("gravity_mps2", gravity_mps2));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("gyro_noise_rps_rthz", gyro_noise_rps_rthz));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("gyro_bias_walk_rps2_rthz", gyro_bias_walk_rps2_rthz));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("initial_bias_sd_rps", initial_bias_sd_rps));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("accel_tilt_sd_rad", accel_tilt_sd_rad));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("accel_reject_mps2", accel_reject_mps2));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("accel_noise_gain", accel_noise_gain));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("accel_lowpass_s", accel_lowpass_s));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_heading_sd_rad", mag_heading_sd_rad));
+  if (!std::isfinite(mag_declination_rad) || std::abs(mag_declination_rad) > M_PI) {
+    return InvalidArgument("mag_declination_rad is " + FormatDouble(mag_declination_rad) +
+                           ", must be within [-pi, pi]");
+  }
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("mag_reference_s", mag_reference_s));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_norm_tolerance", mag_norm_tolerance));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_dip_tolerance_rad", mag_dip_tolerance_rad));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("rest_gyro_rps", rest_gyro_rps));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("rest_accel_mps2", rest_accel_mps2));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("rest_min_s", rest_min_s));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("rest_rate_sd_rps", rest_rate_sd_rps));
+  return Status::Ok();
+}
+
+StatusOr<std::unique_ptr<AttitudeFilter>> CreateAttitudeFilter(const AttitudeFilterOptions& options) {
+  LOCALIZER_RETURN_IF_ERROR(options.Validate());
+  std::unique_ptr<AttitudeFilter> filter;
+  if (options.kind == AttitudeFilterKind::kEuler) {
+    filter = std::make_unique<EulerEkf>(options);
+  } else {
+    filter = std::make_unique<QuaternionEkf>(options);
+  }
+  return filter;
+}
+
+Status ValidateImuSample(const ImuSample& sample, double previous_t_s) {
+  if (!std::isfinite(sample.t_s)) {
+    return InvalidArgument("IMU sample t_s is " + FormatDouble(sample.t_s) + ", must be finite");
+  }
+  if (!(sample.t_s > previous_t_s)) {
+    return InvalidArgument("IMU sample t_s=" + FormatDouble(sample.t_s) +
+                           " is not after the previous sample's t_s=" + FormatDouble(previous_t_s));
+  }
+  LOCALIZER_RETURN_IF_ERROR(CheckFinite("gyro_rps", sample.gyro_rps, sample.t_s));
+  LOCALIZER_RETURN_IF_ERROR(CheckFinite("accel_mps2", sample.accel_mps2, sample.t_s));
+  return Status::Ok();
+}
+
+}  // namespace localizer::engine

@@ -1,0 +1,153 @@
+// Attitude (orientation) of a platform from its IMU: the interface, its options and the
+// factory that picks an implementation.
+//
+// Conventions (engine/core/imu.h, engine/attitude/attitude_math.h): body frame = the IMU's
+// axes; world frame = East-North-Up; body_to_world rotates body vectors into the world
+// (v_world = q v_body q^-1), written (w, x, y, z) wherever it leaves the engine; Euler
+// angles (roll, pitch, yaw) = intrinsic z-y'-x'', R = Rz(yaw) Ry(pitch) Rx(roll); gyro rad/s,
+// accelerometer m/s^2 (specific force, +g up at rest), magnetometer µT.
+//
+// Heading. Gyro + accelerometer alone cannot observe heading: without the magnetometer yaw
+// is relative to the heading at the first sample (yaw = 0 there, its std starting at 0 and
+// growing with the integrated gyro noise). With use_mag, yaw is measured against magnetic
+// North rotated by mag_declination_rad (default 0: the world's North IS magnetic North; set
+// the local declination, east positive, to get true North).
+//
+// Implementations (both final, non-copyable; pick with AttitudeFilterOptions::kind):
+//   kQuaternion (default) — multiplicative EKF on the unit quaternion with gyro-bias states,
+//       engine/attitude/quaternion_ekf.h. Valid at every attitude.
+//   kEuler — the seed's 3-state (roll, pitch, yaw) EKF with Euler-rate kinematics,
+//       engine/attitude/euler_ekf.h. Singular at pitch = +-90 degrees; kept for comparison.
+//
+// Contract of Update (both): the first sample initialises (roll, pitch from its
+// accelerometer, yaw from its magnetometer when use_mag, else 0); each later one integrates
+// its gyro over the time since the previous sample, then corrects. A sample with a non-finite
+// time, gyro or accelerometer value, or with t_s not after the previous sample's, returns
+// INVALID_ARGUMENT naming the field and leaves the state untouched. A non-finite magnetometer
+// is not an error: that sample simply has no magnetometer update. Not thread-safe: one
+// filter per stream. No heap allocation per update.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "engine/core/imu.h"
+#include "engine/core/status.h"
+
+namespace localizer::engine {
+
+enum class AttitudeFilterKind { kQuaternion, kEuler };
+// "quaternion" | "euler"; INVALID_ARGUMENT otherwise.
+StatusOr<AttitudeFilterKind> ParseAttitudeFilterKind(const std::string& name);
+const char* AttitudeFilterKindName(AttitudeFilterKind kind);
+
+// Every default is the one parameter set validated on the BROAD trials (tests/attitude).
+//   field                         default     unit          used by
+//   kind                          kQuaternion               -
+//   use_mag                       false                     both
+//   gravity_mps2                  9.81        m/s^2         both
+//   gyro_noise_rps_rthz           0.003       rad/s/√Hz     both (process noise)
+//   gyro_bias_walk_rps2_rthz      2e-5        rad/s^2/√Hz   quaternion
+//   initial_bias_sd_rps           0.01        rad/s         quaternion
+//   accel_tilt_sd_rad             0.2         rad           both (per sample)
+//   accel_reject_mps2             1.5         m/s^2         both
+//   accel_noise_gain              4.0         1             both
+//   accel_lowpass_s               2.0         s             quaternion
+//   mag_heading_sd_rad            0.2         rad           both (per sample)
+//   mag_declination_rad           0           rad           both
+//   mag_reference_s               1.0         s             both
+//   mag_norm_tolerance            0.08        1             both
+//   mag_dip_tolerance_rad         0.07        rad           both
+//   rest_gyro_rps                 0.03        rad/s         quaternion
+//   rest_accel_mps2               0.25        m/s^2         quaternion
+//   rest_min_s                    0.3         s             quaternion
+//   rest_rate_sd_rps              0.02        rad/s         quaternion
+struct AttitudeFilterOptions {
+  AttitudeFilterKind kind = AttitudeFilterKind::kQuaternion;
+  bool use_mag = false;  // correct heading with the magnetometer (heading-only update)
+
+  double gravity_mps2 = 9.81;  // |g|: the accelerometer's norm at rest
+  // Gyro white noise as a density: the attitude random walk per sqrt(second).
+  double gyro_noise_rps_rthz = 0.003;
+  // Gyro bias random walk (quaternion filter's bias states).
+  double gyro_bias_walk_rps2_rthz = 2e-5;
+  double initial_bias_sd_rps = 0.01;  // prior std of each bias component (bias starts at 0)
+
+  // Accelerometer (tilt) update: the direction of the specific force is taken as "up" with
+  // this std per sample, inflated by (1 + accel_noise_gain * ||f| - g| / g) so that samples
+  // with linear acceleration count less; samples with ||f| - g| > accel_reject_mps2 are not
+  // used at all (motion).
+  double accel_tilt_sd_rad = 0.2;
+  double accel_reject_mps2 = 1.5;
+  double accel_noise_gain = 4.0;
+  // Quaternion filter: the accelerometer is first low-passed with this time constant in the
+  // world frame as the gyro tracks it (each step the filtered vector is turned by the
+  // step's rotation, then moved towards the new sample), so linear accelerations that average
+  // out over a few seconds cancel while gravity, fixed in the world, passes undelayed.
+  // 0: each raw sample is the measurement (as the Euler EKF always does).
+  double accel_lowpass_s = 2.0;
+
+  // Magnetometer (heading) update: the azimuth of the field's horizontal part, std per sample.
+  double mag_heading_sd_rad = 0.2;
+  double mag_declination_rad = 0.0;  // magnetic North's azimuth east of the world's North
+  // The field's norm and dip are learnt over the first mag_reference_s seconds of samples
+  // with a magnetometer; afterwards a sample whose norm departs from the reference by more
+  // than mag_norm_tolerance (a fraction) or whose dip (from the estimated tilt) departs by
+  // more than mag_dip_tolerance_rad is disturbed and not used.
+  double mag_reference_s = 1.0;
+  double mag_norm_tolerance = 0.08;
+  double mag_dip_tolerance_rad = 0.07;
+
+  // Rest detection (quaternion filter): when for rest_min_s every sample has
+  // |gyro - bias| < rest_gyro_rps and its accelerometer within rest_accel_mps2 of both g and
+  // its recent mean, the platform is taken as still and the gyro reading is used as a
+  // measurement of the bias with std rest_rate_sd_rps. 0 for rest_min_s turns this off.
+  double rest_gyro_rps = 0.03;
+  double rest_accel_mps2 = 0.25;
+  double rest_min_s = 0.3;
+  double rest_rate_sd_rps = 0.02;
+
+  // INVALID_ARGUMENT naming the first field out of range (noises > 0, tolerances > 0,
+  // durations >= 0, all finite).
+  Status Validate() const;
+};
+
+struct AttitudeEstimate {
+  double t_s = 0.0;  // the sample time this estimate describes
+  Eigen::Quaterniond body_to_world = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d euler_rad = Eigen::Vector3d::Zero();  // (roll, pitch, yaw)
+  // First-order std of (roll, pitch, yaw): E P_theta E^T with E the Euler-rate matrix
+  // (attitude_math.h); grows without bound for roll and yaw near pitch = +-90 degrees, where
+  // those angles are undefined — world_error_sd_rad stays meaningful there.
+  Eigen::Vector3d sd_rad = Eigen::Vector3d::Zero();
+  // Std of the attitude error as a small rotation about the world's East, North, Up axes
+  // (the first two: inclination, the third: heading).
+  Eigen::Vector3d world_error_sd_rad = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_bias_rps = Eigen::Vector3d::Zero();  // zero for the Euler EKF
+  bool initialised = false;
+  // What the last update did (for diagnostics and tests).
+  bool accel_used = false;  // false: no update (motion) or not initialised
+  bool mag_used = false;    // false: no mag, use_mag off, still learning, or disturbed
+  bool at_rest = false;     // rest detected (bias refined)
+};
+
+class AttitudeFilter {
+ public:
+  virtual ~AttitudeFilter() = default;
+  // See the contract above.
+  virtual Status Update(const ImuSample& sample) = 0;
+  virtual AttitudeEstimate estimate() const = 0;
+  virtual AttitudeFilterKind kind() const = 0;
+};
+
+// The filter `options.kind` names; INVALID_ARGUMENT when options.Validate() fails.
+StatusOr<std::unique_ptr<AttitudeFilter>> CreateAttitudeFilter(const AttitudeFilterOptions& options);
+
+// INVALID_ARGUMENT naming the field when t_s, gyro or accel has a non-finite entry, or when
+// t_s is not after previous_t_s (pass -infinity before the first sample).
+Status ValidateImuSample(const ImuSample& sample, double previous_t_s);
+
+}  // namespace localizer::engine

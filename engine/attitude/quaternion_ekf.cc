@@ -1,0 +1,178 @@
+#include "engine/attitude/quaternion_ekf.h"
+
+#include <cmath>
+#include <limits>
+
+#include "engine/attitude/attitude_math.h"
+
+namespace localizer::engine {
+namespace {
+
+// Prior std of the tilt taken from one accelerometer sample (which may carry some motion),
+// and of the heading taken from one magnetometer sample.
+constexpr double kInitialTiltSdRad = 0.1;
+constexpr double kInitialHeadingSdRad = 0.2;
+
+// Third row of R(q): R^T e_up, the world's Up seen in the body frame.
+Eigen::Vector3d UpInBody(const Eigen::Quaterniond& q) {
+  const double w = q.w(), x = q.x(), y = q.y(), z = q.z();
+  return {2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)};
+}
+
+}  // namespace
+
+QuaternionEkf::QuaternionEkf(const AttitudeFilterOptions& options)
+    : options_(options),
+      mag_reference_(options.mag_reference_s, options.mag_norm_tolerance,
+                     options.mag_dip_tolerance_rad),
+      rest_(options.rest_gyro_rps, options.rest_accel_mps2, options.rest_min_s,
+            options.gravity_mps2) {}
+
+void QuaternionEkf::Initialise(const ImuSample& sample) {
+  const Eigen::Vector2d tilt = TiltFromAccelerometer(sample.accel_mps2);
+  double yaw = 0.0;
+  const bool mag = options_.use_mag && sample.mag_uT.allFinite();
+  if (mag) {  // the heading that puts the field's horizontal part at the declination
+    const Eigen::Quaterniond level = QuaternionFromEuler({tilt.x(), tilt.y(), 0.0});
+    yaw = AzimuthEastOfNorth(level * sample.mag_uT) - options_.mag_declination_rad;
+  }
+  q_ = QuaternionFromEuler({tilt.x(), tilt.y(), yaw});
+  bias_rps_.setZero();
+  accel_lowpass_mps2_ = sample.accel_mps2;
+  // Tilt and heading prior as a world-frame covariance, turned into the body frame.
+  const Eigen::Matrix3d r = q_.toRotationMatrix();
+  const double heading_sd = mag ? kInitialHeadingSdRad : 0.0;
+  const Eigen::Vector3d world_var(kInitialTiltSdRad * kInitialTiltSdRad,
+                                  kInitialTiltSdRad * kInitialTiltSdRad, heading_sd * heading_sd);
+  p_.setZero();
+  p_.topLeftCorner<3, 3>() = r.transpose() * world_var.asDiagonal() * r;
+  p_.bottomRightCorner<3, 3>().diagonal().setConstant(options_.initial_bias_sd_rps *
+                                                      options_.initial_bias_sd_rps);
+  t_s_ = sample.t_s;
+  initialised_ = true;
+  accel_used_ = true;
+  mag_used_ = mag;
+  at_rest_ = false;
+  if (mag) (void)mag_reference_.Observe(q_ * sample.mag_uT, sample.t_s);
+}
+
+void QuaternionEkf::Propagate(const Eigen::Vector3d& rate_rps, double dt_s) {
+  const Eigen::Quaterniond dq = QuaternionFromRotationVector(rate_rps * dt_s);
+  q_ = (q_ * dq).normalized();
+  const Eigen::Matrix3d a = dq.toRotationMatrix().transpose();
+  // A vector fixed in the world, seen from the body, turns by R(omega dt)^T = A.
+  accel_lowpass_mps2_ = a * accel_lowpass_mps2_;
+  // F P F^T with F = [A B; 0 I], B = -dt I, written out per 3x3 block.
+  const Eigen::Matrix3d ptt = p_.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d ptb = p_.topRightCorner<3, 3>();
+  const Eigen::Matrix3d pbb = p_.bottomRightCorner<3, 3>();
+  const Eigen::Matrix3d new_ptb = a * ptb - dt_s * pbb;
+  Eigen::Matrix3d new_ptt = (a * ptt - dt_s * ptb.transpose()) * a.transpose() - dt_s * new_ptb.transpose();
+  new_ptt.diagonal().array() += options_.gyro_noise_rps_rthz * options_.gyro_noise_rps_rthz * dt_s;
+  p_.topLeftCorner<3, 3>() = new_ptt;
+  p_.topRightCorner<3, 3>() = new_ptb;
+  p_.bottomLeftCorner<3, 3>() = new_ptb.transpose();
+  p_.bottomRightCorner<3, 3>().diagonal().array() +=
+      options_.gyro_bias_walk_rps2_rthz * options_.gyro_bias_walk_rps2_rthz * dt_s;
+}
+
+void QuaternionEkf::Correct(const Eigen::Matrix<double, 6, 1>& dx) {
+  q_ = (q_ * QuaternionFromRotationVector(dx.head<3>())).normalized();
+  bias_rps_ += dx.tail<3>();
+}
+
+bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) {
+  if (options_.accel_lowpass_s > 0.0) {
+    accel_lowpass_mps2_ += (dt_s / (options_.accel_lowpass_s + dt_s)) * (accel_mps2 - accel_lowpass_mps2_);
+  } else {
+    accel_lowpass_mps2_ = accel_mps2;
+  }
+  const Eigen::Vector3d& f = accel_lowpass_mps2_;
+  const double norm = f.norm();
+  const double departure = std::abs(norm - options_.gravity_mps2);
+  if (departure > options_.accel_reject_mps2 || norm <= 0.0) return false;
+  const double sd = options_.accel_tilt_sd_rad *
+                    (1.0 + options_.accel_noise_gain * departure / options_.gravity_mps2);
+  const Eigen::Vector3d h = UpInBody(q_);
+  const Eigen::Matrix3d hx = Skew(h);
+  // P H^T = P.leftCols(3) [h x]^T (6x3); S = [h x] P_tt [h x]^T + sd^2 I.
+  const Eigen::Matrix<double, 6, 3> pht = p_.leftCols<3>() * hx.transpose();
+  Eigen::Matrix3d s = hx * pht.topRows<3>();
+  s.diagonal().array() += sd * sd;
+  const Eigen::Matrix3d s_inv = s.inverse();
+  const Eigen::Matrix<double, 6, 3> k = pht * s_inv;
+  Correct(k * (f / norm - h));
+  p_ -= k * pht.transpose();
+  return true;
+}
+
+bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& mag_uT, double t_s) {
+  const Eigen::Vector3d field_world = q_ * mag_uT;
+  if (!mag_reference_.Observe(field_world, t_s)) return false;
+  if (field_world.head<2>().squaredNorm() < 1e-6) return false;  // no horizontal part
+  const double nu = WrapAngle(options_.mag_declination_rad - AzimuthEastOfNorth(field_world));
+  // H = [-h^T 0]: P H^T = -P.leftCols(3) h, S = H P H^T + r.
+  const Eigen::Vector3d h = UpInBody(q_);
+  const Eigen::Matrix<double, 6, 1> pht = -(p_.leftCols<3>() * h);
+  const double s = -h.dot(pht.head<3>()) + options_.mag_heading_sd_rad * options_.mag_heading_sd_rad;
+  // The Kalman gain with its attitude and bias parts projected on the world's Up axis (h in the
+  // body), so the field can only turn the estimate about Up, never tilt it — even through
+  // tilt-heading correlations in P, which a large disturbed innovation would otherwise
+  // amplify. With this (suboptimal) gain P takes the Joseph form, expanded for one scalar
+  // measurement: P <- P - k (PH^T)^T - (PH^T) k^T + s k k^T.
+  Eigen::Matrix<double, 6, 1> k = pht / s;
+  k.head<3>() = h * h.dot(k.head<3>());
+  k.tail<3>() = h * h.dot(k.tail<3>());  // bias too: a bias off Up would tilt as the body turns
+  Correct(k * nu);
+  p_ += s * k * k.transpose() - k * pht.transpose() - pht * k.transpose();
+  return true;
+}
+
+void QuaternionEkf::RestUpdate(const Eigen::Vector3d& gyro_rps) {
+  // H = [0 I]: P H^T = P.rightCols(3), S = P_bb + r I.
+  const Eigen::Matrix<double, 6, 3> pht = p_.rightCols<3>();
+  Eigen::Matrix3d s = pht.bottomRows<3>();
+  s.diagonal().array() += options_.rest_rate_sd_rps * options_.rest_rate_sd_rps;
+  const Eigen::Matrix<double, 6, 3> k = pht * s.inverse();
+  Correct(k * (gyro_rps - bias_rps_));
+  p_ -= k * pht.transpose();
+}
+
+Status QuaternionEkf::Update(const ImuSample& sample) {
+  LOCALIZER_RETURN_IF_ERROR(ValidateImuSample(
+      sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
+  if (!initialised_) {
+    Initialise(sample);
+    return Status::Ok();
+  }
+  const double dt_s = sample.t_s - t_s_;
+  t_s_ = sample.t_s;
+  const Eigen::Vector3d rate_rps = sample.gyro_rps - bias_rps_;
+  Propagate(rate_rps, dt_s);
+  at_rest_ = rest_.Update(rate_rps, sample.accel_mps2, dt_s);
+  if (at_rest_) RestUpdate(sample.gyro_rps);
+  accel_used_ = AccelUpdate(sample.accel_mps2, dt_s);
+  mag_used_ = options_.use_mag && sample.mag_uT.allFinite() && MagUpdate(sample.mag_uT, sample.t_s);
+  p_ = 0.5 * (p_ + p_.transpose()).eval();  // once per sample: rounding only, not per update
+  return Status::Ok();
+}
+
+AttitudeEstimate QuaternionEkf::estimate() const {
+  AttitudeEstimate e;
+  e.t_s = t_s_;
+  e.initialised = initialised_;
+  e.body_to_world = q_;
+  e.euler_rad = EulerFromQuaternion(q_);
+  const Eigen::Matrix3d ptt = p_.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d em = EulerRateMatrix(e.euler_rad.x(), e.euler_rad.y());
+  e.sd_rad = (em * ptt * em.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+  const Eigen::Matrix3d r = q_.toRotationMatrix();
+  e.world_error_sd_rad = (r * ptt * r.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+  e.gyro_bias_rps = bias_rps_;
+  e.accel_used = accel_used_;
+  e.mag_used = mag_used_;
+  e.at_rest = at_rest_;
+  return e;
+}
+
+}  // namespace localizer::engine

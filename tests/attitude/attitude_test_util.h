@@ -1,0 +1,46 @@
+// Shared by the attitude tests: run a filter over synthetic samples and measure its error
+// against the trajectory that made them.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "engine/attitude/attitude_error.h"
+#include "engine/attitude/attitude_filter.h"
+#include "engine/sim/platform_motion.h"
+
+namespace localizer::engine::testing {
+
+// Largest errors over the samples with t_s >= from_s (the filter sees every sample).
+struct RunErrors {
+  double max_total_rad = 0.0;
+  double max_heading_rad = 0.0;
+  double max_inclination_rad = 0.0;
+  AttitudeEstimate last;
+};
+
+inline RunErrors RunFilter(const AttitudeFilterOptions& options, const AttitudeTrajectory& truth,
+                           const std::vector<ImuSample>& samples, double from_s = 0.0) {
+  RunErrors errors;
+  auto filter = CreateAttitudeFilter(options);
+  EXPECT_TRUE(filter.ok()) << filter.status().ToString();
+  if (!filter.ok()) return errors;
+  for (const ImuSample& s : samples) {
+    const Status status = (*filter)->Update(s);
+    EXPECT_TRUE(status.ok()) << status.ToString();
+    if (s.t_s < from_s) continue;
+    const AttitudeError e = AttitudeErrorOf((*filter)->estimate().body_to_world, truth.At(s.t_s));
+    errors.max_total_rad = std::max(errors.max_total_rad, e.total_rad);
+    errors.max_heading_rad = std::max(errors.max_heading_rad, e.heading_rad);
+    errors.max_inclination_rad = std::max(errors.max_inclination_rad, e.inclination_rad);
+  }
+  errors.last = (*filter)->estimate();
+  return errors;
+}
+
+constexpr double kDeg = M_PI / 180.0;
+
+}  // namespace localizer::engine::testing
