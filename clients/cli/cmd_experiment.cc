@@ -1,7 +1,8 @@
 // localizer-cli experiment: reproduce a reference experiment and print its table.
-// So far one: pf-vs-ekf-2d, the seed's particle filter against Kalman filters on a
-// bicycle-model vehicle whose position fixes carry alpha-stable / Gaussian mixture noise
-// (engine/experiments/pf_vs_ekf_2d.h holds the set-up and the definitions of the columns).
+// pf-vs-ekf-2d, the seed's particle filter against Kalman filters on a bicycle-model
+// vehicle whose position fixes carry alpha-stable / Gaussian mixture noise
+// (engine/experiments/pf_vs_ekf_2d.h holds the set-up and the definitions of the columns);
+// fwl and tws live in cmd_experiment_fwl.cc and cmd_experiment_tws.cc, dispatched here.
 #include <chrono>
 #include <cstdio>
 #include <functional>
@@ -9,6 +10,7 @@
 #include <string>
 
 #include "clients/cli/commands.h"
+#include "clients/cli/experiment_commands.h"
 #include "engine/experiments/pf_vs_ekf_2d.h"
 
 namespace localizer::cli {
@@ -16,6 +18,8 @@ namespace {
 
 const char* const kCommand = "experiment";
 const char* const kPfVsEkf2d = "pf-vs-ekf-2d";
+const char* const kFwl = "fwl";
+const char* const kTws = "tws";
 
 std::string FilterList() {
   std::string names;
@@ -142,7 +146,9 @@ std::string ExperimentUsage() {
          "Reproduces a reference experiment and prints its table. Experiments:\n"
          "  " +
          kPfVsEkf2d +
-         "   particle filter vs EKF/UKF and robust variants, 2-D, alpha-stable noise\n\n"
+         "   particle filter vs EKF/UKF and robust variants, 2-D, alpha-stable noise\n"
+         "  " + kFwl + "            fixed-point word length of a steady-state tracking filter (Tables 1, 2)\n"
+         "  " + kTws + "            track-while-scan of N targets in clutter on a rotating radar\n\n"
          "'localizer-cli experiment NAME --help' lists its flags, defaults and units.\n";
 }
 
@@ -150,16 +156,20 @@ std::string ExperimentUsage() {
 
 int RunExperiment(const std::vector<std::string>& args) {
   if (args.empty())
-    return UsageError(kCommand, "name an experiment (" + std::string(kPfVsEkf2d) + ")");
+    return UsageError(kCommand, "name an experiment (" + std::string(kPfVsEkf2d) + ", " + kFwl + ", " + kTws + ")");
   const std::string& name = args.front();
   if (name == "--help" || name == "-h") {
     std::cout << ExperimentUsage();
     return kExitOk;
   }
+  const std::vector<std::string> rest(args.begin() + 1, args.end());
+  if (name == kFwl) return RunFwlExperiment(rest);
+  if (name == kTws) return RunTwsExperiment(rest);
   if (name != kPfVsEkf2d) {
-    return UsageError(kCommand, "unknown experiment \"" + name + "\" (known: " + kPfVsEkf2d + ")");
+    return UsageError(kCommand, "unknown experiment \"" + name + "\" (known: " + kPfVsEkf2d + ", " + kFwl +
+                                    ", " + kTws + ")");
   }
-  return RunPfVsEkf2dCommand(std::vector<std::string>(args.begin() + 1, args.end()));
+  return RunPfVsEkf2dCommand(rest);
 }
 
 }  // namespace localizer::cli

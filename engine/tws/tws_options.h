@@ -1,0 +1,56 @@
+// Options of the track-while-scan tracker (tws_tracker.h), with defaults and units.
+//
+//   field                      default    unit   meaning
+//   dimensions                 2          -      2: track in x-y from (range, bearing);
+//                                                3: x-y-z, every plot needs an elevation
+//   noise.range_sigma_m        10         m      plot noise the conversion assumes
+//   noise.bearing_sigma_rad    0.01       rad
+//   noise.elevation_sigma_rad  0.01       rad    (dimensions 3)
+//   conversion                 kUnbiased  -      polar_conversion.h
+//   accel_noise_mps2           5          m/s^2  sigma_a of the constant-velocity model
+//   filter                     kKalman    -      kSteadyState: freeze the gain once it
+//                                                converges (cv_kalman.h)
+//   steady_state_tolerance     1e-3       -      relative gain change that counts as converged
+//   gate_probability           0.9995     -      P_G; the gate is g = chi^2_D quantile
+//   confirm_hits, confirm_window 3, 5     scans  M of N: tentative -> confirmed
+//   max_coast_scans            5          scans  a confirmed track is deleted after this
+//                                                many misses in a row (P_D 0.9: a real
+//                                                target misses 5 in a row once in 1e5 scans)
+//   max_position_sigma_m       2000       m      any track is deleted when a position
+//                                                variance exceeds this squared
+//   initiation                 kOnePoint  -      kTwoPoint: pair plots of consecutive scans
+//   initial_speed_sigma_mps    150        m/s    one-point: velocity prior std per axis
+//   max_speed_mps              400        m/s    two-point: fastest target to pair plots for
+//   max_tracks                 1000000    -      a scan that would exceed it initiates fewer
+#pragma once
+
+#include "engine/core/status.h"
+#include "engine/tws/polar_conversion.h"
+
+namespace localizer::engine::tws {
+
+enum class FilterForm { kKalman, kSteadyState };
+enum class Initiation { kOnePoint, kTwoPoint };
+
+struct TwsOptions {
+  int dimensions = 2;
+  PolarNoise noise;
+  Conversion conversion = Conversion::kUnbiased;
+  double accel_noise_mps2 = 5.0;
+  FilterForm filter = FilterForm::kKalman;
+  double steady_state_tolerance = 1e-3;
+  double gate_probability = 0.9995;
+  int confirm_hits = 3;
+  int confirm_window = 5;
+  int max_coast_scans = 5;
+  double max_position_sigma_m = 2000.0;
+  Initiation initiation = Initiation::kOnePoint;
+  double initial_speed_sigma_mps = 150.0;
+  double max_speed_mps = 400.0;
+  int max_tracks = 1000000;
+
+  // INVALID_ARGUMENT naming the field and its value.
+  Status Validate() const;
+};
+
+}  // namespace localizer::engine::tws
