@@ -201,6 +201,7 @@ Session::Session(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Session::~Session() = default;
 
 StatusOr<std::unique_ptr<Session>> Session::Create(const SessionConfig& config) {
+  if (config.detections) return InvalidArgument("a detections config makes a ScanSession (scan_session.h), not a Session");
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
   auto array = ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
   if (!array.ok()) return array.status();

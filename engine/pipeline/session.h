@@ -27,6 +27,7 @@
 #include "engine/core/estimate.h"
 #include "engine/filters/particle_filter.h"
 #include "engine/tdoa/gcc_phat.h"
+#include "engine/tws/tws_options.h"
 
 namespace localizer::engine {
 
@@ -76,6 +77,12 @@ struct SessionConfig {
   bool array_in_body_frame = false;
   AttitudeFilterOptions attitude;     // the platform's attitude filter
   Vec3 platform_origin_m = Vec3::Zero();  // body origin in the world until SetPlatformOrigin
+  // Detection session (scan_session.h): the session takes scans of plots from a detecting
+  // sensor instead of samples, and tracks many targets (track-while-scan). Only `tws`,
+  // `label`-like fields and max_block_samples matter then; the array, framing, GCC and
+  // single-target tracker fields are ignored and not validated.
+  bool detections = false;
+  tws::TwsOptions tws;
   std::string backend = "cpu";        // "cpu" | "gpu" | "auto"
   uint64_t seed = 1;
 

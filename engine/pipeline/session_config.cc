@@ -54,6 +54,10 @@ Status ValidateTracker(const SessionConfig& c) {
 }  // namespace
 
 Status SessionConfig::Validate() const {
+  if (detections) {
+    if (const Status s = tws.Validate(); !s.ok()) return InvalidArgument("detections: " + s.message());
+    return Status::Ok();
+  }
   LOCALIZER_RETURN_IF_ERROR(ValidateTracker(*this));
   if (array_in_body_frame) {
     if (const Status s = attitude.Validate(); !s.ok()) return InvalidArgument("platform.attitude: " + s.message());

@@ -17,6 +17,9 @@ grpc::ServerBidiReactor<v1::TrackRequest, v1::TrackResponse>* LocalizerService::
 }
 
 Status LocateOnce(const v1::LocateRequest& request, const wire::ConfigPolicy& policy, v1::LocateResponse* response) {
+  if (request.config().has_detections()) {
+    return InvalidArgument("config.detections: Locate measures one block of samples; detection configs open Track sessions");
+  }
   auto config = wire::ConfigFromProto(request.config(), policy);
   if (!config.ok()) return config.status();
   wire::DecodedBlock decoded;

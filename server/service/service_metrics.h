@@ -6,7 +6,7 @@
 //   localizer_blocks_total                   blocks accepted into a session
 //   localizer_samples_total                  samples per channel accepted
 //   localizer_estimates_total{backend}       estimates produced
-//   localizer_rejections_total{reason}       blocks and IMU batches refused (BlockRejected.reason)
+//   localizer_rejections_total{reason}       blocks, IMU batches and scans refused (BlockRejected.reason)
 //   localizer_sequence_gaps_total            sequence jumps (blocks lost upstream)
 //   localizer_sessions{state}                sessions held now: attached | detached
 //   localizer_sessions_opened_total{how}     open | resume
@@ -15,6 +15,11 @@
 //   localizer_engine_cpu_seconds_total       worker-thread CPU inside Session::Process (the
 //                                            rest of the process CPU is the service's overhead)
 //   localizer_locate_requests_total{code}    one-shot Locate calls by status code
+//   localizer_scans_total                    detection-session scans processed
+//   localizer_scan_seconds{stage}            histogram: tracker (the track-while-scan cycle
+//                                            of one scan), total (scan received -> tracks ready)
+//   localizer_track_updates_total            tracks taken through a scan cycle (predict,
+//                                            gate, update or coast), all detection sessions
 //   localizer_build_info{version,grpc_version,default_backend}  always 1
 // Thread-safe: every pointer here is updated lock-free.
 #pragma once
@@ -54,6 +59,10 @@ class ServiceMetrics final {
   metrics::Gauge* attached = nullptr;
   metrics::Gauge* detached = nullptr;
   metrics::Gauge* queue_depth = nullptr;
+  metrics::Counter* scans = nullptr;
+  metrics::Counter* track_updates = nullptr;
+  metrics::Histogram* scan_tracker = nullptr;
+  metrics::Histogram* scan_total = nullptr;
 
  private:
   ServiceMetrics() = default;

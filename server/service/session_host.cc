@@ -51,8 +51,27 @@ SessionHost::SessionHost(std::string id, std::string token, std::string label,
       token_(std::move(token)),
       label_(std::move(label)),
       session_(std::move(session)),
+      config_(session_->config()),
+      backend_(session_->backend()),
       limits_(limits),
       block_limits_{session_->array().sensor_count(), session_->config().max_block_samples},
+      pool_(pool),
+      metrics_(metrics),
+      created_(Clock::now()),
+      detached_since_(created_),
+      last_block_(created_) {}
+
+SessionHost::SessionHost(std::string id, std::string token, std::string label,
+                         std::unique_ptr<engine::ScanSession> scans, HostLimits limits, WorkerPool* pool,
+                         ServiceMetrics* metrics)
+    : id_(std::move(id)),
+      token_(std::move(token)),
+      label_(std::move(label)),
+      scans_(std::move(scans)),
+      config_(scans_->config()),
+      backend_("cpu"),
+      limits_(limits),
+      block_limits_{0, scans_->config().max_block_samples},
       pool_(pool),
       metrics_(metrics),
       created_(Clock::now()),
@@ -75,10 +94,10 @@ v1::SessionOpened SessionHost::OpenedMessageLocked(bool resumed) const {
   v1::SessionOpened opened;
   opened.set_session_id(id_);
   opened.set_resume_token(token_);
-  engine::SessionConfig effective = session_->config();
-  effective.backend = session_->backend();
+  engine::SessionConfig effective = config_;
+  effective.backend = backend_;
   *opened.mutable_effective_config() = wire::ConfigToProto(effective, label_);
-  opened.set_backend(session_->backend());
+  opened.set_backend(backend_);
   opened.set_resumed(resumed);
   if (last_accepted_) opened.set_last_sequence(*last_accepted_);
   opened.set_frames_processed(frames_);
@@ -142,7 +161,10 @@ void SessionHost::RejectLocked(uint64_t sequence, const std::string& reason, con
 bool SessionHost::OfferLocked(wire::DecodedBlock* decoded, const Status& decode_status, const std::string& reason,
                               uint64_t sequence, Clock::time_point received) {
   if (closed_) return false;
-  if (!decode_status.ok()) {
+  if (scans_ != nullptr) {
+    RejectLocked(sequence, "not_samples",
+                 FailedPrecondition("a sample block for a detection session (it takes scans)"), received);
+  } else if (!decode_status.ok()) {
     RejectLocked(sequence, reason, decode_status, received);
   } else if (last_accepted_ && sequence <= *last_accepted_) {
     const bool duplicate = sequence == *last_accepted_;
@@ -196,7 +218,7 @@ bool SessionHost::OfferImuLocked(StatusOr<wire::DecodedImu> decoded, uint64_t ba
   if (closed_) return false;
   WorkItem item;
   item.received = received;
-  if (!session_->config().array_in_body_frame) {
+  if (!config_.array_in_body_frame) {
     Bump(metrics_->rejections("not_moving"));
     item.response = Rejection(batch_sequence, "not_moving",
                               FailedPrecondition("imu batch for a session whose array is fixed in the world (open "
@@ -209,6 +231,29 @@ bool SessionHost::OfferImuLocked(StatusOr<wire::DecodedImu> decoded, uint64_t ba
     item.imu = std::move(decoded).value();
     item.imu_sequence = batch_sequence;
   }
+  return QueueLocked(std::move(item));
+}
+
+bool SessionHost::OfferScanLocked(StatusOr<engine::Scan> decoded, uint64_t scan_sequence, Clock::time_point received) {
+  if (closed_) return false;
+  WorkItem item;
+  item.received = received;
+  if (scans_ == nullptr) {
+    Bump(metrics_->rejections("not_detections"));
+    item.response = Rejection(scan_sequence, "not_detections",
+                              FailedPrecondition("a scan for an audio session (open it with SessionConfig.detections)"),
+                              "scan");
+  } else if (!decoded.ok()) {
+    Bump(metrics_->rejections("scan"));
+    item.response = Rejection(scan_sequence, "scan", decoded.status(), "scan");
+  } else {
+    item.scan = std::move(decoded).value();
+    item.scan_sequence = scan_sequence;
+  }
+  return QueueLocked(std::move(item));
+}
+
+bool SessionHost::QueueLocked(WorkItem item) {
   queue_.push_back(std::move(item));
   ScheduleLocked();
   const bool room = queue_.size() < static_cast<size_t>(limits_.max_queue_blocks);
@@ -259,9 +304,37 @@ void SessionHost::RunTurn() {
   if (sink_ != nullptr && IdleLocked()) sink_->OutputReadyLocked();
 }
 
+std::vector<ResponsePtr> SessionHost::ProcessScan(WorkItem& item) {
+  std::vector<ResponsePtr> out;
+  engine::ScanResult result;
+  const double cpu_start_s = ThreadCpuSeconds();
+  const Status status = scans_->Process(*item.scan, &result);
+  Bump(metrics_->engine_cpu, ThreadCpuSeconds() - cpu_start_s);
+  if (!status.ok()) {  // out of time order, or a plot the tracker refuses
+    Bump(metrics_->rejections("scan"));
+    out.push_back(Rejection(item.scan_sequence, "scan", status, "scan"));
+    return out;
+  }
+  auto response = std::make_shared<v1::TrackResponse>();
+  v1::TrackList* list = response->mutable_tracks();
+  wire::TrackListToProto(result, item.scan_sequence, list);
+  const double total_s = Seconds(Clock::now() - item.received);
+  list->set_total_s(total_s);
+  Bump(metrics_->scans);
+  Bump(metrics_->track_updates, static_cast<double>(result.summary.track_updates));
+  Observe(metrics_->scan_tracker, result.process_s);
+  Observe(metrics_->scan_total, total_s);
+  out.push_back(std::move(response));
+  return out;
+}
+
 std::vector<ResponsePtr> SessionHost::Process(WorkItem& item, Clock::time_point started) {
   std::vector<ResponsePtr> out;
   if (item.response) out.push_back(item.response);
+  if (item.scan) {
+    for (ResponsePtr& r : ProcessScan(item)) out.push_back(std::move(r));
+    return out;
+  }
   if (item.imu) {
     // Ordering against the previous batch is the engine's check (the reader cannot know).
     Status status = session_->AddImu(item.imu->samples);
@@ -311,7 +384,7 @@ std::vector<ResponsePtr> SessionHost::Process(WorkItem& item, Clock::time_point 
 }
 
 void SessionHost::PushOutputLocked(ResponsePtr response) {
-  if (response->has_estimate()) ++frames_;
+  if (response->has_estimate() || response->has_tracks()) ++frames_;
   outbox_.push_back(std::move(response));
 }
 
@@ -372,10 +445,10 @@ v1::SessionInfo SessionHost::Info(Clock::time_point now, double ttl_s) const {
   v1::SessionInfo info;
   info.set_session_id(id_);
   info.set_label(label_);
-  info.set_backend(session_->backend());
+  info.set_backend(backend_);
   info.set_attached(sink_ != nullptr);
   info.set_channel_count(static_cast<uint32_t>(block_limits_.channel_count));
-  info.set_sample_rate_hz(session_->config().sample_rate_hz);
+  info.set_sample_rate_hz(config_.sample_rate_hz);
   info.set_blocks_processed(blocks_);
   info.set_frames_processed(frames_);
   info.set_rejections(rejections_);

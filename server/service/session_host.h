@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/pipeline/scan_session.h"
 #include "engine/pipeline/session.h"
 #include "localizer/v1/localizer.pb.h"
 #include "server/service/service_metrics.h"
@@ -36,6 +37,7 @@
 #include "server/service/worker_pool.h"
 #include "server/wire/block_wire.h"
 #include "server/wire/imu_wire.h"
+#include "server/wire/scan_wire.h"
 
 namespace localizer::server {
 
@@ -54,13 +56,17 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
 
   SessionHost(std::string id, std::string token, std::string label, std::unique_ptr<engine::Session> session,
               HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics);
+  // A detection session: scans in, track lists out (engine/pipeline/scan_session.h).
+  SessionHost(std::string id, std::string token, std::string label, std::unique_ptr<engine::ScanSession> scans,
+              HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics);
   ~SessionHost();
 
   const std::string& id() const { return id_; }
   const std::string& label() const { return label_; }
-  const std::string& backend() const { return session_->backend(); }
+  const std::string& backend() const { return backend_; }
   // The session's config (fixed at creation, so readable from any thread).
-  const engine::SessionConfig& config() const { return session_->config(); }
+  const engine::SessionConfig& config() const { return config_; }
+  bool detections() const { return scans_ != nullptr; }
   // Recent initialised positions for the live view; locks itself (see track_history.h).
   const TrackHistory& track() const { return track_; }
   bool TokenMatches(const std::string& token) const;  // constant-time comparison
@@ -85,6 +91,9 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   // queued in order with the blocks: the engine takes its samples before the blocks sent
   // after it. Same flow control as OfferLocked.
   bool OfferImuLocked(StatusOr<wire::DecodedImu> decoded, uint64_t batch_sequence, Clock::time_point received);
+  // A decoded scan of a detection session (or its decoding's rejection); answered in order
+  // with a TrackList. Same flow control as OfferLocked.
+  bool OfferScanLocked(StatusOr<engine::Scan> decoded, uint64_t scan_sequence, Clock::time_point received);
 
   // Writer side: the next response to write, or null. MarkWrittenLocked after a write
   // succeeded; RequeueLocked puts a failed write back at the front.
@@ -125,6 +134,8 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
     Clock::time_point received;
     std::optional<wire::DecodedImu> imu;  // an IMU batch instead of a block
     uint64_t imu_sequence = 0;
+    std::optional<engine::Scan> scan;     // a scan (detection sessions)
+    uint64_t scan_sequence = 0;
   };
 
   void ScheduleLocked();
@@ -133,11 +144,17 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   void RejectLocked(uint64_t sequence, const std::string& reason, const Status& status,
                     Clock::time_point received);
   std::vector<ResponsePtr> Process(WorkItem& item, Clock::time_point started);
+  std::vector<ResponsePtr> ProcessScan(WorkItem& item);
+  // Queues a response-only or scan/IMU item; returns whether the reader may read on.
+  bool QueueLocked(WorkItem item);
 
   const std::string id_;
   const std::string token_;
   const std::string label_;
-  const std::unique_ptr<engine::Session> session_;  // used by the scheduled worker only
+  const std::unique_ptr<engine::Session> session_;  // audio sessions; used by the scheduled worker only
+  const std::unique_ptr<engine::ScanSession> scans_;  // detection sessions; likewise
+  const engine::SessionConfig config_;
+  const std::string backend_;
   const HostLimits limits_;
   const wire::BlockLimits block_limits_;
   WorkerPool* const pool_;

@@ -54,8 +54,18 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   }
   auto engine_config = wire::ConfigFromProto(config, options_.policy);
   if (!engine_config.ok()) return engine_config.status();
-  auto session = engine::Session::Create(*engine_config);  // FFT plans, particles: outside the lock
-  if (!session.ok()) return session.status();
+  // FFT plans, particles: outside the lock.
+  std::unique_ptr<engine::Session> session;
+  std::unique_ptr<engine::ScanSession> scans;
+  if (engine_config->detections) {
+    auto made = engine::ScanSession::Create(*engine_config);
+    if (!made.ok()) return made.status();
+    scans = std::move(made).value();
+  } else {
+    auto made = engine::Session::Create(*engine_config);
+    if (!made.ok()) return made.status();
+    session = std::move(made).value();
+  }
   std::lock_guard<std::mutex> lock(mutex_);
   if (static_cast<int>(sessions_.size()) >= options_.max_sessions) {
     return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) + " sessions");
@@ -64,8 +74,10 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   do {
     id = RandomHex(16);
   } while (sessions_.count(id) != 0);
-  auto host = std::make_shared<SessionHost>(id, RandomHex(32), config.label(), std::move(session).value(),
-                                            options_.host, pool_, metrics_);
+  auto host = scans ? std::make_shared<SessionHost>(id, RandomHex(32), config.label(), std::move(scans),
+                                                    options_.host, pool_, metrics_)
+                    : std::make_shared<SessionHost>(id, RandomHex(32), config.label(), std::move(session),
+                                                    options_.host, pool_, metrics_);
   sessions_[id] = host;
   return host;
 }

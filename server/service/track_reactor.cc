@@ -40,9 +40,10 @@ void TrackReactor::OnReadDone(bool ok) {
     case v1::TrackRequest::kResume: return HandleResume(request_.resume());
     case v1::TrackRequest::kBlock: return HandleBlock();
     case v1::TrackRequest::kImu: return HandleImu();
+    case v1::TrackRequest::kScan: return HandleScan();
     default: break;
   }
-  const grpc::Status status(grpc::StatusCode::INVALID_ARGUMENT, "TrackRequest has no open, resume or block");
+  const grpc::Status status(grpc::StatusCode::INVALID_ARGUMENT, "TrackRequest has no open, resume, block, imu or scan");
   if (!host_) return FinishOnce(status);
   std::lock_guard<std::mutex> lock(host_->mutex());
   FinishOnce(status);
@@ -123,6 +124,22 @@ void TrackReactor::HandleImu() {
   std::lock_guard<std::mutex> lock(host_->mutex());
   if (finished_ || input_done_) return;
   if (host_->OfferImuLocked(std::move(decoded), request_.imu().sequence(), received)) {
+    ReadNext();
+  } else {
+    read_paused_ = true;
+  }
+}
+
+void TrackReactor::HandleScan() {
+  if (!host_) {
+    return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                                   "a scan arrived before open or resume; the first request must open a session"));
+  }
+  const auto received = Clock::now();
+  auto decoded = wire::DecodeScan(request_.scan());
+  std::lock_guard<std::mutex> lock(host_->mutex());
+  if (finished_ || input_done_) return;
+  if (host_->OfferScanLocked(std::move(decoded), request_.scan().sequence(), received)) {
     ReadNext();
   } else {
     read_paused_ = true;

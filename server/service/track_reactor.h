@@ -49,7 +49,8 @@ class TrackReactor final : public grpc::ServerBidiReactor<v1::TrackRequest, v1::
   void HandleOpen(const v1::SessionConfig& config);
   void HandleResume(const v1::ResumeSession& resume);
   void HandleBlock();
-  void HandleImu();  // moving-array sessions: IMU samples in order with the blocks
+  void HandleImu();   // moving-array sessions: IMU samples in order with the blocks
+  void HandleScan();  // detection sessions: one scan of plots -> a track list
   void Attach(std::shared_ptr<SessionHost> host, bool resumed, std::optional<uint64_t> last_frame);
   // Ends the stream once; before attaching (no lock needed) or with the host's lock held.
   void FinishOnce(const grpc::Status& status);

@@ -58,7 +58,47 @@ Status Rename(Status status) {
 
 }  // namespace
 
+namespace {
+
+// DetectionConfig -> the tracker's options; zero fields keep the defaults.
+StatusOr<engine::SessionConfig> DetectionConfigFromProto(const v1::SessionConfig& p, const ConfigPolicy& policy) {
+  engine::SessionConfig c;
+  c.detections = true;
+  c.backend = "cpu";
+  c.seed = p.has_seed() ? p.seed() : 1;
+  const v1::DetectionConfig& d = p.detections();
+  engine::tws::TwsOptions& o = c.tws;
+  if (d.dimensions() != 0) o.dimensions = static_cast<int>(std::min<uint32_t>(d.dimensions(), 1000));
+  if (d.range_sigma_m() != 0.0) o.noise.range_sigma_m = d.range_sigma_m();
+  if (d.bearing_sigma_rad() != 0.0) o.noise.bearing_sigma_rad = d.bearing_sigma_rad();
+  if (d.elevation_sigma_rad() != 0.0) o.noise.elevation_sigma_rad = d.elevation_sigma_rad();
+  if (d.accel_noise_mps2() != 0.0) o.accel_noise_mps2 = d.accel_noise_mps2();
+  o.filter = d.steady_state_gain() ? engine::tws::FilterForm::kSteadyState : engine::tws::FilterForm::kKalman;
+  if (d.gate_probability() != 0.0) o.gate_probability = d.gate_probability();
+  if (d.confirm_hits() != 0) o.confirm_hits = static_cast<int>(std::min<uint32_t>(d.confirm_hits(), 1000));
+  if (d.confirm_window() != 0) o.confirm_window = static_cast<int>(std::min<uint32_t>(d.confirm_window(), 1000));
+  if (d.max_coast_scans() != 0) o.max_coast_scans = static_cast<int>(std::min<uint32_t>(d.max_coast_scans(), 100000));
+  if (d.max_position_sigma_m() != 0.0) o.max_position_sigma_m = d.max_position_sigma_m();
+  o.initiation = d.two_point_initiation() ? engine::tws::Initiation::kTwoPoint : engine::tws::Initiation::kOnePoint;
+  if (d.initial_speed_sigma_mps() != 0.0) o.initial_speed_sigma_mps = d.initial_speed_sigma_mps();
+  if (d.max_speed_mps() != 0.0) o.max_speed_mps = d.max_speed_mps();
+  o.max_tracks = policy.max_tracks;
+  if (d.max_tracks() != 0) {
+    if (d.max_tracks() > static_cast<uint32_t>(policy.max_tracks)) {
+      return InvalidArgument("detections.max_tracks is " + std::to_string(d.max_tracks()) +
+                             "; this server allows at most " + std::to_string(policy.max_tracks));
+    }
+    o.max_tracks = static_cast<int>(d.max_tracks());
+  }
+  c.max_block_samples = policy.max_block_samples;
+  LOCALIZER_RETURN_IF_ERROR(c.Validate());
+  return c;
+}
+
+}  // namespace
+
 StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, const ConfigPolicy& policy) {
+  if (p.has_detections()) return DetectionConfigFromProto(p, policy);
   engine::SessionConfig c;
   if (!p.has_array()) return InvalidArgument("array is missing");
   if (p.array().sensors_m_size() > policy.max_channels) {
@@ -142,6 +182,29 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
 
 v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::string& label) {
   v1::SessionConfig p;
+  if (c.detections) {
+    const engine::tws::TwsOptions& o = c.tws;
+    v1::DetectionConfig* d = p.mutable_detections();
+    d->set_dimensions(static_cast<uint32_t>(o.dimensions));
+    d->set_range_sigma_m(o.noise.range_sigma_m);
+    d->set_bearing_sigma_rad(o.noise.bearing_sigma_rad);
+    d->set_elevation_sigma_rad(o.noise.elevation_sigma_rad);
+    d->set_accel_noise_mps2(o.accel_noise_mps2);
+    d->set_steady_state_gain(o.filter == engine::tws::FilterForm::kSteadyState);
+    d->set_gate_probability(o.gate_probability);
+    d->set_confirm_hits(static_cast<uint32_t>(o.confirm_hits));
+    d->set_confirm_window(static_cast<uint32_t>(o.confirm_window));
+    d->set_max_coast_scans(static_cast<uint32_t>(o.max_coast_scans));
+    d->set_max_position_sigma_m(o.max_position_sigma_m);
+    d->set_two_point_initiation(o.initiation == engine::tws::Initiation::kTwoPoint);
+    d->set_initial_speed_sigma_mps(o.initial_speed_sigma_mps);
+    d->set_max_speed_mps(o.max_speed_mps);
+    d->set_max_tracks(static_cast<uint32_t>(o.max_tracks));
+    p.set_backend("cpu");
+    p.set_seed(c.seed);
+    p.set_label(label);
+    return p;
+  }
   for (const Vec3& s : c.sensors_m) ToProto(s, p.mutable_array()->add_sensors_m());
   p.mutable_array()->set_sound_speed_mps(c.sound_speed_mps);
   p.mutable_array()->set_reference_sensor(static_cast<uint32_t>(c.reference_sensor));

@@ -20,6 +20,7 @@ struct ConfigPolicy {
   int64_t max_block_samples = 1 << 22;      // per channel; also the default
   int max_channels = 64;
   int max_particles = 1 << 20;
+  int max_tracks = 1000000;                 // detection sessions: tracks held at once; also the default
 };
 
 // INVALID_ARGUMENT naming the proto field ("array.sensors_m", "filter.particles", ...)

@@ -181,6 +181,63 @@ class ServerTest(unittest.TestCase):
         thread.start()
         return thread
 
+    def test_detection_session_confirms_two_targets(self):
+        # Two targets 1 km apart moving at 20 m/s, noiseless plots every 2 s, plus a plot with a
+        # negative range on the third scan (refused in-band, the session goes on).
+        session = lc.TrackSession(self.channel, lc.detection_config(label="py-radar"), timeout=60)
+        self.assertTrue(session.opened.effective_config.HasField("detections"))
+        starts = np.array([[5000.0, 0.0], [5000.0, 1000.0]])
+        velocity = np.array([0.0, 20.0])
+        for k in range(6):
+            t = 2.0 * k
+            xy = starts + velocity * t
+            ranges, bearings = np.hypot(xy[:, 0], xy[:, 1]), np.arctan2(xy[:, 1], xy[:, 0])
+            if k == 2:
+                session.send_scan(lc.scan(900, t, [-1.0], [0.0]))
+            session.send_scan(lc.scan(k, t, ranges, bearings))
+        session.close()
+        lists = list(session.track_lists())
+        self.assertEqual(session.code(), grpc.StatusCode.OK)
+        self.assertEqual([tl.sequence for tl in lists], list(range(6)))
+        self.assertEqual(len(session.rejected), 1)
+        self.assertEqual(session.rejected[0].request, "scan")
+        self.assertIn("range_m", session.rejected[0].message)
+        last = lists[-1]
+        confirmed = [t for t in last.tracks if t.status == lc.pb.TRACK_STATUS_CONFIRMED]
+        self.assertEqual(sorted(t.id for t in confirmed), [1, 2])
+        for track, start in zip(sorted(confirmed, key=lambda t: t.id), starts):
+            want = start + velocity * 10.0
+            self.assertLess(np.hypot(track.position_m.x - want[0], track.position_m.y - want[1]), 1.0)
+            self.assertLess(abs(track.velocity_mps.y - 20.0), 1.0)
+
+    def test_moving_array_session_reports_the_platform_pose(self):
+        # The array at rest on a level platform: IMU reads gravity on +z and no rotation.
+        platform = lc.platform_config(origin_m=(0.0, 0.0, 0.0))
+        cfg = config("py-moving")
+        cfg.platform.CopyFrom(platform)
+        session = lc.TrackSession(self.channel, cfg, timeout=60)
+        self.assertEqual(session.opened.effective_config.platform.attitude_filter, "quaternion")
+        n_blocks = 6
+        t_imu = np.arange(0.0, n_blocks * BLOCK / FS_HZ, 0.01)
+        gyro = np.zeros((len(t_imu), 3))
+        accel = np.tile([0.0, 0.0, 9.81], (len(t_imu), 1))
+        session.send_imu(lc.imu_batch(1, t_imu, gyro, accel))
+        bad = lc.imu_batch(2, [t_imu[-1] + 0.01], [[np.nan, 0.0, 0.0]], [[0.0, 0.0, 9.81]])
+        session.send_imu(bad)
+        for k in range(n_blocks):
+            session.send(AUDIO[k * BLOCK:(k + 1) * BLOCK], sequence=k + 1)
+        session.close()
+        estimates = list(session.estimates())
+        self.assertEqual(session.code(), grpc.StatusCode.OK)
+        self.assertEqual(len(session.rejected), 1)
+        self.assertEqual(session.rejected[0].request, "imu")
+        self.assertIn("gyro_rps", session.rejected[0].message)
+        self.assertEqual(len(estimates), frames_completed(n_blocks * BLOCK))
+        for e in estimates:
+            self.assertTrue(e.HasField("platform"))
+            self.assertAlmostEqual(e.platform.body_to_world.w, 1.0, places=4)
+            self.assertLess(abs(e.platform.euler_rad.x), 1e-3)
+
     def test_track_estimates_in_order_and_on_the_source(self):
         session = lc.TrackSession(self.channel, config("py-track"), timeout=60)
         self.assertTrue(session.session_id)

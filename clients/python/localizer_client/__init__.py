@@ -47,7 +47,8 @@ from ._stubs import pb, pb_grpc  # noqa: F401  (re-exported)
 from . import synth  # noqa: F401  (re-exported)
 
 __all__ = ["pb", "pb_grpc", "synth", "SESSION_KEY_METADATA", "connect", "vector3",
-           "session_config", "sample_block", "pcm16_bytes", "TrackSession", "locate",
+           "session_config", "platform_config", "detection_config", "sample_block", "imu_batch",
+           "scan", "pcm16_bytes", "TrackSession", "locate",
            "list_sessions", "close_session", "InstanceLost", "from_proxy_reset"]
 
 #: Metadata key a proxy routes on, so that a resumed stream reaches the same server instance.
@@ -69,13 +70,15 @@ def vector3(xyz):
 
 def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, reference_sensor=0,
                    frame_samples=0, hop_samples=0, particles=0, band_hz=None, seed=None,
-                   backend="", label="", init_region=None):
+                   backend="", label="", init_region=None, platform=None):
     """A ``pb.SessionConfig``.
 
     sensors_m: (C, 3) sensor positions, metres (C >= 4, not coplanar). band_hz: (low, high) of
     the GCC band or None for the whole spectrum. init_region: ((xmin, ymin, zmin), (xmax, ymax,
     zmax)) or None. Zero / empty values mean "the server's default" (frame 4096, hop frame/2,
     4096 particles, seed 1, the server's --backend); SessionOpened.effective_config tells.
+    platform: a ``platform_config()`` for a moving array (sensors_m then in the body frame;
+    send ``imu_batch``es with ``TrackSession.send_imu`` before the blocks they cover).
     """
     config = pb.SessionConfig(
         array=pb.ArrayGeometry(sensors_m=[vector3(p) for p in np.asarray(sensors_m, float)],
@@ -90,7 +93,58 @@ def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, referen
     if init_region is not None:
         config.init_region.min_m.CopyFrom(vector3(init_region[0]))
         config.init_region.max_m.CopyFrom(vector3(init_region[1]))
+    if platform is not None:
+        config.platform.CopyFrom(platform)
     return config
+
+
+def platform_config(*, attitude_filter="", use_magnetometer=False, mag_declination_rad=0.0,
+                    origin_m=(0.0, 0.0, 0.0)):
+    """A ``pb.PlatformConfig``: the array rides a platform whose attitude comes from its IMU
+    ("quaternion" filter by default, or "euler"); origin_m: the body origin in the world."""
+    return pb.PlatformConfig(attitude_filter=attitude_filter, use_magnetometer=use_magnetometer,
+                             mag_declination_rad=mag_declination_rad, origin_m=vector3(origin_m))
+
+
+def detection_config(*, label="", dimensions=0, range_sigma_m=0.0, bearing_sigma_rad=0.0,
+                     **detections):
+    """A ``pb.SessionConfig`` for a detection (track-while-scan) session: the session takes
+    ``scan()``s of plots and answers each with a ``pb.TrackList``. Keyword arguments are
+    ``pb.DetectionConfig`` fields (confirm_hits, gate_probability, ...); 0 means the default."""
+    d = pb.DetectionConfig(dimensions=dimensions, range_sigma_m=range_sigma_m,
+                           bearing_sigma_rad=bearing_sigma_rad, **detections)
+    return pb.SessionConfig(detections=d, label=label)
+
+
+def imu_batch(sequence, t_s, gyro_rps, accel_mps2, mag_uT=None, origin_m=None):
+    """A ``pb.ImuBatch`` from arrays: t_s (N,), gyro_rps and accel_mps2 (N, 3), mag_uT (N, 3)
+    or None; times on the session clock (seconds from its first audio sample), increasing."""
+    batch = pb.ImuBatch(sequence=sequence)
+    t_s = np.asarray(t_s, float)
+    gyro, accel = np.asarray(gyro_rps, float), np.asarray(accel_mps2, float)
+    mag = None if mag_uT is None else np.asarray(mag_uT, float)
+    for i in range(len(t_s)):
+        sample = batch.samples.add(t_s=float(t_s[i]), gyro_rps=vector3(gyro[i]),
+                                   accel_mps2=vector3(accel[i]))
+        if mag is not None:
+            sample.mag_uT.CopyFrom(vector3(mag[i]))
+    if origin_m is not None:
+        batch.origin_m.CopyFrom(vector3(origin_m))
+    return batch
+
+
+def scan(sequence, time_s, ranges_m, bearings_rad, *, elevations_rad=None, snr_db=None,
+         sensor_position_m=(0.0, 0.0, 0.0)):
+    """A ``pb.Scan``: one sensor revolution's plots (range m, bearing rad from +x towards +y,
+    optional elevation rad and SNR dB) at time_s, the sensor at sensor_position_m."""
+    s = pb.Scan(sequence=sequence, time_s=float(time_s), sensor_position_m=vector3(sensor_position_m))
+    for i, (r, b) in enumerate(zip(ranges_m, bearings_rad)):
+        d = s.detections.add(range_m=float(r), bearing_rad=float(b))
+        if elevations_rad is not None:
+            d.elevation_rad = float(elevations_rad[i])
+        if snr_db is not None:
+            d.snr_db = float(snr_db[i])
+    return s
 
 
 def sample_block(sequence, data, *, encoding="float"):
@@ -242,6 +296,26 @@ class TrackSession:
         """Queue a ready ``pb.SampleBlock`` as is."""
         self.next_sequence = block.sequence + 1
         self._requests.put(pb.TrackRequest(block=block))
+
+    def send_imu(self, batch):
+        """Queue a ``pb.ImuBatch`` (moving-array sessions; ``imu_batch()``). A bad batch comes
+        back as a ``rejected`` response with request "imu"."""
+        self._requests.put(pb.TrackRequest(imu=batch))
+
+    def send_scan(self, scan_message):
+        """Queue a ``pb.Scan`` (detection sessions; ``scan()``); its answer is a ``tracks``
+        response (``track_lists()``), a bad one a ``rejected`` response with request "scan"."""
+        self._requests.put(pb.TrackRequest(scan=scan_message))
+
+    def track_lists(self):
+        """Detection sessions: the ``pb.TrackList`` responses only; rejections go to
+        .rejected."""
+        for response in self:
+            kind = response.WhichOneof("kind")
+            if kind == "tracks":
+                yield response.tracks
+            elif kind == "rejected":
+                self.rejected.append(response.rejected)
 
     def close(self):
         """Half-close: no more blocks. The server processes what it accepted, sends the

@@ -1,0 +1,103 @@
+#include "server/wire/scan_wire.h"
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace localizer::wire {
+namespace {
+
+void ToProto(const Eigen::Vector3d& v, v1::Vector3* out) {
+  out->set_x(v.x());
+  out->set_y(v.y());
+  out->set_z(v.z());
+}
+
+v1::TrackStatus StatusToProto(engine::tws::TrackStatus s) {
+  switch (s) {
+    case engine::tws::TrackStatus::kTentative: return v1::TRACK_STATUS_TENTATIVE;
+    case engine::tws::TrackStatus::kConfirmed: return v1::TRACK_STATUS_CONFIRMED;
+    case engine::tws::TrackStatus::kCoasting: return v1::TRACK_STATUS_COASTING;
+  }
+  return v1::TRACK_STATUS_UNSPECIFIED;
+}
+
+}  // namespace
+
+StatusOr<engine::Scan> DecodeScan(const v1::Scan& p) {
+  engine::Scan scan;
+  scan.time_s = p.time_s();
+  if (!std::isfinite(scan.time_s)) return InvalidArgument("scan.time_s is not finite");
+  scan.sensor_position_m = Eigen::Vector3d(p.sensor_position_m().x(), p.sensor_position_m().y(),
+                                           p.sensor_position_m().z());
+  if (!scan.sensor_position_m.allFinite()) return InvalidArgument("scan.sensor_position_m is not finite");
+  scan.detections.reserve(static_cast<size_t>(p.detections_size()));
+  for (int i = 0; i < p.detections_size(); ++i) {
+    const v1::Detection& d = p.detections(i);
+    const std::string field = "scan.detections[" + std::to_string(i) + "].";
+    if (!(std::isfinite(d.range_m()) && d.range_m() > 0.0)) {
+      return InvalidArgument(field + "range_m is " + std::to_string(d.range_m()) + "; must be finite and > 0");
+    }
+    if (!(std::abs(d.bearing_rad()) <= std::numbers::pi)) {
+      return InvalidArgument(field + "bearing_rad is " + std::to_string(d.bearing_rad()) + "; must be in [-pi, pi]");
+    }
+    engine::Detection detection;
+    detection.range_m = d.range_m();
+    detection.bearing_rad = d.bearing_rad();
+    if (d.has_elevation_rad()) {
+      if (!(std::abs(d.elevation_rad()) <= 0.5 * std::numbers::pi)) {
+        return InvalidArgument(field + "elevation_rad is " + std::to_string(d.elevation_rad()) +
+                               "; must be in [-pi/2, pi/2]");
+      }
+      detection.elevation_rad = d.elevation_rad();
+    }
+    if (d.has_snr_db()) {
+      if (!std::isfinite(d.snr_db())) return InvalidArgument(field + "snr_db is not finite");
+      detection.snr_db = d.snr_db();
+    }
+    scan.detections.push_back(detection);
+  }
+  return scan;
+}
+
+void EncodeScan(const engine::Scan& scan, uint64_t sequence, v1::Scan* out) {
+  out->Clear();
+  out->set_sequence(sequence);
+  out->set_time_s(scan.time_s);
+  ToProto(scan.sensor_position_m, out->mutable_sensor_position_m());
+  for (const engine::Detection& d : scan.detections) {
+    v1::Detection* p = out->add_detections();
+    p->set_range_m(d.range_m);
+    p->set_bearing_rad(d.bearing_rad);
+    if (d.elevation_rad) p->set_elevation_rad(*d.elevation_rad);
+    if (d.snr_db) p->set_snr_db(*d.snr_db);
+  }
+}
+
+void TrackListToProto(const engine::ScanResult& result, uint64_t sequence, v1::TrackList* out) {
+  out->set_sequence(sequence);
+  out->set_time_s(result.time_s);
+  out->set_scan_index(result.scan_index);
+  out->clear_tracks();
+  for (const engine::tws::TrackReport& t : result.tracks) {
+    v1::TargetTrack* p = out->add_tracks();
+    p->set_id(t.id);
+    p->set_status(StatusToProto(t.status));
+    ToProto(t.position_m, p->mutable_position_m());
+    ToProto(t.velocity_mps, p->mutable_velocity_mps());
+    auto* cov = p->mutable_covariance();
+    cov->Resize(36, 0.0);
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c) cov->Set(6 * r + c, t.covariance(r, c));
+    }
+    p->set_hits(static_cast<uint32_t>(t.hits));
+    p->set_consecutive_misses(static_cast<uint32_t>(t.consecutive_misses));
+  }
+  out->set_plots(static_cast<uint32_t>(result.summary.plots));
+  out->set_assigned(static_cast<uint32_t>(result.summary.assigned));
+  out->set_initiated(static_cast<uint32_t>(result.summary.initiated));
+  out->set_deleted(static_cast<uint32_t>(result.summary.deleted));
+  out->set_process_s(result.process_s);
+}
+
+}  // namespace localizer::wire
