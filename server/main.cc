@@ -57,6 +57,8 @@ int Main(int argc, char** argv) {
   flags.Int("max-particles", &o.max_particles, "N", "particles", "largest filter.particles accepted");
   flags.Int("max-message-bytes", &o.max_message_bytes, "N", "bytes", "largest gRPC message accepted");
   flags.Double("drain-timeout", &o.drain_timeout_s, "S", "s", "on SIGTERM, time allowed to finish in-flight work");
+  flags.Double("memory-trim", &o.memory_trim_s, "S", "s",
+               "hand the allocator's free pages back to the system this often (RSS follows use); 0: never");
   flags.String("ready-file", &o.ready_file, "PATH",
                "once serving, write {\"grpc_port\", \"metrics_port\", \"pid\"} as JSON here (atomically)");
   flags.String("log-level", &o.log_level, "LEVEL", "debug | info | warn | error (logfmt lines on stderr)");

@@ -16,6 +16,9 @@ Status ServerOptions::Validate() const {
   if (max_particles < 16) return InvalidArgument("max_particles must be >= 16");
   if (max_message_bytes < 1024) return InvalidArgument("max_message_bytes must be >= 1024");
   if (!(drain_timeout_s >= 0.0)) return InvalidArgument("drain_timeout_s must be >= 0");
+  if (!(memory_trim_s >= 0.0 && memory_trim_s <= 86400.0)) {
+    return InvalidArgument("memory_trim_s must be in [0, 86400] (0: never)");
+  }
   if (log_level != "debug" && log_level != "info" && log_level != "warn" && log_level != "error") {
     return InvalidArgument("log_level '" + log_level + "' is not one of: debug, info, warn, error");
   }

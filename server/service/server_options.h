@@ -26,6 +26,8 @@ struct ServerOptions {
   int max_particles = 1 << 20;                     // filter.particles allowed
   int max_message_bytes = 64 << 20;                // largest gRPC message accepted
   double drain_timeout_s = 10.0;                   // SIGTERM: time to finish in-flight work
+  double memory_trim_s = 30.0;                     // hand the allocator's free pages back
+                                                   // to the system this often; 0: never
   std::string ready_file;                          // written once serving: JSON with ports
   std::string log_level = "info";                  // debug | info | warn | error
   // GPU backend (gpu/backend/gpu_backend.h); ignored without a device.

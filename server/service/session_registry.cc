@@ -152,13 +152,14 @@ namespace {
 // glibc keeps the pages of freed memory in its (per-thread) arenas: after a burst -- a stall
 // that queued blocks, many sessions opening at once -- the resident size stays at the burst's
 // peak although the memory is free, which reads as growth on a dashboard. Handing free pages
-// back every half minute keeps RSS a measure of memory in use; it costs a few ms on this
-// housekeeping thread, none on the sessions' threads.
-constexpr int kSweepsPerTrim = 120;  // x 250 ms
-
+// back now and then keeps RSS a measure of memory in use. It runs on this housekeeping
+// thread; while it walks an arena, a session thread allocating there waits.
 void ReturnFreeMemoryToTheSystem() {
 #if defined(__GLIBC__)
+  const auto start = Clock::now();
   malloc_trim(0);
+  LogEvent("debug", "memory_trim",
+           {{"ms", std::to_string(1e3 * std::chrono::duration<double>(Clock::now() - start).count())}});
 #endif
 }
 
@@ -166,12 +167,16 @@ void ReturnFreeMemoryToTheSystem() {
 
 void SessionRegistry::SweepLoop() {
   std::unique_lock<std::mutex> lock(mutex_);
-  int sweeps = 0;
+  auto last_trim = Clock::now();
   while (!stopping_) {
     sweep_wake_.wait_for(lock, std::chrono::milliseconds(250));
     if (stopping_) break;
     lock.unlock();
-    if (++sweeps % kSweepsPerTrim == 0) ReturnFreeMemoryToTheSystem();
+    if (options_.memory_trim_s > 0.0 &&
+        std::chrono::duration<double>(Clock::now() - last_trim).count() >= options_.memory_trim_s) {
+      ReturnFreeMemoryToTheSystem();
+      last_trim = Clock::now();
+    }
     const auto now = Clock::now();
     std::vector<std::string> expired;
     for (const auto& host : Snapshot()) {

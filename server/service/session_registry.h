@@ -4,7 +4,7 @@
 // A session id is 16 random hex digits; its resume token 32 more, compared in constant
 // time. A detached session (its stream gone) is kept for `ttl_s`, then closed by a sweep
 // that runs every ~0.25 s on a thread of its own (which also hands the allocator's free
-// pages back to the system every 30 s, so RSS follows the memory in use).
+// pages back to the system every memory_trim_s, so RSS follows the memory in use).
 // Thread-safe. Lock order: a session's mutex may be held when calling Forget; the
 // registry never takes a session's mutex while holding its own.
 #pragma once
@@ -30,6 +30,7 @@ namespace localizer::server {
 struct RegistryOptions {
   int max_sessions = 1024;
   double ttl_s = 60.0;
+  double memory_trim_s = 30.0;  // the sweep returns free heap pages this often; 0: never
   HostLimits host;
   wire::ConfigPolicy policy;
 };

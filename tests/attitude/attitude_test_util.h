@@ -43,4 +43,23 @@ inline RunErrors RunFilter(const AttitudeFilterOptions& options, const AttitudeT
 
 constexpr double kDeg = M_PI / 180.0;
 
+// A consumer-grade IMU: 0.005 rad/s gyro, 0.05 m/s^2 accelerometer, 0.5 µT magnetometer
+// noise per sample, no bias.
+inline ImuNoise ConsumerImuNoise() {
+  ImuNoise noise;
+  noise.gyro_noise_sd_rps = 0.005;
+  noise.accel_noise_sd_mps2 = 0.05;
+  noise.mag_noise_sd_uT = 0.5;
+  return noise;
+}
+
+// Roll, pitch and yaw swinging; pitch with amplitude 1.8 rad, so it passes +-90 degrees
+// (first at about 2.5 s).
+inline AttitudeTrajectory ThroughNinetyDegreesPitch() {
+  AttitudeTrajectoryOptions motion;
+  motion.amplitude_rad = {0.3, 1.8, 0.5};
+  motion.frequency_hz = {0.2, 0.1, 0.07};
+  return AttitudeTrajectory(motion);
+}
+
 }  // namespace localizer::engine::testing

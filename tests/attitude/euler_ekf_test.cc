@@ -68,14 +68,8 @@ TEST(EulerEkfTest, AgreesWithQuaternionFilterAwayFromNinetyDegrees) {
 // accelerometer's roll is undefined there; the Euler EKF loses the attitude, the quaternion
 // filter (quaternion_ekf_test) stays within a degree on the same motion.
 TEST(EulerEkfTest, DegradesThroughNinetyDegreesPitch) {
-  AttitudeTrajectoryOptions motion;
-  motion.amplitude_rad = {0.3, 1.8, 0.5};
-  motion.frequency_hz = {0.2, 0.1, 0.07};
-  const AttitudeTrajectory truth(motion);
-  ImuNoise noise;
-  noise.gyro_noise_sd_rps = 0.005;
-  noise.accel_noise_sd_mps2 = 0.05;
-  noise.mag_noise_sd_uT = 0.5;
+  const AttitudeTrajectory truth = ThroughNinetyDegreesPitch();
+  const ImuNoise noise = ConsumerImuNoise();
   const auto samples = SynthesiseImu(truth, 200.0, 30.0, noise, 4);
   const auto euler = RunFilter(Euler(true), truth, samples, 2.0);
   AttitudeFilterOptions q_options;

@@ -67,14 +67,8 @@ TEST(QuaternionEkfTest, NoisySinusoidalMotionWithinOneDegree) {
 
 // Pitch passes +-90 degrees (amplitude 1.8 rad): the quaternion filter does not notice.
 TEST(QuaternionEkfTest, PassesThroughNinetyDegreesPitch) {
-  AttitudeTrajectoryOptions motion;
-  motion.amplitude_rad = {0.3, 1.8, 0.5};
-  motion.frequency_hz = {0.2, 0.1, 0.07};
-  const AttitudeTrajectory truth(motion);
-  ImuNoise noise;
-  noise.gyro_noise_sd_rps = 0.005;
-  noise.accel_noise_sd_mps2 = 0.05;
-  noise.mag_noise_sd_uT = 0.5;
+  const AttitudeTrajectory truth = ThroughNinetyDegreesPitch();
+  const ImuNoise noise = ConsumerImuNoise();
   const auto samples = SynthesiseImu(truth, 200.0, 30.0, noise, 4);
   double max_pitch = 0.0;  // settled after 2 s, pitch first reaches 90 deg at 2.5 s
   for (const ImuSample& s : samples) {
@@ -165,10 +159,7 @@ TEST_P(MagDisturbanceTest, RejectsDisturbedField) {
   motion.amplitude_rad = {0.2, 0.15, 0.4};
   motion.frequency_hz = {0.11, 0.07, 0.05};
   const AttitudeTrajectory truth(motion);
-  ImuNoise noise;
-  noise.gyro_noise_sd_rps = 0.005;
-  noise.accel_noise_sd_mps2 = 0.05;
-  noise.mag_noise_sd_uT = 0.5;
+  const ImuNoise noise = ConsumerImuNoise();
   noise.mag_disturbance_world_uT = GetParam();
   noise.disturbance_start_s = 5.0;
   noise.disturbance_end_s = 15.0;
@@ -244,10 +235,7 @@ TEST(QuaternionEkfTest, ReportedStdCoversTheError) {
   motion.amplitude_rad = {0.4, 0.3, 0.8};
   motion.frequency_hz = {0.1, 0.08, 0.05};
   const AttitudeTrajectory truth(motion);
-  ImuNoise noise;
-  noise.gyro_noise_sd_rps = 0.005;
-  noise.accel_noise_sd_mps2 = 0.05;
-  noise.mag_noise_sd_uT = 0.5;
+  const ImuNoise noise = ConsumerImuNoise();
   const auto samples = SynthesiseImu(truth, 200.0, 30.0, noise, 8);
   auto filter = CreateAttitudeFilter(Defaults(true));
   ASSERT_TRUE(filter.ok());
