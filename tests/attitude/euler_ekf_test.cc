@@ -12,7 +12,9 @@ namespace localizer::engine {
 namespace {
 
 using testing::kDeg;
+using testing::ConsumerImuNoise;
 using testing::RunFilter;
+using testing::ThroughNinetyDegreesPitch;
 
 AttitudeFilterOptions Euler(bool use_mag) {
   AttitudeFilterOptions options;

@@ -14,7 +14,9 @@ namespace localizer::engine {
 namespace {
 
 using testing::kDeg;
+using testing::ConsumerImuNoise;
 using testing::RunFilter;
+using testing::ThroughNinetyDegreesPitch;
 
 AttitudeFilterOptions Defaults(bool use_mag) {
   AttitudeFilterOptions options;
@@ -159,7 +161,7 @@ TEST_P(MagDisturbanceTest, RejectsDisturbedField) {
   motion.amplitude_rad = {0.2, 0.15, 0.4};
   motion.frequency_hz = {0.11, 0.07, 0.05};
   const AttitudeTrajectory truth(motion);
-  const ImuNoise noise = ConsumerImuNoise();
+  ImuNoise noise = ConsumerImuNoise();
   noise.mag_disturbance_world_uT = GetParam();
   noise.disturbance_start_s = 5.0;
   noise.disturbance_end_s = 15.0;
