@@ -11,6 +11,8 @@
 
 #include "engine/pipeline/backend.h"
 #include "engine/pipeline/session.h"
+#include "engine/sim/evaluation.h"
+#include "engine/sim/platform_motion.h"
 #include "engine/sim/simulator.h"
 #include "tests/gpu/gpu_test_util.h"
 #include "tests/pipeline/scenario_run.h"
@@ -92,6 +94,42 @@ TEST(GpuBackend, ScenarioRmseWithinTenPercentOfTheCpu) {
       EXPECT_LE(gpu_rmse, 1.10 * cpu_rmse) << name << " " << engine::LikelihoodName(likelihood);
     }
   }
+}
+
+// A moving array on backend gpu: the GCC runs on the device, the particle filter (which
+// must follow the array every frame) on the CPU; the track matches the cpu backend's.
+TEST(GpuBackend, MovingArrayKeepsTheFilterOnTheCpuAndMatchesTheCpuBackend) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  engine::Scenario scenario = *engine::MakeScenario("tetra-water", 2);
+  scenario.sim.duration_s = 8.0;
+  engine::AttitudeTrajectoryOptions motion;
+  motion.euler_rate_rps = engine::Vec3(0.0, 0.0, 0.25);
+  scenario.sim.platform_attitude = motion;
+  const auto body = *engine::ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
+  const engine::SimResult sim = *engine::Simulate(body, scenario.sim);
+  engine::ImuNoise noise;
+  noise.with_mag = false;
+  const auto imu = engine::SynthesiseImu(engine::AttitudeTrajectory(motion), 200.0, 8.0, noise, 5);
+  double rmse[2] = {0.0, 0.0};
+  int backend_index = 0;
+  for (const char* backend : {"cpu", "gpu"}) {
+    SessionConfig config = engine::SessionConfigFor(scenario);
+    config.array_in_body_frame = true;
+    config.backend = backend;
+    auto session = Session::Create(config);
+    ASSERT_TRUE(session.ok()) << session.status().ToString();
+    EXPECT_EQ((*session)->backend(), backend);
+    ASSERT_TRUE((*session)->AddImu(imu).ok());
+    std::vector<Estimate> estimates;
+    ASSERT_TRUE((*session)->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &estimates).ok());
+    const auto array_at = [&](double t_s) {
+      return body.Moved(engine::AttitudeTrajectory(motion).At(t_s).toRotationMatrix(), engine::Vec3::Zero());
+    };
+    rmse[backend_index++] = engine::ScoreTrack(array_at, sim, estimates, 2.0).rmse_m;
+  }
+  std::printf("moving array: cpu %.3f m, gpu (GCC on the device) %.3f m\n", rmse[0], rmse[1]);
+  EXPECT_LT(rmse[1], 1.5);
+  EXPECT_LE(rmse[1], 1.25 * rmse[0] + 0.05);
 }
 
 TEST(GpuBackend, SameSeedSameEstimatesTwice) {
