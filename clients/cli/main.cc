@@ -32,13 +32,14 @@ constexpr Command kCommands[] = {
      RunLocate},
     {"list", "the sessions a server holds, one line each", RunList},
     {"close", "end a server session (needs its resume token)", RunClose},
-    {"experiment", "reproduce a reference experiment and print its table (pf-vs-ekf-2d)",
+    {"experiment", "reproduce a reference experiment and print its table\n"
+                   "            (pf-vs-ekf-2d, fwl, tws)",
      RunExperiment},
     {"attitude", "orientation from an IMU CSV (gyro + accelerometer [+ magnetometer]) to a CSV",
      RunAttitude},
     {"attitude-score",
-     "orientation CSV against the IMU CSV's motion-capture truth (BROAD's total, heading,\n"
-     "            inclination RMSE in degrees)",
+     "score an orientation CSV against the IMU CSV's motion-capture truth\n"
+     "               (BROAD's total, heading and inclination RMSE, degrees)",
      RunAttitudeScore},
 };
 
