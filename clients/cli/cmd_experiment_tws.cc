@@ -1,6 +1,8 @@
 // localizer-cli experiment tws: track-while-scan on a simulated rotating radar (the seed's
 // 33 rpm, 1800 Hz PRF): N targets in Poisson clutter with P_D < 1, scored against the
-// simulator's truth with OSPA, GOSPA and identity switches, and timed.
+// simulator's truth with OSPA, GOSPA and identity switches, and timed. With --server the
+// scans go through a detection session on a localizer-server instead (the same tracker, so
+// the same scores), and the scans' round trips are timed.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -10,6 +12,9 @@
 
 #include "clients/cli/commands.h"
 #include "clients/cli/experiment_commands.h"
+#include "clients/cli/server_flags.h"
+#include "clients/grpc/connection.h"
+#include "clients/grpc/remote_scan_session.h"
 #include "engine/sim/radar_scan.h"
 #include "engine/tws/ospa.h"
 #include "engine/tws/track_scoring.h"
@@ -35,6 +40,8 @@ struct TwsFlags {
   std::string initiation = "one-point";
   double ospa_cutoff_m = 1000.0;
   double ospa_order = 2.0;
+  std::string server;       // HOST:PORT: run the scans through a detection session there
+  std::string session_key;  // "" with --server: a random one
 };
 
 Status Check(const TwsFlags& f) {
@@ -86,6 +93,8 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   flags.String("initiation", &f.initiation, "one-point|two-point", "how unassociated plots start tentative tracks");
   flags.Double("ospa-cutoff-m", &f.ospa_cutoff_m, "C", "m", "OSPA / GOSPA cut-off c");
   flags.Double("ospa-order", &f.ospa_order, "P", "", "OSPA / GOSPA order p (GOSPA alpha = 2)");
+  RegisterServerFlag(flags, &f.server, /*required=*/false);
+  flags.String("session-key", &f.session_key, "KEY", "with --server: x-localizer-session-key (default: random)");
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   if (const Status st = Check(f); !st.ok()) return UsageError(kCommand, st.message());
 
@@ -111,8 +120,41 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   options.filter = f.filter == "kalman" ? engine::tws::FilterForm::kKalman : engine::tws::FilterForm::kSteadyState;
   options.initiation = f.initiation == "one-point" ? engine::tws::Initiation::kOnePoint
                                                     : engine::tws::Initiation::kTwoPoint;
-  auto tracker = engine::tws::TwsTracker::Create(options);
-  if (!tracker.ok()) return UsageError(kCommand, tracker.status().message());
+  // One scan through the tracker: the confirmed (and coasting) tracks after it.
+  std::unique_ptr<engine::tws::TwsTracker> tracker;
+  std::unique_ptr<client::RemoteScanSession> remote;
+  std::vector<double> round_trip_s, server_total_s;
+  if (f.server.empty()) {
+    auto made = engine::tws::TwsTracker::Create(options);
+    if (!made.ok()) return UsageError(kCommand, made.status().message());
+    tracker = std::move(made).value();
+  } else {
+    engine::SessionConfig config;
+    config.detections = true;
+    config.tws = options;
+    auto made = client::RemoteScanSession::Open(client::Connect(f.server), config, "experiment-tws",
+                                                f.session_key.empty() ? client::RandomSessionKey() : f.session_key);
+    if (!made.ok()) return RuntimeError(kCommand, made.status());
+    remote = std::move(made).value();
+  }
+  engine::ScanResult remote_result;
+  const auto process = [&](const engine::Scan& scan, engine::tws::ScanSummary* summary,
+                           std::vector<engine::tws::TrackReport>* confirmed) -> Status {
+    if (tracker) {
+      LOCALIZER_RETURN_IF_ERROR(tracker->Process(scan, summary));
+      tracker->Tracks(confirmed, /*include_tentative=*/false);
+      return Status::Ok();
+    }
+    LOCALIZER_RETURN_IF_ERROR(remote->Process(scan, &remote_result));
+    round_trip_s.push_back(remote->last_round_trip_s());
+    server_total_s.push_back(remote->last_server_total_s());
+    *summary = remote_result.summary;
+    confirmed->clear();
+    for (const auto& t : remote_result.tracks) {
+      if (t.status != engine::tws::TrackStatus::kTentative) confirmed->push_back(t);
+    }
+    return Status::Ok();
+  };
 
   engine::tws::TrackScoring scoring(f.ospa_cutoff_m);
   std::vector<double> ospa, gospa;
@@ -125,12 +167,11 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
     const engine::RadarScanFrame frame = sim->Frame(k);
     engine::tws::ScanSummary summary;
     const auto start = std::chrono::steady_clock::now();
-    const Status st = (*tracker)->Process(frame.scan, &summary);
+    const Status st = process(frame.scan, &summary, &tracks);
     tracker_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!st.ok()) return RuntimeError(kCommand, st);
     updates += summary.track_updates;
     plots += summary.plots;
-    (*tracker)->Tracks(&tracks, /*include_tentative=*/false);
     std::vector<Eigen::Vector3d> truth_p, track_p;
     std::vector<engine::tws::Labelled> truth_l, track_l;
     for (const auto& t : frame.truth) {
@@ -163,6 +204,17 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   std::printf("track_purity         %.4f\n", scoring.Purity());
   std::printf("confirmed_tracks     %zu (mean %.1f)\n", tracks.size(), confirmed_sum / static_cast<double>(ospa.size()));
   std::printf("plots_per_scan       %.1f\n", static_cast<double>(plots) / f.scans);
+  if (remote) {
+    // Through the server: the scans' round trips (tentative tracks included in the count).
+    std::printf("server               %s (session %s)\n", f.server.c_str(), remote->opened().session_id().c_str());
+    std::printf("scan_round_trip_ms   p50 %.3f  p95 %.3f  p99 %.3f  max %.3f\n", 1e3 * Percentile(round_trip_s, 0.5),
+                1e3 * Percentile(round_trip_s, 0.95), 1e3 * Percentile(round_trip_s, 0.99),
+                1e3 * Percentile(round_trip_s, 1.0));
+    std::printf("server_total_ms      p50 %.3f  p99 %.3f\n", 1e3 * Percentile(server_total_s, 0.5),
+                1e3 * Percentile(server_total_s, 0.99));
+    if (const Status closed = remote->Close(); !closed.ok()) return RuntimeError(kCommand, closed);
+    return kExitOk;
+  }
   std::printf("track_updates        %lld\n", static_cast<long long>(updates));
   std::printf("tracker_wall_s       %.4f\n", tracker_s);
   std::printf("track_updates_per_s  %.3g\n", tracker_s > 0.0 ? static_cast<double>(updates) / tracker_s : 0.0);

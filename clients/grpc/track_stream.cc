@@ -19,6 +19,8 @@ const char* ResponseKind(const v1::TrackResponse& response) {
       return "rejected";
     case v1::TrackResponse::kGap:
       return "gap";
+    case v1::TrackResponse::kTracks:
+      return "tracks";
     case v1::TrackResponse::KIND_NOT_SET:
       break;
   }
@@ -90,6 +92,18 @@ bool TrackStream::Write(const v1::SampleBlock& block) {
   v1::TrackRequest request;
   // The block is copied once into the request; the caller's block stays untouched.
   *request.mutable_block() = block;
+  return stream_->Write(request);
+}
+
+bool TrackStream::WriteImu(const v1::ImuBatch& batch) {
+  v1::TrackRequest request;
+  *request.mutable_imu() = batch;
+  return stream_->Write(request);
+}
+
+bool TrackStream::WriteScan(const v1::Scan& scan) {
+  v1::TrackRequest request;
+  *request.mutable_scan() = scan;
   return stream_->Write(request);
 }
 

@@ -5,8 +5,9 @@
 //                   the server ends instead (bad config, wrong token, no capacity, server
 //                   unreachable) is returned as a Status whose message starts with the gRPC
 //                   code name: "INVALID_ARGUMENT: array.sensors_m has 3 sensors; ...".
-//   Write           send blocks; false once the stream is broken or finished.
-//   Read            the responses after `opened`, in order (estimate, rejected, gap); false
+//   Write           send blocks (WriteImu: IMU batches of a moving array; WriteScan: scans
+//                   of a detection session); false once the stream is broken or finished.
+//   Read            the responses after `opened`, in order (estimate, rejected, gap, tracks); false
 //                   when the server has ended the stream.
 //   WritesDone      half-close: "finished". The server processes every accepted block, sends
 //                   the remaining estimates and ends the stream OK; the session closes.
@@ -64,6 +65,8 @@ class TrackStream {
   const std::string& session_key() const { return session_key_; }
 
   bool Write(const v1::SampleBlock& block);
+  bool WriteImu(const v1::ImuBatch& batch);  // moving-array sessions (before the blocks it covers)
+  bool WriteScan(const v1::Scan& scan);      // detection sessions: answered by a `tracks` response
   bool Read(v1::TrackResponse* response);
   void WritesDone();
   grpc::Status Finish();

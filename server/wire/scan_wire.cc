@@ -22,6 +22,14 @@ v1::TrackStatus StatusToProto(engine::tws::TrackStatus s) {
   return v1::TRACK_STATUS_UNSPECIFIED;
 }
 
+engine::tws::TrackStatus StatusFromProto(v1::TrackStatus s) {
+  switch (s) {
+    case v1::TRACK_STATUS_CONFIRMED: return engine::tws::TrackStatus::kConfirmed;
+    case v1::TRACK_STATUS_COASTING: return engine::tws::TrackStatus::kCoasting;
+    default: return engine::tws::TrackStatus::kTentative;
+  }
+}
+
 }  // namespace
 
 StatusOr<engine::Scan> DecodeScan(const v1::Scan& p) {
@@ -98,6 +106,37 @@ void TrackListToProto(const engine::ScanResult& result, uint64_t sequence, v1::T
   out->set_initiated(static_cast<uint32_t>(result.summary.initiated));
   out->set_deleted(static_cast<uint32_t>(result.summary.deleted));
   out->set_process_s(result.process_s);
+}
+
+engine::ScanResult TrackListFromProto(const v1::TrackList& p) {
+  engine::ScanResult result;
+  result.scan_index = p.scan_index();
+  result.time_s = p.time_s();
+  result.process_s = p.process_s();
+  result.summary.plots = static_cast<int>(p.plots());
+  result.summary.assigned = static_cast<int>(p.assigned());
+  result.summary.initiated = static_cast<int>(p.initiated());
+  result.summary.deleted = static_cast<int>(p.deleted());
+  for (const v1::TargetTrack& t : p.tracks()) {
+    engine::tws::TrackReport r;
+    r.id = t.id();
+    r.status = StatusFromProto(t.status());
+    r.position_m = Eigen::Vector3d(t.position_m().x(), t.position_m().y(), t.position_m().z());
+    r.velocity_mps = Eigen::Vector3d(t.velocity_mps().x(), t.velocity_mps().y(), t.velocity_mps().z());
+    if (t.covariance_size() == 36) {
+      for (int i = 0; i < 36; ++i) r.covariance(i / 6, i % 6) = t.covariance(i);
+    }
+    r.hits = static_cast<int>(t.hits());
+    r.consecutive_misses = static_cast<int>(t.consecutive_misses());
+    r.time_s = p.time_s();
+    if (r.status == engine::tws::TrackStatus::kConfirmed || r.status == engine::tws::TrackStatus::kCoasting) {
+      ++result.summary.confirmed;
+    } else {
+      ++result.summary.tentative;
+    }
+    result.tracks.push_back(r);
+  }
+  return result;
 }
 
 }  // namespace localizer::wire

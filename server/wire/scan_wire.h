@@ -21,5 +21,8 @@ void EncodeScan(const engine::Scan& scan, uint64_t sequence, v1::Scan* out);
 
 // A scan's result; total_s is the server's to set.
 void TrackListToProto(const engine::ScanResult& result, uint64_t sequence, v1::TrackList* out);
+// The inverse, for clients (summary fields the wire does not carry stay 0; tracks'
+// time_s is the list's).
+engine::ScanResult TrackListFromProto(const v1::TrackList& list);
 
 }  // namespace localizer::wire

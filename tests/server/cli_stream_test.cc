@@ -327,6 +327,36 @@ TEST_F(CliStreamTest, CliSimulateOverServerMatchesOfflineTrack) {
 #endif
 }
 
+// CLI: `experiment tws --server` runs the scans through a detection session; the scores are
+// the local run's (the same tracker behind the wire), and the round trips are reported.
+TEST_F(CliStreamTest, CliTwsExperimentOverServerScoresLikeTheLocalRun) {
+#ifndef LOCALIZER_CLI_BIN
+  GTEST_SKIP() << "LOCALIZER_CLI_BIN not defined by the build";
+#else
+  TempDir dir;
+  const auto read_lines = [&] {
+    std::ifstream in(dir.File("stdout.txt"));
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
+  };
+  const std::string args = "experiment tws --targets 8 --scans 25 --seed 3";
+  const auto [local_code, local_err] = RunCli(args, dir);
+  ASSERT_EQ(local_code, 0) << local_err;
+  const std::vector<std::string> local = read_lines();
+  const auto [code, err] = RunCli(args + " --server " + target_, dir);
+  ASSERT_EQ(code, 0) << err;
+  const std::vector<std::string> remote = read_lines();
+  // The header and every score line (through confirmed_tracks and plots_per_scan) agree.
+  ASSERT_GE(local.size(), 9u);
+  ASSERT_GE(remote.size(), 11u);
+  for (size_t i = 0; i < 9; ++i) EXPECT_EQ(remote[i], local[i]) << "line " << i;
+  EXPECT_EQ(remote[9].rfind("server ", 0), 0u) << remote[9];
+  EXPECT_EQ(remote[10].rfind("scan_round_trip_ms   p50 ", 0), 0u) << remote[10];
+  EXPECT_NE(local[5].find("identity_switches    0"), std::string::npos) << local[5];
+#endif
+}
+
 // (c) One block through Locate: the server's answer is engine::Locate's, and the fix is
 // within a physical bound of the truth.
 TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
