@@ -26,6 +26,8 @@ constexpr std::string_view kPage = R"html(<!DOCTYPE html>
   svg .sensor { fill: #1f77b4; }
   svg .track { stroke: #d62728; stroke-width: 2; fill: none; stroke-linejoin: round; }
   svg .latest { fill: #d62728; stroke: #fff; stroke-width: 1.5; }
+  svg .target rect { fill: #2ca02c; } svg .target.tentative rect { fill: #bbb; }
+  svg .target.coasting rect { fill: #ff7f0e; } svg .target text { font-size: 10px; }
 </style>
 </head>
 <body>
@@ -59,10 +61,11 @@ function tickStep(span) {
 function fmt(v) { return Math.abs(v) < 1e-9 ? "0" : Number(v.toPrecision(4)).toString(); }
 
 // One panel: axes a and b (0 x, 1 y, 2 z) of the sensors and the track, equal scale in metres.
-function drawPanel(svg, title, a, b, sensors, track) {
+function drawPanel(svg, title, a, b, sensors, track, targets) {
   while (svg.firstChild) svg.removeChild(svg.firstChild);
   const names = ["x", "y", "z"];
-  const pts = sensors.concat(track.map(p => p.position_m)).filter(p => p && p[a] !== null && p[b] !== null);
+  const pts = sensors.concat(track.map(p => p.position_m), targets.map(t => t.position_m))
+      .filter(p => p && p[a] !== null && p[b] !== null);
   let minA = Infinity, maxA = -Infinity, minB = Infinity, maxB = -Infinity;
   for (const p of pts) {
     minA = Math.min(minA, p[a]); maxA = Math.max(maxA, p[a]);
@@ -102,6 +105,13 @@ function drawPanel(svg, title, a, b, sensors, track) {
     const last = line[line.length - 1].position_m;
     el("svg:circle", {class: "latest", cx: X(last[a]), cy: Y(last[b]), r: 6}, svg);
   }
+  // Detection sessions: each target track after the latest scan, labelled with its id.
+  targets.filter(t => t.position_m[a] !== null && t.position_m[b] !== null).forEach(t => {
+    const g = el("svg:g", {class: "target " + t.status}, svg);
+    el("svg:rect", {x: X(t.position_m[a]) - 4, y: Y(t.position_m[b]) - 4, width: 8, height: 8}, g);
+    el("svg:text", {x: X(t.position_m[a]) + 6, y: Y(t.position_m[b]) - 6}, g, String(t.id));
+    el("svg:title", {}, g, `track ${t.id} (${t.status}): (${t.position_m.map(fmt).join(", ")}) m`);
+  });
 }
 
 const cards = new Map();  // session id -> {root, heading, meta, xy, xz}
@@ -128,12 +138,20 @@ function render(doc) {
     let meta = `${s.backend} / ${s.filter_type} / ${s.attached ? "attached" : "detached"} / ` +
                `${s.frames} frames, ${s.track.length} track points`;
     if (last) meta += ` / t ${fmt(last.t_s)} s at (${last.position_m.map(v => v === null ? "?" : v.toFixed(2)).join(", ")}) m`;
+    if (s.kind === "detections") {
+      const confirmed = s.targets.filter(t => t.status !== "tentative").length;
+      meta = `track-while-scan / ${s.attached ? "attached" : "detached"} / ${s.frames} scans, ` +
+             `${confirmed} confirmed of ${s.targets.length} tracks`;
+    }
+    if (s.platform) {
+      meta += " / platform roll, pitch, yaw (" + s.platform.euler_rad.map(v => v === null ? "?" : (v * 180 / Math.PI).toFixed(1)).join(", ") + ") deg";
+    }
     if (s.model_probabilities.length) {
       meta += " / models " + s.model_probabilities.map(m => `${m.model} ${(100 * m.probability).toFixed(0)}%`).join(" ");
     }
     c.meta.textContent = meta;
-    drawPanel(c.xy, "x-y (top view)", 0, 1, s.sensors_m, s.track);
-    drawPanel(c.xz, "x-z (side view)", 0, 2, s.sensors_m, s.track);
+    drawPanel(c.xy, "x-y (top view)", 0, 1, s.sensors_m, s.track, s.targets);
+    drawPanel(c.xz, "x-z (side view)", 0, 2, s.sensors_m, s.track, s.targets);
   }
   for (const [id, c] of cards) if (!seen.has(id)) { c.root.remove(); cards.delete(id); }
   const shown = doc.sessions.length ? `${doc.sessions_total} session(s)` :

@@ -324,6 +324,7 @@ std::vector<ResponsePtr> SessionHost::ProcessScan(WorkItem& item) {
   Bump(metrics_->track_updates, static_cast<double>(result.summary.track_updates));
   Observe(metrics_->scan_tracker, result.process_s);
   Observe(metrics_->scan_total, total_s);
+  track_.SetTargets(result.tracks);
   out.push_back(std::move(response));
   return out;
 }

@@ -25,14 +25,29 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
   s["id"] = host.id();
   s["label"] = host.label();
   s["backend"] = host.backend();
-  s["filter_type"] = config.filter_type;
+  s["kind"] = host.detections() ? "detections" : "samples";
+  s["filter_type"] = host.detections() ? "tws" : config.filter_type;
   s["attached"] = info.attached();
+  // A moving array's sensors where its latest pose put them (in the body frame until then).
   json sensors = json::array();
-  for (const engine::Vec3& p : config.sensors_m) {
+  for (const engine::Vec3& body : config.sensors_m) {
+    const engine::Vec3 p = track.platform ? engine::Vec3(track.platform->body_to_world * body + track.platform->origin_m)
+                                          : body;
     const double xyz[3] = {p.x(), p.y(), p.z()};
     sensors.push_back(Triple(xyz));
   }
   s["sensors_m"] = std::move(sensors);
+  if (track.platform) {
+    const Eigen::Quaterniond& q = track.platform->body_to_world;
+    s["platform"] = {{"body_to_world_wxyz", {Number(q.w()), Number(q.x()), Number(q.y()), Number(q.z())}},
+                     {"euler_rad", Triple(track.platform->euler_rad.data())},
+                     {"origin_m", Triple(track.platform->origin_m.data())}};
+  }
+  json targets = json::array();
+  for (const TargetPoint& t : track.targets) {
+    targets.push_back({{"id", t.id}, {"status", t.status}, {"position_m", Triple(t.position_m)}});
+  }
+  s["targets"] = std::move(targets);
   s["reference_sensor"] = config.reference_sensor;
   s["sample_rate_hz"] = Number(config.sample_rate_hz);
   s["sound_speed_mps"] = Number(config.sound_speed_mps);

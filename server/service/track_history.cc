@@ -24,6 +24,7 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++frames_;
   model_probabilities_ = estimate.model_probabilities;
+  if (estimate.platform) platform_ = estimate.platform;
   if (!estimate.initialised) return;
   ++initialised_frames_;
   if (ring_.size() < capacity_) {
@@ -34,6 +35,21 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
   }
 }
 
+void TrackHistory::SetTargets(const std::vector<engine::tws::TrackReport>& tracks) {
+  std::vector<TargetPoint> targets;
+  targets.reserve(tracks.size());
+  for (const engine::tws::TrackReport& t : tracks) {
+    TargetPoint p;
+    p.id = t.id;
+    p.status = engine::tws::TrackStatusName(t.status);
+    for (int i = 0; i < 3; ++i) p.position_m[i] = t.position_m(i);
+    targets.push_back(p);
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++frames_;
+  targets_ = std::move(targets);
+}
+
 TrackSnapshot TrackHistory::Snapshot() const {
   TrackSnapshot snapshot;
   snapshot.capacity = capacity_;
@@ -41,6 +57,8 @@ TrackSnapshot TrackHistory::Snapshot() const {
   snapshot.frames = frames_;
   snapshot.initialised_frames = initialised_frames_;
   snapshot.model_probabilities = model_probabilities_;
+  snapshot.platform = platform_;
+  snapshot.targets = targets_;
   snapshot.points.reserve(ring_.size());
   // Oldest first: once the ring is full, the oldest point sits at next_.
   for (size_t k = 0; k < ring_.size(); ++k) snapshot.points.push_back(ring_[(next_ + k) % ring_.size()]);

@@ -13,9 +13,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "engine/core/estimate.h"
+#include "engine/tws/track_report.h"
 
 namespace localizer::server {
 
@@ -28,9 +30,18 @@ struct TrackPoint {
   bool reinitialised = false;     // the tracker restarted from a new fix at this frame
 };
 
+// A detection session's target after its latest scan.
+struct TargetPoint {
+  uint64_t id = 0;
+  const char* status = "";     // "tentative" | "confirmed" | "coasting"
+  double position_m[3] = {};
+};
+
 struct TrackSnapshot {
   std::vector<TrackPoint> points;  // oldest first, at most capacity
   std::vector<engine::ModelProbability> model_probabilities;  // of the latest estimate
+  std::optional<engine::PlatformAttitude> platform;  // moving arrays: the latest pose
+  std::vector<TargetPoint> targets;  // detection sessions: the latest scan's tracks
   uint64_t frames = 0;             // estimates appended, initialised or not
   uint64_t initialised_frames = 0;
   size_t capacity = 0;
@@ -45,6 +56,8 @@ class TrackHistory final {
   TrackHistory& operator=(const TrackHistory&) = delete;
 
   void Append(const engine::Estimate& estimate);
+  // Detection sessions: the tracks after the latest scan replace the previous ones.
+  void SetTargets(const std::vector<engine::tws::TrackReport>& tracks);
   TrackSnapshot Snapshot() const;
   size_t capacity() const { return capacity_; }
 
@@ -54,6 +67,8 @@ class TrackHistory final {
   std::vector<TrackPoint> ring_;  // guarded by mutex_; grows to capacity_, then wraps
   size_t next_ = 0;               // guarded by mutex_; slot the next point overwrites once full
   std::vector<engine::ModelProbability> model_probabilities_;  // guarded by mutex_
+  std::optional<engine::PlatformAttitude> platform_;           // guarded by mutex_
+  std::vector<TargetPoint> targets_;                           // guarded by mutex_
   uint64_t frames_ = 0;              // guarded by mutex_
   uint64_t initialised_frames_ = 0;  // guarded by mutex_
 };

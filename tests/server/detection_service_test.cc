@@ -7,7 +7,10 @@
 
 #include "engine/pipeline/scan_session.h"
 #include "engine/sim/radar_scan.h"
+#include <nlohmann/json.hpp>
+
 #include "server/wire/scan_wire.h"
+#include "tests/server/http_client.h"
 #include "tests/server/service_fixture.h"
 
 namespace localizer::server::testing {
@@ -105,6 +108,35 @@ TEST_F(DetectionServiceTest, TrackListsEqualTheOfflineRunAndEightTargetsAreConfi
     if (t.status() == v1::TRACK_STATUS_CONFIRMED || t.status() == v1::TRACK_STATUS_COASTING) ++confirmed;
   }
   EXPECT_EQ(confirmed, 8);
+}
+
+TEST_F(DetectionServiceTest, LiveViewJsonListsTheLatestTargets) {
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(OpenDetections()));
+  for (size_t k = 0; k < frames_.size(); ++k) ASSERT_TRUE(stream.Send(ScanRequest(frames_[k].scan, k)));
+  ASSERT_TRUE(stream.WaitFor([&](const auto& rs) {
+    size_t lists = 0;
+    for (const auto& r : rs) lists += r.has_tracks() ? 1 : 0;
+    return lists == frames_.size();
+  }));
+  const auto response = localizer::testing::Request(server_->metrics_port(), "GET", "/sessions");
+  ASSERT_EQ(response.status, 200);
+  const nlohmann::json doc = nlohmann::json::parse(response.body);
+  ASSERT_EQ(doc.at("sessions").size(), 1u);
+  const auto& session = doc.at("sessions")[0];
+  EXPECT_EQ(session.at("kind"), "detections");
+  EXPECT_EQ(session.at("frames"), frames_.size());
+  const v1::TrackList last = Lists(stream).back();
+  const auto& targets = session.at("targets");
+  ASSERT_EQ(targets.size(), static_cast<size_t>(last.tracks_size()));
+  for (int i = 0; i < last.tracks_size(); ++i) {
+    EXPECT_EQ(targets[i].at("id"), last.tracks(i).id());
+    EXPECT_DOUBLE_EQ(targets[i].at("position_m")[0].get<double>(), last.tracks(i).position_m().x());
+    EXPECT_EQ(targets[i].at("status"), last.tracks(i).status() == v1::TRACK_STATUS_TENTATIVE ? "tentative"
+                                       : last.tracks(i).status() == v1::TRACK_STATUS_CONFIRMED ? "confirmed"
+                                                                                              : "coasting");
+  }
+  ASSERT_TRUE(stream.Close().ok());
 }
 
 TEST_F(DetectionServiceTest, BadScanIsRefusedInBandAndChangesNothing) {

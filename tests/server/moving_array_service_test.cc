@@ -5,7 +5,10 @@
 #include <cmath>
 
 #include "engine/sim/platform_motion.h"
+#include <nlohmann/json.hpp>
+
 #include "server/wire/imu_wire.h"
+#include "tests/server/http_client.h"
 #include "tests/server/service_fixture.h"
 
 namespace localizer::server::testing {
@@ -96,6 +99,28 @@ TEST_F(MovingArrayServiceTest, StreamEqualsTheOfflineRunAndCarriesThePose) {
   // The yaw reported follows the buoy's 0.3 rad/s turn (yaw starts at 0: no magnetometer).
   const v1::Estimate& last = got.back();
   EXPECT_NEAR(last.platform().euler_rad().z(), 0.3 * last.t_s(), 0.05);
+}
+
+TEST_F(MovingArrayServiceTest, LiveViewDrawsTheSensorsWhereThePoseMovedThem) {
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(moving_.base.OpenRequest()));
+  for (int64_t k = 1; k <= moving_.base.BlockCount(kBlock); ++k) {
+    ASSERT_TRUE(stream.Send(ImuRequest(moving_.imu_per_block[static_cast<size_t>(k - 1)], static_cast<uint64_t>(k))));
+    ASSERT_TRUE(stream.Send(moving_.base.BlockRequest(k, kBlock)));
+  }
+  ASSERT_TRUE(stream.WaitForEstimates(moving_.base.offline.size()));
+  const auto response = localizer::testing::Request(server_->metrics_port(), "GET", "/sessions");
+  ASSERT_EQ(response.status, 200);
+  const nlohmann::json doc = nlohmann::json::parse(response.body);
+  const auto& session = doc.at("sessions")[0];
+  const engine::PlatformAttitude& pose = *moving_.base.offline.back().platform;
+  ASSERT_TRUE(session.contains("platform"));
+  EXPECT_DOUBLE_EQ(session.at("platform").at("body_to_world_wxyz")[0].get<double>(), pose.body_to_world.w());
+  const engine::Vec3 moved = pose.body_to_world * moving_.base.config.sensors_m[1] + pose.origin_m;
+  EXPECT_NEAR(session.at("sensors_m")[1][0].get<double>(), moved.x(), 1e-12);
+  EXPECT_NEAR(session.at("sensors_m")[1][1].get<double>(), moved.y(), 1e-12);
+  EXPECT_EQ(session.at("kind"), "samples");
+  ASSERT_TRUE(stream.Close().ok());
 }
 
 TEST_F(MovingArrayServiceTest, BadImuBatchIsRefusedInBandAndTheSessionGoesOn) {
