@@ -35,7 +35,8 @@ constexpr std::string_view kPage = R"html(<!DOCTYPE html>
 <div id="status">loading /sessions ...</div>
 <div class="legend"><span style="color:#1f77b4">&#9679;</span> sensor &nbsp;
   <span style="color:#d62728">&#9473;</span> estimated track (last fixes) &nbsp;
-  <span style="color:#d62728">&#9679;</span> latest estimate &nbsp; axes in metres</div>
+  <span style="color:#d62728">&#9679;</span> latest estimate &nbsp;
+  <span style="color:#2ca02c">&#9632;</span> target track (detection sessions) &nbsp; axes in metres</div>
 <div id="sessions"></div>
 <p><a href="/metrics">/metrics</a> (Prometheus) &middot; <a href="/sessions">/sessions</a> (JSON)</p>
 <script>

@@ -6,6 +6,8 @@ decoded and checked for the track's colour).
 Environment: LOCALIZER_SERVER and LOCALIZER_CLI (the binaries; set by CTest),
 LOCALIZER_CHROMIUM (optional; else `chromium` or `chromium-browser` on PATH),
 LIVE_VIEW_SCREENSHOT (optional: copy the screenshot there, e.g. docs/live_view.png).
+DetectionLiveViewTest also needs the Python client (LOCALIZER_PY_CLIENT_DIR, LOCALIZER_PY_GEN)
+and draws a detection session's targets (LIVE_VIEW_RADAR_SCREENSHOT: copy of its screenshot).
 Standard library only; run with /usr/bin/python3 -m unittest -v live_view_test.
 """
 import json
@@ -185,6 +187,75 @@ class LiveViewTest(unittest.TestCase):
         self.assertGreater(track, 100, "no track-coloured pixels in the screenshot")
         if os.environ.get("LIVE_VIEW_SCREENSHOT"):
             shutil.copyfile(shot, os.environ["LIVE_VIEW_SCREENSHOT"])
+
+
+def python_client():
+    """The localizer_client package, or None when its directory or stubs are missing."""
+    client_dir = os.environ.get("LOCALIZER_PY_CLIENT_DIR")
+    if not client_dir:
+        return None
+    import sys
+    sys.path.insert(0, client_dir)
+    try:
+        import localizer_client
+    except ImportError:
+        return None
+    return localizer_client
+
+
+LC = python_client()
+
+
+@unittest.skipUnless(SERVER and os.access(SERVER, os.X_OK), f"no localizer-server (LOCALIZER_SERVER={SERVER!r})")
+@unittest.skipUnless(LC, "no Python client (LOCALIZER_PY_CLIENT_DIR / generated stubs)")
+@unittest.skipUnless(CHROMIUM, "no chromium (apt-get install chromium) for the headless browser check")
+class DetectionLiveViewTest(unittest.TestCase):
+    """A detection session kept open: the page draws its targets with their ids."""
+
+    def setUp(self):
+        self.tmp = Path(tempfile.mkdtemp(prefix="localizer-ops-radar-"))
+        self.addCleanup(shutil.rmtree, self.tmp, True)
+        self.server = ops_util.Server(self.tmp, "server", ["--backend", "cpu"])
+        self.addCleanup(self.server.stop)
+        self.channel = LC.connect(self.server.grpc_target)
+        self.addCleanup(self.channel.close)
+
+    def test_chromium_draws_the_targets(self):
+        import numpy as np
+        session = LC.TrackSession(self.channel, LC.detection_config(label="radar (live view test)"), timeout=60)
+        self.addCleanup(session.cancel)
+        # Four targets 2 km apart crossing the radar's field at 150 m/s, noiseless plots.
+        starts = np.array([[8000.0, -3000.0], [8000.0, -1000.0], [8000.0, 1000.0], [8000.0, 3000.0]])
+        velocity = np.array([-150.0, 0.0])
+        scans = 8
+        for k in range(scans):
+            xy = starts + velocity * 1.8182 * k
+            session.send_scan(LC.scan(k, 1.8182 * k, np.hypot(xy[:, 0], xy[:, 1]), np.arctan2(xy[:, 1], xy[:, 0])))
+        # Read the answers without ending the stream (leaving the generator would half-close
+        # it, and a finished session leaves the view).
+        answers = session.track_lists()
+        lists = [next(answers) for _ in range(scans)]
+        self.assertEqual([tl.sequence for tl in lists], list(range(scans)))
+        _, doc = get_json(f"http://{self.server.metrics_target}/sessions")
+        targets = doc["sessions"][0]["targets"]
+        self.assertEqual(doc["sessions"][0]["kind"], "detections")
+        self.assertEqual(sorted(t["id"] for t in targets if t["status"] == "confirmed"), [1, 2, 3, 4])
+
+        profile = self.tmp / "chromium-profile"
+        common = CHROMIUM_FLAGS + [f"--user-data-dir={profile}", "--virtual-time-budget=5000"]
+        env = dict(os.environ, HOME=str(self.tmp))
+        base = f"http://{self.server.metrics_target}/"
+        dom = subprocess.run([CHROMIUM] + common + ["--dump-dom", base], capture_output=True, timeout=120, env=env)
+        html = dom.stdout.decode(errors="replace")
+        # Two panels, four confirmed targets each, labelled with their ids.
+        self.assertEqual(html.count('class="target confirmed"'), 2 * 4,
+                         f"DOM:\n{html[:3000]}\nchromium stderr:\n{dom.stderr.decode(errors='replace')[-2000:]}")
+        self.assertIn("4 confirmed of 4 tracks", html)
+        if os.environ.get("LIVE_VIEW_RADAR_SCREENSHOT"):
+            shot = self.tmp / "radar.png"
+            subprocess.run([CHROMIUM] + common + [f"--screenshot={shot}", base], capture_output=True, timeout=120,
+                           env=env)
+            shutil.copyfile(shot, os.environ["LIVE_VIEW_RADAR_SCREENSHOT"])
 
 
 if __name__ == "__main__":
