@@ -16,7 +16,7 @@
 
 #include "engine/attitude/attitude_error.h"
 #include "engine/attitude/attitude_filter.h"
-#include "tests/attitude/broad_trial.h"
+#include "clients/io/imu_csv.h"
 
 namespace localizer::engine {
 namespace {
@@ -28,7 +28,7 @@ struct TrialResult {
   double mean_signed_heading_rad = 0.0;
 };
 
-TrialResult RunTrial(const testing::BroadTrial& trial, const AttitudeFilterOptions& options) {
+TrialResult RunTrial(const io::ImuRecording& trial, const AttitudeFilterOptions& options) {
   auto filter = CreateAttitudeFilter(options);
   EXPECT_TRUE(filter.ok());
   std::vector<Eigen::Quaterniond> estimates;
@@ -54,9 +54,9 @@ TrialResult RunTrial(const testing::BroadTrial& trial, const AttitudeFilterOptio
 class BroadTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(BroadTest, MeetsTheGoalsWithDefaults) {
-  testing::BroadTrial trial;
-  std::string error;
-  ASSERT_TRUE(testing::ReadBroadTrial(GetParam(), &trial, &error)) << error;
+  auto read = io::ReadImuCsv(GetParam(), /*need_mag=*/true, /*need_truth=*/true);
+  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  const io::ImuRecording& trial = *read;
   ASSERT_GT(trial.samples.size(), 10000u);
   const std::string name = GetParam().substr(GetParam().rfind('/') + 1);
   for (const AttitudeFilterKind kind : {AttitudeFilterKind::kQuaternion, AttitudeFilterKind::kEuler}) {
@@ -79,7 +79,13 @@ TEST_P(BroadTest, MeetsTheGoalsWithDefaults) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Trials, BroadTest, ::testing::ValuesIn(testing::BroadTrialPaths()),
+std::vector<std::string> BroadTrialPaths() {
+  const std::string dir = std::string(LOCALIZER_DATA_DIR) + "/broad-subset/";
+  return {dir + "02_undisturbed_slow_rotation_B.csv", dir + "16_undisturbed_fast_translation_B.csv",
+          dir + "25_disturbed_tapping_B.csv"};
+}
+
+INSTANTIATE_TEST_SUITE_P(Trials, BroadTest, ::testing::ValuesIn(BroadTrialPaths()),
                          [](const ::testing::TestParamInfo<std::string>& trial_info) {
                            const std::string& p = trial_info.param;
                            return "trial_" + p.substr(p.rfind('/') + 1, 2);
