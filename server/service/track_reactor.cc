@@ -96,54 +96,48 @@ void TrackReactor::Attach(std::shared_ptr<SessionHost> host, bool resumed, std::
   ReadNext();
 }
 
-void TrackReactor::HandleBlock() {
-  if (!host_) {
-    return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                                   "a block arrived before open or resume; the first request must open a session"));
+bool TrackReactor::NeedsSession(const char* what) {
+  if (host_) return true;
+  FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                          std::string(what) + " arrived before open or resume; the first request must open a session"));
+  return false;
+}
+
+void TrackReactor::OfferLocked(bool room) {
+  if (room) {
+    ReadNext();
+  } else {
+    read_paused_ = true;  // the session's queue is full: InputSpaceLocked resumes reading
   }
+}
+
+void TrackReactor::HandleBlock() {
+  if (!NeedsSession("a block")) return;
   const auto received = Clock::now();
   const v1::SampleBlock& block = request_.block();
   std::string reason;
   const Status decoded = wire::DecodeBlock(block, host_->block_limits(), &decoded_, &reason);
   std::lock_guard<std::mutex> lock(host_->mutex());
   if (finished_ || input_done_) return;  // draining: blocks are no longer accepted
-  if (host_->OfferLocked(&decoded_, decoded, reason, block.sequence(), received)) {
-    ReadNext();
-  } else {
-    read_paused_ = true;
-  }
+  OfferLocked(host_->OfferLocked(&decoded_, decoded, reason, block.sequence(), received));
 }
 
 void TrackReactor::HandleImu() {
-  if (!host_) {
-    return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                                   "an imu batch arrived before open or resume; the first request must open a session"));
-  }
+  if (!NeedsSession("an imu batch")) return;
   const auto received = Clock::now();
   auto decoded = wire::DecodeImuBatch(request_.imu());
   std::lock_guard<std::mutex> lock(host_->mutex());
   if (finished_ || input_done_) return;
-  if (host_->OfferImuLocked(std::move(decoded), request_.imu().sequence(), received)) {
-    ReadNext();
-  } else {
-    read_paused_ = true;
-  }
+  OfferLocked(host_->OfferImuLocked(std::move(decoded), request_.imu().sequence(), received));
 }
 
 void TrackReactor::HandleScan() {
-  if (!host_) {
-    return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                                   "a scan arrived before open or resume; the first request must open a session"));
-  }
+  if (!NeedsSession("a scan")) return;
   const auto received = Clock::now();
   auto decoded = wire::DecodeScan(request_.scan());
   std::lock_guard<std::mutex> lock(host_->mutex());
   if (finished_ || input_done_) return;
-  if (host_->OfferScanLocked(std::move(decoded), request_.scan().sequence(), received)) {
-    ReadNext();
-  } else {
-    read_paused_ = true;
-  }
+  OfferLocked(host_->OfferScanLocked(std::move(decoded), request_.scan().sequence(), received));
 }
 
 void TrackReactor::InputSpaceLocked() {

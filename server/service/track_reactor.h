@@ -48,6 +48,10 @@ class TrackReactor final : public grpc::ServerBidiReactor<v1::TrackRequest, v1::
  private:
   void HandleOpen(const v1::SessionConfig& config);
   void HandleResume(const v1::ResumeSession& resume);
+  // False (the stream finished FAILED_PRECONDITION) when no open/resume came first.
+  bool NeedsSession(const char* what);
+  // After an Offer*Locked: read on, or pause reading until the session has room.
+  void OfferLocked(bool room);
   void HandleBlock();
   void HandleImu();   // moving-array sessions: IMU samples in order with the blocks
   void HandleScan();  // detection sessions: one scan of plots -> a track list
