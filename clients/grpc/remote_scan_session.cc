@@ -55,7 +55,7 @@ Status RemoteScanSession::Process(const engine::Scan& scan, engine::ScanResult* 
 }
 
 Status RemoteScanSession::Close() {
-  if (ended_) return end_status_.ok() ? Status::Ok() : end_status_;
+  if (ended_) return end_status_;
   stream_->WritesDone();
   v1::TrackResponse ignored;
   while (stream_->Read(&ignored)) {

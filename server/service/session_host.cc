@@ -249,6 +249,7 @@ bool SessionHost::OfferScanLocked(StatusOr<engine::Scan> decoded, uint64_t scan_
   } else {
     item.scan = std::move(decoded).value();
     item.scan_sequence = scan_sequence;
+    last_block_ = received;  // a detection session's activity is its scans
   }
   return QueueLocked(std::move(item));
 }

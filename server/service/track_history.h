@@ -42,7 +42,8 @@ struct TrackSnapshot {
   std::vector<engine::ModelProbability> model_probabilities;  // of the latest estimate
   std::optional<engine::PlatformAttitude> platform;  // moving arrays: the latest pose
   std::vector<TargetPoint> targets;  // detection sessions: the latest scan's tracks
-  uint64_t frames = 0;             // estimates appended, initialised or not
+  uint64_t frames = 0;             // estimates appended, initialised or not (detection
+                                   // sessions: scans)
   uint64_t initialised_frames = 0;
   size_t capacity = 0;
 };

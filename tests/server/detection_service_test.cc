@@ -126,6 +126,8 @@ TEST_F(DetectionServiceTest, LiveViewJsonListsTheLatestTargets) {
   const auto& session = doc.at("sessions")[0];
   EXPECT_EQ(session.at("kind"), "detections");
   EXPECT_EQ(session.at("frames"), frames_.size());
+  // Scans count as activity: idle since the last one, not since the open.
+  EXPECT_LT(session.at("idle_s").get<double>(), session.at("age_s").get<double>());
   const v1::TrackList last = Lists(stream).back();
   const auto& targets = session.at("targets");
   ASSERT_EQ(targets.size(), static_cast<size_t>(last.tracks_size()));
