@@ -62,6 +62,7 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   ~SessionHost();
 
   const std::string& id() const { return id_; }
+  const std::string& resume_token() const { return token_; }  // a secret: never log it
   const std::string& label() const { return label_; }
   const std::string& backend() const { return backend_; }
   // The session's config (fixed at creation, so readable from any thread).

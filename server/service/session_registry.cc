@@ -5,19 +5,12 @@
 #endif
 
 #include "server/service/log.h"
+#include "server/service/secure_random.h"
 
 namespace localizer::server {
-namespace {
-
-uint64_t SeedFromDevice() {
-  std::random_device device;
-  return (static_cast<uint64_t>(device()) << 32) ^ device();
-}
-
-}  // namespace
 
 SessionRegistry::SessionRegistry(RegistryOptions options, WorkerPool* pool, ServiceMetrics* metrics)
-    : options_(std::move(options)), pool_(pool), metrics_(metrics), random_(SeedFromDevice()) {
+    : options_(std::move(options)), pool_(pool), metrics_(metrics) {
   sweeper_ = std::thread([this] { SweepLoop(); });
 }
 
@@ -31,16 +24,6 @@ SessionRegistry::~SessionRegistry() {
   for (const auto& host : Snapshot()) {
     host->Close(grpc::Status(grpc::StatusCode::UNAVAILABLE, "server shutting down"));
   }
-}
-
-std::string SessionRegistry::RandomHex(int digits) {
-  static constexpr char kHex[] = "0123456789abcdef";
-  std::string s;
-  while (static_cast<int>(s.size()) < digits) {
-    uint64_t bits = random_();
-    for (int i = 0; i < 16 && static_cast<int>(s.size()) < digits; ++i, bits >>= 4) s.push_back(kHex[bits & 15]);
-  }
-  return s;
 }
 
 StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionConfig& config) {
@@ -66,17 +49,21 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
     if (!made.ok()) return made.status();
     session = std::move(made).value();
   }
+  auto token = SecureRandomHex(32);
+  if (!token.ok()) return token.status();
   std::lock_guard<std::mutex> lock(mutex_);
   if (static_cast<int>(sessions_.size()) >= options_.max_sessions) {
     return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) + " sessions");
   }
   std::string id;
   do {
-    id = RandomHex(16);
+    auto drawn = SecureRandomHex(16);
+    if (!drawn.ok()) return drawn.status();
+    id = *std::move(drawn);
   } while (sessions_.count(id) != 0);
-  auto host = scans ? std::make_shared<SessionHost>(id, RandomHex(32), config.label(), std::move(scans),
+  auto host = scans ? std::make_shared<SessionHost>(id, *token, config.label(), std::move(scans),
                                                     options_.host, pool_, metrics_)
-                    : std::make_shared<SessionHost>(id, RandomHex(32), config.label(), std::move(session),
+                    : std::make_shared<SessionHost>(id, *token, config.label(), std::move(session),
                                                     options_.host, pool_, metrics_);
   sessions_[id] = host;
   return host;

@@ -1,8 +1,9 @@
 // The sessions one server instance holds, by id; creates them, finds them for a resume,
 // ends them (CloseSession, expiry, shutdown).
 //
-// A session id is 16 random hex digits; its resume token 32 more, compared in constant
-// time. A detached session (its stream gone) is kept for `ttl_s`, then closed by a sweep
+// A session id is 16 hex digits (64 bits) and its resume token 32 (128 bits), drawn
+// independently from the operating system's CSPRNG (secure_random.h): seeing any number of
+// ids and tokens tells nothing of another session's. Tokens are compared in constant time. A detached session (its stream gone) is kept for `ttl_s`, then closed by a sweep
 // that runs every ~0.25 s on a thread of its own (which also hands the allocator's free
 // pages back to the system every memory_trim_s, so RSS follows the memory in use).
 // Thread-safe. Lock order: a session's mutex may be held when calling Forget; the
@@ -14,7 +15,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -62,7 +62,6 @@ class SessionRegistry final {
 
  private:
   void SweepLoop();
-  std::string RandomHex(int digits);  // requires mutex_
 
   const RegistryOptions options_;
   WorkerPool* const pool_;
@@ -70,7 +69,6 @@ class SessionRegistry final {
 
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<SessionHost>> sessions_;  // guarded by mutex_
-  std::mt19937_64 random_;  // seeded from std::random_device; ids, not numerics
   bool draining_ = false;
   bool stopping_ = false;
   std::condition_variable sweep_wake_;
