@@ -43,6 +43,20 @@ struct Estimate {
   double t_s = 0.0;
   bool initialised = false;    // false until the tracker has a first fix (state then zero)
   bool reinitialised = false;  // true on the frame the tracker was reset after divergence
+  // Source presence (engine/acquisition/presence.h): whether this frame holds a source, and
+  // the detection statistic behind the decision (the spatial spectrum's peak over its
+  // noise-only spread; present when statistic >= threshold, the threshold set by the
+  // session's per-frame false-alarm probability). Without a source the tracker predicts
+  // but does not update; after SessionConfig::source_timeout_s the track is dropped.
+  bool source_present = false;
+  double presence_statistic = 0.0;
+  double presence_threshold = 0.0;
+  // Several position hypotheses fit the data (e.g. the two exact TDOA solutions of a
+  // 4-sensor array): `state` is the strongest, `covariance` covers all of them (their
+  // spread about `state` included), `modes` counts them. modes = 1 when resolved, 0 when
+  // not initialised.
+  bool ambiguous = false;
+  int modes = 0;
   Vec6 state = Vec6::Zero();   // (x, y, z, vx, vy, vz): m, m/s
   Mat6 covariance = Mat6::Zero();
   double ess = 0.0;            // effective sample size after the update (particle filter)

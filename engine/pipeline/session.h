@@ -70,6 +70,20 @@ struct SessionConfig {
   Vec3 init_region_min_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   Vec3 init_region_max_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   int divergence_window = 8;          // frames averaged by the divergence test
+  // Physical bounds on the source position: a box whose sides may be infinite (unbounded;
+  // the default on every side). Particles, fixes and acquisition candidates outside it are
+  // impossible. A water column: bounds_max_m.z() = the surface, bounds_min_m.z() = the bottom.
+  Vec3 bounds_min_m = Vec3::Constant(-std::numeric_limits<double>::infinity());
+  Vec3 bounds_max_m = Vec3::Constant(std::numeric_limits<double>::infinity());
+  // Acquisition (engine/acquisition): the volume searched for a source when there is no
+  // trustworthy track, a sphere of this radius about the array centre intersected with the
+  // bounds (0: 10 apertures).
+  double search_radius_m = 0.0;
+  // Source presence: the per-frame false-alarm probability the presence test is set for,
+  // in (0, 0.1]; and how long a track coasts with no source heard before it is dropped and
+  // acquisition restarts (> 0).
+  double presence_false_alarm = 1e-3;
+  double source_timeout_s = 2.0;
   // Moving array (platform_pose.h): sensors_m are in the platform's body frame (the IMU's
   // axes) and the session is fed IMU samples (AddImu); each frame's TDOA model uses the
   // sensors rotated by the platform's attitude at that frame and moved to its origin.

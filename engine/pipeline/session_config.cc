@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -95,6 +96,24 @@ Status SessionConfig::Validate() const {
   if (region_set && (!init_region_min_m.allFinite() || !init_region_max_m.allFinite() ||
                      (init_region_max_m - init_region_min_m).minCoeff() < 0.0)) {
     return InvalidArgument("init_region_min_m/init_region_max_m must both be finite with min <= max");
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double lo = bounds_min_m(i), hi = bounds_max_m(i);
+    if (std::isnan(lo) || std::isnan(hi) || lo == std::numeric_limits<double>::infinity() ||
+        hi == -std::numeric_limits<double>::infinity() || !(lo < hi) ||
+        (std::isfinite(lo) && std::abs(lo) > 1e7) || (std::isfinite(hi) && std::abs(hi) > 1e7)) {
+      return InvalidArgument("bounds on axis " + std::to_string(i) + " must be lo < hi, each finite within 1e7 m or " +
+                             "unbounded (-inf / +inf), got [" + Num(lo) + ", " + Num(hi) + "]");
+    }
+  }
+  if (!(search_radius_m >= 0.0) || search_radius_m > 1e7) {
+    return InvalidArgument("search_radius_m must be in [0, 1e7], got " + Num(search_radius_m));
+  }
+  if (!(presence_false_alarm > 0.0) || presence_false_alarm > 0.1) {
+    return InvalidArgument("presence_false_alarm must be in (0, 0.1], got " + Num(presence_false_alarm));
+  }
+  if (!(source_timeout_s > 0.0) || source_timeout_s > 1e6) {
+    return InvalidArgument("source_timeout_s must be in (0, 1e6], got " + Num(source_timeout_s));
   }
   return filter.Validate();
 }
