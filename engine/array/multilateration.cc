@@ -53,7 +53,8 @@ Fix Refine(const ArrayGeometry& array, Vec3 s, const Eigen::VectorXd& d,
   return fix;
 }
 
-// Closed-form candidates: s = a + b r with |s| = r (reference sensor at the origin).
+}  // namespace
+
 std::vector<Vec3> ClosedFormCandidates(const ArrayGeometry& array, const Eigen::VectorXd& d) {
   const int pairs = array.pair_count();
   const Vec3& ref = array.sensor_m(array.reference_sensor());
@@ -93,7 +94,6 @@ std::vector<Vec3> ClosedFormCandidates(const ArrayGeometry& array, const Eigen::
   return candidates;
 }
 
-}  // namespace
 
 Mat3 TdoaPositionCrlb(const ArrayGeometry& array, const Vec3& source_m, double tdoa_sigma_s) {
   const Eigen::MatrixXd h = array.TdoaJacobian(source_m);

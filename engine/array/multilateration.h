@@ -15,6 +15,8 @@
 // Cost: a few hundred flops per iteration, ~10 iterations. Thread-safe (pure function).
 #pragma once
 
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "engine/array/array_geometry.h"
@@ -41,6 +43,11 @@ struct MultilaterationOptions {
 // if no candidate converges to a finite position.
 StatusOr<Fix> Multilaterate(const ArrayGeometry& array, const Eigen::VectorXd& tdoa_s,
                             const MultilaterationOptions& options = {});
+
+// The closed form's candidate positions for these TDOAs (above; the reference sensor's
+// range r from the quadratic's non-negative roots): two for a 4-sensor array wherever the
+// TDOAs have two exact solutions, least-squares starting points otherwise. Unrefined.
+std::vector<Vec3> ClosedFormCandidates(const ArrayGeometry& array, const Eigen::VectorXd& tdoa_s);
 
 // Position covariance that TDOAs of standard deviation sigma allow at `source_m`:
 // sigma^2 (H^T H)^-1, H = dh/ds. Its trace's square root is the per-fix position CRLB.

@@ -18,6 +18,9 @@ struct PairMeasurement {
   // noise (1 / sqrt(in-band bins of the full spectrum), exact for PHAT): the detection
   // statistic. Noise alone gives ~2-4 (max over the window); a source far more.
   double peak_snr = 0.0;
+  // Standard deviation of delay_s that this frame's peak allows (its height and curvature;
+  // 0: not computed by this front end).
+  double delay_sigma_s = 0.0;
   // The GCC function over the searched lag window, at integer lags
   // first_lag_samples, first_lag_samples + 1, ...; lag in samples = delay_s * sample_rate_hz.
   // Trackers read it at a candidate's predicted lag (GCC likelihood).

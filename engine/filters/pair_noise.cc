@@ -5,24 +5,54 @@
 
 namespace localizer::engine {
 namespace {
-// Adaptive TDOA noise (fixed sigma 0): start at 0.1 sample, smooth over ~20 frames,
-// keep within [0.01, 2] samples.
+constexpr double kSmoothing = 0.05;
+constexpr double kMinScale = 0.5, kMaxScale = 8.0;
+constexpr double kDivergenceScaleCap = 2.0;
+constexpr double kGateSigmas = 4.0;
+constexpr double kMinAnchorSamples = 0.02;
+// The fallback without an anchor: start at 0.1 sample, keep within [0.01, 2] samples.
 constexpr double kInitialSigmaSamples = 0.1;
-constexpr double kSigmaSmoothing = 0.05;
 constexpr double kMinSigmaSamples = 0.01;
 constexpr double kMaxSigmaSamples = 2.0;
 }  // namespace
 
+double AnchorSigmaS(const PairMeasurement& pair, double sample_rate_hz) {
+  if (pair.delay_sigma_s > 0.0) return pair.delay_sigma_s;
+  if (pair.gcc.size() < 3 || !(pair.peak_snr > 0.0) || !(sample_rate_hz > 0.0)) return 0.0;
+  const long i = std::lround(pair.delay_s * sample_rate_hz) - pair.first_lag_samples;
+  if (i < 1 || i + 1 >= static_cast<long>(pair.gcc.size())) return 0.0;
+  const double g = pair.gcc[static_cast<size_t>(i)];
+  const double curvature = 2.0 * g - pair.gcc[static_cast<size_t>(i - 1)] - pair.gcc[static_cast<size_t>(i + 1)];
+  if (!(g > 0.0) || !(curvature > 0.0)) return 0.0;
+  const double sigma_samples = 1.0 / (pair.peak_snr * std::sqrt(curvature / g));
+  return std::max(sigma_samples, kMinAnchorSamples) / sample_rate_hz;
+}
+
 int PairNoise::Select(const Measurement& m, double min_peak_snr) {
-  if (sigmas_s_.size() != m.pairs.size()) {
-    sigmas_s_.assign(m.pairs.size(),
-                     fixed_sigma_s_ > 0.0 ? fixed_sigma_s_ : kInitialSigmaSamples / m.sample_rate_hz);
+  const size_t n = m.pairs.size();
+  if (sigmas_s_.size() != n) {
+    sigmas_s_.assign(n, 0.0);
+    anchors_s_.assign(n, 0.0);
+    scale2_.assign(n, 0.0);  // 0: not yet seen
+    free_sigma_s_.assign(n, kInitialSigmaSamples / m.sample_rate_hz);
   }
-  used_.resize(m.pairs.size());
+  used_.resize(n);
   int count = 0;
-  for (size_t p = 0; p < m.pairs.size(); ++p) {
+  for (size_t p = 0; p < n; ++p) {
     used_[p] = m.pairs[p].peak_snr >= min_peak_snr ? 1 : 0;
     count += used_[p];
+    if (fixed_sigma_s_ > 0.0) {
+      anchors_s_[p] = sigmas_s_[p] = fixed_sigma_s_;
+      continue;
+    }
+    anchors_s_[p] = AnchorSigmaS(m.pairs[p], m.sample_rate_hz);
+    if (scale2_[p] == 0.0 && anchors_s_[p] > 0.0) {
+      // Start no tighter than 0.1 sample (the sub-sample interpolation's bias; multipath
+      // biases more), then let the innovations bring it down to what the peaks allow.
+      const double start = kInitialSigmaSamples / m.sample_rate_hz / anchors_s_[p];
+      scale2_[p] = std::clamp(start * start, 1.0, kMaxScale * kMaxScale);
+    }
+    sigmas_s_[p] = anchors_s_[p] > 0.0 ? std::sqrt(scale2_[p]) * anchors_s_[p] : free_sigma_s_[p];
   }
   return count;
 }
@@ -31,15 +61,30 @@ void PairNoise::Finish(const std::vector<InnovationMoments>& innovations, double
                        UpdateReport* report) {
   double mean_var_s2 = 0.0;
   for (size_t p = 0; p < innovations.size() && p < sigmas_s_.size(); ++p) {
-    double& sigma_s = sigmas_s_[p];
+    const double sigma_s = sigmas_s_[p];
     mean_var_s2 += sigma_s * sigma_s / static_cast<double>(sigmas_s_.size());
     if (!used_[p]) continue;
     const InnovationMoments& in = innovations[p];
-    report->nis += in.mean_s * in.mean_s / (sigma_s * sigma_s + in.predicted_var_s2);
-    if (fixed_sigma_s_ == 0.0) {  // innovation-based adaptive estimate (Mehra 1972), per pair
-      const double excess_s2 = std::max(0.0, in.mean_s * in.mean_s - in.predicted_var_s2);
-      const double var_s2 = (1.0 - kSigmaSmoothing) * sigma_s * sigma_s + kSigmaSmoothing * excess_s2;
-      sigma_s = std::clamp(std::sqrt(var_s2), kMinSigmaSamples / sample_rate_hz, kMaxSigmaSamples / sample_rate_hz);
+    const double e2 = in.mean_s * in.mean_s;
+    report->nis += e2 / (sigma_s * sigma_s + in.predicted_var_s2);
+    const double anchor_s = anchors_s_[p];
+    if (fixed_sigma_s_ > 0.0) {
+      report->anchored_nis += e2 / (sigma_s * sigma_s + in.predicted_var_s2);
+    } else if (anchor_s > 0.0) {
+      const double capped = std::min(std::sqrt(scale2_[p]), kDivergenceScaleCap) * anchor_s;
+      report->anchored_nis += e2 / (capped * capped + in.predicted_var_s2);
+      // Mehra on the normalised innovation, outliers gated out.
+      if (e2 <= kGateSigmas * kGateSigmas * (sigma_s * sigma_s + in.predicted_var_s2)) {
+        const double excess = std::max(0.0, e2 - in.predicted_var_s2) / (anchor_s * anchor_s);
+        scale2_[p] = std::clamp((1.0 - kSmoothing) * scale2_[p] + kSmoothing * excess, kMinScale * kMinScale,
+                                kMaxScale * kMaxScale);
+      }
+    } else {
+      report->anchored_nis += e2 / (sigma_s * sigma_s + in.predicted_var_s2);
+      const double excess_s2 = std::max(0.0, e2 - in.predicted_var_s2);
+      const double var_s2 = (1.0 - kSmoothing) * sigma_s * sigma_s + kSmoothing * excess_s2;
+      free_sigma_s_[p] =
+          std::clamp(std::sqrt(var_s2), kMinSigmaSamples / sample_rate_hz, kMaxSigmaSamples / sample_rate_hz);
     }
   }
   report->tdoa_sigma_s = std::sqrt(mean_var_s2);

@@ -1,14 +1,29 @@
-// The per-pair TDOA noise a particle filter assumes, and the update's consistency numbers.
-// Shared by the CPU particle filter and the GPU one (gpu/backend), so both choose pairs,
-// adapt sigma and compute the NIS identically.
+// The per-pair TDOA noise a filter assumes, and the update's consistency numbers.
+// Shared by the CPU filters (particle, Kalman, IMM, multiple-model) and the GPU particle
+// filter (gpu/backend), so all choose pairs, set sigma and compute the NIS identically.
 //
-// Per update: Select marks the pairs whose peak_snr >= min_peak_snr (the others carry no
-// source); the filter weighs with sigmas_s(); Finish folds the pairs' innovation moments
-// (d - E[h'] and Var[h'] under the prior) into the NIS,
-//     nis = sum_used (d - E[h'])^2 / (sigma^2 + Var[h']),
-// and, when no fixed sigma was configured, adapts each used pair's sigma by Mehra's
-// innovation-based estimate: sigma^2 <- (1 - a) sigma^2 + a max(0, e^2 - Var[h']), a = 0.05,
-// starting at 0.1 sample and kept within [0.01, 2] samples.
+// Select marks the pairs whose peak_snr >= min_peak_snr (the others carry no source).
+//
+// Anchored noise (the default, fixed sigma 0). Each frame's pair says how precise its own
+// peak is: anchor_k = delay_sigma_s when the front end reports it, else, when the frame kept
+// its GCC, 1 / (peak_snr sqrt(-g''/g)) samples from the GCC's height g and curvature g'' at
+// the peak (the delay's Cramér–Rao-type bound for the PHAT peak; floored at 0.02 sample).
+// The filter uses sigma_k = s_k anchor_k, where the scale s_k adapts to what the
+// innovations show (Mehra's estimate on the normalised innovation, a = 0.05, starting where
+// sigma = max(anchor, 0.1 sample): the sub-sample interpolation's bias, and multipath's)
+//     s_k^2 <- (1 - a) s_k^2 + a max(0, (e_k^2 - Var[h_k']) / anchor_k^2),
+// kept within [0.5, 8] and fed only by innovations inside a 4-sigma
+// gate (an outlier is an outlier, not noise). So the adaptation can absorb a model that is
+// several times too optimistic (multipath biases peaks beyond their curvature's
+// bound), never a divergence: the divergence test caps the scale at 2 (below). Without an anchor (no GCC and no delay_sigma_s) the pair falls back to the
+// former absolute adaptation: sigma from 0.1 sample, kept within [0.01, 2] samples.
+// A fixed sigma (> 0) is used as it is, for every pair.
+//
+// Finish folds the innovation moments (e = d - E[h'], Var[h'] under the prior) into
+//     nis          = sum_used e^2 / (sigma_k^2 + Var[h'])     (what the filter assumed)
+//     anchored_nis = sum_used e^2 / (min(s_k, 2)^2 anchor_k^2 + Var[h'])
+// the divergence test's input: the noise the peaks themselves allow, with at most a factor 2
+// of adaptation, so that adaptation cannot hide a divergence.
 #pragma once
 
 #include <vector>
@@ -23,26 +38,35 @@ struct InnovationMoments {
   double predicted_var_s2 = 0.0;  // Var[h'] under the prior weights
 };
 
+// The anchor of one pair for one frame (seconds): delay_sigma_s if set, else from the kept
+// GCC's peak; 0 when neither is available.
+double AnchorSigmaS(const PairMeasurement& pair, double sample_rate_hz);
+
 class PairNoise {
  public:
-  // fixed_sigma_s > 0: every pair uses it; 0: adaptive per pair (above).
+  // fixed_sigma_s > 0: every pair uses it; 0: anchored and adaptive (above).
   explicit PairNoise(double fixed_sigma_s) : fixed_sigma_s_(fixed_sigma_s) {}
 
-  // Sizes the sigmas to the measurement's pairs on first use, marks the usable pairs and
-  // returns how many there are (0: the update should change nothing).
+  // Sizes the state to the measurement's pairs on first use, marks the usable pairs, sets
+  // this frame's sigmas and returns how many pairs are usable (0: the update should change
+  // nothing).
   int Select(const Measurement& m, double min_peak_snr);
-  // NIS into report->nis, the assumed noise (rms over pairs, before adapting) into
-  // report->tdoa_sigma_s, then adapts the sigmas. `innovations` has one entry per pair.
+  // NIS and anchored NIS into report, the assumed noise (rms over pairs) into
+  // report->tdoa_sigma_s, then adapts the scales. `innovations` has one entry per pair.
   void Finish(const std::vector<InnovationMoments>& innovations, double sample_rate_hz, UpdateReport* report);
 
   const std::vector<int>& used() const { return used_; }
+  // This frame's sigma per pair (after Select).
   const std::vector<double>& sigmas_s() const { return sigmas_s_; }
   // Root mean square of the pairs' sigmas (0 before the first update).
   double rms_sigma_s() const;
 
  private:
   double fixed_sigma_s_;
-  std::vector<double> sigmas_s_;
+  std::vector<double> sigmas_s_;   // this frame's
+  std::vector<double> anchors_s_;  // this frame's (0: none)
+  std::vector<double> scale2_;     // adapted s_k^2 (anchored pairs)
+  std::vector<double> free_sigma_s_;  // fallback absolute adaptation (pairs without anchor)
   std::vector<int> used_;
 };
 

@@ -109,6 +109,29 @@ Status ParticleFilter::InitialiseRegion(const Vec3& min_m, const Vec3& max_m, do
   return Status::Ok();
 }
 
+Status ParticleFilter::InitialiseMixture(const std::vector<WeightedBelief>& components) {
+  if (components.empty()) return InvalidArgument("mixture initialisation needs at least one component");
+  std::vector<ParticleSet::Component> parts;
+  for (const WeightedBelief& c : components) {
+    if (!(c.weight > 0.0) || !std::isfinite(c.weight)) return InvalidArgument("mixture weights must be finite and > 0");
+    const auto root = BeliefRoot(c.belief);
+    if (!root.ok()) return root.status();
+    parts.push_back({c.weight, c.belief.mean, *root});
+  }
+  if (parts.size() == 1) {
+    impl_->set.SampleGaussian(parts[0].mean, parts[0].root);
+  } else {
+    impl_->set.SampleMixture(parts);
+  }
+  impl_->initialised = true;
+  impl_->ess = impl_->options.particles;
+  return Status::Ok();
+}
+
+std::vector<WeightedBelief> ParticleFilter::Hypotheses() const { return impl_->set.Modes(1e-3); }
+
+void ParticleFilter::SetBounds(const Vec3& min_m, const Vec3& max_m) { impl_->set.SetBounds(min_m, max_m); }
+
 void ParticleFilter::Predict(double dt_s) {
   if (!impl_->initialised || !(dt_s > 0.0)) return;
   impl_->set.Predict(dt_s, impl_->options.accel_noise_mps2);

@@ -92,6 +92,11 @@ class ParticleFilter final : public Tracker {
   Status Initialise(const TrackState& belief) override;
   // Particles uniform in the box [min_m, max_m] with velocities ~ N(0, speed_sigma_mps^2 I).
   Status InitialiseRegion(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps) override;
+  // Particles split among the components by weight; each keeps its label (particle_set.h).
+  Status InitialiseMixture(const std::vector<WeightedBelief>& components) override;
+  // Per live component (weight >= 1e-3), heaviest first.
+  std::vector<WeightedBelief> Hypotheses() const override;
+  void SetBounds(const Vec3& min_m, const Vec3& max_m) override;
   Status SetArray(const ArrayGeometry& array) override;
   void Predict(double dt_s) override;
   StatusOr<UpdateReport> Update(const Measurement& measurement) override;

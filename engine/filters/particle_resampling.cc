@@ -46,6 +46,10 @@ void MoveRow(int n, const int* __restrict index, const float* __restrict src, fl
 }  // namespace
 
 void ParticleSet::ResampleSystematic(double kernel_scale) {
+  if (labels_ > 1) {
+    ResampleModes(kernel_scale);
+    return;
+  }
   SystematicIndices();
   const int n = n_;
   const int* __restrict index = index_.data();

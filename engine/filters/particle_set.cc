@@ -75,6 +75,7 @@ void ParticleSet::SampleGaussian(const Vec6& mean, const Mat6& root) {
       cols[r][i] = v;
     }
   }
+  labels_ = 1;
   SetEqualWeights();
 }
 
@@ -91,6 +92,7 @@ void ParticleSet::SampleUniformBox(const Vec3& min_m, const Vec3& max_m, double 
     cur_.vy[i] = s * NormalFromUniform(UniformFromCounter(key, c + 4));
     cur_.vz[i] = s * NormalFromUniform(UniformFromCounter(key, c + 5));
   }
+  labels_ = 1;
   SetEqualWeights();
 }
 
@@ -178,6 +180,8 @@ void ParticleSet::CopyCloudFrom(const ParticleSet& other) {
   w_ = other.w_;
   moments_ = other.moments_;
   moments_valid_ = other.moments_valid_;
+  label_ = other.label_;
+  labels_ = other.labels_;
 }
 
 double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candidates,
@@ -193,6 +197,7 @@ double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candida
     cur_.vz[i] = from.vz[i];
   }
   logw_ = log_weights;
+  labels_ = 1;  // the multiple-model filter starts single-mode and keeps no labels
   return NormaliseWeights();
 }
 
@@ -304,6 +309,7 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
   float* __restrict logw = logw_.data();
 #pragma omp simd
   for (int i = 0; i < n_; ++i) logw[i] += ll[i];
+  if (bounded_) ApplyBounds();
 }
 
 double ParticleSet::NormaliseWeights() {

@@ -83,6 +83,26 @@ class ParticleSet {
   // Weighted mean and covariance (cached until the particles or weights change).
   TrackState MeanAndCovariance() const;
 
+  // Several position hypotheses (particle_modes.cc). Each particle carries the label of the
+  // mixture component it was drawn from; resampling copies labels, and while more than one
+  // label lives the kernel move uses each label's own mean and covariance (a kernel sized
+  // by the spread between modes would smear them into each other). When resampling leaves
+  // one label, the set is single-mode again and runs the vectorised path.
+  struct Component {
+    double weight = 1.0;  // > 0, relative
+    Vec6 mean = Vec6::Zero();
+    Mat6 root = Mat6::Zero();  // root root^T = covariance
+  };
+  // Particles split among the components in proportion to their weights (at least one
+  // each, at most 16 components); weights equal.
+  void SampleMixture(const std::vector<Component>& components);
+  // Per live label: its total weight, mean and covariance, heaviest first (labels whose weight
+  // is below min_weight left out). One entry (the whole cloud) when single-mode.
+  std::vector<WeightedBelief> Modes(double min_weight) const;
+  int labels() const { return labels_; }
+  // Particles outside [min, max] (sides may be infinite) get log-weight -1e30 at each Weigh.
+  void SetBounds(const Vec3& min_m, const Vec3& max_m);
+
  private:
   struct Columns {
     std::vector<float> x, y, z, vx, vy, vz;
@@ -94,6 +114,8 @@ class ParticleSet {
   void SetEqualWeights();
   void SystematicIndices();  // fills index_: the particle each slot copies
   void DrawKernelNoise();    // fills noise_ with unit-variance kernel draws
+  void ResampleModes(double kernel_scale);  // ResampleSystematic while labels_ > 1
+  void ApplyBounds();
 
   int n_;
   uint64_t seed_;
@@ -116,6 +138,10 @@ class ParticleSet {
   // until the particles or weights change (State() and the regulariser share them).
   mutable TrackState moments_;
   mutable bool moments_valid_ = false;
+  std::vector<uint8_t> label_, next_label_;  // mixture component per particle
+  int labels_ = 1;                            // components alive (1: single-mode)
+  bool bounded_ = false;
+  Eigen::Vector3f bound_lo_, bound_hi_;       // relative to origin_m_
 };
 
 }  // namespace localizer::engine

@@ -17,12 +17,21 @@ struct TrackState {
   Mat6 covariance = Mat6::Zero();
 };
 
+// One component of a belief with several hypotheses: its probability and its Gaussian.
+struct WeightedBelief {
+  double weight = 1.0;
+  TrackState belief;
+};
+
 // What one update tells the caller about the fit of model and measurement.
 struct UpdateReport {
   // Normalised innovation squared of the pairs' peak TDOAs against the predicted
   // measurement distribution: sum_p (d_p - E[h_p])^2 / (sigma_p^2 + Var[h_p]).
   // ~ chi-square with `pair_count` degrees of freedom when the filter is consistent.
   double nis = 0.0;
+  // The same with each pair's noise anchored to its own peak (pair_noise.h): the divergence
+  // test's input, which noise adaptation cannot inflate.
+  double anchored_nis = 0.0;
   int pair_count = 0;  // pairs used (those that heard a source); 0: the update did nothing
   double ess = 0.0;  // effective sample size after the update (0 for non-particle filters)
   double tdoa_sigma_s = 0.0;  // TDOA noise std the update assumed
@@ -66,6 +75,28 @@ class Tracker {
     belief.covariance.topLeftCorner<3, 3>() = ((max_m - min_m).array().square() / 12.0).matrix().asDiagonal();
     belief.covariance.bottomRightCorner<3, 3>() = speed_sigma_mps * speed_sigma_mps * Mat3::Identity();
     return Initialise(belief);
+  }
+  // (Re)start from a mixture of Gaussian beliefs (acquisition's modes: the positions the
+  // data allows), weights > 0. A particle filter keeps every component and lets the
+  // measurements and the dynamics decide; the default (Kalman-family filters) starts from
+  // the heaviest. INVALID_ARGUMENT for an empty list or a bad component.
+  virtual Status InitialiseMixture(const std::vector<WeightedBelief>& components) {
+    if (components.empty()) return InvalidArgument("mixture initialisation needs at least one component");
+    size_t best = 0;
+    for (size_t i = 1; i < components.size(); ++i) {
+      if (components[i].weight > components[best].weight) best = i;
+    }
+    return Initialise(components[best].belief);
+  }
+  // The hypotheses the belief holds, heaviest first, weights summing to 1: several while a
+  // particle filter keeps more than one mode alive, else one (the whole belief).
+  virtual std::vector<WeightedBelief> Hypotheses() const { return {WeightedBelief{1.0, State()}}; }
+  // Positions outside the box [min_m, max_m] (sides may be infinite) are impossible. The
+  // default does nothing (Kalman-family filters: the session clamps the acquisition's
+  // fixes instead).
+  virtual void SetBounds(const Vec3& min_m, const Vec3& max_m) {
+    (void)min_m;
+    (void)max_m;
   }
   // Propagate the belief by dt_s >= 0 seconds with the motion model.
   virtual void Predict(double dt_s) = 0;

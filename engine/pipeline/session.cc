@@ -4,7 +4,7 @@
 #include <cmath>
 #include <string>
 
-#include "engine/array/multilateration.h"
+#include "engine/acquisition/acquisition.h"
 #include "engine/filters/divergence_monitor.h"
 #include "engine/pipeline/backend.h"
 #include "engine/pipeline/framer.h"
@@ -50,29 +50,30 @@ Status ValidateBlock(const BlockView& block, int channels, int64_t max_samples, 
 }  // namespace
 
 struct Session::Impl {
-  Impl(SessionConfig c, ArrayGeometry a, SessionComponents parts, std::unique_ptr<PlatformPose> pose)
+  Impl(SessionConfig c, ArrayGeometry a, SessionComponents parts, std::unique_ptr<PlatformPose> pose, Acquisition acq)
       : config(std::move(c)),
         body_array(a),
         array(std::move(a)),
         platform(std::move(pose)),
         components(std::move(parts)),
+        acquisition(std::move(acq)),
         framer(array.sensor_count(), config.frame_samples, config.hop_samples),
         monitor(config.divergence_window) {}
 
   void ProcessFrame(const float* frame, int64_t first_sample, uint64_t sequence, std::vector<Estimate>* out);
-  // Multilaterates this frame; true (and *fix set) when the fix is good enough to (re)start.
-  bool GoodFix(const Vec3* hint, Fix* fix) const;
-  // A Gaussian belief at the fix, at rest with init_speed_sigma_mps of velocity spread.
-  TrackState BeliefFromFix(const Fix& fix) const;
+  // Starts the tracker from acquisition's modes (every one the data allows); false if none.
+  bool StartFromModes(const std::vector<PositionMode>& modes);
+  // The track's frame: predict, test presence near it, update or coast, watch for
+  // divergence and for a source heard elsewhere; drops the track after source_timeout_s of
+  // silence. Fills e's presence and filter fields.
+  void TrackFrame(double dt_s, bool measured, Estimate* e);
+  // No track: search the volume; a present source starts one.
+  void AcquireFrame(bool measured, Estimate* e);
   // Conditions the tracker on this frame, fills e's filter fields, and restarts the tracker
-  // from this frame's fix when the divergence test fires.
+  // through acquisition when the divergence test fires.
   void UpdateAndWatch(Estimate* e);
-  // The TDOA noise std for fixes: configured, else the tracker's latest adaptive estimate,
-  // else 0.1 sample.
-  double tdoa_sigma_s() const {
-    if (config.filter.tdoa_sigma_s > 0.0) return config.filter.tdoa_sigma_s;
-    return last_sigma_s > 0.0 ? last_sigma_s : 0.1 / config.sample_rate_hz;
-  }
+  // The estimate's state: the strongest hypothesis, with a covariance that covers all of them.
+  void Report(Estimate* e) const;
 
   // Moving arrays: moves `array` and the tracker to the platform's pose at t_s; false
   // when there is no pose yet (no IMU sample).
@@ -83,6 +84,10 @@ struct Session::Impl {
   ArrayGeometry array;       // in the world at the current frame
   std::unique_ptr<PlatformPose> platform;  // moving arrays only
   SessionComponents components;
+  Acquisition acquisition;
+  bool live = false;         // the tracker holds a track (not dropped)
+  double silent_s = 0.0;     // time since the source was last heard near the track
+  int heard_elsewhere = 0;   // consecutive frames with the source present away from the track
   Framer framer;
   DivergenceMonitor monitor;
   Measurement measurement;
@@ -91,31 +96,29 @@ struct Session::Impl {
   uint64_t last_sequence = 0;
   uint64_t frames = 0;
   double last_t_s = 0.0;
-  double last_sigma_s = 0.0;
 };
 
-bool Session::Impl::GoodFix(const Vec3* hint, Fix* fix) const {
-  for (const PairMeasurement& p : measurement.pairs) {
-    if (p.quality < config.min_pair_quality || p.peak_snr < config.filter.min_peak_snr) return false;
-  }
-  MultilaterationOptions options;
-  options.tdoa_sigma_s = tdoa_sigma_s();
-  options.hint_m = hint;
-  auto result = Multilaterate(array, delays, options);
-  if (!result.ok() || !result->converged) return false;
-  const double max_std_m = config.max_fix_std_m > 0.0 ? config.max_fix_std_m : 5.0 * array.aperture_m();
-  if (!(result->position_std_m() <= max_std_m)) return false;
-  *fix = *result;
-  return true;
-}
+// Frames in a row that hear the source away from the track before it is re-acquired.
+constexpr int kHeardElsewhereFrames = 3;
 
-TrackState Session::Impl::BeliefFromFix(const Fix& fix) const {
-  TrackState belief;
-  belief.mean.head<3>() = fix.position_m;
-  belief.covariance.topLeftCorner<3, 3>() = fix.covariance_m2;
-  belief.covariance.bottomRightCorner<3, 3>() =
-      config.init_speed_sigma_mps * config.init_speed_sigma_mps * Mat3::Identity();
-  return belief;
+bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
+  if (modes.empty()) return false;
+  std::vector<WeightedBelief> mixture;
+  for (const PositionMode& mode : modes) {
+    WeightedBelief b;
+    b.weight = 1.0;  // equal: the measurements and the dynamics decide between them
+    b.belief.mean.head<3>() = mode.position_m;
+    b.belief.covariance.topLeftCorner<3, 3>() = mode.covariance_m2;
+    b.belief.covariance.bottomRightCorner<3, 3>() =
+        config.init_speed_sigma_mps * config.init_speed_sigma_mps * Mat3::Identity();
+    mixture.push_back(b);
+  }
+  if (!components.tracker->InitialiseMixture(mixture).ok()) return false;
+  live = true;
+  silent_s = 0.0;
+  heard_elsewhere = 0;
+  monitor.Reset();
+  return true;
 }
 
 void Session::Impl::UpdateAndWatch(Estimate* e) {
@@ -126,12 +129,68 @@ void Session::Impl::UpdateAndWatch(Estimate* e) {
   e->ess = report->ess;
   e->tdoa_sigma_s = report->tdoa_sigma_s;
   e->pairs_used = report->pair_count;
-  last_sigma_s = report->tdoa_sigma_s;
-  if (report->pair_count == 0 || !monitor.Add(report->nis, report->pair_count)) return;
-  // Diverged: restart from this frame's fix (velocity reset too), if it is good enough.
-  const Vec3 hint = tracker.State().mean.head<3>();
-  Fix fix;
-  if (GoodFix(&hint, &fix)) e->reinitialised = tracker.Initialise(BeliefFromFix(fix)).ok();
+  if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count)) return;
+  // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too).
+  const AcquisitionResult found = acquisition.Search(measurement);
+  if (found.presence.present) e->reinitialised = StartFromModes(found.modes);
+}
+
+void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
+  Tracker& tracker = *components.tracker;
+  tracker.Predict(dt_s);
+  if (!measured) return;
+  const TrackState predicted = tracker.Hypotheses().front().belief;
+  const PresenceResult near = acquisition.Around(measurement, predicted.mean.head<3>(),
+                                                 predicted.covariance.topLeftCorner<3, 3>());
+  e->presence_statistic = near.statistic;
+  e->presence_threshold = near.threshold;
+  if (near.present) {
+    e->source_present = true;
+    silent_s = 0.0;
+    heard_elsewhere = 0;
+    UpdateAndWatch(e);
+    return;
+  }
+  // Not near the track: silence, or a source the track has lost?
+  const AcquisitionResult found = acquisition.Search(measurement);
+  if (found.presence.present) {
+    e->source_present = true;
+    e->presence_statistic = found.presence.statistic;
+    e->presence_threshold = found.presence.threshold;
+    silent_s = 0.0;
+    if (++heard_elsewhere >= kHeardElsewhereFrames) e->reinitialised = StartFromModes(found.modes);
+    return;
+  }
+  heard_elsewhere = 0;
+  silent_s += dt_s;
+  if (silent_s >= config.source_timeout_s) live = false;  // dropped: acquisition restarts
+}
+
+void Session::Impl::AcquireFrame(bool measured, Estimate* e) {
+  if (!measured) return;
+  const AcquisitionResult found = acquisition.Search(measurement);
+  e->source_present = found.presence.present;
+  e->presence_statistic = found.presence.statistic;
+  e->presence_threshold = found.presence.threshold;
+  if (found.presence.present) StartFromModes(found.modes);
+}
+
+void Session::Impl::Report(Estimate* e) const {
+  const std::vector<WeightedBelief> hypotheses = components.tracker->Hypotheses();
+  const TrackState& best = hypotheses.front().belief;
+  Mat6 covariance = Mat6::Zero();
+  int modes = 0;
+  for (const WeightedBelief& h : hypotheses) {
+    const Vec6 offset = h.belief.mean - best.mean;
+    covariance += h.weight * (h.belief.covariance + offset * offset.transpose());
+    modes += h.weight >= 0.01;
+  }
+  e->initialised = true;
+  e->state = best.mean;
+  e->covariance = covariance;
+  e->modes = std::max(modes, 1);
+  e->ambiguous = e->modes > 1;
+  e->model_probabilities = components.tracker->ModelProbabilities();
 }
 
 bool Session::Impl::MoveArray(double t_s, Estimate* e) {
@@ -139,6 +198,7 @@ bool Session::Impl::MoveArray(double t_s, Estimate* e) {
   if (!pose) return false;
   array = body_array.Moved(pose->body_to_world.toRotationMatrix(), pose->origin_m);
   if (!components.tracker->SetArray(array).ok()) return false;  // a rigid motion: cannot fail
+  acquisition.SetArray(array);
   e->platform = *pose;
   return true;
 }
@@ -166,32 +226,23 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
     }
   }
   Tracker& tracker = *components.tracker;
-  bool update = measured && posed;
   if (!posed) {
     // Nothing to do until the platform's pose is known.
-  } else if (tracker.initialised()) {
-    tracker.Predict(e.t_s - last_t_s);
+  } else if (live && tracker.initialised()) {
+    TrackFrame(e.t_s - last_t_s, measured, &e);
   } else if (config.init_region_min_m.allFinite()) {
     // The region is the belief at this frame; this frame's TDOAs then refine it.
-    (void)tracker.InitialiseRegion(config.init_region_min_m, config.init_region_max_m,
-                                   config.init_speed_sigma_mps);
+    live = tracker.InitialiseRegion(config.init_region_min_m, config.init_region_max_m,
+                                    config.init_speed_sigma_mps).ok();
     monitor.Reset();
-  } else {
-    Fix fix;
-    if (measured && GoodFix(nullptr, &fix)) {
-      (void)tracker.Initialise(BeliefFromFix(fix));
-      monitor.Reset();
+    if (live && measured) {
+      e.source_present = true;  // the user says so; the presence test runs once tracking
+      UpdateAndWatch(&e);
     }
-    update = false;  // the fix already holds this frame's TDOAs
+  } else {
+    AcquireFrame(measured, &e);  // the modes already hold this frame's TDOAs
   }
-  if (update && tracker.initialised()) UpdateAndWatch(&e);
-  if (tracker.initialised()) {
-    const TrackState state = tracker.State();
-    e.initialised = true;
-    e.state = state.mean;
-    e.covariance = state.covariance;
-    e.model_probabilities = tracker.ModelProbabilities();
-  }
+  if (live && tracker.initialised()) Report(&e);
   last_t_s = e.t_s;
   e.timings.filter_s = SecondsSince(filter_start);
   out->push_back(std::move(e));
@@ -226,10 +277,18 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const SessionConfig& config) 
     if (!made.ok()) return made.status();
     pose = std::move(made).value();
   }
+  AcquisitionOptions search;
+  search.bounds_min_m = config.bounds_min_m;
+  search.bounds_max_m = config.bounds_max_m;
+  search.search_radius_m = config.search_radius_m;
+  search.false_alarm = config.presence_false_alarm;
+  auto acquisition = Acquisition::Create(*array, search);
+  if (!acquisition.ok()) return acquisition.status();
   auto parts = BuildComponents(config.backend, *array, gcc, tracker);
   if (!parts.ok()) return parts.status();
-  return std::unique_ptr<Session>(new Session(
-      std::make_unique<Impl>(config, std::move(array).value(), std::move(parts).value(), std::move(pose))));
+  parts->tracker->SetBounds(config.bounds_min_m, config.bounds_max_m);
+  return std::unique_ptr<Session>(new Session(std::make_unique<Impl>(
+      config, std::move(array).value(), std::move(parts).value(), std::move(pose), std::move(acquisition).value())));
 }
 
 Status Session::Process(const BlockView& block, std::vector<Estimate>* out) {

@@ -1,11 +1,20 @@
 // A tracking session: samples in, one Estimate per frame out.
 //
 // Blocks of any length are appended to a per-channel ring; every hop_samples a frame of
-// frame_samples (per channel) is cut, the TDOA front end measures it, and the tracker
-// predicts to the frame's instant and updates. Before the tracker has a state, it starts
-// from the configured region if there is one, else each frame is multilaterated and the
-// first good fix initialises it; a window of normalised innovations
-// far above its chi-square bound re-initialises it from the current frame's fix.
+// frame_samples (per channel) is cut and the TDOA front end measures it.
+// Without a track (or from the configured region, if any), acquisition
+// (engine/acquisition/acquisition.h) searches the plausible volume; when the presence test
+// says a source is there, the tracker starts from every position the frame allows (a
+// particle filter keeps them all as modes until the data and the dynamics decide; Kalman
+// filters take the strongest).
+// With a track, the tracker predicts to the frame's instant; the presence test runs about
+// the predicted position: present, the tracker updates; absent, the volume is searched — a
+// source heard elsewhere for 3 frames in a row restarts the track there; none heard, the
+// track coasts (predicts, no update) and is dropped after source_timeout_s. A window of
+// anchored normalised innovations far above its chi-square bound (pair_noise.h,
+// divergence_monitor.h) restarts the track through acquisition.
+// Each estimate says whether the frame held a source, reports the strongest hypothesis with
+// a covariance covering all live ones, and flags the estimate ambiguous while several live.
 // Every block is validated first (sequence increasing, channel count, length, finite
 // values); a rejected block leaves the session exactly as it was.
 // A moving array (config.array_in_body_frame) is moved, every frame, to where its platform's
@@ -61,9 +70,10 @@ struct SessionConfig {
   std::string imm_variant = "ekf";    // imm: mode filters "ekf" | "ukf"
   std::string robust = "none";        // ekf/ukf/imm update: "none" | "huber" | "student-t"
                                       // (reweighted pairs, kalman_filter.h)
-  double min_pair_quality = 1.5;      // a fix needs every pair's peak/sidelobe above this
-  double max_fix_std_m = 0.0;         // a fix is good when its position std is below this
-                                      // (0: 5 x the array aperture)
+  // Former single-fix initialisation; kept for the wire contract, unused since acquisition
+  // (engine/acquisition) initialises from every mode the data allows.
+  double min_pair_quality = 1.5;
+  double max_fix_std_m = 0.0;
   double init_speed_sigma_mps = 2.0;  // velocity spread at initialisation
   // A region known to hold the source: when min <= max (all finite), the tracker starts
   // from it at the first frame instead of waiting for a good fix. Unset by default.

@@ -126,7 +126,7 @@ GccOptions SessionConfig::GccOptionsFor() const {
   gcc.phat_beta = phat_beta;
   gcc.band_low_hz = band_low_hz;
   gcc.band_high_hz = band_high_hz;
-  gcc.keep_gcc = filter.likelihood == Likelihood::kGcc;
+  gcc.keep_gcc = true;  // acquisition, presence and the noise anchor read the GCC
   return gcc;
 }
 

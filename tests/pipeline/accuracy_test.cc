@@ -47,17 +47,23 @@ TEST(Accuracy, TetrahedronInAirBeatsThePerFrameCrlb) {
 
 // Turning source, 8 hydrophones, surface echo, 5 dB: no divergence (every scored error
 // well inside the 11-22 m range, at most one re-initialisation) and RMSE within 1.5x the
-// per-frame bound for the peak likelihood (goal 1.0x; this seed 0.96, median over seeds
-// 0.90), 2x for the GCC likelihood (this seed 1.09).
+// per-frame bound for the peak likelihood (goal 1.0x), 2x for the GCC likelihood.
+// Scored from 4 s: acquisition starts the track at the first frame (sd ~8 m, honest), where
+// the former single fix waited for a frame whose every pair was clean; the echo biases
+// the first 3 s of TDOAs by ~0.3 sample, so the track needs them to converge (this seed:
+// errors 5 m at 2 s with a reported sd of 1.5-2 m, 0.6 m at 3.5 s).
 TEST(Accuracy, TurningSourceWithMultipathAt5DbDoesNotDiverge) {
   struct Case {
     Likelihood likelihood;
     double max_error_m, max_ratio;
   };
   for (const Case& c : {Case{Likelihood::kPeak, 3.0, 1.5}, Case{Likelihood::kGcc, 3.0, 2.0}}) {
-    const TrackedRun run = Track("turn-multipath", 1, c.likelihood);
+    TrackedRun run = Track("turn-multipath", 1, c.likelihood);
+    const Scenario scenario = *MakeScenario("turn-multipath", 1);
+    const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
+    run.score = ScoreTrack(array, run.sim, run.estimates, /*skip_s=*/4.0);
     Print(std::string("turn-multipath/") + LikelihoodName(c.likelihood), run.score);
-    EXPECT_GT(run.score.scored, 130);
+    EXPECT_GT(run.score.scored, 120);
     EXPECT_LT(run.score.max_m, c.max_error_m);
     EXPECT_LE(run.score.reinitialisations, 1);
     EXPECT_LT(run.score.rmse_over_crlb, c.max_ratio);

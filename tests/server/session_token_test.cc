@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "server/metrics/registry.h"
 #include "server/service/secure_random.h"
 #include "server/service/session_registry.h"
 #include "server/wire/config_wire.h"
@@ -94,10 +95,12 @@ engine::SessionConfig DetectionConfig() {  // cheapest session to open
 
 TEST(SessionTokenAttack, RegistryIdsAndTokensCannotBePredictedFromEarlierSessions) {
   WorkerPool pool(1);
-  ServiceMetrics metrics;
+  metrics::Registry metric_registry;
+  auto metrics = ServiceMetrics::Create(&metric_registry, "cpu");
+  ASSERT_TRUE(metrics.ok());
   RegistryOptions options;
   options.max_sessions = 200;
-  SessionRegistry registry(options, &pool, &metrics);
+  SessionRegistry registry(options, &pool, metrics->get());
   const v1::SessionConfig config = wire::ConfigToProto(DetectionConfig(), "attacker");
 
   // Each session shows 3 outputs of the former generator: its id, then two for its token.
@@ -139,7 +142,8 @@ TEST(SecureRandomHex, GivesHexDigitsOfTheAskedLengthAndRefusesNonPositive) {
 TEST(SecureRandomHex, DigitsAreUniform) {
   std::vector<int> counts(16, 0);
   for (int i = 0; i < 1000; ++i) {
-    for (char c : *SecureRandomHex(32)) ++counts[static_cast<size_t>(c <= '9' ? c - '0' : c - 'a' + 10)];
+    const std::string hex = *SecureRandomHex(32);
+    for (char c : hex) ++counts[static_cast<size_t>(c <= '9' ? c - '0' : c - 'a' + 10)];
   }
   // 32000 digits, 2000 expected per value, sd ~43: 6 sd either way.
   for (int n : counts) EXPECT_NEAR(n, 2000, 260);

@@ -1,0 +1,396 @@
+#include "engine/acquisition/acquisition.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <string>
+
+#include "engine/acquisition/presence.h"
+#include "engine/array/multilateration.h"
+
+namespace localizer::engine {
+namespace {
+
+constexpr double kMinPickValue = 3.0;  // a pick below this normalised height is noise
+constexpr double kMinSigmaSamples = 0.1;  // ~ the sub-sample interpolation's bias (DESIGN.md)
+constexpr double kMaxSigmaSamples = 5.0;
+
+Vec3 UnitFromCell(double mu, double phi) {
+  const double s = std::sqrt(std::max(0.0, 1.0 - mu * mu));
+  return Vec3(s * std::cos(phi), s * std::sin(phi), mu);
+}
+
+// Distance from p to the box (0 inside); infinite sides allowed.
+double DistanceToBox(const Vec3& p, const Vec3& lo, const Vec3& hi) {
+  Vec3 d;
+  for (int i = 0; i < 3; ++i) d(i) = std::max({lo(i) - p(i), 0.0, p(i) - hi(i)});
+  return d.norm();
+}
+
+}  // namespace
+
+Status AcquisitionOptions::Validate() const {
+  if (!(false_alarm > 0.0) || false_alarm > 0.1) return InvalidArgument("false_alarm must be in (0, 0.1]");
+  if (max_modes < 1 || max_modes > 16) return InvalidArgument("max_modes must be in [1, 16]");
+  if (!(mode_margin >= 0.0) || mode_margin > 100.0) return InvalidArgument("mode_margin must be in [0, 100]");
+  if (azimuth_cells < 4 || azimuth_cells > 1024 || polar_cells < 2 || polar_cells > 512 || range_cells < 2 ||
+      range_cells > 256) {
+    return InvalidArgument("acquisition grid must have 4..1024 azimuth, 2..512 polar and 2..256 range cells");
+  }
+  if (refinement_budget < 1 || refinement_budget > 4096) return InvalidArgument("refinement_budget must be in [1, 4096]");
+  if (!(search_radius_m >= 0.0) || search_radius_m > 1e7) return InvalidArgument("search_radius_m must be in [0, 1e7]");
+  for (int i = 0; i < 3; ++i) {
+    if (std::isnan(bounds_min_m(i)) || std::isnan(bounds_max_m(i)) || !(bounds_min_m(i) < bounds_max_m(i))) {
+      return InvalidArgument("bounds must have min < max on every axis");
+    }
+  }
+  return Status::Ok();
+}
+
+StatusOr<Acquisition> Acquisition::Create(const ArrayGeometry& array, const AcquisitionOptions& options) {
+  LOCALIZER_RETURN_IF_ERROR(options.Validate());
+  return Acquisition(array, options);
+}
+
+Acquisition::Acquisition(const ArrayGeometry& array, const AcquisitionOptions& options)
+    : array_(array), options_(options) {
+  const double dphi = 2.0 * M_PI / options.azimuth_cells;
+  const double dmu = 2.0 / options.polar_cells;
+  for (int i = 0; i < options.polar_cells; ++i) {
+    const double mu0 = -1.0 + i * dmu, mu1 = mu0 + dmu;
+    for (int j = 0; j < options.azimuth_cells; ++j) {
+      const double phi0 = j * dphi, phi1 = phi0 + dphi;
+      Direction d;
+      d.unit = UnitFromCell(0.5 * (mu0 + mu1), 0.5 * (phi0 + phi1));
+      double radius = 0.0;
+      for (double mu : {mu0, 0.5 * (mu0 + mu1), mu1}) {
+        for (double phi : {phi0, 0.5 * (phi0 + phi1), phi1}) {
+          radius = std::max(radius, std::acos(std::clamp(d.unit.dot(UnitFromCell(mu, phi)), -1.0, 1.0)));
+        }
+      }
+      d.angular_radius_rad = radius;
+      directions_.push_back(d);
+    }
+  }
+}
+
+double Acquisition::search_radius_m() const {
+  return options_.search_radius_m > 0.0 ? options_.search_radius_m : 10.0 * array_.aperture_m();
+}
+
+bool Acquisition::InBounds(const Vec3& p) const {
+  return (p.array() >= options_.bounds_min_m.array()).all() && (p.array() <= options_.bounds_max_m.array()).all();
+}
+
+double Acquisition::Score(const Vec3& p) const {
+  const double scale = field_.sample_rate_hz();
+  const Eigen::VectorXd lags = array_.Tdoa(p) * scale;
+  double s = 0.0;
+  for (int q = 0; q < field_.pair_count(); ++q) s += field_.At(q, lags(q));
+  return s;
+}
+
+bool Acquisition::Refine(const Vec3& start_m, const std::vector<double>& lo, const std::vector<double>& hi,
+                         PositionMode* mode) const {
+  const int pairs = field_.pair_count();
+  const double fs = field_.sample_rate_hz();
+  std::vector<double> pick(static_cast<size_t>(pairs), 0.0), sigma(static_cast<size_t>(pairs), 1.0);
+  std::vector<char> used(static_cast<size_t>(pairs), 0);
+  // Pair p's pick in [a, b]: its lag, and a curvature-based sigma; false when too weak.
+  auto pick_in = [&](int p, double a, double b) {
+    double lag = 0.0, value = 0.0;
+    if (!field_.ArgMax(p, a, b, &lag, &value) || value < kMinPickValue) return false;
+    const double left = field_.At(p, std::round(lag) - 1.0), mid = field_.At(p, std::round(lag));
+    const double right = field_.At(p, std::round(lag) + 1.0);
+    const double curvature = -(left - 2.0 * mid + right);  // -g'' in normalised units per sample^2
+    const double s = curvature > 0.0 && mid > 0.0 ? 1.0 / std::sqrt(curvature * mid) : kMaxSigmaSamples;
+    pick[static_cast<size_t>(p)] = lag;
+    sigma[static_cast<size_t>(p)] = std::clamp(s, kMinSigmaSamples, kMaxSigmaSamples);
+    return true;
+  };
+  int count = 0;
+  for (int p = 0; p < pairs; ++p) {
+    used[static_cast<size_t>(p)] = pick_in(p, lo[static_cast<size_t>(p)], hi[static_cast<size_t>(p)]);
+    count += used[static_cast<size_t>(p)];
+  }
+  if (count < 3) return false;
+
+  Vec3 x = start_m;
+  Mat3 info = Mat3::Zero();
+  // Weighted Gauss–Newton with Levenberg damping on the used pairs; returns the final cost.
+  auto solve = [&]() {
+    double lambda = 1e-3;
+    double cost = 0.0;
+    for (int it = 0; it < 30; ++it) {
+      const Eigen::VectorXd lag = array_.Tdoa(x) * fs;
+      const Eigen::MatrixXd jac = array_.TdoaJacobian(x) * fs;  // samples per metre
+      Mat3 a = Mat3::Zero();
+      Vec3 g = Vec3::Zero();
+      cost = 0.0;
+      for (int p = 0; p < pairs; ++p) {
+        if (!used[static_cast<size_t>(p)]) continue;
+        const double w = 1.0 / (sigma[static_cast<size_t>(p)] * sigma[static_cast<size_t>(p)]);
+        const Eigen::Vector3d row = jac.row(p).transpose();
+        const double r = pick[static_cast<size_t>(p)] - lag(p);
+        a += w * row * row.transpose();
+        g += w * row * r;
+        cost += w * r * r;
+      }
+      info = a;
+      bool stepped = false;
+      for (int tries = 0; tries < 8 && !stepped; ++tries) {
+        Mat3 damped = a;
+        damped.diagonal() += lambda * (a.diagonal().array() + 1e-12).matrix();
+        const Vec3 step = damped.ldlt().solve(g);
+        if (!step.allFinite()) break;
+        const Vec3 candidate = x + step;
+        const Eigen::VectorXd lag2 = array_.Tdoa(candidate) * fs;
+        double cost2 = 0.0;
+        for (int p = 0; p < pairs; ++p) {
+          if (!used[static_cast<size_t>(p)]) continue;
+          const double r = pick[static_cast<size_t>(p)] - lag2(p);
+          cost2 += r * r / (sigma[static_cast<size_t>(p)] * sigma[static_cast<size_t>(p)]);
+        }
+        if (cost2 <= cost) {
+          stepped = true;
+          const double moved = step.norm();
+          x = candidate;
+          lambda = std::max(lambda * 0.3, 1e-9);
+          if (moved < 1e-7 * std::max(1.0, x.norm())) return cost2;
+        } else {
+          lambda *= 10.0;
+        }
+      }
+      if (!stepped) break;
+    }
+    return cost;
+  };
+  double cost = solve();
+  // Consensus: leave out the worst pair while it is off the solution (keep >= 3).
+  while (count > 3) {
+    const Eigen::VectorXd lag = array_.Tdoa(x) * fs;
+    int worst = -1;
+    double worst_excess = 0.0;
+    for (int p = 0; p < pairs; ++p) {
+      if (!used[static_cast<size_t>(p)]) continue;
+      const double r = std::abs(pick[static_cast<size_t>(p)] - lag(p));
+      const double allowed = std::max(3.0 * sigma[static_cast<size_t>(p)], 1.5);
+      if (r > allowed && r / allowed > worst_excess) {
+        worst_excess = r / allowed;
+        worst = p;
+      }
+    }
+    if (worst < 0) break;
+    used[static_cast<size_t>(worst)] = 0;
+    --count;
+    solve();
+  }
+  // Re-pick every pair near the solution's lags (a pair may now find its true peak), solve again.
+  {
+    const Eigen::VectorXd lag = array_.Tdoa(x) * fs;
+    count = 0;
+    for (int p = 0; p < pairs; ++p) {
+      used[static_cast<size_t>(p)] = pick_in(p, lag(p) - 2.0, lag(p) + 2.0);
+      count += used[static_cast<size_t>(p)];
+    }
+    if (count < 3) return false;
+    cost = solve();
+  }
+  if (!x.allFinite()) return false;
+  Eigen::LDLT<Mat3> ldlt(info);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return false;
+  // With redundant pairs, the fit's own residual scales the covariance up when the peaks
+  // are less precise than their curvature says (multipath biases them): the a-posteriori
+  // variance factor of least squares, never below 1.
+  const double variance_factor = count > 3 ? std::max(1.0, cost / (count - 3)) : 1.0;
+  const Mat3 cov = variance_factor * ldlt.solve(Mat3::Identity());
+  if (!cov.allFinite()) return false;
+  mode->position_m = x;
+  mode->covariance_m2 = 0.5 * (cov + cov.transpose());
+  mode->pairs_used = count;
+  mode->score = Score(x);
+  return true;
+}
+
+AcquisitionResult Acquisition::Search(const Measurement& m) {
+  AcquisitionResult out;
+  field_.Build(m);
+  const int pairs = field_.pair_count();
+  const int usable = field_.usable_pairs();
+  out.presence.threshold = std::numeric_limits<double>::infinity();
+  if (usable < 3 || pairs != array_.pair_count()) return out;
+  const double fs = m.sample_rate_hz;
+  const double c = array_.sound_speed_mps();
+  const Vec3 centre = array_.centroid_m();
+  const double radius = search_radius_m();
+  const double r_min = std::min(0.05 * array_.aperture_m(), 0.5 * radius);
+  const int shells = options_.range_cells;
+  const double q = std::pow(radius / r_min, 1.0 / (shells - 1));
+
+  struct Cell {
+    float upper;
+    int direction;
+    int shell;
+  };
+  std::vector<Cell> cells;
+  cells.reserve(directions_.size() * static_cast<size_t>(shells));
+  std::vector<double> lags(static_cast<size_t>(pairs)), widths(static_cast<size_t>(pairs));
+  // The cell's centre and circumradius.
+  auto geometry = [&](int d, int s, Vec3* x, double* rad) {
+    if (s == 0) {  // the ball about the centre
+      *x = centre;
+      *rad = r_min;
+      return;
+    }
+    const double r_lo = r_min * std::pow(q, s - 1), r_hi = r_lo * q;
+    *x = centre + 0.5 * (r_lo + r_hi) * directions_[static_cast<size_t>(d)].unit;
+    const double chord = 2.0 * r_hi * std::sin(0.5 * directions_[static_cast<size_t>(d)].angular_radius_rad);
+    *rad = std::hypot(chord, 0.5 * (r_hi - r_lo));
+  };
+  const int ref = array_.reference_sensor();
+  auto lag_windows = [&](const Vec3& x, double rad) {
+    const Vec3 to_ref = x - array_.sensor_m(ref);
+    const double d_ref = to_ref.norm();
+    const Vec3 u_ref = d_ref > 0.0 ? Vec3(to_ref / d_ref) : Vec3::Zero();
+    for (int p = 0; p < pairs; ++p) {
+      const Vec3 to_k = x - array_.sensor_m(array_.sensor_of_pair(p));
+      const double d_k = to_k.norm();
+      const Vec3 u_k = d_k > 0.0 ? Vec3(to_k / d_k) : Vec3::Zero();
+      lags[static_cast<size_t>(p)] = (d_k - d_ref) / c * fs;
+      // |grad lag| <= 2 fs / c near a sensor, where the unit vectors are undefined.
+      const double grad = (d_k > rad && d_ref > rad) ? (u_k - u_ref).norm() / c * fs : 2.0 * fs / c;
+      widths[static_cast<size_t>(p)] = grad * rad + 0.5;
+    }
+  };
+  for (int s = 0; s < shells; ++s) {
+    const int dirs = s == 0 ? 1 : static_cast<int>(directions_.size());
+    for (int d = 0; d < dirs; ++d) {
+      Vec3 x;
+      double rad = 0.0;
+      geometry(d, s, &x, &rad);
+      if (DistanceToBox(x, options_.bounds_min_m, options_.bounds_max_m) > rad) continue;
+      lag_windows(x, rad);
+      double upper = 0.0;
+      for (int p = 0; p < pairs; ++p) upper += field_.MaxAround(p, lags[static_cast<size_t>(p)], widths[static_cast<size_t>(p)]);
+      cells.push_back({static_cast<float>(upper), d, s});
+    }
+  }
+  const size_t keep = std::min(cells.size(), static_cast<size_t>(options_.refinement_budget) * 4);
+  std::partial_sort(cells.begin(), cells.begin() + static_cast<std::ptrdiff_t>(keep), cells.end(),
+                    [](const Cell& a, const Cell& b) { return a.upper > b.upper; });
+
+  const double margin = options_.mode_margin * std::sqrt(static_cast<double>(usable));
+  std::vector<PositionMode> modes;
+  double best = -std::numeric_limits<double>::infinity();
+  int refined = 0;
+  std::vector<double> lo(static_cast<size_t>(pairs)), hi(static_cast<size_t>(pairs));
+  // Refines from `start`; keeps a new mode (or the stronger of two that coincide). With
+  // `siblings`, the closed form's other exact solutions of a new mode's lags are refined too
+  // (a 4-sensor array's second solution lies where no cell order guarantees a visit).
+  std::function<void(const Vec3&, const std::vector<double>&, const std::vector<double>&, bool)> consider =
+      [&](const Vec3& start, const std::vector<double>& a, const std::vector<double>& b, bool siblings) {
+        PositionMode mode;
+        if (!Refine(start, a, b, &mode)) return;
+        if (!InBounds(mode.position_m) || (mode.position_m - centre).norm() > 1.5 * radius) return;
+        // The source lies within the searched sphere: no axis of the covariance may exceed it
+        // (far away, range is barely observable and (H^T W H)^-1 grows without bound).
+        const Eigen::SelfAdjointEigenSolver<Mat3> eig(mode.covariance_m2);
+        mode.covariance_m2 = eig.eigenvectors() *
+                             eig.eigenvalues().cwiseMax(0.0).cwiseMin(radius * radius).asDiagonal() *
+                             eig.eigenvectors().transpose();
+        for (PositionMode& other : modes) {
+          const Vec3 delta = mode.position_m - other.position_m;
+          const Mat3 spread = mode.covariance_m2 + other.covariance_m2;
+          if (delta.dot(spread.ldlt().solve(delta)) < 9.0 || delta.norm() < 1e-3 * array_.aperture_m()) {
+            if (mode.score > other.score) other = mode;
+            best = std::max(best, mode.score);
+            return;
+          }
+        }
+        modes.push_back(mode);
+        best = std::max(best, mode.score);
+        if (!siblings) return;
+        const Vec3 found = mode.position_m;
+        for (const Vec3& candidate : ClosedFormCandidates(array_, array_.Tdoa(found))) {
+          if ((candidate - found).norm() < 1e-3 * array_.aperture_m()) continue;
+          const Eigen::VectorXd lag = array_.Tdoa(candidate) * fs;
+          std::vector<double> c_lo(static_cast<size_t>(pairs)), c_hi(static_cast<size_t>(pairs));
+          for (int p = 0; p < pairs; ++p) {
+            c_lo[static_cast<size_t>(p)] = lag(p) - 3.0;
+            c_hi[static_cast<size_t>(p)] = lag(p) + 3.0;
+          }
+          consider(candidate, c_lo, c_hi, /*siblings=*/false);
+        }
+      };
+  for (size_t i = 0; i < keep && refined < options_.refinement_budget; ++i) {
+    if (cells[i].upper < best - margin) break;  // no cell left can hold a mode near the best
+    Vec3 x;
+    double rad = 0.0;
+    geometry(cells[i].direction, cells[i].shell, &x, &rad);
+    // A cell holding a mode already found would most likely refine onto it again: the budget
+    // goes to cells elsewhere (a 4-sensor array's other solution has the same lags, so only
+    // the starting point tells the two apart).
+    bool holds_mode = false;
+    for (const PositionMode& mode : modes) holds_mode |= (mode.position_m - x).norm() <= rad;
+    if (holds_mode) continue;
+    lag_windows(x, rad);
+    for (int p = 0; p < pairs; ++p) {
+      lo[static_cast<size_t>(p)] = lags[static_cast<size_t>(p)] - widths[static_cast<size_t>(p)];
+      hi[static_cast<size_t>(p)] = lags[static_cast<size_t>(p)] + widths[static_cast<size_t>(p)];
+    }
+    ++refined;
+    consider(x, lo, hi, /*siblings=*/true);
+  }
+  std::sort(modes.begin(), modes.end(), [](const PositionMode& a, const PositionMode& b) { return a.score > b.score; });
+  for (const PositionMode& mode : modes) {
+    if (static_cast<int>(out.modes.size()) >= options_.max_modes || mode.score < best - margin) break;
+    out.modes.push_back(mode);
+  }
+  // The search chose among at most M lag combinations (3 degrees of freedom).
+  double product = 1.0, widest = 1.0;
+  for (int p = 0; p < pairs; ++p) {
+    if (!field_.usable(p)) continue;
+    const double w = field_.last_lag(p) - field_.first_lag(p) + 1;
+    product *= w;
+    widest = std::max(widest, w);
+  }
+  const double combinations = std::min(product, 8.0 * widest * widest * widest);
+  out.presence.threshold = PresenceThreshold(options_.false_alarm, combinations);
+  out.presence.statistic = out.modes.empty() ? 0.0 : out.modes.front().score / std::sqrt(static_cast<double>(usable));
+  out.presence.present = !out.modes.empty() && out.presence.statistic >= out.presence.threshold;
+  return out;
+}
+
+PresenceResult Acquisition::Around(const Measurement& m, const Vec3& position_m, const Mat3& covariance_m2) {
+  PresenceResult out;
+  field_.Build(m, /*with_levels=*/false);
+  const int usable = field_.usable_pairs();
+  out.threshold = std::numeric_limits<double>::infinity();
+  if (usable == 0 || field_.pair_count() != array_.pair_count()) return out;
+  const double fs = m.sample_rate_hz;
+  const Eigen::VectorXd lag = array_.Tdoa(position_m) * fs;
+  const Eigen::MatrixXd jac = array_.TdoaJacobian(position_m) * fs;
+  double sum = 0.0, combinations = 1.0;
+  for (int p = 0; p < field_.pair_count(); ++p) {
+    if (!field_.usable(p)) continue;
+    const Eigen::Vector3d row = jac.row(p).transpose();
+    const double spread = std::sqrt(std::max(0.0, row.dot(covariance_m2 * row)));
+    const double half = std::min(3.0 * spread + 1.0, static_cast<double>(field_.last_lag(p) - field_.first_lag(p)));
+    const double a = std::max(lag(p) - half, static_cast<double>(field_.first_lag(p)));
+    const double b = std::min(lag(p) + half, static_cast<double>(field_.last_lag(p)));
+    double at = 0.0, value = 0.0;
+    if (a <= b && field_.ArgMax(p, a, b, &at, &value)) {
+      sum += value;
+      combinations *= std::max(1.0, std::floor(b) - std::ceil(a) + 1.0);
+    }
+  }
+  out.statistic = sum / std::sqrt(static_cast<double>(usable));
+  out.threshold = PresenceThreshold(options_.false_alarm, combinations);
+  out.present = out.statistic >= out.threshold;
+  return out;
+}
+
+}  // namespace localizer::engine

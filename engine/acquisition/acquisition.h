@@ -1,0 +1,112 @@
+// Acquisition: every position the frame's TDOAs allow, before (and whenever) the tracker
+// has no trustworthy state; and the presence test, globally or around a track.
+//
+// Search. The plausible volume (a sphere of search_radius_m about the array centroid,
+// intersected with the bounds box) is cut into cells: azimuth_cells x polar_cells equal-area
+// directions (uniform in azimuth and in cos(polar angle)) times range_cells shells, log-spaced
+// from 0.05 apertures (the innermost holds the centre) to the radius. Each cell gets an
+// upper bound of the normalised spatial spectrum (lag_field.h) inside it:
+//     U(cell) = sum_p max{ n_p(l) : |l - lag_p(centre)| <= |grad lag_p| r_cell + 0.5 }
+// with lag_p(x) = h_p(x) fs and r_cell the cell's circumradius (a cell's lags cannot stray
+// further). Cells are refined in decreasing U until refinement_budget cells are used or U
+// falls below the best mode found minus mode_margin sqrt(P) (branch and bound: such a cell
+// cannot hold a mode close to the best). A refinement picks, per pair, the largest peak
+// within the cell's lags, solves the weighted TDOA least squares from the cell centre
+// (Gauss–Newton, weights 1/sigma_p^2, sigma_p from the peak's curvature and height:
+// sigma_p ~ 1 / (n_peak sqrt(-g''/g)) samples, the delay's CRLB), then re-picks each pair's
+// peak within 2 samples of the solution's lag and solves again (multipath: a pair whose pick
+// is off the solution by more than 3 sigma and 1.5 samples is left out of the solve, the
+// consensus subset, keeping at least 3 pairs). The mode's score is the normalised spectrum at the
+// solution, summed over all usable pairs; modes within 3 position standard deviations of a
+// stronger one are merged. Every mode within mode_margin sqrt(P) of the best survives (a
+// 4-sensor array's two exact TDOA solutions score alike and both survive), at most max_modes,
+// strongest first, each with its fix covariance (H^T W H)^-1.
+//
+// Presence (presence.h): statistic = best mode's score / sqrt(P); the combinations the
+// search chose from are M = min(prod_p W_p, 8 max_p W_p^3) for lag windows of W_p lags (a
+// position has 3 degrees of freedom). Around a track, the per-pair windows are
+// +-(3 sqrt(J_p C J_p^T) fs + 1) lags about the track's predicted lags (C its position
+// covariance) and M = prod_p W_p.
+//
+// Cost: (cells x (sensors + pairs)) + refinements x ~10 solves; ~1-3 ms for the default grid
+// on one core. Not thread-safe; one per session.
+#pragma once
+
+#include <limits>
+#include <vector>
+
+#include "engine/acquisition/lag_field.h"
+#include "engine/array/array_geometry.h"
+#include "engine/core/measurement.h"
+#include "engine/core/status.h"
+#include "engine/core/types.h"
+
+namespace localizer::engine {
+
+struct AcquisitionOptions {
+  Vec3 bounds_min_m = Vec3::Constant(-std::numeric_limits<double>::infinity());
+  Vec3 bounds_max_m = Vec3::Constant(std::numeric_limits<double>::infinity());
+  double search_radius_m = 0.0;  // 0: 10 apertures
+  double false_alarm = 1e-3;     // per frame, in (0, 0.1]
+  int max_modes = 4;             // in [1, 16]
+  double mode_margin = 3.0;      // modes within this x sqrt(P) of the best's score survive
+  int azimuth_cells = 40;
+  int polar_cells = 20;
+  int range_cells = 16;
+  int refinement_budget = 64;    // cells refined at most
+
+  Status Validate() const;
+};
+
+// One position hypothesis.
+struct PositionMode {
+  Vec3 position_m = Vec3::Zero();
+  Mat3 covariance_m2 = Mat3::Identity();
+  double score = 0.0;   // normalised spatial spectrum at the position, summed over pairs
+  int pairs_used = 0;   // pairs in the consensus subset of its solve
+};
+
+struct PresenceResult {
+  bool present = false;
+  double statistic = 0.0;  // z
+  double threshold = 0.0;  // t
+};
+
+struct AcquisitionResult {
+  PresenceResult presence;
+  std::vector<PositionMode> modes;  // strongest first; empty when none could be solved
+};
+
+class Acquisition {
+ public:
+  // INVALID_ARGUMENT naming the option.
+  static StatusOr<Acquisition> Create(const ArrayGeometry& array, const AcquisitionOptions& options);
+
+  // A moving array: search about its new pose.
+  void SetArray(const ArrayGeometry& array) { array_ = array; }
+  // The whole plausible volume.
+  AcquisitionResult Search(const Measurement& m);
+  // Presence near a track: position and its covariance (m, m^2).
+  PresenceResult Around(const Measurement& m, const Vec3& position_m, const Mat3& covariance_m2);
+  // The field built for the last Search or Around (the same measurement).
+  const LagField& field() const { return field_; }
+  const AcquisitionOptions& options() const { return options_; }
+  double search_radius_m() const;
+
+ private:
+  Acquisition(const ArrayGeometry& array, const AcquisitionOptions& options);
+  struct Direction {
+    Vec3 unit;
+    double angular_radius_rad;
+  };
+  bool Refine(const Vec3& start_m, const std::vector<double>& lo, const std::vector<double>& hi, PositionMode* mode) const;
+  bool InBounds(const Vec3& p) const;
+  double Score(const Vec3& p) const;
+
+  ArrayGeometry array_;
+  AcquisitionOptions options_;
+  std::vector<Direction> directions_;
+  LagField field_;
+};
+
+}  // namespace localizer::engine

@@ -1,0 +1,95 @@
+#include "engine/acquisition/lag_field.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace localizer::engine {
+
+void LagField::Build(const Measurement& m, bool with_levels) {
+  sample_rate_hz_ = m.sample_rate_hz;
+  pairs_.resize(m.pairs.size());
+  usable_ = 0;
+  for (size_t p = 0; p < m.pairs.size(); ++p) {
+    const PairMeasurement& pm = m.pairs[p];
+    Pair& out = pairs_[p];
+    out.first_lag = pm.first_lag_samples;
+    out.usable = !pm.gcc.empty() && pm.peak_value > 0.0 && pm.peak_snr > 0.0;
+    if (!out.usable) {
+      out.levels.assign(1, std::vector<float>(std::max<size_t>(pm.gcc.size(), 1), 0.0f));
+      continue;
+    }
+    ++usable_;
+    const double inv_sigma = pm.peak_snr / pm.peak_value;  // 1 / sigma_R
+    const int n = static_cast<int>(pm.gcc.size());
+    int level_count = 1;
+    while (with_levels && (1 << (level_count - 1)) < n) ++level_count;
+    out.levels.resize(static_cast<size_t>(level_count));
+    std::vector<float>& base = out.levels[0];
+    base.resize(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) base[static_cast<size_t>(i)] = static_cast<float>(pm.gcc[static_cast<size_t>(i)] * inv_sigma);
+    for (int l = 1; l < level_count; ++l) {
+      const std::vector<float>& prev = out.levels[static_cast<size_t>(l - 1)];
+      std::vector<float>& next = out.levels[static_cast<size_t>(l)];
+      next.resize(static_cast<size_t>(n));
+      const int d = 1 << (l - 1);
+      for (int i = 0; i < n; ++i) {
+        const float a = prev[static_cast<size_t>(std::max(i - d, 0))];
+        const float b = prev[static_cast<size_t>(std::min(i + d, n - 1))];
+        next[static_cast<size_t>(i)] = std::max(prev[static_cast<size_t>(i)], std::max(a, b));
+      }
+    }
+  }
+}
+
+double LagField::At(int p, double lag_samples) const {
+  const Pair& pair = pairs_[static_cast<size_t>(p)];
+  if (!pair.usable) return 0.0;
+  const std::vector<float>& g = pair.levels[0];
+  const double x = lag_samples - pair.first_lag;
+  if (!(x >= 0.0) || x > static_cast<double>(g.size() - 1)) return 0.0;
+  const size_t i = static_cast<size_t>(x);
+  if (i + 1 >= g.size()) return g.back();
+  const double f = x - static_cast<double>(i);
+  return (1.0 - f) * g[i] + f * g[i + 1];
+}
+
+double LagField::MaxAround(int p, double lag_samples, double half_width_samples) const {
+  const Pair& pair = pairs_[static_cast<size_t>(p)];
+  if (!pair.usable) return 0.0;
+  const int n = static_cast<int>(pair.levels[0].size());
+  const double lo = lag_samples - half_width_samples - pair.first_lag;
+  const double hi = lag_samples + half_width_samples - pair.first_lag;
+  if (hi < 0.0 || lo > n - 1) return 0.0;
+  const int i_lo = std::max(0, static_cast<int>(std::floor(lo)));
+  const int i_hi = std::min(n - 1, static_cast<int>(std::ceil(hi)));
+  const int centre = (i_lo + i_hi) / 2;
+  const int need = std::max(centre - i_lo, i_hi - centre);  // half-width to cover [i_lo, i_hi]
+  int level = 0;
+  while ((1 << level) - 1 < need && level + 1 < static_cast<int>(pair.levels.size())) ++level;
+  return pair.levels[static_cast<size_t>(level)][static_cast<size_t>(centre)];
+}
+
+bool LagField::ArgMax(int p, double lo_samples, double hi_samples, double* lag_samples, double* value) const {
+  const Pair& pair = pairs_[static_cast<size_t>(p)];
+  if (!pair.usable) return false;
+  const std::vector<float>& g = pair.levels[0];
+  const int n = static_cast<int>(g.size());
+  const int i_lo = std::max(0, static_cast<int>(std::ceil(lo_samples - pair.first_lag)));
+  const int i_hi = std::min(n - 1, static_cast<int>(std::floor(hi_samples - pair.first_lag)));
+  if (i_lo > i_hi) return false;
+  int best = i_lo;
+  for (int i = i_lo + 1; i <= i_hi; ++i) {
+    if (g[static_cast<size_t>(i)] > g[static_cast<size_t>(best)]) best = i;
+  }
+  double offset = 0.0;
+  if (best > 0 && best < n - 1) {
+    const double a = g[static_cast<size_t>(best - 1)], b = g[static_cast<size_t>(best)], c = g[static_cast<size_t>(best + 1)];
+    const double denom = a - 2.0 * b + c;
+    if (denom < 0.0) offset = std::clamp(0.5 * (a - c) / denom, -0.5, 0.5);
+  }
+  *lag_samples = pair.first_lag + best + offset;
+  *value = g[static_cast<size_t>(best)];
+  return true;
+}
+
+}  // namespace localizer::engine

@@ -1,0 +1,196 @@
+// ParticleSet's several hypotheses (particle_set.h): mixture sampling, per-label moments,
+// resampling that keeps each label's kernel its own, and position bounds.
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "engine/core/fast_math.h"
+#include "engine/filters/particle_set.h"
+
+namespace localizer::engine {
+namespace {
+
+constexpr int kMaxComponents = 16;
+
+// Lower-triangular (or eigen) root of a covariance that may be semi-definite.
+Mat6 RootOf(const Mat6& covariance) {
+  const Eigen::LLT<Mat6> llt(covariance);
+  if (llt.info() == Eigen::Success) return llt.matrixL();
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(0.5 * (covariance + covariance.transpose()));
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+}
+
+// Weight, mean and covariance per label, in the set's coordinates.
+struct LabelMoments {
+  std::array<double, kMaxComponents> weight{};
+  std::array<Vec6, kMaxComponents> mean;
+  std::array<Mat6, kMaxComponents> cov;
+};
+
+LabelMoments MomentsByLabel(int n, const std::array<const float*, 6>& cols, const std::vector<uint8_t>& label,
+                            const std::vector<float>& w) {
+  LabelMoments out;
+  std::array<Vec6, kMaxComponents> sum;
+  for (int c = 0; c < kMaxComponents; ++c) {
+    sum[static_cast<size_t>(c)].setZero();
+    out.cov[static_cast<size_t>(c)].setZero();
+  }
+  for (int i = 0; i < n; ++i) {
+    const size_t c = label[static_cast<size_t>(i)];
+    const double wi = w[static_cast<size_t>(i)];
+    out.weight[c] += wi;
+    for (int r = 0; r < 6; ++r) sum[c](r) += wi * cols[static_cast<size_t>(r)][i];
+  }
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    out.mean[c] = out.weight[c] > 0.0 ? Vec6(sum[c] / out.weight[c]) : Vec6::Zero();
+  }
+  for (int i = 0; i < n; ++i) {
+    const size_t c = label[static_cast<size_t>(i)];
+    Vec6 d;
+    for (int r = 0; r < 6; ++r) d(r) = cols[static_cast<size_t>(r)][i] - out.mean[c](r);
+    out.cov[c] += w[static_cast<size_t>(i)] * d * d.transpose();
+  }
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    if (out.weight[c] > 0.0) out.cov[c] /= out.weight[c];
+  }
+  return out;
+}
+
+}  // namespace
+
+void ParticleSet::SampleMixture(const std::vector<Component>& components) {
+  const int k = std::min(static_cast<int>(components.size()), kMaxComponents);
+  double total = 0.0;
+  for (int c = 0; c < k; ++c) total += std::max(components[static_cast<size_t>(c)].weight, 0.0);
+  // Counts by largest remainder, at least one particle each.
+  std::vector<int> count(static_cast<size_t>(k), 1);
+  int assigned = k;
+  for (int c = 0; c < k; ++c) {
+    const double share = total > 0.0 ? components[static_cast<size_t>(c)].weight / total : 1.0 / k;
+    const int extra = std::max(0, static_cast<int>(std::floor(share * (n_ - k))));
+    count[static_cast<size_t>(c)] += extra;
+    assigned += extra;
+  }
+  for (int c = 0; assigned < n_; c = (c + 1) % k, ++assigned) ++count[static_cast<size_t>(c)];
+  label_.assign(static_cast<size_t>(n_), 0);
+  next_label_.assign(static_cast<size_t>(n_), 0);
+  const uint32_t key = NextKey();
+  const std::array<float*, 6> cols = cur_.Pointers();
+  int i = 0;
+  for (int c = 0; c < k; ++c) {
+    const Component& comp = components[static_cast<size_t>(c)];
+    Vec6 centre = comp.mean;
+    centre.head<3>() -= origin_m_;
+    const Eigen::Matrix<float, 6, 6> l = comp.root.cast<float>();
+    const Eigen::Matrix<float, 6, 1> mu = centre.cast<float>();
+    for (int j = 0; j < count[static_cast<size_t>(c)] && i < n_; ++j, ++i) {
+      float z[6];
+      for (int d = 0; d < 6; ++d) z[d] = NormalFromUniform(UniformFromCounter(key, 6u * i + d));
+      for (int r = 0; r < 6; ++r) {
+        float v = mu(r);
+        for (int d = 0; d < 6; ++d) v += l(r, d) * z[d];
+        cols[r][i] = v;
+      }
+      label_[static_cast<size_t>(i)] = static_cast<uint8_t>(c);
+    }
+  }
+  labels_ = k;
+  SetEqualWeights();
+}
+
+std::vector<WeightedBelief> ParticleSet::Modes(double min_weight) const {
+  if (labels_ <= 1) return {WeightedBelief{1.0, MeanAndCovariance()}};
+  const LabelMoments m = MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(),
+                                             cur_.vy.data(), cur_.vz.data()}, label_, w_);
+  std::vector<WeightedBelief> out;
+  double kept = 0.0;
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    if (!(m.weight[c] >= min_weight) || m.weight[c] <= 0.0) continue;
+    WeightedBelief b;
+    b.weight = m.weight[c];
+    b.belief.mean = m.mean[c];
+    b.belief.mean.head<3>() += origin_m_;
+    b.belief.covariance = m.cov[c];
+    kept += b.weight;
+    out.push_back(b);
+  }
+  if (out.empty()) return {WeightedBelief{1.0, MeanAndCovariance()}};
+  for (WeightedBelief& b : out) b.weight /= kept;
+  std::sort(out.begin(), out.end(), [](const WeightedBelief& a, const WeightedBelief& b) { return a.weight > b.weight; });
+  return out;
+}
+
+void ParticleSet::ResampleModes(double kernel_scale) {
+  // Each label's moments before resampling: its kernel's shape and centre.
+  std::array<Eigen::Matrix<float, 6, 6>, kMaxComponents> l;
+  std::array<Eigen::Matrix<float, 6, 1>, kMaxComponents> shift;
+  const double d = 6.0;
+  const double h = std::min(0.95, kernel_scale * std::pow(4.0 / (n_ * (d + 2.0)), 1.0 / (d + 4.0)));
+  const double a = kernel_scale > 0.0 ? std::sqrt(1.0 - h * h) : 1.0;
+  const LabelMoments moments = MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(),
+                                                   cur_.vy.data(), cur_.vz.data()}, label_, w_);
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    l[c].setZero();
+    shift[c].setZero();
+    if (moments.weight[c] <= 0.0) continue;
+    l[c] = (h * RootOf(moments.cov[c])).cast<float>();
+    shift[c] = ((1.0 - a) * moments.mean[c]).cast<float>();
+  }
+  SystematicIndices();
+  DrawKernelNoise();
+  const std::array<float*, 6> from = cur_.Pointers(), to = next_.Pointers();
+  const float fa = static_cast<float>(a);
+  std::array<bool, kMaxComponents> alive{};
+  for (int m = 0; m < n_; ++m) {
+    const int src = index_[static_cast<size_t>(m)];
+    const int c = label_[static_cast<size_t>(src)];
+    alive[static_cast<size_t>(c)] = true;
+    next_label_[static_cast<size_t>(m)] = static_cast<uint8_t>(c);
+    const Eigen::Matrix<float, 6, 6>& lc = l[static_cast<size_t>(c)];
+    for (int r = 0; r < 6; ++r) {
+      float v = fa * from[r][src] + shift[static_cast<size_t>(c)](r);
+      if (kernel_scale > 0.0) {
+        for (int k = 0; k <= r; ++k) v += lc(r, k) * noise_[static_cast<size_t>(k)][static_cast<size_t>(m)];
+      }
+      to[r][m] = v;
+    }
+  }
+  std::swap(cur_, next_);
+  std::swap(label_, next_label_);
+  labels_ = static_cast<int>(std::count(alive.begin(), alive.end(), true));
+  if (labels_ == 1) std::fill(label_.begin(), label_.end(), 0);
+  else {
+    // Keep labels dense so the next pass stays within the live count.
+    std::array<int, kMaxComponents> remap{};
+    int next = 0;
+    for (int c = 0; c < kMaxComponents; ++c) remap[static_cast<size_t>(c)] = alive[static_cast<size_t>(c)] ? next++ : 0;
+    for (uint8_t& lab : label_) lab = static_cast<uint8_t>(remap[lab]);
+  }
+  SetEqualWeights();
+}
+
+void ParticleSet::SetBounds(const Vec3& min_m, const Vec3& max_m) {
+  bounded_ = false;
+  for (int i = 0; i < 3; ++i) bounded_ |= std::isfinite(min_m(i)) || std::isfinite(max_m(i));
+  // Infinite sides stay infinite in float; finite ones are shifted to the set's origin.
+  bound_lo_ = (min_m - origin_m_).cast<float>();
+  bound_hi_ = (max_m - origin_m_).cast<float>();
+}
+
+void ParticleSet::ApplyBounds() {
+  const float* __restrict x = cur_.x.data();
+  const float* __restrict y = cur_.y.data();
+  const float* __restrict z = cur_.z.data();
+  float* __restrict logw = logw_.data();
+  const float x0 = bound_lo_.x(), x1 = bound_hi_.x(), y0 = bound_lo_.y(), y1 = bound_hi_.y();
+  const float z0 = bound_lo_.z(), z1 = bound_hi_.z();
+#pragma omp simd
+  for (int i = 0; i < n_; ++i) {
+    const bool inside = x[i] >= x0 && x[i] <= x1 && y[i] >= y0 && y[i] <= y1 && z[i] >= z0 && z[i] <= z1;
+    logw[i] = inside ? logw[i] : -1e30f;
+  }
+}
+
+}  // namespace localizer::engine

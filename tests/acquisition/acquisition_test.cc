@@ -1,0 +1,163 @@
+// Acquisition finds every position the TDOAs allow and says whether a source is there.
+// Frames are made by tests/tdoa's independent signal generator (exact fractional delays).
+#include "engine/acquisition/acquisition.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "engine/acquisition/presence.h"
+#include "engine/tdoa/gcc_phat.h"
+#include "tests/tdoa/tdoa_test_signals.h"
+
+namespace localizer::engine {
+namespace {
+
+using testing::ChannelDelaysSamples;
+using testing::DelayedNoiseFrame;
+using testing::MultipathFrame;
+using testing::Path;
+using testing::SignalSpec;
+
+TEST(NormalUpperQuantile, MatchesTabulatedValues) {
+  EXPECT_NEAR(NormalUpperQuantile(0.025), 1.959963985, 1e-8);
+  EXPECT_NEAR(NormalUpperQuantile(1e-3), 3.090232306, 1e-8);
+  EXPECT_NEAR(NormalUpperQuantile(1e-9), 5.997807015, 1e-7);
+  EXPECT_NEAR(NormalUpperQuantile(0.5), 0.0, 1e-9);
+  EXPECT_GT(NormalUpperQuantile(1e-200), 30.0);
+}
+
+struct Frame {
+  Measurement measurement;
+};
+
+Measurement Measure(const ArrayGeometry& array, const SignalSpec& spec, const std::vector<float>& frame) {
+  GccOptions gcc;
+  gcc.frame_samples = spec.frame_samples;
+  gcc.sample_rate_hz = spec.sample_rate_hz;
+  gcc.keep_gcc = true;
+  auto estimator = GccPhatEstimator::Create(array, gcc);
+  EXPECT_TRUE(estimator.ok());
+  Measurement m;
+  EXPECT_TRUE((*estimator)->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
+  return m;
+}
+
+// The other exact TDOA solution of a 4-sensor array (the mirror the closed form finds).
+TEST(Acquisition, FindsBothExactSolutionsOfAFourSensorArray) {
+  // A tetrahedron of 2.8 m edges; source 3 apertures out along a sensor's axis, where the
+  // other exact solution lies near the array (0.6, 0.6, 0.6), 7 m from the truth.
+  const auto array = *ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
+  const Vec3 truth(5.0, 5.0, 5.0);
+  const SignalSpec spec;
+  const auto frame = DelayedNoiseFrame(spec, ChannelDelaysSamples(array, truth, spec.sample_rate_hz), 10.0, 7);
+  const Measurement m = Measure(array, spec, frame);
+  auto acquisition = *Acquisition::Create(array, AcquisitionOptions{});
+  const AcquisitionResult result = acquisition.Search(m);
+  ASSERT_TRUE(result.presence.present);
+  ASSERT_GE(result.modes.size(), 2u) << "a 4-sensor array at 3 apertures has two exact solutions";
+  // One mode is the truth (within 4 sigma of its covariance); another explains the same
+  // TDOAs but lies elsewhere.
+  int true_modes = 0, ghosts = 0;
+  for (const PositionMode& mode : result.modes) {
+    const Vec3 err = mode.position_m - truth;
+    const double d2 = err.dot(mode.covariance_m2.ldlt().solve(err));
+    if (d2 < 16.0) {
+      ++true_modes;
+    } else {
+      const Eigen::VectorXd lag_gap = (array.Tdoa(mode.position_m) - array.Tdoa(truth)) * spec.sample_rate_hz;
+      if (lag_gap.cwiseAbs().maxCoeff() < 0.5 && err.norm() > 5.0) ++ghosts;
+    }
+  }
+  EXPECT_EQ(true_modes, 1);
+  EXPECT_GE(ghosts, 1);
+  EXPECT_NEAR(result.modes[0].score, result.modes[1].score, 3.0 * std::sqrt(3.0));
+}
+
+// A volumetric 8-sensor array: one solution, found although two pairs lock on an echo.
+TEST(Acquisition, EightSensorsFindTheSourceThroughAnEcho) {
+  std::vector<Vec3> sensors;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  for (int i = 0; i < 8; ++i) sensors.push_back(Vec3(u(rng), u(rng), u(rng)));
+  const auto array = *ArrayGeometry::Create(sensors, 1500.0);
+  const Vec3 truth(9.0, -6.0, -3.0);
+  const SignalSpec spec;
+  const std::vector<double> delays = ChannelDelaysSamples(array, truth, spec.sample_rate_hz);
+  std::vector<std::vector<Path>> channels;
+  for (int c = 0; c < 8; ++c) {
+    std::vector<Path> paths{{delays[static_cast<size_t>(c)] + 40.0, 1.0}};
+    // Channels 2 and 5 hear a strong echo whose delay misleads their pairs' peaks.
+    if (c == 2 || c == 5) paths.push_back({delays[static_cast<size_t>(c)] + 40.0 + 9.0 + 3.0 * c, 1.3});
+    channels.push_back(paths);
+  }
+  const Measurement m = Measure(array, spec, MultipathFrame(spec, channels, 5.0, 3));
+  auto acquisition = *Acquisition::Create(array, AcquisitionOptions{});
+  const AcquisitionResult result = acquisition.Search(m);
+  ASSERT_TRUE(result.presence.present);
+  ASSERT_FALSE(result.modes.empty());
+  const PositionMode& best = result.modes[0];
+  EXPECT_EQ(best.pairs_used, 5) << "the two pairs on the echo are left out";
+  const Vec3 err = best.position_m - truth;
+  EXPECT_LT(err.dot(best.covariance_m2.ldlt().solve(err)), 16.0) << best.position_m.transpose();
+  EXPECT_LT(err.norm(), 1.5);
+}
+
+// Noise alone: the per-frame false-alarm rate stays at or below the stated 1e-3 (200 frames:
+// at most 2 alarms allowed; the union bound makes it far rarer).
+TEST(Acquisition, PureNoiseIsNotASource) {
+  const auto array = *ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
+  SignalSpec spec;
+  auto acquisition = *Acquisition::Create(array, AcquisitionOptions{});
+  std::mt19937_64 rng(5);
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  int alarms = 0, local_alarms = 0;
+  double largest = 0.0;
+  for (int k = 0; k < 200; ++k) {
+    std::vector<float> frame(static_cast<size_t>(4 * spec.frame_samples));
+    for (float& v : frame) v = gauss(rng);
+    const Measurement m = Measure(array, spec, frame);
+    const AcquisitionResult result = acquisition.Search(m);
+    alarms += result.presence.present;
+    largest = std::max(largest, result.presence.statistic / result.presence.threshold);
+    local_alarms += acquisition.Around(m, Vec3(6, 0, 0), 0.01 * Mat3::Identity()).present;
+  }
+  EXPECT_LE(alarms, 2) << "largest statistic / threshold " << largest;
+  EXPECT_LE(local_alarms, 2);
+}
+
+// A weak but real source (-10 dB per channel) is present, both globally and at its place.
+TEST(Acquisition, AWeakSourceIsPresent) {
+  const auto array = *ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
+  const Vec3 truth(-3.0, 5.0, 2.0);
+  const SignalSpec spec;
+  const auto frame = DelayedNoiseFrame(spec, ChannelDelaysSamples(array, truth, spec.sample_rate_hz), -10.0, 9);
+  const Measurement m = Measure(array, spec, frame);
+  auto acquisition = *Acquisition::Create(array, AcquisitionOptions{});
+  EXPECT_TRUE(acquisition.Search(m).presence.present);
+  EXPECT_TRUE(acquisition.Around(m, truth, 0.25 * Mat3::Identity()).present);
+}
+
+// Bounds make positions outside impossible: the mirror solution above a surface goes.
+TEST(Acquisition, BoundsRemoveModesOutsideThem) {
+  const auto array = *ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
+  const Vec3 truth(5.0, 5.0, 5.0);
+  const SignalSpec spec;
+  const auto frame = DelayedNoiseFrame(spec, ChannelDelaysSamples(array, truth, spec.sample_rate_hz), 10.0, 7);
+  const Measurement m = Measure(array, spec, frame);
+  auto unbounded = *Acquisition::Create(array, AcquisitionOptions{});
+  const AcquisitionResult all = unbounded.Search(m);
+  ASSERT_GE(all.modes.size(), 2u);
+  // Everything beyond 2 m in x (the other solution lies at x = 0.6).
+  AcquisitionOptions options;
+  options.bounds_min_m.x() = 2.0;
+  auto bounded = *Acquisition::Create(array, options);
+  const AcquisitionResult kept = bounded.Search(m);
+  ASSERT_EQ(kept.modes.size(), 1u);
+  EXPECT_LT((kept.modes[0].position_m - truth).norm(), 1.0);
+}
+
+}  // namespace
+}  // namespace localizer::engine
