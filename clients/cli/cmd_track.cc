@@ -87,6 +87,7 @@ io::TrackSummary SummaryOf(const client::RemoteTrackResult& r, int channel_count
   double filter_s = 0.0;
   for (const client::StreamedEstimate& e : r.stream.estimates) {
     if (e.estimate.initialised) ++s.initialised_estimates;
+    s.presence.Add(e.estimate);
     tdoa_s += e.estimate.timings.tdoa_s;
     filter_s += e.estimate.timings.filter_s;
   }
@@ -128,6 +129,7 @@ int RunLocal(const TrackFlags& f, const io::TrackJob& job) {
   progress.Finish();
   if (!summary.ok()) return RuntimeError(kCommand, summary.status());
   PrintSummary(*summary, f.out_path);
+  if (auto line = summary->presence.NoSourceLine()) std::printf("%s\n", line->c_str());
   return kExitOk;
 }
 
@@ -162,7 +164,8 @@ int RunTrack(const std::vector<std::string>& args) {
       "CSV holds the same numbers as a local run with the same flags (the server runs the same\n"
       "engine; only the stage times differ, and only when both use the same backend). The\n"
       "summary adds the client latency (block sent -> estimate received) p50/p95/p99 and the\n"
-      "count of blocks the server rejected.");
+      "count of blocks the server rejected. A run in which no frame held a source ends with\n"
+      "\"no source found in N frames (presence statistic max X, threshold Y)\".");
   RegisterFlags(flags, &f);
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   if (f.print_every < 0) return UsageError(kCommand, "--print-every must be >= 0");

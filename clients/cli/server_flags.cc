@@ -64,6 +64,9 @@ void PrintStreamTotals(const client::StreamResult& result) {
   const client::LatencySummary latency = client::SummariseLatencies(result.ClientLatencies());
   std::printf("%s rejections=%zu gaps=%zu\n", client::FormatLatencyMs(latency).c_str(),
               result.rejections.size(), result.gaps.size());
+  io::PresenceSummary presence;
+  for (const client::StreamedEstimate& s : result.estimates) presence.Add(s.estimate);
+  if (auto line = presence.NoSourceLine()) std::printf("%s\n", line->c_str());
 }
 
 }  // namespace localizer::cli

@@ -6,6 +6,7 @@
 
 #include "clients/grpc/remote_track.h"
 #include "clients/grpc/streamer.h"
+#include "clients/io/presence_summary.h"
 #include "engine/core/flags.h"
 #include "engine/core/status.h"
 
@@ -34,6 +35,9 @@ StatusOr<client::RemoteTrackOptions> ParseStreamFlags(const StreamFlags& f);
 //   "session=ID token=T backend=cpu resumed=0 ttl_s=60"      (when opened; the token
 //                                                             is what `close` needs)
 //   "latency_ms p50=... p95=... p99=... max=... (n=...)  rejections=R gaps=G"  (at the end)
+//   "no source found in N frames (presence statistic max X, threshold Y)"   (then, when the
+//                                                             server tested presence and no
+//                                                             frame held a source)
 void PrintOpened(const v1::SessionOpened& opened);
 void PrintStreamTotals(const client::StreamResult& result);
 

@@ -1,5 +1,9 @@
 #include "clients/cli/session_flags.h"
 
+#include <cmath>
+#include <limits>
+#include <vector>
+
 namespace localizer::cli {
 
 void RegisterGccFlags(FlagSet& flags, SessionFlags* f) {
@@ -44,6 +48,53 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "std of the white acceleration driving the motion model, per axis");
   flags.String("backend", &c.backend, "NAME",
                "compute backend: cpu|gpu|auto (with --server: on the server)");
+  flags.String("bounds-min", &f->bounds_min, "X,Y,Z",
+               "lower corner of the box that can hold the source, m; per axis a number or -inf "
+               "(open) (default: the array file's bounds, else open)");
+  flags.String("bounds-max", &f->bounds_max, "X,Y,Z",
+               "upper corner of that box, m; per axis a number or inf (open)");
+  flags.OptionalDouble("surface-z", &f->array.surface_z_m, "Z", "from the array file, else open",
+                       "water surface, m (z up): the upper z bound");
+  flags.OptionalDouble("bottom-z", &f->array.bottom_z_m, "Z", "from the array file, else open",
+                       "sea or lake bottom, m (z up): the lower z bound");
+  flags.Double("search-radius", &c.search_radius_m, "M", "m",
+               "acquisition: radius about the array centre searched for a source (0: 10 apertures)");
+  flags.Double("presence-false-alarm", &c.presence_false_alarm, "P", "per frame",
+               "false-alarm probability of the source-presence test, in (0, 0.1]");
+  flags.Double("source-timeout", &c.source_timeout_s, "S", "s",
+               "a track coasting this long with no source heard is dropped and acquisition restarts");
+}
+
+StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::string& text, bool is_min) {
+  const std::string open = is_min ? "-inf" : "inf";
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    parts.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (parts.size() != 3) {
+    return InvalidArgument("--" + flag + " is \"" + text + "\"; expected X,Y,Z (a number or " + open +
+                           " per axis)");
+  }
+  engine::Vec3 v;
+  const char* axes = "xyz";
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::string& part = parts[static_cast<size_t>(axis)];
+    if (part == open || (!is_min && part == "+inf")) {
+      v[axis] = is_min ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
+      continue;
+    }
+    auto x = ParseFiniteDouble(part);
+    if (!x.ok()) {
+      return InvalidArgument("--" + flag + ": " + std::string(1, axes[axis]) + " is \"" + part +
+                             "\"; expected a number or " + open + " (open)");
+    }
+    v[axis] = *x;
+  }
+  return v;
 }
 
 StatusOr<engine::SessionConfig> BuildSessionConfig(const SessionFlags& f,
@@ -57,8 +108,33 @@ StatusOr<engine::SessionConfig> BuildSessionConfig(const SessionFlags& f,
   if (!likelihood.ok()) return InvalidArgument("--likelihood: " + likelihood.status().message());
   base.filter.likelihood = *likelihood;
   base.filter.tdoa_sigma_s = f.tdoa_sigma_us * 1e-6;
+  io::ArrayOverrides overrides = f.array;
+  if (!f.bounds_min.empty()) {
+    auto v = ParseBoundsFlag("bounds-min", f.bounds_min, true);
+    if (!v.ok()) return v.status();
+    if (f.array.bottom_z_m && std::isfinite(v->z())) {
+      return InvalidArgument("--bottom-z and the z of --bounds-min both give the lower z bound; keep one");
+    }
+    overrides.bounds_min_m = *v;
+  }
+  if (!f.bounds_max.empty()) {
+    auto v = ParseBoundsFlag("bounds-max", f.bounds_max, false);
+    if (!v.ok()) return v.status();
+    if (f.array.surface_z_m && std::isfinite(v->z())) {
+      return InvalidArgument("--surface-z and the z of --bounds-max both give the upper z bound; keep one");
+    }
+    overrides.bounds_max_m = *v;
+  }
   const engine::SessionConfig config =
-      io::TrackConfigFor(std::move(base), array, f.array, sample_rate_hz);
+      io::TrackConfigFor(std::move(base), array, overrides, sample_rate_hz);
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!(config.bounds_min_m[axis] < config.bounds_max_m[axis])) {
+      const char* names[3] = {"x", "y", "z"};
+      return InvalidArgument(std::string("bounds: ") + names[axis] + " min " + FormatDouble(config.bounds_min_m[axis]) +
+                             " is not below max " + FormatDouble(config.bounds_max_m[axis]) +
+                             " (--bounds-min/--bounds-max, --bottom-z/--surface-z, or the array file)");
+    }
+  }
   engine::SessionConfig check = config;
   if (runs == Runs::kOnServer) {
     if (config.backend != "cpu" && config.backend != "gpu" && config.backend != "auto") {

@@ -19,15 +19,22 @@ struct SessionFlags {
   std::string weighting = engine::WeightingName(engine::SessionConfig{}.weighting);
   std::string likelihood = engine::LikelihoodName(engine::SessionConfig{}.filter.likelihood);
   double tdoa_sigma_us = engine::SessionConfig{}.filter.tdoa_sigma_s * 1e6;
-  io::ArrayOverrides array;  // --sound-speed, --reference
+  io::ArrayOverrides array;  // --sound-speed, --reference, --surface-z, --bottom-z
+  std::string bounds_min;    // --bounds-min X,Y,Z ("" = the array file's)
+  std::string bounds_max;    // --bounds-max X,Y,Z
 };
 
 // --sound-speed, --reference, --weighting, --phat-beta, --band-low, --band-high.
 void RegisterGccFlags(FlagSet& flags, SessionFlags* f);
 // --frame, --hop, --particles, --likelihood, --SEED_FLAG, --tdoa-sigma-us, --accel-noise,
-// --backend. `seed_flag` names the filter seed's flag ("seed" for track; simulate's --seed
+// --backend; source presence and bounds: --bounds-min, --bounds-max, --surface-z,
+// --bottom-z, --search-radius, --presence-false-alarm, --source-timeout. `seed_flag` names the filter seed's flag ("seed" for track; simulate's --seed
 // is the scenario's).
 void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& seed_flag);
+
+// "X,Y,Z" with each axis a number or, for an open side, "-inf" (is_min) / "inf" (max);
+// INVALID_ARGUMENT naming `flag` and the axis.
+StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::string& text, bool is_min);
 
 // Where the session will run: a local engine::Session, or a server.
 enum class Runs { kLocally, kOnServer };

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -16,7 +17,8 @@ namespace {
 using nlohmann::json;
 
 const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz", "sensors_m",
-                                            "reference_sensor", "band_hz"};
+                                            "reference_sensor", "band_hz",  "bounds_min_m",
+                                            "bounds_max_m",    "surface_z_m", "bottom_z_m"};
 
 // A finite number at `value`, or an error naming `field`.
 StatusOr<double> FiniteNumber(const json& value, const std::string& source,
@@ -67,13 +69,75 @@ StatusOr<int> ParseReference(const json& value, const std::string& source) {
   return static_cast<int>(value.get<int64_t>());
 }
 
+// One side of the bounds box: per axis a finite number, or null / the string naming its
+// open direction ("-inf" for a min, "inf" for a max).
+Status ParseBoundsSide(const json& row, const std::string& source, const std::string& field, bool is_min,
+                       engine::Vec3* out) {
+  if (!row.is_array() || row.size() != 3) {
+    return InvalidArgument(source + ": " + field + " is " + row.dump() +
+                           ", not [x, y, z] (a number or null per axis; null = open)");
+  }
+  const double open = is_min ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
+  for (int axis = 0; axis < 3; ++axis) {
+    const json& v = row[axis];
+    const std::string name = field + "[" + std::to_string(axis) + "]";
+    if (v.is_null() || (v.is_string() && v.get<std::string>() == (is_min ? "-inf" : "inf"))) {
+      (*out)[axis] = open;
+      continue;
+    }
+    auto x = FiniteNumber(v, source, name);
+    if (!x.ok()) {
+      return InvalidArgument(source + ": " + name + " is " + v.dump() + "; must be a finite number, or null or \"" +
+                             (is_min ? "-inf" : "inf") + "\" for an open side");
+    }
+    (*out)[axis] = *x;
+  }
+  return Status::Ok();
+}
+
+Status ParseBounds(const json& root, const std::string& source, ArrayFile* array) {
+  if (root.contains("bounds_min_m")) {
+    LOCALIZER_RETURN_IF_ERROR(ParseBoundsSide(root["bounds_min_m"], source, "bounds_min_m", true, &array->bounds_min_m));
+  }
+  if (root.contains("bounds_max_m")) {
+    LOCALIZER_RETURN_IF_ERROR(ParseBoundsSide(root["bounds_max_m"], source, "bounds_max_m", false, &array->bounds_max_m));
+  }
+  if (root.contains("surface_z_m")) {
+    auto z = FiniteNumber(root["surface_z_m"], source, "surface_z_m");
+    if (!z.ok()) return z.status();
+    if (std::isfinite(array->bounds_max_m.z())) {
+      return InvalidArgument(source + ": surface_z_m and bounds_max_m[2] both give the upper z bound; keep one");
+    }
+    array->bounds_max_m.z() = *z;
+  }
+  if (root.contains("bottom_z_m")) {
+    auto z = FiniteNumber(root["bottom_z_m"], source, "bottom_z_m");
+    if (!z.ok()) return z.status();
+    if (std::isfinite(array->bounds_min_m.z())) {
+      return InvalidArgument(source + ": bottom_z_m and bounds_min_m[2] both give the lower z bound; keep one");
+    }
+    array->bounds_min_m.z() = *z;
+  }
+  const char* axes = "xyz";
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!(array->bounds_min_m[axis] < array->bounds_max_m[axis])) {
+      return InvalidArgument(source + ": the " + std::string(1, axes[axis]) + " bounds are empty: min " +
+                             std::to_string(array->bounds_min_m[axis]) + " must be below max " +
+                             std::to_string(array->bounds_max_m[axis]) +
+                             (axis == 2 ? " (bottom_z_m below surface_z_m, with z up)" : ""));
+    }
+  }
+  return Status::Ok();
+}
+
 Status CheckFields(const json& root, const std::string& source) {
   if (!root.is_object()) return InvalidArgument(source + ": top level must be a JSON object");
   for (const auto& item : root.items()) {
     if (!kKnownFields.contains(item.key())) {
       return InvalidArgument(source + ": unknown field \"" + item.key() +
                              "\" (known: sound_speed_mps, sample_rate_hz, sensors_m, "
-                             "reference_sensor, band_hz)");
+                             "reference_sensor, band_hz, bounds_min_m, bounds_max_m, surface_z_m, "
+                             "bottom_z_m)");
     }
   }
   for (const char* required : {"sound_speed_mps", "sensors_m"}) {
@@ -111,6 +175,7 @@ StatusOr<ArrayFile> FromJson(const json& root, const std::string& source) {
     }
     array.band_hz = std::make_pair(band[0].get<double>(), band[1].get<double>());
   }
+  LOCALIZER_RETURN_IF_ERROR(ParseBounds(root, source, &array));
   return array;
 }
 
@@ -146,6 +211,15 @@ Status WriteArrayJson(const std::string& path, const ArrayFile& array) {
   if (array.sample_rate_hz) root["sample_rate_hz"] = *array.sample_rate_hz;
   root["reference_sensor"] = array.reference_sensor;
   if (array.band_hz) root["band_hz"] = {array.band_hz->first, array.band_hz->second};
+  if (array.has_bounds()) {  // open sides as null
+    const auto side = [](const engine::Vec3& v) {
+      json row = json::array();
+      for (int axis = 0; axis < 3; ++axis) row.push_back(std::isfinite(v[axis]) ? json(v[axis]) : json(nullptr));
+      return row;
+    };
+    root["bounds_min_m"] = side(array.bounds_min_m);
+    root["bounds_max_m"] = side(array.bounds_max_m);
+  }
   json rows = json::array();
   for (const engine::Vec3& m : array.sensors_m) rows.push_back({m.x(), m.y(), m.z()});
   root["sensors_m"] = std::move(rows);

@@ -5,8 +5,16 @@
 //     "sample_rate_hz": 11025,                 optional, finite, > 0 (a WAV header wins)
 //     "sensors_m": [[x, y, z], ...],           required, metres, one row per sensor/channel
 //     "reference_sensor": 0,                   optional integer, default 0
-//     "band_hz": [300, 3000]                   optional processing hint: the source's band,
+//     "band_hz": [300, 3000],                  optional processing hint: the source's band,
 //                                              used as the GCC band when none is given
+//     "bounds_min_m": [x, y, z],               optional physical bounds on the source, metres:
+//     "bounds_max_m": [x, y, z],               per axis a number, or null (or "-inf" for a
+//                                              min, "inf" for a max) for an open side;
+//                                              default open everywhere; min < max per axis
+//     "surface_z_m": 7.03,                     optional, a water column with z up: the
+//     "bottom_z_m": -0.97                      surface is the upper z bound, the bottom the
+//                                              lower (each excludes the same side of
+//                                              bounds_max_m / bounds_min_m)
 //   }
 //
 // Reading also builds an engine::ArrayGeometry from the file, so a geometry the engine
@@ -15,6 +23,7 @@
 // ("reference_sensr") cannot be silently ignored. Every error names the source and field.
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +39,14 @@ struct ArrayFile {
   std::optional<double> sample_rate_hz;
   int reference_sensor = 0;
   std::optional<std::pair<double, double>> band_hz;  // (low, high), 0 <= low < high
+  // Physical bounds on the source (engine::SessionConfig::bounds_min_m/max_m): +-infinity
+  // on an open side, the default. surface_z_m / bottom_z_m land in bounds_max_m.z() /
+  // bounds_min_m.z().
+  engine::Vec3 bounds_min_m = engine::Vec3::Constant(-std::numeric_limits<double>::infinity());
+  engine::Vec3 bounds_max_m = engine::Vec3::Constant(std::numeric_limits<double>::infinity());
+  bool has_bounds() const {
+    return bounds_min_m.array().isFinite().any() || bounds_max_m.array().isFinite().any();
+  }
 };
 
 // `source` names the text in messages (usually its path).

@@ -87,6 +87,21 @@ StatusOr<std::vector<EstimateRow>> ReadEstimatesCsv(const std::string& path) {
   if (!columns.ok()) return columns.status();
   auto initialised_column = table->Column("initialised");
   if (!initialised_column.ok()) return initialised_column.status();
+  // Presence columns: files written before they existed have none (the row's presence
+  // then stays unknown); a file must have all or none of them.
+  const char* presence_names[5] = {"source_present", "presence_statistic", "presence_threshold", "ambiguous", "modes"};
+  int presence_columns[5];
+  int found = 0;
+  for (int i = 0; i < 5; ++i) {
+    auto column = table->Column(presence_names[i]);
+    presence_columns[i] = column.ok() ? *column : -1;
+    if (column.ok()) ++found;
+  }
+  if (found != 0 && found != 5) {
+    for (int i = 0; i < 5; ++i) {
+      if (presence_columns[i] < 0) return table->Column(presence_names[i]).status();
+    }
+  }
   std::vector<EstimateRow> estimates;
   for (size_t r = 0; r < table->row_count(); ++r) {
     auto v = StateValues(*table, r, *columns);
@@ -98,6 +113,19 @@ StatusOr<std::vector<EstimateRow>> ReadEstimatesCsv(const std::string& path) {
     row.position_m = engine::Vec3((*v)[1], (*v)[2], (*v)[3]);
     row.velocity_mps = engine::Vec3((*v)[4], (*v)[5], (*v)[6]);
     row.initialised = *initialised != 0.0;
+    if (found == 5) {
+      double presence[5];
+      for (int i = 0; i < 5; ++i) {
+        auto value = table->Number(r, presence_columns[i]);
+        if (!value.ok()) return value.status();
+        presence[i] = *value;
+      }
+      row.source_present = presence[0] != 0.0;
+      row.presence_statistic = presence[1];
+      row.presence_threshold = presence[2];
+      row.ambiguous = presence[3] != 0.0;
+      row.modes = static_cast<int>(presence[4]);
+    }
     estimates.push_back(row);
   }
   return estimates;
@@ -111,7 +139,8 @@ StatusOr<EstimatesCsvWriter> EstimatesCsvWriter::Open(const std::string& path,
   writer.out_ = std::make_unique<std::ofstream>(path);
   if (!*writer.out_) return InvalidArgument(path + ": cannot open for writing");
   std::string header = std::string(kStateColumns) +
-                       ",sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,reinitialised,tdoa_ms,filter_ms";
+                       ",sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,reinitialised,tdoa_ms,filter_ms,"
+                       "source_present,presence_statistic,presence_threshold,ambiguous,modes";
   for (int k : pair_sensors) {
     header += ",delay_s_" + std::to_string(k) + ",quality_" + std::to_string(k);
   }
@@ -128,7 +157,9 @@ Status EstimatesCsvWriter::Write(const engine::Estimate& e) {
   }
   values.insert(values.end(), {e.ess, e.nis, static_cast<double>(e.pairs_used), e.tdoa_sigma_s * 1e6,
                                e.initialised ? 1.0 : 0.0, e.reinitialised ? 1.0 : 0.0,
-                               e.timings.tdoa_s * 1e3, e.timings.filter_s * 1e3});
+                               e.timings.tdoa_s * 1e3, e.timings.filter_s * 1e3,
+                               e.source_present ? 1.0 : 0.0, e.presence_statistic, e.presence_threshold,
+                               e.ambiguous ? 1.0 : 0.0, static_cast<double>(e.modes)});
   for (size_t p = 0; p < pair_count_; ++p) {
     values.push_back(p < e.delay_s.size() ? e.delay_s[p] : NAN);
     values.push_back(p < e.quality.size() ? e.quality[p] : NAN);

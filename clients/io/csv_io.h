@@ -11,13 +11,18 @@
 //   ess,nis,pairs_used,tdoa_sigma_us,          filter health: pairs conditioned on, the
 //   initialised,reinitialised,                 TDOA noise assumed; flags are 0 or 1
 //   tdoa_ms,filter_ms,                         stage wall times of the frame
+//   source_present,presence_statistic,         source presence (0 or 1) and the detection
+//   presence_threshold,                        statistic and threshold behind it
+//   ambiguous,modes,                           several position hypotheses (0 or 1), and
+//                                              how many (1 resolved, 0 not initialised)
 //   delay_s_<k>,quality_<k>, ...               per sensor pair (reference, k), k ascending
 // Missing per-pair values are written as nan. Readers look columns up by name, so extra
-// columns are ignored.
+// columns are ignored; files written before the presence columns existed still read.
 #pragma once
 
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +43,12 @@ struct EstimateRow {
   engine::Vec3 position_m = engine::Vec3::Zero();
   engine::Vec3 velocity_mps = engine::Vec3::Zero();
   bool initialised = false;
+  // Presence columns; unset when the file predates them.
+  std::optional<bool> source_present = std::nullopt;
+  double presence_statistic = 0.0;
+  double presence_threshold = 0.0;
+  bool ambiguous = false;
+  int modes = 0;
 };
 
 StatusOr<std::vector<EstimateRow>> ReadEstimatesCsv(const std::string& path);

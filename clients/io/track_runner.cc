@@ -99,6 +99,7 @@ class TrackRun {
   Status Consume(const engine::Estimate& e) {
     ++summary_.estimates;
     if (e.initialised) ++summary_.initialised_estimates;
+    summary_.presence.Add(e);
     tdoa_total_s_ += e.timings.tdoa_s;
     filter_total_s_ += e.timings.filter_s;
     if (writer_) LOCALIZER_RETURN_IF_ERROR(writer_->Write(e));
@@ -149,6 +150,16 @@ engine::SessionConfig TrackConfigFor(engine::SessionConfig config, const ArrayFi
     config.band_low_hz = array.band_hz->first;  // the array file's hint, unless flags say
     config.band_high_hz = std::min(array.band_hz->second, 0.5 * sample_rate_hz);
   }
+  const bool base_unbounded =
+      !config.bounds_min_m.array().isFinite().any() && !config.bounds_max_m.array().isFinite().any();
+  if (base_unbounded && array.has_bounds()) {
+    config.bounds_min_m = array.bounds_min_m;
+    config.bounds_max_m = array.bounds_max_m;
+  }
+  if (overrides.bounds_min_m) config.bounds_min_m = *overrides.bounds_min_m;
+  if (overrides.bounds_max_m) config.bounds_max_m = *overrides.bounds_max_m;
+  if (overrides.bottom_z_m) config.bounds_min_m.z() = *overrides.bottom_z_m;
+  if (overrides.surface_z_m) config.bounds_max_m.z() = *overrides.surface_z_m;
   return config;
 }
 

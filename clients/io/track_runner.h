@@ -22,6 +22,7 @@
 
 #include "clients/io/array_json.h"
 #include "clients/io/csv_io.h"
+#include "clients/io/presence_summary.h"
 #include "clients/io/wav_io.h"
 #include "engine/core/estimate.h"
 #include "engine/core/status.h"
@@ -52,6 +53,7 @@ struct TrackSummary {
   uint64_t blocks = 0;
   uint64_t estimates = 0;  // frames processed
   uint64_t initialised_estimates = 0;
+  PresenceSummary presence;  // source presence over the run (NoSourceLine)
   double wall_s = 0.0;       // streaming and processing, excluding setup
   double mean_tdoa_s = 0.0;  // mean stage wall time per frame
   double mean_filter_s = 0.0;
@@ -73,13 +75,20 @@ StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callb
 struct ArrayOverrides {
   std::optional<double> sound_speed_mps;
   std::optional<int> reference_sensor;
+  // Bounds: a whole side of the box (--bounds-min / --bounds-max), then the water column's
+  // z sides (--bottom-z / --surface-z) over it.
+  std::optional<engine::Vec3> bounds_min_m;
+  std::optional<engine::Vec3> bounds_max_m;
+  std::optional<double> bottom_z_m;
+  std::optional<double> surface_z_m;
 };
 
 // The session config `localizer-cli track` runs with, locally or on a server: `base` (the
 // user's choices) with the array file's sensors, sound speed and reference sensor unless
 // overridden, `sample_rate_hz` (the WAV header's), and, when `base` leaves both band edges
-// at 0, the array file's band_hz as the GCC band (its high edge capped at Nyquist). Not
-// validated: Session::Create (or the server) does that.
+// at 0, the array file's band_hz as the GCC band (its high edge capped at Nyquist); when
+// `base` is unbounded, the array file's bounds; then the overrides' bounds. Not validated:
+// Session::Create (or the server) does that.
 engine::SessionConfig TrackConfigFor(engine::SessionConfig base, const ArrayFile& array,
                                      const ArrayOverrides& overrides, double sample_rate_hz);
 

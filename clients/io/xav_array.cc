@@ -22,6 +22,8 @@ StatusOr<XavArray> ReadXavHydrophoneCsv(const std::string& path) {
   xav.array.sound_speed_mps = kXavSoundSpeedMps;
   xav.array.reference_sensor = kXavReferenceSensor;
   xav.array.sample_rate_hz = kXavSampleRateHz;
+  xav.array.bounds_max_m.z() = kXavSurfaceZM;
+  xav.array.bounds_min_m.z() = kXavBottomZM;
   for (size_t r = 0; r < table->row_count(); ++r) {
     engine::Vec3 position_m;
     for (int axis = 0; axis < 3; ++axis) {

@@ -28,6 +28,12 @@ constexpr std::string_view kPage = R"html(<!DOCTYPE html>
   svg .latest { fill: #d62728; stroke: #fff; stroke-width: 1.5; }
   svg .target rect { fill: #2ca02c; } svg .target.tentative rect { fill: #bbb; }
   svg .target.coasting rect { fill: #ff7f0e; } svg .target text { font-size: 10px; }
+  svg .latest.silent { fill: #fff; stroke: #d62728; stroke-width: 2; }
+  .presence { display: inline-block; border-radius: 3px; padding: 0 5px; margin-right: 6px;
+              font-family: ui-monospace, monospace; font-size: 12px; color: #fff; }
+  .presence.present { background: #2ca02c; } .presence.silent { background: #888; }
+  .presence.untested { background: #ccc; color: #333; }
+  .presence.ambiguous { background: #ff7f0e; }
 </style>
 </head>
 <body>
@@ -35,7 +41,7 @@ constexpr std::string_view kPage = R"html(<!DOCTYPE html>
 <div id="status">loading /sessions ...</div>
 <div class="legend"><span style="color:#1f77b4">&#9679;</span> sensor &nbsp;
   <span style="color:#d62728">&#9473;</span> estimated track (last fixes) &nbsp;
-  <span style="color:#d62728">&#9679;</span> latest estimate &nbsp;
+  <span style="color:#d62728">&#9679;</span> latest estimate (&#9675; hollow: no source heard, a prediction) &nbsp;
   <span style="color:#2ca02c">&#9632;</span> target track (detection sessions) &nbsp; axes in metres</div>
 <div id="sessions"></div>
 <p><a href="/metrics">/metrics</a> (Prometheus) &middot; <a href="/sessions">/sessions</a> (JSON)</p>
@@ -62,7 +68,7 @@ function tickStep(span) {
 function fmt(v) { return Math.abs(v) < 1e-9 ? "0" : Number(v.toPrecision(4)).toString(); }
 
 // One panel: axes a and b (0 x, 1 y, 2 z) of the sensors and the track, equal scale in metres.
-function drawPanel(svg, title, a, b, sensors, track, targets) {
+function drawPanel(svg, title, a, b, sensors, track, targets, silent) {
   while (svg.firstChild) svg.removeChild(svg.firstChild);
   const names = ["x", "y", "z"];
   const pts = sensors.concat(track.map(p => p.position_m), targets.map(t => t.position_m))
@@ -104,7 +110,7 @@ function drawPanel(svg, title, a, b, sensors, track, targets) {
     el("svg:polyline", {class: "track", "data-points": line.length,
                         points: line.map(p => `${X(p.position_m[a]).toFixed(1)},${Y(p.position_m[b]).toFixed(1)}`).join(" ")}, svg);
     const last = line[line.length - 1].position_m;
-    el("svg:circle", {class: "latest", cx: X(last[a]), cy: Y(last[b]), r: 6}, svg);
+    el("svg:circle", {class: silent ? "latest silent" : "latest", cx: X(last[a]), cy: Y(last[b]), r: 6}, svg);
   }
   // Detection sessions: each target track after the latest scan, labelled with its id.
   targets.filter(t => t.position_m[a] !== null && t.position_m[b] !== null).forEach(t => {
@@ -122,6 +128,8 @@ function card(id) {
   if (c) return c;
   const root = el("section", {class: "session", "data-id": id}, document.getElementById("sessions"));
   c = {root, heading: el("h2", {}, root), meta: el("div", {class: "meta"}, root)};
+  c.badges = el("div", {class: "badges"}, c.meta);
+  c.text = el("span", {}, c.meta);
   const panels = el("div", {class: "panels"}, root);
   c.xy = el("svg:svg", {class: "plot xy", viewBox: `0 0 ${W} ${H}`}, panels);
   c.xz = el("svg:svg", {class: "plot xz", viewBox: `0 0 ${W} ${H}`}, panels);
@@ -150,9 +158,24 @@ function render(doc) {
     if (s.model_probabilities.length) {
       meta += " / models " + s.model_probabilities.map(m => `${m.model} ${(100 * m.probability).toFixed(0)}%`).join(" ");
     }
-    c.meta.textContent = meta;
-    drawPanel(c.xy, "x-y (top view)", 0, 1, s.sensors_m, s.track, s.targets);
-    drawPanel(c.xz, "x-z (side view)", 0, 2, s.sensors_m, s.track, s.targets);
+    c.text.textContent = meta;
+    // The latest frame's presence (present / silent) and ambiguity, as badges.
+    while (c.badges.firstChild) c.badges.removeChild(c.badges.firstChild);
+    const pr = s.presence;
+    if (pr) {
+      const tip = pr.state === "untested" ? "the engine ran no presence test" :
+          `presence statistic ${fmt(pr.statistic || 0)}, threshold ${fmt(pr.threshold || 0)}; ` +
+          `${s.present_frames} of ${s.frames} frames held a source`;
+      el("span", {class: "presence " + pr.state, title: tip}, c.badges,
+         pr.state === "untested" ? "presence n/a" : pr.state);
+      if (pr.ambiguous) {
+        el("span", {class: "presence ambiguous", title: "several position hypotheses fit the data"},
+           c.badges, `ambiguous: ${pr.modes} modes`);
+      }
+    }
+    const silent = !!(pr && pr.state === "silent");
+    drawPanel(c.xy, "x-y (top view)", 0, 1, s.sensors_m, s.track, s.targets, silent);
+    drawPanel(c.xz, "x-z (side view)", 0, 2, s.sensors_m, s.track, s.targets, silent);
   }
   for (const [id, c] of cards) if (!seen.has(id)) { c.root.remove(); cards.delete(id); }
   const shown = doc.sessions.length ? `${doc.sessions_total} session(s)` :

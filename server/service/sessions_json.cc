@@ -54,6 +54,21 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
   s["blocks"] = info.blocks_processed();
   s["frames"] = info.frames_processed();
   s["initialised_frames"] = track.initialised_frames;
+  s["present_frames"] = track.present_frames;
+  // The latest frame's source presence and ambiguity; null before the first frame and for
+  // detection sessions. "state": "present", "silent", or "untested" (the engine ran no
+  // presence test: threshold 0).
+  if (track.presence && !host.detections()) {
+    const PresencePoint& p = *track.presence;
+    s["presence"] = {{"state", !p.tested ? "untested" : p.present ? "present" : "silent"},
+                     {"source_present", p.present},
+                     {"statistic", Number(p.statistic)},
+                     {"threshold", Number(p.threshold)},
+                     {"ambiguous", p.ambiguous},
+                     {"modes", p.modes}};
+  } else {
+    s["presence"] = nullptr;
+  }
   s["age_s"] = Number(info.age_s());
   s["idle_s"] = Number(info.idle_s());
   s["track_capacity"] = track.capacity;
@@ -66,7 +81,9 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
                         {"position_m", Triple(p.position_m)},
                         {"velocity_mps", Triple(p.velocity_mps)},
                         {"position_std_m", Triple(p.position_std_m)},
-                        {"reinitialised", p.reinitialised}});
+                        {"reinitialised", p.reinitialised},
+                        {"source_present", p.source_present},
+                        {"ambiguous", p.ambiguous}});
     }
   }
   s["track"] = std::move(points);

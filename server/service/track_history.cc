@@ -14,6 +14,8 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
     point.frame_index = estimate.frame_index;
     point.t_s = estimate.t_s;
     point.reinitialised = estimate.reinitialised;
+    point.source_present = estimate.source_present;
+    point.ambiguous = estimate.ambiguous;
     for (int i = 0; i < 3; ++i) {
       point.position_m[i] = estimate.state(i);
       point.velocity_mps[i] = estimate.state(3 + i);
@@ -21,8 +23,17 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
       point.position_std_m[i] = std::sqrt(std::max(0.0, estimate.covariance(i, i)));
     }
   }
+  PresencePoint presence;
+  presence.tested = estimate.presence_threshold > 0.0;
+  presence.present = estimate.source_present;
+  presence.statistic = estimate.presence_statistic;
+  presence.threshold = estimate.presence_threshold;
+  presence.ambiguous = estimate.ambiguous;
+  presence.modes = estimate.modes;
   std::lock_guard<std::mutex> lock(mutex_);
   ++frames_;
+  if (estimate.source_present) ++present_frames_;
+  presence_ = presence;
   model_probabilities_ = estimate.model_probabilities;
   if (estimate.platform) platform_ = estimate.platform;
   if (!estimate.initialised) return;
@@ -59,6 +70,8 @@ TrackSnapshot TrackHistory::Snapshot() const {
   snapshot.model_probabilities = model_probabilities_;
   snapshot.platform = platform_;
   snapshot.targets = targets_;
+  snapshot.presence = presence_;
+  snapshot.present_frames = present_frames_;
   snapshot.points.reserve(ring_.size());
   // Oldest first: once the ring is full, the oldest point sits at next_.
   for (size_t k = 0; k < ring_.size(); ++k) snapshot.points.push_back(ring_[(next_ + k) % ring_.size()]);

@@ -1,7 +1,7 @@
 // TrackHistory: a session's recent estimated track for the live web view (GET /sessions).
 //
 // A bounded ring of the last `capacity` initialised positions (with their frame instant
-// t_s) and the latest estimate's model probabilities. Frames before the tracker's first
+// t_s) and the latest estimate's model probabilities, source presence and ambiguity. Frames before the tracker's first
 // fix carry no position and are only counted. Memory is fixed once the ring is full
 // (capacity x 40 bytes), so a long session costs no more than a short one.
 //
@@ -28,6 +28,8 @@ struct TrackPoint {
   double velocity_mps[3] = {};   // vx, vy, vz
   double position_std_m[3] = {};  // square roots of the covariance's position diagonal
   bool reinitialised = false;     // the tracker restarted from a new fix at this frame
+  bool source_present = false;    // a source was heard at this frame (else a prediction)
+  bool ambiguous = false;         // several position hypotheses fit this frame
 };
 
 // A detection session's target after its latest scan.
@@ -37,11 +39,25 @@ struct TargetPoint {
   double position_m[3] = {};
 };
 
+// An audio session's source presence and ambiguity at its latest frame
+// (engine::Estimate::source_present, ...); `tested` is false when the engine ran no
+// presence test (threshold 0).
+struct PresencePoint {
+  bool tested = false;
+  bool present = false;
+  double statistic = 0.0;
+  double threshold = 0.0;
+  bool ambiguous = false;
+  int modes = 0;
+};
+
 struct TrackSnapshot {
   std::vector<TrackPoint> points;  // oldest first, at most capacity
   std::vector<engine::ModelProbability> model_probabilities;  // of the latest estimate
   std::optional<engine::PlatformAttitude> platform;  // moving arrays: the latest pose
   std::vector<TargetPoint> targets;  // detection sessions: the latest scan's tracks
+  std::optional<PresencePoint> presence;  // audio sessions: the latest frame's; none before it
+  uint64_t present_frames = 0;       // frames that held a source
   uint64_t frames = 0;             // estimates appended, initialised or not (detection
                                    // sessions: scans)
   uint64_t initialised_frames = 0;
@@ -70,6 +86,8 @@ class TrackHistory final {
   std::vector<engine::ModelProbability> model_probabilities_;  // guarded by mutex_
   std::optional<engine::PlatformAttitude> platform_;           // guarded by mutex_
   std::vector<TargetPoint> targets_;                           // guarded by mutex_
+  std::optional<PresencePoint> presence_;                      // guarded by mutex_
+  uint64_t present_frames_ = 0;      // guarded by mutex_
   uint64_t frames_ = 0;              // guarded by mutex_
   uint64_t initialised_frames_ = 0;  // guarded by mutex_
 };

@@ -1,6 +1,8 @@
 #include "server/wire/config_wire.h"
 
 #include <cmath>
+#include <limits>
+#include <sstream>
 
 namespace localizer::wire {
 namespace {
@@ -54,6 +56,62 @@ Status Rename(Status status) {
     }
   }
   return {status.code(), m};
+}
+
+std::string Num(double v) {
+  std::ostringstream out;
+  out.precision(17);
+  out << v;
+  return out.str();
+}
+
+// Bounds -> the engine's box: an unset side is open (+-infinity), as is a side set to
+// infinity in its open direction; anything else must be finite, within 1e7 m, and each
+// axis's min < max. Errors name the proto field ("bounds.max_z_m").
+Status BoundsFromProto(const v1::Bounds& b, engine::SessionConfig* c) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  struct Axis {
+    const char* name;
+    bool has_min, has_max;
+    double min, max;
+  };
+  const Axis axes[3] = {{"x", b.has_min_x_m(), b.has_max_x_m(), b.min_x_m(), b.max_x_m()},
+                        {"y", b.has_min_y_m(), b.has_max_y_m(), b.min_y_m(), b.max_y_m()},
+                        {"z", b.has_min_z_m(), b.has_max_z_m(), b.min_z_m(), b.max_z_m()}};
+  for (int i = 0; i < 3; ++i) {
+    const Axis& a = axes[i];
+    const std::string min_name = std::string("bounds.min_") + a.name + "_m";
+    const std::string max_name = std::string("bounds.max_") + a.name + "_m";
+    const double lo = a.has_min ? a.min : -kInf;
+    const double hi = a.has_max ? a.max : kInf;
+    const auto check = [](const std::string& name, double v, double open) -> Status {
+      if (v == open) return Status::Ok();
+      if (!std::isfinite(v) || std::abs(v) > 1e7) {
+        return InvalidArgument(name + " is " + Num(v) + "; must be finite within 1e7 m, or " +
+                               (open > 0 ? "+inf" : "-inf") + " / unset for unbounded");
+      }
+      return Status::Ok();
+    };
+    LOCALIZER_RETURN_IF_ERROR(check(min_name, lo, -kInf));
+    LOCALIZER_RETURN_IF_ERROR(check(max_name, hi, kInf));
+    if (!(lo < hi)) {
+      return InvalidArgument(min_name + " (" + Num(lo) + ") must be below " + max_name + " (" + Num(hi) + ")");
+    }
+    c->bounds_min_m(i) = lo;
+    c->bounds_max_m(i) = hi;
+  }
+  return Status::Ok();
+}
+
+void BoundsToProto(const engine::SessionConfig& c, v1::SessionConfig* p) {
+  if (c.bounds_min_m.array().isInf().all() && c.bounds_max_m.array().isInf().all()) return;  // unbounded
+  v1::Bounds* b = p->mutable_bounds();
+  if (std::isfinite(c.bounds_min_m.x())) b->set_min_x_m(c.bounds_min_m.x());
+  if (std::isfinite(c.bounds_max_m.x())) b->set_max_x_m(c.bounds_max_m.x());
+  if (std::isfinite(c.bounds_min_m.y())) b->set_min_y_m(c.bounds_min_m.y());
+  if (std::isfinite(c.bounds_max_m.y())) b->set_max_y_m(c.bounds_max_m.y());
+  if (std::isfinite(c.bounds_min_m.z())) b->set_min_z_m(c.bounds_min_m.z());
+  if (std::isfinite(c.bounds_max_m.z())) b->set_max_z_m(c.bounds_max_m.z());
 }
 
 }  // namespace
@@ -165,6 +223,10 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
                            "; this server allows at most " + std::to_string(policy.max_block_samples));
   }
   c.max_block_samples = p.max_block_samples() != 0 ? p.max_block_samples() : policy.max_block_samples;
+  if (p.has_bounds()) LOCALIZER_RETURN_IF_ERROR(BoundsFromProto(p.bounds(), &c));
+  c.search_radius_m = p.search_radius_m();
+  if (p.presence_false_alarm() != 0.0) c.presence_false_alarm = p.presence_false_alarm();
+  if (p.source_timeout_s() != 0.0) c.source_timeout_s = p.source_timeout_s();
   if (p.has_platform()) {
     const v1::PlatformConfig& platform = p.platform();
     c.array_in_body_frame = true;
@@ -244,6 +306,10 @@ v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::strin
   p.set_min_pair_quality(c.min_pair_quality);
   p.set_max_fix_std_m(c.max_fix_std_m);
   p.set_max_block_samples(static_cast<uint32_t>(std::min<int64_t>(c.max_block_samples, UINT32_MAX)));
+  BoundsToProto(c, &p);
+  p.set_search_radius_m(c.search_radius_m);
+  p.set_presence_false_alarm(c.presence_false_alarm);
+  p.set_source_timeout_s(c.source_timeout_s);
   if (c.array_in_body_frame) {
     v1::PlatformConfig* platform = p.mutable_platform();
     platform->set_attitude_filter(engine::AttitudeFilterKindName(c.attitude.kind));

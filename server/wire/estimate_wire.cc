@@ -1,5 +1,7 @@
 #include "server/wire/estimate_wire.h"
 
+#include <algorithm>
+
 namespace localizer::wire {
 
 void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& array, const std::string& backend,
@@ -26,6 +28,11 @@ void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& arr
   out->set_tdoa_sigma_s(e.tdoa_sigma_s);
   out->set_pairs_used(static_cast<uint32_t>(e.pairs_used));
   out->set_nis(e.nis);
+  out->set_source_present(e.source_present);
+  out->set_presence_statistic(e.presence_statistic);
+  out->set_presence_threshold(e.presence_threshold);
+  out->set_ambiguous(e.ambiguous);
+  out->set_modes(static_cast<uint32_t>(std::max(0, e.modes)));
   out->clear_pairs();
   for (size_t k = 0; k < e.delay_s.size(); ++k) {
     v1::PairTdoa* pair = out->add_pairs();
@@ -79,6 +86,11 @@ engine::Estimate EstimateFromProto(const v1::Estimate& p) {
   e.tdoa_sigma_s = p.tdoa_sigma_s();
   e.pairs_used = static_cast<int>(p.pairs_used());
   e.nis = p.nis();
+  e.source_present = p.source_present();
+  e.presence_statistic = p.presence_statistic();
+  e.presence_threshold = p.presence_threshold();
+  e.ambiguous = p.ambiguous();
+  e.modes = static_cast<int>(std::min<uint32_t>(p.modes(), 1u << 30));
   for (const v1::PairTdoa& pair : p.pairs()) {
     e.delay_s.push_back(pair.delay_s());
     e.quality.push_back(pair.quality());

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "clients/io/xav_array.h"
 #include "tests/clients/test_util.h"
 
@@ -95,6 +98,45 @@ TEST(ArrayJson, ErrorsNameTheField) {
   EXPECT_NE(ErrorOf("{not json").find("not valid JSON"), std::string::npos);
 }
 
+TEST(ArrayJson, BoundsAndWaterColumn) {
+  const std::string head = R"({"sound_speed_mps": 1500, "sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]], )";
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  auto unbounded = ParseArrayJson(head + R"("reference_sensor": 0})", "t");
+  ASSERT_TRUE(unbounded.ok());
+  EXPECT_FALSE(unbounded->has_bounds());
+  EXPECT_EQ(unbounded->bounds_min_m, engine::Vec3::Constant(-kInf));
+  EXPECT_EQ(unbounded->bounds_max_m, engine::Vec3::Constant(kInf));
+
+  auto water = ParseArrayJson(head + R"("surface_z_m": 7.03, "bottom_z_m": -0.97})", "t");
+  ASSERT_TRUE(water.ok()) << water.status().ToString();
+  EXPECT_EQ(water->bounds_max_m, engine::Vec3(kInf, kInf, 7.03));
+  EXPECT_EQ(water->bounds_min_m, engine::Vec3(-kInf, -kInf, -0.97));
+
+  auto box = ParseArrayJson(head + R"("bounds_min_m": [-10, null, "-inf"], "bounds_max_m": [10, 20, null]})", "t");
+  ASSERT_TRUE(box.ok()) << box.status().ToString();
+  EXPECT_EQ(box->bounds_min_m, engine::Vec3(-10, -kInf, -kInf));
+  EXPECT_EQ(box->bounds_max_m, engine::Vec3(10, 20, kInf));
+
+  // Written and read back: open sides as null.
+  TempDir dir;
+  ArrayFile written = *box;
+  written.bounds_min_m.z() = -0.97;
+  ASSERT_TRUE(WriteArrayJson(dir.File("array.json"), written).ok());
+  auto read = ReadArrayJson(dir.File("array.json"));
+  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  EXPECT_EQ(read->bounds_min_m, written.bounds_min_m);
+  EXPECT_EQ(read->bounds_max_m, written.bounds_max_m);
+
+  // Errors name the field.
+  EXPECT_NE(ErrorOf(head + R"("surface_z_m": -5, "bottom_z_m": 3})").find("bottom_z_m below surface_z_m"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(head + R"("bounds_min_m": ["inf", 0, 0]})").find("bounds_min_m[0]"), std::string::npos);
+  EXPECT_NE(ErrorOf(head + R"("bounds_max_m": [1, 2]})").find("bounds_max_m"), std::string::npos);
+  EXPECT_NE(ErrorOf(head + R"("bounds_max_m": [null, null, 1], "surface_z_m": 2})").find("surface_z_m"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(head + R"("bottom_z_m": "deep"})").find("bottom_z_m"), std::string::npos);
+}
+
 TEST(ArrayJson, GeometryErrorsFlowThroughFromTheEngine) {
   const std::string three =
       ErrorOf(R"({"sound_speed_mps": 1500, "sensors_m": [[0,0,0],[1,0,0],[0,1,0]]})");
@@ -119,6 +161,11 @@ TEST(ArrayJson, ReadArrayFileTakesTheXavCsv) {
   EXPECT_EQ(array->sound_speed_mps, kXavSoundSpeedMps);
   EXPECT_EQ(array->reference_sensor, 3);
   EXPECT_EQ(array->sensors_m[5], engine::Vec3(0.858, 0.86, 0.671));
+  // The water column (8 m deep, z up, the surface 7.03 m above the array frame's origin).
+  EXPECT_EQ(array->bounds_max_m.z(), kXavSurfaceZM);
+  EXPECT_EQ(array->bounds_min_m.z(), kXavBottomZM);
+  EXPECT_FALSE(std::isfinite(array->bounds_min_m.x()));
+  EXPECT_FALSE(std::isfinite(array->bounds_max_m.y()));
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include "clients/io/csv_io.h"
+#include "clients/io/presence_summary.h"
 
 #include <gtest/gtest.h>
 
@@ -62,7 +63,8 @@ TEST(CsvIo, EstimatesHeaderAndRows) {
   ASSERT_TRUE(writer->Close().ok());
   EXPECT_EQ(FirstLine(dir.File("est.csv")),
             "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,"
-            "reinitialised,tdoa_ms,filter_ms,delay_s_1,quality_1,delay_s_2,quality_2,"
+            "reinitialised,tdoa_ms,filter_ms,source_present,presence_statistic,presence_threshold,ambiguous,modes,"
+            "delay_s_1,quality_1,delay_s_2,quality_2,"
             "delay_s_3,quality_3");
   auto rows = ReadEstimatesCsv(dir.File("est.csv"));
   ASSERT_TRUE(rows.ok()) << rows.status().ToString();
@@ -72,6 +74,85 @@ TEST(CsvIo, EstimatesHeaderAndRows) {
   EXPECT_EQ((*rows)[1].t_s, 0.5);
   EXPECT_EQ((*rows)[1].position_m, engine::Vec3(1, 2, 3));
   EXPECT_NEAR((*rows)[1].velocity_mps.z(), 0.3, 1e-12);
+}
+
+TEST(CsvIo, PresenceColumnsRoundTrip) {
+  TempDir dir;
+  auto writer = EstimatesCsvWriter::Open(dir.File("est.csv"), {1, 2, 3});
+  ASSERT_TRUE(writer.ok());
+  engine::Estimate silent = MakeEstimate(0.25, false);
+  silent.presence_statistic = 2.5;
+  silent.presence_threshold = 6.75;
+  engine::Estimate heard = MakeEstimate(0.5, true);
+  heard.source_present = true;
+  heard.presence_statistic = 31.25;
+  heard.presence_threshold = 6.75;
+  heard.ambiguous = true;
+  heard.modes = 2;
+  ASSERT_TRUE(writer->Write(silent).ok());
+  ASSERT_TRUE(writer->Write(heard).ok());
+  ASSERT_TRUE(writer->Close().ok());
+  auto rows = ReadEstimatesCsv(dir.File("est.csv"));
+  ASSERT_TRUE(rows.ok()) << rows.status().ToString();
+  ASSERT_EQ(rows->size(), 2u);
+  ASSERT_TRUE((*rows)[0].source_present.has_value());
+  EXPECT_FALSE(*(*rows)[0].source_present);
+  EXPECT_EQ((*rows)[0].presence_statistic, 2.5);
+  EXPECT_EQ((*rows)[0].presence_threshold, 6.75);
+  EXPECT_FALSE((*rows)[0].ambiguous);
+  EXPECT_EQ((*rows)[0].modes, 0);
+  ASSERT_TRUE((*rows)[1].source_present.has_value());
+  EXPECT_TRUE(*(*rows)[1].source_present);
+  EXPECT_EQ((*rows)[1].presence_statistic, 31.25);
+  EXPECT_TRUE((*rows)[1].ambiguous);
+  EXPECT_EQ((*rows)[1].modes, 2);
+}
+
+TEST(CsvIo, EstimatesWithoutPresenceColumnsStillRead) {
+  TempDir dir;
+  {
+    std::ofstream out(dir.File("old.csv"));  // as written before the presence columns
+    out << "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,"
+           "reinitialised,tdoa_ms,filter_ms,delay_s_1,quality_1\n"
+           "0.5,1,2,3,0,0,0,0.1,0.1,0.1,900,2,3,10,1,0,0.1,0.2,1e-4,5\n";
+  }
+  auto rows = ReadEstimatesCsv(dir.File("old.csv"));
+  ASSERT_TRUE(rows.ok()) << rows.status().ToString();
+  ASSERT_EQ(rows->size(), 1u);
+  EXPECT_TRUE((*rows)[0].initialised);
+  EXPECT_EQ((*rows)[0].position_m, engine::Vec3(1, 2, 3));
+  EXPECT_FALSE((*rows)[0].source_present.has_value());
+  {
+    std::ofstream out(dir.File("half.csv"));  // some presence columns but not all: named
+    out << "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,initialised,source_present\n0.5,1,2,3,0,0,0,1,1\n";
+  }
+  auto half = ReadEstimatesCsv(dir.File("half.csv"));
+  ASSERT_FALSE(half.ok());
+  EXPECT_NE(half.status().message().find("presence_statistic"), std::string::npos) << half.status().message();
+}
+
+TEST(PresenceSummary, NoSourceLineWhenNoFrameHeldASource) {
+  PresenceSummary summary;
+  for (int i = 0; i < 12; ++i) {
+    engine::Estimate e = MakeEstimate(0.1 * i, false);
+    e.presence_statistic = 1.0 + 0.25 * i;  // max 3.75 on the last frame
+    e.presence_threshold = 6.5;
+    summary.Add(e);
+  }
+  ASSERT_TRUE(summary.NoSourceLine().has_value());
+  EXPECT_EQ(*summary.NoSourceLine(), "no source found in 12 frames (presence statistic max 3.75, threshold 6.5)");
+  engine::Estimate heard = MakeEstimate(1.3, true);
+  heard.source_present = true;
+  heard.presence_statistic = 9.0;
+  heard.presence_threshold = 6.5;
+  summary.Add(heard);
+  EXPECT_FALSE(summary.NoSourceLine().has_value());
+  EXPECT_EQ(summary.present, 1u);
+  // Estimates that carry no presence test (threshold 0: an engine or server that does not
+  // report presence) never read as a silent run.
+  PresenceSummary untested;
+  for (int i = 0; i < 5; ++i) untested.Add(MakeEstimate(0.1 * i, true));
+  EXPECT_FALSE(untested.NoSourceLine().has_value());
 }
 
 TEST(CsvIo, ReadErrorsNameFileLineAndColumn) {

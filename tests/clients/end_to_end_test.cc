@@ -86,7 +86,8 @@ TEST(EndToEnd, TetraWaterTracksBelowOneMetreRmse) {
 
   EXPECT_EQ(FirstLine(job.estimates_csv_path),
             "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,"
-            "reinitialised,tdoa_ms,filter_ms,delay_s_1,quality_1,delay_s_2,quality_2,"
+            "reinitialised,tdoa_ms,filter_ms,source_present,presence_statistic,presence_threshold,ambiguous,modes,"
+            "delay_s_1,quality_1,delay_s_2,quality_2,"
             "delay_s_3,quality_3");
   auto truth = ReadTruthCsv(files->truth_path);
   ASSERT_TRUE(truth.ok());

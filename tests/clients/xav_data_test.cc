@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "clients/io/csv_table.h"
 #include "clients/io/wav_io.h"
 #include "clients/io/xav_array.h"
 #include "tests/clients/test_util.h"
@@ -29,6 +30,33 @@ TEST(XavData, HydrophoneConfigGivesSixSensorsAndTheirFiles) {
   ASSERT_EQ(paths.size(), 6u);
   EXPECT_NE(paths[0].find("AMAR173.1."), std::string::npos);
   EXPECT_NE(paths[5].find("AMAR173.6."), std::string::npos);
+}
+
+// The water column constants agree with the authors' deployment sheet: every hydrophone's
+// depth is surface_z - z (z up), and the bottom lies the water depth below the surface.
+TEST(XavData, WaterColumnBoundsMatchTheDeploymentSheet) {
+  auto xav = ReadXavHydrophoneCsv(testing::XavConfigCsv());
+  ASSERT_TRUE(xav.ok()) << xav.status().ToString();
+  auto sheet = CsvTable::Read(testing::XavDir() + "/deployment_info.csv");
+  ASSERT_TRUE(sheet.ok()) << sheet.status().ToString();
+  auto channel = sheet->Column("audio_channel_number");
+  auto depth = sheet->Column("hydrophone_depth");
+  auto water = sheet->Column("location_water_depth");
+  ASSERT_TRUE(channel.ok() && depth.ok() && water.ok());
+  ASSERT_EQ(sheet->row_count(), 6u);
+  for (size_t r = 0; r < sheet->row_count(); ++r) {
+    const int k = static_cast<int>(*sheet->Number(r, *channel));
+    ASSERT_GE(k, 0);
+    ASSERT_LT(k, 6);
+    EXPECT_NEAR(*sheet->Number(r, *depth), kXavSurfaceZM - xav->array.sensors_m[k].z(), 0.005) << "channel " << k;
+    EXPECT_EQ(*sheet->Number(r, *water), kXavWaterDepthM);
+  }
+  EXPECT_EQ(xav->array.bounds_max_m.z(), kXavSurfaceZM);
+  EXPECT_DOUBLE_EQ(xav->array.bounds_min_m.z(), -0.97);
+  for (const engine::Vec3& s : xav->array.sensors_m) {
+    EXPECT_GT(s.z(), xav->array.bounds_min_m.z());
+    EXPECT_LT(s.z(), xav->array.bounds_max_m.z());
+  }
 }
 
 TEST(XavData, EachRecordingIs32kHzMonoAbout17sFiniteAndNotSilent) {

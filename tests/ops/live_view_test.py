@@ -141,8 +141,13 @@ class LiveViewTest(unittest.TestCase):
         self.assertEqual(content_type, "application/json; charset=utf-8")
         self.assertEqual(doc["sessions_total"], 1)
         for key in ("id", "label", "backend", "filter_type", "attached", "sensors_m", "frames",
-                    "track", "track_capacity", "model_probabilities"):
+                    "track", "track_capacity", "model_probabilities", "presence", "present_frames"):
             self.assertIn(key, session)
+        # The latest frame's source presence and ambiguity.
+        self.assertIn(session["presence"]["state"], ("present", "silent", "untested"))
+        self.assertIsInstance(session["presence"]["ambiguous"], bool)
+        self.assertIsInstance(session["presence"]["modes"], int)
+        self.assertIn("source_present", session["track"][-1])
         self.assertEqual(session["label"], "tetra-water (live view test)")
         self.assertEqual(session["backend"], "cpu")
         self.assertGreaterEqual(len(session["sensors_m"]), 4)
@@ -173,6 +178,8 @@ class LiveViewTest(unittest.TestCase):
                                          f"chromium stderr:\n{dom.stderr.decode(errors='replace')[-2000:]}")
         self.assertTrue(all(int(n) >= MIN_TRACK_POINTS for n in tracks), tracks)
         self.assertEqual(html.count('class="sensor"'), 2 * 4)  # tetra-water: 4 sensors, 2 panels
+        # The presence badge: present, silent, or n/a when the engine tests no presence.
+        self.assertRegex(html, r'<span class="presence (present|silent|untested)"')
 
         shot = self.tmp / "live_view.png"
         run = subprocess.run([CHROMIUM] + common + [f"--screenshot={shot}", self.base + "/"],

@@ -114,6 +114,40 @@ class SyntheticSignalTest(unittest.TestCase):
                       Err(grpc.StatusCode.UNAVAILABLE, "server shutting down")):
             self.assertIs(lc.from_proxy_reset(other), other)
 
+    def test_bounds_helper_sets_only_closed_sides(self):
+        water = lc.bounds(surface_z_m=0.0, bottom_z_m=-8.0)
+        self.assertTrue(water.HasField("max_z_m"))  # an explicit 0 is kept
+        self.assertEqual((water.max_z_m, water.min_z_m), (0.0, -8.0))
+        for field in ("min_x_m", "max_x_m", "min_y_m", "max_y_m"):
+            self.assertFalse(water.HasField(field), field)
+        box = lc.bounds((-10, None, float("-inf")), (10, float("inf"), 5))
+        self.assertEqual((box.min_x_m, box.max_x_m, box.max_z_m), (-10.0, 10.0, 5.0))
+        for field in ("min_y_m", "max_y_m", "min_z_m"):
+            self.assertFalse(box.HasField(field), field)
+        with self.assertRaises(ValueError):
+            lc.bounds(max_m=(None, None, 1.0), surface_z_m=2.0)
+        cfg = lc.session_config(SENSORS_M, FS_HZ, bounds=water, search_radius_m=40.0,
+                                presence_false_alarm=0.01, source_timeout_s=3.0)
+        self.assertEqual(cfg.bounds.min_z_m, -8.0)
+        self.assertEqual((cfg.search_radius_m, cfg.presence_false_alarm, cfg.source_timeout_s),
+                         (40.0, 0.01, 3.0))
+        self.assertFalse(lc.session_config(SENSORS_M, FS_HZ).HasField("bounds"))
+
+    def test_presence_summary_reports_a_run_with_no_source(self):
+        silent = [lc.pb.Estimate(frame_index=k, presence_statistic=1.0 + 0.25 * k,
+                                 presence_threshold=6.5) for k in range(12)]
+        summary = lc.presence_summary(silent)
+        self.assertTrue(summary["no_source"])
+        self.assertEqual(summary["no_source_line"],
+                         "no source found in 12 frames (presence statistic max 3.75, threshold 6.5)")
+        heard = silent + [lc.pb.Estimate(frame_index=12, source_present=True, presence_statistic=9.0,
+                                         presence_threshold=6.5, ambiguous=True, modes=2)]
+        summary = lc.presence_summary(heard)
+        self.assertFalse(summary["no_source"])
+        self.assertEqual((summary["present"], summary["ambiguous"]), (1, 1))
+        # Estimates without a presence test (threshold 0: an older server) are not a silent run.
+        self.assertFalse(lc.presence_summary([lc.pb.Estimate(initialised=True)])["no_source"])
+
     def test_loadtest_encodes_requests_like_protobuf(self):
         sys.path.insert(0, CLIENT_DIR)
         import loadtest
@@ -318,6 +352,45 @@ class ServerTest(unittest.TestCase):
             lc.TrackSession(self.channel, bad, timeout=30)
         self.assertEqual(caught.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
         self.assertIn("sensors", caught.exception.details())
+
+    def test_bounds_and_presence_config_echo_and_estimate_fields(self):
+        cfg = config("py-bounds")
+        cfg.bounds.CopyFrom(lc.bounds(surface_z_m=10.0, bottom_z_m=-20.0))
+        cfg.presence_false_alarm = 0.01
+        session = lc.TrackSession(self.channel, cfg, timeout=60)
+        effective = session.opened.effective_config
+        self.assertEqual((effective.bounds.max_z_m, effective.bounds.min_z_m), (10.0, -20.0))
+        self.assertFalse(effective.bounds.HasField("min_x_m"))  # open sides stay unset
+        self.assertEqual(effective.presence_false_alarm, 0.01)
+        self.assertEqual(effective.source_timeout_s, 2.0)       # defaults are echoed
+        self.assertEqual(effective.search_radius_m, 0.0)        # 0: 10 apertures
+        for k in range(3):
+            session.send(AUDIO[k * BLOCK:(k + 1) * BLOCK], sequence=k + 1)
+        session.close()
+        estimates = list(session.estimates())
+        self.assertEqual(session.code(), grpc.StatusCode.OK)
+        self.assertEqual(len(estimates), frames_completed(3 * BLOCK))
+        for e in estimates:  # the fields exist with their types (values are the engine's)
+            self.assertIsInstance(e.source_present, bool)
+            self.assertIsInstance(e.ambiguous, bool)
+            self.assertIsInstance(e.modes, int)
+            self.assertGreaterEqual(e.presence_statistic, 0.0)
+
+    def test_bad_bounds_raise_invalid_argument_naming_the_field(self):
+        for bad, field in ((lc.bounds(surface_z_m=-5.0, bottom_z_m=0.0), "bounds.min_z_m"),
+                           (lc.bounds(max_m=(float("nan"), None, None)), "bounds.max_x_m")):
+            cfg = config("py-bad-bounds")
+            cfg.bounds.CopyFrom(bad)
+            with self.assertRaises(grpc.RpcError) as caught:
+                lc.TrackSession(self.channel, cfg, timeout=30)
+            self.assertEqual(caught.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
+            self.assertIn(field, caught.exception.details())
+        cfg = config("py-bad-presence")
+        cfg.presence_false_alarm = 0.5
+        with self.assertRaises(grpc.RpcError) as caught:
+            lc.TrackSession(self.channel, cfg, timeout=30)
+        self.assertEqual(caught.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("presence_false_alarm", caught.exception.details())
 
     def test_close_session_needs_the_token_and_cancels_the_stream(self):
         session = lc.TrackSession(self.channel, config("py-close"), timeout=60)

@@ -31,6 +31,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "clients/grpc/connection.h"
@@ -115,6 +116,11 @@ void ExpectBitIdentical(const engine::Estimate& want, const engine::Estimate& go
   EXPECT_EQ(got.nis, want.nis);
   EXPECT_EQ(got.delay_s, want.delay_s);
   EXPECT_EQ(got.quality, want.quality);
+  EXPECT_EQ(got.source_present, want.source_present) << "frame " << want.frame_index;
+  EXPECT_EQ(got.presence_statistic, want.presence_statistic);
+  EXPECT_EQ(got.presence_threshold, want.presence_threshold);
+  EXPECT_EQ(got.ambiguous, want.ambiguous);
+  EXPECT_EQ(got.modes, want.modes);
 }
 
 class CliStreamTest : public ::testing::Test {
@@ -301,6 +307,53 @@ TEST_F(CliStreamTest, CliUnreachableServerExitsOne) {
                  " --out " + dir.File("e.csv"),
              dir);
   EXPECT_EQ(usage_code, 2) << usage_err;  // --rate without --server
+#endif
+}
+
+// The array file's water column and the presence settings reach the server: the session's
+// effective config echoes them (open sides unset), and a bad bound is a usage error naming
+// the flag before anything is sent.
+TEST_F(CliStreamTest, BoundsAndPresenceSettingsReachTheServer) {
+  TempDir dir;
+  const io::SimulationFiles files = SimulateToFiles(dir, 1.0);
+  io::TrackJob job = TrackJobFor(files, dir.File("bounded.csv"));
+  job.config.bounds_max_m.z() = 50.0;   // the surface
+  job.config.bounds_min_m.z() = -60.0;  // the bottom
+  job.config.presence_false_alarm = 0.02;
+  job.config.source_timeout_s = 4.0;
+  job.config.search_radius_m = 80.0;
+  RemoteTrackOptions options;
+  options.block_samples = 4096;
+  auto remote = RunRemoteTrack(channel_, job, options);
+  ASSERT_TRUE(remote.ok()) << remote.status().ToString();
+  ASSERT_TRUE(remote->stream.status().ok()) << remote->stream.status().ToString();
+  const v1::SessionConfig& effective = remote->opened.effective_config();
+  ASSERT_TRUE(effective.has_bounds());
+  EXPECT_EQ(effective.bounds().max_z_m(), 50.0);
+  EXPECT_EQ(effective.bounds().min_z_m(), -60.0);
+  EXPECT_FALSE(effective.bounds().has_min_x_m());
+  EXPECT_FALSE(effective.bounds().has_max_y_m());
+  EXPECT_EQ(effective.presence_false_alarm(), 0.02);
+  EXPECT_EQ(effective.source_timeout_s(), 4.0);
+  EXPECT_EQ(effective.search_radius_m(), 80.0);
+#ifdef LOCALIZER_CLI_BIN
+  const std::string track = "track --server " + target_ + " --array " + files.array_path + " --wav " +
+                            files.wav_path + " --out " + dir.File("e.csv");
+  auto [code, err] = RunCli(track + " --bounds-min 0,0,inf", dir);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("--bounds-min"), std::string::npos) << err;
+  std::tie(code, err) = RunCli(track + " --surface-z -5 --bottom-z 0", dir);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("bounds"), std::string::npos) << err;
+  std::tie(code, err) = RunCli(track + " --presence-false-alarm 0.5", dir);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("presence_false_alarm"), std::string::npos) << err;
+  std::tie(code, err) = RunCli(track + " --bounds-max inf,inf,100 --surface-z 50", dir);
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("--surface-z"), std::string::npos) << err;
+  // Well-formed bounds run.
+  std::tie(code, err) = RunCli(track + " --bounds-min -inf,-inf,-60 --bounds-max inf,inf,50", dir);
+  EXPECT_EQ(code, 0) << err;
 #endif
 }
 

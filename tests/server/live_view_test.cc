@@ -60,6 +60,36 @@ TEST(TrackHistoryTest, CountsFramesWithoutAFixButStoresNoPosition) {
   EXPECT_EQ(s.model_probabilities[1].model, "ct");
 }
 
+TEST(TrackHistoryTest, KeepsTheLatestPresenceAndAmbiguity) {
+  TrackHistory track(4);
+  EXPECT_FALSE(track.Snapshot().presence.has_value());  // no frame yet
+  engine::Estimate heard = Fix(0, 1.0);
+  heard.source_present = true;
+  heard.presence_statistic = 20.0;
+  heard.presence_threshold = 5.0;
+  heard.ambiguous = true;
+  heard.modes = 2;
+  track.Append(heard);
+  engine::Estimate silent = Fix(1, 1.1);  // the tracker coasts: a prediction
+  silent.presence_statistic = 2.0;
+  silent.presence_threshold = 5.0;
+  silent.modes = 1;
+  track.Append(silent);
+  const TrackSnapshot s = track.Snapshot();
+  ASSERT_TRUE(s.presence.has_value());
+  EXPECT_TRUE(s.presence->tested);
+  EXPECT_FALSE(s.presence->present);
+  EXPECT_EQ(s.presence->statistic, 2.0);
+  EXPECT_EQ(s.presence->threshold, 5.0);
+  EXPECT_FALSE(s.presence->ambiguous);
+  EXPECT_EQ(s.presence->modes, 1);
+  EXPECT_EQ(s.present_frames, 1u);
+  ASSERT_EQ(s.points.size(), 2u);
+  EXPECT_TRUE(s.points[0].source_present);
+  EXPECT_TRUE(s.points[0].ambiguous);
+  EXPECT_FALSE(s.points[1].source_present);
+}
+
 TEST(SessionsJsonTest, NoSessionsIsAnEmptyList) {
   const auto doc = nlohmann::json::parse(SessionsJson({}, Clock::now(), 60.0));
   EXPECT_EQ(doc.at("sessions_total"), 0);
@@ -109,6 +139,21 @@ TEST_F(ServiceTest, SessionsJsonListsTheStreamedTrack) {
   EXPECT_DOUBLE_EQ(point.at("position_m")[2].get<double>(), last.position_m().z());
   EXPECT_GE(point.at("position_std_m")[0].get<double>(), 0.0);
   for (size_t i = 1; i < track.size(); ++i) EXPECT_GT(track[i].at("t_s"), track[i - 1].at("t_s"));
+  EXPECT_EQ(point.at("source_present").get<bool>(), last.source_present());
+  EXPECT_EQ(point.at("ambiguous").get<bool>(), last.ambiguous());
+  // The latest frame's presence and ambiguity, as the stream received them.
+  const v1::Estimate& latest = stream.estimates().back();
+  const auto& presence = session.at("presence");
+  ASSERT_TRUE(presence.is_object()) << session.dump();
+  EXPECT_EQ(presence.at("source_present").get<bool>(), latest.source_present());
+  EXPECT_EQ(presence.at("ambiguous").get<bool>(), latest.ambiguous());
+  EXPECT_EQ(presence.at("modes").get<uint32_t>(), latest.modes());
+  EXPECT_DOUBLE_EQ(presence.at("threshold").get<double>(), latest.presence_threshold());
+  const std::string state = presence.at("state");
+  EXPECT_EQ(state, latest.presence_threshold() <= 0.0 ? "untested" : latest.source_present() ? "present" : "silent");
+  uint64_t present = 0;
+  for (const auto& e : stream.estimates()) present += e.source_present() ? 1 : 0;
+  EXPECT_EQ(session.at("present_frames").get<uint64_t>(), present);
   ASSERT_TRUE(stream.Close().ok());
 }
 
@@ -118,6 +163,8 @@ TEST_F(ServiceTest, RootServesTheSelfContainedLivePage) {
   EXPECT_EQ(response.headers.at("content-type"), "text/html; charset=utf-8");
   EXPECT_NE(response.body.find("fetch(\"/sessions\""), std::string::npos);
   EXPECT_NE(response.body.find("<a href=\"/metrics\">"), std::string::npos);
+  EXPECT_NE(response.body.find("s.presence"), std::string::npos);  // presence and ambiguity shown
+  EXPECT_NE(response.body.find("ambiguous"), std::string::npos);
   // Self-contained: nothing loaded from another origin.
   EXPECT_EQ(response.body.find("src="), std::string::npos);
   EXPECT_EQ(response.body.find("https://"), std::string::npos);

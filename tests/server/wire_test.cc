@@ -2,6 +2,7 @@
 // bad block breaks, config defaults and round trips (the multiple-model filters' fields
 // included), estimates with model probabilities both ways, Status -> gRPC codes.
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -284,6 +285,143 @@ TEST(ConfigWire, PolicyLimitsAreInvalidArgumentNamingTheField) {
   p = MinimalConfig();
   p.clear_array();
   EXPECT_NE(ConfigFromProto(p, policy).status().message().find("array"), std::string::npos);
+}
+
+TEST(ConfigWire, BoundsAndPresenceFieldsDefaultWhenUnset) {
+  auto config = ConfigFromProto(MinimalConfig(), {});
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  const engine::SessionConfig defaults;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(config->bounds_min_m(i), -std::numeric_limits<double>::infinity());
+    EXPECT_EQ(config->bounds_max_m(i), std::numeric_limits<double>::infinity());
+  }
+  EXPECT_EQ(config->search_radius_m, 0.0);
+  EXPECT_EQ(config->presence_false_alarm, defaults.presence_false_alarm);
+  EXPECT_EQ(config->source_timeout_s, defaults.source_timeout_s);
+  // effective_config: no bounds (unbounded), the defaults written out.
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  EXPECT_FALSE(effective.has_bounds());
+  EXPECT_EQ(effective.search_radius_m(), 0.0);
+  EXPECT_EQ(effective.presence_false_alarm(), 1e-3);
+  EXPECT_EQ(effective.source_timeout_s(), 2.0);
+}
+
+TEST(ConfigWire, WaterColumnBoundsAndPresenceFieldsRoundTrip) {
+  v1::SessionConfig p = MinimalConfig();
+  p.mutable_bounds()->set_max_z_m(0.0);   // the surface: explicitly zero, kept
+  p.mutable_bounds()->set_min_z_m(-8.0);  // the bottom
+  p.mutable_bounds()->set_min_x_m(-50.0);
+  p.mutable_bounds()->set_max_y_m(std::numeric_limits<double>::infinity());  // open, as unset
+  p.set_search_radius_m(30.0);
+  p.set_presence_false_alarm(0.01);
+  p.set_source_timeout_s(5.0);
+  auto config = ConfigFromProto(p, {});
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  EXPECT_EQ(config->bounds_max_m.z(), 0.0);
+  EXPECT_EQ(config->bounds_min_m.z(), -8.0);
+  EXPECT_EQ(config->bounds_min_m.x(), -50.0);
+  EXPECT_EQ(config->bounds_max_m.x(), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(config->bounds_min_m.y(), -std::numeric_limits<double>::infinity());
+  EXPECT_EQ(config->bounds_max_m.y(), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(config->search_radius_m, 30.0);
+  EXPECT_EQ(config->presence_false_alarm, 0.01);
+  EXPECT_EQ(config->source_timeout_s, 5.0);
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  ASSERT_TRUE(effective.has_bounds());
+  EXPECT_TRUE(effective.bounds().has_max_z_m());
+  EXPECT_EQ(effective.bounds().max_z_m(), 0.0);
+  EXPECT_EQ(effective.bounds().min_z_m(), -8.0);
+  EXPECT_EQ(effective.bounds().min_x_m(), -50.0);
+  EXPECT_FALSE(effective.bounds().has_max_x_m());  // open sides stay unset
+  EXPECT_FALSE(effective.bounds().has_min_y_m());
+  EXPECT_FALSE(effective.bounds().has_max_y_m());
+  EXPECT_EQ(effective.search_radius_m(), 30.0);
+  EXPECT_EQ(effective.presence_false_alarm(), 0.01);
+  EXPECT_EQ(effective.source_timeout_s(), 5.0);
+  auto again = ConfigFromProto(effective, {});
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(ConfigToProto(*again, "").SerializeAsString(), effective.SerializeAsString());
+}
+
+TEST(ConfigWire, BadBoundsAndPresenceFieldsAreInvalidArgumentNamingTheField) {
+  const auto refused = [](const v1::SessionConfig& p, const std::string& field) {
+    auto config = ConfigFromProto(p, {});
+    ASSERT_FALSE(config.ok()) << field;
+    EXPECT_EQ(config.status().code(), StatusCode::kInvalidArgument) << config.status().ToString();
+    EXPECT_NE(config.status().message().find(field), std::string::npos) << config.status().message();
+  };
+  v1::SessionConfig p = MinimalConfig();
+  p.mutable_bounds()->set_min_z_m(0.0);
+  p.mutable_bounds()->set_max_z_m(-8.0);  // bottom above the surface
+  refused(p, "bounds.min_z_m");
+  p = MinimalConfig();
+  p.mutable_bounds()->set_min_y_m(3.0);
+  p.mutable_bounds()->set_max_y_m(3.0);  // empty
+  refused(p, "bounds.min_y_m");
+  p = MinimalConfig();
+  p.mutable_bounds()->set_max_x_m(std::nan(""));
+  refused(p, "bounds.max_x_m");
+  p = MinimalConfig();
+  p.mutable_bounds()->set_min_x_m(std::numeric_limits<double>::infinity());  // +inf is no lower side
+  refused(p, "bounds.min_x_m");
+  p = MinimalConfig();
+  p.mutable_bounds()->set_max_z_m(-std::numeric_limits<double>::infinity());
+  refused(p, "bounds.max_z_m");
+  p = MinimalConfig();
+  p.mutable_bounds()->set_min_y_m(-2e7);
+  refused(p, "bounds.min_y_m");
+  p = MinimalConfig();
+  p.set_search_radius_m(-1.0);
+  refused(p, "search_radius_m");
+  p = MinimalConfig();
+  p.set_presence_false_alarm(0.5);
+  refused(p, "presence_false_alarm");
+  p = MinimalConfig();
+  p.set_presence_false_alarm(-1e-3);
+  refused(p, "presence_false_alarm");
+  p = MinimalConfig();
+  p.set_source_timeout_s(-2.0);
+  refused(p, "source_timeout_s");
+  p = MinimalConfig();
+  p.set_source_timeout_s(std::nan(""));
+  refused(p, "source_timeout_s");
+}
+
+TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
+  const engine::ArrayGeometry array = *engine::ArrayGeometry::Create(
+      {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, 1500.0);
+  engine::Estimate e;
+  e.initialised = true;
+  e.source_present = true;
+  e.presence_statistic = 12.5;
+  e.presence_threshold = 4.25;
+  e.ambiguous = true;
+  e.modes = 2;
+  v1::Estimate wire;
+  EstimateToProto(e, array, "cpu", &wire);
+  EXPECT_TRUE(wire.source_present());
+  EXPECT_EQ(wire.presence_statistic(), 12.5);
+  EXPECT_EQ(wire.presence_threshold(), 4.25);
+  EXPECT_TRUE(wire.ambiguous());
+  EXPECT_EQ(wire.modes(), 2u);
+  engine::Estimate back = EstimateFromProto(wire);
+  EXPECT_TRUE(back.source_present);
+  EXPECT_EQ(back.presence_statistic, 12.5);
+  EXPECT_EQ(back.presence_threshold, 4.25);
+  EXPECT_TRUE(back.ambiguous);
+  EXPECT_EQ(back.modes, 2);
+  // A silent, uninitialised frame: all false / zero, and a reused message is overwritten.
+  engine::Estimate silent;
+  silent.presence_statistic = 1.5;
+  silent.presence_threshold = 4.25;
+  EstimateToProto(silent, array, "cpu", &wire);
+  EXPECT_FALSE(wire.source_present());
+  EXPECT_FALSE(wire.ambiguous());
+  EXPECT_EQ(wire.modes(), 0u);
+  back = EstimateFromProto(wire);
+  EXPECT_FALSE(back.source_present);
+  EXPECT_EQ(back.presence_statistic, 1.5);
+  EXPECT_EQ(back.modes, 0);
 }
 
 TEST(StatusWire, CodesMapByName) {

@@ -47,7 +47,7 @@ from ._stubs import pb, pb_grpc  # noqa: F401  (re-exported)
 from . import synth  # noqa: F401  (re-exported)
 
 __all__ = ["pb", "pb_grpc", "synth", "SESSION_KEY_METADATA", "connect", "vector3",
-           "session_config", "platform_config", "detection_config", "sample_block", "imu_batch",
+           "session_config", "bounds", "presence_summary", "platform_config", "detection_config", "sample_block", "imu_batch",
            "scan", "pcm16_bytes", "TrackSession", "locate",
            "list_sessions", "close_session", "InstanceLost", "from_proxy_reset"]
 
@@ -70,7 +70,8 @@ def vector3(xyz):
 
 def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, reference_sensor=0,
                    frame_samples=0, hop_samples=0, particles=0, band_hz=None, seed=None,
-                   backend="", label="", init_region=None, platform=None):
+                   backend="", label="", init_region=None, platform=None, bounds=None,
+                   search_radius_m=0.0, presence_false_alarm=0.0, source_timeout_s=0.0):
     """A ``pb.SessionConfig``.
 
     sensors_m: (C, 3) sensor positions, metres (C >= 4, not coplanar). band_hz: (low, high) of
@@ -79,6 +80,12 @@ def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, referen
     4096 particles, seed 1, the server's --backend); SessionOpened.effective_config tells.
     platform: a ``platform_config()`` for a moving array (sensors_m then in the body frame;
     send ``imu_batch``es with ``TrackSession.send_imu`` before the blocks they cover).
+    bounds: a ``bounds()`` box that can hold the source (None: unbounded). search_radius_m:
+    the acquisition search radius about the array centre, m (0: 10 apertures).
+    presence_false_alarm: per-frame false-alarm probability of the source-presence test, in
+    (0, 0.1] (0: 0.001). source_timeout_s: how long a track coasts with no source heard
+    before it is dropped, s (0: 2 s). Each estimate then says ``source_present`` (with
+    ``presence_statistic`` and ``presence_threshold``), ``ambiguous`` and ``modes``.
     """
     config = pb.SessionConfig(
         array=pb.ArrayGeometry(sensors_m=[vector3(p) for p in np.asarray(sensors_m, float)],
@@ -95,7 +102,66 @@ def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, referen
         config.init_region.max_m.CopyFrom(vector3(init_region[1]))
     if platform is not None:
         config.platform.CopyFrom(platform)
+    if bounds is not None:
+        config.bounds.CopyFrom(bounds)
+    config.search_radius_m = float(search_radius_m)
+    config.presence_false_alarm = float(presence_false_alarm)
+    config.source_timeout_s = float(source_timeout_s)
     return config
+
+
+def bounds(min_m=None, max_m=None, *, surface_z_m=None, bottom_z_m=None):
+    """A ``pb.Bounds``: the box that can hold the source, metres, world frame.
+
+    min_m, max_m: (x, y, z) corners or None; an axis that is None or infinite (-inf in min_m,
+    +inf in max_m) is open (left unset on the wire). A water column with z up:
+    ``bounds(surface_z_m=0.0, bottom_z_m=-8.0)`` (the surface is the upper z side, the
+    bottom the lower; giving one together with that side of max_m / min_m is a ValueError).
+    The server refuses a side that is not finite or an axis whose min is not below its max
+    with INVALID_ARGUMENT naming the field (``bounds.min_z_m``, ...).
+    """
+    b = pb.Bounds()
+    for corner, prefix in ((min_m, "min"), (max_m, "max")):
+        if corner is None:
+            continue
+        for axis, value in zip("xyz", corner):
+            if value is None:
+                continue
+            value = float(value)
+            if np.isinf(value) and (value < 0) == (prefix == "min"):
+                continue  # open side
+            setattr(b, f"{prefix}_{axis}_m", value)
+    for value, field in ((surface_z_m, "max_z_m"), (bottom_z_m, "min_z_m")):
+        if value is None:
+            continue
+        if b.HasField(field):
+            raise ValueError(f"bounds: {field} given twice (as a corner and as the "
+                             f"{'surface' if field == 'max_z_m' else 'bottom'})")
+        setattr(b, field, float(value))
+    return b
+
+
+def presence_summary(estimates):
+    """Source presence over a run: a dict with ``frames``, ``tested`` (estimates whose
+    presence test ran: threshold > 0), ``present``, ``ambiguous``, ``max_statistic`` and the
+    ``threshold`` of that frame, and ``no_source`` (frames were tested and none held a
+    source; the line ``localizer-cli`` prints then is ``no_source_line``)."""
+    out = {"frames": 0, "tested": 0, "present": 0, "ambiguous": 0, "max_statistic": 0.0,
+           "threshold": 0.0}
+    for e in estimates:
+        out["frames"] += 1
+        out["present"] += int(e.source_present)
+        out["ambiguous"] += int(e.ambiguous)
+        if e.presence_threshold > 0.0:
+            if out["tested"] == 0 or e.presence_statistic > out["max_statistic"]:
+                out["max_statistic"] = e.presence_statistic
+                out["threshold"] = e.presence_threshold
+            out["tested"] += 1
+    out["no_source"] = out["tested"] > 0 and out["present"] == 0
+    out["no_source_line"] = (
+        f"no source found in {out['frames']} frames (presence statistic max "
+        f"{out['max_statistic']:.3g}, threshold {out['threshold']:.3g})" if out["no_source"] else "")
+    return out
 
 
 def platform_config(*, attitude_filter="", use_magnetometer=False, mag_declination_rad=0.0,
