@@ -90,9 +90,10 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
     f.counted = e.t_s <= t_end_s && (!score.presence_reported || e.source_present);
     const Vec3 truth_m = sim.TruthAt(e.t_s).position_m;
     f.crlb_m = Crlb(array, truth_m, score.tdoa_sigma_robust_s);
+    f.crlb_theory_m = Crlb(array, truth_m, theory_sigma_s);
     if (f.counted) {
       crlbs.push_back(f.crlb_m);
-      theory_crlbs.push_back(Crlb(array, truth_m, theory_sigma_s));
+      theory_crlbs.push_back(f.crlb_theory_m);
     }
     if (e.initialised) {
       ++score.initialised_frames;
@@ -120,7 +121,7 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
   if (acquired_at >= 0) {
     score.acquired = true;
     score.time_to_acquire_s = score.per_frame[acquired_at].t_s;
-    double sum_sq = 0.0;
+    double sum_sq = 0.0, sum_sq_theory = 0.0;
     int counted = 0, initialised = 0;
     std::vector<double> errors, nees;
     for (int i = acquired_at; i < n; ++i) {
@@ -130,10 +131,12 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
       if (!judged(f)) continue;
       ++initialised;
       sum_sq += (f.error_m / f.crlb_m) * (f.error_m / f.crlb_m);
+      sum_sq_theory += (f.error_m / f.crlb_theory_m) * (f.error_m / f.crlb_theory_m);
       errors.push_back(f.error_m);
       nees.push_back(f.nees_position / 3.0);
     }
     score.rmse_over_crlb = std::sqrt(sum_sq / initialised);
+    score.rmse_over_crlb_theory = std::sqrt(sum_sq_theory / initialised);  // NaN without theory
     score.median_error_m = Median(errors);
     score.median_nees_per_dim = Median(nees);
     score.initialised_after_acquire = counted > 0 ? static_cast<double>(initialised) / counted : kNan;
@@ -230,7 +233,7 @@ SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
 
 CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
   CampaignSummary s;
-  std::vector<double> times_all, times_acquired, nees, rmse_gaussian, rmse_hard;
+  std::vector<double> times_all, times_acquired, nees, rmse_gaussian, rmse_hard, rmse_theory;
   std::vector<double> rmse_class[3];
   ClassSummary* classes[3] = {&s.gaussian, &s.multipath, &s.impulsive};
   for (const SceneRow& row : rows) {
@@ -250,6 +253,7 @@ CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
     ++classes[c]->acquired;
     times_acquired.push_back(score.time_to_acquire_s);
     nees.push_back(score.median_nees_per_dim);
+    rmse_theory.push_back(score.rmse_over_crlb_theory);
     rmse_class[c].push_back(score.rmse_over_crlb);
     (row.scene_class == SceneClass::kGaussian ? rmse_gaussian : rmse_hard).push_back(score.rmse_over_crlb);
   }
@@ -261,6 +265,7 @@ CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
   s.median_rmse_over_crlb_hard = Median(rmse_hard);
   for (int c = 0; c < 3; ++c) classes[c]->median_rmse_over_crlb = Median(rmse_class[c]);
   s.median_nees_per_dim = Median(nees);
+  s.median_rmse_over_crlb_theory = Median(rmse_theory);
   s.rows = std::move(rows);
   return s;
 }

@@ -52,6 +52,7 @@ struct FrameScore {
   bool initialised = false;
   double error_m = std::numeric_limits<double>::quiet_NaN();
   double crlb_m = std::numeric_limits<double>::quiet_NaN();
+  double crlb_theory_m = std::numeric_limits<double>::quiet_NaN();
   double nees_position = std::numeric_limits<double>::quiet_NaN();
 };
 
@@ -66,6 +67,9 @@ struct SceneScore {
   bool acquired = false;
   double time_to_acquire_s = std::numeric_limits<double>::infinity();
   double rmse_over_crlb = std::numeric_limits<double>::quiet_NaN();  // after acquisition
+  // The same against the theoretical per-frame CRLB (NaN without theory sigmas): shows how
+  // far the measured TDOA spread itself is from what the scene's SNR and band allow.
+  double rmse_over_crlb_theory = std::numeric_limits<double>::quiet_NaN();
   double median_error_m = std::numeric_limits<double>::quiet_NaN();  // after acquisition
   double median_nees_per_dim = std::numeric_limits<double>::quiet_NaN();
   double initialised_after_acquire = std::numeric_limits<double>::quiet_NaN();  // fraction
@@ -130,6 +134,7 @@ struct CampaignSummary {
   double median_rmse_over_crlb_hard = std::numeric_limits<double>::quiet_NaN();  // multipath + impulsive
   ClassSummary gaussian, multipath, impulsive;
   double median_nees_per_dim = std::numeric_limits<double>::quiet_NaN();  // acquired scenes
+  double median_rmse_over_crlb_theory = std::numeric_limits<double>::quiet_NaN();  // acquired scenes
   std::vector<SceneRow> rows;
 };
 
