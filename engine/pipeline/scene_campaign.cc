@@ -63,6 +63,21 @@ double HopSeconds(const std::vector<Estimate>& estimates) {
   return steps.empty() ? 0.0 : Median(steps);
 }
 
+// The first frame from which every counted, initialised frame with a finite `bound` has
+// error <= multiple x bound to the end; -1 when there is none.
+int AcquiredFrom(const std::vector<FrameScore>& frames, double FrameScore::*bound, double multiple) {
+  auto judged = [&](const FrameScore& f) { return f.counted && f.initialised && std::isfinite(f.*bound); };
+  const auto n = static_cast<int>(frames.size());
+  int last_bad = -1;
+  for (int i = 0; i < n; ++i) {
+    if (judged(frames[i]) && !(frames[i].error_m <= multiple * (frames[i].*bound))) last_bad = i;
+  }
+  for (int i = last_bad + 1; i < n; ++i) {
+    if (judged(frames[i])) return i;
+  }
+  return -1;
+}
+
 }  // namespace
 
 double Quantile(std::vector<double> values, double q) {
@@ -109,14 +124,12 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
   // Frames whose error is compared (counted, initialised, with a bound).
   auto judged = [](const FrameScore& f) { return f.counted && f.initialised && std::isfinite(f.crlb_m); };
   const auto n = static_cast<int>(score.per_frame.size());
-  int last_bad = -1;
-  for (int i = 0; i < n; ++i) {
-    const FrameScore& f = score.per_frame[i];
-    if (judged(f) && !(f.error_m <= options.acquire_crlb_multiple * f.crlb_m)) last_bad = i;
-  }
-  int acquired_at = -1;
-  for (int i = last_bad + 1; i < n && acquired_at < 0; ++i) {
-    if (judged(score.per_frame[i])) acquired_at = i;
+  const int acquired_at = AcquiredFrom(score.per_frame, &FrameScore::crlb_m, options.acquire_crlb_multiple);
+  const int acquired_theory_at =
+      AcquiredFrom(score.per_frame, &FrameScore::crlb_theory_m, options.acquire_crlb_multiple);
+  if (acquired_theory_at >= 0) {
+    score.acquired_theory = true;
+    score.time_to_acquire_theory_s = score.per_frame[acquired_theory_at].t_s;
   }
   if (acquired_at >= 0) {
     score.acquired = true;
@@ -233,6 +246,7 @@ SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
 
 CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
   CampaignSummary s;
+  std::vector<double> times_theory;
   std::vector<double> times_all, times_acquired, nees, rmse_gaussian, rmse_hard, rmse_theory;
   std::vector<double> rmse_class[3];
   ClassSummary* classes[3] = {&s.gaussian, &s.multipath, &s.impulsive};
@@ -246,6 +260,8 @@ CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
     const int c = static_cast<int>(row.scene_class);
     ++classes[c]->scenes;
     times_all.push_back(score.time_to_acquire_s);
+    times_theory.push_back(score.time_to_acquire_theory_s);
+    if (score.acquired_theory) ++s.acquired_theory;
     if (score.lost_frames > 0) ++s.lost;
     if (score.silent_failure) ++s.silent_failures;
     if (!score.acquired) continue;
@@ -259,6 +275,7 @@ CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
   }
   s.median_time_to_acquire_s = Quantile(times_all, 0.5);
   s.p95_time_to_acquire_s = Quantile(times_all, 0.95);
+  s.median_time_to_acquire_theory_s = Quantile(times_theory, 0.5);
   s.median_time_to_acquire_acquired_s = Quantile(times_acquired, 0.5);
   s.p95_time_to_acquire_acquired_s = Quantile(times_acquired, 0.95);
   s.median_rmse_over_crlb_gaussian = Median(rmse_gaussian);

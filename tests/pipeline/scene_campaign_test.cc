@@ -77,6 +77,12 @@ TEST(SceneScore, PerfectEstimatesAcquireAtOnceWithNoError) {
   EXPECT_EQ(s.lost_frames, 0);
   EXPECT_FALSE(s.silent_failure);
   EXPECT_DOUBLE_EQ(s.initialised_after_acquire, 1.0);
+  EXPECT_FALSE(s.acquired_theory);  // no theoretical sigma given: no theoretical bound
+  // With a theoretical sigma equal to the true one the two bounds agree.
+  const SceneScore t = ScoreScene(array, sim, estimates, {kTdoaSigmaS, kTdoaSigmaS, kTdoaSigmaS});
+  EXPECT_TRUE(t.acquired_theory);
+  EXPECT_DOUBLE_EQ(t.time_to_acquire_theory_s, estimates.front().t_s);
+  EXPECT_NEAR(t.crlb_theory_median_m / t.crlb_median_m, 1.0, 0.3);
   // The bound: sigma sqrt(trace((H^T H)^-1)) at the truth, a few cm for 2 us on a 2 m array.
   EXPECT_GT(s.crlb_median_m, 0.005);
   EXPECT_LT(s.crlb_median_m, 0.5);
