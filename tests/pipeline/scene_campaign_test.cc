@@ -206,14 +206,14 @@ TEST(SceneCampaign, ConfigHasNoBandHintAndScalesTheFrame) {
   }
 }
 
-// A few short random scenes, one of each class, end to end: they run and are scored.
+// Nine short random scenes, three of each class, end to end: they run and are scored.
 TEST(SceneCampaign, ShortRandomScenesRunAndAreScored) {
   RandomSceneOptions options;
   options.duration_s = 3.0;
   std::vector<SceneRow> rows;
   for (SceneClass c : {SceneClass::kGaussian, SceneClass::kMultipath, SceneClass::kImpulsive}) {
     options.scene_class = c;
-    for (uint64_t seed : {101u, 102u}) {
+    for (uint64_t seed : {101u, 102u, 103u}) {
       SceneRow row = RunRandomScene(seed, options, {}, /*keep_frames=*/true);
       ASSERT_TRUE(row.error.empty()) << seed << ": " << row.error;
       EXPECT_EQ(row.scene_class, c);
@@ -226,9 +226,9 @@ TEST(SceneCampaign, ShortRandomScenesRunAndAreScored) {
     }
   }
   const CampaignSummary s = SummariseCampaign(rows);
-  EXPECT_EQ(s.scenes, 6);
+  EXPECT_EQ(s.scenes, 9);
   EXPECT_EQ(s.run_errors, 0);
-  EXPECT_EQ(s.gaussian.scenes + s.multipath.scenes + s.impulsive.scenes, 6);
+  EXPECT_EQ(s.gaussian.scenes + s.multipath.scenes + s.impulsive.scenes, 9);
 }
 
 TEST(SceneCampaign, QuantileIsNearestRankAndKeepsInfinities) {
