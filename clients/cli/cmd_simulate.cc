@@ -15,6 +15,7 @@
 #include "clients/io/score.h"
 #include "clients/io/simulation_files.h"
 #include "clients/io/track_runner.h"
+#include "engine/sim/random_scene.h"
 #include "engine/sim/simulator.h"
 
 namespace localizer::cli {
@@ -25,6 +26,7 @@ const char* const kCommand = "simulate";
 
 struct SimulateFlags {
   std::string scenario_name;
+  uint64_t random_seed = 0;  // --random: a scene drawn from this seed (random_scene.h)
   std::string out_dir;
   uint64_t seed = 1;
   std::optional<double> duration_s;
@@ -62,6 +64,23 @@ bool IsScenario(const std::string& name) {
 
 // The array file simulate writes (simulation_files.h), so that the live session is
 // configured exactly as `track` would be on the written files.
+// A random scene (engine/sim/random_scene.h) simulated as the named scenarios are.
+StatusOr<io::SimulationRun> SimulateRandomScene(uint64_t seed, std::optional<double> duration_s) {
+  engine::RandomSceneOptions options;
+  if (duration_s) options.duration_s = *duration_s;
+  auto scene = engine::DrawRandomScene(seed, options);
+  if (!scene.ok()) return scene.status();
+  auto array = engine::ArrayGeometry::Create(scene->scenario.sensors_m, scene->scenario.sound_speed_mps);
+  if (!array.ok()) return array.status();
+  auto result = engine::Simulate(*array, scene->scenario.sim);
+  if (!result.ok()) return result.status();
+  io::SimulationRun run;
+  run.scenario = scene->scenario;
+  run.result = std::move(*result);
+  run.reference_sensor = array->reference_sensor();
+  return run;
+}
+
 io::ArrayFile ArrayFileOf(const io::SimulationRun& run) {
   io::ArrayFile array;
   array.sensors_m = run.scenario.sensors_m;
@@ -176,6 +195,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   SimulateFlags f;
   FlagSet flags(
       "localizer-cli simulate --scenario NAME --out DIR [flags] | --list\n"
+      "       localizer-cli simulate --random SEED --out DIR [flags]\n"
       "       localizer-cli simulate --scenario NAME --server HOST:PORT [--out DIR] [flags]",
       "Simulates a named scenario (engine/sim) and writes DIR/signals.wav (float32,\n"
       "channel k = sensor k), DIR/array.json (with sample_rate_hz) and DIR/truth.csv.\n"
@@ -184,9 +204,14 @@ int RunSimulate(const std::vector<std::string>& args) {
       "written files. Every Nth estimate is printed with its error against the truth;\n"
       "at the end the error statistics (as `score` computes them), the client latency\n"
       "(block sent -> estimate received) p50/p95/p99 and the rejected blocks. --out then\n"
-      "also writes DIR/estimates.csv.");
+      "also writes DIR/estimates.csv.\n"
+      "--random SEED simulates a scene drawn at random from SEED instead (geometry, medium,\n"
+      "range, SNR, spectrum, echoes, impulses: engine/sim/random_scene.h; the seeds\n"
+      "scene_campaign prints), written and streamed the same way.");
   flags.String("scenario", &f.scenario_name, "NAME", "scenario to simulate (see --list)");
   flags.String("out", &f.out_dir, "DIR", "output directory, created if missing");
+  flags.Uint64("random", &f.random_seed, "SEED",
+               "simulate a random scene drawn from SEED instead of a named scenario");
   flags.Uint64("seed", &f.seed, "S", "random seed of the scenario: source signal, noise, jitter");
   flags.OptionalDouble("duration", &f.duration_s, "S", "the scenario's own",
                        "seconds of recording to simulate");
@@ -200,7 +225,10 @@ int RunSimulate(const std::vector<std::string>& args) {
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   if (f.list) return ListScenarios();
   const bool remote = !f.stream.server.empty();
-  if (f.scenario_name.empty()) return UsageError(kCommand, "missing required flag --scenario");
+  const bool random = flags.seen("random");
+  if (random && !f.scenario_name.empty()) return UsageError(kCommand, "--random and --scenario exclude each other");
+  if (random && flags.seen("seed")) return UsageError(kCommand, "--seed is a named scenario's; --random SEED seeds the whole scene");
+  if (!random && f.scenario_name.empty()) return UsageError(kCommand, "missing required flag --scenario");
   if (!remote) {
     if (f.out_dir.empty()) return UsageError(kCommand, "missing required flag --out");
     for (const std::string& name : ServerOnlyFlags()) {
@@ -209,11 +237,12 @@ int RunSimulate(const std::vector<std::string>& args) {
   }
   if (f.duration_s && *f.duration_s <= 0.0) return UsageError(kCommand, "--duration must be > 0");
   if (f.print_every < 0) return UsageError(kCommand, "--print-every must be >= 0");
-  if (!IsScenario(f.scenario_name)) {
+  if (!random && !IsScenario(f.scenario_name)) {
     return UsageError(kCommand, "unknown scenario \"" + f.scenario_name + "\" (see --list)");
   }
 
-  auto run = io::SimulateScenario(f.scenario_name, f.seed, f.duration_s);
+  auto run = random ? SimulateRandomScene(f.random_seed, f.duration_s)
+                    : io::SimulateScenario(f.scenario_name, f.seed, f.duration_s);
   if (!run.ok()) return RuntimeError(kCommand, run.status());
   if (remote) return RunOnServer(f, *run);
   auto files = io::WriteSimulationFiles(f.out_dir, *run);
@@ -222,9 +251,10 @@ int RunSimulate(const std::vector<std::string>& args) {
   std::printf(
       "simulated %s: %d channels, %.3f s at %g Hz, seed %llu -> %s (signals.wav, "
       "array.json, truth.csv)\n",
-      f.scenario_name.c_str(), r.channel_count,
+      run->scenario.name.c_str(), r.channel_count,
       static_cast<double>(r.samples_per_channel) / r.sample_rate_hz, r.sample_rate_hz,
-      static_cast<unsigned long long>(f.seed), f.out_dir.c_str());
+      static_cast<unsigned long long>(random ? f.random_seed : f.seed), f.out_dir.c_str());
+  if (random) std::printf("scene: %s\n", run->scenario.description.c_str());
   return kExitOk;
 }
 

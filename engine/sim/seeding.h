@@ -11,6 +11,8 @@ enum class RandomStream : uint32_t {
   kSourceNoise = 1,   // index: block of source samples
   kClickJitter = 2,   // index: nominal click number
   kChannelNoise = 3,  // index: channel
+  kChannelImpulses = 4,  // index: channel
+  kTones = 5,         // index: 0 (the tones' frequencies and phases)
 };
 
 // std::mt19937_64 seeded by std::seed_seq over the 32-bit halves of seed and index, and the

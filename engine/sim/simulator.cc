@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "engine/sim/alpha_stable.h"
 #include "engine/sim/fractional_delay.h"
 #include "engine/sim/propagation.h"
 #include "engine/sim/seeding.h"
@@ -70,6 +71,24 @@ Status ValidateSignal(const SimOptions& o) {
   if (o.signal == SourceSignal::kClicks && !IsPositiveFinite(o.click_rate_hz)) {
     return Invalid("click_rate_hz", o.click_rate_hz, "must be positive and finite");
   }
+  if (o.signal == SourceSignal::kTonalBroadband) {
+    if (o.tone_count < 1 || o.tone_count > 16) {
+      return Invalid("tone_count", o.tone_count, "must lie in [1, 16]");
+    }
+    if (!(o.tone_power_fraction >= 0.0 && o.tone_power_fraction <= 1.0)) {
+      return Invalid("tone_power_fraction", o.tone_power_fraction, "must lie in [0, 1]");
+    }
+  }
+  if (!(o.impulse_probability >= 0.0 && o.impulse_probability <= 1.0)) {
+    return Invalid("impulse_probability", o.impulse_probability, "must lie in [0, 1]");
+  }
+  if (!IsPositiveFinite(o.impulse_scale_over_noise_std)) {
+    return Invalid("impulse_scale_over_noise_std", o.impulse_scale_over_noise_std,
+                   "must be positive and finite");
+  }
+  if (!(o.impulse_alpha > 0.0 && o.impulse_alpha <= 2.0)) {
+    return Invalid("impulse_alpha", o.impulse_alpha, "must lie in (0, 2]");
+  }
   if (std::isnan(o.snr_db) || o.snr_db == -std::numeric_limits<double>::infinity()) {
     return Invalid("snr_db", o.snr_db, "must be a number of dB (>= 200 or +inf: no noise)");
   }
@@ -82,6 +101,12 @@ Status ValidateGeometry(const SimOptions& o) {
   }
   if (!(std::abs(o.surface_reflection) <= 1.0)) {
     return Invalid("surface_reflection", o.surface_reflection, "must lie in [-1, 1]");
+  }
+  if (!std::isfinite(o.bottom_z_m)) {
+    return Invalid("bottom_z_m", o.bottom_z_m, "must be finite");
+  }
+  if (!(std::abs(o.bottom_reflection) <= 1.0)) {
+    return Invalid("bottom_reflection", o.bottom_reflection, "must lie in [-1, 1]");
   }
   const Trajectory& t = o.trajectory;
   if (!t.position_m.allFinite()) {
@@ -96,13 +121,26 @@ Status ValidateGeometry(const SimOptions& o) {
   return Status::Ok();
 }
 
-// The direct path, then the surface image when the reflection is on.
-std::vector<Trajectory> SourcePaths(const SimOptions& o) {
-  std::vector<Trajectory> paths{o.trajectory};
+// The direct path (gain 1), then the surface and bottom images when their reflections are on.
+struct SourcePath {
+  Trajectory trajectory;
+  double gain = 1.0;
+};
+std::vector<SourcePath> SourcePaths(const SimOptions& o) {
+  std::vector<SourcePath> paths{{o.trajectory, 1.0}};
   if (o.surface_reflection_enabled) {
-    paths.push_back(MirrorInHorizontalPlane(o.trajectory, o.surface_z_m));
+    paths.push_back({MirrorInHorizontalPlane(o.trajectory, o.surface_z_m), o.surface_reflection});
+  }
+  if (o.bottom_reflection_enabled) {
+    paths.push_back({MirrorInHorizontalPlane(o.trajectory, o.bottom_z_m), o.bottom_reflection});
   }
   return paths;
+}
+
+std::vector<Trajectory> Trajectories(const std::vector<SourcePath>& paths) {
+  std::vector<Trajectory> out;
+  for (const SourcePath& p : paths) out.push_back(p.trajectory);
+  return out;
 }
 
 // Checks that need the array, and the source signal's length, before anything is allocated.
@@ -178,6 +216,17 @@ void AddChannelNoise(const SimOptions& o, int channel, double signal_power,
   std::mt19937_64 engine = SeededEngine(o.seed, RandomStream::kChannelNoise, channel);
   std::normal_distribution<double> normal(0.0, sigma);
   for (double& v : x) v += normal(engine);
+  // Impulses come from their own engine, drawn after the Gaussian noise, so that turning
+  // them on leaves the Gaussian part of the channel unchanged.
+  if (o.impulse_probability <= 0.0) return;
+  std::mt19937_64 impulses = SeededEngine(o.seed, RandomStream::kChannelImpulses, channel);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  AlphaStable stable;
+  stable.alpha = o.impulse_alpha;
+  stable.scale = o.impulse_scale_over_noise_std * sigma;
+  for (double& v : x) {
+    if (uniform(impulses) < o.impulse_probability) v += SampleAlphaStable(stable, impulses);
+  }
 }
 
 std::vector<TruthRow> MakeTruth(const ArrayGeometry& array, const SimOptions& o, const SensorTrack& reference) {
@@ -222,7 +271,8 @@ StatusOr<SimResult> Simulate(const ArrayGeometry& array, const SimOptions& optio
   LOCALIZER_RETURN_IF_ERROR(options.Validate());
   const double c = array.sound_speed_mps();
   const double fs = options.sample_rate_hz;
-  const std::vector<Trajectory> paths = SourcePaths(options);
+  const std::vector<SourcePath> paths = SourcePaths(options);
+  const std::vector<Trajectory> path_trajectories = Trajectories(paths);
   std::optional<AttitudeTrajectory> platform;
   if (options.platform_attitude) platform.emplace(*options.platform_attitude);
   std::vector<SensorTrack> sensors;
@@ -234,8 +284,8 @@ StatusOr<SimResult> Simulate(const ArrayGeometry& array, const SimOptions& optio
   // A moving sensor is at most reach_m from the origin, which adds at most
   // reach_m / (c - |v|) < 2 reach_m / c (|v| < c / 2) to any travel time.
   const double travel_bound_s =
-      platform ? MaxTravelTimeBound(paths, {options.platform_origin_m}, c, options.duration_s) + 2.0 * reach_m / c
-               : MaxTravelTimeBound(paths, array.sensors_m(), c, options.duration_s);
+      platform ? MaxTravelTimeBound(path_trajectories, {options.platform_origin_m}, c, options.duration_s) + 2.0 * reach_m / c
+               : MaxTravelTimeBound(path_trajectories, array.sensors_m(), c, options.duration_s);
   LOCALIZER_RETURN_IF_ERROR(ValidateAgainstArray(array, options, travel_bound_s));
 
   // Emission time never exceeds reception time, and precedes it by at most the travel bound;
@@ -251,14 +301,13 @@ StatusOr<SimResult> Simulate(const ArrayGeometry& array, const SimOptions& optio
   result.sample_rate_hz = fs;
   result.samples.resize(static_cast<size_t>(result.channel_count * result.samples_per_channel));
   std::vector<double> channel(result.samples_per_channel);
-  std::vector<double> reflected(options.surface_reflection_enabled ? channel.size() : 0);
+  std::vector<double> reflected(paths.size() > 1 ? channel.size() : 0);
   for (int k = 0; k < result.channel_count; ++k) {
     const SensorTrack& sensor = sensors[static_cast<size_t>(k)];
-    RenderPath(paths[0], sensor, c, 1.0, source, interpolator, channel);
+    RenderPath(paths[0].trajectory, sensor, c, paths[0].gain, source, interpolator, channel);
     const double direct_power = MeanPower(channel);  // the SNR reference
-    if (options.surface_reflection_enabled) {
-      RenderPath(paths[1], sensor, c, options.surface_reflection, source, interpolator,
-                 reflected);
+    for (size_t p = 1; p < paths.size(); ++p) {
+      RenderPath(paths[p].trajectory, sensor, c, paths[p].gain, source, interpolator, reflected);
       for (size_t n = 0; n < channel.size(); ++n) channel[n] += reflected[n];
     }
     AddChannelNoise(options, k, direct_power, channel);

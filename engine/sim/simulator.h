@@ -12,9 +12,15 @@
 // a time-varying fractional delay, evaluated by windowed-sinc interpolation of s
 // (fractional_delay.h: 32 taps, RMS error ~1e-5 of the signal RMS for content below 0.4 fs).
 // Optional surface reflection: an image source mirrored in the plane z = surface_z_m with
-// reflection coefficient `surface_reflection` (about -0.9 for a sea surface).
+// reflection coefficient `surface_reflection` (about -0.9 for a sea surface); optional bottom
+// reflection likewise in z = bottom_z_m (`bottom_reflection`, e.g. +0.5 for a hard bottom).
+// First-order images only: no surface-bottom multiple bounces.
 // Noise: independent white Gaussian per channel, scaled so that each channel's direct-path
 // signal power (its mean over the run, measured noiseless) over its noise power is snr_db.
+// Impulsive noise (optional): on each channel independently, each sample carries with
+// probability impulse_probability an extra symmetric alpha-stable variate
+// S1(impulse_alpha, 0, impulse_scale_over_noise_std x the Gaussian noise std, 0)
+// (alpha_stable.h). Its scale is tied to the Gaussian noise, so no noise means no impulses.
 // Output: channel-major float32 samples and the truth, sampled every truth_step_s of
 // reception time at the reference sensor: the source state at the emission instant whose
 // sound reaches the reference sensor at that reception time.
@@ -35,7 +41,10 @@
 
 namespace localizer::engine {
 
-enum class SourceSignal { kBroadband, kClicks };
+// kTonalBroadband: tone_count tones (frequencies drawn from the seed in the middle 80 % of
+// the band, random phases) carrying tone_power_fraction of the unit source power, plus the
+// band-limited noise carrying the rest (source_signal.h).
+enum class SourceSignal { kBroadband, kClicks, kTonalBroadband };
 
 // snr_db at or above this means no noise at all.
 inline constexpr double kNoNoiseSnrDb = 200.0;
@@ -50,10 +59,18 @@ struct SimOptions {
                                     // well below fs / 2 for accurate fractional delays
   double band_high_hz = 4000.0;
   double click_rate_hz = 20.0;      // kClicks: clicks per second (regular, jittered by seed)
+  int tone_count = 3;               // kTonalBroadband: tones, in [1, 16]
+  double tone_power_fraction = 0.5; // kTonalBroadband: share of the power in tones, [0, 1]
   double snr_db = 20.0;             // per channel, direct path; +inf (or >= 200) for no noise
   bool surface_reflection_enabled = false;
   double surface_z_m = 0.0;         // reflecting plane z = surface_z_m
   double surface_reflection = -0.9; // pressure-release surface: negative, |r| <= 1
+  bool bottom_reflection_enabled = false;
+  double bottom_z_m = -100.0;       // reflecting plane z = bottom_z_m
+  double bottom_reflection = 0.5;   // hard bottom: positive, |r| <= 1
+  double impulse_probability = 0.0; // per sample and channel, in [0, 1]; 0: no impulses
+  double impulse_scale_over_noise_std = 30.0;  // alpha-stable scale / Gaussian noise std, > 0
+  double impulse_alpha = 1.5;       // tail index of the impulses, in (0, 2]
   double truth_step_s = 0.01;       // spacing of truth rows, >= 1 / fs
   uint64_t seed = 1;
   // A moving array: the sensors given to Simulate are in the platform's body frame and

@@ -102,6 +102,26 @@ std::vector<double> ClickEmissionTimes(const SimOptions& options, double start_s
   return times;
 }
 
+std::vector<Tone> SourceTones(const SimOptions& options) {
+  std::vector<Tone> tones;
+  if (options.signal != SourceSignal::kTonalBroadband) return tones;
+  std::mt19937_64 engine = SeededEngine(options.seed, RandomStream::kTones, 0);
+  const double width_hz = options.band_high_hz - options.band_low_hz;
+  std::uniform_real_distribution<double> frequency(options.band_low_hz + 0.1 * width_hz,
+                                                   options.band_high_hz - 0.1 * width_hz);
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * std::numbers::pi);
+  const double amplitude =
+      std::sqrt(2.0 * options.tone_power_fraction / static_cast<double>(options.tone_count));
+  for (int i = 0; i < options.tone_count; ++i) {
+    Tone tone;
+    tone.frequency_hz = frequency(engine);
+    tone.phase_rad = phase(engine);
+    tone.amplitude = amplitude;
+    tones.push_back(tone);
+  }
+  return tones;
+}
+
 SourceWaveform MakeSourceWaveform(const SimOptions& options, double start_s, double end_s) {
   SourceWaveform out;
   out.sample_rate_hz = options.sample_rate_hz;
@@ -111,6 +131,18 @@ SourceWaveform MakeSourceWaveform(const SimOptions& options, double start_s, dou
   out.origin_index = -first;
   if (options.signal == SourceSignal::kBroadband) {
     out.samples = BroadbandSamples(options, first, count);
+  } else if (options.signal == SourceSignal::kTonalBroadband) {
+    out.samples = BroadbandSamples(options, first, count);
+    const double noise_gain = std::sqrt(1.0 - options.tone_power_fraction);
+    const std::vector<Tone> tones = SourceTones(options);
+    for (int64_t i = 0; i < count; ++i) {
+      const double t_s = static_cast<double>(first + i) / options.sample_rate_hz;
+      double v = noise_gain * out.samples[i];
+      for (const Tone& tone : tones) {
+        v += tone.amplitude * std::cos(2.0 * std::numbers::pi * tone.frequency_hz * t_s + tone.phase_rad);
+      }
+      out.samples[i] = v;
+    }
   } else {
     out.samples.assign(count, 0.0);
     out.click_times_s = AddClicks(options, first, out.samples);

@@ -10,6 +10,11 @@
 // keep the pulse band-limited; g(0) = 1 is the peak (300-3000 Hz: a 2.2 ms burst at 1650 Hz).
 // Click i is due at i / click_rate_hz and jittered by a uniform draw in +-0.2 / click_rate_hz.
 //
+// kTonalBroadband: sqrt(1 - F) x the kBroadband noise plus tone_count tones
+//     sum_i sqrt(2 F / N) cos(2 pi f_i t + phi_i),  F = tone_power_fraction, N = tone_count,
+// so the expected power is still 1, F of it in tones; f_i uniform in the middle 80 % of
+// [band_low_hz, band_high_hz] (clear of the noise filter's transitions), phi_i uniform.
+//
 // Random draws come from std::mt19937_64 engines seeded with std::seed_seq from (seed, stream,
 // index): the noise per block of kNoiseBlock grid samples, the jitter per click. So s at a
 // given emission time depends only on the options (seed, rate, band), not on the span asked
@@ -38,6 +43,14 @@ struct SourceWaveform {
 // s on the smallest grid covering emission times [start_s, end_s] (start_s <= end_s), for
 // options that passed SimOptions::Validate. Cost: (end - start) fs x FIR taps for kBroadband.
 SourceWaveform MakeSourceWaveform(const SimOptions& options, double start_s, double end_s);
+
+struct Tone {
+  double frequency_hz = 0.0;
+  double phase_rad = 0.0;
+  double amplitude = 0.0;  // peak; the tone's power is amplitude^2 / 2
+};
+// kTonalBroadband's tones, drawn from options.seed (empty for the other signals).
+std::vector<Tone> SourceTones(const SimOptions& options);
 
 // The click pulse g above.
 class ClickPulse {

@@ -394,6 +394,21 @@ TEST(Simulator, BadOptionsAreInvalidArgumentsNamingTheField) {
       {"snr_db", [](SimOptions& o) { o.snr_db = kNan; }},
       {"surface_reflection", [](SimOptions& o) { o.surface_reflection = -1.5; }},
       {"surface_z_m", [](SimOptions& o) { o.surface_z_m = kInf; }},
+      {"bottom_reflection", [](SimOptions& o) { o.bottom_reflection = 1.5; }},
+      {"bottom_z_m", [](SimOptions& o) { o.bottom_z_m = kNan; }},
+      {"impulse_probability", [](SimOptions& o) { o.impulse_probability = 1.5; }},
+      {"impulse_scale_over_noise_std", [](SimOptions& o) { o.impulse_scale_over_noise_std = 0.0; }},
+      {"impulse_alpha", [](SimOptions& o) { o.impulse_alpha = 2.5; }},
+      {"tone_count",
+       [](SimOptions& o) {
+         o.signal = SourceSignal::kTonalBroadband;
+         o.tone_count = 0;
+       }},
+      {"tone_power_fraction",
+       [](SimOptions& o) {
+         o.signal = SourceSignal::kTonalBroadband;
+         o.tone_power_fraction = -0.1;
+       }},
       {"truth_step_s", [](SimOptions& o) { o.truth_step_s = 0.0; }},
       {"truth_step_s", [](SimOptions& o) { o.truth_step_s = 1e-6; }},
       {"trajectory.position_m", [](SimOptions& o) { o.trajectory.position_m.x() = kNan; }},
@@ -436,6 +451,74 @@ TEST(Simulator, OptionsBadForThisArrayAreInvalidArguments) {
   const StatusOr<SimResult> r3 = Simulate(array, far);
   ASSERT_FALSE(r3.ok());
   EXPECT_NE(r3.status().message().find("trajectory.position_m"), std::string::npos);
+}
+
+
+// A hard bottom: a positive copy at the image-source delay, on top of the direct path.
+TEST(Simulator, BottomEchoIsAPositiveCopyAtTheImagePathDifference) {
+  const ArrayGeometry array = Tetrahedron();
+  SimOptions o = Stationary(Vec3(10.0, 0.0, -15.0));
+  o.duration_s = 3.0;
+  o.bottom_reflection_enabled = true;
+  o.bottom_z_m = -20.0;
+  o.bottom_reflection = 0.5;
+  const SimResult r = MustSimulate(array, o);
+  const Vec3 image_m = MirrorInHorizontalPlane(o.trajectory, -20.0).position_m;
+  for (int k = 0; k < array.sensor_count(); ++k) {
+    const double direct_m = (o.trajectory.position_m - array.sensor_m(k)).norm();
+    const double reflected_m = (image_m - array.sensor_m(k)).norm();
+    const double echo_lag = (reflected_m - direct_m) / kSoundSpeed * kFs;  // 30-70 samples
+    const double a = 1.0 / direct_m;
+    const double b = 0.5 / reflected_m;
+    const std::vector<double> y = Channel(r, k);
+    const double zero_lag = CrossCorrelation(y, y, 0);
+    int highest_lag = 0;
+    double highest = -std::numeric_limits<double>::infinity();
+    for (int lag = 10; lag <= 150; ++lag) {
+      const double value = CrossCorrelation(y, y, lag) / zero_lag;
+      if (value > highest) highest = value, highest_lag = lag;
+    }
+    EXPECT_LE(std::abs(highest_lag - echo_lag), 1.0) << "sensor " << k;
+    EXPECT_NEAR(highest, a * b / (a * a + b * b), 0.05) << "sensor " << k;
+  }
+}
+
+// Impulses: on ~impulse_probability of the samples of every channel, independently, with a
+// scale of impulse_scale_over_noise_std Gaussian noise stds; the Gaussian part is unchanged.
+TEST(Simulator, ImpulsesAppearAtTheAskedRateAndScale) {
+  const ArrayGeometry array = Tetrahedron();
+  SimOptions o = Stationary(Vec3(6.0, 3.0, -7.0));
+  o.duration_s = 4.0;
+  o.snr_db = 0.0;
+  const SimResult gaussian = MustSimulate(array, o);
+  o.impulse_probability = 0.01;
+  o.impulse_scale_over_noise_std = 30.0;
+  o.impulse_alpha = 1.5;
+  const SimResult impulsive = MustSimulate(array, o);
+  o.snr_db = std::numeric_limits<double>::infinity();
+  const SimResult clean = MustSimulate(array, o);
+  std::vector<std::vector<bool>> hit(array.sensor_count());
+  for (int k = 0; k < array.sensor_count(); ++k) {
+    const std::vector<double> g = Channel(gaussian, k), x = Channel(impulsive, k), c = Channel(clean, k);
+    double noise_power = 0.0;
+    std::vector<double> sizes;
+    for (size_t n = 0; n < g.size(); ++n) {
+      noise_power += (g[n] - c[n]) * (g[n] - c[n]);
+      hit[k].push_back(x[n] != g[n]);
+      if (x[n] != g[n]) sizes.push_back(std::abs(x[n] - g[n]));
+    }
+    const double noise_std = std::sqrt(noise_power / static_cast<double>(g.size()));
+    const double n = static_cast<double>(g.size());
+    const double expected = 0.01 * n;  // binomial: std ~ sqrt(0.01 n) ~ 21 of ~441
+    EXPECT_NEAR(static_cast<double>(sizes.size()), expected, 5.0 * std::sqrt(expected)) << k;
+    // |S1(1.5, 0, 1, 0)| has median ~0.97, so the median impulse is ~30 noise stds.
+    std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
+    EXPECT_NEAR(sizes[sizes.size() / 2] / noise_std, 30.0, 6.0) << k;
+  }
+  // Independent per channel: coincidences at the product rate (~4 of 44100), not ~441.
+  int both = 0;
+  for (size_t n = 0; n < hit[0].size(); ++n) both += hit[0][n] && hit[1][n];
+  EXPECT_LT(both, 20);
 }
 
 }  // namespace

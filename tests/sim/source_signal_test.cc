@@ -173,5 +173,54 @@ TEST(SourceSignal, ClicksComeAtTheRateWithBoundedJitter) {
   EXPECT_GE(s.click_times_s.size(), times.size());
 }
 
+
+// A low-pass source (band_low_hz = 0): unit RMS, DC and low frequencies pass, above the edge
+// is stopped.
+TEST(SourceSignal, LowPassSourceHasUnitRmsAndStaysBelowItsEdge) {
+  SimOptions o = BroadbandOptions();
+  o.band_low_hz = 0.0;
+  o.band_high_hz = 2000.0;
+  ASSERT_TRUE(o.Validate().ok());
+  const SourceWaveform s = MakeSourceWaveform(o, 0.0, 10.0);
+  double power = 0.0;
+  for (double v : s.samples) power += v * v;
+  EXPECT_NEAR(std::sqrt(power / static_cast<double>(s.samples.size())), 1.0, 0.02);
+  const double in_band = std::min(PowerNear(s.samples, 100.0, o.sample_rate_hz),
+                                  PowerNear(s.samples, 1500.0, o.sample_rate_hz));
+  for (double f_hz : {2600.0, 3500.0, 5000.0}) {
+    EXPECT_LT(Db(PowerNear(s.samples, f_hz, o.sample_rate_hz) / in_band), -55.0) << f_hz;
+  }
+}
+
+// Tonal plus broadband: each tone carries tone_power_fraction / tone_count of the unit power
+// at its drawn frequency (inside the band), the total stays 1.
+TEST(SourceSignal, TonesCarryTheirShareOfThePowerAtTheirFrequencies) {
+  SimOptions o = BroadbandOptions();
+  o.signal = SourceSignal::kTonalBroadband;
+  o.tone_count = 3;
+  o.tone_power_fraction = 0.6;
+  ASSERT_TRUE(o.Validate().ok());
+  const std::vector<Tone> tones = SourceTones(o);
+  ASSERT_EQ(tones.size(), 3u);
+  const SourceWaveform s = MakeSourceWaveform(o, 0.0, 10.0);
+  double power = 0.0;
+  for (double v : s.samples) power += v * v;
+  EXPECT_NEAR(power / static_cast<double>(s.samples.size()), 1.0, 0.03);
+  for (const Tone& tone : tones) {
+    EXPECT_GE(tone.frequency_hz, 300.0 + 0.1 * 2700.0);
+    EXPECT_LE(tone.frequency_hz, 3000.0 - 0.1 * 2700.0);
+    // Projection on the tone over 10 s: the broadband part adds ~1/sqrt(N) of noise.
+    std::complex<double> sum = 0.0;
+    for (size_t n = 0; n < s.samples.size(); ++n) {
+      const double t_s = static_cast<double>(static_cast<int64_t>(n) - s.origin_index) / o.sample_rate_hz;
+      sum += s.samples[n] * std::polar(1.0, -kTwoPi * tone.frequency_hz * t_s);
+    }
+    const double amplitude = 2.0 * std::abs(sum) / static_cast<double>(s.samples.size());
+    EXPECT_NEAR(amplitude * amplitude / 2.0, 0.6 / 3.0, 0.01) << tone.frequency_hz;
+  }
+  o.signal = SourceSignal::kBroadband;
+  EXPECT_TRUE(SourceTones(o).empty());
+}
+
 }  // namespace
 }  // namespace localizer::engine
