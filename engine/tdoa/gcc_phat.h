@@ -79,9 +79,10 @@
 
 namespace localizer::engine {
 
-enum class Weighting { kPhat, kPhatBeta, kScot, kCc };
+enum class Weighting { kPhat, kPhatBeta, kScot, kCc, kPhatCoherence };
 
-// Parses "phat", "phat-beta", "scot", "cc"; anything else is INVALID_ARGUMENT listing them.
+// Parses "phat", "phat-beta", "scot", "cc", "phat-coherence"; anything else is
+// INVALID_ARGUMENT listing them.
 StatusOr<Weighting> ParseWeighting(const std::string& name);
 const char* WeightingName(Weighting w);
 
@@ -96,6 +97,13 @@ struct GccOptions {
   bool keep_gcc = true;           // copy the GCC over the lag window into the Measurement
   PeakInterpolation interpolation = PeakInterpolation::kSinc;  // sub-sample refinement
   bool measure_fft_plans = false; // FFTW_MEASURE instead of FFTW_ESTIMATE (see above)
+  int max_candidates = 4;         // PairMeasurement::candidates per pair, in [1, 32]; 1: the
+                                  // main peak only
+  // kPhatCoherence: the exponential average's time constant in frames (>= 1; the weight of
+  // a frame falls by e after this many frames) and the frames measured with plain PHAT before
+  // the averaged coherence is used (>= 1).
+  double coherence_time_constant_frames = 16.0;
+  int coherence_warmup_frames = 4;
 
   // OK, or INVALID_ARGUMENT naming the field and value.
   Status Validate() const;
@@ -114,6 +122,10 @@ class GccPhatEstimator final : public TdoaEstimator {
   // INVALID_ARGUMENT (naming the value) when frame or out is null, frame_samples differs from
   // options().frame_samples, or a channel holds a non-finite sample; `out` is then untouched.
   Status Estimate(const float* frame, int frame_samples, double t_s, Measurement* out) override;
+
+  // Forgets what kPhatCoherence learnt (the next frame starts its warm-up): the estimator
+  // then answers like a fresh one. A no-op for the other weightings.
+  void Reset();
 
   const GccOptions& options() const;
   int fft_size() const;                    // N
