@@ -26,16 +26,19 @@ constexpr int kMaxCandidates = 32;
 // 2 pi / B = (2 pi / sqrt(12)) / sigma_omega, sigma_omega = B / sqrt(12) its rms width.
 constexpr double kEnvelopeNullPerRmsWidth = 2.0 * std::numbers::pi / 3.4641016151377544;
 
-// The interpolator's own error (peak_interpolation.h, rms over fractions at 20 dB, rounded
-// up), added in quadrature to delay_sigma: the statistical part alone would claim less than
-// the method can deliver on a clean frame.
-double InterpolationFloorSamples(PeakInterpolation method) {
-  switch (method) {
-    case PeakInterpolation::kParabolic: return 0.04;
-    case PeakInterpolation::kGaussian: return 0.07;
-    case PeakInterpolation::kSinc: return 0.003;
-  }
-  return 0.04;
+// The sinc interpolator's own rms error on a clean frame (peak_interpolation.h: 0.0011 sample
+// noiseless, rounded up), added in quadrature to delay_sigma: the statistical part alone
+// would claim less than the method delivers on a clean frame.
+constexpr double kSincFloorSamples = 0.002;
+
+// The refinement's systematic error on this peak: for kParabolic and kGaussian their distance
+// from the (nearly unbiased) kSinc refinement of the same samples, which is their bias here
+// (0.04-0.06 sample at 11 kHz, far less on a peak many samples wide); kSinc's floor else.
+double InterpolationErrorSamples(PeakInterpolation method,
+                                 std::span<const float, kPeakSamples> samples, double offset) {
+  if (method == PeakInterpolation::kSinc) return kSincFloorSamples;
+  const double bias = offset - InterpolatePeak(PeakInterpolation::kSinc, samples);
+  return std::sqrt(bias * bias + kSincFloorSamples * kSincFloorSamples);
 }
 
 std::string Value(double v) {
@@ -177,6 +180,9 @@ Status GccOptions::Validate() const {
   if (!(coherence_time_constant_frames >= 1.0) || !std::isfinite(coherence_time_constant_frames)) {
     return BadOption("coherence_time_constant_frames", coherence_time_constant_frames,
                      "must be finite and >= 1");
+  }
+  if (coherence_smoothing_bins < 0 || coherence_smoothing_bins > 4096) {
+    return BadOption("coherence_smoothing_bins", coherence_smoothing_bins, "must be in [0, 4096]");
   }
   if (coherence_warmup_frames < 1) {
     return BadOption("coherence_warmup_frames", coherence_warmup_frames, "must be >= 1");
@@ -416,16 +422,36 @@ GccPhatEstimator::Impl::SpectrumStats GccPhatEstimator::Impl::AnalyseSpectrum(
 // (clamped to [0, 0.99]) for the pair's next frame.
 void GccPhatEstimator::Impl::LearnCoherence(int pair) {
   const int frames = ++coherence_frames[pair];
-  const double keep = 1.0 - 1.0 / options.coherence_time_constant_frames;
-  // An average started at zero holds (1 - keep^frames) of the weight: divide it out.
-  const float correction = static_cast<float>(1.0 / (1.0 - std::pow(keep, frames)));
+  const double alpha = 1.0 / options.coherence_time_constant_frames;
+  const double keep = 1.0 - alpha;
+  // An average started at zero holds sum_w = 1 - keep^frames of the weight: divide it out.
+  const double sum_w = 1.0 - std::pow(keep, frames);
+  const double sum_w2 = alpha * alpha * (1.0 - std::pow(keep, 2 * frames)) / (1.0 - keep * keep);
+  const int h = options.coherence_smoothing_bins;
+  const int lo = layout.band_first_bin;
+  const int hi = layout.band_end_bin;
+  // A noise-only bin's aligned coherence is cos of a uniform phase: mean 0, variance 1/2. The
+  // averaged, smoothed estimate then has variance v0 = (1/2) (sum_w2 / sum_w^2) / n_eff, n_eff
+  // the independent bins in the 2h + 1 smoothed (zero padding correlates N / M neighbours):
+  // c^2 is debiased by v0 so that noise-only bins get weight ~0 rather than ~v0.
+  const double padding = static_cast<double>(layout.fft_size) / options.frame_samples;
+  const double n_eff = std::max(1.0, (2.0 * h + 1.0) / padding);
+  const float v0 = static_cast<float>(0.5 * sum_w2 / (sum_w * sum_w) / n_eff);
+  const float correction = static_cast<float>(1.0 / sum_w);
   const std::size_t base = static_cast<std::size_t>(pair) * layout.bin_count;
   const float* average = coherence.data() + base;
   float* weight = coherence_weight.data() + base;
+  // Box average over [k - h, k + h] within the band, by a running sum (double: no drift).
+  double running = 0.0;
+  int first = lo;
+  int last = lo;  // the sum covers [first, last)
   float largest = 0.0f;
-  for (int k = layout.band_first_bin; k < layout.band_end_bin; ++k) {
-    const float c = std::clamp(average[k] * correction, 0.0f, 0.99f);
-    weight[k] = c * c / (1.0f - c * c);
+  for (int k = lo; k < hi; ++k) {
+    while (last < std::min(hi, k + h + 1)) running += average[last++];
+    while (first < k - h) running -= average[first++];
+    const float c = std::max(0.0f, static_cast<float>(running / (last - first)) * correction);
+    const float c2 = std::clamp(c * c - v0, 0.0f, 0.98f);
+    weight[k] = c2 / (1.0f - c2);
     largest = std::max(largest, weight[k]);
   }
   coherence_usable[pair] = frames >= options.coherence_warmup_frames && largest > 1e-6f;
@@ -439,10 +465,9 @@ void GccPhatEstimator::Impl::PickCandidates(std::span<const float> searched, int
                                             PairMeasurement* out) {
   const int count = static_cast<int>(searched.size());
   const double fs = options.sample_rate_hz;
-  const double floor = InterpolationFloorSamples(options.interpolation);
   const double cap = SigmaCapSamples(max_lag);
   const float* w = searched.data();  // w[-K .. count - 1 + K] are valid
-  const auto sigma_of = [&](double curvature) {
+  const auto sigma_of = [&](double curvature, double floor) {
     if (!(curvature < 0.0)) return cap;
     const double stat = slope_std / -curvature;
     return std::min(std::sqrt(stat * stat + floor * floor), cap);
@@ -475,7 +500,9 @@ void GccPhatEstimator::Impl::PickCandidates(std::span<const float> searched, int
     DelayCandidate candidate;
     candidate.delay_s = (e.index - max_lag + offset) / fs;
     candidate.value = w[e.index];
-    candidate.delay_sigma_s = sigma_of(SincCurvature(around, offset)) / fs;
+    candidate.delay_sigma_s =
+        sigma_of(SincCurvature(around, offset),
+                 InterpolationErrorSamples(options.interpolation, around, offset)) / fs;
     out->candidates.push_back(candidate);
   }
 }
@@ -521,7 +548,7 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
   const double padding_factor =
       static_cast<double>(layout.fft_size) / static_cast<double>(options.frame_samples);
   const double slope_std = std::sqrt(padding_factor * stats.slope_var) / norm;  // std of R'
-  const double floor = InterpolationFloorSamples(options.interpolation);
+  const double floor = InterpolationErrorSamples(options.interpolation, around, offset_samples);
   const double cap = SigmaCapSamples(max_lag);
   double sigma = cap;
   if (stats.curvature > 0.0) {

@@ -104,6 +104,8 @@ struct GccOptions {
   // the averaged coherence is used (>= 1).
   double coherence_time_constant_frames = 16.0;
   int coherence_warmup_frames = 4;
+  int coherence_smoothing_bins = 8;  // kPhatCoherence: half-width of the box average of the
+                                     // coherence over frequency, bins, in [0, 4096]
 
   // OK, or INVALID_ARGUMENT naming the field and value.
   Status Validate() const;
