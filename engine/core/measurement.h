@@ -5,6 +5,14 @@
 
 namespace localizer::engine {
 
+// One local extremum of a pair's GCC: a delay the pair's channels share (a path, an echo, an
+// image of the source) or a noise peak. See gcc_phat.h for how candidates are picked.
+struct DelayCandidate {
+  double delay_s = 0.0;        // refined like the main peak
+  double value = 0.0;          // GCC at the integer extremum; negative: an inverted copy
+  double delay_sigma_s = 0.0;  // standard deviation of delay_s, as delay_sigma_s below
+};
+
 // One sensor pair (reference, sensor). Sign convention throughout the engine:
 //   delay_s = t_arrival(sensor) - t_arrival(reference) = (|s - m_sensor| - |s - m_ref|) / c,
 // so a positive delay means the source is nearer the reference.
@@ -18,9 +26,17 @@ struct PairMeasurement {
   // noise (1 / sqrt(in-band bins of the full spectrum), exact for PHAT): the detection
   // statistic. Noise alone gives ~2-4 (max over the window); a source far more.
   double peak_snr = 0.0;
-  // Standard deviation of delay_s that this frame's peak allows (its height and curvature;
-  // 0: not computed by this front end).
+  // Standard deviation of delay_s on this frame, seconds, from the GCC's own curvature and
+  // the spread of its cross-spectrum about the measured delay (gcc_phat.h derives it and
+  // states how well it agrees with the measured spread). It describes the scatter about the
+  // peak that was found; whether that peak is the source is peak_snr's and quality's job.
+  // 0: not computed by this front end (the GPU one; filters then use the GCC's curvature).
   double delay_sigma_s = 0.0;
+  // The K largest local extrema of |GCC| in the lag window, at least one envelope width
+  // apart (K = GccOptions::max_candidates). candidates[0] is the main peak (delay_s,
+  // peak_value, delay_sigma_s); the others follow by decreasing |value|. Empty when the
+  // frame had no energy in the band.
+  std::vector<DelayCandidate> candidates;
   // The GCC function over the searched lag window, at integer lags
   // first_lag_samples, first_lag_samples + 1, ...; lag in samples = delay_s * sample_rate_hz.
   // Trackers read it at a candidate's predicted lag (GCC likelihood).

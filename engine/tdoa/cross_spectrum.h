@@ -60,6 +60,18 @@ struct PhatWeight {
   }
 };
 
+// W = w[i] / max(|G|, floor): PHAT scaled by a per-bin weight w >= 0 (kPhatCoherence's
+// w(f) = c^2 / (1 - c^2), learnt over earlier frames; see gcc_phat.h).
+struct CoherencePhatWeight {
+  float floor_mag;
+  const float* bin_weight;  // indexed by bin
+  BinWeight operator()(CrossBin c, const float*, const float*, int i) const {
+    const float mag = Magnitude(c);
+    const float weight = bin_weight[i] / std::max(mag, floor_mag);
+    return {weight, mag * weight};
+  }
+};
+
 // W = max(|G|, floor)^-beta = exp(-beta ln max(|G|, floor)), with the vectorisable FastExp
 // and FastLog of engine/core/fast_math.h (powf would be a scalar call per bin; it cost more
 // than the FFTs). Their float rounding of an exponent up to ~88 bounds the relative error of

@@ -15,6 +15,7 @@
 //     PHAT-beta  1 / |X_k X_r*|^beta               (beta in [0, 1]; 1 = PHAT, 0 = CC)
 //     SCOT       1 / sqrt(|X_k|^2 |X_r|^2)  computed per frame (no averaging)
 //     CC         1                                (plain cross-correlation)
+//     PHAT-coherence  w(f) / |X_k X_r*|  with w learnt over the pair's earlier frames (below)
 // Per frame, without averaging, SCOT equals PHAT except in floored bins (it floors each
 // auto-spectrum rather than the cross-spectrum). PHAT-beta evaluates |.|^-beta with the
 // vectorised FastExp/FastLog of engine/core/fast_math.h (~1e-5 relative), not powf.
@@ -51,6 +52,76 @@
 // ratio to the noise-only standard deviation of R (measurement.h). With keep_gcc, pair.gcc holds R (same
 // normalisation) at lags -L_p..L_p, so first_lag_samples = -L_p and gcc.size() = 2 L_p + 1.
 //
+// delay_sigma_s, the standard deviation of this frame's delay. Near the peak d, with
+// A_k = G_k exp(j w_k d) = Re_k + j Im_k (w_k = 2 pi k / N rad/sample, c_k = 2 for the bins
+// that stand for a conjugate pair, 1 for DC and Nyquist):
+//     R'(tau)  = -(1/S) sum c_k w_k Im(G_k e^{j w_k tau}),  R''(d) = -(1/S) sum c_k w_k^2 Re_k.
+// The refined delay solves R'(d_hat) = 0, so to first order d_hat - d = -R'(d) / R''(d). The
+// signal's part of Im_k vanishes at the true delay; what is left is noise, so
+//     var R'(d) = (N / M) (1/S^2) sum c_k^2 w_k^2 E[Im_k^2]
+// (N / M = fft_size / frame_samples: zero padding makes ~N/M neighbouring bins one independent
+// one), and E[Im_k^2] is estimated by this frame's Im_k^2 at the refined delay. Hence
+//     sigma = sqrt((N / M) sum c_k^2 w_k^2 Im_k^2) / sum c_k w_k^2 Re_k    [samples],
+// S cancelling; then the interpolator's error is added in quadrature (kSinc: 0.002 sample, its
+// rms on clean frames; kParabolic / kGaussian: their distance from the kSinc refinement of the
+// same samples, i.e. their bias on this peak, which is 0.04-0.06 sample at 11 kHz and much less
+// on a wide peak), and sigma is capped at (2 L_p + 1) / sqrt(12), a delay uniform over the
+// window (also what a frame with no energy in the band reports). With noise-only bins
+// (E[Im^2] = 1/2 for PHAT) this is the quadratic-peak argument 1 / (peak_snr sqrt(-R''/R))
+// times sqrt(N/M); at high SNR Im_k shrinks with the per-bin phase noise, so, unlike that
+// formula, sigma keeps falling with SNR (it would otherwise overstate a 20 dB frame 10x).
+// Measured (tests/tdoa/gcc_frontend_test.cc, DelaySigma.AgreesWithTheMeasuredSpread; 24
+// frames x 3 pairs per point, rms of sigma over rms error about the truth):
+//     scene                                 -5 dB  0 dB   5 dB   10 dB  20 dB
+//     11025 Hz, 200-4000 Hz, band set        1.06   1.10   1.11   1.18   1.26 (sinc floor)
+//     same, no band (PHAT whitens noise)     0.99   0.99   0.99   0.99   0.92
+//     same, band set, kParabolic             0.94   0.96   0.99   1.00   1.00
+//     48 kHz, 300-3000 Hz, 8192, band set    0.90   0.96   1.03   1.08   1.14
+// Spreads at 0 dB: 0.023, 0.045, 0.055, 0.109 sample. At -10 dB without a band, or at 48 kHz
+// without a band, peaks are lost (a third of the pairs at 48 kHz) and sigma is then large,
+// usually the cap: it describes the scatter about the peak found, not whether that peak is the
+// source (peak_snr and quality say that). Cost: one pass over the in-band bins per pair
+// (phasor rotated in 16 double lanes): gcc_bench's stage_over_bare went from 1.11-1.13
+// (BENCHMARKS.md) to 1.48-1.59 (91-96 us against 60-62 us of bare transforms, 4 x 4096,
+// FFTW_ESTIMATE, on a loaded shared machine), i.e. ~10 us per pair for sigma and candidates.
+//
+// candidates: the local extrema of R in the window (maxima with R > 0 and minima with R < 0:
+// an inverted copy, e.g. an echo off a pressure-release surface, is a negative extremum),
+// candidates[0] the main peak, the others by decreasing |R|, up to max_candidates, each at least
+// one envelope width from those taken: 2 pi / (sqrt(12) sigma_w) lags, sigma_w the rms width of
+// the aligned spectrum Re_k (the first null of a flat band's envelope; 2.9 samples for
+// 200-4000 Hz at 11025 Hz), so the carrier ripples of one peak are not candidates. Each is
+// refined by options.interpolation (on -R for a minimum); its delay_sigma_s uses the same
+// var R'(d) over the sinc reconstruction's curvature at that candidate. Measured: direct path
+// + echo (gain -0.9, 9 samples later) at 20 dB gives the direct path first (R 0.66) and the
+// echo second (R -0.48) in 10 of 10 frames.
+//
+// PHAT-coherence (weighting kPhatCoherence): PHAT whitens bins that hold only noise, which is
+// why without the band the spread grows several-fold. After each frame the pair's cross-spectrum
+// is aligned by that frame's measured delay d and each in-band bin's
+//     c_k = Re(X_k X_r* e^{j w_k d}) / |X_k X_r*|
+// (~1 where the source dominates; cos of a uniform phase, mean 0, where noise does: whatever the
+// source's motion, since every frame aligns by its own delay) is folded into an exponential
+// average with time constant coherence_time_constant_frames (bias-corrected for the first
+// frames), box-smoothed over +-coherence_smoothing_bins bins; the next frame's bins are weighted
+//     w = C / (1 - C),  C = clamp(c_smooth^2 - v0, 0, 0.98)
+// (Knapp & Carter's ML weight |gamma|^2 / (1 - |gamma|^2) in coherence terms), v0 being the
+// expected c^2 of a noise-only bin for this many frames and smoothed bins, so that such bins get
+// weight ~0. The first coherence_warmup_frames frames of each pair use plain PHAT. S still
+// normalises, so R(d) = 1 for a perfect path. The coherence is learnt from the unweighted
+// spectra, so a bin weighted to zero can come back. The state is per estimator and per pair:
+// frames must be given in time order, a fresh estimator (or one after Reset()) replays a stream
+// bit for bit, and a dropped or reordered frame only perturbs the average.
+// Measured (PhatCoherence.WithoutABandHintMatchesPhatWithTheTrueBand; 500-2000 Hz source,
+// white noise 0-5.5 kHz, 11025 Hz, 40 scored frames x 3 pairs after 8 warm-up):
+//     SNR      PHAT, true band   PHAT, no band        PHAT-coherence, no band
+//     -10 dB   0.180 (0 lost)    0.457 (9 lost)       0.206 (0 lost)
+//      -5 dB   0.083             0.306                0.088
+//       0 dB   0.047             0.234                0.047
+// i.e. within 1.15x of PHAT with the true band, 2.2-5x better than PHAT without it. Cost:
+// the weight array read in the weighing pass plus one O(bins) update per pair and frame:
+// BM_GccPhatCoherence 133 us per 4 x 4096 frame against 91-96 us for PHAT (same run).
+//
 // Cost per frame: (channels) real FFTs of N plus (channels - 1) inverse FFTs of N, O(N) for
 // the spectra (one vectorised pass per pair, cross_spectrum.h), O(L_p) for the peak and
 // ~0.2 us per pair for the sinc refinement; plans are made once in Create and reused, so
@@ -79,9 +150,10 @@
 
 namespace localizer::engine {
 
-enum class Weighting { kPhat, kPhatBeta, kScot, kCc };
+enum class Weighting { kPhat, kPhatBeta, kScot, kCc, kPhatCoherence };
 
-// Parses "phat", "phat-beta", "scot", "cc"; anything else is INVALID_ARGUMENT listing them.
+// Parses "phat", "phat-beta", "scot", "cc", "phat-coherence"; anything else is
+// INVALID_ARGUMENT listing them.
 StatusOr<Weighting> ParseWeighting(const std::string& name);
 const char* WeightingName(Weighting w);
 
@@ -96,6 +168,15 @@ struct GccOptions {
   bool keep_gcc = true;           // copy the GCC over the lag window into the Measurement
   PeakInterpolation interpolation = PeakInterpolation::kSinc;  // sub-sample refinement
   bool measure_fft_plans = false; // FFTW_MEASURE instead of FFTW_ESTIMATE (see above)
+  int max_candidates = 4;         // PairMeasurement::candidates per pair, in [1, 32]; 1: the
+                                  // main peak only
+  // kPhatCoherence: the exponential average's time constant in frames (>= 1; the weight of
+  // a frame falls by e after this many frames) and the frames measured with plain PHAT before
+  // the averaged coherence is used (>= 1).
+  double coherence_time_constant_frames = 16.0;
+  int coherence_warmup_frames = 4;
+  int coherence_smoothing_bins = 8;  // kPhatCoherence: half-width of the box average of the
+                                     // coherence over frequency, bins, in [0, 4096]
 
   // OK, or INVALID_ARGUMENT naming the field and value.
   Status Validate() const;
@@ -114,6 +195,10 @@ class GccPhatEstimator final : public TdoaEstimator {
   // INVALID_ARGUMENT (naming the value) when frame or out is null, frame_samples differs from
   // options().frame_samples, or a channel holds a non-finite sample; `out` is then untouched.
   Status Estimate(const float* frame, int frame_samples, double t_s, Measurement* out) override;
+
+  // Forgets what kPhatCoherence learnt (the next frame starts its warm-up): the estimator
+  // then answers like a fresh one. A no-op for the other weightings.
+  void Reset();
 
   const GccOptions& options() const;
   int fft_size() const;                    // N

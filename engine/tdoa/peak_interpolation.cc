@@ -132,6 +132,10 @@ double SincReconstruct(std::span<const float, kPeakSamples> samples, double x) {
   return EvaluateSinc(samples, x).value;
 }
 
+double SincCurvature(std::span<const float, kPeakSamples> samples, double x) {
+  return EvaluateSinc(samples, x).curvature;
+}
+
 double InterpolatePeak(PeakInterpolation method, std::span<const float, kPeakSamples> samples) {
   const double y_minus = samples[kPeakHalfWidth - 1];
   const double y0 = samples[kPeakHalfWidth];

@@ -62,4 +62,8 @@ double GaussianPeakOffset(double y_minus, double y0, double y_plus);
 // |x| <= 1 (exposed for tests).
 double SincReconstruct(std::span<const float, kPeakSamples> samples, double x);
 
+// Its second derivative (per sample^2) at x, |x| <= 1: the peak's curvature, from which
+// gcc_phat.h derives a candidate's delay standard deviation.
+double SincCurvature(std::span<const float, kPeakSamples> samples, double x);
+
 }  // namespace localizer::engine

@@ -7,6 +7,11 @@
 //                                   tetrahedron with 2 m edges, c = 1500 m/s, PHAT, keep_gcc.
 //   BM_StageOverBare/<fs>/<measure> the two alternated in each iteration; its counter
 //                                   stage_over_bare is the ratio, robust to a busy machine.
+//   BM_GccPhatCoherence/<fs>        Estimate with Weighting::kPhatCoherence (and no band), in
+//                                   steady state: the per-bin weights and the coherence update.
+//   BM_Despike/<coincidence>        Despike (despike.h) on the same 4 x 4096 frame, k = 5, with
+//                                   the coincidence gate off (0) or at 20 samples.
+// Estimate includes delay_sigma_s (one pass over the in-band bins per pair) and 4 candidates.
 // <measure> 0 plans with FFTW_ESTIMATE (the default), 1 with FFTW_MEASURE. The goal is
 // Estimate / bare FFTW <= 1.15. Run:
 //   build-tdoa/tests/bench/gcc_bench
@@ -18,6 +23,7 @@
 #include <memory>
 #include <vector>
 
+#include "engine/tdoa/despike.h"
 #include "engine/tdoa/fftw_util.h"
 #include "engine/tdoa/gcc_phat.h"
 #include "tests/tdoa/tdoa_test_signals.h"
@@ -154,6 +160,44 @@ void BM_StageOverBare(benchmark::State& state) {
   state.counters["stage_over_bare"] = stage_s / bare_s;
 }
 
+void BM_GccPhatCoherence(benchmark::State& state) {
+  const ArrayGeometry array = BenchArray();
+  GccOptions options;
+  options.frame_samples = kFrameSamples;
+  options.sample_rate_hz = static_cast<double>(state.range(0));
+  options.weighting = Weighting::kPhatCoherence;
+  auto gcc = GccPhatEstimator::Create(array, options);
+  if (!gcc.ok()) {
+    state.SkipWithError(gcc.status().ToString().c_str());
+    return;
+  }
+  const std::vector<float> frame = BenchFrame(options.sample_rate_hz, array);
+  Measurement m;
+  for (int i = 0; i < 8; ++i) (void)(*gcc)->Estimate(frame.data(), kFrameSamples, 0.0, &m);
+  for (auto _ : state) {
+    const Status status = (*gcc)->Estimate(frame.data(), kFrameSamples, 0.0, &m);
+    benchmark::DoNotOptimize(status.ok());
+  }
+  SetCounters(state);
+}
+
+void BM_Despike(benchmark::State& state) {
+  const ArrayGeometry array = BenchArray();
+  const std::vector<float> source = BenchFrame(11025.0, array);
+  std::vector<float> frame = source;
+  DespikeOptions options;
+  options.coincidence_samples = static_cast<int>(state.range(0));
+  DespikeScratch scratch;
+  for (auto _ : state) {
+    state.PauseTiming();
+    frame = source;
+    state.ResumeTiming();
+    const Status status = Despike(options, frame.data(), kChannels, kFrameSamples, &scratch);
+    benchmark::DoNotOptimize(status.ok());
+  }
+  SetCounters(state);
+}
+
 // An FFTW_ESTIMATE plan reuses FFTW_MEASURE wisdom made earlier in the process, so every
 // measure=0 benchmark is registered (and runs) before any measure=1 one. For the same reason
 // do not combine measure=1 with --benchmark_enable_random_interleaving.
@@ -167,6 +211,8 @@ void MeasuredPlans(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_BareFftw)->Apply(EstimatePlans);
 BENCHMARK(BM_GccPhatStage)->Apply(EstimatePlans);
 BENCHMARK(BM_StageOverBare)->Apply(EstimatePlans);
+BENCHMARK(BM_GccPhatCoherence)->Arg(11025)->Arg(44100)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Despike)->Arg(0)->Arg(20)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BareFftw)->Apply(MeasuredPlans);
 BENCHMARK(BM_GccPhatStage)->Apply(MeasuredPlans);
 BENCHMARK(BM_StageOverBare)->Apply(MeasuredPlans);

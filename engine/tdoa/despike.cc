@@ -1,0 +1,83 @@
+#include "engine/tdoa/despike.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+namespace localizer::engine {
+
+Status DespikeOptions::Validate() const {
+  if (despike_k == 0.0) return Status::Ok();
+  if (!(despike_k >= 1.0 && despike_k <= 1e6)) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", despike_k);
+    return InvalidArgument(std::string("DespikeOptions.despike_k is ") + text +
+                           "; must be 0 (off) or in [1, 1e6]");
+  }
+  if (coincidence_samples < 0 || coincidence_samples > (1 << 20)) {
+    return InvalidArgument("DespikeOptions.coincidence_samples is " +
+                           std::to_string(coincidence_samples) + "; must be in [0, 1048576]");
+  }
+  return Status::Ok();
+}
+
+Status Despike(const DespikeOptions& options, float* frame, int channels, int samples,
+               DespikeScratch* scratch, DespikeStats* stats) {
+  if (Status s = options.Validate(); !s.ok()) return s;
+  if (frame == nullptr) return InvalidArgument("frame is null");
+  if (channels < 1) return InvalidArgument("channels is " + std::to_string(channels) + "; must be >= 1");
+  if (samples < 1) return InvalidArgument("samples is " + std::to_string(samples) + "; must be >= 1");
+  if (stats != nullptr) stats->clipped_samples = 0;
+  if (options.despike_k == 0.0) return Status::Ok();
+  DespikeScratch local;
+  DespikeScratch& buffers = scratch != nullptr ? *scratch : local;
+  std::vector<float>& magnitudes = buffers.magnitudes;
+  magnitudes.resize(samples);
+  constexpr float kMadToSigma = 1.4826f;
+  const int window = options.coincidence_samples;
+  const std::size_t stride = static_cast<std::size_t>(samples) + 1;
+  std::vector<float> limits(channels);  // small; channels is the array's sensor count
+  if (window > 0) buffers.outliers_before.assign(stride * channels, 0);
+  for (int c = 0; c < channels; ++c) {
+    const float* x = frame + static_cast<std::size_t>(c) * samples;
+    for (int i = 0; i < samples; ++i) magnitudes[i] = std::abs(x[i]);
+    const auto middle = magnitudes.begin() + samples / 2;
+    std::nth_element(magnitudes.begin(), middle, magnitudes.end());
+    limits[c] = static_cast<float>(options.despike_k) * kMadToSigma * *middle;
+    if (window > 0) {
+      int* before = buffers.outliers_before.data() + stride * c;
+      for (int i = 0; i < samples; ++i) before[i + 1] = before[i] + (std::abs(x[i]) > limits[c]);
+    }
+  }
+  // Does channel c have an outlier in [i - window, i + window]?
+  const auto outlier_near = [&](int c, int i) {
+    const int* before = buffers.outliers_before.data() + stride * c;
+    const int lo = std::max(0, i - window);
+    const int hi = std::min(samples, i + window + 1);
+    return before[hi] > before[lo];
+  };
+  int clipped = 0;
+  for (int c = 0; c < channels; ++c) {
+    float* x = frame + static_cast<std::size_t>(c) * samples;
+    const float limit = limits[c];
+    if (!(limit > 0.0f)) continue;  // a silent (or mostly zero) channel: nothing to scale by
+    for (int i = 0; i < samples; ++i) {
+      const float v = x[i];
+      if (!(std::abs(v) > limit)) continue;
+      if (window > 0 && channels > 1) {
+        bool everywhere = true;
+        for (int other = 0; other < channels && everywhere; ++other) {
+          everywhere = other == c || outlier_near(other, i);
+        }
+        if (everywhere) continue;  // coherent across the array: the source, kept
+      }
+      x[i] = std::clamp(v, -limit, limit);
+      ++clipped;
+    }
+  }
+  if (stats != nullptr) stats->clipped_samples = clipped;
+  return Status::Ok();
+}
+
+}  // namespace localizer::engine
