@@ -84,7 +84,13 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
   }
   const bool particle = tracker.type == "pf";
   SessionComponents parts;
-  if (backend != "cpu") {
+  // The learnt coherence weighting keeps per-pair state across frames that the device GCC
+  // does not have yet: such sessions run on the CPU (auto) or are refused (gpu).
+  const bool cpu_weighting = gcc.weighting == Weighting::kPhatCoherence;
+  if (backend == "gpu" && cpu_weighting) {
+    return FailedPrecondition("weighting phat-coherence runs on the CPU backend only (backend cpu or auto)");
+  }
+  if (backend != "cpu" && !cpu_weighting) {
     const auto provider = CurrentProvider();
     const std::string reason = provider ? provider->UnavailableReason() : GpuUnavailableReason();
     if (reason.empty()) {

@@ -9,6 +9,7 @@
 #include "engine/pipeline/backend.h"
 #include "engine/pipeline/framer.h"
 #include "engine/pipeline/platform_pose.h"
+#include "engine/tdoa/despike.h"
 
 namespace localizer::engine {
 namespace {
@@ -58,7 +59,12 @@ struct Session::Impl {
         components(std::move(parts)),
         acquisition(std::move(acq)),
         framer(array.sensor_count(), config.frame_samples, config.hop_samples),
-        monitor(config.divergence_window) {}
+        monitor(config.divergence_window) {
+    despike.despike_k = config.despike_k;
+    // A coherent impulse reaches every sensor within the aperture's travel time.
+    despike.coincidence_samples =
+        static_cast<int>(std::ceil(array.aperture_m() / config.sound_speed_mps * config.sample_rate_hz)) + 5;
+  }
 
   void ProcessFrame(const float* frame, int64_t first_sample, uint64_t sequence, std::vector<Estimate>* out);
   // Starts the tracker from acquisition's modes (every one the data allows); false if none.
@@ -89,6 +95,9 @@ struct Session::Impl {
   double silent_s = 0.0;     // time since the source was last heard near the track
   int heard_elsewhere = 0;   // consecutive frames with the source present away from the track
   Framer framer;
+  DespikeOptions despike;
+  DespikeScratch despike_scratch;
+  std::vector<float> despiked;  // the frame as the estimator sees it, when despiking
   DivergenceMonitor monitor;
   Measurement measurement;
   Eigen::VectorXd delays;
@@ -211,6 +220,11 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
   e.t_s = (static_cast<double>(first_sample) + 0.5 * (config.frame_samples - 1)) / config.sample_rate_hz;
 
   const auto tdoa_start = std::chrono::steady_clock::now();
+  if (despike.despike_k > 0.0) {
+    despiked.assign(frame, frame + static_cast<size_t>(array.sensor_count()) * config.frame_samples);
+    (void)Despike(despike, despiked.data(), array.sensor_count(), config.frame_samples, &despike_scratch);
+    frame = despiked.data();
+  }
   const bool measured = components.estimator->Estimate(frame, config.frame_samples, e.t_s, &measurement).ok();
   e.timings.tdoa_s = SecondsSince(tdoa_start);
 

@@ -55,6 +55,10 @@ struct SessionConfig {
   double phat_beta = 0.8;
   double band_low_hz = 0.0;
   double band_high_hz = 0.0;          // 0: Nyquist
+  // Impulsive-noise front end (engine/tdoa/despike.h): each frame's channels are clipped at
+  // despike_k robust standard deviations before the GCC (0: off), keeping outliers that every
+  // channel shows within the array's largest delay (a coherent impulsive source).
+  double despike_k = 5.0;
   // Tracker
   // "pf" particle filter (particle_filter.h), "ekf" | "ukf" (kalman_filter.h), "mmpf"
   // multiple-model particle filter (multi_model_pf.h: cv, cv-manoeuvre, ct-left, ct-right

@@ -97,6 +97,9 @@ Status SessionConfig::Validate() const {
                      (init_region_max_m - init_region_min_m).minCoeff() < 0.0)) {
     return InvalidArgument("init_region_min_m/init_region_max_m must both be finite with min <= max");
   }
+  if (!(despike_k == 0.0 || (despike_k >= 1.0 && despike_k <= 1e6))) {
+    return InvalidArgument("despike_k must be 0 (off) or in [1, 1e6], got " + Num(despike_k));
+  }
   for (int i = 0; i < 3; ++i) {
     const double lo = bounds_min_m(i), hi = bounds_max_m(i);
     if (std::isnan(lo) || std::isnan(hi) || lo == std::numeric_limits<double>::infinity() ||

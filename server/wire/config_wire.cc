@@ -22,6 +22,7 @@ engine::Weighting WeightingFromProto(v1::Weighting w) {
     case v1::WEIGHTING_PHAT_BETA: return engine::Weighting::kPhatBeta;
     case v1::WEIGHTING_SCOT: return engine::Weighting::kScot;
     case v1::WEIGHTING_CC: return engine::Weighting::kCc;
+    case v1::WEIGHTING_PHAT_COHERENCE: return engine::Weighting::kPhatCoherence;
     default: return engine::Weighting::kPhat;
   }
 }
@@ -31,6 +32,7 @@ v1::Weighting WeightingToProto(engine::Weighting w) {
     case engine::Weighting::kPhatBeta: return v1::WEIGHTING_PHAT_BETA;
     case engine::Weighting::kScot: return v1::WEIGHTING_SCOT;
     case engine::Weighting::kCc: return v1::WEIGHTING_CC;
+    case engine::Weighting::kPhatCoherence: return v1::WEIGHTING_PHAT_COHERENCE;
     case engine::Weighting::kPhat: break;
   }
   return v1::WEIGHTING_PHAT;
@@ -227,6 +229,7 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
   c.search_radius_m = p.search_radius_m();
   if (p.presence_false_alarm() != 0.0) c.presence_false_alarm = p.presence_false_alarm();
   if (p.source_timeout_s() != 0.0) c.source_timeout_s = p.source_timeout_s();
+  if (p.has_despike_k()) c.despike_k = p.despike_k();
   if (p.has_platform()) {
     const v1::PlatformConfig& platform = p.platform();
     c.array_in_body_frame = true;
@@ -310,6 +313,7 @@ v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::strin
   p.set_search_radius_m(c.search_radius_m);
   p.set_presence_false_alarm(c.presence_false_alarm);
   p.set_source_timeout_s(c.source_timeout_s);
+  p.set_despike_k(c.despike_k);
   if (c.array_in_body_frame) {
     v1::PlatformConfig* platform = p.mutable_platform();
     platform->set_attitude_filter(engine::AttitudeFilterKindName(c.attitude.kind));
