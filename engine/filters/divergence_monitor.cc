@@ -25,11 +25,25 @@ double ChiSquareQuantile(double p, int dof) {
   return k * t * t * t;
 }
 
-bool DivergenceMonitor::Add(double nis, int dof) {
+bool DivergenceMonitor::Add(double nis, int dof, const std::vector<double>& z) {
+  constexpr double kBiasSigmas = 3.0;
   entries_.emplace_back(nis, dof);
   while (static_cast<int>(entries_.size()) > window_) entries_.pop_front();
-  if (static_cast<int>(entries_.size()) < window_ || ratio() <= 1.0) return false;
-  entries_.clear();
+  bool biased = false;
+  if (pair_z_.size() < z.size()) pair_z_.resize(z.size());
+  for (size_t p = 0; p < z.size(); ++p) {
+    if (std::isnan(z[p])) continue;
+    std::deque<double>& w = pair_z_[p];
+    w.push_back(z[p]);
+    while (static_cast<int>(w.size()) > window_) w.pop_front();
+    if (static_cast<int>(w.size()) < window_) continue;
+    double sum = 0.0;
+    for (double v : w) sum += v;
+    biased |= std::abs(sum / window_) > kBiasSigmas;
+  }
+  const bool wholesale = static_cast<int>(entries_.size()) >= window_ && ratio() > 1.0;
+  if (!wholesale && !biased) return false;
+  Reset();
   return true;
 }
 

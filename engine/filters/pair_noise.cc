@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace localizer::engine {
 namespace {
@@ -9,6 +10,7 @@ constexpr double kSmoothing = 0.05;
 constexpr double kMinScale = 0.5, kMaxScale = 8.0;
 constexpr double kDivergenceScaleCap = 2.0;
 constexpr double kGateSigmas = 4.0;
+constexpr double kAnchoredCap = 6.0;  // |z| beyond this counts as 6 in the divergence test
 constexpr double kMinAnchorSamples = 0.02;
 // The fallback without an anchor: start at 0.1 sample, keep within [0.01, 2] samples.
 constexpr double kInitialSigmaSamples = 0.1;
@@ -60,6 +62,13 @@ int PairNoise::Select(const Measurement& m, double min_peak_snr) {
 void PairNoise::Finish(const std::vector<InnovationMoments>& innovations, double sample_rate_hz,
                        UpdateReport* report) {
   double mean_var_s2 = 0.0;
+  report->anchored_z.assign(sigmas_s_.size(), std::numeric_limits<double>::quiet_NaN());
+  // The divergence test's terms: signed, capped at kAnchoredCap sigmas.
+  auto anchored = [&](size_t p, double e_s, double var_s2) {
+    const double z = std::clamp(e_s / std::sqrt(var_s2), -kAnchoredCap, kAnchoredCap);
+    report->anchored_z[p] = z;
+    report->anchored_nis += z * z;
+  };
   for (size_t p = 0; p < innovations.size() && p < sigmas_s_.size(); ++p) {
     const double sigma_s = sigmas_s_[p];
     mean_var_s2 += sigma_s * sigma_s / static_cast<double>(sigmas_s_.size());
@@ -69,10 +78,10 @@ void PairNoise::Finish(const std::vector<InnovationMoments>& innovations, double
     report->nis += e2 / (sigma_s * sigma_s + in.predicted_var_s2);
     const double anchor_s = anchors_s_[p];
     if (fixed_sigma_s_ > 0.0) {
-      report->anchored_nis += e2 / (sigma_s * sigma_s + in.predicted_var_s2);
+      anchored(p, in.mean_s, sigma_s * sigma_s + in.predicted_var_s2);
     } else if (anchor_s > 0.0) {
       const double capped = std::min(std::sqrt(scale2_[p]), kDivergenceScaleCap) * anchor_s;
-      report->anchored_nis += e2 / (capped * capped + in.predicted_var_s2);
+      anchored(p, in.mean_s, capped * capped + in.predicted_var_s2);
       // Mehra on the normalised innovation, outliers gated out.
       if (e2 <= kGateSigmas * kGateSigmas * (sigma_s * sigma_s + in.predicted_var_s2)) {
         const double excess = std::max(0.0, e2 - in.predicted_var_s2) / (anchor_s * anchor_s);
@@ -80,7 +89,7 @@ void PairNoise::Finish(const std::vector<InnovationMoments>& innovations, double
                                 kMaxScale * kMaxScale);
       }
     } else {
-      report->anchored_nis += e2 / (sigma_s * sigma_s + in.predicted_var_s2);
+      anchored(p, in.mean_s, sigma_s * sigma_s + in.predicted_var_s2);
       const double excess_s2 = std::max(0.0, e2 - in.predicted_var_s2);
       const double var_s2 = (1.0 - kSmoothing) * sigma_s * sigma_s + kSmoothing * excess_s2;
       free_sigma_s_[p] =

@@ -97,6 +97,7 @@ void ParticleSet::SampleMixture(const std::vector<Component>& components) {
     }
   }
   labels_ = k;
+  if (bounded_) ApplyBounds();
   SetEqualWeights();
 }
 
@@ -180,16 +181,22 @@ void ParticleSet::SetBounds(const Vec3& min_m, const Vec3& max_m) {
 }
 
 void ParticleSet::ApplyBounds() {
-  const float* __restrict x = cur_.x.data();
-  const float* __restrict y = cur_.y.data();
-  const float* __restrict z = cur_.z.data();
-  float* __restrict logw = logw_.data();
-  const float x0 = bound_lo_.x(), x1 = bound_hi_.x(), y0 = bound_lo_.y(), y1 = bound_hi_.y();
-  const float z0 = bound_lo_.z(), z1 = bound_hi_.z();
+  // A particle that left the box is put back on its wall with the outward velocity removed
+  // (a source cannot be outside): a cloud predicted out of the water as a whole would
+  // otherwise keep going, every particle equally impossible and so equally weighted.
+  moments_valid_ = false;
+  const std::array<float*, 6> cols = cur_.Pointers();
+  for (int axis = 0; axis < 3; ++axis) {
+    float* __restrict p = cols[static_cast<size_t>(axis)];
+    float* __restrict v = cols[static_cast<size_t>(axis + 3)];
+    const float lo = bound_lo_(axis), hi = bound_hi_(axis);
+    if (!std::isfinite(lo) && !std::isfinite(hi)) continue;
 #pragma omp simd
-  for (int i = 0; i < n_; ++i) {
-    const bool inside = x[i] >= x0 && x[i] <= x1 && y[i] >= y0 && y[i] <= y1 && z[i] >= z0 && z[i] <= z1;
-    logw[i] = inside ? logw[i] : -1e30f;
+    for (int i = 0; i < n_; ++i) {
+      const bool below = p[i] < lo, above = p[i] > hi;
+      v[i] = (below && v[i] < 0.0f) || (above && v[i] > 0.0f) ? 0.0f : v[i];
+      p[i] = below ? lo : above ? hi : p[i];
+    }
   }
 }
 

@@ -76,6 +76,7 @@ void ParticleSet::SampleGaussian(const Vec6& mean, const Mat6& root) {
     }
   }
   labels_ = 1;
+  if (bounded_) ApplyBounds();
   SetEqualWeights();
 }
 
@@ -93,6 +94,7 @@ void ParticleSet::SampleUniformBox(const Vec3& min_m, const Vec3& max_m, double 
     cur_.vz[i] = s * NormalFromUniform(UniformFromCounter(key, c + 5));
   }
   labels_ = 1;
+  if (bounded_) ApplyBounds();
   SetEqualWeights();
 }
 
@@ -121,6 +123,7 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2) {
     vy[i] += a_to_v * ay[i];
     vz[i] += a_to_v * az[i];
   }
+  if (bounded_) ApplyBounds();
 }
 
 void ParticleSet::DrawAccelNormals(uint32_t key) {
@@ -309,7 +312,6 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
   float* __restrict logw = logw_.data();
 #pragma omp simd
   for (int i = 0; i < n_; ++i) logw[i] += ll[i];
-  if (bounded_) ApplyBounds();
 }
 
 double ParticleSet::NormaliseWeights() {

@@ -100,7 +100,9 @@ class ParticleSet {
   // is below min_weight left out). One entry (the whole cloud) when single-mode.
   std::vector<WeightedBelief> Modes(double min_weight) const;
   int labels() const { return labels_; }
-  // Particles outside [min, max] (sides may be infinite) get log-weight -1e30 at each Weigh.
+  // Positions outside [min, max] (sides may be infinite) are impossible: after every
+  // sampling and prediction a particle outside is put back on the wall it crossed and its
+  // outward velocity removed.
   void SetBounds(const Vec3& min_m, const Vec3& max_m);
 
  private:

@@ -29,9 +29,13 @@ struct UpdateReport {
   // measurement distribution: sum_p (d_p - E[h_p])^2 / (sigma_p^2 + Var[h_p]).
   // ~ chi-square with `pair_count` degrees of freedom when the filter is consistent.
   double nis = 0.0;
-  // The same with each pair's noise anchored to its own peak (pair_noise.h): the divergence
-  // test's input, which noise adaptation cannot inflate.
+  // The same with each pair's noise anchored to its own peak (pair_noise.h), each pair's
+  // term capped at 36 (6 sigma: one impulsive outlier cannot fill the divergence window): the
+  // divergence test's input, which noise adaptation cannot inflate.
   double anchored_nis = 0.0;
+  // Per pair, the signed anchored innovation e / sqrt(anchor^2 + Var[h']), capped at +-6;
+  // NaN for pairs the update did not use. The divergence test looks for a persistent bias.
+  std::vector<double> anchored_z;
   int pair_count = 0;  // pairs used (those that heard a source); 0: the update did nothing
   double ess = 0.0;  // effective sample size after the update (0 for non-particle filters)
   double tdoa_sigma_s = 0.0;  // TDOA noise std the update assumed

@@ -212,7 +212,8 @@ SessionConfig CampaignSessionConfig(const RandomScene& scene) {
 }
 
 SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
-                        const SceneScoreOptions& score_options, bool keep_frames) {
+                        const SceneScoreOptions& score_options, bool keep_frames,
+                        const std::function<void(SessionConfig*)>& adjust) {
   const auto start = std::chrono::steady_clock::now();
   SceneRow row;
   row.seed = seed;
@@ -229,7 +230,8 @@ SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
   if (!array.ok()) return fail(array.status());
   auto sim = Simulate(*array, scene->scenario.sim);
   if (!sim.ok()) return fail(sim.status());
-  const SessionConfig config = CampaignSessionConfig(*scene);
+  SessionConfig config = CampaignSessionConfig(*scene);
+  if (adjust) adjust(&config);
   auto session = Session::Create(config);
   if (!session.ok()) return fail(session.status());
   std::vector<Estimate> estimates;

@@ -28,6 +28,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -112,9 +113,11 @@ struct SceneRow {
 };
 
 // Draws, simulates, tracks and scores one scene; the per-frame rows are dropped unless
-// keep_frames. Errors go to SceneRow::error (a campaign keeps running).
+// keep_frames. Errors go to SceneRow::error (a campaign keeps running). `adjust`, when set,
+// changes the default config before the session is made (e.g. another weighting).
 SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
-                        const SceneScoreOptions& score_options = {}, bool keep_frames = false);
+                        const SceneScoreOptions& score_options = {}, bool keep_frames = false,
+                        const std::function<void(SessionConfig*)>& adjust = {});
 
 struct ClassSummary {
   int scenes = 0;

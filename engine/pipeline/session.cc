@@ -80,6 +80,11 @@ struct Session::Impl {
   void UpdateAndWatch(Estimate* e);
   // The estimate's state: the strongest hypothesis, with a covariance that covers all of them.
   void Report(Estimate* e) const;
+  // Multipath: a pair whose main peak is far from where the track predicts it, while another
+  // of its candidate peaks (an arrival of the same sign, at least kCandidateShare of the main
+  // peak's height) lies within kAssociationGate predicted sigmas, is measured at that
+  // candidate instead (nearest-neighbour association; returns how many pairs were changed).
+  int AssociateCandidates(const TrackState& predicted);
 
   // Moving arrays: moves `array` and the tracker to the platform's pose at t_s; false
   // when there is no pose yet (no IMU sample).
@@ -109,6 +114,43 @@ struct Session::Impl {
 
 // Frames in a row that hear the source away from the track before it is re-acquired.
 constexpr int kHeardElsewhereFrames = 3;
+constexpr double kAssociationGate = 3.0;
+constexpr double kCandidateShare = 0.3;
+
+int Session::Impl::AssociateCandidates(const TrackState& predicted) {
+  const Vec3 position = predicted.mean.head<3>();
+  const Eigen::VectorXd lag_s = array.Tdoa(position);
+  const Eigen::MatrixXd jac = array.TdoaJacobian(position);
+  const Mat3 cov = predicted.covariance.topLeftCorner<3, 3>();
+  int changed = 0;
+  for (size_t p = 0; p < measurement.pairs.size(); ++p) {
+    PairMeasurement& pair = measurement.pairs[p];
+    if (pair.candidates.size() < 2) continue;
+    const Eigen::Vector3d row = jac.row(static_cast<Eigen::Index>(p)).transpose();
+    const double spread_s2 = row.dot(cov * row);
+    auto distance = [&](double delay_s, double sigma_s) {
+      return std::abs(delay_s - lag_s(static_cast<Eigen::Index>(p))) / std::sqrt(spread_s2 + sigma_s * sigma_s);
+    };
+    const DelayCandidate& main = pair.candidates.front();
+    if (distance(main.delay_s, main.delay_sigma_s) <= kAssociationGate) continue;
+    const DelayCandidate* best = nullptr;
+    double best_distance = kAssociationGate;
+    for (size_t c = 1; c < pair.candidates.size(); ++c) {
+      const DelayCandidate& cand = pair.candidates[c];
+      if (!(cand.value > 0.0) || cand.value < kCandidateShare * main.value) continue;
+      const double d = distance(cand.delay_s, cand.delay_sigma_s);
+      if (d < best_distance) {
+        best_distance = d;
+        best = &cand;
+      }
+    }
+    if (best == nullptr) continue;
+    pair.delay_s = best->delay_s;
+    pair.delay_sigma_s = best->delay_sigma_s;
+    ++changed;
+  }
+  return changed;
+}
 
 bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
   if (modes.empty()) return false;
@@ -138,7 +180,7 @@ void Session::Impl::UpdateAndWatch(Estimate* e) {
   e->ess = report->ess;
   e->tdoa_sigma_s = report->tdoa_sigma_s;
   e->pairs_used = report->pair_count;
-  if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count)) return;
+  if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count, report->anchored_z)) return;
   // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too).
   const AcquisitionResult found = acquisition.Search(measurement);
   if (found.presence.present) e->reinitialised = StartFromModes(found.modes);
@@ -157,6 +199,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     e->source_present = true;
     silent_s = 0.0;
     heard_elsewhere = 0;
+    AssociateCandidates(predicted);
     UpdateAndWatch(e);
     return;
   }
@@ -167,6 +210,18 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     e->presence_statistic = found.presence.statistic;
     e->presence_threshold = found.presence.threshold;
     silent_s = 0.0;
+    // A mode within the track's own uncertainty is the track's source, heard on a frame
+    // whose peaks the local test missed: update as usual.
+    const Mat3 track_cov = predicted.covariance.topLeftCorner<3, 3>();
+    for (const PositionMode& mode : found.modes) {
+      const Vec3 delta = mode.position_m - predicted.mean.head<3>();
+      if (delta.dot((track_cov + mode.covariance_m2).ldlt().solve(delta)) < 16.0) {
+        heard_elsewhere = 0;
+        AssociateCandidates(predicted);
+        UpdateAndWatch(e);
+        return;
+      }
+    }
     if (++heard_elsewhere >= kHeardElsewhereFrames) e->reinitialised = StartFromModes(found.modes);
     return;
   }
@@ -196,6 +251,9 @@ void Session::Impl::Report(Estimate* e) const {
   }
   e->initialised = true;
   e->state = best.mean;
+  // Positions outside the bounds are impossible (the particle filter keeps its particles in;
+  // the Kalman filters' Gaussian may straddle a wall).
+  e->state.head<3>() = e->state.head<3>().cwiseMax(config.bounds_min_m).cwiseMin(config.bounds_max_m);
   e->covariance = covariance;
   e->modes = std::max(modes, 1);
   e->ambiguous = e->modes > 1;

@@ -8,7 +8,9 @@
 // particle filter keeps them all as modes until the data and the dynamics decide; Kalman
 // filters take the strongest).
 // With a track, the tracker predicts to the frame's instant; the presence test runs about
-// the predicted position: present, the tracker updates; absent, the volume is searched — a
+// the predicted position: present, the tracker updates (a pair whose main peak is far from
+// the prediction while another of its candidate peaks is near is measured there: multipath);
+// absent, the volume is searched — a
 // source heard elsewhere for 3 frames in a row restarts the track there; none heard, the
 // track coasts (predicts, no update) and is dropped after source_timeout_s. A window of
 // anchored normalised innovations far above its chi-square bound (pair_noise.h,
