@@ -72,6 +72,7 @@ Acquisition::Acquisition(const ArrayGeometry& array, const AcquisitionOptions& o
         }
       }
       d.angular_radius_rad = radius;
+      d.chord_per_range = 2.0 * std::sin(0.5 * radius);
       directions_.push_back(d);
     }
   }
@@ -238,6 +239,9 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
   std::vector<Cell> cells;
   cells.reserve(directions_.size() * static_cast<size_t>(shells));
   std::vector<double> lags(static_cast<size_t>(pairs)), widths(static_cast<size_t>(pairs));
+  // Shell s > 0 spans [r_min q^(s-1), r_min q^s].
+  std::vector<double> shell_lo(static_cast<size_t>(shells), 0.0);
+  for (int s = 1; s < shells; ++s) shell_lo[static_cast<size_t>(s)] = r_min * std::pow(q, s - 1);
   // The cell's centre and circumradius.
   auto geometry = [&](int d, int s, Vec3* x, double* rad) {
     if (s == 0) {  // the ball about the centre
@@ -245,10 +249,12 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
       *rad = r_min;
       return;
     }
-    const double r_lo = r_min * std::pow(q, s - 1), r_hi = r_lo * q;
-    *x = centre + 0.5 * (r_lo + r_hi) * directions_[static_cast<size_t>(d)].unit;
-    const double chord = 2.0 * r_hi * std::sin(0.5 * directions_[static_cast<size_t>(d)].angular_radius_rad);
-    *rad = std::hypot(chord, 0.5 * (r_hi - r_lo));
+    const double r_lo = shell_lo[static_cast<size_t>(s)], r_hi = r_lo * q;
+    const Direction& dir = directions_[static_cast<size_t>(d)];
+    *x = centre + 0.5 * (r_lo + r_hi) * dir.unit;
+    const double chord = r_hi * dir.chord_per_range;
+    const double half_depth = 0.5 * (r_hi - r_lo);
+    *rad = std::sqrt(chord * chord + half_depth * half_depth);
   };
   const int ref = array_.reference_sensor();
   auto lag_windows = [&](const Vec3& x, double rad) {
@@ -373,7 +379,7 @@ PresenceResult Acquisition::Around(const Measurement& m, const Vec3& position_m,
   const double fs = m.sample_rate_hz;
   const Eigen::VectorXd lag = array_.Tdoa(position_m) * fs;
   const Eigen::MatrixXd jac = array_.TdoaJacobian(position_m) * fs;
-  double sum = 0.0, combinations = 1.0;
+  double sum = 0.0, combinations = 1.0, unconstrained = 0.0;
   for (int p = 0; p < field_.pair_count(); ++p) {
     if (!field_.usable(p)) continue;
     const Eigen::Vector3d row = jac.row(p).transpose();
@@ -386,8 +392,10 @@ PresenceResult Acquisition::Around(const Measurement& m, const Vec3& position_m,
       sum += value;
       combinations *= std::max(1.0, std::floor(b) - std::ceil(a) + 1.0);
     }
+    if (field_.ArgMax(p, field_.first_lag(p), field_.last_lag(p), &at, &value)) unconstrained += value;
   }
   out.statistic = sum / std::sqrt(static_cast<double>(usable));
+  out.unconstrained = unconstrained / std::sqrt(static_cast<double>(usable));
   out.threshold = PresenceThreshold(options_.false_alarm, combinations);
   out.present = out.statistic >= out.threshold;
   return out;

@@ -50,9 +50,9 @@ struct AcquisitionOptions {
   double false_alarm = 1e-3;     // per frame, in (0, 0.1]
   int max_modes = 4;             // in [1, 16]
   double mode_margin = 3.0;      // modes within this x sqrt(P) of the best's score survive
-  int azimuth_cells = 40;
-  int polar_cells = 20;
-  int range_cells = 16;
+  int azimuth_cells = 32;
+  int polar_cells = 16;
+  int range_cells = 12;
   int refinement_budget = 64;    // cells refined at most
 
   Status Validate() const;
@@ -70,6 +70,10 @@ struct PresenceResult {
   bool present = false;
   double statistic = 0.0;  // z
   double threshold = 0.0;  // t
+  // Around only: sum over pairs of each pair's largest normalised value anywhere in its
+  // window, / sqrt(P). A track that explains the data as well as anything could scores near
+  // it; far below (an echo aside), something else explains the frame better.
+  double unconstrained = 0.0;
 };
 
 struct AcquisitionResult {
@@ -98,6 +102,7 @@ class Acquisition {
   struct Direction {
     Vec3 unit;
     double angular_radius_rad;
+    double chord_per_range;  // 2 sin(angular radius / 2): the cell's half-width per metre of range
   };
   bool Refine(const Vec3& start_m, const std::vector<double>& lo, const std::vector<double>& hi, PositionMode* mode) const;
   bool InBounds(const Vec3& p) const;

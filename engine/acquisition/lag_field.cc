@@ -1,6 +1,7 @@
 #include "engine/acquisition/lag_field.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace localizer::engine {
@@ -64,8 +65,9 @@ double LagField::MaxAround(int p, double lag_samples, double half_width_samples)
   const int i_hi = std::min(n - 1, static_cast<int>(std::ceil(hi)));
   const int centre = (i_lo + i_hi) / 2;
   const int need = std::max(centre - i_lo, i_hi - centre);  // half-width to cover [i_lo, i_hi]
-  int level = 0;
-  while ((1 << level) - 1 < need && level + 1 < static_cast<int>(pair.levels.size())) ++level;
+  // The smallest level l with 2^l - 1 >= need: bit_width(need).
+  const int level = std::min(static_cast<int>(std::bit_width(static_cast<unsigned>(need))),
+                             static_cast<int>(pair.levels.size()) - 1);
   return pair.levels[static_cast<size_t>(level)][static_cast<size_t>(centre)];
 }
 

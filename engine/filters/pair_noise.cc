@@ -12,6 +12,7 @@ constexpr double kDivergenceScaleCap = 2.0;
 constexpr double kGateSigmas = 4.0;
 constexpr double kAnchoredCap = 6.0;  // |z| beyond this counts as 6 in the divergence test
 constexpr double kMinAnchorSamples = 0.02;
+constexpr double kStartSigmaSamples = 0.05;
 // The fallback without an anchor: start at 0.1 sample, keep within [0.01, 2] samples.
 constexpr double kInitialSigmaSamples = 0.1;
 constexpr double kMinSigmaSamples = 0.01;
@@ -49,9 +50,9 @@ int PairNoise::Select(const Measurement& m, double min_peak_snr) {
     }
     anchors_s_[p] = AnchorSigmaS(m.pairs[p], m.sample_rate_hz);
     if (scale2_[p] == 0.0 && anchors_s_[p] > 0.0) {
-      // Start no tighter than 0.1 sample (the sub-sample interpolation's bias; multipath
-      // biases more), then let the innovations bring it down to what the peaks allow.
-      const double start = kInitialSigmaSamples / m.sample_rate_hz / anchors_s_[p];
+      // Start at the anchor, or at kStartSigmaSamples if that is larger (the sub-sample
+      // interpolation's bias), and let the innovations adapt it.
+      const double start = kStartSigmaSamples / m.sample_rate_hz / anchors_s_[p];
       scale2_[p] = std::clamp(start * start, 1.0, kMaxScale * kMaxScale);
     }
     sigmas_s_[p] = anchors_s_[p] > 0.0 ? std::sqrt(scale2_[p]) * anchors_s_[p] : free_sigma_s_[p];

@@ -75,6 +75,13 @@ struct Session::Impl {
   void TrackFrame(double dt_s, bool measured, Estimate* e);
   // No track: search the volume; a present source starts one.
   void AcquireFrame(bool measured, Estimate* e);
+  // A present frame that the track explains much worse than each pair's best peak allows
+  // (PresenceResult::unconstrained), or whose update used fewer than 3 pairs, is audited by
+  // a volume search (at most every
+  // kAuditSpacingFrames): no mode near the track scoring within the margin of the best, in
+  // kOutscoredAudits audits in a row, restarts the track from the modes and the track
+  // itself. Catches a track that locked on a wrong position while every test near it passes.
+  void Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e);
   // Conditions the tracker on this frame, fills e's filter fields, and restarts the tracker
   // through acquisition when the divergence test fires.
   void UpdateAndWatch(Estimate* e);
@@ -97,6 +104,8 @@ struct Session::Impl {
   SessionComponents components;
   Acquisition acquisition;
   bool live = false;         // the tracker holds a track (not dropped)
+  int frames_since_audit = 0;  // see Audit
+  int outscored = 0;           // audits in a row that found the frame better explained elsewhere
   double silent_s = 0.0;     // time since the source was last heard near the track
   int heard_elsewhere = 0;   // consecutive frames with the source present away from the track
   Framer framer;
@@ -115,6 +124,42 @@ struct Session::Impl {
 // Frames in a row that hear the source away from the track before it is re-acquired.
 constexpr int kHeardElsewhereFrames = 3;
 constexpr double kAssociationGate = 3.0;
+constexpr double kAuditMargin = 3.0;  // x sqrt(P): the acquisition's mode margin
+constexpr int kAuditSpacingFrames = 8;
+constexpr int kOutscoredAudits = 2;
+
+void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e) {
+  ++frames_since_audit;
+  const double pairs = std::max(1, acquisition.field().usable_pairs());
+  // Both statistics are sums over pairs / sqrt(P), so a gap of kAuditMargin here is the
+  // acquisition's mode margin (kAuditMargin sqrt(P) in summed units).
+  // Fewer than 3 pairs in the update leave the position unobservable: the track may drift
+  // along the unobserved directions while every test near it passes.
+  const bool suspicious = near.unconstrained - near.statistic > kAuditMargin || e->pairs_used < 3;
+  if (!suspicious || frames_since_audit < kAuditSpacingFrames) return;
+  frames_since_audit = 0;
+  const AcquisitionResult found = acquisition.Search(measurement);
+  if (!found.presence.present || found.modes.empty()) return;
+  const Mat3 track_cov = predicted.covariance.topLeftCorner<3, 3>();
+  const double best = found.modes.front().score;
+  for (const PositionMode& mode : found.modes) {
+    const Vec3 delta = mode.position_m - predicted.mean.head<3>();
+    const bool near_track = delta.dot((track_cov + mode.covariance_m2).ldlt().solve(delta)) < 16.0;
+    if (near_track && mode.score >= best - kAuditMargin * std::sqrt(pairs)) {
+      outscored = 0;
+      return;
+    }
+  }
+  if (++outscored < kOutscoredAudits) return;
+  outscored = 0;
+  // Restart from every mode and the track's own position: the data decide.
+  std::vector<PositionMode> modes = found.modes;
+  PositionMode own;
+  own.position_m = predicted.mean.head<3>();
+  own.covariance_m2 = track_cov;
+  modes.push_back(own);
+  e->reinitialised = StartFromModes(modes);
+}
 constexpr double kCandidateShare = 0.3;
 
 int Session::Impl::AssociateCandidates(const TrackState& predicted) {
@@ -168,6 +213,8 @@ bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
   live = true;
   silent_s = 0.0;
   heard_elsewhere = 0;
+  outscored = 0;
+  frames_since_audit = 0;
   monitor.Reset();
   return true;
 }
@@ -201,6 +248,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     heard_elsewhere = 0;
     AssociateCandidates(predicted);
     UpdateAndWatch(e);
+    if (!e->reinitialised) Audit(predicted, near, e);
     return;
   }
   // Not near the track: silence, or a source the track has lost?

@@ -4,9 +4,9 @@
 // For each channel x of the frame (channel-major, `channels` x `samples` floats):
 //     scale = 1.4826 * median |x|        (the MAD about zero; = the standard deviation for
 //                                          zero-mean Gaussian samples; the median of at most
-//                                          1024 evenly spaced samples of the channel)
+//                                          256 evenly spaced samples of the channel)
 //     x <- clamp(x, -k scale, +k scale)   k = DespikeOptions::despike_k (0: off)
-// The median comes from std::nth_element on a copy of |x| at most 1024 samples long; a
+// The median comes from std::nth_element on a copy of |x| at most 256 samples long; a
 // channel whose largest |x| is within the limit is left untouched after one pass; the frame
 // is changed in place. An impulse on 1 % of the samples moves the median by about 1 %, so the clip level
 // follows the background (source + noise), not the impulses. Nothing is kept between frames.

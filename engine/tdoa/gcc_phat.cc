@@ -384,8 +384,8 @@ GccPhatEstimator::Impl::SpectrumStats GccPhatEstimator::Impl::AnalyseSpectrum(
   SpectrumStats stats;
   // The phasor exp(j w_k d) in kLanes independent lanes (lane l at bin first + l), each
   // rotated by exp(j kLanes w_1 d) per block so that the loop vectorises; restarted exactly
-  // every 256 bins (the recurrence then drifts by < 1e-13). Lane sums, reduced at the end.
-  constexpr int kRestart = 256;
+  // every 2048 bins (the recurrence then drifts by < 1e-12). Lane sums, reduced at the end.
+  constexpr int kRestart = 2048;
   static_assert(kRestart % kLanes == 0);
   const double block_re = std::cos(step_angle * kLanes);
   const double block_im = std::sin(step_angle * kLanes);

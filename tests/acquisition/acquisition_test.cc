@@ -99,7 +99,8 @@ TEST(Acquisition, EightSensorsFindTheSourceThroughAnEcho) {
   ASSERT_TRUE(result.presence.present);
   ASSERT_FALSE(result.modes.empty());
   const PositionMode& best = result.modes[0];
-  EXPECT_EQ(best.pairs_used, 5) << "the two pairs on the echo are left out";
+  // The echo pairs are either left out of the consensus or re-picked at their direct path.
+  EXPECT_GE(best.pairs_used, 5);
   const Vec3 err = best.position_m - truth;
   EXPECT_LT(err.dot(best.covariance_m2.ldlt().solve(err)), 16.0) << best.position_m.transpose();
   EXPECT_LT(err.norm(), 1.5);
