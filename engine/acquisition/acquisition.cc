@@ -16,6 +16,7 @@ namespace {
 
 constexpr double kMinPickValue = 3.0;  // a pick below this normalised height is noise
 constexpr double kMinSigmaSamples = 0.1;  // ~ the sub-sample interpolation's bias (DESIGN.md)
+constexpr double kMinFrontEndSigmaSamples = 0.02;
 constexpr double kMaxSigmaSamples = 5.0;
 
 Vec3 UnitFromCell(double mu, double phi) {
@@ -110,6 +111,15 @@ bool Acquisition::Refine(const Vec3& start_m, const std::vector<double>& lo, con
     const double s = curvature > 0.0 && mid > 0.0 ? 1.0 / std::sqrt(curvature * mid) : kMaxSigmaSamples;
     pick[static_cast<size_t>(p)] = lag;
     sigma[static_cast<size_t>(p)] = std::clamp(s, kMinSigmaSamples, kMaxSigmaSamples);
+    // The main peak: the front end's own delay and sigma (from the whole cross-spectrum,
+    // gcc_phat.h) are better than a parabola through three samples.
+    if (measurement_ != nullptr) {
+      const PairMeasurement& pm = measurement_->pairs[static_cast<size_t>(p)];
+      if (pm.delay_sigma_s > 0.0 && std::abs(pm.delay_s * fs - lag) < 0.5) {
+        pick[static_cast<size_t>(p)] = pm.delay_s * fs;
+        sigma[static_cast<size_t>(p)] = std::clamp(pm.delay_sigma_s * fs, kMinFrontEndSigmaSamples, kMaxSigmaSamples);
+      }
+    }
     return true;
   };
   int count = 0;
@@ -219,6 +229,11 @@ bool Acquisition::Refine(const Vec3& start_m, const std::vector<double>& lo, con
 AcquisitionResult Acquisition::Search(const Measurement& m) {
   AcquisitionResult out;
   field_.Build(m);
+  measurement_ = &m;
+  struct Forget {  // the measurement is only borrowed for this call
+    const Measurement** slot;
+    ~Forget() { *slot = nullptr; }
+  } forget{&measurement_};
   const int pairs = field_.pair_count();
   const int usable = field_.usable_pairs();
   out.presence.threshold = std::numeric_limits<double>::infinity();

@@ -112,6 +112,7 @@ class Acquisition {
   AcquisitionOptions options_;
   std::vector<Direction> directions_;
   LagField field_;
+  const Measurement* measurement_ = nullptr;  // during Search only
 };
 
 }  // namespace localizer::engine

@@ -48,6 +48,9 @@ Status ParticleFilterOptions::Validate() const {
   if (!(resample_threshold >= 0.0 && resample_threshold <= 1.0)) {
     return InvalidArgument("resample_threshold must be in [0, 1], got " + std::to_string(resample_threshold));
   }
+  if (tempered_updates < 0 || tempered_updates > 100) {
+    return InvalidArgument("tempered_updates must be in [0, 100], got " + std::to_string(tempered_updates));
+  }
   if (!(kernel_scale >= 0.0 && kernel_scale <= 2.0)) {
     return InvalidArgument("kernel_scale must be in [0, 2], got " + std::to_string(kernel_scale));
   }
@@ -65,7 +68,11 @@ struct ParticleFilter::Impl {
   double ess = 0.0;
   PairNoise noise;  // pairs used and their TDOA noise std
   std::vector<InnovationMoments> innovations;
+  std::vector<InnovationMoments> later_innovations;  // of a tempered update's later stages
+  int tempered_updates_left = 0;  // updates still applied progressively after a (re)start
 };
+
+constexpr int kTemperedStages = 4;
 
 ParticleFilter::ParticleFilter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ParticleFilter::~ParticleFilter() = default;
@@ -98,6 +105,7 @@ Status ParticleFilter::Initialise(const TrackState& belief) {
   impl_->set.SampleGaussian(belief.mean, *root);
   impl_->initialised = true;
   impl_->ess = impl_->options.particles;
+  impl_->tempered_updates_left = impl_->options.tempered_updates;
   return Status::Ok();
 }
 
@@ -106,6 +114,7 @@ Status ParticleFilter::InitialiseRegion(const Vec3& min_m, const Vec3& max_m, do
   impl_->set.SampleUniformBox(min_m, max_m, speed_sigma_mps);
   impl_->initialised = true;
   impl_->ess = impl_->options.particles;
+  impl_->tempered_updates_left = impl_->options.tempered_updates;
   return Status::Ok();
 }
 
@@ -125,6 +134,7 @@ Status ParticleFilter::InitialiseMixture(const std::vector<WeightedBelief>& comp
   }
   impl_->initialised = true;
   impl_->ess = impl_->options.particles;
+  impl_->tempered_updates_left = impl_->options.tempered_updates;
   return Status::Ok();
 }
 
@@ -153,11 +163,24 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
     report.tdoa_sigma_s = tdoa_sigma_s();
     return report;
   }
-  s.set.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness, &s.innovations);
-  s.noise.Finish(s.innovations, m.sample_rate_hz, &report);
-  report.ess = impl_->set.NormaliseWeights();
+  // Progressive correction for the first updates after a (re)start: the likelihood is
+  // applied in kTemperedStages steps of likelihood^(1/stages), each followed by
+  // resampling and the kernel move, so a prior far wider than the likelihood
+  // (a fix's position and an unknown velocity against TDOAs precise to centimetres) is
+  // narrowed gradually instead of collapsing onto the few particles that happened to land
+  // near the peak (Oudjane & Musso 2000).
+  const int stages = s.tempered_updates_left > 0 ? kTemperedStages : 1;
+  if (s.tempered_updates_left > 0) --s.tempered_updates_left;
+  for (int stage = 0; stage < stages; ++stage) {
+    std::vector<InnovationMoments>* innovations = stage == 0 ? &s.innovations : &s.later_innovations;
+    s.set.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness, innovations,
+                1.0f / static_cast<float>(stages));
+    report.ess = impl_->set.NormaliseWeights();
+    const bool last = stage + 1 == stages;
+    if (!last || report.ess < o.resample_threshold * o.particles) impl_->set.ResampleSystematic(o.kernel_scale);
+  }
+  s.noise.Finish(s.innovations, m.sample_rate_hz, &report);  // the prior's innovations
   impl_->ess = report.ess;
-  if (report.ess < o.resample_threshold * o.particles) impl_->set.ResampleSystematic(o.kernel_scale);
   return report;
 }
 

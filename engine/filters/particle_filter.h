@@ -74,6 +74,9 @@ struct ParticleFilterOptions {
   double resample_threshold = 0.8;    // resample when ESS < threshold * N (seed: 0.8)
   double kernel_scale = 0.5;          // regularisation after resampling, x Silverman's
                                       // bandwidth (0: plain bootstrap filter)
+  int tempered_updates = 2;           // updates after each (re)start applied in 4 tempered
+                                      // stages (progressive correction, particle_filter.cc),
+                                      // in [0, 100]; the GPU filter has none yet
   uint64_t seed = 1;
 
   Status Validate() const;

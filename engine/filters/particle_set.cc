@@ -215,7 +215,7 @@ double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharp
 
 void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Likelihood likelihood,
                         const std::vector<double>& sigmas_s, double peak_dof,
-                        double gcc_sharpness, std::vector<InnovationMoments>* innovations) {
+                        double gcc_sharpness, std::vector<InnovationMoments>* innovations, float exponent) {
   innovations->resize(m.pairs.size());
   const float* __restrict x = cur_.x.data();
   const float* __restrict y = cur_.y.data();
@@ -311,7 +311,7 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
   }
   float* __restrict logw = logw_.data();
 #pragma omp simd
-  for (int i = 0; i < n_; ++i) logw[i] += ll[i];
+  for (int i = 0; i < n_; ++i) logw[i] += exponent * ll[i];
 }
 
 double ParticleSet::NormaliseWeights() {

@@ -67,9 +67,10 @@ class ParticleSet {
   // Adds each particle's log-likelihood of `m` to its log-weight (see particle_filter.h) and
   // reports, per pair, the innovation of the peak delay against the prior predicted delays.
   // sigmas_s holds one TDOA noise std per pair; pairs with used[p] == 0 are skipped.
+  // `exponent` < 1 tempers the likelihood (log-weights += exponent x log-likelihood).
   void Weigh(const Measurement& m, const std::vector<int>& used, Likelihood likelihood,
              const std::vector<double>& sigmas_s, double peak_dof,
-             double gcc_sharpness, std::vector<InnovationMoments>* innovations);
+             double gcc_sharpness, std::vector<InnovationMoments>* innovations, float exponent = 1.0f);
   // Normalises the weights (log-sum-exp) and returns the ESS = 1 / sum w^2.
   double NormaliseWeights();
   // Systematic resampling (one uniform offset, N evenly spaced pointers); weights equal.

@@ -87,10 +87,10 @@ struct Session::Impl {
   void UpdateAndWatch(Estimate* e);
   // The estimate's state: the strongest hypothesis, with a covariance that covers all of them.
   void Report(Estimate* e) const;
-  // Multipath: a pair whose main peak is far from where the track predicts it, while another
-  // of its candidate peaks (an arrival of the same sign, at least kCandidateShare of the main
-  // peak's height) lies within kAssociationGate predicted sigmas, is measured at that
-  // candidate instead (nearest-neighbour association; returns how many pairs were changed).
+  // Multipath: a pair whose main peak is far from where the track predicts it, while its GCC
+  // has another peak (a local maximum at least kCandidateShare of the main peak's height)
+  // within kAssociationGate predicted sigmas, is measured at that peak instead (the tallest
+  // in the gate; returns how many pairs were changed).
   int AssociateCandidates(const TrackState& predicted);
 
   // Moving arrays: moves `array` and the tracker to the platform's pose at t_s; false
@@ -164,34 +164,35 @@ constexpr double kCandidateShare = 0.3;
 
 int Session::Impl::AssociateCandidates(const TrackState& predicted) {
   const Vec3 position = predicted.mean.head<3>();
-  const Eigen::VectorXd lag_s = array.Tdoa(position);
-  const Eigen::MatrixXd jac = array.TdoaJacobian(position);
+  const double fs = config.sample_rate_hz;
+  const Eigen::VectorXd lag = array.Tdoa(position) * fs;
+  const Eigen::MatrixXd jac = array.TdoaJacobian(position) * fs;
   const Mat3 cov = predicted.covariance.topLeftCorner<3, 3>();
   int changed = 0;
   for (size_t p = 0; p < measurement.pairs.size(); ++p) {
     PairMeasurement& pair = measurement.pairs[p];
-    if (pair.candidates.size() < 2) continue;
+    const std::vector<float>& g = pair.gcc;
+    if (g.size() < 3 || !(pair.peak_value > 0.0)) continue;
     const Eigen::Vector3d row = jac.row(static_cast<Eigen::Index>(p)).transpose();
-    const double spread_s2 = row.dot(cov * row);
-    auto distance = [&](double delay_s, double sigma_s) {
-      return std::abs(delay_s - lag_s(static_cast<Eigen::Index>(p))) / std::sqrt(spread_s2 + sigma_s * sigma_s);
-    };
-    const DelayCandidate& main = pair.candidates.front();
-    if (distance(main.delay_s, main.delay_sigma_s) <= kAssociationGate) continue;
-    const DelayCandidate* best = nullptr;
-    double best_distance = kAssociationGate;
-    for (size_t c = 1; c < pair.candidates.size(); ++c) {
-      const DelayCandidate& cand = pair.candidates[c];
-      if (!(cand.value > 0.0) || cand.value < kCandidateShare * main.value) continue;
-      const double d = distance(cand.delay_s, cand.delay_sigma_s);
-      if (d < best_distance) {
-        best_distance = d;
-        best = &cand;
-      }
+    const double sigma = std::max(pair.delay_sigma_s * fs, 0.05);
+    const double gate = kAssociationGate * std::sqrt(row.dot(cov * row) + sigma * sigma);  // samples
+    const double predicted_lag = lag(static_cast<Eigen::Index>(p));
+    if (std::abs(pair.delay_s * fs - predicted_lag) <= gate) continue;
+    // The largest local maximum of the pair's GCC inside the gate, if tall enough.
+    const long lo = std::max(1L, static_cast<long>(std::ceil(predicted_lag - gate)) - pair.first_lag_samples);
+    const long hi = std::min(static_cast<long>(g.size()) - 2,
+                             static_cast<long>(std::floor(predicted_lag + gate)) - pair.first_lag_samples);
+    long best = -1;
+    for (long i = lo; i <= hi; ++i) {
+      const size_t k = static_cast<size_t>(i);
+      if (g[k] > g[k - 1] && g[k] >= g[k + 1] && (best < 0 || g[k] > g[static_cast<size_t>(best)])) best = i;
     }
-    if (best == nullptr) continue;
-    pair.delay_s = best->delay_s;
-    pair.delay_sigma_s = best->delay_sigma_s;
+    if (best < 0 || g[static_cast<size_t>(best)] < kCandidateShare * pair.peak_value) continue;
+    const size_t k = static_cast<size_t>(best);
+    const double a = g[k - 1], b = g[k], c = g[k + 1], denom = a - 2.0 * b + c;
+    const double offset = denom < 0.0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0;
+    pair.delay_s = (pair.first_lag_samples + best + offset) / fs;
+    pair.delay_sigma_s = 0.0;  // the anchor then comes from this peak's own curvature
     ++changed;
   }
   return changed;

@@ -129,7 +129,8 @@ GccOptions SessionConfig::GccOptionsFor() const {
   gcc.phat_beta = phat_beta;
   gcc.band_low_hz = band_low_hz;
   gcc.band_high_hz = band_high_hz;
-  gcc.keep_gcc = true;  // acquisition, presence and the noise anchor read the GCC
+  gcc.keep_gcc = true;  // acquisition, presence, multipath association and the noise anchor read it
+  gcc.max_candidates = 1;  // the session looks for other peaks in the kept GCC, near its track
   return gcc;
 }
 
