@@ -12,7 +12,9 @@ void RegisterGccFlags(FlagSet& flags, SessionFlags* f) {
                        "sound speed, m/s");
   flags.OptionalInt("reference", &f->array.reference_sensor, "K", "from the array file",
                     "reference sensor index");
-  flags.String("weighting", &f->weighting, "NAME", "GCC weighting: phat|phat-beta|scot|cc");
+  flags.String("weighting", &f->weighting, "NAME",
+               "GCC weighting: phat|phat-beta|scot|cc|phat-coherence (learns the band; CPU only; "
+               "its presence test is not calibrated)");
   flags.Double("phat-beta", &c.phat_beta, "B", "", "exponent of --weighting phat-beta, in [0, 1]");
   flags.Double("band-low", &c.band_low_hz, "HZ", "Hz",
                "lower edge of the GCC band (0: DC, or the array file's band_hz)");
@@ -63,6 +65,8 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "false-alarm probability of the source-presence test, in (0, 0.1]");
   flags.Double("source-timeout", &c.source_timeout_s, "S", "s",
                "a track coasting this long with no source heard is dropped and acquisition restarts");
+  flags.Double("despike-k", &c.despike_k, "K", "robust sd",
+               "clip each frame's channels at K robust standard deviations before the GCC (0: off)");
 }
 
 StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::string& text, bool is_min) {
