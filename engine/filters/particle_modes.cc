@@ -64,7 +64,7 @@ void ParticleSet::SampleMixture(const std::vector<Component>& components) {
   const int k = std::min(static_cast<int>(components.size()), kMaxComponents);
   double total = 0.0;
   for (int c = 0; c < k; ++c) total += std::max(components[static_cast<size_t>(c)].weight, 0.0);
-  // Counts by largest remainder, at least one particle each.
+  // Counts: one each, the floor of each share of the rest, then the remainder in turn.
   std::vector<int> count(static_cast<size_t>(k), 1);
   int assigned = k;
   for (int c = 0; c < k; ++c) {
@@ -77,24 +77,13 @@ void ParticleSet::SampleMixture(const std::vector<Component>& components) {
   label_.assign(static_cast<size_t>(n_), 0);
   next_label_.assign(static_cast<size_t>(n_), 0);
   const uint32_t key = NextKey();
-  const std::array<float*, 6> cols = cur_.Pointers();
-  int i = 0;
+  int first = 0;
   for (int c = 0; c < k; ++c) {
     const Component& comp = components[static_cast<size_t>(c)];
-    Vec6 centre = comp.mean;
-    centre.head<3>() -= origin_m_;
-    const Eigen::Matrix<float, 6, 6> l = comp.root.cast<float>();
-    const Eigen::Matrix<float, 6, 1> mu = centre.cast<float>();
-    for (int j = 0; j < count[static_cast<size_t>(c)] && i < n_; ++j, ++i) {
-      float z[6];
-      for (int d = 0; d < 6; ++d) z[d] = NormalFromUniform(UniformFromCounter(key, 6u * i + d));
-      for (int r = 0; r < 6; ++r) {
-        float v = mu(r);
-        for (int d = 0; d < 6; ++d) v += l(r, d) * z[d];
-        cols[r][i] = v;
-      }
-      label_[static_cast<size_t>(i)] = static_cast<uint8_t>(c);
-    }
+    const int end = std::min(first + count[static_cast<size_t>(c)], n_);
+    SampleGaussianRange(comp.mean, comp.root, key, first, end);
+    std::fill(label_.begin() + first, label_.begin() + end, static_cast<uint8_t>(c));
+    first = end;
   }
   labels_ = k;
   if (bounded_) ApplyBounds();

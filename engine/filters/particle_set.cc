@@ -59,14 +59,13 @@ void ParticleSet::SetEqualWeights() {
   std::fill(w_.begin(), w_.end(), 1.0f / static_cast<float>(n_));
 }
 
-void ParticleSet::SampleGaussian(const Vec6& mean, const Mat6& root) {
+void ParticleSet::SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32_t key, int first, int end) {
   Vec6 centre = mean;
   centre.head<3>() -= origin_m_;
   const Eigen::Matrix<float, 6, 6> l = root.cast<float>();
   const Eigen::Matrix<float, 6, 1> mu = centre.cast<float>();
-  const uint32_t key = NextKey();
   const std::array<float*, 6> cols = cur_.Pointers();
-  for (int i = 0; i < n_; ++i) {
+  for (int i = first; i < end; ++i) {
     float z[6];
     for (int k = 0; k < 6; ++k) z[k] = NormalFromUniform(UniformFromCounter(key, 6u * i + k));
     for (int r = 0; r < 6; ++r) {
@@ -75,6 +74,10 @@ void ParticleSet::SampleGaussian(const Vec6& mean, const Mat6& root) {
       cols[r][i] = v;
     }
   }
+}
+
+void ParticleSet::SampleGaussian(const Vec6& mean, const Mat6& root) {
+  SampleGaussianRange(mean, root, NextKey(), 0, n_);
   labels_ = 1;
   if (bounded_) ApplyBounds();
   SetEqualWeights();

@@ -114,6 +114,8 @@ class ParticleSet {
     std::array<float*, 6> Pointers() { return {x.data(), y.data(), z.data(), vx.data(), vy.data(), vz.data()}; }
   };
   void DrawAccelNormals(uint32_t key);  // fills accel_ with 3N standard normals
+  // Particles [first, end) ~ N(mean, root root^T), normals keyed by (key, 6 i + k).
+  void SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32_t key, int first, int end);
   void SetEqualWeights();
   void SystematicIndices();  // fills index_: the particle each slot copies
   void DrawKernelNoise();    // fills noise_ with unit-variance kernel draws

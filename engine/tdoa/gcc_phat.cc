@@ -399,32 +399,23 @@ GccPhatEstimator::Impl::SpectrumStats GccPhatEstimator::Impl::AnalyseSpectrum(
     }
     for (int b = first; b < last; b += kLanes) {
       const int count = std::min(kLanes, last - b);
+      // One bin's moments; the full-width call has a constant trip count and vectorises.
+      const auto accumulate = [&](int l) {
+        const int k = b + l;
+        const double gr = g[2 * k];
+        const double gi = g[2 * k + 1];
+        const double re = gr * ph_re[l] - gi * ph_im[l];
+        const double im = gr * ph_im[l] + gi * ph_re[l];
+        const double w = bin_rate * k;
+        level[l] += re;
+        first_moment[l] += w * re;
+        curvature[l] += w * w * re;
+        slope[l] += w * w * im * im;
+      };
       if (count == kLanes) {
-        for (int l = 0; l < kLanes; ++l) {
-          const int k = b + l;
-          const double gr = g[2 * k];
-          const double gi = g[2 * k + 1];
-          const double re = gr * ph_re[l] - gi * ph_im[l];
-          const double im = gr * ph_im[l] + gi * ph_re[l];
-          const double w = bin_rate * k;
-          level[l] += re;
-          first_moment[l] += w * re;
-          curvature[l] += w * w * re;
-          slope[l] += w * w * im * im;
-        }
+        for (int l = 0; l < kLanes; ++l) accumulate(l);
       } else {
-        for (int l = 0; l < count; ++l) {
-          const int k = b + l;
-          const double gr = g[2 * k];
-          const double gi = g[2 * k + 1];
-          const double re = gr * ph_re[l] - gi * ph_im[l];
-          const double im = gr * ph_im[l] + gi * ph_re[l];
-          const double w = bin_rate * k;
-          level[l] += re;
-          first_moment[l] += w * re;
-          curvature[l] += w * w * re;
-          slope[l] += w * w * im * im;
-        }
+        for (int l = 0; l < count; ++l) accumulate(l);
       }
       if (learn) {  // from the unweighted spectra: a bin weighted to zero must still learn
         for (int l = 0; l < count; ++l) {

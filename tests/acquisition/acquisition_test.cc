@@ -45,15 +45,20 @@ Measurement Measure(const ArrayGeometry& array, const SignalSpec& spec, const st
   return m;
 }
 
+// A tetrahedron of 2.8 m edges; the source 3 apertures out along a sensor's axis at 10 dB,
+// where the other exact TDOA solution lies near the array (0.6, 0.6, 0.6), 7 m from it.
+const Vec3 kAxisSource(5.0, 5.0, 5.0);
+Measurement AxisSourceFrame(const ArrayGeometry& array) {
+  const SignalSpec spec;
+  return Measure(array, spec, DelayedNoiseFrame(spec, ChannelDelaysSamples(array, kAxisSource, spec.sample_rate_hz), 10.0, 7));
+}
+
 // The other exact TDOA solution of a 4-sensor array (the mirror the closed form finds).
 TEST(Acquisition, FindsBothExactSolutionsOfAFourSensorArray) {
-  // A tetrahedron of 2.8 m edges; source 3 apertures out along a sensor's axis, where the
-  // other exact solution lies near the array (0.6, 0.6, 0.6), 7 m from the truth.
-  const auto array = *ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
-  const Vec3 truth(5.0, 5.0, 5.0);
+  const auto array = testing::TetrahedronArray();
+  const Vec3 truth = kAxisSource;
   const SignalSpec spec;
-  const auto frame = DelayedNoiseFrame(spec, ChannelDelaysSamples(array, truth, spec.sample_rate_hz), 10.0, 7);
-  const Measurement m = Measure(array, spec, frame);
+  const Measurement m = AxisSourceFrame(array);
   auto acquisition = *Acquisition::Create(array, AcquisitionOptions{});
   const AcquisitionResult result = acquisition.Search(m);
   ASSERT_TRUE(result.presence.present);
@@ -143,11 +148,9 @@ TEST(Acquisition, AWeakSourceIsPresent) {
 
 // Bounds make positions outside impossible: the mirror solution above a surface goes.
 TEST(Acquisition, BoundsRemoveModesOutsideThem) {
-  const auto array = *ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
-  const Vec3 truth(5.0, 5.0, 5.0);
-  const SignalSpec spec;
-  const auto frame = DelayedNoiseFrame(spec, ChannelDelaysSamples(array, truth, spec.sample_rate_hz), 10.0, 7);
-  const Measurement m = Measure(array, spec, frame);
+  const auto array = testing::TetrahedronArray();
+  const Vec3 truth = kAxisSource;
+  const Measurement m = AxisSourceFrame(array);
   auto unbounded = *Acquisition::Create(array, AcquisitionOptions{});
   const AcquisitionResult all = unbounded.Search(m);
   ASSERT_GE(all.modes.size(), 2u);

@@ -20,13 +20,8 @@ namespace {
 using testing::DelayedNoiseFrame;
 using testing::SignalSpec;
 
-constexpr double kSoundSpeedMps = 1500.0;
 
-ArrayGeometry Tetrahedron() {
-  auto array = ArrayGeometry::Create(testing::TetrahedronSensors(), kSoundSpeedMps);
-  EXPECT_TRUE(array.ok());
-  return *array;
-}
+ArrayGeometry Tetrahedron() { return testing::TetrahedronArray(); }
 
 std::unique_ptr<GccPhatEstimator> BandEstimator(const SignalSpec& spec) {
   GccOptions o;

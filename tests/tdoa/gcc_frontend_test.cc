@@ -17,11 +17,7 @@ using testing::MultipathFrame;
 using testing::Path;
 using testing::SignalSpec;
 
-ArrayGeometry Tetrahedron() {
-  auto array = ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
-  EXPECT_TRUE(array.ok());
-  return *array;
-}
+ArrayGeometry Tetrahedron() { return testing::TetrahedronArray(); }
 
 GccOptions Options(const SignalSpec& spec, bool band_hint) {
   GccOptions o;

@@ -24,11 +24,7 @@ using testing::SignalSpec;
 
 constexpr double kSoundSpeedMps = 1500.0;
 
-ArrayGeometry Tetrahedron() {
-  auto array = ArrayGeometry::Create(testing::TetrahedronSensors(), kSoundSpeedMps);
-  EXPECT_TRUE(array.ok());
-  return *array;
-}
+ArrayGeometry Tetrahedron() { return testing::TetrahedronArray(); }
 
 // The options a deployment would use for the test source: its band, 11025 Hz.
 GccOptions SourceBandOptions(const SignalSpec& spec, Weighting weighting) {

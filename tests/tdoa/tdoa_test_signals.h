@@ -119,6 +119,9 @@ inline std::vector<Vec3> TetrahedronSensors() {
   return {Vec3(a, a, a), Vec3(a, -a, -a), Vec3(-a, a, -a), Vec3(-a, -a, a)};
 }
 
+// TetrahedronSensors() as an array underwater (c = 1500 m/s).
+inline ArrayGeometry TetrahedronArray() { return *ArrayGeometry::Create(TetrahedronSensors(), 1500.0); }
+
 // Per-channel delay in samples relative to the reference sensor for a source at `source_m`:
 // channel c arrives TravelTime(c) - TravelTime(ref) later, which is the pair's TDOA.
 inline std::vector<double> ChannelDelaysSamples(const ArrayGeometry& array, const Vec3& source_m,
