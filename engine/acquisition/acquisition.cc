@@ -380,7 +380,19 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
   }
   const double combinations = std::min(product, 8.0 * widest * widest * widest);
   out.presence.threshold = PresenceThreshold(options_.false_alarm, combinations);
-  out.presence.statistic = out.modes.empty() ? 0.0 : out.modes.front().score / std::sqrt(static_cast<double>(usable));
+  if (out.modes.empty()) {
+    // No position could be solved: report the bound no position can exceed (each pair's
+    // largest value anywhere in its window), so a frame says how far from present it was.
+    double unconstrained = 0.0, lag = 0.0, value = 0.0;
+    for (int p = 0; p < pairs; ++p) {
+      if (field_.usable(p) && field_.ArgMax(p, field_.first_lag(p), field_.last_lag(p), &lag, &value)) {
+        unconstrained += value;
+      }
+    }
+    out.presence.statistic = unconstrained / std::sqrt(static_cast<double>(usable));
+  } else {
+    out.presence.statistic = out.modes.front().score / std::sqrt(static_cast<double>(usable));
+  }
   out.presence.present = !out.modes.empty() && out.presence.statistic >= out.presence.threshold;
   return out;
 }

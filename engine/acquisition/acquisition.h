@@ -22,7 +22,9 @@
 // 4-sensor array's two exact TDOA solutions score alike and both survive), at most max_modes,
 // strongest first, each with its fix covariance (H^T W H)^-1.
 //
-// Presence (presence.h): statistic = best mode's score / sqrt(P); the combinations the
+// Presence (presence.h): statistic = best mode's score / sqrt(P) (with no mode solved, the
+// sum of each pair's largest value / sqrt(P), which no position can exceed; never present
+// then); the combinations the
 // search chose from are M = min(prod_p W_p, 8 max_p W_p^3) for lag windows of W_p lags (a
 // position has 3 degrees of freedom). Around a track, the per-pair windows are
 // +-(3 sqrt(J_p C J_p^T) fs + 1) lags about the track's predicted lags (C its position
