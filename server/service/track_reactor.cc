@@ -179,6 +179,7 @@ void TrackReactor::OutputReadyLocked() {
     grpc::WriteOptions options;
     if (host_->HasOutputLocked()) options.set_buffer_hint();
     bool own_buffer = false;
+    write_buffer_.Clear();  // the previous write's bytes (gRPC holds its own reference)
     const grpc::Status serialized =
         grpc::SerializationTraits<v1::TrackResponse>::Serialize(*writing_, &write_buffer_, &own_buffer);
     if (!serialized.ok()) {  // cannot happen for a well-formed message; never loop on it
