@@ -60,7 +60,11 @@ StatusOr<std::unique_ptr<TrackStream>> TrackStream::Resume(
   v1::ResumeSession* resume = request.mutable_resume();
   resume->set_session_id(session_id);
   resume->set_resume_token(resume_token);
-  if (last_frame_received) resume->set_last_frame_received(*last_frame_received);
+  if (last_frame_received) {
+    resume->set_last_frame_received(*last_frame_received);
+  } else {
+    resume->set_received_none(true);  // 0 would mean "frame 0 received"
+  }
   LOCALIZER_RETURN_IF_ERROR(stream->Start(request));
   return stream;
 }

@@ -11,7 +11,7 @@ LocalizerService::LocalizerService(SessionRegistry* registry, WorkerPool* pool, 
                                    wire::ConfigPolicy policy)
     : registry_(registry), pool_(pool), metrics_(metrics), policy_(std::move(policy)) {}
 
-grpc::ServerBidiReactor<v1::TrackRequest, v1::TrackResponse>* LocalizerService::Track(
+grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LocalizerService::Track(
     grpc::CallbackServerContext* context) {
   return new TrackReactor(context, registry_, metrics_);
 }

@@ -13,11 +13,16 @@
 
 namespace localizer::server {
 
-class LocalizerService final : public v1::Localizer::CallbackService {
+// Track is registered raw (ByteBuffer) so its reactor can tell a request that does not
+// parse from the client's half-close (see track_reactor.h); the rest are typed.
+using LocalizerCallbackBase = v1::Localizer::WithRawCallbackMethod_Track<v1::Localizer::WithCallbackMethod_Locate<
+    v1::Localizer::WithCallbackMethod_ListSessions<v1::Localizer::WithCallbackMethod_CloseSession<v1::Localizer::Service>>>>;
+
+class LocalizerService final : public LocalizerCallbackBase {
  public:
   LocalizerService(SessionRegistry* registry, WorkerPool* pool, ServiceMetrics* metrics, wire::ConfigPolicy policy);
 
-  grpc::ServerBidiReactor<v1::TrackRequest, v1::TrackResponse>* Track(grpc::CallbackServerContext* context) override;
+  grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Track(grpc::CallbackServerContext* context) override;
   grpc::ServerUnaryReactor* Locate(grpc::CallbackServerContext* context, const v1::LocateRequest* request,
                                    v1::LocateResponse* response) override;
   grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* context,

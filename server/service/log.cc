@@ -19,17 +19,34 @@ int LevelRank(std::string_view level) {
   return 3;
 }
 
+// Quoted when it has spaces, quotes, '=' or any control byte; inside quotes '"' and '\\'
+// are escaped, \n \r \t as such and other control bytes as \xHH, so a client string can
+// never break a line or forge a field.
 void AppendValue(std::string* line, std::string_view value) {
-  const bool quote = value.empty() || value.find_first_of(" \"=\t\n") != std::string_view::npos;
+  bool quote = value.empty();
+  for (char ch : value) {
+    const auto u = static_cast<unsigned char>(ch);
+    if (ch == ' ' || ch == '"' || ch == '=' || ch == '\\' || u < 0x20 || u == 0x7f) quote = true;
+  }
   if (!quote) {
     line->append(value);
     return;
   }
   line->push_back('"');
   for (char ch : value) {
-    if (ch == '"' || ch == '\\') line->push_back('\\');
-    if (ch == '\n') {
-      line->append("\\n");
+    const auto u = static_cast<unsigned char>(ch);
+    switch (ch) {
+      case '"': line->append("\\\""); continue;
+      case '\\': line->append("\\\\"); continue;
+      case '\n': line->append("\\n"); continue;
+      case '\r': line->append("\\r"); continue;
+      case '\t': line->append("\\t"); continue;
+      default: break;
+    }
+    if (u < 0x20 || u == 0x7f) {
+      char buf[5];
+      std::snprintf(buf, sizeof buf, "\\x%02x", u);
+      line->append(buf);
       continue;
     }
     line->push_back(ch);

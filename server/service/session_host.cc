@@ -105,7 +105,8 @@ v1::SessionOpened SessionHost::OpenedMessageLocked(bool resumed) const {
   return opened;
 }
 
-void SessionHost::AttachLocked(StreamSink* sink, bool resumed, std::optional<uint64_t> last_frame_received) {
+void SessionHost::AttachLocked(StreamSink* sink, bool resumed, std::optional<uint64_t> last_frame_received,
+                               bool received_none) {
   if (sink_ != nullptr && sink_ != sink) {
     StreamSink* old = sink_;
     sink_ = nullptr;
@@ -117,7 +118,10 @@ void SessionHost::AttachLocked(StreamSink* sink, bool resumed, std::optional<uin
   }
   sink_ = sink;
   input_paused_ = false;
-  if (last_frame_received) {
+  if (received_none) {
+    // The client has nothing: replay every written estimate still held, oldest first.
+    for (auto it = history_.rbegin(); it != history_.rend(); ++it) outbox_.push_front(*it);
+  } else if (last_frame_received) {
     // Drop what the client has; replay written estimates it has not seen, oldest first.
     const uint64_t seen = *last_frame_received;
     std::erase_if(outbox_, [seen](const ResponsePtr& r) {

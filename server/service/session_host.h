@@ -76,8 +76,10 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
 
   // Attaches a stream, replacing (and ending with ABORTED) any stream still attached, and
   // puts SessionOpened first in the outbox. With `last_frame_received`, estimates after
-  // that frame still in the history are queued again (before unwritten ones).
-  void AttachLocked(StreamSink* sink, bool resumed, std::optional<uint64_t> last_frame_received);
+  // that frame still in the history are queued again (before unwritten ones); with
+  // `received_none`, every estimate still in the history is (frame 0 included).
+  void AttachLocked(StreamSink* sink, bool resumed, std::optional<uint64_t> last_frame_received,
+                    bool received_none = false);
   // The stream is gone (its reactor is done). No-op if `sink` is no longer attached.
   void DetachLocked(StreamSink* sink);
   bool attached() const;

@@ -1,5 +1,7 @@
 #include "server/service/session_registry.h"
 
+#include "server/wire/string_limits.h"
+
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -8,6 +10,15 @@
 #include "server/service/secure_random.h"
 
 namespace localizer::server {
+namespace {
+
+// A session reference from a client (Resume, CloseSession) within its documented lengths.
+Status CheckSessionRef(const std::string& id, const std::string& token) {
+  LOCALIZER_RETURN_IF_ERROR(wire::CheckLength("session_id", id, wire::kMaxSessionIdBytes));
+  return wire::CheckLength("resume_token", token, wire::kMaxResumeTokenBytes);
+}
+
+}  // namespace
 
 SessionRegistry::SessionRegistry(RegistryOptions options, WorkerPool* pool, ServiceMetrics* metrics)
     : options_(std::move(options)), pool_(pool), metrics_(metrics) {
@@ -70,10 +81,11 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
 }
 
 StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Find(const std::string& id, const std::string& token) const {
+  LOCALIZER_RETURN_IF_ERROR(CheckSessionRef(id, token));
   std::lock_guard<std::mutex> lock(mutex_);
   if (draining_) return Unavailable("server is draining");
   const auto it = sessions_.find(id);
-  if (it == sessions_.end()) return NotFound("no session '" + id + "' (unknown, closed or expired)");
+  if (it == sessions_.end()) return NotFound("no session '" + wire::Escape(id) + "' (unknown, closed or expired)");
   if (!it->second->TokenMatches(token)) return PermissionDenied("wrong resume_token for session " + id);
   return it->second;
 }
@@ -102,11 +114,12 @@ void SessionRegistry::Forget(const std::string& id, const std::string& reason) {
 }
 
 StatusOr<uint64_t> SessionRegistry::Close(const std::string& id, const std::string& token) {
+  LOCALIZER_RETURN_IF_ERROR(CheckSessionRef(id, token));
   std::shared_ptr<SessionHost> host;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     const auto it = sessions_.find(id);
-    if (it == sessions_.end()) return NotFound("no session '" + id + "'");
+    if (it == sessions_.end()) return NotFound("no session '" + wire::Escape(id) + "'");
     if (!it->second->TokenMatches(token)) return PermissionDenied("wrong resume_token for session " + id);
     host = it->second;
   }

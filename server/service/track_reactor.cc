@@ -8,7 +8,7 @@ namespace localizer::server {
 TrackReactor::TrackReactor(grpc::CallbackServerContext* context, SessionRegistry* registry,
                            ServiceMetrics* metrics)
     : context_(context), registry_(registry), metrics_(metrics), peer_(context->peer()) {
-  StartRead(&request_);
+  StartRead(&read_buffer_);
 }
 
 void TrackReactor::FinishOnce(const grpc::Status& status) {
@@ -18,11 +18,31 @@ void TrackReactor::FinishOnce(const grpc::Status& status) {
 }
 
 void TrackReactor::ReadNext() {
-  if (!finished_) StartRead(&request_);
+  if (!finished_) StartRead(&read_buffer_);
+}
+
+void TrackReactor::ParseFailed(size_t bytes) {
+  const grpc::Status status(grpc::StatusCode::INVALID_ARGUMENT,
+                            "TrackRequest of " + std::to_string(bytes) +
+                                " bytes could not be parsed (not a serialized localizer.v1.TrackRequest)" +
+                                (host_ ? "; session " + host_->id() + " stays open for a resume" : std::string()));
+  LogEvent("info", "request_unparseable",
+           {{"peer", peer_}, {"bytes", std::to_string(bytes)}, {"session", host_ ? host_->id() : std::string()}});
+  if (!host_) return FinishOnce(status);
+  std::lock_guard<std::mutex> lock(host_->mutex());
+  // Like a broken stream: the session detaches (OnDone) and can be resumed.
+  cancelled_ = true;
+  FinishOnce(status);
 }
 
 void TrackReactor::OnReadDone(bool ok) {
-  if (!ok) {  // the client half-closed, or the stream broke
+  if (ok) {
+    const size_t bytes = read_buffer_.Length();
+    const grpc::Status parsed = grpc::SerializationTraits<v1::TrackRequest>::Deserialize(&read_buffer_, &request_);
+    read_buffer_.Clear();
+    if (!parsed.ok()) return ParseFailed(bytes);
+  }
+  if (!ok) {  // the client half-closed, or the stream broke (a parse failure is handled above)
     if (!host_) {
       FinishOnce(grpc::Status::OK);
       return;
@@ -73,6 +93,10 @@ void TrackReactor::HandleResume(const v1::ResumeSession& resume) {
     std::lock_guard<std::mutex> lock(host_->mutex());
     return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION, "this stream already has a session"));
   }
+  if (resume.received_none() && resume.has_last_frame_received()) {
+    return FinishOnce(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                                   "resume.received_none and resume.last_frame_received are exclusive: send one"));
+  }
   auto host = registry_->Find(resume.session_id(), resume.resume_token());
   if (!host.ok()) {
     LogEvent("info", "resume_refused", {{"peer", peer_}, {"status", host.status().ToString()}});
@@ -82,17 +106,18 @@ void TrackReactor::HandleResume(const v1::ResumeSession& resume) {
   LogEvent("info", "session_resume", {{"session", (*host)->id()}, {"peer", peer_}});
   std::optional<uint64_t> last_frame;
   if (resume.has_last_frame_received()) last_frame = resume.last_frame_received();
-  Attach(std::move(host).value(), true, last_frame);
+  Attach(std::move(host).value(), true, last_frame, resume.received_none());
 }
 
-void TrackReactor::Attach(std::shared_ptr<SessionHost> host, bool resumed, std::optional<uint64_t> last_frame) {
+void TrackReactor::Attach(std::shared_ptr<SessionHost> host, bool resumed, std::optional<uint64_t> last_frame,
+                          bool received_none) {
   host_ = std::move(host);
   std::lock_guard<std::mutex> lock(host_->mutex());
   if (host_->ClosedLocked()) {
     // Closed between Find and here (CloseSession or expiry raced us).
     return FinishOnce(grpc::Status(grpc::StatusCode::NOT_FOUND, "session " + host_->id() + " was just closed"));
   }
-  host_->AttachLocked(this, resumed, last_frame);
+  host_->AttachLocked(this, resumed, last_frame, received_none);
   ReadNext();
 }
 
@@ -143,7 +168,7 @@ void TrackReactor::HandleScan() {
 void TrackReactor::InputSpaceLocked() {
   if (!read_paused_ || finished_) return;
   read_paused_ = false;
-  StartRead(&request_);
+  StartRead(&read_buffer_);
 }
 
 void TrackReactor::OutputReadyLocked() {
@@ -153,7 +178,18 @@ void TrackReactor::OutputReadyLocked() {
     // More already waiting: let gRPC hold this one and send both in one flush.
     grpc::WriteOptions options;
     if (host_->HasOutputLocked()) options.set_buffer_hint();
-    StartWrite(writing_.get(), options);
+    bool own_buffer = false;
+    write_buffer_.Clear();  // the previous write's bytes (gRPC holds its own reference)
+    const grpc::Status serialized =
+        grpc::SerializationTraits<v1::TrackResponse>::Serialize(*writing_, &write_buffer_, &own_buffer);
+    if (!serialized.ok()) {  // cannot happen for a well-formed message; never loop on it
+      host_->RequeueLocked(std::move(writing_));
+      writing_.reset();
+      FinishOnce(grpc::Status(grpc::StatusCode::INTERNAL, "could not serialize a response: " +
+                                                              serialized.error_message()));
+      return;
+    }
+    StartWrite(&write_buffer_, options);
     return;
   }
   if (input_done_ && host_->IdleLocked()) {

@@ -10,6 +10,13 @@
 //     responses and they are written; the session then closes.
 //   stream broken or cancelled -> finish CANCELLED; the session stays, detached, for
 //     the registry's TTL, its unwritten responses kept for a resume.
+//   a request that does not parse -> finish INVALID_ARGUMENT; the session stays, detached
+//     and resumable, as on a broken stream (a garbled request is never taken for a finish).
+//
+// The method is registered raw (ByteBuffer in and out) and the reactor parses requests
+// itself: with typed messages gRPC 1.51 reports a request that fails to parse as
+// OnReadDone(false), exactly like the client's half-close, so the two could not be told
+// apart. Responses are serialized here as gRPC would (one serialization per write).
 // Thread-safety: gRPC may run OnReadDone, OnWriteDone and OnCancel concurrently; once
 // attached, every field below marked "host" is guarded by the session's mutex. Before
 // attaching only the read path touches the reactor.
@@ -27,7 +34,7 @@
 
 namespace localizer::server {
 
-class TrackReactor final : public grpc::ServerBidiReactor<v1::TrackRequest, v1::TrackResponse>,
+class TrackReactor final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>,
                            public StreamSink {
  public:
   TrackReactor(grpc::CallbackServerContext* context, SessionRegistry* registry, ServiceMetrics* metrics);
@@ -55,19 +62,24 @@ class TrackReactor final : public grpc::ServerBidiReactor<v1::TrackRequest, v1::
   void HandleBlock();
   void HandleImu();   // moving-array sessions: IMU samples in order with the blocks
   void HandleScan();  // detection sessions: one scan of plots -> a track list
-  void Attach(std::shared_ptr<SessionHost> host, bool resumed, std::optional<uint64_t> last_frame);
+  void Attach(std::shared_ptr<SessionHost> host, bool resumed, std::optional<uint64_t> last_frame,
+              bool received_none = false);
   // Ends the stream once; before attaching (no lock needed) or with the host's lock held.
   void FinishOnce(const grpc::Status& status);
   // The stream broke or was cancelled: end it and leave the session resumable.
   void CancelLocked();
   void ReadNext();
+  // A request that did not parse: end the stream INVALID_ARGUMENT, keep the session.
+  void ParseFailed(size_t bytes);
 
   grpc::CallbackServerContext* const context_;
   SessionRegistry* const registry_;
   ServiceMetrics* const metrics_;
   std::string peer_;
 
-  v1::TrackRequest request_;             // read path only
+  grpc::ByteBuffer read_buffer_;         // read path only: the request as received
+  v1::TrackRequest request_;             // read path only: read_buffer_ parsed
+  grpc::ByteBuffer write_buffer_;        // host: writing_ serialized
   wire::DecodedBlock decoded_;           // read path only
   std::shared_ptr<SessionHost> host_;    // set once by the read path, before attaching
 

@@ -4,6 +4,8 @@
 #include <limits>
 #include <sstream>
 
+#include "server/wire/string_limits.h"
+
 namespace localizer::wire {
 namespace {
 
@@ -116,6 +118,62 @@ void BoundsToProto(const engine::SessionConfig& c, v1::SessionConfig* p) {
   if (std::isfinite(c.bounds_max_m.z())) b->set_max_z_m(c.bounds_max_m.z());
 }
 
+// Client strings within their documented lengths (string_limits.h), before anything
+// reads them.
+Status CheckStrings(const v1::SessionConfig& p) {
+  LOCALIZER_RETURN_IF_ERROR(CheckLength("label", p.label(), kMaxLabelBytes));
+  LOCALIZER_RETURN_IF_ERROR(CheckLength("backend", p.backend(), kMaxEnumStringBytes));
+  const v1::FilterConfig& f = p.filter();
+  LOCALIZER_RETURN_IF_ERROR(CheckLength("filter.motion_model", f.motion_model(), kMaxEnumStringBytes));
+  LOCALIZER_RETURN_IF_ERROR(CheckLength("filter.imm_modes", f.imm_modes(), kMaxEnumStringBytes));
+  LOCALIZER_RETURN_IF_ERROR(CheckLength("filter.imm_variant", f.imm_variant(), kMaxEnumStringBytes));
+  LOCALIZER_RETURN_IF_ERROR(CheckLength("filter.robust", f.robust(), kMaxEnumStringBytes));
+  LOCALIZER_RETURN_IF_ERROR(
+      CheckLength("platform.attitude_filter", p.platform().attitude_filter(), kMaxEnumStringBytes));
+  return Status::Ok();
+}
+
+// A proto3 enum field holds any int32; a value outside the enum is refused, never read as
+// the default.
+template <typename IsValid>
+Status CheckEnum(const char* field, int value, IsValid is_valid, const char* allowed) {
+  if (is_valid(value)) return Status::Ok();
+  return InvalidArgument(std::string(field) + " is " + std::to_string(value) + ", not a known value (" + allowed +
+                         ")");
+}
+
+Status CheckEnums(const v1::SessionConfig& p) {
+  LOCALIZER_RETURN_IF_ERROR(CheckEnum("weighting", p.weighting(), v1::Weighting_IsValid,
+                                      "PHAT, PHAT_BETA, SCOT, CC, PHAT_COHERENCE"));
+  LOCALIZER_RETURN_IF_ERROR(CheckEnum("filter.type", p.filter().type(), v1::FilterType_IsValid,
+                                      "PF, EKF, UKF, MMPF, IMM"));
+  LOCALIZER_RETURN_IF_ERROR(CheckEnum("filter.likelihood", p.filter().likelihood(), v1::Likelihood_IsValid,
+                                      "PEAK, GCC, MIXTURE"));
+  return Status::Ok();
+}
+
+// init_region: finite, within 1e7 m (as the bounds), min <= max on every axis.
+Status InitRegionFromProto(const v1::Region& r, engine::SessionConfig* c) {
+  const double lo[3] = {r.min_m().x(), r.min_m().y(), r.min_m().z()};
+  const double hi[3] = {r.max_m().x(), r.max_m().y(), r.max_m().z()};
+  const char* const axes[3] = {"x", "y", "z"};
+  for (int i = 0; i < 3; ++i) {
+    for (const auto& [side, v] : {std::pair<const char*, double>{"min_m", lo[i]}, {"max_m", hi[i]}}) {
+      if (!std::isfinite(v) || std::abs(v) > 1e7) {
+        return InvalidArgument(std::string("init_region.") + side + "." + axes[i] + " is " + Num(v) +
+                               "; must be finite within 1e7 m");
+      }
+    }
+    if (lo[i] > hi[i]) {
+      return InvalidArgument(std::string("init_region.min_m.") + axes[i] + " (" + Num(lo[i]) +
+                             ") must be <= init_region.max_m." + axes[i] + " (" + Num(hi[i]) + ")");
+    }
+  }
+  c->init_region_min_m = FromProto(r.min_m());
+  c->init_region_max_m = FromProto(r.max_m());
+  return Status::Ok();
+}
+
 }  // namespace
 
 namespace {
@@ -158,7 +216,9 @@ StatusOr<engine::SessionConfig> DetectionConfigFromProto(const v1::SessionConfig
 }  // namespace
 
 StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, const ConfigPolicy& policy) {
+  LOCALIZER_RETURN_IF_ERROR(CheckStrings(p));
   if (p.has_detections()) return DetectionConfigFromProto(p, policy);
+  LOCALIZER_RETURN_IF_ERROR(CheckEnums(p));
   engine::SessionConfig c;
   if (!p.has_array()) return InvalidArgument("array is missing");
   if (p.array().sensors_m_size() > policy.max_channels) {
@@ -167,6 +227,12 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
   }
   for (const v1::Vector3& s : p.array().sensors_m()) c.sensors_m.push_back(FromProto(s));
   c.sound_speed_mps = p.array().sound_speed_mps();
+  // Unsigned on the wire: checked (and printed) as such before the engine's int.
+  if (p.array().sensors_m_size() > 0 &&
+      p.array().reference_sensor() >= static_cast<uint32_t>(p.array().sensors_m_size())) {
+    return InvalidArgument("array.reference_sensor is " + std::to_string(p.array().reference_sensor()) +
+                           "; must be below the sensor count " + std::to_string(p.array().sensors_m_size()));
+  }
   c.reference_sensor = static_cast<int>(p.array().reference_sensor());
   c.sample_rate_hz = p.sample_rate_hz();
   if (p.frame_samples() > (1u << 20)) {
@@ -210,14 +276,7 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
 
   c.backend = p.backend().empty() ? policy.default_backend : p.backend();
   if (p.has_seed()) c.seed = p.seed();
-  if (p.has_init_region()) {
-    c.init_region_min_m = FromProto(p.init_region().min_m());
-    c.init_region_max_m = FromProto(p.init_region().max_m());
-    if (!c.init_region_min_m.allFinite() || !c.init_region_max_m.allFinite() ||
-        (c.init_region_min_m.array() > c.init_region_max_m.array()).any()) {
-      return InvalidArgument("init_region: min_m must be finite and <= max_m on every axis");
-    }
-  }
+  if (p.has_init_region()) LOCALIZER_RETURN_IF_ERROR(InitRegionFromProto(p.init_region(), &c));
   if (p.min_pair_quality() != 0.0) c.min_pair_quality = p.min_pair_quality();
   c.max_fix_std_m = p.max_fix_std_m();
   if (p.max_block_samples() > policy.max_block_samples) {

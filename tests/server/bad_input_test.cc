@@ -194,6 +194,80 @@ TEST_F(ServiceTest, BadConfigsAreInvalidArgumentNamingTheField) {
   }
 }
 
+// The status of an open spoiled by `spoil`.
+grpc::Status OpenStatus(v1::Localizer::Stub* stub, const Scenario& s,
+                        const std::function<void(v1::SessionConfig*)>& spoil) {
+  v1::TrackRequest open = s.OpenRequest();
+  spoil(open.mutable_open());
+  TestStream stream(stub);
+  EXPECT_TRUE(stream.Send(open));
+  return stream.Close();
+}
+
+TEST_F(ServiceTest, BadNumbersAreInvalidArgumentNamingTheField) {
+  const Scenario s = MakeScenario("tetra-water", 1.0, 1, kBlock);
+  struct Case {
+    std::function<void(v1::SessionConfig*)> spoil;
+    std::vector<std::string> expect;  // substrings of the message
+  };
+  const std::vector<Case> cases = {
+      {[](v1::SessionConfig* c) {
+         c->mutable_init_region()->mutable_min_m()->set_x(-1e300);
+         c->mutable_init_region()->mutable_max_m()->set_x(1e300);
+       },
+       {"init_region.min_m.x", "1e7"}},
+      {[](v1::SessionConfig* c) { c->mutable_init_region()->mutable_max_m()->set_z(1e300); },
+       {"init_region.max_m.z", "1e7"}},
+      {[](v1::SessionConfig* c) { c->set_weighting(static_cast<v1::Weighting>(99)); }, {"weighting", "99"}},
+      {[](v1::SessionConfig* c) { c->mutable_filter()->set_likelihood(static_cast<v1::Likelihood>(-7)); },
+       {"filter.likelihood", "-7"}},
+      {[](v1::SessionConfig* c) { c->mutable_array()->set_reference_sensor(4294967295u); },
+       {"array.reference_sensor", "4294967295"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.expect[0]);
+    const grpc::Status status = OpenStatus(stub_.get(), s, c.spoil);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+    for (const std::string& want : c.expect) {
+      EXPECT_NE(status.error_message().find(want), std::string::npos) << status.error_message();
+    }
+    EXPECT_EQ(status.error_message().find("-1 "), std::string::npos) << status.error_message();
+  }
+}
+
+TEST_F(ServiceTest, OversizedStringsAreInvalidArgumentWithoutEcho) {
+  const Scenario s = MakeScenario("tetra-water", 1.0, 1, kBlock);
+  const std::string huge = "x\r\nlevel=error event=forged " + std::string(1 << 20, 'Q');
+  struct Case {
+    std::function<void(v1::SessionConfig*)> spoil;
+    std::string field;
+    std::string limit;
+  };
+  const std::vector<Case> cases = {
+      {[&](v1::SessionConfig* c) { c->set_label(huge); }, "label", "256"},
+      {[&](v1::SessionConfig* c) { c->set_label(std::string(257, 'l')); }, "label", "256"},
+      {[&](v1::SessionConfig* c) { c->set_backend(huge); }, "backend", "64"},
+      {[&](v1::SessionConfig* c) { c->mutable_filter()->set_motion_model(huge); }, "filter.motion_model", "64"},
+      {[&](v1::SessionConfig* c) { c->mutable_filter()->set_imm_modes(huge); }, "filter.imm_modes", "64"},
+      {[&](v1::SessionConfig* c) { c->mutable_filter()->set_imm_variant(huge); }, "filter.imm_variant", "64"},
+      {[&](v1::SessionConfig* c) { c->mutable_filter()->set_robust(huge); }, "filter.robust", "64"},
+      {[&](v1::SessionConfig* c) { c->mutable_platform()->set_attitude_filter(huge); }, "platform.attitude_filter",
+       "64"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.field);
+    const grpc::Status status = OpenStatus(stub_.get(), s, c.spoil);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message().substr(0, 200);
+    EXPECT_NE(status.error_message().find(c.field), std::string::npos) << status.error_message().substr(0, 200);
+    EXPECT_NE(status.error_message().find(c.limit), std::string::npos) << status.error_message().substr(0, 200);
+    EXPECT_LT(status.error_message().size(), 200u);
+    EXPECT_EQ(status.error_message().find_first_of("\r\n"), std::string::npos);
+  }
+  // At the limit is fine.
+  const grpc::Status ok = OpenStatus(stub_.get(), s, [](v1::SessionConfig* c) { c->set_label(std::string(256, 'l')); });
+  EXPECT_TRUE(ok.ok()) << ok.error_message();
+}
+
 TEST_F(ServiceTest, GpuBackendWithoutADeviceIsFailedPrecondition) {
   if (engine::GpuUnavailableReason().empty()) GTEST_SKIP() << "this machine has a usable GPU";
   const Scenario s = MakeScenario("tetra-water", 1.0, 1, kBlock);

@@ -3,6 +3,8 @@
 // CloseSession and the session limit.
 #include <set>
 
+#include <grpcpp/generic/generic_stub.h>
+
 #include "tests/server/service_fixture.h"
 
 namespace localizer::server::testing {
@@ -16,6 +18,177 @@ v1::TrackRequest ResumeRequest(const v1::SessionOpened& opened, std::optional<ui
   request.mutable_resume()->set_resume_token(opened.resume_token());
   if (last_frame) request.mutable_resume()->set_last_frame_received(*last_frame);
   return request;
+}
+
+// Track over a generic stub: a client that writes raw bytes (here: garbage after a valid
+// open), one operation at a time on a completion queue.
+class RawTrack {
+ public:
+  explicit RawTrack(const std::shared_ptr<grpc::Channel>& channel) : stub_(channel) {
+    context_.AddMetadata("x-localizer-session-key", "test");
+    call_ = stub_.PrepareCall(&context_, "/localizer.v1.Localizer/Track", &cq_);
+    call_->StartCall(Tag(1));
+    EXPECT_TRUE(Wait(1));
+  }
+  ~RawTrack() {
+    cq_.Shutdown();
+    void* tag;
+    bool ok;
+    while (cq_.Next(&tag, &ok)) {
+    }
+  }
+  bool WriteBytes(const std::string& bytes) {
+    grpc::Slice slice(bytes);
+    grpc::ByteBuffer buffer(&slice, 1);
+    call_->Write(buffer, Tag(2));
+    return Wait(2);
+  }
+  bool Write(const v1::TrackRequest& request) { return WriteBytes(request.SerializeAsString()); }
+  bool Read(v1::TrackResponse* response) {
+    grpc::ByteBuffer buffer;
+    call_->Read(&buffer, Tag(3));
+    if (!Wait(3)) return false;
+    return grpc::SerializationTraits<v1::TrackResponse>::Deserialize(&buffer, response).ok();
+  }
+  grpc::Status Finish() {
+    v1::TrackResponse ignored;
+    while (Read(&ignored)) {
+    }
+    grpc::Status status;
+    call_->Finish(&status, Tag(4));
+    Wait(4);
+    return status;
+  }
+
+ private:
+  static void* Tag(intptr_t n) { return reinterpret_cast<void*>(n); }
+  bool Wait(intptr_t n) {
+    void* tag = nullptr;
+    bool ok = false;
+    EXPECT_TRUE(cq_.Next(&tag, &ok));
+    EXPECT_EQ(tag, Tag(n));
+    return ok;
+  }
+
+  grpc::GenericStub stub_;
+  grpc::ClientContext context_;
+  grpc::CompletionQueue cq_;
+  std::unique_ptr<grpc::GenericClientAsyncReaderWriter> call_;
+};
+
+// A block field (3) announcing 16 bytes and carrying 3: truncated, fails to parse.
+const std::string kTruncated("\x1a\x10" "abc", 5);
+
+TEST_F(ServiceTest, UnparseableRequestIsInvalidArgumentAndTheSessionResumes) {
+  const Scenario s = MakeScenario("tetra-water", 2.0, 1, kBlock);
+  RawTrack raw(channel_);
+  ASSERT_TRUE(raw.Write(s.OpenRequest()));
+  v1::SessionOpened opened;
+  std::vector<v1::Estimate> received;
+  v1::TrackResponse response;
+  ASSERT_TRUE(raw.Read(&response));
+  ASSERT_TRUE(response.has_opened());
+  opened = response.opened();
+  for (int64_t k = 1; k <= 3; ++k) ASSERT_TRUE(raw.Write(s.BlockRequest(k, kBlock)));
+  while (received.size() < 2 && raw.Read(&response)) {
+    if (response.has_estimate()) received.push_back(response.estimate());
+  }
+  ASSERT_EQ(received.size(), 2u);
+  raw.WriteBytes(kTruncated);
+  const grpc::Status status = raw.Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_NE(status.error_message().find("could not be parsed"), std::string::npos) << status.error_message();
+
+  // Not a finish: the session is still there and resumes where the client left off.
+  grpc::ClientContext context;
+  v1::ListSessionsResponse list;
+  ASSERT_TRUE(stub_->ListSessions(&context, {}, &list).ok());
+  ASSERT_EQ(list.sessions_size(), 1);
+  EXPECT_EQ(list.sessions(0).session_id(), opened.session_id());
+
+  TestStream resumed(stub_.get());
+  ASSERT_TRUE(resumed.Send(ResumeRequest(opened, received.back().frame_index())));
+  ASSERT_TRUE(resumed.WaitFor([](const auto& r) { return !r.empty(); }));
+  EXPECT_TRUE(resumed.opened().resumed());
+  for (int64_t k = 4; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(resumed.Send(s.BlockRequest(k, kBlock)));
+  ASSERT_TRUE(resumed.Close().ok());
+  for (const auto& e : resumed.estimates()) received.push_back(e);
+  ASSERT_EQ(received.size(), s.offline.size());
+  for (size_t i = 0; i < received.size(); ++i) {
+    SCOPED_TRACE(i);
+    ExpectSameEstimate(s.offline[i], received[i]);
+  }
+}
+
+TEST_F(ServiceTest, UnparseableFirstRequestIsInvalidArgument) {
+  RawTrack raw(channel_);
+  raw.WriteBytes(kTruncated);
+  const grpc::Status status = raw.Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+}
+
+// A client whose stream broke before its first estimate says so (received_none) and gets
+// every estimate the server holds, frame 0 first; last_frame_received 0 would skip frame 0
+// and leaving it unset would skip every estimate already written.
+TEST_F(ServiceTest, ResumeWithReceivedNoneReplaysFromFrameZero) {
+  const Scenario s = MakeScenario("tetra-water", 2.0, 1, kBlock);
+  v1::SessionOpened opened;
+  size_t written = 0;
+  {
+    TestStream first(stub_.get());
+    ASSERT_TRUE(first.Send(s.OpenRequest()));
+    for (int64_t k = 1; k <= 4; ++k) ASSERT_TRUE(first.Send(s.BlockRequest(k, kBlock)));
+    ASSERT_TRUE(first.WaitForEstimates(3));  // written by the server (the client "lost" them)
+    written = first.estimates().size();
+    opened = first.opened();
+    first.Cancel();
+  }
+  v1::TrackRequest resume = ResumeRequest(opened, std::nullopt);
+  resume.mutable_resume()->set_received_none(true);
+  TestStream second(stub_.get());
+  ASSERT_TRUE(second.Send(resume));
+  for (int64_t k = 5; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(second.Send(s.BlockRequest(k, kBlock)));
+  ASSERT_TRUE(second.Close().ok());
+  const auto estimates = second.estimates();
+  ASSERT_GE(written, 3u);
+  ASSERT_EQ(estimates.size(), s.offline.size());
+  for (size_t i = 0; i < estimates.size(); ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(estimates[i].frame_index(), i);
+    ExpectSameEstimate(s.offline[i], estimates[i]);
+  }
+
+  // Both at once is refused.
+  v1::TrackRequest both = ResumeRequest(opened, 0);
+  both.mutable_resume()->set_received_none(true);
+  TestStream third(stub_.get());
+  ASSERT_TRUE(third.Send(both));
+  EXPECT_EQ(third.Close().error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
+
+TEST_F(ServiceTest, OversizedSessionRefsAreInvalidArgumentWithoutEcho) {
+  const std::string huge = "evil\r\nlevel=error " + std::string(100000, 'A');
+  v1::SessionOpened forged;
+  forged.set_session_id(huge);
+  forged.set_resume_token("t");
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(ResumeRequest(forged, std::nullopt)));
+  grpc::Status status = stream.Close();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("session_id"), std::string::npos) << status.error_message();
+  EXPECT_NE(status.error_message().find("64"), std::string::npos) << status.error_message();
+  EXPECT_LT(status.error_message().size(), 200u);
+  EXPECT_EQ(status.error_message().find('\n'), std::string::npos);
+
+  v1::CloseSessionRequest close;
+  close.set_session_id("0123456789abcdef");
+  close.set_resume_token(huge);
+  v1::CloseSessionResponse response;
+  grpc::ClientContext context;
+  status = stub_->CloseSession(&context, close, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("resume_token"), std::string::npos) << status.error_message();
+  EXPECT_LT(status.error_message().size(), 200u);
 }
 
 TEST_F(ServiceTest, ResumeAfterDisconnectLosesAndRepeatsNothing) {

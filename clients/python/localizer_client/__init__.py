@@ -329,10 +329,18 @@ class TrackSession:
     @classmethod
     def resume(cls, channel, session_id, resume_token, *, last_frame_received=None,
                session_key=None, timeout=None):
-        """Resume a detached session (use the session_key it was opened with, if any)."""
+        """Resume a detached session (use the session_key it was opened with, if any).
+
+        ``last_frame_received``: frame_index of the last estimate this client holds; None when
+        it holds none (sent as ``received_none``: every estimate the server still has is
+        sent again, frame 0 first)."""
         req = pb.ResumeSession(session_id=session_id, resume_token=resume_token)
         if last_frame_received is not None:
             req.last_frame_received = last_frame_received
+        else:
+            # This client holds no estimate: ask for all the server still has, frame 0
+            # included (last_frame_received=0 would mean "frame 0 received").
+            req.received_none = True
         return cls(channel, resume=req, session_key=session_key, timeout=timeout)
 
     def reattach(self, channel=None, *, timeout=None):
