@@ -32,6 +32,11 @@ struct PairMeasurement {
   // peak that was found; whether that peak is the source is peak_snr's and quality's job.
   // 0: not computed by this front end (the GPU one; filters then use the GCC's curvature).
   double delay_sigma_s = 0.0;
+  // Set by a session that found this pair's peak where its established track predicts it
+  // (within the association gate): the filters then use the pair down to a lower peak SNR
+  // (pair_noise.h), since a peak in a few predicted lags is far less likely noise than the
+  // largest value anywhere in the window.
+  bool confirmed = false;
   // The K largest local extrema of |GCC| in the lag window, at least one envelope width
   // apart (K = GccOptions::max_candidates). candidates[0] is the main peak (delay_s,
   // peak_value, delay_sigma_s); the others follow by decreasing |value|. Empty when the

@@ -13,6 +13,7 @@ constexpr double kGateSigmas = 4.0;
 constexpr double kAnchoredCap = 6.0;  // |z| beyond this counts as 6 in the divergence test
 constexpr double kMinAnchorSamples = 0.02;
 constexpr double kStartSigmaSamples = 0.05;
+constexpr double kConfirmedPeakSnr = 3.0;  // a confirmed pair's peak SNR floor
 // The fallback without an anchor: start at 0.1 sample, keep within [0.01, 2] samples.
 constexpr double kInitialSigmaSamples = 0.1;
 constexpr double kMinSigmaSamples = 0.01;
@@ -42,7 +43,8 @@ int PairNoise::Select(const Measurement& m, double min_peak_snr) {
   used_.resize(n);
   int count = 0;
   for (size_t p = 0; p < n; ++p) {
-    used_[p] = m.pairs[p].peak_snr >= min_peak_snr ? 1 : 0;
+    const double needed = m.pairs[p].confirmed ? std::min(min_peak_snr, kConfirmedPeakSnr) : min_peak_snr;
+    used_[p] = m.pairs[p].peak_snr >= needed ? 1 : 0;
     count += used_[p];
     if (fixed_sigma_s_ > 0.0) {
       anchors_s_[p] = sigmas_s_[p] = fixed_sigma_s_;

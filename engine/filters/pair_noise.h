@@ -2,7 +2,8 @@
 // Shared by the CPU filters (particle, Kalman, IMM, multiple-model) and the GPU particle
 // filter (gpu/backend), so all choose pairs, set sigma and compute the NIS identically.
 //
-// Select marks the pairs whose peak_snr >= min_peak_snr (the others carry no source).
+// Select marks the pairs whose peak_snr >= min_peak_snr (the others carry no source), or
+// >= 3 for a pair the session confirmed near its track (PairMeasurement::confirmed).
 //
 // Anchored noise (the default, fixed sigma 0). Each frame's pair says how precise its own
 // peak is: anchor_k = delay_sigma_s when the front end reports it, else, when the frame kept

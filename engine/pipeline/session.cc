@@ -177,7 +177,10 @@ int Session::Impl::AssociateCandidates(const TrackState& predicted) {
     const double sigma = std::max(pair.delay_sigma_s * fs, 0.05);
     const double gate = kAssociationGate * std::sqrt(row.dot(cov * row) + sigma * sigma);  // samples
     const double predicted_lag = lag(static_cast<Eigen::Index>(p));
-    if (std::abs(pair.delay_s * fs - predicted_lag) <= gate) continue;
+    if (std::abs(pair.delay_s * fs - predicted_lag) <= gate) {
+      pair.confirmed = true;
+      continue;
+    }
     // The largest local maximum of the pair's GCC inside the gate, if tall enough.
     const long lo = std::max(1L, static_cast<long>(std::ceil(predicted_lag - gate)) - pair.first_lag_samples);
     const long hi = std::min(static_cast<long>(g.size()) - 2,
@@ -193,6 +196,7 @@ int Session::Impl::AssociateCandidates(const TrackState& predicted) {
     const double offset = denom < 0.0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0;
     pair.delay_s = (pair.first_lag_samples + best + offset) / fs;
     pair.delay_sigma_s = 0.0;  // the anchor then comes from this peak's own curvature
+    pair.confirmed = true;
     ++changed;
   }
   return changed;
