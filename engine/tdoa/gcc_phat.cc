@@ -604,7 +604,11 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
     if (var > 0.0) radius = std::clamp(kEnvelopeNullPerRmsWidth / std::sqrt(var), 1.0,
                                        static_cast<double>(searched_count));
   }
-  PickCandidates(searched, peak, max_lag, radius, slope_std, out);
+  if (options.max_candidates > 1) {
+    PickCandidates(searched, peak, max_lag, radius, slope_std, out);
+  } else {
+    out->candidates.resize(1);  // the main peak alone: no scan of the window's extrema
+  }
   out->candidates[0] = DelayCandidate{out->delay_s, out->peak_value, out->delay_sigma_s};
 
   if (options.keep_gcc) out->gcc.assign(searched.begin(), searched.end());
