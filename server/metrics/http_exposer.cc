@@ -20,7 +20,10 @@ namespace localizer::server::metrics {
 namespace {
 
 constexpr int kMaxThreads = 64;
-constexpr char kRequestTimeoutMs[] = "10000";
+// A connection that sends no complete request within this time is dropped: an idle or slow
+// client holds one worker at most this long (at 10 s, four idle connections kept every
+// scrape of a 2-thread server waiting past Prometheus's own timeout).
+constexpr char kRequestTimeoutMs[] = "2000";
 
 void InitCivetwebOnce() {
   static std::once_flag once;

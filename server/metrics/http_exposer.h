@@ -8,7 +8,8 @@
 //   other methods      405 with "Allow: GET, HEAD" (on a known path)
 // The query string is ignored. No files are ever served (civetweb runs without a document
 // root). Connections are closed after each response (no keep-alive); a request that does
-// not arrive within 10 s is dropped.
+// not arrive within 2 s is dropped, and 8 workers by default serve at once, so a few idle
+// or slow connections cannot keep scrapes from being answered.
 //
 // Lifetime: Start binds and starts `threads` worker threads; the destructor stops the
 // server, waiting for requests in flight (civetweb's listener polls in 2 s steps; the
@@ -49,7 +50,7 @@ class HttpExposer final {
   // of range; UNAVAILABLE when the server cannot start (port in use, address not local,
   // permission denied), with the address and civetweb's reason in the message.
   static StatusOr<std::unique_ptr<HttpExposer>> Start(const std::string& listen, Registry* registry,
-                                                      int threads = 2);
+                                                      int threads = 8);
 
   ~HttpExposer();
   HttpExposer(const HttpExposer&) = delete;

@@ -5,7 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <chrono>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -164,6 +170,31 @@ TEST_F(HttpExposerTest, ServesConcurrentClients) {
   }
   for (auto& client : clients) client.join();
   EXPECT_EQ(good.load(), 60);
+}
+
+// Idle connections (a TCP connect, no request) each hold a worker until the request
+// timeout (2 s): twelve of them, more than the 8 workers, must not keep a scrape waiting
+// past a few seconds (with the former 2 workers and 10 s, four blinded every scrape).
+TEST_F(HttpExposerTest, ScrapesAreAnsweredWhileIdleConnectionsAreOpen) {
+  std::vector<int> idle;
+  for (int i = 0; i < 12; ++i) {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    ASSERT_GE(fd, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(static_cast<uint16_t>(exposer_->port()));
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address), 0);
+    idle.push_back(fd);
+  }
+  for (int scrape = 0; scrape < 3; ++scrape) {
+    const auto start = std::chrono::steady_clock::now();
+    const HttpResponse r = Request(exposer_->port(), "GET", "/metrics");
+    const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(r.status, 200);
+    EXPECT_LT(waited_s, 4.0) << "scrape " << scrape;
+  }
+  for (int fd : idle) close(fd);
 }
 
 TEST_F(HttpExposerTest, DestructorStopsTheServer) {
