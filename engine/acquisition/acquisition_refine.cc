@@ -1,0 +1,150 @@
+// Acquisition::Refine (acquisition.h): one cell's picks, the weighted Gauss–Newton solve,
+// the consensus subset and the re-pick at the solution.
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+#include "engine/acquisition/acquisition.h"
+
+namespace localizer::engine {
+namespace {
+
+constexpr double kMinPickValue = 3.0;  // a pick below this normalised height is noise
+constexpr double kMinSigmaSamples = 0.1;  // ~ the sub-sample interpolation's bias (DESIGN.md)
+constexpr double kMinFrontEndSigmaSamples = 0.02;
+constexpr double kMaxSigmaSamples = 5.0;
+
+}  // namespace
+
+bool Acquisition::Refine(const Vec3& start_m, const std::vector<double>& lo, const std::vector<double>& hi,
+                         PositionMode* mode) const {
+  const int pairs = field_.pair_count();
+  const double fs = field_.sample_rate_hz();
+  std::vector<double> pick(static_cast<size_t>(pairs), 0.0), sigma(static_cast<size_t>(pairs), 1.0);
+  std::vector<char> used(static_cast<size_t>(pairs), 0);
+  // Pair p's pick in [a, b]: its lag, and a curvature-based sigma; false when too weak.
+  auto pick_in = [&](int p, double a, double b) {
+    double lag = 0.0, value = 0.0;
+    if (!field_.ArgMax(p, a, b, &lag, &value) || value < kMinPickValue) return false;
+    const double left = field_.At(p, std::round(lag) - 1.0), mid = field_.At(p, std::round(lag));
+    const double right = field_.At(p, std::round(lag) + 1.0);
+    const double curvature = -(left - 2.0 * mid + right);  // -g'' in normalised units per sample^2
+    const double s = curvature > 0.0 && mid > 0.0 ? 1.0 / std::sqrt(curvature * mid) : kMaxSigmaSamples;
+    pick[static_cast<size_t>(p)] = lag;
+    sigma[static_cast<size_t>(p)] = std::clamp(s, kMinSigmaSamples, kMaxSigmaSamples);
+    // The main peak: the front end's own delay and sigma (from the whole cross-spectrum,
+    // gcc_phat.h) are better than a parabola through three samples.
+    if (measurement_ != nullptr) {
+      const PairMeasurement& pm = measurement_->pairs[static_cast<size_t>(p)];
+      if (pm.delay_sigma_s > 0.0 && std::abs(pm.delay_s * fs - lag) < 0.5) {
+        pick[static_cast<size_t>(p)] = pm.delay_s * fs;
+        sigma[static_cast<size_t>(p)] = std::clamp(pm.delay_sigma_s * fs, kMinFrontEndSigmaSamples, kMaxSigmaSamples);
+      }
+    }
+    return true;
+  };
+  int count = 0;
+  for (int p = 0; p < pairs; ++p) {
+    used[static_cast<size_t>(p)] = pick_in(p, lo[static_cast<size_t>(p)], hi[static_cast<size_t>(p)]);
+    count += used[static_cast<size_t>(p)];
+  }
+  if (count < 3) return false;
+
+  Vec3 x = start_m;
+  Mat3 info = Mat3::Zero();
+  // Weighted Gauss–Newton with Levenberg damping on the used pairs; returns the final cost.
+  auto solve = [&]() {
+    double lambda = 1e-3;
+    double cost = 0.0;
+    for (int it = 0; it < 30; ++it) {
+      const Eigen::VectorXd lag = array_.Tdoa(x) * fs;
+      const Eigen::MatrixXd jac = array_.TdoaJacobian(x) * fs;  // samples per metre
+      Mat3 a = Mat3::Zero();
+      Vec3 g = Vec3::Zero();
+      cost = 0.0;
+      for (int p = 0; p < pairs; ++p) {
+        if (!used[static_cast<size_t>(p)]) continue;
+        const double w = 1.0 / (sigma[static_cast<size_t>(p)] * sigma[static_cast<size_t>(p)]);
+        const Eigen::Vector3d row = jac.row(p).transpose();
+        const double r = pick[static_cast<size_t>(p)] - lag(p);
+        a += w * row * row.transpose();
+        g += w * row * r;
+        cost += w * r * r;
+      }
+      info = a;
+      bool stepped = false;
+      for (int tries = 0; tries < 8 && !stepped; ++tries) {
+        Mat3 damped = a;
+        damped.diagonal() += lambda * (a.diagonal().array() + 1e-12).matrix();
+        const Vec3 step = damped.ldlt().solve(g);
+        if (!step.allFinite()) break;
+        const Vec3 candidate = x + step;
+        const Eigen::VectorXd lag2 = array_.Tdoa(candidate) * fs;
+        double cost2 = 0.0;
+        for (int p = 0; p < pairs; ++p) {
+          if (!used[static_cast<size_t>(p)]) continue;
+          const double r = pick[static_cast<size_t>(p)] - lag2(p);
+          cost2 += r * r / (sigma[static_cast<size_t>(p)] * sigma[static_cast<size_t>(p)]);
+        }
+        if (cost2 <= cost) {
+          stepped = true;
+          const double moved = step.norm();
+          x = candidate;
+          lambda = std::max(lambda * 0.3, 1e-9);
+          if (moved < 1e-7 * std::max(1.0, x.norm())) return cost2;
+        } else {
+          lambda *= 10.0;
+        }
+      }
+      if (!stepped) break;
+    }
+    return cost;
+  };
+  double cost = solve();
+  // Consensus: leave out the worst pair while it is off the solution (keep >= 3).
+  while (count > 3) {
+    const Eigen::VectorXd lag = array_.Tdoa(x) * fs;
+    int worst = -1;
+    double worst_excess = 0.0;
+    for (int p = 0; p < pairs; ++p) {
+      if (!used[static_cast<size_t>(p)]) continue;
+      const double r = std::abs(pick[static_cast<size_t>(p)] - lag(p));
+      const double allowed = std::max(3.0 * sigma[static_cast<size_t>(p)], 1.5);
+      if (r > allowed && r / allowed > worst_excess) {
+        worst_excess = r / allowed;
+        worst = p;
+      }
+    }
+    if (worst < 0) break;
+    used[static_cast<size_t>(worst)] = 0;
+    --count;
+    solve();
+  }
+  // Re-pick every pair near the solution's lags (a pair may now find its true peak), solve again.
+  {
+    const Eigen::VectorXd lag = array_.Tdoa(x) * fs;
+    count = 0;
+    for (int p = 0; p < pairs; ++p) {
+      used[static_cast<size_t>(p)] = pick_in(p, lag(p) - 2.0, lag(p) + 2.0);
+      count += used[static_cast<size_t>(p)];
+    }
+    if (count < 3) return false;
+    cost = solve();
+  }
+  if (!x.allFinite()) return false;
+  Eigen::LDLT<Mat3> ldlt(info);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return false;
+  // With redundant pairs, the fit's own residual scales the covariance up when the peaks
+  // are less precise than their curvature says (multipath biases them): the a-posteriori
+  // variance factor of least squares, never below 1.
+  const double variance_factor = count > 3 ? std::max(1.0, cost / (count - 3)) : 1.0;
+  const Mat3 cov = variance_factor * ldlt.solve(Mat3::Identity());
+  if (!cov.allFinite()) return false;
+  mode->position_m = x;
+  mode->covariance_m2 = 0.5 * (cov + cov.transpose());
+  mode->pairs_used = count;
+  mode->score = Score(x);
+  return true;
+}
+
+}  // namespace localizer::engine

@@ -1,0 +1,91 @@
+// The session's state and its frame steps, shared by session.cc (framing, blocks, IMU,
+// Create) and session_tracking.cc (acquisition, presence, audits, updates, reporting).
+// Internal to engine/pipeline.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "engine/acquisition/acquisition.h"
+#include "engine/filters/divergence_monitor.h"
+#include "engine/pipeline/backend.h"
+#include "engine/pipeline/framer.h"
+#include "engine/pipeline/platform_pose.h"
+#include "engine/pipeline/session.h"
+#include "engine/tdoa/despike.h"
+
+namespace localizer::engine {
+
+struct Session::Impl {
+  Impl(SessionConfig c, ArrayGeometry a, SessionComponents parts, std::unique_ptr<PlatformPose> pose, Acquisition acq)
+      : config(std::move(c)),
+        body_array(a),
+        array(std::move(a)),
+        platform(std::move(pose)),
+        components(std::move(parts)),
+        acquisition(std::move(acq)),
+        framer(array.sensor_count(), config.frame_samples, config.hop_samples),
+        monitor(config.divergence_window) {
+    despike.despike_k = config.despike_k;
+    // A coherent impulse reaches every sensor within the aperture's travel time.
+    despike.coincidence_samples =
+        static_cast<int>(std::ceil(array.aperture_m() / config.sound_speed_mps * config.sample_rate_hz)) + 5;
+  }
+
+  void ProcessFrame(const float* frame, int64_t first_sample, uint64_t sequence, std::vector<Estimate>* out);
+  // Starts the tracker from acquisition's modes (every one the data allows); false if none.
+  bool StartFromModes(const std::vector<PositionMode>& modes);
+  // The track's frame: predict, test presence near it, update or coast, watch for
+  // divergence and for a source heard elsewhere; drops the track after source_timeout_s of
+  // silence. Fills e's presence and filter fields.
+  void TrackFrame(double dt_s, bool measured, Estimate* e);
+  // No track: search the volume; a present source starts one.
+  void AcquireFrame(bool measured, Estimate* e);
+  // A present frame that the track explains much worse than each pair's best peak allows
+  // (PresenceResult::unconstrained), or whose update used fewer than 3 pairs, is audited by
+  // a volume search (at most every
+  // kAuditSpacingFrames): no mode near the track scoring within the margin of the best, in
+  // kOutscoredAudits audits in a row, restarts the track from the modes and the track
+  // itself. Catches a track that locked on a wrong position while every test near it passes.
+  void Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e);
+  // Conditions the tracker on this frame, fills e's filter fields, and restarts the tracker
+  // through acquisition when the divergence test fires.
+  void UpdateAndWatch(Estimate* e);
+  // The estimate's state: the strongest hypothesis, with a covariance that covers all of them.
+  void Report(Estimate* e) const;
+  // Multipath: a pair whose main peak is far from where the track predicts it, while its GCC
+  // has another peak (a local maximum at least kCandidateShare of the main peak's height)
+  // within kAssociationGate predicted sigmas, is measured at that peak instead (the tallest
+  // in the gate; returns how many pairs were changed).
+  int AssociateCandidates(const TrackState& predicted);
+
+  // Moving arrays: moves `array` and the tracker to the platform's pose at t_s; false
+  // when there is no pose yet (no IMU sample).
+  bool MoveArray(double t_s, Estimate* e);
+
+  SessionConfig config;
+  ArrayGeometry body_array;  // as configured (the body frame, for a moving array)
+  ArrayGeometry array;       // in the world at the current frame
+  std::unique_ptr<PlatformPose> platform;  // moving arrays only
+  SessionComponents components;
+  Acquisition acquisition;
+  bool live = false;         // the tracker holds a track (not dropped)
+  int frames_since_audit = 0;  // see Audit
+  int outscored = 0;           // audits in a row that found the frame better explained elsewhere
+  double silent_s = 0.0;     // time since the source was last heard near the track
+  int heard_elsewhere = 0;   // consecutive frames with the source present away from the track
+  Framer framer;
+  DespikeOptions despike;
+  DespikeScratch despike_scratch;
+  std::vector<float> despiked;  // the frame as the estimator sees it, when despiking
+  DivergenceMonitor monitor;
+  Measurement measurement;
+  Eigen::VectorXd delays;
+  bool have_sequence = false;
+  uint64_t last_sequence = 0;
+  uint64_t frames = 0;
+  double last_t_s = 0.0;
+};
+
+}  // namespace localizer::engine

@@ -1,0 +1,204 @@
+// Session::Impl's tracking steps (session_impl.h): acquisition, presence about the track,
+// multipath association, audits, the update with its divergence watch, and the estimate's
+// hypotheses. See session.h for the behaviour these implement.
+#include <algorithm>
+#include <cmath>
+
+#include "engine/pipeline/session_impl.h"
+
+namespace localizer::engine {
+
+// Frames in a row that hear the source away from the track before it is re-acquired.
+constexpr int kHeardElsewhereFrames = 3;
+constexpr double kAssociationGate = 3.0;
+constexpr double kAuditMargin = 3.0;  // x sqrt(P): the acquisition's mode margin
+constexpr int kAuditSpacingFrames = 8;
+constexpr int kOutscoredAudits = 2;
+
+void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e) {
+  ++frames_since_audit;
+  const double pairs = std::max(1, acquisition.field().usable_pairs());
+  // Both statistics are sums over pairs / sqrt(P), so a gap of kAuditMargin here is the
+  // acquisition's mode margin (kAuditMargin sqrt(P) in summed units).
+  // Fewer than 3 pairs in the update leave the position unobservable: the track may drift
+  // along the unobserved directions while every test near it passes.
+  const bool suspicious = near.unconstrained - near.statistic > kAuditMargin || e->pairs_used < 3;
+  if (!suspicious || frames_since_audit < kAuditSpacingFrames) return;
+  frames_since_audit = 0;
+  const AcquisitionResult found = acquisition.Search(measurement);
+  if (!found.presence.present || found.modes.empty()) return;
+  const Mat3 track_cov = predicted.covariance.topLeftCorner<3, 3>();
+  const double best = found.modes.front().score;
+  for (const PositionMode& mode : found.modes) {
+    const Vec3 delta = mode.position_m - predicted.mean.head<3>();
+    const bool near_track = delta.dot((track_cov + mode.covariance_m2).ldlt().solve(delta)) < 16.0;
+    if (near_track && mode.score >= best - kAuditMargin * std::sqrt(pairs)) {
+      outscored = 0;
+      return;
+    }
+  }
+  if (++outscored < kOutscoredAudits) return;
+  outscored = 0;
+  // Restart from every mode and the track's own position: the data decide.
+  std::vector<PositionMode> modes = found.modes;
+  PositionMode own;
+  own.position_m = predicted.mean.head<3>();
+  own.covariance_m2 = track_cov;
+  modes.push_back(own);
+  e->reinitialised = StartFromModes(modes);
+}
+constexpr double kCandidateShare = 0.3;
+
+int Session::Impl::AssociateCandidates(const TrackState& predicted) {
+  const Vec3 position = predicted.mean.head<3>();
+  const double fs = config.sample_rate_hz;
+  const Eigen::VectorXd lag = array.Tdoa(position) * fs;
+  const Eigen::MatrixXd jac = array.TdoaJacobian(position) * fs;
+  const Mat3 cov = predicted.covariance.topLeftCorner<3, 3>();
+  int changed = 0;
+  for (size_t p = 0; p < measurement.pairs.size(); ++p) {
+    PairMeasurement& pair = measurement.pairs[p];
+    const std::vector<float>& g = pair.gcc;
+    if (g.size() < 3 || !(pair.peak_value > 0.0)) continue;
+    const Eigen::Vector3d row = jac.row(static_cast<Eigen::Index>(p)).transpose();
+    const double sigma = std::max(pair.delay_sigma_s * fs, 0.05);
+    const double gate = kAssociationGate * std::sqrt(row.dot(cov * row) + sigma * sigma);  // samples
+    const double predicted_lag = lag(static_cast<Eigen::Index>(p));
+    if (std::abs(pair.delay_s * fs - predicted_lag) <= gate) {
+      pair.confirmed = true;
+      continue;
+    }
+    // The largest local maximum of the pair's GCC inside the gate, if tall enough.
+    const long lo = std::max(1L, static_cast<long>(std::ceil(predicted_lag - gate)) - pair.first_lag_samples);
+    const long hi = std::min(static_cast<long>(g.size()) - 2,
+                             static_cast<long>(std::floor(predicted_lag + gate)) - pair.first_lag_samples);
+    long best = -1;
+    for (long i = lo; i <= hi; ++i) {
+      const size_t k = static_cast<size_t>(i);
+      if (g[k] > g[k - 1] && g[k] >= g[k + 1] && (best < 0 || g[k] > g[static_cast<size_t>(best)])) best = i;
+    }
+    if (best < 0 || g[static_cast<size_t>(best)] < kCandidateShare * pair.peak_value) continue;
+    const size_t k = static_cast<size_t>(best);
+    const double a = g[k - 1], b = g[k], c = g[k + 1], denom = a - 2.0 * b + c;
+    const double offset = denom < 0.0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0;
+    pair.delay_s = (pair.first_lag_samples + best + offset) / fs;
+    pair.delay_sigma_s = 0.0;  // the anchor then comes from this peak's own curvature
+    pair.confirmed = true;
+    ++changed;
+  }
+  return changed;
+}
+
+bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
+  if (modes.empty()) return false;
+  std::vector<WeightedBelief> mixture;
+  for (const PositionMode& mode : modes) {
+    WeightedBelief b;
+    b.weight = 1.0;  // equal: the measurements and the dynamics decide between them
+    b.belief.mean.head<3>() = mode.position_m;
+    b.belief.covariance.topLeftCorner<3, 3>() = mode.covariance_m2;
+    b.belief.covariance.bottomRightCorner<3, 3>() =
+        config.init_speed_sigma_mps * config.init_speed_sigma_mps * Mat3::Identity();
+    mixture.push_back(b);
+  }
+  if (!components.tracker->InitialiseMixture(mixture).ok()) return false;
+  live = true;
+  silent_s = 0.0;
+  heard_elsewhere = 0;
+  outscored = 0;
+  frames_since_audit = 0;
+  monitor.Reset();
+  return true;
+}
+
+void Session::Impl::UpdateAndWatch(Estimate* e) {
+  Tracker& tracker = *components.tracker;
+  auto report = tracker.Update(measurement);
+  if (!report.ok()) return;
+  e->nis = report->nis;
+  e->ess = report->ess;
+  e->tdoa_sigma_s = report->tdoa_sigma_s;
+  e->pairs_used = report->pair_count;
+  if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count, report->anchored_z)) return;
+  // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too).
+  const AcquisitionResult found = acquisition.Search(measurement);
+  if (found.presence.present) e->reinitialised = StartFromModes(found.modes);
+}
+
+void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
+  Tracker& tracker = *components.tracker;
+  tracker.Predict(dt_s);
+  if (!measured) return;
+  const TrackState predicted = tracker.Hypotheses().front().belief;
+  const PresenceResult near = acquisition.Around(measurement, predicted.mean.head<3>(),
+                                                 predicted.covariance.topLeftCorner<3, 3>());
+  e->presence_statistic = near.statistic;
+  e->presence_threshold = near.threshold;
+  if (near.present) {
+    e->source_present = true;
+    silent_s = 0.0;
+    heard_elsewhere = 0;
+    AssociateCandidates(predicted);
+    UpdateAndWatch(e);
+    if (!e->reinitialised) Audit(predicted, near, e);
+    return;
+  }
+  // Not near the track: silence, or a source the track has lost?
+  const AcquisitionResult found = acquisition.Search(measurement);
+  if (found.presence.present) {
+    e->source_present = true;
+    e->presence_statistic = found.presence.statistic;
+    e->presence_threshold = found.presence.threshold;
+    silent_s = 0.0;
+    // A mode within the track's own uncertainty is the track's source, heard on a frame
+    // whose peaks the local test missed: update as usual.
+    const Mat3 track_cov = predicted.covariance.topLeftCorner<3, 3>();
+    for (const PositionMode& mode : found.modes) {
+      const Vec3 delta = mode.position_m - predicted.mean.head<3>();
+      if (delta.dot((track_cov + mode.covariance_m2).ldlt().solve(delta)) < 16.0) {
+        heard_elsewhere = 0;
+        AssociateCandidates(predicted);
+        UpdateAndWatch(e);
+        return;
+      }
+    }
+    if (++heard_elsewhere >= kHeardElsewhereFrames) e->reinitialised = StartFromModes(found.modes);
+    return;
+  }
+  heard_elsewhere = 0;
+  silent_s += dt_s;
+  if (silent_s >= config.source_timeout_s) live = false;  // dropped: acquisition restarts
+}
+
+void Session::Impl::AcquireFrame(bool measured, Estimate* e) {
+  if (!measured) return;
+  const AcquisitionResult found = acquisition.Search(measurement);
+  e->source_present = found.presence.present;
+  e->presence_statistic = found.presence.statistic;
+  e->presence_threshold = found.presence.threshold;
+  if (found.presence.present) StartFromModes(found.modes);
+}
+
+void Session::Impl::Report(Estimate* e) const {
+  const std::vector<WeightedBelief> hypotheses = components.tracker->Hypotheses();
+  const TrackState& best = hypotheses.front().belief;
+  Mat6 covariance = Mat6::Zero();
+  int modes = 0;
+  for (const WeightedBelief& h : hypotheses) {
+    const Vec6 offset = h.belief.mean - best.mean;
+    covariance += h.weight * (h.belief.covariance + offset * offset.transpose());
+    modes += h.weight >= 0.01;
+  }
+  e->initialised = true;
+  e->state = best.mean;
+  // Positions outside the bounds are impossible (the particle filter keeps its particles in;
+  // the Kalman filters' Gaussian may straddle a wall).
+  e->state.head<3>() = e->state.head<3>().cwiseMax(config.bounds_min_m).cwiseMin(config.bounds_max_m);
+  e->covariance = covariance;
+  e->modes = std::max(modes, 1);
+  e->ambiguous = e->modes > 1;
+  e->model_probabilities = components.tracker->ModelProbabilities();
+}
+
+
+}  // namespace localizer::engine
