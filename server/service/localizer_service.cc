@@ -52,7 +52,7 @@ Status LocateOnce(const v1::LocateRequest& request, const wire::ConfigPolicy& po
 }
 
 grpc::ServerUnaryReactor* LocalizerService::Locate(grpc::CallbackServerContext* context,
-                                                   const v1::LocateRequest* request, v1::LocateResponse* response) {
+                                                   const grpc::ByteBuffer* request, grpc::ByteBuffer* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
   auto finish = [this, reactor](const Status& status) {
     if (auto* c = metrics_->locate_requests(StatusCodeName(status.code()))) c->Increment();
@@ -62,8 +62,25 @@ grpc::ServerUnaryReactor* LocalizerService::Locate(grpc::CallbackServerContext* 
     finish(Unavailable("server is draining"));
     return reactor;
   }
+  // The request's bytes stay valid until Finish; decoding (up to the message limit) runs on
+  // the worker pool with the rest of the work.
   const bool queued = pool_->Submit([this, request, response, finish] {
-    finish(LocateOnce(*request, policy_, response));
+    v1::LocateRequest parsed;
+    grpc::ByteBuffer copy(*request);  // Deserialize consumes its buffer
+    const size_t bytes = request->Length();
+    if (!grpc::SerializationTraits<v1::LocateRequest>::Deserialize(&copy, &parsed).ok()) {
+      finish(InvalidArgument("LocateRequest of " + std::to_string(bytes) +
+                             " bytes could not be parsed (not a serialized localizer.v1.LocateRequest)"));
+      return;
+    }
+    v1::LocateResponse typed;
+    const Status status = LocateOnce(parsed, policy_, &typed);
+    if (status.ok()) {
+      bool own_buffer = false;
+      const grpc::Status serialized = grpc::SerializationTraits<v1::LocateResponse>::Serialize(typed, response, &own_buffer);
+      if (!serialized.ok()) return finish(Internal("could not serialize the LocateResponse: " + serialized.error_message()));
+    }
+    finish(status);
   });
   if (!queued) finish(Unavailable("server is shutting down"));
   return reactor;

@@ -14,8 +14,10 @@
 namespace localizer::server {
 
 // Track is registered raw (ByteBuffer) so its reactor can tell a request that does not
-// parse from the client's half-close (see track_reactor.h); the rest are typed.
-using LocalizerCallbackBase = v1::Localizer::WithRawCallbackMethod_Track<v1::Localizer::WithCallbackMethod_Locate<
+// parse from the client's half-close (see track_reactor.h); Locate is raw so that an
+// unparseable request is INVALID_ARGUMENT with a message (gRPC's typed unary handler answers
+// UNIMPLEMENTED with none before our code runs); the rest are typed.
+using LocalizerCallbackBase = v1::Localizer::WithRawCallbackMethod_Track<v1::Localizer::WithRawCallbackMethod_Locate<
     v1::Localizer::WithCallbackMethod_ListSessions<v1::Localizer::WithCallbackMethod_CloseSession<v1::Localizer::Service>>>>;
 
 class LocalizerService final : public LocalizerCallbackBase {
@@ -23,8 +25,8 @@ class LocalizerService final : public LocalizerCallbackBase {
   LocalizerService(SessionRegistry* registry, WorkerPool* pool, ServiceMetrics* metrics, wire::ConfigPolicy policy);
 
   grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Track(grpc::CallbackServerContext* context) override;
-  grpc::ServerUnaryReactor* Locate(grpc::CallbackServerContext* context, const v1::LocateRequest* request,
-                                   v1::LocateResponse* response) override;
+  grpc::ServerUnaryReactor* Locate(grpc::CallbackServerContext* context, const grpc::ByteBuffer* request,
+                                   grpc::ByteBuffer* response) override;
   grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* context,
                                          const v1::ListSessionsRequest* request,
                                          v1::ListSessionsResponse* response) override;

@@ -130,6 +130,47 @@ TEST_F(ServiceTest, UnparseableFirstRequestIsInvalidArgument) {
 // A client whose stream broke before its first estimate says so (received_none) and gets
 // every estimate the server holds, frame 0 first; last_frame_received 0 would skip frame 0
 // and leaving it unset would skip every estimate already written.
+// Locate is registered raw too: bytes that are not a LocateRequest are INVALID_ARGUMENT with
+// a message (gRPC's typed handler answered UNIMPLEMENTED with none), and a valid request sent
+// the same way still gets its answer.
+TEST_F(ServiceTest, UnparseableLocateIsInvalidArgumentWithAMessage) {
+  grpc::GenericStub stub(channel_);
+  auto call = [&](const std::string& bytes, grpc::ByteBuffer* reply) {
+    grpc::CompletionQueue cq;
+    grpc::ClientContext context;
+    grpc::Slice slice(bytes);
+    const grpc::ByteBuffer request(&slice, 1);
+    auto reader = stub.PrepareUnaryCall(&context, "/localizer.v1.Localizer/Locate", request, &cq);
+    reader->StartCall();
+    grpc::Status status;
+    reader->Finish(reply, &status, reinterpret_cast<void*>(1));
+    void* tag = nullptr;
+    bool ok = false;
+    EXPECT_TRUE(cq.Next(&tag, &ok));
+    cq.Shutdown();
+    while (cq.Next(&tag, &ok)) {
+    }
+    return status;
+  };
+  grpc::ByteBuffer reply;
+  const grpc::Status garbage = call(std::string("\xff\xff\xff\xff\x0f garbage", 14), &reply);
+  EXPECT_EQ(garbage.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(garbage.error_message().find("could not be parsed"), std::string::npos) << garbage.error_message();
+  // A well-formed request through the raw path: the same answer as the typed client gets.
+  const Scenario s = MakeScenario("tetra-water", 1.0, 2, 4096);
+  v1::LocateRequest request;
+  *request.mutable_config() = wire::ConfigToProto(s.config, "raw-locate");
+  const std::vector<float> samples = s.Block(1, 4096);
+  const engine::BlockView view{1, s.sim.channel_count, static_cast<int64_t>(samples.size()) / s.sim.channel_count,
+                               samples.data()};
+  wire::EncodeBlock(view, false, request.mutable_block());
+  const grpc::Status good = call(request.SerializeAsString(), &reply);
+  ASSERT_TRUE(good.ok()) << good.error_message();
+  v1::LocateResponse response;
+  ASSERT_TRUE(grpc::SerializationTraits<v1::LocateResponse>::Deserialize(&reply, &response).ok());
+  EXPECT_EQ(response.pairs_size(), s.sim.channel_count - 1);
+}
+
 TEST_F(ServiceTest, ResumeWithReceivedNoneReplaysFromFrameZero) {
   const Scenario s = MakeScenario("tetra-water", 2.0, 1, kBlock);
   v1::SessionOpened opened;
