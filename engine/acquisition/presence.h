@@ -10,11 +10,9 @@
 // A real source gives z ~ sqrt(P) x peak_snr, tens to hundreds.
 #pragma once
 
-namespace localizer::engine {
+#include "engine/core/normal_quantile.h"
 
-// Upper-tail quantile of the standard normal: Q^-1(p), p in (0, 0.5]; accurate to ~1e-12
-// relative down to p = 1e-300 (Newton on log Q).
-double NormalUpperQuantile(double p);
+namespace localizer::engine {
 
 // t = Q^-1(false_alarm / combinations); combinations >= 1.
 double PresenceThreshold(double false_alarm, double combinations);

@@ -1,22 +1,10 @@
 #include "engine/filters/divergence_monitor.h"
 
+#include "engine/core/normal_quantile.h"
+
 #include <cmath>
 
 namespace localizer::engine {
-namespace {
-
-// Standard normal quantile by bisection on erfc; called once per update, so exactness
-// matters more than speed.
-double NormalQuantile(double p) {
-  double lo = -10.0, hi = 10.0;
-  for (int i = 0; i < 100; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
-}  // namespace
 
 double ChiSquareQuantile(double p, int dof) {
   const double k = dof, z = NormalQuantile(p);

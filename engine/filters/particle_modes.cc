@@ -1,7 +1,5 @@
 // ParticleSet's several hypotheses (particle_set.h): mixture sampling, per-label moments,
 // resampling that keeps each label's kernel its own, and position bounds.
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -13,14 +11,6 @@ namespace localizer::engine {
 namespace {
 
 constexpr int kMaxComponents = 16;
-
-// Lower-triangular (or eigen) root of a covariance that may be semi-definite.
-Mat6 RootOf(const Mat6& covariance) {
-  const Eigen::LLT<Mat6> llt(covariance);
-  if (llt.info() == Eigen::Success) return llt.matrixL();
-  const Eigen::SelfAdjointEigenSolver<Mat6> eig(0.5 * (covariance + covariance.transpose()));
-  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
-}
 
 // Weight, mean and covariance per label, in the set's coordinates.
 struct LabelMoments {
@@ -116,8 +106,7 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   // Each label's moments before resampling: its kernel's shape and centre.
   std::array<Eigen::Matrix<float, 6, 6>, kMaxComponents> l;
   std::array<Eigen::Matrix<float, 6, 1>, kMaxComponents> shift;
-  const double d = 6.0;
-  const double h = std::min(0.95, kernel_scale * std::pow(4.0 / (n_ * (d + 2.0)), 1.0 / (d + 4.0)));
+  const double h = KernelBandwidth(kernel_scale, n_);
   const double a = kernel_scale > 0.0 ? std::sqrt(1.0 - h * h) : 1.0;
   const LabelMoments moments = MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(),
                                                    cur_.vy.data(), cur_.vz.data()}, label_, w_);
@@ -125,7 +114,8 @@ void ParticleSet::ResampleModes(double kernel_scale) {
     l[c].setZero();
     shift[c].setZero();
     if (moments.weight[c] <= 0.0) continue;
-    l[c] = (h * RootOf(moments.cov[c])).cast<float>();
+    // Lower triangular: the move below reads z_0 .. z_r for row r.
+    l[c] = (h * CovarianceRoot(moments.cov[c])).cast<float>();
     shift[c] = ((1.0 - a) * moments.mean[c]).cast<float>();
   }
   SystematicIndices();

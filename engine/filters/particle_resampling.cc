@@ -14,8 +14,6 @@
 
 namespace localizer::engine {
 
-namespace {
-
 // A lower-triangular L with L L^T = covariance: Cholesky when the covariance is positive
 // definite, else (a collapsed dimension) the QR-triangularised eigen square root.
 Mat6 CovarianceRoot(const Mat6& covariance) {
@@ -27,6 +25,13 @@ Mat6 CovarianceRoot(const Mat6& covariance) {
   const Mat6 r = Eigen::HouseholderQR<Mat6>(root.transpose()).matrixQR().triangularView<Eigen::Upper>();
   return r.transpose();
 }
+
+double KernelBandwidth(double kernel_scale, int n) {
+  const double d = 6.0;
+  return std::min(0.95, kernel_scale * std::pow(4.0 / (n * (d + 2.0)), 1.0 / (d + 4.0)));
+}
+
+namespace {
 
 // dst[m] = a src[index[m]] + shift + sum_{k <= kRow} l_row[k * stride] z_k[m]: one state
 // column resampled and moved by the kernel in one pass.
@@ -68,8 +73,7 @@ void ParticleSet::ResampleSystematic(double kernel_scale) {
   // Copy and kernel move in one pass per column:
   //   x'_m = a x_index[m] + (1 - a) mean + h L z_m
   const TrackState moments = MeanAndCovariance();
-  const double d = 6.0;
-  const double h = std::min(0.95, kernel_scale * std::pow(4.0 / (n * (d + 2.0)), 1.0 / (d + 4.0)));
+  const double h = KernelBandwidth(kernel_scale, n);
   const double a = std::sqrt(1.0 - h * h);
   const Eigen::Matrix<float, 6, 6> l = (h * CovarianceRoot(moments.covariance)).cast<float>();
   Vec6 centre = moments.mean;

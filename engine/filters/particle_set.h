@@ -24,6 +24,12 @@ namespace localizer::engine {
 // while away from it every secondary peak keeps its relative height.
 double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharpness);
 
+// A lower-triangular root L L^T = covariance (Cholesky, or a triangularised eigen root when
+// a dimension has collapsed): the regularisation kernel's shape (particle_resampling.cc).
+Mat6 CovarianceRoot(const Mat6& covariance);
+// The kernel's bandwidth h = kernel_scale (4 / (N (d + 2)))^(1 / (d + 4)), d = 6, at most 0.95.
+double KernelBandwidth(double kernel_scale, int n);
+
 // The GCC likelihood reads each pair's GCC upsampled this many times (gcc_upsampling.h).
 inline constexpr int kGccUpsampling = 8;
 

@@ -15,6 +15,13 @@ constexpr double kAuditMargin = 3.0;  // x sqrt(P): the acquisition's mode margi
 constexpr int kAuditSpacingFrames = 8;
 constexpr int kOutscoredAudits = 2;
 
+// The mode lies within the track's and its own uncertainty (Mahalanobis distance < 4).
+bool NearTrack(const TrackState& predicted, const PositionMode& mode) {
+  const Vec3 delta = mode.position_m - predicted.mean.head<3>();
+  const Mat3 spread = predicted.covariance.topLeftCorner<3, 3>() + mode.covariance_m2;
+  return delta.dot(spread.ldlt().solve(delta)) < 16.0;
+}
+
 void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e) {
   ++frames_since_audit;
   const double pairs = std::max(1, acquisition.field().usable_pairs());
@@ -27,12 +34,9 @@ void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& nea
   frames_since_audit = 0;
   const AcquisitionResult found = acquisition.Search(measurement);
   if (!found.presence.present || found.modes.empty()) return;
-  const Mat3 track_cov = predicted.covariance.topLeftCorner<3, 3>();
   const double best = found.modes.front().score;
   for (const PositionMode& mode : found.modes) {
-    const Vec3 delta = mode.position_m - predicted.mean.head<3>();
-    const bool near_track = delta.dot((track_cov + mode.covariance_m2).ldlt().solve(delta)) < 16.0;
-    if (near_track && mode.score >= best - kAuditMargin * std::sqrt(pairs)) {
+    if (NearTrack(predicted, mode) && mode.score >= best - kAuditMargin * std::sqrt(pairs)) {
       outscored = 0;
       return;
     }
@@ -43,7 +47,7 @@ void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& nea
   std::vector<PositionMode> modes = found.modes;
   PositionMode own;
   own.position_m = predicted.mean.head<3>();
-  own.covariance_m2 = track_cov;
+  own.covariance_m2 = predicted.covariance.topLeftCorner<3, 3>();
   modes.push_back(own);
   e->reinitialised = StartFromModes(modes);
 }
@@ -152,10 +156,8 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     silent_s = 0.0;
     // A mode within the track's own uncertainty is the track's source, heard on a frame
     // whose peaks the local test missed: update as usual.
-    const Mat3 track_cov = predicted.covariance.topLeftCorner<3, 3>();
     for (const PositionMode& mode : found.modes) {
-      const Vec3 delta = mode.position_m - predicted.mean.head<3>();
-      if (delta.dot((track_cov + mode.covariance_m2).ldlt().solve(delta)) < 16.0) {
+      if (NearTrack(predicted, mode)) {
         heard_elsewhere = 0;
         AssociateCandidates(predicted);
         UpdateAndWatch(e);
