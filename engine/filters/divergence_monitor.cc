@@ -2,6 +2,7 @@
 
 #include "engine/core/normal_quantile.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace localizer::engine {
@@ -15,6 +16,8 @@ double ChiSquareQuantile(double p, int dof) {
 
 bool DivergenceMonitor::Add(double nis, int dof, const std::vector<double>& z) {
   constexpr double kBiasSigmas = 3.0;
+  constexpr int kRunFrames = 3;
+  constexpr double kRunSigmas = 5.9;  // the caller caps z at 6
   entries_.emplace_back(nis, dof);
   while (static_cast<int>(entries_.size()) > window_) entries_.pop_front();
   bool biased = false;
@@ -24,12 +27,18 @@ bool DivergenceMonitor::Add(double nis, int dof, const std::vector<double>& z) {
     std::deque<double>& w = pair_z_[p];
     w.push_back(z[p]);
     while (static_cast<int>(w.size()) > window_) w.pop_front();
+    // A run of extreme innovations of one sign: a pair the track cannot explain at all.
+    if (static_cast<int>(w.size()) >= kRunFrames) {
+      bool run = true;
+      for (size_t i = w.size() - kRunFrames; i < w.size(); ++i) run &= std::abs(w[i]) >= kRunSigmas && w[i] * w.back() > 0.0;
+      biased |= run;
+    }
     if (static_cast<int>(w.size()) < window_) continue;
     double sum = 0.0;
     for (double v : w) sum += v;
     biased |= std::abs(sum / window_) > kBiasSigmas;
   }
-  const bool wholesale = static_cast<int>(entries_.size()) >= window_ && ratio() > 1.0;
+  const bool wholesale = static_cast<int>(entries_.size()) >= std::min(window_, 3) && ratio() > 1.0;
   if (!wholesale && !biased) return false;
   Reset();
   return true;

@@ -1,15 +1,20 @@
 // Online consistency test that tells when a tracker has lost its target.
 //
-// Two tests over the last `window` updates; either reports divergence:
-//  - wholesale: the sum of the normalised innovations squared (NIS). For a consistent filter
-//    it is chi-square with sum(dof) degrees of freedom; divergence when the sum exceeds that
-//    distribution's quantile at `confidence` (Wilson-Hilferty, good to ~1 % for dof >= 3)
-//    times `slack`, which absorbs the peak likelihood's clipping and the occasional echo;
+// Three tests; any reports divergence:
+//  - wholesale: the sum of the normalised innovations squared (NIS) over the last `window`
+//    updates (or fewer, from 3, right after a reset: a track lost at once need not wait for
+//    the window to fill). For a consistent filter it is chi-square with sum(dof) degrees of
+//    freedom; divergence when the sum exceeds that distribution's quantile at `confidence`
+//    (Wilson-Hilferty, good to ~1 % for dof >= 3) times `slack`, which absorbs the peak
+//    likelihood's clipping and the occasional echo;
 //  - persistent bias (when per-pair signed innovations z are given): a pair whose mean z over
 //    its last `window` used frames exceeds 3 in magnitude. Noise alone gives the mean a
 //    standard deviation of 1/sqrt(window) (0.35 for 8: 3 is 8.5 of them); z is capped at 6
-//    by the caller, so fewer than window/2 outliers of one sign cannot trip it.
-// The windows must be full.
+//    by the caller, so fewer than window/2 outliers of one sign cannot trip it;
+//  - a run: a pair at the cap (|z| >= 5.9) with one sign on its last 3 used frames. A pair
+//    the track cannot explain at all; an echo winning a pair now and then (or on alternate
+//    sides) does not make a run. On a 4-sensor array the other pairs may agree with the
+//    wrong track exactly, so this is often the only early sign.
 #pragma once
 
 #include <deque>

@@ -102,6 +102,15 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
     FrameScore f;
     f.t_s = e.t_s;
     f.initialised = e.initialised;
+    f.present = e.source_present;
+    f.ambiguous = e.ambiguous;
+    f.pairs_used = e.pairs_used;
+    f.nis = e.nis;
+    f.tdoa_sigma_s = e.tdoa_sigma_s;
+    for (size_t p = 0; p < e.delay_s.size() && static_cast<int>(p) < array.pair_count(); ++p) {
+      const Vec3 at = sim.TruthAt(e.t_s - 0.5 * e.delay_s[p]).position_m;
+      f.tdoa_error_s.push_back(e.delay_s[p] - array.Tdoa(at)(static_cast<int>(p)));
+    }
     f.counted = e.t_s <= t_end_s && (!score.presence_reported || e.source_present);
     const Vec3 truth_m = sim.TruthAt(e.t_s).position_m;
     f.crlb_m = Crlb(array, truth_m, score.tdoa_sigma_robust_s);
@@ -115,6 +124,7 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
       const Vec3 error = e.state.head<3>() - truth_m;
       f.error_m = error.norm();
       f.nees_position = PositionNees(e, error);
+      f.sd_m = std::sqrt(e.covariance.topLeftCorner<3, 3>().trace());
     }
     score.per_frame.push_back(f);
   }

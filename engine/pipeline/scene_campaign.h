@@ -55,6 +55,15 @@ struct FrameScore {
   double crlb_m = std::numeric_limits<double>::quiet_NaN();
   double crlb_theory_m = std::numeric_limits<double>::quiet_NaN();
   double nees_position = std::numeric_limits<double>::quiet_NaN();
+  // What the estimate said of itself, for traces: sqrt(trace) of its position covariance,
+  // and its presence and ambiguity flags.
+  double sd_m = std::numeric_limits<double>::quiet_NaN();
+  bool present = false;
+  bool ambiguous = false;
+  int pairs_used = 0;
+  double nis = 0.0;
+  double tdoa_sigma_s = 0.0;         // the TDOA noise std the tracker assumed
+  std::vector<double> tdoa_error_s;  // per pair: measured - true TDOA (NaN where not measured)
 };
 
 struct SceneScore {

@@ -85,7 +85,7 @@ int Session::Impl::AssociateCandidates(const TrackState& predicted) {
     const size_t k = static_cast<size_t>(best);
     const double a = g[k - 1], b = g[k], c = g[k + 1], denom = a - 2.0 * b + c;
     const double offset = denom < 0.0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0;
-    pair.delay_s = (pair.first_lag_samples + best + offset) / fs;
+    pair.delay_s = (static_cast<double>(pair.first_lag_samples + best) + offset) / fs;
     pair.delay_sigma_s = 0.0;  // the anchor then comes from this peak's own curvature
     pair.confirmed = true;
     ++changed;

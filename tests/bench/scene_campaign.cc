@@ -34,18 +34,31 @@ struct Args {
   double duration_s = 12.0;
   int jobs = 1;
   std::optional<Weighting> weighting;  // unset: the session default
+  std::optional<uint64_t> trace_seed;  // one scene, frame by frame
+  std::string filter_type;             // empty: the session default
+  int particles = 0;                   // 0: the session default
 };
+
+// The flags' changes to the campaign's default session config.
+void Adjust(const Args& a, SessionConfig* c) {
+  if (a.weighting) c->weighting = *a.weighting;
+  if (!a.filter_type.empty()) c->filter_type = a.filter_type;
+  if (a.particles > 0) c->filter.particles = a.particles;
+}
 
 void Usage(FILE* out) {
   std::fprintf(out,
                "usage: scene_campaign [--scenes N] [--seed S] [--json FILE] [--class all|gaussian|multipath|impulsive]\n"
                "                      [--duration SECONDS] [--jobs J] [--weighting phat|phat-coherence|...]\n"
+               "                      [--filter pf|ekf|ukf|mmpf|imm] [--particles N] [--trace SEED]\n"
                "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
                "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
                "within 3 x CRLB to the end), RMSE/CRLB and median NEES/dim after acquisition, lost frames\n"
                "(> 10 x CRLB after a first good frame), silent failures (> 1 s of error > 10 x CRLB with\n"
                "position NEES > 50 while initialised, present, not ambiguous).\n"
-               "--weighting overrides the session's default GCC weighting.\n"
+               "--weighting, --filter and --particles override the session's defaults.\n"
+               "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
+               "initialised, present, ambiguous, error, CRLB, error/CRLB, reported sd, position NEES.\n"
                "Defaults: --scenes 200 --seed 1 --class all --duration 12 --jobs 1.\n");
 }
 
@@ -68,6 +81,14 @@ bool ParseArgs(int argc, char** argv, Args* a) {
     } else if (flag == "--seed") {
       a->seed = std::strtoull(value.c_str(), &end, 10);
       if (*end != '\0') return std::fprintf(stderr, "scene_campaign: --seed must be an integer\n"), false;
+    } else if (flag == "--filter") {
+      a->filter_type = value;
+    } else if (flag == "--particles") {
+      a->particles = static_cast<int>(std::strtol(value.c_str(), &end, 10));
+      if (*end != '\0' || a->particles < 1) return std::fprintf(stderr, "scene_campaign: --particles must be >= 1\n"), false;
+    } else if (flag == "--trace") {
+      a->trace_seed = std::strtoull(value.c_str(), &end, 10);
+      if (*end != '\0') return std::fprintf(stderr, "scene_campaign: --trace must be a scene seed\n"), false;
     } else if (flag == "--json") {
       a->json_path = value;
     } else if (flag == "--class") {
@@ -181,6 +202,31 @@ void PrintClass(const char* name, const ClassSummary& c) {
               Num(c.median_rmse_over_crlb).c_str());
 }
 
+int Trace(uint64_t seed, const RandomSceneOptions& scene_options, const Args& a) {
+  const SceneRow row = RunRandomScene(seed, scene_options, {}, true, [&](SessionConfig* c) { Adjust(a, c); });
+  if (!row.error.empty()) {
+    std::fprintf(stderr, "scene_campaign: scene %" PRIu64 ": %s\n", seed, row.error.c_str());
+    return 1;
+  }
+  const std::vector<double>& sigma_s = row.score.tdoa_sigma_robust_s;
+  std::printf("%s\nrobust TDOA sigma per pair (us):", row.description.c_str());
+  for (double s : sigma_s) std::printf(" %.3g", 1e6 * s);
+  std::printf("\n%8s %4s %4s %4s %10s %10s %9s %10s %10s %5s %7s %9s  %s\n", "t_s", "init", "pres", "amb", "error_m",
+              "crlb_m", "err/crlb", "sd_m", "nees", "pairs", "nis", "sigma_us", "per pair (measured - true) / sigma");
+  for (const FrameScore& f : row.score.per_frame) {
+    std::printf("%8.3f %4d %4d %4d %10s %10s %9s %10s %10s %5d %7.3g %9.3g ", f.t_s, f.initialised, f.present,
+                f.ambiguous, Num(f.error_m, "%.4g").c_str(), Num(f.crlb_m, "%.4g").c_str(),
+                Num(f.error_m / f.crlb_m).c_str(), Num(f.sd_m, "%.4g").c_str(), Num(f.nees_position).c_str(),
+                f.pairs_used, f.nis, 1e6 * f.tdoa_sigma_s);
+    for (size_t p = 0; p < f.tdoa_error_s.size() && p < sigma_s.size(); ++p) {
+      std::printf(" %s", Num(f.tdoa_error_s[p] / sigma_s[p], "%.1f").c_str());
+    }
+    std::printf("\n");
+  }
+  PrintRow(stdout, row);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -192,6 +238,7 @@ int main(int argc, char** argv) {
   RandomSceneOptions scene_options;
   scene_options.duration_s = a.duration_s;
   scene_options.scene_class = a.scene_class;
+  if (a.trace_seed) return Trace(*a.trace_seed, scene_options, a);
   std::vector<SceneRow> rows(static_cast<size_t>(a.scenes));
   std::atomic<int> next{0};
   std::mutex print_mutex;
@@ -199,9 +246,7 @@ int main(int argc, char** argv) {
   auto worker = [&] {
     for (int i = next++; i < a.scenes; i = next++) {
       const uint64_t seed = a.seed * 1000000ULL + static_cast<uint64_t>(i);
-      rows[static_cast<size_t>(i)] = RunRandomScene(seed, scene_options, {}, false, [&](SessionConfig* c) {
-        if (a.weighting) c->weighting = *a.weighting;
-      });
+      rows[static_cast<size_t>(i)] = RunRandomScene(seed, scene_options, {}, false, [&](SessionConfig* c) { Adjust(a, c); });
       const std::lock_guard<std::mutex> lock(print_mutex);
       std::fprintf(stderr, "[%d/%d] ", ++done, a.scenes);
       PrintRow(stderr, rows[static_cast<size_t>(i)]);
