@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "engine/core/finite.h"
 #include "engine/pipeline/session_impl.h"
 
 namespace localizer::engine {
@@ -29,9 +30,7 @@ Status ValidateBlock(const BlockView& block, int channels, int64_t max_samples, 
   }
   if (block.samples == nullptr) return InvalidArgument("samples is null");
   const int64_t total = block.samples_per_channel * channels;
-  bool finite = true;
-  for (int64_t i = 0; i < total; ++i) finite &= std::isfinite(block.samples[i]);
-  if (!finite) {
+  if (!AllFinite(block.samples, total)) {
     for (int64_t i = 0; i < total; ++i) {
       if (!std::isfinite(block.samples[i])) {
         return InvalidArgument("samples[" + std::to_string(i) + "] (channel " +

@@ -22,6 +22,35 @@ Status DespikeOptions::Validate() const {
   return Status::Ok();
 }
 
+namespace {
+
+// The median of n >= 1 non-negative values to within max / 2^20 (max their largest): a
+// bisection on the value whose counts are branch-free (they vectorise). std::nth_element on
+// 256 values mispredicts about every other comparison and took 2-4 us per channel; this
+// takes a fraction of that. The clip level needs the median to a few per cent; an impulse
+// 1e4 x the median still leaves it to 1 %.
+float ApproximateMedian(const float* values, int n) {
+  float hi = 0.0f;
+#pragma omp simd reduction(max : hi)
+  for (int i = 0; i < n; ++i) hi = std::max(hi, values[i]);
+  float lo = 0.0f;
+  const int half = (n + 1) / 2;  // the lower median's rank
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    const float mid = 0.5f * (lo + hi);
+    int at_most = 0;
+#pragma omp simd reduction(+ : at_most)
+    for (int i = 0; i < n; ++i) at_most += values[i] <= mid ? 1 : 0;
+    if (at_most >= half) {
+      hi = mid;
+    } else {
+      lo = mid;
+    }
+  }
+  return hi;
+}
+
+}  // namespace
+
 Status Despike(const DespikeOptions& options, float* frame, int channels, int samples,
                DespikeScratch* scratch, DespikeStats* stats) {
   if (Status s = options.Validate(); !s.ok()) return s;
@@ -47,9 +76,7 @@ Status Despike(const DespikeOptions& options, float* frame, int channels, int sa
     const int step = std::max(1, (samples + kMedianSamples - 1) / kMedianSamples);
     int n = 0;
     for (int i = 0; i < samples; i += step) magnitudes[static_cast<std::size_t>(n++)] = std::abs(x[i]);
-    const auto middle = magnitudes.begin() + n / 2;
-    std::nth_element(magnitudes.begin(), middle, magnitudes.begin() + n);
-    limits[c] = static_cast<float>(options.despike_k) * kMadToSigma * *middle;
+    limits[c] = static_cast<float>(options.despike_k) * kMadToSigma * ApproximateMedian(magnitudes.data(), n);
   }
   // Most frames have nothing to clip: one vectorised pass per channel says so.
   bool any = false;

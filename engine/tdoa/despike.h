@@ -6,7 +6,8 @@
 //                                          zero-mean Gaussian samples; the median of at most
 //                                          256 evenly spaced samples of the channel)
 //     x <- clamp(x, -k scale, +k scale)   k = DespikeOptions::despike_k (0: off)
-// The median comes from std::nth_element on a copy of |x| at most 256 samples long; a
+// The median comes from a branch-free bisection over |x| of at most 256 samples (to 1e-6 of
+// the largest); a
 // channel whose largest |x| is within the limit is left untouched after one pass; the frame
 // is changed in place. An impulse on 1 % of the samples moves the median by about 1 %, so the clip level
 // follows the background (source + noise), not the impulses. Nothing is kept between frames.
@@ -35,7 +36,7 @@
 // So set coincidence_samples (to the array's largest delay in samples plus a few) wherever
 // the source may itself be impulsive; it costs the impulse scene nearly nothing.
 // Cost (tests/bench/gcc_bench.cc, BM_Despike, 4 x 4096 frame): see BENCHMARKS / the bench;
-// nth_element dominates, O(channels x samples).
+// O(channels x samples): the median's bisection and one max pass per channel.
 #pragma once
 
 #include <vector>
