@@ -51,6 +51,10 @@ Status ParticleFilterOptions::Validate() const {
   if (tempered_updates < 0 || tempered_updates > 100) {
     return InvalidArgument("tempered_updates must be in [0, 100], got " + std::to_string(tempered_updates));
   }
+  if (!(velocity_time_constant_s >= 0.0 && velocity_time_constant_s <= 1e6)) {
+    return InvalidArgument("velocity_time_constant_s must be in [0, 1e6], got " +
+                           std::to_string(velocity_time_constant_s));
+  }
   if (!(kernel_scale >= 0.0 && kernel_scale <= 2.0)) {
     return InvalidArgument("kernel_scale must be in [0, 2], got " + std::to_string(kernel_scale));
   }
@@ -144,7 +148,7 @@ void ParticleFilter::SetBounds(const Vec3& min_m, const Vec3& max_m) { impl_->se
 
 void ParticleFilter::Predict(double dt_s) {
   if (!impl_->initialised || !(dt_s > 0.0)) return;
-  impl_->set.Predict(dt_s, impl_->options.accel_noise_mps2);
+  impl_->set.Predict(dt_s, impl_->options.accel_noise_mps2, impl_->options.velocity_time_constant_s);
 }
 
 StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {

@@ -101,8 +101,11 @@ void ParticleSet::SampleUniformBox(const Vec3& min_m, const Vec3& max_m, double 
   SetEqualWeights();
 }
 
-void ParticleSet::Predict(double dt_s, double accel_sigma_mps2) {
-  const float dt = static_cast<float>(dt_s);
+void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_time_constant_s) {
+  const double tau = velocity_time_constant_s;
+  const double decay = tau > 0.0 ? std::exp(-dt_s / tau) : 1.0;
+  const float dt = static_cast<float>(tau > 0.0 ? tau * (1.0 - decay) : dt_s);  // the velocity's reach
+  const float d = static_cast<float>(decay);
   const float a_to_v = static_cast<float>(accel_sigma_mps2 * dt_s);
   const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
   DrawAccelNormals(NextKey());  // axis k of particle i reads accel_[k * N + i]
@@ -122,9 +125,9 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2) {
     x[i] += vx[i] * dt + a_to_p * ax[i];
     y[i] += vy[i] * dt + a_to_p * ay[i];
     z[i] += vz[i] * dt + a_to_p * az[i];
-    vx[i] += a_to_v * ax[i];
-    vy[i] += a_to_v * ay[i];
-    vz[i] += a_to_v * az[i];
+    vx[i] = d * vx[i] + a_to_v * ax[i];
+    vy[i] = d * vy[i] + a_to_v * ay[i];
+    vz[i] = d * vz[i] + a_to_v * az[i];
   }
   if (bounded_) ApplyBounds();
 }

@@ -44,8 +44,10 @@ class ParticleSet {
   void SampleGaussian(const Vec6& mean, const Mat6& root);
   // Position uniform in the box, velocity ~ N(0, speed_sigma^2 I3); weights equal.
   void SampleUniformBox(const Vec3& min_m, const Vec3& max_m, double speed_sigma_mps);
-  // p += v dt + a dt^2/2, v += a dt, a ~ N(0, accel_sigma^2 I3).
-  void Predict(double dt_s, double accel_sigma_mps2);
+  // p += v dt + a dt^2/2, v += a dt, a ~ N(0, accel_sigma^2 I3). With a velocity time
+  // constant tau > 0 the velocity is mean-reverting (Ornstein-Uhlenbeck): v' = d v + a dt,
+  // p += tau (1 - d) v + a dt^2/2, d = exp(-dt / tau); tau = 0 is constant velocity.
+  void Predict(double dt_s, double accel_sigma_mps2, double velocity_time_constant_s = 0.0);
   // Coordinated turn at a fixed rate omega (rad/s, counter-clockwise seen from +z) in the
   // x-y plane, constant vz, plus the same white acceleration as Predict, its normals drawn
   // from `key` (NextKey()): clouds predicted with one key share their noise (common random

@@ -273,5 +273,33 @@ TEST(ParticleFilter, InitialiseMatchesTheRequestedBelief) {
   EXPECT_NEAR(s.covariance(0, 1), 0.3, 0.02);
 }
 
+TEST(ParticleFilter, MeanRevertingVelocityDecaysByTheTimeConstant) {
+  // No acceleration noise: the prediction is deterministic, v' = d v, p' = p + tau (1 - d) v.
+  const ArrayGeometry array = Tetrahedron(2.0, Vec3::Zero(), 343.0);
+  for (double tau_s : {0.0, 10.0, 1.0}) {
+    ParticleFilterOptions o = Options();
+    o.accel_noise_mps2 = 0.0;
+    o.velocity_time_constant_s = tau_s;
+    auto pf = ParticleFilter::Create(array, o);
+    ASSERT_TRUE(pf.ok());
+    TrackState belief;
+    belief.mean << 3, -2, 1, 2.0, -1.0, 0.5;
+    belief.covariance = 1e-8 * Mat6::Identity();
+    ASSERT_TRUE((*pf)->Initialise(belief).ok());
+    const double dt_s = 0.5;
+    (*pf)->Predict(dt_s);
+    const TrackState s = (*pf)->State();
+    const double d = tau_s > 0.0 ? std::exp(-dt_s / tau_s) : 1.0;
+    const double reach_s = tau_s > 0.0 ? tau_s * (1.0 - d) : dt_s;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(s.mean(3 + k), d * belief.mean(3 + k), 1e-4) << "tau " << tau_s << " axis " << k;
+      EXPECT_NEAR(s.mean(k), belief.mean(k) + reach_s * belief.mean(3 + k), 1e-4) << "tau " << tau_s << " axis " << k;
+    }
+  }
+  ParticleFilterOptions bad = Options();
+  bad.velocity_time_constant_s = -1.0;
+  EXPECT_EQ(ParticleFilter::Create(array, bad).status().code(), StatusCode::kInvalidArgument);
+}
+
 }  // namespace
 }  // namespace localizer::engine
