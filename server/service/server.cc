@@ -145,7 +145,7 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
 Server::~Server() { Shutdown(); }
 
 void Server::Shutdown() {
-  std::lock_guard<std::mutex> lock(shutdown_mutex_);
+  MutexLock lock(&shutdown_mutex_);
   if (shut_down_) return;
   shut_down_ = true;
   const auto start = Clock::now();

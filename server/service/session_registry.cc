@@ -27,7 +27,7 @@ SessionRegistry::SessionRegistry(RegistryOptions options, WorkerPool* pool, Serv
 
 SessionRegistry::~SessionRegistry() {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     stopping_ = true;
   }
   sweep_wake_.notify_all();
@@ -39,7 +39,7 @@ SessionRegistry::~SessionRegistry() {
 
 StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionConfig& config) {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     if (draining_) return Unavailable("server is draining; open the session on another instance");
     if (static_cast<int>(sessions_.size()) >= options_.max_sessions) {
       return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) +
@@ -62,7 +62,7 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   }
   auto token = SecureRandomHex(32);
   if (!token.ok()) return token.status();
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   if (static_cast<int>(sessions_.size()) >= options_.max_sessions) {
     return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) + " sessions");
   }
@@ -82,7 +82,7 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
 
 StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Find(const std::string& id, const std::string& token) const {
   LOCALIZER_RETURN_IF_ERROR(CheckSessionRef(id, token));
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   if (draining_) return Unavailable("server is draining");
   const auto it = sessions_.find(id);
   if (it == sessions_.end()) return NotFound("no session '" + wire::Escape(id) + "' (unknown, closed or expired)");
@@ -93,7 +93,7 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Find(const std::string& 
 void SessionRegistry::Remove(const std::string& id, const std::string& reason, const grpc::Status& status) {
   std::shared_ptr<SessionHost> host;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     const auto it = sessions_.find(id);
     if (it == sessions_.end()) return;
     host = std::move(it->second);
@@ -106,7 +106,7 @@ void SessionRegistry::Remove(const std::string& id, const std::string& reason, c
 
 void SessionRegistry::Forget(const std::string& id, const std::string& reason) {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     if (sessions_.erase(id) == 0) return;
   }
   if (auto* c = metrics_->sessions_closed(reason)) c->Increment();
@@ -117,7 +117,7 @@ StatusOr<uint64_t> SessionRegistry::Close(const std::string& id, const std::stri
   LOCALIZER_RETURN_IF_ERROR(CheckSessionRef(id, token));
   std::shared_ptr<SessionHost> host;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     const auto it = sessions_.find(id);
     if (it == sessions_.end()) return NotFound("no session '" + wire::Escape(id) + "'");
     if (!it->second->TokenMatches(token)) return PermissionDenied("wrong resume_token for session " + id);
@@ -129,7 +129,7 @@ StatusOr<uint64_t> SessionRegistry::Close(const std::string& id, const std::stri
 }
 
 std::vector<std::shared_ptr<SessionHost>> SessionRegistry::Snapshot() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   std::vector<std::shared_ptr<SessionHost>> hosts;
   for (const auto& [id, host] : sessions_) hosts.push_back(host);
   return hosts;
@@ -143,7 +143,7 @@ std::vector<v1::SessionInfo> SessionRegistry::List() const {
 }
 
 void SessionRegistry::StartDrain() {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   draining_ = true;
 }
 
@@ -166,12 +166,13 @@ void ReturnFreeMemoryToTheSystem() {
 }  // namespace
 
 void SessionRegistry::SweepLoop() {
-  std::unique_lock<std::mutex> lock(mutex_);
   auto last_trim = Clock::now();
-  while (!stopping_) {
-    sweep_wake_.wait_for(lock, std::chrono::milliseconds(250));
-    if (stopping_) break;
-    lock.unlock();
+  for (;;) {
+    {
+      MutexLock lock(&mutex_);
+      if (!stopping_) mutex_.WaitFor(&sweep_wake_, std::chrono::milliseconds(250));
+      if (stopping_) return;
+    }
     if (options_.memory_trim_s > 0.0 &&
         std::chrono::duration<double>(Clock::now() - last_trim).count() >= options_.memory_trim_s) {
       ReturnFreeMemoryToTheSystem();
@@ -186,7 +187,6 @@ void SessionRegistry::SweepLoop() {
     for (const std::string& id : expired) {
       Remove(id, "expired", grpc::Status(grpc::StatusCode::NOT_FOUND, "session expired"));
     }
-    lock.lock();
   }
 }
 

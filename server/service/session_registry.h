@@ -14,7 +14,6 @@
 #include <condition_variable>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -23,6 +22,7 @@
 #include "server/service/service_metrics.h"
 #include "server/service/session_host.h"
 #include "server/service/worker_pool.h"
+#include "server/sync/mutex.h"
 #include "wire/config_wire.h"
 
 namespace localizer::server {
@@ -44,33 +44,34 @@ class SessionRegistry final {
 
   // INVALID_ARGUMENT naming the field; FAILED_PRECONDITION (backend gpu without one);
   // RESOURCE_EXHAUSTED at max_sessions; UNAVAILABLE while draining.
-  StatusOr<std::shared_ptr<SessionHost>> Open(const v1::SessionConfig& config);
+  StatusOr<std::shared_ptr<SessionHost>> Open(const v1::SessionConfig& config) EXCLUDES(mutex_);
   // NOT_FOUND unknown or expired; PERMISSION_DENIED wrong token; UNAVAILABLE draining.
-  StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const;
+  StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const
+      EXCLUDES(mutex_);
   // Removes and closes; `reason` labels the closed-sessions metric. No-op if unknown.
-  void Remove(const std::string& id, const std::string& reason, const grpc::Status& status);
+  void Remove(const std::string& id, const std::string& reason, const grpc::Status& status) EXCLUDES(mutex_);
   // Removes without touching the session (the caller holds its lock and ends it).
-  void Forget(const std::string& id, const std::string& reason);
+  void Forget(const std::string& id, const std::string& reason) EXCLUDES(mutex_);
   // CloseSession: NOT_FOUND / PERMISSION_DENIED as Find; returns frames processed.
-  StatusOr<uint64_t> Close(const std::string& id, const std::string& token);
+  StatusOr<uint64_t> Close(const std::string& id, const std::string& token) EXCLUDES(mutex_);
 
-  std::vector<v1::SessionInfo> List() const;
+  std::vector<v1::SessionInfo> List() const EXCLUDES(mutex_);
 
   // Refuse new sessions and resumes from now on (UNAVAILABLE).
-  void StartDrain();
-  std::vector<std::shared_ptr<SessionHost>> Snapshot() const;
+  void StartDrain() EXCLUDES(mutex_);
+  std::vector<std::shared_ptr<SessionHost>> Snapshot() const EXCLUDES(mutex_);
 
  private:
-  void SweepLoop();
+  void SweepLoop() EXCLUDES(mutex_);
 
   const RegistryOptions options_;
   WorkerPool* const pool_;
   ServiceMetrics* const metrics_;
 
-  mutable std::mutex mutex_;
-  std::map<std::string, std::shared_ptr<SessionHost>> sessions_;  // guarded by mutex_
-  bool draining_ = false;
-  bool stopping_ = false;
+  mutable Mutex mutex_;
+  std::map<std::string, std::shared_ptr<SessionHost>> sessions_ GUARDED_BY(mutex_);
+  bool draining_ GUARDED_BY(mutex_) = false;
+  bool stopping_ GUARDED_BY(mutex_) = false;
   std::condition_variable sweep_wake_;
   std::thread sweeper_;
 };
