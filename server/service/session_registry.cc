@@ -49,17 +49,8 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   auto engine_config = wire::ConfigFromProto(config, options_.policy);
   if (!engine_config.ok()) return engine_config.status();
   // FFT plans, particles: outside the lock.
-  std::unique_ptr<engine::Session> session;
-  std::unique_ptr<engine::ScanSession> scans;
-  if (engine_config->detections) {
-    auto made = engine::ScanSession::Create(*engine_config);
-    if (!made.ok()) return made.status();
-    scans = std::move(made).value();
-  } else {
-    auto made = engine::Session::Create(*engine_config);
-    if (!made.ok()) return made.status();
-    session = std::move(made).value();
-  }
+  auto runner = MakeSessionRunner(*engine_config, metrics_);
+  if (!runner.ok()) return runner.status();
   auto token = SecureRandomHex(32);
   if (!token.ok()) return token.status();
   MutexLock lock(&mutex_);
@@ -72,10 +63,11 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
     if (!drawn.ok()) return drawn.status();
     id = *std::move(drawn);
   } while (sessions_.count(id) != 0);
-  auto host = scans ? std::make_shared<SessionHost>(id, *token, config.label(), std::move(scans),
-                                                    options_.host, pool_, metrics_)
-                    : std::make_shared<SessionHost>(id, *token, config.label(), std::move(session),
-                                                    options_.host, pool_, metrics_);
+  // A session that finishes (the client half-closed, all written) is forgotten before its
+  // stream sees OK; the host calls this with its lock held (lock order: host -> registry).
+  auto forget = [this, id] { Forget(id, "finished"); };
+  auto host = std::make_shared<SessionHost>(id, *token, config.label(), std::move(runner).value(), options_.host,
+                                            pool_, metrics_, std::move(forget));
   sessions_[id] = host;
   return host;
 }
@@ -181,8 +173,7 @@ void SessionRegistry::SweepLoop() {
     const auto now = Clock::now();
     std::vector<std::string> expired;
     for (const auto& host : Snapshot()) {
-      std::lock_guard<std::mutex> host_lock(host->mutex());
-      if (host->ExpiredLocked(now, options_.ttl_s)) expired.push_back(host->id());
+      if (host->Expired(now, options_.ttl_s)) expired.push_back(host->id());
     }
     for (const std::string& id : expired) {
       Remove(id, "expired", grpc::Status(grpc::StatusCode::NOT_FOUND, "session expired"));

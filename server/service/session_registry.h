@@ -6,8 +6,8 @@
 // ids and tokens tells nothing of another session's. Tokens are compared in constant time. A detached session (its stream gone) is kept for `ttl_s`, then closed by a sweep
 // that runs every ~0.25 s on a thread of its own (which also hands the allocator's free
 // pages back to the system every memory_trim_s, so RSS follows the memory in use).
-// Thread-safe. Lock order: a session's mutex may be held when calling Forget; the
-// registry never takes a session's mutex while holding its own.
+// Thread-safe. Lock order: a session's lock may be held when calling Forget (a session that
+// finishes forgets itself); the registry never takes a session's lock while holding its own.
 #pragma once
 
 #include <atomic>
@@ -50,7 +50,7 @@ class SessionRegistry final {
       EXCLUDES(mutex_);
   // Removes and closes; `reason` labels the closed-sessions metric. No-op if unknown.
   void Remove(const std::string& id, const std::string& reason, const grpc::Status& status) EXCLUDES(mutex_);
-  // Removes without touching the session (the caller holds its lock and ends it).
+  // Removes without touching the session (the session itself calls this as it finishes).
   void Forget(const std::string& id, const std::string& reason) EXCLUDES(mutex_);
   // CloseSession: NOT_FOUND / PERMISSION_DENIED as Find; returns frames processed.
   StatusOr<uint64_t> Close(const std::string& id, const std::string& token) EXCLUDES(mutex_);
