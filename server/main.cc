@@ -50,8 +50,9 @@ int Main(int argc, char** argv) {
   flags.Int("max-sessions", &o.max_sessions, "N", "sessions", "open sessions before RESOURCE_EXHAUSTED");
   flags.Int("workers", &o.workers, "N", "threads", "engine worker threads (0: one per core)");
   flags.Double("session-ttl", &o.session_ttl_s, "S", "s", "how long a session whose stream broke waits for a resume");
-  flags.Int("max-queue-blocks", &o.max_queue_blocks, "N", "blocks",
-            "blocks queued per session before reading pauses (backpressure)");
+  flags.Int("max-queue-blocks", &o.max_queued_requests, "N", "requests",
+            "requests (blocks, IMU batches, scans, refusals) queued per session before reading pauses "
+            "(backpressure)");
   flags.Int("max-block-samples", &max_block_samples, "N", "samples", "per channel per block");
   flags.Int("max-channels", &o.max_channels, "N", "sensors", "largest array accepted");
   flags.Int("max-particles", &o.max_particles, "N", "particles", "largest filter.particles accepted");

@@ -35,7 +35,7 @@ StatusOr<T*> Family<T>::WithLabels(const std::vector<std::string>& label_values)
                              "\" is not valid UTF-8");
     }
   }
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   std::unique_ptr<T>& series = series_[label_values];
   if (!series) {
     if constexpr (std::is_same_v<T, Histogram>) {
@@ -53,7 +53,7 @@ MetricFamily Family<T>::Collect() const {
   family.name = name_;
   family.help = help_;
   family.type = kTypeOf<T>;
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   family.points.reserve(series_.size());
   for (const auto& [label_values, series] : series_) {
     MetricPoint& point = family.points.emplace_back();

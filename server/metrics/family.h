@@ -19,13 +19,13 @@
 
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
 #include "engine/core/status.h"
 #include "server/metrics/metric_family.h"
 #include "server/metrics/metric_types.h"
+#include "server/sync/mutex.h"
 
 namespace localizer::server::metrics {
 
@@ -41,14 +41,14 @@ class Family final : public Collectable {
   // at zero on first use. Values may be any UTF-8 text, the empty string included.
   // INVALID_ARGUMENT if the number of values differs from the number of label names or a
   // value is not valid UTF-8.
-  StatusOr<T*> WithLabels(const std::vector<std::string>& label_values);
+  StatusOr<T*> WithLabels(const std::vector<std::string>& label_values) EXCLUDES(mutex_);
 
   const std::string& name() const { return name_; }
   const std::string& help() const { return help_; }
   const std::vector<std::string>& label_names() const { return label_names_; }
 
   // The family's series sorted by label values (lexicographically, in label-name order).
-  MetricFamily Collect() const override;
+  MetricFamily Collect() const override EXCLUDES(mutex_);
 
  private:
   friend class Registry;
@@ -61,9 +61,9 @@ class Family final : public Collectable {
   const std::vector<std::string> label_names_;
   const std::vector<double> bucket_upper_bounds_;
 
-  mutable std::mutex mutex_;
-  // Label values -> series. Guarded by mutex_; the series themselves are not (atomics).
-  std::map<std::vector<std::string>, std::unique_ptr<T>> series_;
+  mutable Mutex mutex_;
+  // Label values -> series. The series themselves are not guarded (atomics).
+  std::map<std::vector<std::string>, std::unique_ptr<T>> series_ GUARDED_BY(mutex_);
 };
 
 // Defined in family.cc for these three kinds only.

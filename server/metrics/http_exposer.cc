@@ -178,7 +178,7 @@ StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& lis
   exposer->context_ = mg_start2(&init, &error);
   std::string log;
   {
-    std::lock_guard<std::mutex> lock(exposer->log_mutex_);
+    MutexLock lock(&exposer->log_mutex_);
     exposer->starting_ = false;
     log = std::move(exposer->startup_log_);
   }
@@ -216,13 +216,13 @@ Status HttpExposer::AddPage(const std::string& path, PageHandler handler,
       return InvalidArgument("content type of page \"" + path + "\" holds a control character");
     }
   }
-  std::lock_guard<std::mutex> lock(pages_mutex_);
+  MutexLock lock(&pages_mutex_);
   pages_[path] = Page{std::move(handler), std::move(content_type)};
   return Status::Ok();
 }
 
 bool HttpExposer::FindPage(const std::string& path, Page* page) const {
-  std::lock_guard<std::mutex> lock(pages_mutex_);
+  MutexLock lock(&pages_mutex_);
   const auto it = pages_.find(path);
   if (it != pages_.end()) {
     *page = it->second;
@@ -245,7 +245,7 @@ std::string HttpExposer::IndexPage() const {
   std::string html =
       "<!DOCTYPE html>\n<html><head><title>localizer</title></head><body>\n"
       "<h1>localizer</h1>\n<ul>\n<li><a href=\"/metrics\">/metrics</a></li>\n";
-  std::lock_guard<std::mutex> lock(pages_mutex_);
+  MutexLock lock(&pages_mutex_);
   for (const auto& [path, page] : pages_) {
     if (path == "/" || path == "/metrics") continue;
     // Paths hold only [A-Za-z0-9/._~-] (AddPage checks), so they need no HTML escaping.
@@ -261,7 +261,7 @@ int HttpExposer::LogMessage(const mg_connection* connection, const char* message
   const mg_context* context = mg_get_context(connection);
   auto* self = context != nullptr ? static_cast<HttpExposer*>(mg_get_user_data(context)) : nullptr;
   if (self == nullptr) return 1;
-  std::lock_guard<std::mutex> lock(self->log_mutex_);
+  MutexLock lock(&self->log_mutex_);
   if (self->starting_ && self->startup_log_.size() < 1024) {
     if (!self->startup_log_.empty()) self->startup_log_ += "; ";
     self->startup_log_ += message;

@@ -24,12 +24,12 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <utility>
 
 #include "engine/core/status.h"
 #include "server/metrics/registry.h"
+#include "server/sync/mutex.h"
 
 struct mg_connection;
 struct mg_context;
@@ -63,7 +63,7 @@ class HttpExposer final {
   // replacing any page already there, /metrics and / included. INVALID_ARGUMENT when path
   // does not start with '/' or holds characters other than [A-Za-z0-9/._~-], or when
   // content_type is empty or holds a control character; nothing changes then.
-  Status AddPage(const std::string& path, PageHandler handler, std::string content_type);
+  Status AddPage(const std::string& path, PageHandler handler, std::string content_type) EXCLUDES(pages_mutex_);
 
  private:
   struct Page {
@@ -79,8 +79,8 @@ class HttpExposer final {
   static int LogMessage(const mg_connection* connection, const char* message);
   // Copies the page served at `path` into *page; false if there is none ("/" is the
   // index unless a page replaced it).
-  bool FindPage(const std::string& path, Page* page) const;
-  std::string IndexPage() const;
+  bool FindPage(const std::string& path, Page* page) const EXCLUDES(pages_mutex_);
+  std::string IndexPage() const EXCLUDES(pages_mutex_);
 
   Registry* const registry_;
   mg_context* context_ = nullptr;
@@ -89,12 +89,12 @@ class HttpExposer final {
   // wildcard listen address); the destructor connects there to wake civetweb's listener.
   std::string wake_host_;
 
-  std::mutex log_mutex_;
-  bool starting_ = true;     // guarded by log_mutex_
-  std::string startup_log_;  // guarded by log_mutex_
+  Mutex log_mutex_;
+  bool starting_ GUARDED_BY(log_mutex_) = true;
+  std::string startup_log_ GUARDED_BY(log_mutex_);
 
-  mutable std::mutex pages_mutex_;
-  std::map<std::string, Page> pages_;  // path -> page; guarded by pages_mutex_
+  mutable Mutex pages_mutex_;
+  std::map<std::string, Page> pages_ GUARDED_BY(pages_mutex_);  // path -> page
 };
 
 }  // namespace localizer::server::metrics

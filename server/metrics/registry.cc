@@ -56,7 +56,7 @@ StatusOr<Family<T>*> Registry::Add(const std::string& name, const std::string& h
     series_names.push_back(name + "_count");
   }
 
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   if (families_.contains(name)) {
     return InvalidArgument("metric \"" + name + "\" is already registered");
   }
@@ -93,18 +93,18 @@ StatusOr<Family<Histogram>*> Registry::AddHistogram(const std::string& name,
 }
 
 void Registry::AddCollector(std::function<void()> collector) {
-  std::lock_guard<std::mutex> lock(collectors_mutex_);
+  MutexLock lock(&collectors_mutex_);
   collectors_.push_back(std::move(collector));
 }
 
 std::vector<MetricFamily> Registry::Collect() const {
   {
-    std::lock_guard<std::mutex> lock(collectors_mutex_);
+    MutexLock lock(&collectors_mutex_);
     for (const auto& collector : collectors_) collector();
   }
   std::vector<const Collectable*> families;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     families.reserve(families_.size());
     for (const auto& [name, family] : families_) families.push_back(family.get());
   }

@@ -30,7 +30,6 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
@@ -38,6 +37,7 @@
 #include "server/metrics/family.h"
 #include "server/metrics/metric_family.h"
 #include "server/metrics/metric_types.h"
+#include "server/sync/mutex.h"
 
 namespace localizer::server::metrics {
 
@@ -80,11 +80,11 @@ class Registry final {
   // the rest of the program. A hook may update metrics and call WithLabels or Add*, but
   // must not call AddCollector, Collect or Serialize (that would deadlock), and must not
   // throw.
-  void AddCollector(std::function<void()> collector);
+  void AddCollector(std::function<void()> collector) EXCLUDES(collectors_mutex_);
 
   // Runs the collectors, then snapshots every family, sorted by name; series within a
   // family are sorted by label values.
-  std::vector<MetricFamily> Collect() const;
+  std::vector<MetricFamily> Collect() const EXCLUDES(collectors_mutex_, mutex_);
 
   // Collect() written in the text exposition format 0.0.4 (text_format.h).
   std::string Serialize() const;
@@ -93,17 +93,19 @@ class Registry final {
   template <typename T>
   StatusOr<Family<T>*> Add(const std::string& name, const std::string& help,
                            const std::vector<std::string>& label_names,
-                           std::vector<double> bucket_upper_bounds);
+                           std::vector<double> bucket_upper_bounds) EXCLUDES(mutex_);
 
-  mutable std::mutex mutex_;
-  // Family name -> family, sorted by name. Guarded by mutex_.
-  std::map<std::string, std::unique_ptr<Collectable>> families_;
+  // Taken after collectors_mutex_ (Collect holds that one while the collectors run, and
+  // they may register metrics).
+  mutable Mutex mutex_ ACQUIRED_AFTER(collectors_mutex_);
+  // Family name -> family, sorted by name.
+  std::map<std::string, std::unique_ptr<Collectable>> families_ GUARDED_BY(mutex_);
   // Every series name a family writes (its own name; a histogram's _bucket, _sum and
-  // _count too) -> the family's name. Guarded by mutex_.
-  std::map<std::string, std::string> series_names_;
+  // _count too) -> the family's name.
+  std::map<std::string, std::string> series_names_ GUARDED_BY(mutex_);
 
-  mutable std::mutex collectors_mutex_;
-  std::vector<std::function<void()>> collectors_;  // guarded by collectors_mutex_
+  mutable Mutex collectors_mutex_;
+  std::vector<std::function<void()>> collectors_ GUARDED_BY(collectors_mutex_);
 };
 
 }  // namespace localizer::server::metrics

@@ -13,4 +13,8 @@ namespace localizer::server {
 // the kernel's pool is initialised (at boot); INTERNAL if the system call fails.
 StatusOr<std::string> SecureRandomHex(int digits);
 
+// a == b in time that depends on the lengths only, not on where they differ (a resume token
+// compared this way leaks none of its digits through the time a refusal takes).
+bool ConstantTimeEquals(const std::string& a, const std::string& b);
+
 }  // namespace localizer::server

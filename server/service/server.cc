@@ -74,7 +74,7 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   registry_options.max_sessions = options.max_sessions;
   registry_options.ttl_s = options.session_ttl_s;
   registry_options.memory_trim_s = options.memory_trim_s;
-  registry_options.host.max_queue_blocks = options.max_queue_blocks;
+  registry_options.host.max_queued_requests = options.max_queued_requests;
   registry_options.host.ttl_s = options.session_ttl_s;
   registry_options.policy.default_backend = options.backend;
   registry_options.policy.max_block_samples = options.max_block_samples;
@@ -145,7 +145,7 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
 Server::~Server() { Shutdown(); }
 
 void Server::Shutdown() {
-  std::lock_guard<std::mutex> lock(shutdown_mutex_);
+  MutexLock lock(&shutdown_mutex_);
   if (shut_down_) return;
   shut_down_ = true;
   const auto start = Clock::now();

@@ -14,7 +14,6 @@
 #pragma once
 
 #include <memory>
-#include <mutex>
 
 #include <grpcpp/grpcpp.h>
 
@@ -25,6 +24,7 @@
 #include "server/service/service_metrics.h"
 #include "server/service/session_registry.h"
 #include "server/service/worker_pool.h"
+#include "server/sync/mutex.h"
 
 namespace localizer::server {
 
@@ -38,7 +38,7 @@ class Server final {
 
   int grpc_port() const { return grpc_port_; }
   int metrics_port() const { return exposer_ ? exposer_->port() : 0; }
-  void Shutdown();
+  void Shutdown() EXCLUDES(shutdown_mutex_);
 
  private:
   explicit Server(const ServerOptions& options);
@@ -52,8 +52,8 @@ class Server final {
   std::unique_ptr<grpc::Server> grpc_;
   std::unique_ptr<metrics::HttpExposer> exposer_;
   int grpc_port_ = 0;
-  std::mutex shutdown_mutex_;
-  bool shut_down_ = false;
+  Mutex shutdown_mutex_;
+  bool shut_down_ GUARDED_BY(shutdown_mutex_) = false;
 };
 
 }  // namespace localizer::server

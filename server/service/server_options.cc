@@ -10,7 +10,8 @@ Status ServerOptions::Validate() const {
   if (max_sessions < 1) return InvalidArgument("max_sessions must be >= 1");
   if (workers < 0 || workers > 1024) return InvalidArgument("workers must be in [0, 1024] (0: one per core)");
   if (!(session_ttl_s >= 0.0)) return InvalidArgument("session_ttl_s must be >= 0");
-  if (max_queue_blocks < 1) return InvalidArgument("max_queue_blocks must be >= 1");
+  // Named as before the field was renamed (the flag is still --max-queue-blocks).
+  if (max_queued_requests < 1) return InvalidArgument("max_queue_blocks must be >= 1");
   if (max_block_samples < 64) return InvalidArgument("max_block_samples must be >= 64");
   if (max_channels < 4) return InvalidArgument("max_channels must be >= 4");
   if (max_particles < 16) return InvalidArgument("max_particles must be >= 16");

@@ -18,8 +18,10 @@ struct ServerOptions {
                                                    // (with a GPU: one per session up
                                                    // to 1024, as they wait on batches)
   double session_ttl_s = 60.0;                     // a detached session waits this long
-  int max_queue_blocks = 8;                        // blocks queued per session before
-                                                   // reading pauses (backpressure)
+  int max_queued_requests = 8;                     // requests (blocks, IMU batches, scans,
+                                                   // refusals) queued per session before
+                                                   // reading pauses (backpressure);
+                                                   // flag --max-queue-blocks
   int64_t max_block_samples = 1 << 22;             // per channel per block (the message
                                                    // size limit usually binds first)
   int max_channels = 64;                           // sensors per array

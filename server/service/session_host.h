@@ -1,186 +1,163 @@
-// One session held by the server: the engine Session plus what the service needs around it.
+// One session held by the server: its runner (what the kind of session does), its inbox and
+// outbox, and the stream attached to it.
 //
-//   reader (gRPC thread) --Offer--> queue --worker--> engine Session --> outbox --> writer
+//   reader (gRPC thread) --Offer--> inbox --worker turn--> runner --> outbox --> stream
 //
-// * Queue: accepted blocks (and the in-order rejections of bad ones) wait here for a
-//   worker; at most `max_queue_blocks` items, then Offer says "stop reading" and gRPC
-//   flow control holds the client back until InputSpaceLocked.
-// * One worker at a time runs a session (the `scheduled` flag), so its frames are
-//   processed in order; the engine Session is touched only by that worker.
-// * Outbox: responses not yet written to a stream. It survives a broken stream; a
-//   resume writes it first. History: the last kHistoryEstimates estimates written, for a
-//   resume that says which frame it saw last.
-// * Sequence rules (checked at Offer, under the lock): a block whose sequence is not
-//   greater than the last accepted one is rejected ("duplicate" if equal, "out_of_order"
-//   if less) and changes nothing; a jump reports a SequenceGap and the engine skips the
-//   missing time (missing blocks x this block's length).
+// The host keeps the lifecycle (open, attach, detach, close, drain), the lock, the worker
+// turn and the token check; what a request becomes and what a work item produces is the
+// runner's (session_runner.h), ordering and sequence rules the inbox's (inbox.h), replay
+// on resume the outbox's (outbox.h).
+// * One worker at a time runs a session (the `scheduled` flag), so its items are processed
+//   in order; the runner's engine session is touched only by that worker.
+// * Backpressure: when the inbox is full Offer says "stop reading" and gRPC flow control
+//   holds the client back until the host asks the stream to read again (ReadMore).
+//   Processing pauses while max_outbox responses wait to be written.
 //
-// Thread-safety: public methods lock the session's mutex; "Locked" methods require the
-// caller to hold it (mutex()).
+// The stream contract (stream_sink.h). The host decides; the stream acts:
+// * The host hands the attached stream its next response (StreamSink::Write) when none is
+//   in flight, asks it to read again after a pause (ReadMore) and ends it (End) -- always
+//   with the host's lock held. A sink never calls back into the host from those calls.
+// * The stream reports what happened to it through the public methods below (Offer,
+//   InputDone, WriteDone, EndStream, Detach), which take the host's lock themselves: the
+//   stream calls them holding no lock of the host's (its own is never held across them).
+// * A stream stays attached until it detaches (its OnDone), even after it was ended, so a
+//   write in flight is settled (written, or first again for a resume). A resume on another
+//   stream replaces it at once: its write in flight goes first again, it ends ABORTED.
+// * Finish: once the client half-closed (InputDone) and every accepted item has produced its
+//   responses and they are written, the session is forgotten by the registry (on_finished)
+//   and closed, and the stream ends OK -- so nothing can find the session after the client
+//   saw OK. A stream that was cancelled ends CANCELLED instead and the session stays; a
+//   draining server ends it UNAVAILABLE.
+//
+// Thread-safety: every public method may be called from any thread and takes the host's
+// lock; the lock is never held while calling the runner's Process or Decode*.
+// Lock order: host -> a stream's own lock; host -> registry (on_finished).
 #pragma once
 
-#include <chrono>
-#include <cstdint>
-#include <deque>
+#include <functional>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "engine/pipeline/scan_session.h"
+#include <grpcpp/support/status.h>
+
 #include "engine/pipeline/session.h"
 #include "localizer/v1/localizer.pb.h"
+#include "server/service/inbox.h"
+#include "server/service/outbox.h"
 #include "server/service/service_metrics.h"
+#include "server/service/session_runner.h"
 #include "server/service/stream_sink.h"
 #include "server/service/track_history.h"
 #include "server/service/worker_pool.h"
-#include "server/wire/block_wire.h"
-#include "server/wire/imu_wire.h"
-#include "server/wire/scan_wire.h"
+#include "server/sync/mutex.h"
+#include "wire/block_wire.h"
 
 namespace localizer::server {
 
-using Clock = std::chrono::steady_clock;
-using ResponsePtr = std::shared_ptr<const v1::TrackResponse>;
-
 struct HostLimits {
-  int max_queue_blocks = 8;
+  // Requests (blocks, IMU batches, scans, refusals) waiting for the worker before the reader
+  // stops reading (--max-queue-blocks).
+  int max_queued_requests = 8;
   size_t max_outbox = 256;  // responses waiting to be written before processing pauses
   double ttl_s = 60.0;      // reported in SessionOpened; the registry enforces it
 };
 
 class SessionHost final : public std::enable_shared_from_this<SessionHost> {
  public:
-  static constexpr size_t kHistoryEstimates = 256;
-
-  SessionHost(std::string id, std::string token, std::string label, std::unique_ptr<engine::Session> session,
-              HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics);
-  // A detection session: scans in, track lists out (engine/pipeline/scan_session.h).
-  SessionHost(std::string id, std::string token, std::string label, std::unique_ptr<engine::ScanSession> scans,
-              HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics);
-  ~SessionHost();
+  // `on_finished` runs (with the host's lock held) when the session finishes cleanly,
+  // before the stream sees OK: the registry forgets the session there.
+  SessionHost(std::string id, std::string token, std::string label, std::unique_ptr<SessionRunner> runner,
+              HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics, std::function<void()> on_finished);
 
   const std::string& id() const { return id_; }
   const std::string& resume_token() const { return token_; }  // a secret: never log it
   const std::string& label() const { return label_; }
-  const std::string& backend() const { return backend_; }
+  const RunnerInfo& runner_info() const { return runner_->info(); }
+  const std::string& backend() const { return runner_->info().backend; }
   // The session's config (fixed at creation, so readable from any thread).
-  const engine::SessionConfig& config() const { return config_; }
-  bool detections() const { return scans_ != nullptr; }
-  // Recent initialised positions for the live view; locks itself (see track_history.h).
+  const engine::SessionConfig& config() const { return runner_->config(); }
+  // Recent positions for the live view; locks itself (see track_history.h).
   const TrackHistory& track() const { return track_; }
   bool TokenMatches(const std::string& token) const;  // constant-time comparison
-  const wire::BlockLimits& block_limits() const { return block_limits_; }
-  std::mutex& mutex() const { return mutex_; }
 
-  // Attaches a stream, replacing (and ending with ABORTED) any stream still attached, and
-  // puts SessionOpened first in the outbox. With `last_frame_received`, estimates after
-  // that frame still in the history are queued again (before unwritten ones); with
-  // `received_none`, every estimate still in the history is (frame 0 included).
-  void AttachLocked(StreamSink* sink, bool resumed, std::optional<uint64_t> last_frame_received,
-                    bool received_none = false);
-  // The stream is gone (its reactor is done). No-op if `sink` is no longer attached.
-  void DetachLocked(StreamSink* sink);
-  bool attached() const;
+  // --- the stream's side (see the contract above) ---
+  // Attaches `sink`, replacing (ending ABORTED) any stream still attached, and writes
+  // SessionOpened first, after the replay `resume` asks for (outbox.h). False when the
+  // session was closed meanwhile (nothing attached).
+  bool Attach(StreamSink* sink, bool resumed, const ResumePoint& resume) EXCLUDES(mutex_);
+  // A request with a block, IMU batch or scan from `sink`'s reader: decoded by the runner
+  // (outside the lock; `scratch` is the stream's block buffer), then queued. Returns true
+  // when the reader may read on; false when the inbox is full (the host calls
+  // sink->ReadMore once there is room) or the stream no longer takes input (ended,
+  // replaced, draining, session closed: the request is dropped).
+  bool Offer(StreamSink* sink, const v1::TrackRequest& request, Clock::time_point received,
+             wire::DecodedBlock* scratch) EXCLUDES(mutex_);
+  // The client half-closed: finish once everything accepted is answered and written.
+  void InputDone(StreamSink* sink) EXCLUDES(mutex_);
+  // The write the host handed `sink` completed: written (`ok`), or the stream broke (the
+  // response stays for a resume and the stream ends CANCELLED).
+  void WriteDone(StreamSink* sink, bool ok) EXCLUDES(mutex_);
+  // `sink` ends its stream with `status` (cancelled, a bad request); the session stays.
+  void EndStream(StreamSink* sink, const grpc::Status& status) EXCLUDES(mutex_);
+  // `sink` is done (gRPC's OnDone): forgotten if still attached. Returns whether the session
+  // is still open (detached, resumable).
+  bool Detach(StreamSink* sink) EXCLUDES(mutex_);
 
-  // A decoded block (or the rejection its decoding produced: `rejection` set). Returns
-  // true when the reader may read on, false when the queue is full (wait for
-  // InputSpaceLocked). `decoded.samples` is taken; a recycled buffer is left in its place.
-  bool OfferLocked(wire::DecodedBlock* decoded, const Status& decode_status, const std::string& reason,
-                   uint64_t sequence, Clock::time_point received);
-
-  // A decoded IMU batch of a moving-array session (or the rejection its decoding produced),
-  // queued in order with the blocks: the engine takes its samples before the blocks sent
-  // after it. Same flow control as OfferLocked.
-  bool OfferImuLocked(StatusOr<wire::DecodedImu> decoded, uint64_t batch_sequence, Clock::time_point received);
-  // A decoded scan of a detection session (or its decoding's rejection); answered in order
-  // with a TrackList. Same flow control as OfferLocked.
-  bool OfferScanLocked(StatusOr<engine::Scan> decoded, uint64_t scan_sequence, Clock::time_point received);
-
-  // Writer side: the next response to write, or null. MarkWrittenLocked after a write
-  // succeeded; RequeueLocked puts a failed write back at the front.
-  ResponsePtr NextOutputLocked();
-  bool HasOutputLocked() const { return !outbox_.empty(); }
-  void MarkWrittenLocked(const ResponsePtr& response);
-  void RequeueLocked(ResponsePtr response);
-  // Nothing queued, nothing processing: every accepted block has produced its responses.
-  bool IdleLocked() const { return queue_.empty() && !running_; }
-
-  // Ends the session: the attached stream (if any) ends with `status`; queued blocks are
+  // --- lifecycle ---
+  // Ends the session: the attached stream (if any) ends with `status`; queued requests are
   // dropped. Idempotent.
-  void Close(const grpc::Status& status);
-  void CloseLocked(const grpc::Status& status);
-  bool ClosedLocked() const { return closed_; }
-  // Server shutdown: the attached stream stops reading and ends once idle (DrainLocked).
-  void Drain();
+  void Close(const grpc::Status& status) EXCLUDES(mutex_);
+  // Server shutdown: the attached stream stops reading and ends UNAVAILABLE once idle.
+  void Drain() EXCLUDES(mutex_);
   // Nothing queued or running and nothing left to write (or no stream to write to).
-  bool Drained() const;
-
-  // For ListSessions and the expiry sweep.
-  v1::SessionInfo Info(Clock::time_point now, double ttl_s) const;
+  bool Drained() const EXCLUDES(mutex_);
+  bool attached() const EXCLUDES(mutex_);
   // Detached for longer than `ttl_s`.
-  bool ExpiredLocked(Clock::time_point now, double ttl_s) const;
-  v1::SessionOpened OpenedMessageLocked(bool resumed) const;
+  bool Expired(Clock::time_point now, double ttl_s) const EXCLUDES(mutex_);
+  // For ListSessions, CloseSession and GET /sessions.
+  v1::SessionInfo Info(Clock::time_point now, double ttl_s) const EXCLUDES(mutex_);
 
   // Worker entry: processes queued items in order, a few per turn, then resubmits itself
   // if more remain (so sessions share the workers fairly).
-  void RunTurn();
+  void RunTurn() EXCLUDES(mutex_);
 
  private:
-  struct WorkItem {
-    uint64_t sequence = 0;
-    std::vector<float> samples;      // channel-major; empty for response-only items
-    int64_t samples_per_channel = 0;
-    int64_t skip_samples = 0;        // gap before this block
-    ResponsePtr response;            // emitted in order before the block (gap/rejection)
-    Clock::time_point received;
-    std::optional<wire::DecodedImu> imu;  // an IMU batch instead of a block
-    uint64_t imu_sequence = 0;
-    std::optional<engine::Scan> scan;     // a scan (detection sessions)
-    uint64_t scan_sequence = 0;
-  };
-
-  void ScheduleLocked();
-  void PushOutputLocked(ResponsePtr response);
-  // Queues a BlockRejected in order behind the blocks already queued.
-  void RejectLocked(uint64_t sequence, const std::string& reason, const Status& status,
-                    Clock::time_point received);
-  std::vector<ResponsePtr> Process(WorkItem& item, Clock::time_point started);
-  std::vector<ResponsePtr> ProcessScan(WorkItem& item);
-  // Queues a response-only or scan/IMU item; returns whether the reader may read on.
-  bool QueueLocked(WorkItem item);
+  // Submits a turn unless one is pending or nothing can be processed now.
+  void ScheduleLocked() REQUIRES(mutex_);
+  // Hands the stream its next response, or finishes the stream when all is done.
+  void PumpLocked() REQUIRES(mutex_);
+  void EndStreamLocked(const grpc::Status& status) REQUIRES(mutex_);
+  void CloseLocked(const grpc::Status& status) REQUIRES(mutex_);
+  // Nothing queued, nothing processing: every accepted item has produced its responses.
+  bool IdleLocked() const REQUIRES(mutex_) { return inbox_.empty() && !running_; }
+  v1::SessionOpened OpenedLocked(bool resumed) const REQUIRES(mutex_);
 
   const std::string id_;
   const std::string token_;
   const std::string label_;
-  const std::unique_ptr<engine::Session> session_;  // audio sessions; used by the scheduled worker only
-  const std::unique_ptr<engine::ScanSession> scans_;  // detection sessions; likewise
-  const engine::SessionConfig config_;
-  const std::string backend_;
+  const std::unique_ptr<SessionRunner> runner_;  // Process: by the scheduled worker only
   const HostLimits limits_;
-  const wire::BlockLimits block_limits_;
   WorkerPool* const pool_;
   ServiceMetrics* const metrics_;
+  const std::function<void()> on_finished_;
   const Clock::time_point created_;
-  std::vector<engine::Estimate> estimates_;  // worker scratch
-  TrackHistory track_;                       // appended by the worker; has its own lock
+  TrackHistory track_;  // appended by the runner; has its own lock
 
-  mutable std::mutex mutex_;
-  StreamSink* sink_ = nullptr;                // guarded by mutex_
-  Clock::time_point detached_since_;          // guarded by mutex_
-  std::deque<WorkItem> queue_;                // guarded by mutex_
-  size_t queued_blocks_ = 0;                  // blocks (not responses) in queue_
-  std::vector<std::vector<float>> free_buffers_;  // recycled sample buffers
-  std::deque<ResponsePtr> outbox_;            // guarded by mutex_
-  std::deque<ResponsePtr> history_;           // estimates written, oldest first
-  bool scheduled_ = false;                    // a turn is submitted or running
-  bool running_ = false;                      // a worker is inside Process
-  bool closed_ = false;
-  bool input_paused_ = false;                 // Offer returned false and no space since
-  std::optional<uint64_t> last_accepted_;     // sequence
-  uint64_t blocks_ = 0, frames_ = 0, rejections_ = 0;
-  Clock::time_point last_block_;
+  mutable Mutex mutex_;
+  Inbox inbox_ GUARDED_BY(mutex_);
+  Outbox outbox_ GUARDED_BY(mutex_);
+  bool scheduled_ GUARDED_BY(mutex_) = false;  // a turn is submitted or running
+  bool running_ GUARDED_BY(mutex_) = false;    // a worker is processing an item
+  bool closed_ GUARDED_BY(mutex_) = false;
+  // The attached stream, and what the host knows of it.
+  StreamSink* sink_ GUARDED_BY(mutex_) = nullptr;
+  bool stream_ended_ GUARDED_BY(mutex_) = false;  // End was called; it stays until it detaches
+  bool input_done_ GUARDED_BY(mutex_) = false;    // the client half-closed, or draining
+  bool draining_ GUARDED_BY(mutex_) = false;      // the server is shutting down
+  bool input_paused_ GUARDED_BY(mutex_) = false;  // Offer said "stop reading"; no ReadMore since
+  Clock::time_point detached_since_ GUARDED_BY(mutex_);
 };
 
 }  // namespace localizer::server

@@ -1,6 +1,6 @@
 #include "server/service/session_registry.h"
 
-#include "server/wire/string_limits.h"
+#include "wire/string_limits.h"
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -27,7 +27,7 @@ SessionRegistry::SessionRegistry(RegistryOptions options, WorkerPool* pool, Serv
 
 SessionRegistry::~SessionRegistry() {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     stopping_ = true;
   }
   sweep_wake_.notify_all();
@@ -39,7 +39,7 @@ SessionRegistry::~SessionRegistry() {
 
 StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionConfig& config) {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     if (draining_) return Unavailable("server is draining; open the session on another instance");
     if (static_cast<int>(sessions_.size()) >= options_.max_sessions) {
       return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) +
@@ -49,20 +49,11 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   auto engine_config = wire::ConfigFromProto(config, options_.policy);
   if (!engine_config.ok()) return engine_config.status();
   // FFT plans, particles: outside the lock.
-  std::unique_ptr<engine::Session> session;
-  std::unique_ptr<engine::ScanSession> scans;
-  if (engine_config->detections) {
-    auto made = engine::ScanSession::Create(*engine_config);
-    if (!made.ok()) return made.status();
-    scans = std::move(made).value();
-  } else {
-    auto made = engine::Session::Create(*engine_config);
-    if (!made.ok()) return made.status();
-    session = std::move(made).value();
-  }
+  auto runner = MakeSessionRunner(*engine_config, metrics_);
+  if (!runner.ok()) return runner.status();
   auto token = SecureRandomHex(32);
   if (!token.ok()) return token.status();
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   if (static_cast<int>(sessions_.size()) >= options_.max_sessions) {
     return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) + " sessions");
   }
@@ -72,17 +63,18 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
     if (!drawn.ok()) return drawn.status();
     id = *std::move(drawn);
   } while (sessions_.count(id) != 0);
-  auto host = scans ? std::make_shared<SessionHost>(id, *token, config.label(), std::move(scans),
-                                                    options_.host, pool_, metrics_)
-                    : std::make_shared<SessionHost>(id, *token, config.label(), std::move(session),
-                                                    options_.host, pool_, metrics_);
+  // A session that finishes (the client half-closed, all written) is forgotten before its
+  // stream sees OK; the host calls this with its lock held (lock order: host -> registry).
+  auto forget = [this, id] { Forget(id, "finished"); };
+  auto host = std::make_shared<SessionHost>(id, *token, config.label(), std::move(runner).value(), options_.host,
+                                            pool_, metrics_, std::move(forget));
   sessions_[id] = host;
   return host;
 }
 
 StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Find(const std::string& id, const std::string& token) const {
   LOCALIZER_RETURN_IF_ERROR(CheckSessionRef(id, token));
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   if (draining_) return Unavailable("server is draining");
   const auto it = sessions_.find(id);
   if (it == sessions_.end()) return NotFound("no session '" + wire::Escape(id) + "' (unknown, closed or expired)");
@@ -93,7 +85,7 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Find(const std::string& 
 void SessionRegistry::Remove(const std::string& id, const std::string& reason, const grpc::Status& status) {
   std::shared_ptr<SessionHost> host;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     const auto it = sessions_.find(id);
     if (it == sessions_.end()) return;
     host = std::move(it->second);
@@ -106,7 +98,7 @@ void SessionRegistry::Remove(const std::string& id, const std::string& reason, c
 
 void SessionRegistry::Forget(const std::string& id, const std::string& reason) {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     if (sessions_.erase(id) == 0) return;
   }
   if (auto* c = metrics_->sessions_closed(reason)) c->Increment();
@@ -117,7 +109,7 @@ StatusOr<uint64_t> SessionRegistry::Close(const std::string& id, const std::stri
   LOCALIZER_RETURN_IF_ERROR(CheckSessionRef(id, token));
   std::shared_ptr<SessionHost> host;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    MutexLock lock(&mutex_);
     const auto it = sessions_.find(id);
     if (it == sessions_.end()) return NotFound("no session '" + wire::Escape(id) + "'");
     if (!it->second->TokenMatches(token)) return PermissionDenied("wrong resume_token for session " + id);
@@ -129,7 +121,7 @@ StatusOr<uint64_t> SessionRegistry::Close(const std::string& id, const std::stri
 }
 
 std::vector<std::shared_ptr<SessionHost>> SessionRegistry::Snapshot() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   std::vector<std::shared_ptr<SessionHost>> hosts;
   for (const auto& [id, host] : sessions_) hosts.push_back(host);
   return hosts;
@@ -143,7 +135,7 @@ std::vector<v1::SessionInfo> SessionRegistry::List() const {
 }
 
 void SessionRegistry::StartDrain() {
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   draining_ = true;
 }
 
@@ -166,12 +158,13 @@ void ReturnFreeMemoryToTheSystem() {
 }  // namespace
 
 void SessionRegistry::SweepLoop() {
-  std::unique_lock<std::mutex> lock(mutex_);
   auto last_trim = Clock::now();
-  while (!stopping_) {
-    sweep_wake_.wait_for(lock, std::chrono::milliseconds(250));
-    if (stopping_) break;
-    lock.unlock();
+  for (;;) {
+    {
+      MutexLock lock(&mutex_);
+      if (!stopping_) mutex_.WaitFor(&sweep_wake_, std::chrono::milliseconds(250));
+      if (stopping_) return;
+    }
     if (options_.memory_trim_s > 0.0 &&
         std::chrono::duration<double>(Clock::now() - last_trim).count() >= options_.memory_trim_s) {
       ReturnFreeMemoryToTheSystem();
@@ -180,13 +173,11 @@ void SessionRegistry::SweepLoop() {
     const auto now = Clock::now();
     std::vector<std::string> expired;
     for (const auto& host : Snapshot()) {
-      std::lock_guard<std::mutex> host_lock(host->mutex());
-      if (host->ExpiredLocked(now, options_.ttl_s)) expired.push_back(host->id());
+      if (host->Expired(now, options_.ttl_s)) expired.push_back(host->id());
     }
     for (const std::string& id : expired) {
       Remove(id, "expired", grpc::Status(grpc::StatusCode::NOT_FOUND, "session expired"));
     }
-    lock.lock();
   }
 }
 

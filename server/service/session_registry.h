@@ -6,15 +6,14 @@
 // ids and tokens tells nothing of another session's. Tokens are compared in constant time. A detached session (its stream gone) is kept for `ttl_s`, then closed by a sweep
 // that runs every ~0.25 s on a thread of its own (which also hands the allocator's free
 // pages back to the system every memory_trim_s, so RSS follows the memory in use).
-// Thread-safe. Lock order: a session's mutex may be held when calling Forget; the
-// registry never takes a session's mutex while holding its own.
+// Thread-safe. Lock order: a session's lock may be held when calling Forget (a session that
+// finishes forgets itself); the registry never takes a session's lock while holding its own.
 #pragma once
 
 #include <atomic>
 #include <condition_variable>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -23,7 +22,8 @@
 #include "server/service/service_metrics.h"
 #include "server/service/session_host.h"
 #include "server/service/worker_pool.h"
-#include "server/wire/config_wire.h"
+#include "server/sync/mutex.h"
+#include "wire/config_wire.h"
 
 namespace localizer::server {
 
@@ -44,33 +44,34 @@ class SessionRegistry final {
 
   // INVALID_ARGUMENT naming the field; FAILED_PRECONDITION (backend gpu without one);
   // RESOURCE_EXHAUSTED at max_sessions; UNAVAILABLE while draining.
-  StatusOr<std::shared_ptr<SessionHost>> Open(const v1::SessionConfig& config);
+  StatusOr<std::shared_ptr<SessionHost>> Open(const v1::SessionConfig& config) EXCLUDES(mutex_);
   // NOT_FOUND unknown or expired; PERMISSION_DENIED wrong token; UNAVAILABLE draining.
-  StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const;
+  StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const
+      EXCLUDES(mutex_);
   // Removes and closes; `reason` labels the closed-sessions metric. No-op if unknown.
-  void Remove(const std::string& id, const std::string& reason, const grpc::Status& status);
-  // Removes without touching the session (the caller holds its lock and ends it).
-  void Forget(const std::string& id, const std::string& reason);
+  void Remove(const std::string& id, const std::string& reason, const grpc::Status& status) EXCLUDES(mutex_);
+  // Removes without touching the session (the session itself calls this as it finishes).
+  void Forget(const std::string& id, const std::string& reason) EXCLUDES(mutex_);
   // CloseSession: NOT_FOUND / PERMISSION_DENIED as Find; returns frames processed.
-  StatusOr<uint64_t> Close(const std::string& id, const std::string& token);
+  StatusOr<uint64_t> Close(const std::string& id, const std::string& token) EXCLUDES(mutex_);
 
-  std::vector<v1::SessionInfo> List() const;
+  std::vector<v1::SessionInfo> List() const EXCLUDES(mutex_);
 
   // Refuse new sessions and resumes from now on (UNAVAILABLE).
-  void StartDrain();
-  std::vector<std::shared_ptr<SessionHost>> Snapshot() const;
+  void StartDrain() EXCLUDES(mutex_);
+  std::vector<std::shared_ptr<SessionHost>> Snapshot() const EXCLUDES(mutex_);
 
  private:
-  void SweepLoop();
+  void SweepLoop() EXCLUDES(mutex_);
 
   const RegistryOptions options_;
   WorkerPool* const pool_;
   ServiceMetrics* const metrics_;
 
-  mutable std::mutex mutex_;
-  std::map<std::string, std::shared_ptr<SessionHost>> sessions_;  // guarded by mutex_
-  bool draining_ = false;
-  bool stopping_ = false;
+  mutable Mutex mutex_;
+  std::map<std::string, std::shared_ptr<SessionHost>> sessions_ GUARDED_BY(mutex_);
+  bool draining_ GUARDED_BY(mutex_) = false;
+  bool stopping_ GUARDED_BY(mutex_) = false;
   std::condition_variable sweep_wake_;
   std::thread sweeper_;
 };

@@ -25,8 +25,8 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
   s["id"] = host.id();
   s["label"] = host.label();
   s["backend"] = host.backend();
-  s["kind"] = host.detections() ? "detections" : "samples";
-  s["filter_type"] = host.detections() ? "tws" : config.filter_type;
+  s["kind"] = host.runner_info().kind;
+  s["filter_type"] = host.runner_info().filter_type;
   s["attached"] = info.attached();
   // A moving array's sensors where its latest pose put them (in the body frame until then).
   json sensors = json::array();
@@ -58,7 +58,7 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
   // The latest frame's source presence and ambiguity; null before the first frame and for
   // detection sessions. "state": "present", "silent", or "untested" (the engine ran no
   // presence test: threshold 0).
-  if (track.presence && !host.detections()) {
+  if (track.presence && host.runner_info().reports_presence) {
     const PresencePoint& p = *track.presence;
     s["presence"] = {{"state", !p.tested ? "untested" : p.present ? "present" : "silent"},
                      {"source_present", p.present},

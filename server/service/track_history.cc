@@ -30,7 +30,7 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
   presence.threshold = estimate.presence_threshold;
   presence.ambiguous = estimate.ambiguous;
   presence.modes = estimate.modes;
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   ++frames_;
   if (estimate.source_present) ++present_frames_;
   presence_ = presence;
@@ -56,7 +56,7 @@ void TrackHistory::SetTargets(const std::vector<engine::tws::TrackReport>& track
     for (int i = 0; i < 3; ++i) p.position_m[i] = t.position_m(i);
     targets.push_back(p);
   }
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   ++frames_;
   targets_ = std::move(targets);
 }
@@ -64,7 +64,7 @@ void TrackHistory::SetTargets(const std::vector<engine::tws::TrackReport>& track
 TrackSnapshot TrackHistory::Snapshot() const {
   TrackSnapshot snapshot;
   snapshot.capacity = capacity_;
-  std::lock_guard<std::mutex> lock(mutex_);
+  MutexLock lock(&mutex_);
   snapshot.frames = frames_;
   snapshot.initialised_frames = initialised_frames_;
   snapshot.model_probabilities = model_probabilities_;

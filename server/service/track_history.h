@@ -12,12 +12,12 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <mutex>
 #include <optional>
 #include <vector>
 
 #include "engine/core/estimate.h"
 #include "engine/tws/track_report.h"
+#include "server/sync/mutex.h"
 
 namespace localizer::server {
 
@@ -72,24 +72,24 @@ class TrackHistory final {
   TrackHistory(const TrackHistory&) = delete;
   TrackHistory& operator=(const TrackHistory&) = delete;
 
-  void Append(const engine::Estimate& estimate);
+  void Append(const engine::Estimate& estimate) EXCLUDES(mutex_);
   // Detection sessions: the tracks after the latest scan replace the previous ones.
-  void SetTargets(const std::vector<engine::tws::TrackReport>& tracks);
-  TrackSnapshot Snapshot() const;
+  void SetTargets(const std::vector<engine::tws::TrackReport>& tracks) EXCLUDES(mutex_);
+  TrackSnapshot Snapshot() const EXCLUDES(mutex_);
   size_t capacity() const { return capacity_; }
 
  private:
   const size_t capacity_;
-  mutable std::mutex mutex_;
-  std::vector<TrackPoint> ring_;  // guarded by mutex_; grows to capacity_, then wraps
-  size_t next_ = 0;               // guarded by mutex_; slot the next point overwrites once full
-  std::vector<engine::ModelProbability> model_probabilities_;  // guarded by mutex_
-  std::optional<engine::PlatformAttitude> platform_;           // guarded by mutex_
-  std::vector<TargetPoint> targets_;                           // guarded by mutex_
-  std::optional<PresencePoint> presence_;                      // guarded by mutex_
-  uint64_t present_frames_ = 0;      // guarded by mutex_
-  uint64_t frames_ = 0;              // guarded by mutex_
-  uint64_t initialised_frames_ = 0;  // guarded by mutex_
+  mutable Mutex mutex_;
+  std::vector<TrackPoint> ring_ GUARDED_BY(mutex_);  // grows to capacity_, then wraps
+  size_t next_ GUARDED_BY(mutex_) = 0;               // slot the next point overwrites once full
+  std::vector<engine::ModelProbability> model_probabilities_ GUARDED_BY(mutex_);
+  std::optional<engine::PlatformAttitude> platform_ GUARDED_BY(mutex_);
+  std::vector<TargetPoint> targets_ GUARDED_BY(mutex_);
+  std::optional<PresencePoint> presence_ GUARDED_BY(mutex_);
+  uint64_t present_frames_ GUARDED_BY(mutex_) = 0;
+  uint64_t frames_ GUARDED_BY(mutex_) = 0;
+  uint64_t initialised_frames_ GUARDED_BY(mutex_) = 0;
 };
 
 }  // namespace localizer::server

@@ -1,28 +1,39 @@
-// One Track stream: the gRPC callback reactor that reads requests, hands blocks to its
-// session and writes the session's responses back (one write in flight at a time).
+// One Track stream: the gRPC callback reactor that reads requests, hands them to its
+// session and writes what the session hands it (one write in flight at a time).
 //
 // Life of a stream:
 //   read `open` -> SessionRegistry::Open, or `resume` -> SessionRegistry::Find; attach
-//   read `block`s -> decode (here, on the gRPC thread: cheap) -> SessionHost::OfferLocked;
-//     when the session's queue is full, reading pauses until a worker frees a slot, so a
-//     fast client is held back by HTTP/2 flow control, never by memory.
-//   client half-close -> finish with OK once every accepted block has produced its
-//     responses and they are written; the session then closes.
-//   stream broken or cancelled -> finish CANCELLED; the session stays, detached, for
-//     the registry's TTL, its unwritten responses kept for a resume.
-//   a request that does not parse -> finish INVALID_ARGUMENT; the session stays, detached
+//   read `block`s, `imu` batches, `scan`s -> SessionHost::Offer (the session's runner
+//     decodes them here, on the gRPC thread: cheap); when the session's inbox is full,
+//     reading pauses until the session asks for more (ReadMore), so a fast client is held
+//     back by HTTP/2 flow control, never by memory.
+//   client half-close -> SessionHost::InputDone; the session ends the stream OK once every
+//     accepted request has produced its responses and they are written, and closes.
+//   stream broken or cancelled -> ends CANCELLED; the session stays, detached, for the
+//     registry's TTL, its unwritten responses kept for a resume.
+//   a request that does not parse -> ends INVALID_ARGUMENT; the session stays, detached
 //     and resumable, as on a broken stream (a garbled request is never taken for a finish).
+//
+// The stream contract (session_host.h, stream_sink.h): the session decides what to write
+// and when the stream ends; the reactor acts on it (StreamSink: Write, ReadMore, End, called
+// with the session's lock held) and reports what gRPC tells it (OnWriteDone, OnReadDone,
+// OnCancel, OnDone) through the session's public methods. The reactor never holds its own
+// lock while calling the session, and never calls the session from a StreamSink method.
 //
 // The method is registered raw (ByteBuffer in and out) and the reactor parses requests
 // itself: with typed messages gRPC 1.51 reports a request that fails to parse as
 // OnReadDone(false), exactly like the client's half-close, so the two could not be told
 // apart. Responses are serialized here as gRPC would (one serialization per write).
-// Thread-safety: gRPC may run OnReadDone, OnWriteDone and OnCancel concurrently; once
-// attached, every field below marked "host" is guarded by the session's mutex. Before
-// attaching only the read path touches the reactor.
+//
+// Thread-safety: gRPC may run OnReadDone, OnWriteDone and OnCancel concurrently, and the
+// session calls the StreamSink methods from its worker. `mutex_` (taken after the session's
+// lock, never before it) guards the attached session and the finished flag. The read path's
+// buffers are touched by one read at a time; the write buffer by Write, which the session
+// calls for one write at a time.
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <grpcpp/grpcpp.h>
@@ -31,6 +42,8 @@
 #include "server/service/session_host.h"
 #include "server/service/session_registry.h"
 #include "server/service/stream_sink.h"
+#include "server/sync/mutex.h"
+#include "wire/block_wire.h"
 
 namespace localizer::server {
 
@@ -40,56 +53,47 @@ class TrackReactor final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc
   TrackReactor(grpc::CallbackServerContext* context, SessionRegistry* registry, ServiceMetrics* metrics);
 
   // grpc::ServerBidiReactor
-  void OnReadDone(bool ok) override;
-  void OnWriteDone(bool ok) override;
-  void OnCancel() override;
-  void OnDone() override;
+  void OnReadDone(bool ok) override EXCLUDES(mutex_);
+  void OnWriteDone(bool ok) override EXCLUDES(mutex_);
+  void OnCancel() override EXCLUDES(mutex_);
+  void OnDone() override EXCLUDES(mutex_);
 
-  // StreamSink (called with the session's mutex held)
-  void OutputReadyLocked() override;
-  void InputSpaceLocked() override;
-  void EndLocked(const grpc::Status& status) override;
-  void DrainLocked() override;
-  ResponsePtr TakeInFlightLocked() override;
+  // StreamSink (called by the session, its lock held)
+  grpc::Status Write(const v1::TrackResponse& response, bool more_waiting) override EXCLUDES(mutex_);
+  void ReadMore() override EXCLUDES(mutex_);
+  void End(const grpc::Status& status) override EXCLUDES(mutex_);
+  bool Cancelled() const override { return context_->IsCancelled(); }
 
  private:
-  void HandleOpen(const v1::SessionConfig& config);
-  void HandleResume(const v1::ResumeSession& resume);
-  // False (the stream finished FAILED_PRECONDITION) when no open/resume came first.
-  bool NeedsSession(const char* what);
-  // After an Offer*Locked: read on, or pause reading until the session has room.
-  void OfferLocked(bool room);
-  void HandleBlock();
-  void HandleImu();   // moving-array sessions: IMU samples in order with the blocks
-  void HandleScan();  // detection sessions: one scan of plots -> a track list
-  void Attach(std::shared_ptr<SessionHost> host, bool resumed, std::optional<uint64_t> last_frame,
-              bool received_none = false);
-  // Ends the stream once; before attaching (no lock needed) or with the host's lock held.
-  void FinishOnce(const grpc::Status& status);
-  // The stream broke or was cancelled: end it and leave the session resumable.
-  void CancelLocked();
-  void ReadNext();
+  // The attached session, or null before open/resume (it never changes once set).
+  SessionHost* Host() const EXCLUDES(mutex_);
+  void HandleOpen(const v1::SessionConfig& config) EXCLUDES(mutex_);
+  void HandleResume(const v1::ResumeSession& resume) EXCLUDES(mutex_);
+  // A block, IMU batch or scan: to the session (`what` names it if none is attached).
+  void HandleInput(const char* what) EXCLUDES(mutex_);
+  void Attach(std::shared_ptr<SessionHost> host, bool resumed, const ResumePoint& resume) EXCLUDES(mutex_);
+  // Ends the stream through the session when one is attached (which leaves it resumable),
+  // else directly.
+  void EndStream(const grpc::Status& status) EXCLUDES(mutex_);
+  // Calls Finish once; later calls do nothing.
+  void FinishOnce(const grpc::Status& status) EXCLUDES(mutex_);
+  void ReadNext() EXCLUDES(mutex_);  // unless finished
   // A request that did not parse: end the stream INVALID_ARGUMENT, keep the session.
-  void ParseFailed(size_t bytes);
+  void ParseFailed(size_t bytes) EXCLUDES(mutex_);
 
   grpc::CallbackServerContext* const context_;
   SessionRegistry* const registry_;
   ServiceMetrics* const metrics_;
-  std::string peer_;
+  const std::string peer_;
 
-  grpc::ByteBuffer read_buffer_;         // read path only: the request as received
-  v1::TrackRequest request_;             // read path only: read_buffer_ parsed
-  grpc::ByteBuffer write_buffer_;        // host: writing_ serialized
-  wire::DecodedBlock decoded_;           // read path only
-  std::shared_ptr<SessionHost> host_;    // set once by the read path, before attaching
+  grpc::ByteBuffer read_buffer_;   // read path: the request as received
+  v1::TrackRequest request_;       // read path: read_buffer_ parsed
+  wire::DecodedBlock decoded_;     // read path: the session's runner decodes blocks into it
+  grpc::ByteBuffer write_buffer_;  // Write: the response in flight, serialized
 
-  ResponsePtr writing_;                  // host: the response in flight, if any
-  bool finished_ = false;                // host: Finish called
-  bool finished_clean_ = false;          // host: finished OK after the client's half-close
-  bool input_done_ = false;              // host: the client half-closed
-  bool read_paused_ = false;             // host: waiting for queue space
-  bool cancelled_ = false;               // host: OnCancel ran or a write failed
-  bool draining_ = false;                // host: the server is shutting down
+  mutable Mutex mutex_;
+  std::shared_ptr<SessionHost> host_ GUARDED_BY(mutex_);  // set once, by the read path
+  bool finished_ GUARDED_BY(mutex_) = false;              // Finish called
 };
 
 }  // namespace localizer::server

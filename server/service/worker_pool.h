@@ -10,9 +10,10 @@
 #include <condition_variable>
 #include <deque>
 #include <functional>
-#include <mutex>
 #include <thread>
 #include <vector>
+
+#include "server/sync/mutex.h"
 
 namespace localizer::server {
 
@@ -23,17 +24,17 @@ class WorkerPool final {
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
 
-  bool Submit(std::function<void()> task);
-  void Shutdown();
+  bool Submit(std::function<void()> task) EXCLUDES(mutex_);
+  void Shutdown() EXCLUDES(mutex_);
   int threads() const { return static_cast<int>(threads_.size()); }
 
  private:
-  void Run();
+  void Run() EXCLUDES(mutex_);
 
-  mutable std::mutex mutex_;
+  mutable Mutex mutex_;
   std::condition_variable wake_;
-  std::deque<std::function<void()>> tasks_;  // guarded by mutex_
-  bool stopping_ = false;                    // guarded by mutex_
+  std::deque<std::function<void()>> tasks_ GUARDED_BY(mutex_);
+  bool stopping_ GUARDED_BY(mutex_) = false;
   std::vector<std::thread> threads_;
 };
 

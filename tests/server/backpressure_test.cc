@@ -21,7 +21,7 @@ class BackpressureTest : public ServiceTest {
  protected:
   void SetUp() override {
     ServerOptions options;
-    options.max_queue_blocks = 2;
+    options.max_queued_requests = 2;
     StartServer(options);
   }
 };
