@@ -11,9 +11,9 @@
 #include "clients/io/array_json.h"
 #include "clients/io/wav_io.h"
 #include "localizer/v1/localizer.grpc.pb.h"
-#include "server/wire/block_wire.h"
-#include "server/wire/config_wire.h"
-#include "server/wire/status_wire.h"
+#include "wire/block_wire.h"
+#include "wire/config_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::cli {
 

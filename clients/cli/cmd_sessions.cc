@@ -6,7 +6,7 @@
 #include "clients/cli/server_flags.h"
 #include "clients/grpc/connection.h"
 #include "localizer/v1/localizer.grpc.pb.h"
-#include "server/wire/status_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::cli {
 

@@ -2,9 +2,9 @@
 
 #include <chrono>
 
-#include "server/wire/config_wire.h"
-#include "server/wire/scan_wire.h"
-#include "server/wire/status_wire.h"
+#include "wire/config_wire.h"
+#include "wire/scan_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::client {
 

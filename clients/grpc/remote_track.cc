@@ -5,7 +5,7 @@
 #include <utility>
 
 #include "clients/grpc/track_stream.h"
-#include "server/wire/config_wire.h"
+#include "wire/config_wire.h"
 
 namespace localizer::client {
 

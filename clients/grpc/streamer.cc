@@ -10,9 +10,9 @@
 #include <optional>
 #include <thread>
 
-#include "server/wire/block_wire.h"
-#include "server/wire/estimate_wire.h"
-#include "server/wire/status_wire.h"
+#include "wire/block_wire.h"
+#include "wire/estimate_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::client {
 

@@ -3,7 +3,7 @@
 #include <utility>
 
 #include "clients/grpc/connection.h"
-#include "server/wire/status_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::client {
 

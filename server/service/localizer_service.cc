@@ -2,8 +2,8 @@
 
 #include "engine/pipeline/locate.h"
 #include "server/service/track_reactor.h"
-#include "server/wire/block_wire.h"
-#include "server/wire/status_wire.h"
+#include "wire/locate_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::server {
 
@@ -17,37 +17,14 @@ grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LocalizerService::T
 }
 
 Status LocateOnce(const v1::LocateRequest& request, const wire::ConfigPolicy& policy, v1::LocateResponse* response) {
-  if (request.config().has_detections()) {
-    return InvalidArgument("config.detections: Locate measures one block of samples; detection configs open Track sessions");
-  }
-  auto config = wire::ConfigFromProto(request.config(), policy);
-  if (!config.ok()) return config.status();
-  wire::DecodedBlock decoded;
-  std::string reason;
-  LOCALIZER_RETURN_IF_ERROR(wire::DecodeBlock(
-      request.block(), {static_cast<int>(config->sensors_m.size()), config->max_block_samples}, &decoded, &reason));
-  auto result = engine::Locate(*config, decoded.view);
+  wire::DecodedLocate decoded;
+  LOCALIZER_RETURN_IF_ERROR(wire::DecodeLocateRequest(request, policy, &decoded));
+  auto result = engine::Locate(decoded.config, decoded.block.view);
   if (!result.ok()) return result.status();
-  const auto array = engine::ArrayGeometry::Create(config->sensors_m, config->sound_speed_mps, config->reference_sensor);
-  for (size_t p = 0; p < result->measurement.pairs.size(); ++p) {
-    const engine::PairMeasurement& m = result->measurement.pairs[p];
-    v1::PairTdoa* pair = response->add_pairs();
-    pair->set_sensor(static_cast<uint32_t>(array->sensor_of_pair(static_cast<int>(p))));
-    pair->set_delay_s(m.delay_s);
-    pair->set_quality(m.quality);
-    pair->set_peak_snr(m.peak_snr);
-  }
-  response->set_fix_found(result->fix_found);
-  if (result->fix_found) {
-    response->mutable_position_m()->set_x(result->fix.position_m.x());
-    response->mutable_position_m()->set_y(result->fix.position_m.y());
-    response->mutable_position_m()->set_z(result->fix.position_m.z());
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) response->add_covariance(result->fix.covariance_m2(r, c));
-    }
-    response->set_residual_rms_s(result->fix.rms_residual_s);
-  }
-  response->set_tdoa_s(result->tdoa_s);
+  const auto array = engine::ArrayGeometry::Create(decoded.config.sensors_m, decoded.config.sound_speed_mps,
+                                                   decoded.config.reference_sensor);
+  if (!array.ok()) return array.status();  // Locate accepted the same geometry: never here
+  wire::LocateResultToProto(*result, *array, response);
   return Status::Ok();
 }
 

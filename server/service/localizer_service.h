@@ -9,7 +9,7 @@
 #include "server/service/service_metrics.h"
 #include "server/service/session_registry.h"
 #include "server/service/worker_pool.h"
-#include "server/wire/config_wire.h"
+#include "wire/config_wire.h"
 
 namespace localizer::server {
 

@@ -5,8 +5,8 @@
 #include <algorithm>
 
 #include "server/service/log.h"
-#include "server/wire/config_wire.h"
-#include "server/wire/estimate_wire.h"
+#include "wire/config_wire.h"
+#include "wire/estimate_wire.h"
 
 namespace localizer::server {
 namespace {

@@ -35,9 +35,9 @@
 #include "server/service/stream_sink.h"
 #include "server/service/track_history.h"
 #include "server/service/worker_pool.h"
-#include "server/wire/block_wire.h"
-#include "server/wire/imu_wire.h"
-#include "server/wire/scan_wire.h"
+#include "wire/block_wire.h"
+#include "wire/imu_wire.h"
+#include "wire/scan_wire.h"
 
 namespace localizer::server {
 

@@ -1,6 +1,6 @@
 #include "server/service/session_registry.h"
 
-#include "server/wire/string_limits.h"
+#include "wire/string_limits.h"
 
 #if defined(__GLIBC__)
 #include <malloc.h>

@@ -1,7 +1,7 @@
 #include "server/service/track_reactor.h"
 
 #include "server/service/log.h"
-#include "server/wire/status_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::server {
 

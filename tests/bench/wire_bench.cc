@@ -9,8 +9,8 @@
 #include <random>
 
 #include "engine/array/array_geometry.h"
-#include "server/wire/block_wire.h"
-#include "server/wire/estimate_wire.h"
+#include "wire/block_wire.h"
+#include "wire/estimate_wire.h"
 
 namespace localizer::wire {
 namespace {

@@ -48,9 +48,9 @@
 #include "engine/pipeline/locate.h"
 #include "localizer/v1/localizer.grpc.pb.h"
 #include "server/service/server.h"
-#include "server/wire/block_wire.h"
-#include "server/wire/config_wire.h"
-#include "server/wire/status_wire.h"
+#include "wire/block_wire.h"
+#include "wire/config_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::client {
 namespace {

@@ -7,7 +7,7 @@
 #include "clients/grpc/connection.h"
 #include "clients/grpc/latency_summary.h"
 #include "clients/grpc/streamer.h"
-#include "server/wire/status_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::client {
 namespace {

@@ -9,7 +9,7 @@
 #include "engine/sim/radar_scan.h"
 #include <nlohmann/json.hpp>
 
-#include "server/wire/scan_wire.h"
+#include "wire/scan_wire.h"
 #include "tests/server/http_client.h"
 #include "tests/server/service_fixture.h"
 

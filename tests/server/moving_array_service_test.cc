@@ -7,7 +7,7 @@
 #include "engine/sim/platform_motion.h"
 #include <nlohmann/json.hpp>
 
-#include "server/wire/imu_wire.h"
+#include "wire/imu_wire.h"
 #include "tests/server/http_client.h"
 #include "tests/server/service_fixture.h"
 

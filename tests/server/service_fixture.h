@@ -18,8 +18,8 @@
 #include "engine/sim/simulator.h"
 #include "localizer/v1/localizer.grpc.pb.h"
 #include "server/service/server.h"
-#include "server/wire/block_wire.h"
-#include "server/wire/config_wire.h"
+#include "wire/block_wire.h"
+#include "wire/config_wire.h"
 #include "tests/pipeline/scenario_run.h"
 
 namespace localizer::server::testing {

@@ -15,7 +15,7 @@
 #include "server/metrics/registry.h"
 #include "server/service/secure_random.h"
 #include "server/service/session_registry.h"
-#include "server/wire/config_wire.h"
+#include "wire/config_wire.h"
 
 namespace localizer::server {
 namespace {

@@ -1,4 +1,4 @@
-#include "server/wire/string_limits.h"
+#include "wire/string_limits.h"
 
 #include <cstdio>
 

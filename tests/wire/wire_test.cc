@@ -1,15 +1,17 @@
-// server/wire: frame-major <-> channel-major blocks (float and 16-bit PCM), the rules a
+// wire/: frame-major <-> channel-major blocks (float and 16-bit PCM), the rules a
 // bad block breaks, config defaults and round trips (the multiple-model filters' fields
-// included), estimates with model probabilities both ways, Status -> gRPC codes.
+// included), estimates with model probabilities both ways, Locate's request and response,
+// Status -> gRPC codes.
 #include <cmath>
 #include <limits>
 
 #include <gtest/gtest.h>
 
-#include "server/wire/block_wire.h"
-#include "server/wire/config_wire.h"
-#include "server/wire/estimate_wire.h"
-#include "server/wire/status_wire.h"
+#include "wire/block_wire.h"
+#include "wire/config_wire.h"
+#include "wire/estimate_wire.h"
+#include "wire/locate_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::wire {
 namespace {
@@ -433,6 +435,70 @@ TEST(StatusWire, CodesMapByName) {
     EXPECT_EQ(g.error_message(), "m");
   }
   EXPECT_TRUE(ToGrpcStatus(Status::Ok()).ok());
+}
+
+TEST(LocateWire, DetectionConfigsAndBadBlocksAreInvalidArgumentNamingTheField) {
+  v1::LocateRequest request;
+  request.mutable_config()->mutable_detections();
+  DecodedLocate decoded;
+  Status status = DecodeLocateRequest(request, ConfigPolicy{}, &decoded);
+  EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(status.message().find("config.detections"), std::string::npos) << status.message();
+
+  *request.mutable_config() = MinimalConfig();
+  *request.mutable_block() = InterleavedBlock(3, 100);  // the array has 4 sensors
+  status = DecodeLocateRequest(request, ConfigPolicy{}, &decoded);
+  EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
+
+  *request.mutable_block() = InterleavedBlock(4, 100);
+  ASSERT_TRUE(DecodeLocateRequest(request, ConfigPolicy{}, &decoded).ok());
+  EXPECT_EQ(decoded.config.sensors_m.size(), 4u);
+  EXPECT_EQ(decoded.block.view.channel_count, 4);
+  EXPECT_EQ(decoded.block.view.samples_per_channel, 100);
+  EXPECT_EQ(decoded.block.view.samples[100], 100.0f);  // channel 1, sample 0
+}
+
+TEST(LocateWire, ResultFillsPairsFixAndCovariance) {
+  // Reference sensor 1: pairs are (1, 0), (1, 2), (1, 3).
+  const std::vector<engine::Vec3> sensors = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  auto array = engine::ArrayGeometry::Create(sensors, 1500.0, 1);
+  ASSERT_TRUE(array.ok()) << array.status().ToString();
+  engine::LocateResult result;
+  for (int p = 0; p < 3; ++p) {
+    engine::PairMeasurement m;
+    m.delay_s = 1e-4 * (p + 1);
+    m.quality = 2.0 + p;
+    m.peak_snr = 10.0 + p;
+    result.measurement.pairs.push_back(m);
+  }
+  result.tdoa_s = 0.004;
+  v1::LocateResponse response;
+  LocateResultToProto(result, *array, &response);
+  ASSERT_EQ(response.pairs_size(), 3);
+  EXPECT_EQ(response.pairs(0).sensor(), 0u);
+  EXPECT_EQ(response.pairs(1).sensor(), 2u);
+  EXPECT_EQ(response.pairs(2).sensor(), 3u);
+  EXPECT_EQ(response.pairs(2).delay_s(), result.measurement.pairs[2].delay_s);
+  EXPECT_EQ(response.pairs(1).quality(), 3.0);
+  EXPECT_EQ(response.pairs(0).peak_snr(), 10.0);
+  EXPECT_FALSE(response.fix_found());
+  EXPECT_FALSE(response.has_position_m());
+  EXPECT_EQ(response.covariance_size(), 0);
+  EXPECT_EQ(response.tdoa_s(), 0.004);
+
+  result.fix_found = true;
+  result.fix.position_m = engine::Vec3(1.0, 2.0, 3.0);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) result.fix.covariance_m2(r, c) = 10.0 * r + c;
+  }
+  result.fix.rms_residual_s = 2e-6;
+  response.Clear();
+  LocateResultToProto(result, *array, &response);
+  EXPECT_TRUE(response.fix_found());
+  EXPECT_EQ(response.position_m().y(), 2.0);
+  ASSERT_EQ(response.covariance_size(), 9);
+  EXPECT_EQ(response.covariance(5), 12.0);  // row 1, column 2: row-major
+  EXPECT_EQ(response.residual_rms_s(), 2e-6);
 }
 
 }  // namespace

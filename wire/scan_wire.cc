@@ -1,4 +1,4 @@
-#include "server/wire/scan_wire.h"
+#include "wire/scan_wire.h"
 
 #include <cmath>
 #include <numbers>

@@ -1,4 +1,4 @@
-#include "server/wire/imu_wire.h"
+#include "wire/imu_wire.h"
 
 #include <cmath>
 #include <limits>

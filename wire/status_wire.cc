@@ -1,4 +1,4 @@
-#include "server/wire/status_wire.h"
+#include "wire/status_wire.h"
 
 namespace localizer::wire {
 

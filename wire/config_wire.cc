@@ -1,10 +1,10 @@
-#include "server/wire/config_wire.h"
+#include "wire/config_wire.h"
 
 #include <cmath>
 #include <limits>
 #include <sstream>
 
-#include "server/wire/string_limits.h"
+#include "wire/string_limits.h"
 
 namespace localizer::wire {
 namespace {

@@ -1,4 +1,4 @@
-#include "server/wire/block_wire.h"
+#include "wire/block_wire.h"
 
 #include <algorithm>
 #include <cmath>

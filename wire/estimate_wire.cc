@@ -1,4 +1,4 @@
-#include "server/wire/estimate_wire.h"
+#include "wire/estimate_wire.h"
 
 #include <algorithm>
 
