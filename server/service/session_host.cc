@@ -68,10 +68,10 @@ SessionHost::SessionHost(std::string id, std::string token, std::string label,
       token_(std::move(token)),
       label_(std::move(label)),
       scans_(std::move(scans)),
-      config_(scans_->config()),
+      config_(),
       backend_("cpu"),
       limits_(limits),
-      block_limits_{0, scans_->config().max_block_samples},
+      block_limits_{0, 0},  // takes no sample blocks
       pool_(pool),
       metrics_(metrics),
       created_(Clock::now()),
@@ -94,9 +94,10 @@ v1::SessionOpened SessionHost::OpenedMessageLocked(bool resumed) const {
   v1::SessionOpened opened;
   opened.set_session_id(id_);
   opened.set_resume_token(token_);
-  engine::SessionConfig effective = config_;
-  effective.backend = backend_;
-  *opened.mutable_effective_config() = wire::ConfigToProto(effective, label_);
+  v1::SessionConfig* effective = opened.mutable_effective_config();
+  *effective =
+      session_ ? wire::ConfigToProto(session_->config(), label_) : wire::ConfigToProto(scans_->config(), label_);
+  effective->set_backend(backend_);
   opened.set_backend(backend_);
   opened.set_resumed(resumed);
   if (last_accepted_) opened.set_last_sequence(*last_accepted_);

@@ -65,8 +65,9 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   const std::string& resume_token() const { return token_; }  // a secret: never log it
   const std::string& label() const { return label_; }
   const std::string& backend() const { return backend_; }
-  // The session's config (fixed at creation, so readable from any thread).
-  const engine::SessionConfig& config() const { return config_; }
+  // An audio session's config (fixed at creation, so readable from any thread); a detection
+  // session's is the default one (no array).
+  const engine::AudioSessionConfig& config() const { return config_; }
   bool detections() const { return scans_ != nullptr; }
   // Recent initialised positions for the live view; locks itself (see track_history.h).
   const TrackHistory& track() const { return track_; }
@@ -156,7 +157,7 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   const std::string label_;
   const std::unique_ptr<engine::Session> session_;  // audio sessions; used by the scheduled worker only
   const std::unique_ptr<engine::ScanSession> scans_;  // detection sessions; likewise
-  const engine::SessionConfig config_;
+  const engine::AudioSessionConfig config_;
   const std::string backend_;
   const HostLimits limits_;
   const wire::BlockLimits block_limits_;

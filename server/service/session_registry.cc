@@ -51,12 +51,12 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   // FFT plans, particles: outside the lock.
   std::unique_ptr<engine::Session> session;
   std::unique_ptr<engine::ScanSession> scans;
-  if (engine_config->detections) {
-    auto made = engine::ScanSession::Create(*engine_config);
+  if (const auto* detection = std::get_if<engine::DetectionSessionConfig>(&*engine_config)) {
+    auto made = engine::ScanSession::Create(*detection);
     if (!made.ok()) return made.status();
     scans = std::move(made).value();
   } else {
-    auto made = engine::Session::Create(*engine_config);
+    auto made = engine::Session::Create(std::get<engine::AudioSessionConfig>(*engine_config));
     if (!made.ok()) return made.status();
     session = std::move(made).value();
   }

@@ -19,14 +19,14 @@ json Triple(const double v[3]) { return json::array({Number(v[0]), Number(v[1]),
 
 json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, bool with_track) {
   const v1::SessionInfo info = host.Info(now, ttl_s);
-  const engine::SessionConfig& config = host.config();
+  const engine::AudioSessionConfig& config = host.config();
   const TrackSnapshot track = host.track().Snapshot();
   json s;
   s["id"] = host.id();
   s["label"] = host.label();
   s["backend"] = host.backend();
   s["kind"] = host.detections() ? "detections" : "samples";
-  s["filter_type"] = host.detections() ? "tws" : config.filter_type;
+  s["filter_type"] = host.detections() ? "tws" : engine::FilterKindName(config.tracker.kind);
   s["attached"] = info.attached();
   // A moving array's sensors where its latest pose put them (in the body frame until then).
   json sensors = json::array();
