@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <variant>
 
 #include "wire/string_limits.h"
 
@@ -49,8 +50,6 @@ Status Rename(Status status) {
       {"reference_sensor", "array.reference_sensor"}, {"particles", "filter.particles"},
       {"accel_noise_mps2", "filter.accel_noise_mps2"}, {"tdoa_sigma_s", "filter.tdoa_sigma_s"},
       {"resample_threshold", "filter.resample_threshold"}, {"min_peak_snr", "filter.min_peak_snr"},
-      {"imm_modes", "filter.imm_modes"},           {"imm_variant", "filter.imm_variant"},
-      {"robust", "filter.robust"},
   };
   for (const auto& [from, to] : renames) {
     const size_t at = m.find(from);
@@ -72,7 +71,7 @@ std::string Num(double v) {
 // Bounds -> the engine's box: an unset side is open (+-infinity), as is a side set to
 // infinity in its open direction; anything else must be finite, within 1e7 m, and each
 // axis's min < max. Errors name the proto field ("bounds.max_z_m").
-Status BoundsFromProto(const v1::Bounds& b, engine::SessionConfig* c) {
+Status BoundsFromProto(const v1::Bounds& b, engine::AudioSessionConfig* c) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   struct Axis {
     const char* name;
@@ -107,7 +106,7 @@ Status BoundsFromProto(const v1::Bounds& b, engine::SessionConfig* c) {
   return Status::Ok();
 }
 
-void BoundsToProto(const engine::SessionConfig& c, v1::SessionConfig* p) {
+void BoundsToProto(const engine::AudioSessionConfig& c, v1::SessionConfig* p) {
   if (c.bounds_min_m.array().isInf().all() && c.bounds_max_m.array().isInf().all()) return;  // unbounded
   v1::Bounds* b = p->mutable_bounds();
   if (std::isfinite(c.bounds_min_m.x())) b->set_min_x_m(c.bounds_min_m.x());
@@ -153,7 +152,7 @@ Status CheckEnums(const v1::SessionConfig& p) {
 }
 
 // init_region: finite, within 1e7 m (as the bounds), min <= max on every axis.
-Status InitRegionFromProto(const v1::Region& r, engine::SessionConfig* c) {
+Status InitRegionFromProto(const v1::Region& r, engine::AudioSessionConfig* c) {
   const double lo[3] = {r.min_m().x(), r.min_m().y(), r.min_m().z()};
   const double hi[3] = {r.max_m().x(), r.max_m().y(), r.max_m().z()};
   const char* const axes[3] = {"x", "y", "z"};
@@ -178,11 +177,101 @@ Status InitRegionFromProto(const v1::Region& r, engine::SessionConfig* c) {
 
 namespace {
 
+// Which filter each proto filter type selects.
+StatusOr<engine::FilterKind> FilterKindFromProto(v1::FilterType type) {
+  switch (type) {
+    case v1::FILTER_TYPE_UNSPECIFIED:
+    case v1::FILTER_TYPE_PF: return engine::FilterKind::kPf;
+    case v1::FILTER_TYPE_EKF: return engine::FilterKind::kEkf;
+    case v1::FILTER_TYPE_UKF: return engine::FilterKind::kUkf;
+    case v1::FILTER_TYPE_MMPF: return engine::FilterKind::kMmpf;
+    case v1::FILTER_TYPE_IMM: return engine::FilterKind::kImm;
+    default: break;
+  }
+  return InvalidArgument("filter.type " + std::to_string(type) + " is not one of: PF, EKF, UKF, MMPF, IMM");
+}
+
+v1::FilterType FilterKindToProto(engine::FilterKind kind) {
+  switch (kind) {
+    case engine::FilterKind::kEkf: return v1::FILTER_TYPE_EKF;
+    case engine::FilterKind::kUkf: return v1::FILTER_TYPE_UKF;
+    case engine::FilterKind::kMmpf: return v1::FILTER_TYPE_MMPF;
+    case engine::FilterKind::kImm: return v1::FILTER_TYPE_IMM;
+    case engine::FilterKind::kPf: break;
+  }
+  return v1::FILTER_TYPE_PF;
+}
+
+// FilterConfig -> the tracker's options; zero (or "") fields keep the defaults. Its names
+// (motion model, IMM modes and variant, robust update) are parsed here, each error naming
+// its proto field. The one motion noise, TDOA noise and pair threshold the proto gives
+// every filter go to both the particle and the Kalman filters' options.
+Status TrackerFromProto(const v1::FilterConfig& f, const ConfigPolicy& policy, engine::TrackerOptions* t) {
+  if (f.particles() > static_cast<uint32_t>(policy.max_particles)) {
+    return InvalidArgument("filter.particles is " + std::to_string(f.particles()) +
+                           "; this server allows at most " + std::to_string(policy.max_particles));
+  }
+  auto kind = FilterKindFromProto(f.type());
+  if (!kind.ok()) return kind.status();
+  t->kind = *kind;
+  if (!f.motion_model().empty()) {
+    auto model = engine::ParseMotionModelKind(f.motion_model(), "filter.motion_model");
+    if (!model.ok()) return model.status();
+    t->kalman.motion_model = *model;
+  }
+  if (!f.imm_modes().empty()) {
+    auto modes = engine::ParseImmModes(f.imm_modes(), "filter.imm_modes");
+    if (!modes.ok()) return modes.status();
+    t->imm_modes = *std::move(modes);
+  }
+  if (!f.imm_variant().empty()) {
+    auto variant = engine::ParseKalmanVariant(f.imm_variant(), "filter.imm_variant");
+    if (!variant.ok()) return variant.status();
+    t->imm_variant = *variant;
+  }
+  if (!f.robust().empty()) {
+    auto robust = engine::ParseRobustUpdate(f.robust(), "filter.robust");
+    if (!robust.ok()) return robust.status();
+    t->kalman.robust = *robust;
+  }
+  engine::ParticleFilterOptions& particle = t->particle;
+  if (f.particles() != 0) particle.particles = static_cast<int>(f.particles());
+  if (f.accel_noise_mps2() != 0.0) particle.accel_noise_mps2 = f.accel_noise_mps2();
+  particle.tdoa_sigma_s = f.tdoa_sigma_s();
+  if (f.likelihood() == v1::LIKELIHOOD_GCC) particle.likelihood = engine::Likelihood::kGcc;
+  if (f.likelihood() == v1::LIKELIHOOD_MIXTURE) particle.likelihood = engine::Likelihood::kMixture;
+  if (f.outlier_probability() != 0.0) particle.outlier_probability = f.outlier_probability();
+  if (f.min_peak_snr() != 0.0) particle.min_peak_snr = f.min_peak_snr();
+  if (f.resample_threshold() != 0.0) particle.resample_threshold = f.resample_threshold();
+  t->kalman.motion.accel_noise_mps2 = particle.accel_noise_mps2;
+  t->kalman.tdoa_sigma_s = particle.tdoa_sigma_s;
+  t->kalman.min_peak_snr = particle.min_peak_snr;
+  return Status::Ok();
+}
+
+void TrackerToProto(const engine::TrackerOptions& t, v1::FilterConfig* f) {
+  f->set_type(FilterKindToProto(t.kind));
+  f->set_motion_model(engine::MotionModelKindName(t.kalman.motion_model));
+  f->set_imm_modes(engine::ImmModesName(t.imm_modes));
+  f->set_imm_variant(engine::KalmanVariantName(t.imm_variant));
+  f->set_robust(engine::RobustUpdateName(t.kalman.robust));
+  f->set_particles(static_cast<uint32_t>(t.particle.particles));
+  // The noise the session's filter reads: the Kalman filters' for ekf, ukf and imm.
+  const bool kalman = t.kind != engine::FilterKind::kPf && t.kind != engine::FilterKind::kMmpf;
+  f->set_accel_noise_mps2(kalman ? t.kalman.motion.accel_noise_mps2 : t.particle.accel_noise_mps2);
+  f->set_tdoa_sigma_s(kalman ? t.kalman.tdoa_sigma_s : t.particle.tdoa_sigma_s);
+  f->set_likelihood(t.particle.likelihood == engine::Likelihood::kGcc       ? v1::LIKELIHOOD_GCC
+                    : t.particle.likelihood == engine::Likelihood::kMixture ? v1::LIKELIHOOD_MIXTURE
+                                                                            : v1::LIKELIHOOD_PEAK);
+  f->set_outlier_probability(t.particle.outlier_probability);
+  f->set_min_peak_snr(kalman ? t.kalman.min_peak_snr : t.particle.min_peak_snr);
+  f->set_resample_threshold(t.particle.resample_threshold);
+}
+
 // DetectionConfig -> the tracker's options; zero fields keep the defaults.
-StatusOr<engine::SessionConfig> DetectionConfigFromProto(const v1::SessionConfig& p, const ConfigPolicy& policy) {
-  engine::SessionConfig c;
-  c.detections = true;
-  c.backend = "cpu";
+StatusOr<engine::DetectionSessionConfig> DetectionConfigFromProto(const v1::SessionConfig& p,
+                                                                  const ConfigPolicy& policy) {
+  engine::DetectionSessionConfig c;
   c.seed = p.has_seed() ? p.seed() : 1;
   const v1::DetectionConfig& d = p.detections();
   engine::tws::TwsOptions& o = c.tws;
@@ -208,18 +297,31 @@ StatusOr<engine::SessionConfig> DetectionConfigFromProto(const v1::SessionConfig
     }
     o.max_tracks = static_cast<int>(d.max_tracks());
   }
-  c.max_block_samples = policy.max_block_samples;
-  LOCALIZER_RETURN_IF_ERROR(c.Validate());
+  if (const Status s = c.Validate(); !s.ok()) return InvalidArgument("detections: " + s.message());
   return c;
 }
 
 }  // namespace
 
 StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, const ConfigPolicy& policy) {
+  if (p.has_detections()) {
+    LOCALIZER_RETURN_IF_ERROR(CheckStrings(p));
+    auto detection = DetectionConfigFromProto(p, policy);
+    if (!detection.ok()) return detection.status();
+    return engine::SessionConfig(*std::move(detection));
+  }
+  auto audio = AudioConfigFromProto(p, policy);
+  if (!audio.ok()) return audio.status();
+  return engine::SessionConfig(*std::move(audio));
+}
+
+StatusOr<engine::AudioSessionConfig> AudioConfigFromProto(const v1::SessionConfig& p, const ConfigPolicy& policy) {
   LOCALIZER_RETURN_IF_ERROR(CheckStrings(p));
-  if (p.has_detections()) return DetectionConfigFromProto(p, policy);
+  if (p.has_detections()) {
+    return InvalidArgument("detections: an audio session's config has an array and samples, not detections");
+  }
   LOCALIZER_RETURN_IF_ERROR(CheckEnums(p));
-  engine::SessionConfig c;
+  engine::AudioSessionConfig c;
   if (!p.has_array()) return InvalidArgument("array is missing");
   if (p.array().sensors_m_size() > policy.max_channels) {
     return InvalidArgument("array.sensors_m has " + std::to_string(p.array().sensors_m_size()) +
@@ -246,35 +348,10 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
   c.band_low_hz = p.band_low_hz();
   c.band_high_hz = p.band_high_hz();
 
-  const v1::FilterConfig& f = p.filter();
-  if (f.particles() > static_cast<uint32_t>(policy.max_particles)) {
-    return InvalidArgument("filter.particles is " + std::to_string(f.particles()) +
-                           "; this server allows at most " + std::to_string(policy.max_particles));
-  }
-  switch (f.type()) {
-    case v1::FILTER_TYPE_UNSPECIFIED:
-    case v1::FILTER_TYPE_PF: c.filter_type = "pf"; break;
-    case v1::FILTER_TYPE_EKF: c.filter_type = "ekf"; break;
-    case v1::FILTER_TYPE_UKF: c.filter_type = "ukf"; break;
-    case v1::FILTER_TYPE_MMPF: c.filter_type = "mmpf"; break;
-    case v1::FILTER_TYPE_IMM: c.filter_type = "imm"; break;
-    default:
-      return InvalidArgument("filter.type " + std::to_string(f.type()) + " is not one of: PF, EKF, UKF, MMPF, IMM");
-  }
-  if (!f.motion_model().empty()) c.motion_model = f.motion_model();
-  if (!f.imm_modes().empty()) c.imm_modes = f.imm_modes();
-  if (!f.imm_variant().empty()) c.imm_variant = f.imm_variant();
-  if (!f.robust().empty()) c.robust = f.robust();
-  if (f.particles() != 0) c.filter.particles = static_cast<int>(f.particles());
-  if (f.accel_noise_mps2() != 0.0) c.filter.accel_noise_mps2 = f.accel_noise_mps2();
-  c.filter.tdoa_sigma_s = f.tdoa_sigma_s();
-  if (f.likelihood() == v1::LIKELIHOOD_GCC) c.filter.likelihood = engine::Likelihood::kGcc;
-  if (f.likelihood() == v1::LIKELIHOOD_MIXTURE) c.filter.likelihood = engine::Likelihood::kMixture;
-  if (f.outlier_probability() != 0.0) c.filter.outlier_probability = f.outlier_probability();
-  if (f.min_peak_snr() != 0.0) c.filter.min_peak_snr = f.min_peak_snr();
-  if (f.resample_threshold() != 0.0) c.filter.resample_threshold = f.resample_threshold();
-
-  c.backend = p.backend().empty() ? policy.default_backend : p.backend();
+  LOCALIZER_RETURN_IF_ERROR(TrackerFromProto(p.filter(), policy, &c.tracker));
+  auto backend = engine::ParseBackendChoice(p.backend().empty() ? policy.default_backend : p.backend(), "backend");
+  if (!backend.ok()) return backend.status();
+  c.backend = *backend;
   if (p.has_seed()) c.seed = p.seed();
   if (p.has_init_region()) LOCALIZER_RETURN_IF_ERROR(InitRegionFromProto(p.init_region(), &c));
   if (p.min_pair_quality() != 0.0) c.min_pair_quality = p.min_pair_quality();
@@ -304,31 +381,37 @@ StatusOr<engine::SessionConfig> ConfigFromProto(const v1::SessionConfig& p, cons
   return c;
 }
 
-v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::string& label) {
+v1::SessionConfig ConfigToProto(const engine::SessionConfig& config, const std::string& label) {
+  return std::visit([&](const auto& kind) { return ConfigToProto(kind, label); }, config);
+}
+
+v1::SessionConfig ConfigToProto(const engine::DetectionSessionConfig& c, const std::string& label) {
   v1::SessionConfig p;
-  if (c.detections) {
-    const engine::tws::TwsOptions& o = c.tws;
-    v1::DetectionConfig* d = p.mutable_detections();
-    d->set_dimensions(static_cast<uint32_t>(o.dimensions));
-    d->set_range_sigma_m(o.noise.range_sigma_m);
-    d->set_bearing_sigma_rad(o.noise.bearing_sigma_rad);
-    d->set_elevation_sigma_rad(o.noise.elevation_sigma_rad);
-    d->set_accel_noise_mps2(o.accel_noise_mps2);
-    d->set_steady_state_gain(o.filter == engine::tws::FilterForm::kSteadyState);
-    d->set_gate_probability(o.gate_probability);
-    d->set_confirm_hits(static_cast<uint32_t>(o.confirm_hits));
-    d->set_confirm_window(static_cast<uint32_t>(o.confirm_window));
-    d->set_max_coast_scans(static_cast<uint32_t>(o.max_coast_scans));
-    d->set_max_position_sigma_m(o.max_position_sigma_m);
-    d->set_two_point_initiation(o.initiation == engine::tws::Initiation::kTwoPoint);
-    d->set_initial_speed_sigma_mps(o.initial_speed_sigma_mps);
-    d->set_max_speed_mps(o.max_speed_mps);
-    d->set_max_tracks(static_cast<uint32_t>(o.max_tracks));
-    p.set_backend("cpu");
-    p.set_seed(c.seed);
-    p.set_label(label);
-    return p;
-  }
+  const engine::tws::TwsOptions& o = c.tws;
+  v1::DetectionConfig* d = p.mutable_detections();
+  d->set_dimensions(static_cast<uint32_t>(o.dimensions));
+  d->set_range_sigma_m(o.noise.range_sigma_m);
+  d->set_bearing_sigma_rad(o.noise.bearing_sigma_rad);
+  d->set_elevation_sigma_rad(o.noise.elevation_sigma_rad);
+  d->set_accel_noise_mps2(o.accel_noise_mps2);
+  d->set_steady_state_gain(o.filter == engine::tws::FilterForm::kSteadyState);
+  d->set_gate_probability(o.gate_probability);
+  d->set_confirm_hits(static_cast<uint32_t>(o.confirm_hits));
+  d->set_confirm_window(static_cast<uint32_t>(o.confirm_window));
+  d->set_max_coast_scans(static_cast<uint32_t>(o.max_coast_scans));
+  d->set_max_position_sigma_m(o.max_position_sigma_m);
+  d->set_two_point_initiation(o.initiation == engine::tws::Initiation::kTwoPoint);
+  d->set_initial_speed_sigma_mps(o.initial_speed_sigma_mps);
+  d->set_max_speed_mps(o.max_speed_mps);
+  d->set_max_tracks(static_cast<uint32_t>(o.max_tracks));
+  p.set_backend("cpu");  // detection sessions run on the CPU
+  p.set_seed(c.seed);
+  p.set_label(label);
+  return p;
+}
+
+v1::SessionConfig ConfigToProto(const engine::AudioSessionConfig& c, const std::string& label) {
+  v1::SessionConfig p;
   for (const Vec3& s : c.sensors_m) ToProto(s, p.mutable_array()->add_sensors_m());
   p.mutable_array()->set_sound_speed_mps(c.sound_speed_mps);
   p.mutable_array()->set_reference_sensor(static_cast<uint32_t>(c.reference_sensor));
@@ -339,26 +422,8 @@ v1::SessionConfig ConfigToProto(const engine::SessionConfig& c, const std::strin
   p.set_phat_beta(c.phat_beta);
   p.set_band_low_hz(c.band_low_hz);
   p.set_band_high_hz(c.band_high_hz);
-  v1::FilterConfig* f = p.mutable_filter();
-  f->set_type(c.filter_type == "ekf"    ? v1::FILTER_TYPE_EKF
-              : c.filter_type == "ukf"  ? v1::FILTER_TYPE_UKF
-              : c.filter_type == "mmpf" ? v1::FILTER_TYPE_MMPF
-              : c.filter_type == "imm"  ? v1::FILTER_TYPE_IMM
-                                        : v1::FILTER_TYPE_PF);
-  f->set_motion_model(c.motion_model);
-  f->set_imm_modes(c.imm_modes);
-  f->set_imm_variant(c.imm_variant);
-  f->set_robust(c.robust);
-  f->set_particles(static_cast<uint32_t>(c.filter.particles));
-  f->set_accel_noise_mps2(c.filter.accel_noise_mps2);
-  f->set_tdoa_sigma_s(c.filter.tdoa_sigma_s);
-  f->set_likelihood(c.filter.likelihood == engine::Likelihood::kGcc       ? v1::LIKELIHOOD_GCC
-                    : c.filter.likelihood == engine::Likelihood::kMixture ? v1::LIKELIHOOD_MIXTURE
-                                                                          : v1::LIKELIHOOD_PEAK);
-  f->set_outlier_probability(c.filter.outlier_probability);
-  f->set_min_peak_snr(c.filter.min_peak_snr);
-  f->set_resample_threshold(c.filter.resample_threshold);
-  p.set_backend(c.backend);
+  TrackerToProto(c.tracker, p.mutable_filter());
+  p.set_backend(engine::BackendChoiceName(c.backend));
   p.set_seed(c.seed);
   p.set_label(label);
   if (c.init_region_min_m.allFinite() && c.init_region_max_m.allFinite()) {

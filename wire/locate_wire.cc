@@ -8,7 +8,7 @@ Status DecodeLocateRequest(const v1::LocateRequest& request, const ConfigPolicy&
   if (request.config().has_detections()) {
     return InvalidArgument("config.detections: Locate measures one block of samples; detection configs open Track sessions");
   }
-  auto config = ConfigFromProto(request.config(), policy);
+  auto config = AudioConfigFromProto(request.config(), policy);
   if (!config.ok()) return config.status();
   out->config = std::move(config).value();
   std::string reason;

@@ -4,7 +4,6 @@
 #include "engine/array/array_geometry.h"
 #include "engine/core/status.h"
 #include "engine/pipeline/locate.h"
-#include "engine/pipeline/session.h"
 #include "localizer/v1/localizer.pb.h"
 #include "wire/block_wire.h"
 #include "wire/config_wire.h"
@@ -12,12 +11,12 @@
 namespace localizer::wire {
 
 struct DecodedLocate {
-  engine::SessionConfig config;
+  engine::AudioSessionConfig config;
   DecodedBlock block;  // block.view points into block.samples after a successful decode
 };
 
 // INVALID_ARGUMENT for a detection config ("config.detections: ..."; Locate measures one
-// block of samples), else as ConfigFromProto and DecodeBlock (the block's limits come from
+// block of samples), else as AudioConfigFromProto and DecodeBlock (the block's limits come from
 // the config: its sensor count and max_block_samples).
 Status DecodeLocateRequest(const v1::LocateRequest& request, const ConfigPolicy& policy, DecodedLocate* out);
 

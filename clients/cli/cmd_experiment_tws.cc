@@ -129,8 +129,7 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
     if (!made.ok()) return UsageError(kCommand, made.status().message());
     tracker = std::move(made).value();
   } else {
-    engine::SessionConfig config;
-    config.detections = true;
+    engine::DetectionSessionConfig config;
     config.tws = options;
     auto made = client::RemoteScanSession::Open(client::Connect(f.server), config, "experiment-tws",
                                                 f.session_key.empty() ? client::RandomSessionKey() : f.session_key);

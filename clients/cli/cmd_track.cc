@@ -22,7 +22,7 @@ namespace {
 
 const char* const kCommand = "track";
 
-// Flag values; the numeric defaults come from engine::SessionConfig.
+// Flag values; the numeric defaults come from engine::AudioSessionConfig.
 struct TrackFlags {
   std::string array_path;
   std::vector<std::string> wav_paths;

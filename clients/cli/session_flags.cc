@@ -7,7 +7,7 @@
 namespace localizer::cli {
 
 void RegisterGccFlags(FlagSet& flags, SessionFlags* f) {
-  engine::SessionConfig& c = f->config;
+  engine::AudioSessionConfig& c = f->config;
   flags.OptionalDouble("sound-speed", &f->array.sound_speed_mps, "MPS", "from the array file",
                        "sound speed, m/s");
   flags.OptionalInt("reference", &f->array.reference_sensor, "K", "from the array file",
@@ -23,32 +23,32 @@ void RegisterGccFlags(FlagSet& flags, SessionFlags* f) {
 }
 
 void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& seed_flag) {
-  engine::SessionConfig& c = f->config;
+  engine::AudioSessionConfig& c = f->config;
   flags.Int("frame", &c.frame_samples, "N", "samples", "samples per channel per TDOA frame");
   flags.Int("hop", &c.hop_samples, "N", "samples", "samples between frame starts");
-  flags.String("filter", &c.filter_type, "NAME",
+  flags.String("filter", &f->filter, "NAME",
                "tracker: pf (particle filter) | ekf (extended Kalman) | ukf (unscented Kalman) | "
                "mmpf (multiple-model particle filter: cv, manoeuvre, turns) | imm (interacting "
                "multiple model over --imm-modes)");
-  flags.String("motion-model", &c.motion_model, "NAME",
+  flags.String("motion-model", &f->motion_model, "NAME",
                "ekf/ukf motion model: cv | ca | ct (coordinated turn) | singer; pf: cv");
-  flags.String("imm-modes", &c.imm_modes, "LIST",
+  flags.String("imm-modes", &f->imm_modes, "LIST",
                "imm: comma-separated motion models of its modes, e.g. cv,ct | cv,ca");
-  flags.String("imm-variant", &c.imm_variant, "NAME", "imm: mode filters ekf | ukf");
-  flags.String("robust", &c.robust, "NAME",
+  flags.String("imm-variant", &f->imm_variant, "NAME", "imm: mode filters ekf | ukf");
+  flags.String("robust", &f->robust, "NAME",
                "ekf/ukf/imm update: none | huber | student-t (down-weight a pair the others contradict)");
-  flags.Int("particles", &c.filter.particles, "N", "", "particle count");
+  flags.Int("particles", &c.tracker.particle.particles, "N", "", "particle count");
   flags.String("likelihood", &f->likelihood, "NAME",
                "particle likelihood: peak (TDOA peaks, Student-t) | gcc (whole GCC functions) | "
                "mixture (Gaussian + uniform outliers)");
-  flags.Double("outlier-probability", &c.filter.outlier_probability, "P", "",
+  flags.Double("outlier-probability", &c.tracker.particle.outlier_probability, "P", "",
                "mixture likelihood: chance that a pair's peak is an outlier, in [0, 1)");
   flags.Uint64(seed_flag, &c.seed, "S", "random seed of the particle filter");
   flags.Double("tdoa-sigma-us", &f->tdoa_sigma_us, "US", "us",
                "TDOA noise std of the peak likelihood (0: estimated online from the innovations)");
-  flags.Double("accel-noise", &c.filter.accel_noise_mps2, "MPS2", "m/s^2",
+  flags.Double("accel-noise", &c.tracker.particle.accel_noise_mps2, "MPS2", "m/s^2",
                "std of the white acceleration driving the motion model, per axis");
-  flags.String("backend", &c.backend, "NAME",
+  flags.String("backend", &f->backend, "NAME",
                "compute backend: cpu|gpu|auto (with --server: on the server)");
   flags.String("bounds-min", &f->bounds_min, "X,Y,Z",
                "lower corner of the box that can hold the source, m; per axis a number or -inf "
@@ -101,17 +101,39 @@ StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::strin
   return v;
 }
 
-StatusOr<engine::SessionConfig> BuildSessionConfig(const SessionFlags& f,
-                                                   const io::ArrayFile& array,
-                                                   double sample_rate_hz, Runs runs) {
-  engine::SessionConfig base = f.config;
+StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, const io::ArrayFile& array,
+                                                        double sample_rate_hz, Runs runs) {
+  engine::AudioSessionConfig base = f.config;
   auto weighting = engine::ParseWeighting(f.weighting);
   if (!weighting.ok()) return InvalidArgument("--weighting: " + weighting.status().message());
   base.weighting = *weighting;
+  engine::TrackerOptions& tracker = base.tracker;
   auto likelihood = engine::ParseLikelihood(f.likelihood);
   if (!likelihood.ok()) return InvalidArgument("--likelihood: " + likelihood.status().message());
-  base.filter.likelihood = *likelihood;
-  base.filter.tdoa_sigma_s = f.tdoa_sigma_us * 1e-6;
+  tracker.particle.likelihood = *likelihood;
+  tracker.particle.tdoa_sigma_s = f.tdoa_sigma_us * 1e-6;
+  // One motion and TDOA noise for every filter (--accel-noise, --tdoa-sigma-us).
+  tracker.kalman.motion.accel_noise_mps2 = tracker.particle.accel_noise_mps2;
+  tracker.kalman.tdoa_sigma_s = tracker.particle.tdoa_sigma_s;
+  tracker.kalman.min_peak_snr = tracker.particle.min_peak_snr;
+  auto filter = engine::ParseFilterKind(f.filter, "filter");
+  if (!filter.ok()) return filter.status();
+  tracker.kind = *filter;
+  auto motion_model = engine::ParseMotionModelKind(f.motion_model, "motion_model");
+  if (!motion_model.ok()) return motion_model.status();
+  tracker.kalman.motion_model = *motion_model;
+  auto imm_variant = engine::ParseKalmanVariant(f.imm_variant, "imm_variant");
+  if (!imm_variant.ok()) return imm_variant.status();
+  tracker.imm_variant = *imm_variant;
+  auto robust = engine::ParseRobustUpdate(f.robust, "robust");
+  if (!robust.ok()) return robust.status();
+  tracker.kalman.robust = *robust;
+  auto imm_modes = engine::ParseImmModes(f.imm_modes, "imm_modes");
+  if (!imm_modes.ok()) return imm_modes.status();
+  tracker.imm_modes = *std::move(imm_modes);
+  auto backend = engine::ParseBackendChoice(f.backend, "backend");
+  if (!backend.ok()) return backend.status();
+  base.backend = *backend;
   io::ArrayOverrides overrides = f.array;
   if (!f.bounds_min.empty()) {
     auto v = ParseBoundsFlag("bounds-min", f.bounds_min, true);
@@ -129,7 +151,7 @@ StatusOr<engine::SessionConfig> BuildSessionConfig(const SessionFlags& f,
     }
     overrides.bounds_max_m = *v;
   }
-  const engine::SessionConfig config =
+  const engine::AudioSessionConfig config =
       io::TrackConfigFor(std::move(base), array, overrides, sample_rate_hz);
   for (int axis = 0; axis < 3; ++axis) {
     if (!(config.bounds_min_m[axis] < config.bounds_max_m[axis])) {
@@ -139,14 +161,8 @@ StatusOr<engine::SessionConfig> BuildSessionConfig(const SessionFlags& f,
                              " (--bounds-min/--bounds-max, --bottom-z/--surface-z, or the array file)");
     }
   }
-  engine::SessionConfig check = config;
-  if (runs == Runs::kOnServer) {
-    if (config.backend != "cpu" && config.backend != "gpu" && config.backend != "auto") {
-      return InvalidArgument("--backend: unknown backend \"" + config.backend +
-                             "\"; use cpu, gpu or auto");
-    }
-    check.backend = "cpu";
-  }
+  engine::AudioSessionConfig check = config;
+  if (runs == Runs::kOnServer) check.backend = engine::BackendChoice::kCpu;
   // Create, not just Validate: some limits (band edges against Nyquist, the backend) are
   // only checked when the stages are built, and a bad flag should fail here as a usage error.
   auto session = engine::Session::Create(check);

@@ -1,7 +1,7 @@
-// The flags that build an engine::SessionConfig, shared by `track` (local and --server),
-// `simulate --server` and `locate`, so that every path builds the same config from the same
-// flags: the numeric defaults are engine::SessionConfig's, the array comes from the array
-// file (io::TrackConfigFor).
+// The flags that build an engine::AudioSessionConfig, shared by `track` (local and
+// --server), `simulate --server` and `locate`, so that every path builds the same config from
+// the same flags: the defaults are engine::AudioSessionConfig's, the array comes from the
+// array file (io::TrackConfigFor).
 #pragma once
 
 #include <string>
@@ -14,11 +14,19 @@
 
 namespace localizer::cli {
 
+// Numeric fields bind to `config`; names bind to strings (defaults: the engine's, by name)
+// that BuildSessionConfig parses, each error naming its field.
 struct SessionFlags {
-  engine::SessionConfig config;  // numeric fields bound to flags
-  std::string weighting = engine::WeightingName(engine::SessionConfig{}.weighting);
-  std::string likelihood = engine::LikelihoodName(engine::SessionConfig{}.filter.likelihood);
-  double tdoa_sigma_us = engine::SessionConfig{}.filter.tdoa_sigma_s * 1e6;
+  engine::AudioSessionConfig config;  // numeric fields bound to flags
+  std::string weighting = engine::WeightingName(engine::AudioSessionConfig{}.weighting);
+  std::string likelihood = engine::LikelihoodName(engine::AudioSessionConfig{}.tracker.particle.likelihood);
+  double tdoa_sigma_us = engine::AudioSessionConfig{}.tracker.particle.tdoa_sigma_s * 1e6;
+  std::string filter = engine::FilterKindName(engine::AudioSessionConfig{}.tracker.kind);
+  std::string motion_model = engine::MotionModelKindName(engine::AudioSessionConfig{}.tracker.kalman.motion_model);
+  std::string imm_modes = engine::ImmModesName(engine::AudioSessionConfig{}.tracker.imm_modes);
+  std::string imm_variant = engine::KalmanVariantName(engine::AudioSessionConfig{}.tracker.imm_variant);
+  std::string robust = engine::RobustUpdateName(engine::AudioSessionConfig{}.tracker.kalman.robust);
+  std::string backend = engine::BackendChoiceName(engine::AudioSessionConfig{}.backend);
   io::ArrayOverrides array;  // --sound-speed, --reference, --surface-z, --bottom-z
   std::string bounds_min;    // --bounds-min X,Y,Z ("" = the array file's)
   std::string bounds_max;    // --bounds-max X,Y,Z
@@ -26,10 +34,12 @@ struct SessionFlags {
 
 // --sound-speed, --reference, --weighting, --phat-beta, --band-low, --band-high.
 void RegisterGccFlags(FlagSet& flags, SessionFlags* f);
-// --frame, --hop, --particles, --likelihood, --SEED_FLAG, --tdoa-sigma-us, --accel-noise,
-// --backend; source presence and bounds: --bounds-min, --bounds-max, --surface-z,
-// --bottom-z, --search-radius, --presence-false-alarm, --source-timeout. `seed_flag` names the filter seed's flag ("seed" for track; simulate's --seed
-// is the scenario's).
+// --frame, --hop, --filter, --motion-model, --imm-modes, --imm-variant, --robust,
+// --particles, --likelihood, --outlier-probability, --SEED_FLAG, --tdoa-sigma-us,
+// --accel-noise, --backend, --despike-k; source presence and bounds: --bounds-min,
+// --bounds-max, --surface-z, --bottom-z, --search-radius, --presence-false-alarm,
+// --source-timeout. `seed_flag` names the filter seed's flag ("seed" for track; simulate's
+// --seed is the scenario's).
 void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& seed_flag);
 
 // "X,Y,Z" with each axis a number or, for an open side, "-inf" (is_min) / "inf" (max);
@@ -40,11 +50,11 @@ StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::strin
 enum class Runs { kLocally, kOnServer };
 
 // The config from the flags and the array file at `sample_rate_hz`, checked as far as this
-// machine can: built into a Session (some limits, e.g. band edges against Nyquist, are only
-// checked then). For kOnServer the backend name is only checked for spelling, since the
-// server, not this machine, must have the GPU. INVALID_ARGUMENT naming the flag or field.
-StatusOr<engine::SessionConfig> BuildSessionConfig(const SessionFlags& f,
-                                                   const io::ArrayFile& array,
-                                                   double sample_rate_hz, Runs runs);
+// machine can: the names parsed (errors name the field: "filter 'x' is not one of: pf, ...")
+// and the config built into a Session (some limits, e.g. band edges against Nyquist, are
+// only checked then). For kOnServer the session is built on the CPU, since the server, not
+// this machine, must have the GPU. INVALID_ARGUMENT naming the flag or field.
+StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, const io::ArrayFile& array,
+                                                        double sample_rate_hz, Runs runs);
 
 }  // namespace localizer::cli

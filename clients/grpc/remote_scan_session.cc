@@ -9,10 +9,9 @@
 namespace localizer::client {
 
 StatusOr<std::unique_ptr<RemoteScanSession>> RemoteScanSession::Open(std::shared_ptr<grpc::Channel> channel,
-                                                                     const engine::SessionConfig& config,
+                                                                     const engine::DetectionSessionConfig& config,
                                                                      const std::string& label,
                                                                      const std::string& session_key) {
-  if (!config.detections) return InvalidArgument("a remote scan session needs a detections config");
   auto stream = TrackStream::Open(std::move(channel), wire::ConfigToProto(config, label), session_key);
   if (!stream.ok()) return stream.status();
   return std::unique_ptr<RemoteScanSession>(new RemoteScanSession(std::move(stream).value()));

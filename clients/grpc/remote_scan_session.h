@@ -24,10 +24,9 @@ namespace localizer::client {
 
 class RemoteScanSession {
  public:
-  // `config.detections` must be set (INVALID_ARGUMENT otherwise); a refused open returns the
-  // server's status with its code name first.
+  // A refused open returns the server's status with its code name first.
   static StatusOr<std::unique_ptr<RemoteScanSession>> Open(std::shared_ptr<grpc::Channel> channel,
-                                                           const engine::SessionConfig& config,
+                                                           const engine::DetectionSessionConfig& config,
                                                            const std::string& label,
                                                            const std::string& session_key);
   ~RemoteScanSession();

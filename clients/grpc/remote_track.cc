@@ -10,7 +10,7 @@
 namespace localizer::client {
 
 StatusOr<std::unique_ptr<TrackStream>> OpenTrackSession(
-    const std::shared_ptr<grpc::Channel>& channel, const engine::SessionConfig& config,
+    const std::shared_ptr<grpc::Channel>& channel, const engine::AudioSessionConfig& config,
     const std::string& label, const std::string& session_key) {
   v1::SessionConfig proto = wire::ConfigToProto(config, label);
   proto.set_max_block_samples(0);  // the server's limit; it bounds block size, not numbers
@@ -24,7 +24,7 @@ StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>&
                                            const StreamCallbacks& stream_callbacks) {
   auto prepared = io::PrepareTrack(job, callbacks);
   if (!prepared.ok()) return prepared.status();
-  const engine::SessionConfig& config = prepared->config;
+  const engine::AudioSessionConfig& config = prepared->config;
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
   auto array = engine::ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps,
                                              config.reference_sensor);

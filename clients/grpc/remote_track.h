@@ -44,7 +44,7 @@ struct RemoteTrackResult {
 // attached, max_block_samples left 0 for the server's limit): what RunRemoteTrack and
 // `simulate --server` send. Errors as TrackStream::Open.
 StatusOr<std::unique_ptr<TrackStream>> OpenTrackSession(
-    const std::shared_ptr<grpc::Channel>& channel, const engine::SessionConfig& config,
+    const std::shared_ptr<grpc::Channel>& channel, const engine::AudioSessionConfig& config,
     const std::string& label, const std::string& session_key);
 
 // Errors before streaming (a file, the server refusing the config or unreachable: message

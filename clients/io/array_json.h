@@ -39,7 +39,7 @@ struct ArrayFile {
   std::optional<double> sample_rate_hz;
   int reference_sensor = 0;
   std::optional<std::pair<double, double>> band_hz;  // (low, high), 0 <= low < high
-  // Physical bounds on the source (engine::SessionConfig::bounds_min_m/max_m): +-infinity
+  // Physical bounds on the source (engine::AudioSessionConfig::bounds_min_m/max_m): +-infinity
   // on an open side, the default. surface_z_m / bottom_z_m land in bounds_max_m.z() /
   // bounds_min_m.z().
   engine::Vec3 bounds_min_m = engine::Vec3::Constant(-std::numeric_limits<double>::infinity());

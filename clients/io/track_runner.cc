@@ -23,8 +23,8 @@ void Warn(const TrackCallbacks& callbacks, const std::string& message) {
 }
 
 // The session config with the WAV's sample rate, after checking the WAV against the array.
-StatusOr<engine::SessionConfig> ConfigForStream(const TrackJob& job, const WavStream& stream,
-                                                const TrackCallbacks& callbacks) {
+StatusOr<engine::AudioSessionConfig> ConfigForStream(const TrackJob& job, const WavStream& stream,
+                                                     const TrackCallbacks& callbacks) {
   const int sensors = static_cast<int>(job.config.sensors_m.size());
   if (stream.channel_count() != sensors) {
     return InvalidArgument(stream.Describe() + " has " + std::to_string(stream.channel_count()) +
@@ -32,7 +32,7 @@ StatusOr<engine::SessionConfig> ConfigForStream(const TrackJob& job, const WavSt
                            " sensors; they must match (channel k = "
                            "sensor k)");
   }
-  engine::SessionConfig config = job.config;
+  engine::AudioSessionConfig config = job.config;
   config.sample_rate_hz = stream.sample_rate_hz();
   if (job.array_sample_rate_hz && *job.array_sample_rate_hz != stream.sample_rate_hz()) {
     Warn(callbacks, job.array_source + " says sample_rate_hz " +
@@ -140,8 +140,8 @@ StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callb
   return run.Run(job.block_s);
 }
 
-engine::SessionConfig TrackConfigFor(engine::SessionConfig config, const ArrayFile& array,
-                                     const ArrayOverrides& overrides, double sample_rate_hz) {
+engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig config, const ArrayFile& array,
+                                          const ArrayOverrides& overrides, double sample_rate_hz) {
   config.sensors_m = array.sensors_m;
   config.sound_speed_mps = overrides.sound_speed_mps.value_or(array.sound_speed_mps);
   config.reference_sensor = overrides.reference_sensor.value_or(array.reference_sensor);

@@ -34,7 +34,7 @@ struct TrackJob {
   std::vector<std::string> wav_paths;          // one multichannel file or mono files per sensor
   std::string array_source = "array.json";     // names the array in messages
   std::optional<double> array_sample_rate_hz;  // from the array file, checked against the WAV
-  engine::SessionConfig config;                // sample_rate_hz is taken from the WAV header
+  engine::AudioSessionConfig config;           // sample_rate_hz is taken from the WAV header
   std::string estimates_csv_path;              // empty: write no CSV
   double block_s = 0.25;                       // audio per Session::Process call, > 0
 };
@@ -89,8 +89,8 @@ struct ArrayOverrides {
 // at 0, the array file's band_hz as the GCC band (its high edge capped at Nyquist); when
 // `base` is unbounded, the array file's bounds; then the overrides' bounds. Not validated:
 // Session::Create (or the server) does that.
-engine::SessionConfig TrackConfigFor(engine::SessionConfig base, const ArrayFile& array,
-                                     const ArrayOverrides& overrides, double sample_rate_hz);
+engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig base, const ArrayFile& array,
+                                          const ArrayOverrides& overrides, double sample_rate_hz);
 
 // The first half of RunTrack, shared with the remote track (clients/grpc/remote_track.h) so
 // that both track a recording with the same session config: opens the WAV(s) (a set's
@@ -99,7 +99,7 @@ engine::SessionConfig TrackConfigFor(engine::SessionConfig base, const ArrayFile
 // on_warning). The config is not validated here; Session::Create (or the server) does that.
 struct PreparedTrack {
   WavStream stream;  // positioned at the first sample
-  engine::SessionConfig config;
+  engine::AudioSessionConfig config;
 };
 StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});
 

@@ -47,7 +47,7 @@ struct Estimate {
   // the detection statistic behind the decision (the spatial spectrum's peak over its
   // noise-only spread; present when statistic >= threshold, the threshold set by the
   // session's per-frame false-alarm probability). Without a source the tracker predicts
-  // but does not update; after SessionConfig::source_timeout_s the track is dropped.
+  // but does not update; after AudioSessionConfig::source_timeout_s the track is dropped.
   bool source_present = false;
   double presence_statistic = 0.0;
   double presence_threshold = 0.0;
@@ -68,7 +68,7 @@ struct Estimate {
   // Multiple-model trackers (filter mmpf, imm): each hypothesis' probability after this
   // frame; empty for single-model filters and before initialisation.
   std::vector<ModelProbability> model_probabilities;
-  // Sessions whose array rides a platform (SessionConfig::array_in_body_frame): the pose the
+  // Sessions whose array rides a platform (AudioSessionConfig::array_in_body_frame): the pose the
   // frame's TDOA model used; unset for fixed arrays and before the first IMU sample.
   std::optional<PlatformAttitude> platform;
   StageTimings timings;

@@ -1,5 +1,6 @@
 #include "engine/filters/imm_filter.h"
 
+#include <algorithm>
 #include <set>
 #include <sstream>
 #include <string>
@@ -30,17 +31,31 @@ Embedded Embed(const KalmanFilter& from, const KalmanFilter& to) {
 
 }  // namespace
 
-StatusOr<std::vector<ImmMode>> ParseImmModes(const std::string& list, const MotionModelOptions& motion,
-                                             const char* field) {
-  std::vector<ImmMode> modes;
+StatusOr<std::vector<MotionModelKind>> ParseImmModes(const std::string& list, const std::string& field) {
+  std::vector<std::string> names;
   std::stringstream in(list);
   std::string name;
   while (std::getline(in, name, ',')) {
-    if (name.empty()) return InvalidArgument(std::string(field) + " '" + list + "' has an empty entry");
-    modes.push_back({name, name, motion});
+    if (name.empty()) return InvalidArgument(field + " '" + list + "' has an empty entry");
+    names.push_back(name);
   }
-  if (modes.empty()) return InvalidArgument(std::string(field) + " is empty; e.g. \"cv,ct\"");
+  if (names.empty()) return InvalidArgument(field + " is empty; e.g. \"cv,ct\"");
+  std::vector<MotionModelKind> modes;
+  for (const std::string& entry : names) {
+    auto kind = ParseMotionModelKind(entry, field + " entry");
+    if (!kind.ok()) return kind.status();
+    if (std::find(modes.begin(), modes.end(), *kind) != modes.end()) {
+      return InvalidArgument(field + " '" + list + "' names '" + entry + "' twice");
+    }
+    modes.push_back(*kind);
+  }
   return modes;
+}
+
+std::string ImmModesName(const std::vector<MotionModelKind>& modes) {
+  std::string list;
+  for (size_t i = 0; i < modes.size(); ++i) list += std::string(i == 0 ? "" : ",") + MotionModelKindName(modes[i]);
+  return list;
 }
 
 Status ImmOptions::Validate() const {
@@ -49,7 +64,7 @@ Status ImmOptions::Validate() const {
   }
   std::set<std::string> names;
   for (const ImmMode& m : modes) {
-    const std::string name = m.name.empty() ? m.motion_model : m.name;
+    const std::string name = m.name.empty() ? MotionModelKindName(m.motion_model) : m.name;
     if (!names.insert(name).second) return InvalidArgument("imm modes: the name '" + name + "' appears twice");
     KalmanOptions o = kalman;
     o.motion_model = m.motion_model;
@@ -113,7 +128,7 @@ StatusOr<std::unique_ptr<ImmFilter>> ImmFilter::Create(const ArrayGeometry& arra
     auto filter = KalmanFilter::Create(array, o);
     if (!filter.ok()) return filter.status();
     impl->modes.push_back(std::move(filter).value());
-    impl->names.push_back(m.name.empty() ? m.motion_model : m.name);
+    impl->names.push_back(m.name.empty() ? MotionModelKindName(m.motion_model) : m.name);
   }
   const int k = impl->count();
   impl->switching = SwitchingMatrix(k, options.stay_probability);

@@ -48,22 +48,24 @@
 namespace localizer::engine {
 
 struct ImmMode {
-  std::string name;          // reported in ModelProbabilities; "" -> the motion model's name
-  std::string motion_model;  // "cv" | "ca" | "ct" | "singer"
+  std::string name;              // reported in ModelProbabilities; "" -> the motion model's name
+  MotionModelKind motion_model;
   MotionModelOptions motion;
 };
 
-// Modes from a comma-separated list of motion models (e.g. "cv,ct"), each with `motion`'s
-// noise; INVALID_ARGUMENT naming `field` for an empty list or entry.
-StatusOr<std::vector<ImmMode>> ParseImmModes(const std::string& list, const MotionModelOptions& motion,
-                                             const char* field = "imm_modes");
+// The modes' motion models from a comma-separated list (e.g. "cv,ct" on the wire and in
+// flags), in order; INVALID_ARGUMENT naming `field` for an empty list, an empty entry, a
+// name that is not a motion model or one named twice.
+StatusOr<std::vector<MotionModelKind>> ParseImmModes(const std::string& list, const std::string& field);
+std::string ImmModesName(const std::vector<MotionModelKind>& modes);  // "cv,ct"
 
 struct ImmOptions {
   // The mode filters' shared options: variant (EKF/UKF), TDOA noise, pair selection,
   // gate, robust update, initial std of extra states. Its motion_model and motion are
   // replaced by each mode's.
   KalmanOptions kalman;
-  std::vector<ImmMode> modes = {{"cv", "cv", {}}, {"ct", "ct", {}}};  // >= 1, <= 8, unique names
+  std::vector<ImmMode> modes = {{"cv", MotionModelKind::kCv, {}},
+                                {"ct", MotionModelKind::kCt, {}}};  // >= 1, <= 8, unique names
   double stay_probability = 0.95;  // pi_ii, in [0, 1]
 
   Status Validate() const;  // INVALID_ARGUMENT naming the field

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <vector>
 
+#include "engine/core/enum_names.h"
 #include "engine/filters/divergence_monitor.h"
 
 namespace localizer::engine {
@@ -36,14 +37,24 @@ struct Innovation {
   MatrixXd s_cov, cross, h;
 };
 
+constexpr EnumName<KalmanVariant> kKalmanVariants[] = {{KalmanVariant::kExtended, "ekf"},
+                                                     {KalmanVariant::kUnscented, "ukf"}};
+constexpr EnumName<RobustUpdate> kRobustUpdates[] = {
+    {RobustUpdate::kNone, "none"}, {RobustUpdate::kHuber, "huber"}, {RobustUpdate::kStudentT, "student-t"}};
+
 }  // namespace
 
-StatusOr<RobustUpdate> ParseRobustUpdate(const std::string& name) {
-  if (name == "none") return RobustUpdate::kNone;
-  if (name == "huber") return RobustUpdate::kHuber;
-  if (name == "student-t") return RobustUpdate::kStudentT;
-  return InvalidArgument("robust '" + name + "' is not one of: none, huber, student-t");
+StatusOr<KalmanVariant> ParseKalmanVariant(const std::string& name, const std::string& field) {
+  return ParseEnumName(name, field, kKalmanVariants);
 }
+
+const char* KalmanVariantName(KalmanVariant variant) { return EnumNameOf(variant, kKalmanVariants); }
+
+StatusOr<RobustUpdate> ParseRobustUpdate(const std::string& name, const std::string& field) {
+  return ParseEnumName(name, field, kRobustUpdates);
+}
+
+const char* RobustUpdateName(RobustUpdate robust) { return EnumNameOf(robust, kRobustUpdates); }
 
 Status KalmanOptions::Validate() const {
   if (!(tdoa_sigma_s >= 0.0) || !std::isfinite(tdoa_sigma_s)) {

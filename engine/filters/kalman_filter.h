@@ -49,13 +49,21 @@
 
 namespace localizer::engine {
 
+// Names on the wire and in flags: "ekf" (kExtended), "ukf" (kUnscented).
 enum class KalmanVariant { kExtended, kUnscented };
+// INVALID_ARGUMENT "<field> 'x' is not one of: ekf, ukf".
+StatusOr<KalmanVariant> ParseKalmanVariant(const std::string& name, const std::string& field);
+const char* KalmanVariantName(KalmanVariant variant);
+
+// Names on the wire and in flags: "none", "huber", "student-t".
 enum class RobustUpdate { kNone, kHuber, kStudentT };
-StatusOr<RobustUpdate> ParseRobustUpdate(const std::string& name);  // "none" | "huber" | "student-t"
+// INVALID_ARGUMENT "<field> 'x' is not one of: none, huber, student-t".
+StatusOr<RobustUpdate> ParseRobustUpdate(const std::string& name, const std::string& field);
+const char* RobustUpdateName(RobustUpdate robust);
 
 struct KalmanOptions {
   KalmanVariant variant = KalmanVariant::kExtended;
-  std::string motion_model = "cv";       // cv | ca | ct | singer
+  MotionModelKind motion_model = MotionModelKind::kCv;
   MotionModelOptions motion;             // its noise parameters
   double tdoa_sigma_s = 0.0;             // TDOA noise std; 0: adaptive (pair_noise.h)
   double min_peak_snr = 5.0;             // pairs below are left out

@@ -39,6 +39,14 @@ class MotionModel {
   }
 };
 
+// Which model MakeMotionModel builds. Names on the wire and in flags: "cv", "ca", "ct",
+// "singer" (each model's name()).
+enum class MotionModelKind { kCv, kCa, kCt, kSinger };
+
+// INVALID_ARGUMENT "<field> 'x' is not one of: cv, ca, ct, singer".
+StatusOr<MotionModelKind> ParseMotionModelKind(const std::string& name, const std::string& field);
+const char* MotionModelKindName(MotionModelKind kind);
+
 // Options for MakeMotionModel; each model reads the fields its header names.
 struct MotionModelOptions {
   double accel_noise_mps2 = 1.0;     // cv: std of the piecewise-constant white acceleration
@@ -49,7 +57,7 @@ struct MotionModelOptions {
   double singer_accel_std_mps2 = 2.0;  // singer: std of the manoeuvre acceleration
 };
 
-// "cv", "ca", "ct" or "singer"; INVALID_ARGUMENT for another name or invalid options.
-StatusOr<std::unique_ptr<MotionModel>> MakeMotionModel(const std::string& name, const MotionModelOptions& options);
+// The model `kind` names with `options`' noise; INVALID_ARGUMENT for invalid options.
+StatusOr<std::unique_ptr<MotionModel>> MakeMotionModel(MotionModelKind kind, const MotionModelOptions& options);
 
 }  // namespace localizer::engine

@@ -2,8 +2,13 @@
 
 #include <mutex>
 
+#include "engine/core/enum_names.h"
+
 namespace localizer::engine {
 namespace {
+
+constexpr EnumName<BackendChoice> kBackendChoices[] = {
+    {BackendChoice::kAuto, "auto"}, {BackendChoice::kCpu, "cpu"}, {BackendChoice::kGpu, "gpu"}};
 
 std::mutex& ProviderMutex() {
   static std::mutex mutex;
@@ -28,29 +33,40 @@ StatusOr<std::unique_ptr<Tracker>> AsTracker(StatusOr<std::unique_ptr<Filter>> m
 // The Kalman filters, whatever the backend.
 StatusOr<std::unique_ptr<Tracker>> MakeKalman(const ArrayGeometry& array, const TrackerOptions& tracker) {
   KalmanOptions options = tracker.kalman;
-  options.variant = tracker.type == "ukf" ? KalmanVariant::kUnscented : KalmanVariant::kExtended;
+  options.variant = tracker.kind == FilterKind::kUkf ? KalmanVariant::kUnscented : KalmanVariant::kExtended;
   return AsTracker(KalmanFilter::Create(array, options));
 }
 
-// The multiple-model trackers, whatever the backend.
-StatusOr<std::unique_ptr<Tracker>> MakeMultiModel(const ArrayGeometry& array, const TrackerOptions& tracker) {
-  if (tracker.type == "mmpf") {
-    MultiModelPfOptions options;
-    options.particle = tracker.particle;
-    options.models = tracker.mmpf_models;
-    options.stay_probability = tracker.stay_probability;
-    return AsTracker(MultiModelParticleFilter::Create(array, options));
-  }
+StatusOr<std::unique_ptr<Tracker>> MakeMultiModelParticleFilter(const ArrayGeometry& array,
+                                                                 const TrackerOptions& tracker) {
+  MultiModelPfOptions options;
+  options.particle = tracker.particle;
+  options.models = tracker.mmpf_models;
+  options.stay_probability = tracker.stay_probability;
+  return AsTracker(MultiModelParticleFilter::Create(array, options));
+}
+
+StatusOr<std::unique_ptr<Tracker>> MakeImm(const ArrayGeometry& array, const TrackerOptions& tracker) {
   ImmOptions options;
   options.kalman = tracker.kalman;
-  options.modes = tracker.imm_modes;
+  options.kalman.variant = tracker.imm_variant;
+  options.modes.clear();
+  for (MotionModelKind mode : tracker.imm_modes) {
+    options.modes.push_back({MotionModelKindName(mode), mode, tracker.kalman.motion});
+  }
   options.stay_probability = tracker.stay_probability;
   return AsTracker(ImmFilter::Create(array, options));
 }
 
 // Every tracker but the plain particle filter: CPU whatever the backend.
 StatusOr<std::unique_ptr<Tracker>> MakeCpuOnly(const ArrayGeometry& array, const TrackerOptions& tracker) {
-  if (tracker.type == "mmpf" || tracker.type == "imm") return MakeMultiModel(array, tracker);
+  switch (tracker.kind) {
+    case FilterKind::kMmpf: return MakeMultiModelParticleFilter(array, tracker);
+    case FilterKind::kImm: return MakeImm(array, tracker);
+    case FilterKind::kEkf:
+    case FilterKind::kUkf:
+    case FilterKind::kPf: break;
+  }
   return MakeKalman(array, tracker);
 }
 
@@ -67,30 +83,30 @@ std::shared_ptr<BackendProvider> SetGpuProvider(std::shared_ptr<BackendProvider>
   return provider;
 }
 
+StatusOr<BackendChoice> ParseBackendChoice(const std::string& name, const std::string& field) {
+  return ParseEnumName(name, field, kBackendChoices);
+}
+
+const char* BackendChoiceName(BackendChoice choice) { return EnumNameOf(choice, kBackendChoices); }
+
 std::string GpuUnavailableReason() {
   const auto provider = CurrentProvider();
   if (!provider) return "this program has no GPU backend (built without CUDA, or gpu/ not registered)";
   return provider->UnavailableReason();
 }
 
-StatusOr<SessionComponents> BuildComponents(const std::string& backend, const ArrayGeometry& array,
-                                            const GccOptions& gcc, const TrackerOptions& tracker) {
-  if (backend != "cpu" && backend != "gpu" && backend != "auto") {
-    return InvalidArgument("backend '" + backend + "' is not one of: auto, cpu, gpu");
-  }
-  if (tracker.type != "pf" && tracker.type != "ekf" && tracker.type != "ukf" && tracker.type != "mmpf" &&
-      tracker.type != "imm") {
-    return InvalidArgument("filter '" + tracker.type + "' is not one of: pf, ekf, ukf, mmpf, imm");
-  }
-  const bool particle = tracker.type == "pf";
+StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGeometry& array,
+                                            const GccOptions& gcc, const TrackerOptions& tracker,
+                                            bool moving_array) {
+  const bool particle = tracker.kind == FilterKind::kPf;
   SessionComponents parts;
   // The learnt coherence weighting keeps per-pair state across frames that the device GCC
   // does not have yet: such sessions run on the CPU (auto) or are refused (gpu).
   const bool cpu_weighting = gcc.weighting == Weighting::kPhatCoherence;
-  if (backend == "gpu" && cpu_weighting) {
+  if (backend == BackendChoice::kGpu && cpu_weighting) {
     return FailedPrecondition("weighting phat-coherence runs on the CPU backend only (backend cpu or auto)");
   }
-  if (backend != "cpu" && !cpu_weighting) {
+  if (backend != BackendChoice::kCpu && !cpu_weighting) {
     const auto provider = CurrentProvider();
     const std::string reason = provider ? provider->UnavailableReason() : GpuUnavailableReason();
     if (reason.empty()) {
@@ -100,7 +116,7 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
       // likelihood's particle filter, and one on a moving array, run on the CPU beside the
       // GPU GCC, as the Kalman filters do.
       const bool on_device =
-          particle && tracker.particle.likelihood != Likelihood::kMixture && !tracker.moving_array;
+          particle && tracker.particle.likelihood != Likelihood::kMixture && !moving_array;
       auto made = on_device ? provider->MakeTracker(array, tracker.particle)
                             : particle ? MakeCpuParticleFilter(array, tracker.particle) : MakeCpuOnly(array, tracker);
       if (!made.ok()) return made.status();
@@ -109,7 +125,7 @@ StatusOr<SessionComponents> BuildComponents(const std::string& backend, const Ar
       parts.backend = "gpu";
       return parts;
     }
-    if (backend == "gpu") return FailedPrecondition("backend gpu requested but unavailable: " + reason);
+    if (backend == BackendChoice::kGpu) return FailedPrecondition("backend gpu requested but unavailable: " + reason);
   }
   auto estimator = GccPhatEstimator::Create(array, gcc);
   if (!estimator.ok()) return estimator.status();

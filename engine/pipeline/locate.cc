@@ -33,9 +33,9 @@ Status ValidateLocateBlock(const BlockView& block, int channels, int64_t max_sam
 
 }  // namespace
 
-StatusOr<LocateResult> Locate(const SessionConfig& config, const BlockView& block) {
+StatusOr<LocateResult> Locate(const AudioSessionConfig& config, const BlockView& block) {
   if (block.samples == nullptr) return InvalidArgument("samples is empty");
-  SessionConfig checked = config;
+  AudioSessionConfig checked = config;
   checked.frame_samples = static_cast<int>(
       std::min<int64_t>(std::max<int64_t>(block.samples_per_channel, kMinLocateSamples), 1 << 20));
   checked.hop_samples = checked.frame_samples;

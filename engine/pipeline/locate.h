@@ -12,7 +12,7 @@
 #include "engine/array/multilateration.h"
 #include "engine/core/block.h"
 #include "engine/core/measurement.h"
-#include "engine/pipeline/session.h"
+#include "engine/pipeline/session_config.h"
 
 namespace localizer::engine {
 
@@ -27,6 +27,6 @@ struct LocateResult {
 // and band; frame_samples and hop_samples are taken from the block (at least 64 samples
 // per channel, at most config.max_block_samples). INVALID_ARGUMENT naming the field for a
 // bad config or block. A block the fit cannot place is not an error: fix_found = false.
-StatusOr<LocateResult> Locate(const SessionConfig& config, const BlockView& block);
+StatusOr<LocateResult> Locate(const AudioSessionConfig& config, const BlockView& block);
 
 }  // namespace localizer::engine

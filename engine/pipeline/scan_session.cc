@@ -4,8 +4,7 @@
 
 namespace localizer::engine {
 
-StatusOr<std::unique_ptr<ScanSession>> ScanSession::Create(const SessionConfig& config) {
-  if (!config.detections) return InvalidArgument("a scan session needs a detections config");
+StatusOr<std::unique_ptr<ScanSession>> ScanSession::Create(const DetectionSessionConfig& config) {
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
   auto tracker = tws::TwsTracker::Create(config.tws);
   if (!tracker.ok()) return tracker.status();

@@ -6,7 +6,8 @@
 // target tracks with stable identities (engine/tws/tws_tracker.h). Each scan yields the
 // tracks after it: tentative, confirmed and coasting, with position, velocity and
 // covariance in the world frame.
-// A pure function of its options and the scans it was given (no random draws).
+// Opened with a DetectionSessionConfig (session_config.h). A pure function of its options
+// and the scans it was given (no random draws).
 #pragma once
 
 #include <cstdint>
@@ -14,7 +15,7 @@
 #include <vector>
 
 #include "engine/core/detection.h"
-#include "engine/pipeline/session.h"
+#include "engine/pipeline/session_config.h"
 #include "engine/tws/track_report.h"
 #include "engine/tws/tws_tracker.h"
 
@@ -30,23 +31,23 @@ struct ScanResult {
 
 class ScanSession {
  public:
-  // INVALID_ARGUMENT unless config.detections and config.Validate() holds.
-  static StatusOr<std::unique_ptr<ScanSession>> Create(const SessionConfig& config);
+  // INVALID_ARGUMENT unless config.Validate() holds.
+  static StatusOr<std::unique_ptr<ScanSession>> Create(const DetectionSessionConfig& config);
 
   // INVALID_ARGUMENT (the session unchanged) for a scan the tracker refuses: time not finite
   // or not after the previous scan's, a range not finite and > 0, an angle not finite, a
   // 3-D session's plot without elevation. `out` is filled on success.
   Status Process(const Scan& scan, ScanResult* out);
 
-  const SessionConfig& config() const { return config_; }
+  const DetectionSessionConfig& config() const { return config_; }
   uint64_t scans_processed() const { return scans_; }
   int64_t track_updates() const { return tracker_->total_track_updates(); }
 
  private:
-  ScanSession(SessionConfig config, std::unique_ptr<tws::TwsTracker> tracker)
+  ScanSession(DetectionSessionConfig config, std::unique_ptr<tws::TwsTracker> tracker)
       : config_(std::move(config)), tracker_(std::move(tracker)) {}
 
-  SessionConfig config_;
+  DetectionSessionConfig config_;
   std::unique_ptr<tws::TwsTracker> tracker_;
   uint64_t scans_ = 0;
 };

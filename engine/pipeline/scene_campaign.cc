@@ -204,8 +204,8 @@ std::vector<double> TheoreticalTdoaSigma(const SimOptions& sim, int pair_count, 
   return std::vector<double>(pair_count, 1.0 / std::sqrt(information));
 }
 
-SessionConfig CampaignSessionConfig(const RandomScene& scene) {
-  SessionConfig config;
+AudioSessionConfig CampaignSessionConfig(const RandomScene& scene) {
+  AudioSessionConfig config;
   config.sensors_m = scene.scenario.sensors_m;
   config.sound_speed_mps = scene.scenario.sound_speed_mps;
   config.sample_rate_hz = scene.scenario.sim.sample_rate_hz;
@@ -216,14 +216,14 @@ SessionConfig CampaignSessionConfig(const RandomScene& scene) {
   config.hop_samples = config.frame_samples / 2;
   config.band_low_hz = 0.0;   // no band hint: users do not know their source's band
   config.band_high_hz = 0.0;
-  config.backend = "cpu";
+  config.backend = BackendChoice::kCpu;
   config.seed = scene.seed;
   return config;
 }
 
 SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
                         const SceneScoreOptions& score_options, bool keep_frames,
-                        const std::function<void(SessionConfig*)>& adjust) {
+                        const std::function<void(AudioSessionConfig*)>& adjust) {
   const auto start = std::chrono::steady_clock::now();
   SceneRow row;
   row.seed = seed;
@@ -240,7 +240,7 @@ SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
   if (!array.ok()) return fail(array.status());
   auto sim = Simulate(*array, scene->scenario.sim);
   if (!sim.ok()) return fail(sim.status());
-  SessionConfig config = CampaignSessionConfig(*scene);
+  AudioSessionConfig config = CampaignSessionConfig(*scene);
   if (adjust) adjust(&config);
   auto session = Session::Create(config);
   if (!session.ok()) return fail(session.status());

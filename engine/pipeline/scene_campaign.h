@@ -110,7 +110,7 @@ std::vector<double> TheoreticalTdoaSigma(const SimOptions& sim, int pair_count, 
 // The config a user knowing only the array would give: sensors, sound speed, sample rate,
 // frame 4096 / hop 2048 up to 16 kHz (frames of about the same duration above: 16384 at
 // 48 kHz), no band hint, backend cpu, seed = the scene's seed; everything else default.
-SessionConfig CampaignSessionConfig(const RandomScene& scene);
+AudioSessionConfig CampaignSessionConfig(const RandomScene& scene);
 
 struct SceneRow {
   uint64_t seed = 0;
@@ -126,7 +126,7 @@ struct SceneRow {
 // changes the default config before the session is made (e.g. another weighting).
 SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
                         const SceneScoreOptions& score_options = {}, bool keep_frames = false,
-                        const std::function<void(SessionConfig*)>& adjust = {});
+                        const std::function<void(AudioSessionConfig*)>& adjust = {});
 
 struct ClassSummary {
   int scenes = 0;

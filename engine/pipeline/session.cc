@@ -107,26 +107,12 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
 Session::Session(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Session::~Session() = default;
 
-StatusOr<std::unique_ptr<Session>> Session::Create(const SessionConfig& config) {
-  if (config.detections) return InvalidArgument("a detections config makes a ScanSession (scan_session.h), not a Session");
+StatusOr<std::unique_ptr<Session>> Session::Create(const AudioSessionConfig& config) {
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
   auto array = ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
   if (!array.ok()) return array.status();
-  const GccOptions gcc = config.GccOptionsFor();
-  TrackerOptions tracker;
-  tracker.type = config.filter_type;
-  tracker.particle = config.filter;
+  TrackerOptions tracker = config.tracker;
   tracker.particle.seed = config.seed;
-  tracker.kalman.motion_model = config.motion_model;
-  tracker.kalman.motion.accel_noise_mps2 = config.filter.accel_noise_mps2;
-  tracker.kalman.tdoa_sigma_s = config.filter.tdoa_sigma_s;
-  tracker.kalman.min_peak_snr = config.filter.min_peak_snr;
-  tracker.kalman.robust = *ParseRobustUpdate(config.robust);  // validated above
-  if (config.filter_type == "imm") {
-    tracker.kalman.variant = config.imm_variant == "ukf" ? KalmanVariant::kUnscented : KalmanVariant::kExtended;
-    tracker.imm_modes = *ParseImmModes(config.imm_modes, tracker.kalman.motion);
-  }
-  tracker.moving_array = config.array_in_body_frame;
   std::unique_ptr<PlatformPose> pose;
   if (config.array_in_body_frame) {
     auto made = PlatformPose::Create(config.attitude, config.platform_origin_m);
@@ -140,7 +126,7 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const SessionConfig& config) 
   search.false_alarm = config.presence_false_alarm;
   auto acquisition = Acquisition::Create(*array, search);
   if (!acquisition.ok()) return acquisition.status();
-  auto parts = BuildComponents(config.backend, *array, gcc, tracker);
+  auto parts = BuildComponents(config.backend, *array, config.GccOptionsFor(), tracker, config.array_in_body_frame);
   if (!parts.ok()) return parts.status();
   parts->tracker->SetBounds(config.bounds_min_m, config.bounds_max_m);
   return std::unique_ptr<Session>(new Session(std::make_unique<Impl>(
@@ -183,7 +169,7 @@ Status Session::SetPlatformOrigin(const Vec3& origin_m) {
   return impl_->platform->SetOrigin(origin_m);
 }
 
-const SessionConfig& Session::config() const { return impl_->config; }
+const AudioSessionConfig& Session::config() const { return impl_->config; }
 const std::string& Session::backend() const { return impl_->components.backend; }
 const ArrayGeometry& Session::array() const { return impl_->array; }
 uint64_t Session::frames_processed() const { return impl_->frames; }

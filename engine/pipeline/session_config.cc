@@ -1,65 +1,29 @@
-#include <algorithm>
+#include "engine/pipeline/session_config.h"
+
 #include <cmath>
 #include <limits>
 #include <string>
-#include <vector>
-
-#include "engine/filters/imm_filter.h"
-#include "engine/pipeline/session.h"
 
 namespace localizer::engine {
 namespace {
 
 std::string Num(double v) { return std::to_string(v); }
 
-bool IsMotionModel(const std::string& name) {
-  return name == "cv" || name == "ca" || name == "ct" || name == "singer";
-}
-
-// The tracker's fields: filter type, motion model, the IMM's modes and variant, robust.
-Status ValidateTracker(const SessionConfig& c) {
-  const std::string& filter_type = c.filter_type;
-  const std::string& motion_model = c.motion_model;
-  const std::string& imm_modes = c.imm_modes;
-  if (filter_type != "pf" && filter_type != "ekf" && filter_type != "ukf" && filter_type != "mmpf" &&
-      filter_type != "imm") {
-    return InvalidArgument("filter '" + filter_type + "' is not one of: pf, ekf, ukf, mmpf, imm");
-  }
-  if (!IsMotionModel(motion_model)) {
-    return InvalidArgument("motion_model '" + motion_model + "' is not one of: cv, ca, ct, singer");
-  }
-  const bool kalman = filter_type == "ekf" || filter_type == "ukf";
-  if (!kalman && motion_model != "cv") {
-    return InvalidArgument("motion_model '" + motion_model + "' needs filter ekf or ukf (pf and mmpf set their " +
-                           "own models, imm takes imm_modes)");
-  }
-  if (c.imm_variant != "ekf" && c.imm_variant != "ukf") {
-    return InvalidArgument("imm_variant '" + c.imm_variant + "' is not one of: ekf, ukf");
-  }
-  LOCALIZER_RETURN_IF_ERROR(ParseRobustUpdate(c.robust).status());
-  auto modes = ParseImmModes(imm_modes, MotionModelOptions{});
-  if (!modes.ok()) return modes.status();
-  std::vector<std::string> seen;
-  for (const ImmMode& mode : *modes) {
-    if (!IsMotionModel(mode.motion_model)) {
-      return InvalidArgument("imm_modes entry '" + mode.motion_model + "' is not one of: cv, ca, ct, singer");
-    }
-    if (std::find(seen.begin(), seen.end(), mode.motion_model) != seen.end()) {
-      return InvalidArgument("imm_modes '" + imm_modes + "' names '" + mode.motion_model + "' twice");
-    }
-    seen.push_back(mode.motion_model);
+// The one tracker field that depends on another: the motion model applies to ekf and ukf.
+Status ValidateTrackerKind(const TrackerOptions& t) {
+  if (!IsSingleKalman(t.kind) && t.kalman.motion_model != MotionModelKind::kCv) {
+    return InvalidArgument(std::string("motion_model '") + MotionModelKindName(t.kalman.motion_model) +
+                           "' needs filter ekf or ukf (pf and mmpf set their own models, imm takes imm_modes)");
   }
   return Status::Ok();
 }
 
 }  // namespace
 
-Status SessionConfig::Validate() const {
-  if (detections) {
-    if (const Status s = tws.Validate(); !s.ok()) return InvalidArgument("detections: " + s.message());
-    return Status::Ok();
-  }
-  LOCALIZER_RETURN_IF_ERROR(ValidateTracker(*this));
+Status DetectionSessionConfig::Validate() const { return tws.Validate(); }
+
+Status AudioSessionConfig::Validate() const {
+  LOCALIZER_RETURN_IF_ERROR(ValidateTrackerKind(tracker));
   if (array_in_body_frame) {
     if (const Status s = attitude.Validate(); !s.ok()) return InvalidArgument("platform.attitude: " + s.message());
     if (!platform_origin_m.allFinite()) return InvalidArgument("platform.origin_m must be finite");
@@ -118,10 +82,10 @@ Status SessionConfig::Validate() const {
   if (!(source_timeout_s > 0.0) || source_timeout_s > 1e6) {
     return InvalidArgument("source_timeout_s must be in (0, 1e6], got " + Num(source_timeout_s));
   }
-  return filter.Validate();
+  return tracker.particle.Validate();
 }
 
-GccOptions SessionConfig::GccOptionsFor() const {
+GccOptions AudioSessionConfig::GccOptionsFor() const {
   GccOptions gcc;
   gcc.frame_samples = frame_samples;
   gcc.sample_rate_hz = sample_rate_hz;

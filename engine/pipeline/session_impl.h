@@ -18,7 +18,7 @@
 namespace localizer::engine {
 
 struct Session::Impl {
-  Impl(SessionConfig c, ArrayGeometry a, SessionComponents parts, std::unique_ptr<PlatformPose> pose, Acquisition acq)
+  Impl(AudioSessionConfig c, ArrayGeometry a, SessionComponents parts, std::unique_ptr<PlatformPose> pose, Acquisition acq)
       : config(std::move(c)),
         body_array(a),
         array(std::move(a)),
@@ -64,7 +64,7 @@ struct Session::Impl {
   // when there is no pose yet (no IMU sample).
   bool MoveArray(double t_s, Estimate* e);
 
-  SessionConfig config;
+  AudioSessionConfig config;
   ArrayGeometry body_array;  // as configured (the body frame, for a moving array)
   ArrayGeometry array;       // in the world at the current frame
   std::unique_ptr<PlatformPose> platform;  // moving arrays only

@@ -1,6 +1,7 @@
 #include "server/service/audio_runner.h"
 
 #include "server/service/runner_util.h"
+#include "wire/config_wire.h"
 #include "wire/estimate_wire.h"
 #include "wire/imu_wire.h"
 #include "wire/stream_wire.h"
@@ -11,7 +12,7 @@ AudioRunner::AudioRunner(std::unique_ptr<engine::Session> session, ServiceMetric
     : session_(std::move(session)),
       metrics_(metrics),
       stages_(metrics->stages(session_->backend())),
-      info_{"samples", session_->config().filter_type, session_->backend(), session_->array().sensor_count(), true},
+      info_{"samples", engine::FilterKindName(session_->config().tracker.kind), session_->backend(), session_->array().sensor_count(), true},
       block_limits_{session_->array().sensor_count(), session_->config().max_block_samples} {}
 
 WorkItem AudioRunner::DecodeBlock(const v1::SampleBlock& block, Clock::time_point received,
@@ -96,6 +97,12 @@ void AudioRunner::ProcessBlock(const BlockWork& block, Clock::time_point receive
     track->Append(e);
     out->push_back(std::move(response));
   }
+}
+
+v1::SessionConfig AudioRunner::EffectiveConfig(const std::string& label) const {
+  v1::SessionConfig effective = wire::ConfigToProto(session_->config(), label);
+  effective.set_backend(info_.backend);
+  return effective;
 }
 
 }  // namespace localizer::server

@@ -25,7 +25,8 @@ class AudioRunner final : public SessionRunner {
   AudioRunner(std::unique_ptr<engine::Session> session, ServiceMetrics* metrics);
 
   const RunnerInfo& info() const override { return info_; }
-  const engine::SessionConfig& config() const override { return session_->config(); }
+  const engine::AudioSessionConfig& config() const override { return session_->config(); }
+  v1::SessionConfig EffectiveConfig(const std::string& label) const override;
 
   WorkItem DecodeBlock(const v1::SampleBlock& block, Clock::time_point received,
                        wire::DecodedBlock* scratch) const override;

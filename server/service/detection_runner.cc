@@ -1,6 +1,7 @@
 #include "server/service/detection_runner.h"
 
 #include "server/service/runner_util.h"
+#include "wire/config_wire.h"
 #include "wire/scan_wire.h"
 
 namespace localizer::server {
@@ -49,6 +50,12 @@ void DetectionRunner::Process(WorkItem& item, Clock::time_point /*started*/, Tra
   Observe(metrics_->scan_total, total_s);
   track->SetTargets(result.tracks);
   out->push_back(std::move(response));
+}
+
+v1::SessionConfig DetectionRunner::EffectiveConfig(const std::string& label) const {
+  v1::SessionConfig effective = wire::ConfigToProto(scans_->config(), label);
+  effective.set_backend(info_.backend);
+  return effective;
 }
 
 }  // namespace localizer::server

@@ -22,7 +22,8 @@ class DetectionRunner final : public SessionRunner {
   DetectionRunner(std::unique_ptr<engine::ScanSession> scans, ServiceMetrics* metrics);
 
   const RunnerInfo& info() const override { return info_; }
-  const engine::SessionConfig& config() const override { return scans_->config(); }
+  const engine::AudioSessionConfig& config() const override { return kNoAudio; }
+  v1::SessionConfig EffectiveConfig(const std::string& label) const override;
 
   WorkItem DecodeBlock(const v1::SampleBlock& block, Clock::time_point received,
                        wire::DecodedBlock* scratch) const override;
@@ -33,6 +34,7 @@ class DetectionRunner final : public SessionRunner {
                std::vector<ResponsePtr>* out) override;
 
  private:
+  static inline const engine::AudioSessionConfig kNoAudio{};
   const std::unique_ptr<engine::ScanSession> scans_;  // touched by Process only
   ServiceMetrics* const metrics_;
   const RunnerInfo info_;

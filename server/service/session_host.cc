@@ -35,9 +35,7 @@ v1::SessionOpened SessionHost::OpenedLocked(bool resumed) const {
   v1::SessionOpened opened;
   opened.set_session_id(id_);
   opened.set_resume_token(token_);
-  engine::SessionConfig effective = runner_->config();
-  effective.backend = backend();
-  *opened.mutable_effective_config() = wire::ConfigToProto(effective, label_);
+  *opened.mutable_effective_config() = runner_->EffectiveConfig(label_);
   opened.set_backend(backend());
   opened.set_resumed(resumed);
   if (inbox_.last_sequence()) opened.set_last_sequence(*inbox_.last_sequence());

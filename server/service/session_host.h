@@ -76,8 +76,9 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   const std::string& label() const { return label_; }
   const RunnerInfo& runner_info() const { return runner_->info(); }
   const std::string& backend() const { return runner_->info().backend; }
-  // The session's config (fixed at creation, so readable from any thread).
-  const engine::SessionConfig& config() const { return runner_->config(); }
+  // An audio session's config (fixed at creation, so readable from any thread); a detection
+  // session's is the default one (no array).
+  const engine::AudioSessionConfig& config() const { return runner_->config(); }
   // Recent positions for the live view; locks itself (see track_history.h).
   const TrackHistory& track() const { return track_; }
   bool TokenMatches(const std::string& token) const;  // constant-time comparison

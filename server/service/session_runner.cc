@@ -9,12 +9,12 @@ namespace localizer::server {
 StatusOr<std::unique_ptr<SessionRunner>> MakeSessionRunner(const engine::SessionConfig& config,
                                                            ServiceMetrics* metrics) {
   // The one question of kind: a detection config opens a detection session.
-  if (config.detections) {
-    auto scans = engine::ScanSession::Create(config);
+  if (const auto* detection = std::get_if<engine::DetectionSessionConfig>(&config)) {
+    auto scans = engine::ScanSession::Create(*detection);
     if (!scans.ok()) return scans.status();
     return std::unique_ptr<SessionRunner>(std::make_unique<DetectionRunner>(std::move(scans).value(), metrics));
   }
-  auto session = engine::Session::Create(config);
+  auto session = engine::Session::Create(std::get<engine::AudioSessionConfig>(config));
   if (!session.ok()) return session.status();
   return std::unique_ptr<SessionRunner>(std::make_unique<AudioRunner>(std::move(session).value(), metrics));
 }

@@ -50,8 +50,11 @@ class SessionRunner {
   virtual ~SessionRunner() = default;
 
   virtual const RunnerInfo& info() const = 0;
-  // The session's config as the engine holds it (fixed at creation).
-  virtual const engine::SessionConfig& config() const = 0;
+  // An audio session's config as the engine holds it (fixed at creation); a detection
+  // session's is the default one (no array): what the live view and /sessions read.
+  virtual const engine::AudioSessionConfig& config() const = 0;
+  // The config SessionOpened reports (wire/config_wire.h), with the backend chosen.
+  virtual v1::SessionConfig EffectiveConfig(const std::string& label) const = 0;
 
   // Reader side: a request's block, IMU batch or scan -> a work item for the inbox (or its
   // refusal), by the Decode* of its kind below. `scratch` is the stream's block decoding

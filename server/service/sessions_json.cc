@@ -19,7 +19,7 @@ json Triple(const double v[3]) { return json::array({Number(v[0]), Number(v[1]),
 
 json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, bool with_track) {
   const v1::SessionInfo info = host.Info(now, ttl_s);
-  const engine::SessionConfig& config = host.config();
+  const engine::AudioSessionConfig& config = host.config();
   const TrackSnapshot track = host.track().Snapshot();
   json s;
   s["id"] = host.id();

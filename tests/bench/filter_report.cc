@@ -22,16 +22,22 @@ double Median(std::vector<double> v) {
 }
 
 struct FilterChoice {
-  std::string filter, model;
+  std::string label;  // "pf", "ekf-ct", ...
+  FilterKind filter;
+  MotionModelKind model;
 };
 
-std::vector<FilterChoice> Choices(const std::string& list) {
+// "pf,ekf-ct,..." -> the choices; an unknown name is INVALID_ARGUMENT naming it.
+StatusOr<std::vector<FilterChoice>> Choices(const std::string& list) {
   std::vector<FilterChoice> all;
   std::stringstream in(list);
   for (std::string item; std::getline(in, item, ',');) {
     const auto dash = item.find('-');
-    all.push_back(dash == std::string::npos ? FilterChoice{item, "cv"}
-                                            : FilterChoice{item.substr(0, dash), item.substr(dash + 1)});
+    auto filter = ParseFilterKind(item.substr(0, dash), "filter");
+    if (!filter.ok()) return filter.status();
+    auto model = ParseMotionModelKind(dash == std::string::npos ? "cv" : item.substr(dash + 1), "motion_model");
+    if (!model.ok()) return model.status();
+    all.push_back({item, *filter, *model});
   }
   return all;
 }
@@ -41,13 +47,18 @@ int Main(int argc, char** argv) {
   const std::string list = argc > 2 ? argv[2] : "pf,ekf,ukf,ekf-ct,ukf-ct,mmpf,imm";
   std::printf("%-15s %-7s %4s %8s %9s %9s %8s %6s\n", "scenario", "filter", "seed", "rmse_m", "rmse/crlb",
               "rmse/pcrlb", "nees/dim", "reinit");
+  const auto choices = Choices(list);
+  if (!choices.ok()) {
+    std::fprintf(stderr, "filter_report: %s\n", choices.status().ToString().c_str());
+    return 2;
+  }
   std::vector<std::string> summary;
   for (const std::string& name : ScenarioNames()) {
-    for (const FilterChoice& f : Choices(list)) {
-      const std::string label = f.model == "cv" ? f.filter : f.filter + "-" + f.model;
+    for (const FilterChoice& f : *choices) {
+      const std::string& label = f.label;
       std::vector<double> crlb, pcrlb, nees, rmse;
       for (int seed = 1; seed <= seeds; ++seed) {
-        const ScenarioRun run = TrackScenario(name, seed, Likelihood::kPeak, "cpu", f.filter, f.model);
+        const ScenarioRun run = TrackScenario(name, seed, Likelihood::kPeak, BackendChoice::kCpu, f.filter, f.model);
         const ArrayGeometry array = *ArrayGeometry::Create(run.config.sensors_m, run.config.sound_speed_mps);
         const BoundScore b = ScoreAgainstPcrlb(array, run.sim, run.config, run.estimates, run.score, 2.0);
         std::printf("%-15s %-7s %4d %8.3f %9.3f %9.3f %8.2f %6d\n", name.c_str(), label.c_str(), seed,

@@ -57,8 +57,8 @@ Audio MakeAudio(double seconds) {
   return a;
 }
 
-SessionConfig ConfigFor(const Audio& a, const std::string& backend, int particles, uint64_t seed) {
-  SessionConfig c;
+AudioSessionConfig ConfigFor(const Audio& a, BackendChoice backend, int particles, uint64_t seed) {
+  AudioSessionConfig c;
   c.sensors_m = a.scenario.sensors_m;
   c.sound_speed_mps = a.scenario.sound_speed_mps;
   c.sample_rate_hz = a.sim.sample_rate_hz;
@@ -66,7 +66,7 @@ SessionConfig ConfigFor(const Audio& a, const std::string& backend, int particle
   c.band_high_hz = a.scenario.sim.band_high_hz;
   c.frame_samples = kFrame;
   c.hop_samples = kHop;
-  c.filter.particles = particles;
+  c.tracker.particle.particles = particles;
   c.backend = backend;
   c.seed = seed;
   return c;
@@ -85,7 +85,7 @@ std::vector<std::vector<float>> HopBlocks(const SimResult& sim) {
   return blocks;
 }
 
-int RunRealtime(const Audio& audio, const std::string& backend, int sessions, int particles) {
+int RunRealtime(const Audio& audio, BackendChoice backend, int sessions, int particles) {
   const auto blocks = HopBlocks(audio.sim);
   const double hop_s = kHop / audio.sim.sample_rate_hz;
   std::vector<std::vector<double>> latency_ms(sessions);
@@ -142,7 +142,7 @@ int RunRealtime(const Audio& audio, const std::string& backend, int sessions, in
     failed += failures[i];
   }
   const gpu::GpuBatchCounts c = gpu::BatchCounts();
-  std::printf("%-8s %8d %10zu %9.2f %9.2f %9.2f %10.2f %8d %7.2f %10.1f %10.1f\n", backend.c_str(), sessions,
+  std::printf("%-8s %8d %10zu %9.2f %9.2f %9.2f %10.2f %8d %7.2f %10.1f %10.1f\n", BackendChoiceName(backend), sessions,
               all.size(), Percentile(all, 0.5), Percentile(all, 0.99), Percentile(all, 1.0), Percentile(steady, 0.99),
               failed, open_s,
               c.gcc_batches ? static_cast<double>(c.gcc_frames) / static_cast<double>(c.gcc_batches) : 0.0,
@@ -151,7 +151,7 @@ int RunRealtime(const Audio& audio, const std::string& backend, int sessions, in
   return failed == 0 ? 0 : 1;
 }
 
-int RunOffline(const Audio& audio, const std::string& backend, int particles) {
+int RunOffline(const Audio& audio, BackendChoice backend, int particles) {
   const auto blocks = HopBlocks(audio.sim);
   std::vector<double> ms_per_audio_s;
   for (int rep = 0; rep < 5; ++rep) {
@@ -167,17 +167,17 @@ int RunOffline(const Audio& audio, const std::string& backend, int particles) {
     ms_per_audio_s.push_back(wall_ms / (static_cast<double>(blocks.size() * kHop) / audio.sim.sample_rate_hz));
   }
   std::printf("offline %s: %.2f ms per second of audio (median of 5; one session, %d particles)\n",
-              backend.c_str(), Percentile(ms_per_audio_s, 0.5), particles);
+              BackendChoiceName(backend), Percentile(ms_per_audio_s, 0.5), particles);
   return 0;
 }
 
 int Main(int argc, char** argv) {
-  std::string backend = "gpu", sessions_list = "1,100,500,1000,2000";
+  std::string backend_name = "gpu", sessions_list = "1,100,500,1000,2000";
   double seconds = 4.0, window_ms = 1.0;
   int particles = 4096;
   bool offline = false;
   FlagSet flags("gpu_sessions_bench [flags]", "Concurrent real-time sessions' frame latency on one backend.");
-  flags.String("backend", &backend, "cpu|gpu", "backend for every session");
+  flags.String("backend", &backend_name, "cpu|gpu", "backend for every session");
   flags.String("sessions", &sessions_list, "N,N,...", "session counts to run, one after another");
   flags.Double("seconds", &seconds, "S", "s", "audio per session");
   flags.Int("particles", &particles, "N", "particles", "per session");
@@ -192,26 +192,31 @@ int Main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", parsed.message().c_str());
     return 2;
   }
+  const auto backend = ParseBackendChoice(backend_name, "--backend");
+  if (!backend.ok()) {
+    std::fprintf(stderr, "%s\n", backend.status().message().c_str());
+    return 2;
+  }
   gpu::GpuBackendOptions gpu_options;
   gpu_options.batch_window_s = window_ms * 1e-3;
   if (const Status s = gpu::RegisterGpuBackend(gpu_options); !s.ok()) {
     std::fprintf(stderr, "%s\n", s.message().c_str());
     return 2;
   }
-  if (backend == "gpu" && !GpuUnavailableReason().empty()) {
+  if (*backend == BackendChoice::kGpu && !GpuUnavailableReason().empty()) {
     std::printf("skipped: no usable GPU (%s)\n", GpuUnavailableReason().c_str());
     return 0;
   }
-  if (backend == "gpu") std::printf("device: %s\n", gpu::DeviceName().c_str());
+  if (*backend == BackendChoice::kGpu) std::printf("device: %s\n", gpu::DeviceName().c_str());
   const Audio audio = MakeAudio(seconds);
   int code = 0;
   if (offline) {
-    code = RunOffline(audio, backend, particles);
+    code = RunOffline(audio, *backend, particles);
   } else {
     std::printf("%-8s %8s %10s %9s %9s %9s %10s %8s %7s %10s %10s\n", "backend", "sessions", "frames", "p50_ms",
                 "p99_ms", "max_ms", "steady_p99", "failed", "open_s", "gcc_batch", "pf_batch");
     std::stringstream list(sessions_list);
-    for (std::string item; std::getline(list, item, ',');) code |= RunRealtime(audio, backend, std::stoi(item), particles);
+    for (std::string item; std::getline(list, item, ',');) code |= RunRealtime(audio, *backend, std::stoi(item), particles);
   }
   SetGpuProvider(nullptr);
   return code;

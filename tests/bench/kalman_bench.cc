@@ -15,7 +15,8 @@
 namespace localizer::engine {
 namespace {
 
-const char* kModels[] = {"cv", "ca", "ct", "singer"};
+const MotionModelKind kModels[] = {MotionModelKind::kCv, MotionModelKind::kCa, MotionModelKind::kCt,
+                                   MotionModelKind::kSinger};
 
 void BM_KalmanStep(benchmark::State& state) {
   std::vector<Vec3> sensors;
@@ -46,7 +47,7 @@ void BM_KalmanStep(benchmark::State& state) {
     filter->Predict(0.05);
     benchmark::DoNotOptimize(filter->Update(m));
   }
-  state.SetLabel(std::string(state.range(0) == 0 ? "ekf " : "ukf ") + kModels[state.range(1)]);
+  state.SetLabel(std::string(state.range(0) == 0 ? "ekf " : "ukf ") + MotionModelKindName(kModels[state.range(1)]));
 }
 BENCHMARK(BM_KalmanStep)->ArgsProduct({{0, 1}, {0, 1, 2, 3}});
 

@@ -27,14 +27,14 @@ const SimResult& Audio(double fs, Scenario* scenario_out) {
 void BM_PipelinePerAudioSecond(benchmark::State& state) {
   Scenario scenario;
   const SimResult& sim = Audio(44100.0, &scenario);
-  SessionConfig config;
+  AudioSessionConfig config;
   config.sensors_m = scenario.sensors_m;
   config.sound_speed_mps = scenario.sound_speed_mps;
   config.sample_rate_hz = sim.sample_rate_hz;
   config.frame_samples = 4096;
   config.hop_samples = 2048;
-  config.filter.particles = static_cast<int>(state.range(0));
-  config.filter.likelihood = state.range(1) == 0 ? Likelihood::kPeak : Likelihood::kGcc;
+  config.tracker.particle.particles = static_cast<int>(state.range(0));
+  config.tracker.particle.likelihood = state.range(1) == 0 ? Likelihood::kPeak : Likelihood::kGcc;
   // 0.1 s blocks, as a streaming client would send them.
   const int64_t block = 4410;
   std::vector<std::vector<float>> blocks;
@@ -69,7 +69,7 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
       benchmark::Counter(runs * audio_s * 1e-3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["tdoa_us_per_frame"] = 1e6 * tdoa_s / static_cast<double>(frames);
   state.counters["filter_us_per_frame"] = 1e6 * filter_s / static_cast<double>(frames);
-  state.SetLabel(LikelihoodName(config.filter.likelihood));
+  state.SetLabel(LikelihoodName(config.tracker.particle.likelihood));
 }
 BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}})->Unit(benchmark::kMillisecond);
 

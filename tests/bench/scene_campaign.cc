@@ -35,15 +35,15 @@ struct Args {
   int jobs = 1;
   std::optional<Weighting> weighting;  // unset: the session default
   std::optional<uint64_t> trace_seed;  // one scene, frame by frame
-  std::string filter_type;             // empty: the session default
+  std::optional<FilterKind> filter;    // unset: the session default
   int particles = 0;                   // 0: the session default
 };
 
 // The flags' changes to the campaign's default session config.
-void Adjust(const Args& a, SessionConfig* c) {
+void Adjust(const Args& a, AudioSessionConfig* c) {
   if (a.weighting) c->weighting = *a.weighting;
-  if (!a.filter_type.empty()) c->filter_type = a.filter_type;
-  if (a.particles > 0) c->filter.particles = a.particles;
+  if (a.filter) c->tracker.kind = *a.filter;
+  if (a.particles > 0) c->tracker.particle.particles = a.particles;
 }
 
 void Usage(FILE* out) {
@@ -82,7 +82,9 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->seed = std::strtoull(value.c_str(), &end, 10);
       if (*end != '\0') return std::fprintf(stderr, "scene_campaign: --seed must be an integer\n"), false;
     } else if (flag == "--filter") {
-      a->filter_type = value;
+      auto parsed = ParseFilterKind(value, "--filter");
+      if (!parsed.ok()) return std::fprintf(stderr, "scene_campaign: %s\n", parsed.status().ToString().c_str()), false;
+      a->filter = *parsed;
     } else if (flag == "--particles") {
       a->particles = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->particles < 1) return std::fprintf(stderr, "scene_campaign: --particles must be >= 1\n"), false;
@@ -203,7 +205,7 @@ void PrintClass(const char* name, const ClassSummary& c) {
 }
 
 int Trace(uint64_t seed, const RandomSceneOptions& scene_options, const Args& a) {
-  const SceneRow row = RunRandomScene(seed, scene_options, {}, true, [&](SessionConfig* c) { Adjust(a, c); });
+  const SceneRow row = RunRandomScene(seed, scene_options, {}, true, [&](AudioSessionConfig* c) { Adjust(a, c); });
   if (!row.error.empty()) {
     std::fprintf(stderr, "scene_campaign: scene %" PRIu64 ": %s\n", seed, row.error.c_str());
     return 1;
@@ -246,7 +248,7 @@ int main(int argc, char** argv) {
   auto worker = [&] {
     for (int i = next++; i < a.scenes; i = next++) {
       const uint64_t seed = a.seed * 1000000ULL + static_cast<uint64_t>(i);
-      rows[static_cast<size_t>(i)] = RunRandomScene(seed, scene_options, {}, false, [&](SessionConfig* c) { Adjust(a, c); });
+      rows[static_cast<size_t>(i)] = RunRandomScene(seed, scene_options, {}, false, [&](AudioSessionConfig* c) { Adjust(a, c); });
       const std::lock_guard<std::mutex> lock(print_mutex);
       std::fprintf(stderr, "[%d/%d] ", ++done, a.scenes);
       PrintRow(stderr, rows[static_cast<size_t>(i)]);

@@ -84,7 +84,7 @@ Recording Shifted(const Recording& in) {
 
 // The session `localizer-cli track --array hydrophones_config_07-HI.csv` runs (the array
 // file's sensors, sound speed, reference and water column), with `base`'s choices.
-engine::SessionConfig ConfigFor(engine::SessionConfig base) {
+engine::AudioSessionConfig ConfigFor(engine::AudioSessionConfig base) {
   const Xav& xav = LoadXav();
   base.frame_samples = kFrame;
   base.hop_samples = kHop;
@@ -92,7 +92,7 @@ engine::SessionConfig ConfigFor(engine::SessionConfig base) {
   return TrackConfigFor(base, xav.array.array, ArrayOverrides{}, xav.recording.sample_rate_hz);
 }
 
-std::vector<engine::Estimate> Track(const engine::SessionConfig& config, const Recording& rec) {
+std::vector<engine::Estimate> Track(const engine::AudioSessionConfig& config, const Recording& rec) {
   auto session = engine::Session::Create(config);
   EXPECT_TRUE(session.ok()) << session.status().ToString();
   std::vector<engine::Estimate> out;
@@ -157,7 +157,7 @@ struct Counts {
 };
 
 // check_bounds: a present estimate outside config's bounds is a failure (else only counted).
-Counts Measure(const std::vector<engine::Estimate>& estimates, const engine::SessionConfig& config,
+Counts Measure(const std::vector<engine::Estimate>& estimates, const engine::AudioSessionConfig& config,
                const std::vector<double>* ratio, bool check_bounds = true) {
   Counts c;
   c.frames = static_cast<int>(estimates.size());
@@ -186,11 +186,11 @@ Counts Measure(const std::vector<engine::Estimate>& estimates, const engine::Ses
   return c;
 }
 
-void ExpectContractOnTheRecording(const engine::SessionConfig& base, const char* name,
+void ExpectContractOnTheRecording(const engine::AudioSessionConfig& base, const char* name,
                                   bool check_bounds) {
   const Xav& xav = LoadXav();
   ASSERT_EQ(xav.recording.channel_count, 6);
-  const engine::SessionConfig config = ConfigFor(base);
+  const engine::AudioSessionConfig config = ConfigFor(base);
   ASSERT_EQ(config.bounds_max_m.z(), kXavSurfaceZM);
   ASSERT_EQ(config.bounds_min_m.z(), kXavBottomZM);
   const auto estimates = Track(config, xav.recording);
@@ -209,21 +209,21 @@ void ExpectContractOnTheRecording(const engine::SessionConfig& base, const char*
   EXPECT_GE(c.calls_heard, kMinCallsHeard * c.calls);
 }
 
-engine::SessionConfig Band50To1000() {
-  engine::SessionConfig base;
+engine::AudioSessionConfig Band50To1000() {
+  engine::AudioSessionConfig base;
   base.band_low_hz = 50.0;  // the authors' fish-sound band
   base.band_high_hz = 1000.0;
   return base;
 }
 
-engine::SessionConfig PhatCoherence() {
-  engine::SessionConfig base;
+engine::AudioSessionConfig PhatCoherence() {
+  engine::AudioSessionConfig base;
   base.weighting = engine::Weighting::kPhatCoherence;
   return base;
 }
 
 TEST(XavPresence, PhatWholeBandHearsTheCallsWithinTheWaterColumn) {
-  ExpectContractOnTheRecording(engine::SessionConfig{}, "phat", /*check_bounds=*/true);
+  ExpectContractOnTheRecording(engine::AudioSessionConfig{}, "phat", /*check_bounds=*/true);
 }
 
 TEST(XavPresence, PhatCoherenceHearsTheCallsWithinTheWaterColumn) {
@@ -243,10 +243,10 @@ TEST(XavPresence, PhatBand50To1000PresentEstimatesStayInTheWaterColumn) {
   ExpectContractOnTheRecording(Band50To1000(), "phat 50-1000 Hz", /*check_bounds=*/true);
 }
 
-void ExpectNoSourceOnShiftedChannels(const engine::SessionConfig& base, const char* name) {
+void ExpectNoSourceOnShiftedChannels(const engine::AudioSessionConfig& base, const char* name) {
   const Xav& xav = LoadXav();
   ASSERT_EQ(xav.recording.channel_count, 6);
-  const engine::SessionConfig config = ConfigFor(base);
+  const engine::AudioSessionConfig config = ConfigFor(base);
   const auto estimates = Track(config, Shifted(xav.recording));
   const Counts c = Measure(estimates, config, nullptr);
   std::printf("XAV shifted channels, %s: %d frames, %d present\n", name, c.frames, c.present);
@@ -256,7 +256,7 @@ void ExpectNoSourceOnShiftedChannels(const engine::SessionConfig& base, const ch
 }
 
 TEST(XavPresence, ShiftedChannelsHoldNoSourcePhat) {
-  ExpectNoSourceOnShiftedChannels(engine::SessionConfig{}, "phat");
+  ExpectNoSourceOnShiftedChannels(engine::AudioSessionConfig{}, "phat");
   ExpectNoSourceOnShiftedChannels(Band50To1000(), "phat 50-1000 Hz");
 }
 

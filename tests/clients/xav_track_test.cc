@@ -29,7 +29,7 @@ TEST(XavTrack, WholeRecordingTracksWithoutRejectionAndStaysNearTheArray) {
   job.config.reference_sensor = xav->array.reference_sensor;
   job.config.frame_samples = 4096;
   job.config.hop_samples = 2048;
-  job.config.filter.particles = 1024;  // keeps the test quick; accuracy is not asserted
+  job.config.tracker.particle.particles = 1024;  // keeps the test quick; accuracy is not asserted
   // The authors' detector looks at 0-1000 Hz (detection_config_large_array.yaml): fish
   // grunts and knocks. Outside that band PHAT would whiten 31 kHz of ambient noise.
   job.config.band_low_hz = 50.0;

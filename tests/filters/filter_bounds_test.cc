@@ -44,7 +44,7 @@ struct CaseResult {
 KalmanOptions Kalman(KalmanVariant variant, const std::string& model, double sigma_s) {
   KalmanOptions o;
   o.variant = variant;
-  o.motion_model = model;
+  o.motion_model = *ParseMotionModelKind(model, "motion_model");
   o.tdoa_sigma_s = sigma_s;
   return o;
 }
@@ -83,7 +83,7 @@ std::vector<FilterCase> Filters(double sigma_s) {
 // filters' start belief.
 std::vector<Eigen::MatrixXd> Bound(const ArrayGeometry& array, const BoundScene& scene,
                                    const std::vector<testing::PathPoint>& path, const FilterCase& c) {
-  auto model = MakeMotionModel(c.model, MotionModelOptions{});
+  auto model = MakeMotionModel(*ParseMotionModelKind(c.model, "motion_model"), MotionModelOptions{});
   EXPECT_TRUE(model.ok());
   std::vector<TrueState> truth;
   for (int k = 0; k <= scene.steps(); ++k) {

@@ -26,7 +26,7 @@ constexpr double kManoeuvreNoise = 3.0;
 KalmanOptions Kalman(KalmanVariant variant, const std::string& model) {
   KalmanOptions o;
   o.variant = variant;
-  o.motion_model = model;
+  o.motion_model = *ParseMotionModelKind(model, "motion_model");
   o.tdoa_sigma_s = kSigma;
   o.motion.accel_noise_mps2 = 0.02;
   o.motion.turn_rate_noise_radps2 = 0.02;
@@ -39,7 +39,7 @@ KalmanOptions Kalman(KalmanVariant variant, const std::string& model) {
 ImmOptions Imm(KalmanVariant variant) {
   ImmOptions o;
   o.kalman = Kalman(variant, "cv");
-  o.modes = {{"cv", "cv", o.kalman.motion}, {"ct", "ct", o.kalman.motion}};
+  o.modes = {{"cv", MotionModelKind::kCv, o.kalman.motion}, {"ct", MotionModelKind::kCt, o.kalman.motion}};
   return o;
 }
 
@@ -52,15 +52,20 @@ TEST(ImmFilter, OptionsAreCheckedNamingTheField) {
   o.modes.push_back(o.modes[0]);
   EXPECT_NE(ImmFilter::Create(array, o).status().message().find("twice"), std::string::npos);
   o = Imm(KalmanVariant::kExtended);
-  o.modes[1].motion_model = "bicycle";
-  EXPECT_NE(ImmFilter::Create(array, o).status().message().find("bicycle"), std::string::npos);
+  o.modes[1].motion_model = static_cast<MotionModelKind>(42);  // no such model
+  EXPECT_EQ(ImmFilter::Create(array, o).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(ParseImmModes("cv,bicycle", "imm_modes").status().message().find("bicycle"), std::string::npos);
+  o = Imm(KalmanVariant::kExtended);
   o.modes.clear();
   EXPECT_EQ(ImmFilter::Create(array, o).status().code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(ParseImmModes("cv,,ct", {}).status().code(), StatusCode::kInvalidArgument);
-  const auto modes = ParseImmModes("cv,ca", {});
+  EXPECT_EQ(ParseImmModes("cv,,ct", "imm_modes").status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(ParseImmModes("cv,cv", "imm_modes").status().message().find("twice"), std::string::npos);
+  EXPECT_NE(ParseImmModes("", "imm_modes").status().message().find("imm_modes"), std::string::npos);
+  const auto modes = ParseImmModes("cv,ca", "imm_modes");
   ASSERT_TRUE(modes.ok());
   ASSERT_EQ(modes->size(), 2u);
-  EXPECT_EQ((*modes)[1].motion_model, "ca");
+  EXPECT_EQ((*modes)[1], MotionModelKind::kCa);
+  EXPECT_EQ(ImmModesName(*modes), "cv,ca");
 }
 
 // With one mode the mixing is the identity and mu stays 1: the IMM is its mode filter.

@@ -56,7 +56,7 @@ TrackState Belief(const Vec3& p, double pos_std, double vel_std) {
 KalmanOptions Options(KalmanVariant variant, const std::string& model, double sigma_s) {
   KalmanOptions o;
   o.variant = variant;
-  o.motion_model = model;
+  o.motion_model = *ParseMotionModelKind(model, "motion_model");
   o.tdoa_sigma_s = sigma_s;
   o.motion.accel_noise_mps2 = 0.3;
   o.motion.jerk_psd = 0.05;
@@ -219,8 +219,9 @@ TEST(KalmanFilter, AnOutlierFrameIsGatedOut) {
 TEST(KalmanFilter, ContractsMatchTheOtherTrackers) {
   const ArrayGeometry array = Cube();
   KalmanOptions bad;
-  bad.motion_model = "bicycle";
+  bad.motion_model = static_cast<MotionModelKind>(42);  // no such model
   EXPECT_EQ(KalmanFilter::Create(array, bad).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(ParseMotionModelKind("bicycle", "motion_model").status().code(), StatusCode::kInvalidArgument);
   bad = {};
   bad.gate_probability = 0.0;
   EXPECT_EQ(KalmanFilter::Create(array, bad).status().code(), StatusCode::kInvalidArgument);

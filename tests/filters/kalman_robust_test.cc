@@ -145,7 +145,7 @@ TEST(KalmanRobust, LogLikelihoodIsTheGaussianOfTheInnovation) {
 TEST(KalmanRobust, SetStateChecksItsInput) {
   const ArrayGeometry array = testing::BoxArray();
   KalmanOptions o;
-  o.motion_model = "ct";
+  o.motion_model = MotionModelKind::kCt;
   auto ct = std::move(*KalmanFilter::Create(array, o));
   EXPECT_FALSE(ct->initialised());
   EXPECT_STREQ(ct->motion_model_name(), "ct");
@@ -162,9 +162,10 @@ TEST(KalmanRobust, SetStateChecksItsInput) {
   KalmanOptions bad;
   bad.huber_threshold = 0.0;
   EXPECT_NE(KalmanFilter::Create(array, bad).status().message().find("huber_threshold"), std::string::npos);
-  EXPECT_EQ(ParseRobustUpdate("huber").value(), RobustUpdate::kHuber);
-  EXPECT_EQ(ParseRobustUpdate("student-t").value(), RobustUpdate::kStudentT);
-  EXPECT_NE(ParseRobustUpdate("tukey").status().message().find("robust"), std::string::npos);
+  EXPECT_EQ(ParseRobustUpdate("huber", "robust").value(), RobustUpdate::kHuber);
+  EXPECT_EQ(ParseRobustUpdate("student-t", "robust").value(), RobustUpdate::kStudentT);
+  EXPECT_NE(ParseRobustUpdate("tukey", "robust").status().message().find("robust"), std::string::npos);
+  EXPECT_STREQ(RobustUpdateName(RobustUpdate::kStudentT), "student-t");
   bad = {};
   bad.student_dof = -1.0;
   EXPECT_NE(KalmanFilter::Create(array, bad).status().message().find("student_dof"), std::string::npos);

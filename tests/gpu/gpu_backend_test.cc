@@ -22,9 +22,9 @@ namespace {
 
 using engine::Estimate;
 using engine::Session;
-using engine::SessionConfig;
+using engine::AudioSessionConfig;
 
-SessionConfig TetraWaterConfig() {
+AudioSessionConfig TetraWaterConfig() {
   const engine::Scenario scenario = *engine::MakeScenario("tetra-water", 1);
   return engine::SessionConfigFor(scenario);
 }
@@ -33,8 +33,8 @@ TEST(GpuBackend, GpuWithoutADeviceIsFailedPreconditionNamingTheReason) {
   ASSERT_TRUE(RegisterGpuBackend().ok());
   const std::string reason = engine::GpuUnavailableReason();
   if (reason.empty()) GTEST_SKIP() << "this machine has a usable GPU";
-  SessionConfig config = TetraWaterConfig();
-  config.backend = "gpu";
+  AudioSessionConfig config = TetraWaterConfig();
+  config.backend = engine::BackendChoice::kGpu;
   auto session = Session::Create(config);
   ASSERT_FALSE(session.ok());
   EXPECT_EQ(session.status().code(), StatusCode::kFailedPrecondition);
@@ -43,8 +43,8 @@ TEST(GpuBackend, GpuWithoutADeviceIsFailedPreconditionNamingTheReason) {
 
 TEST(GpuBackend, AutoUsesTheGpuExactlyWhenOneIsUsable) {
   ASSERT_TRUE(RegisterGpuBackend().ok());
-  SessionConfig config = TetraWaterConfig();
-  config.backend = "auto";
+  AudioSessionConfig config = TetraWaterConfig();
+  config.backend = engine::BackendChoice::kAuto;
   auto session = Session::Create(config);
   ASSERT_TRUE(session.ok()) << session.status().ToString();
   EXPECT_EQ((*session)->backend(), engine::GpuUnavailableReason().empty() ? "gpu" : "cpu");
@@ -53,8 +53,8 @@ TEST(GpuBackend, AutoUsesTheGpuExactlyWhenOneIsUsable) {
 TEST(GpuBackend, WithoutAProviderTheReasonSaysSo) {
   auto previous = engine::SetGpuProvider(nullptr);
   EXPECT_NE(engine::GpuUnavailableReason().find("no GPU backend"), std::string::npos);
-  SessionConfig config = TetraWaterConfig();
-  config.backend = "gpu";
+  AudioSessionConfig config = TetraWaterConfig();
+  config.backend = engine::BackendChoice::kGpu;
   EXPECT_EQ(Session::Create(config).status().code(), StatusCode::kFailedPrecondition);
   engine::SetGpuProvider(previous);
 }
@@ -81,8 +81,8 @@ TEST(GpuBackend, ScenarioRmseWithinTenPercentOfTheCpu) {
     for (auto likelihood : {engine::Likelihood::kPeak, engine::Likelihood::kGcc}) {
       double cpu_sq = 0.0, gpu_sq = 0.0;
       for (int seed = 1; seed <= kSeeds; ++seed) {
-        const auto cpu = engine::TrackScenario(name, seed, likelihood, "cpu");
-        const auto gpu = engine::TrackScenario(name, seed, likelihood, "gpu");
+        const auto cpu = engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kCpu);
+        const auto gpu = engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kGpu);
         ASSERT_EQ(gpu.estimates.size(), cpu.estimates.size());
         EXPECT_GE(gpu.score.scored, cpu.score.scored - 2) << name << " seed " << seed;
         cpu_sq += cpu.score.rmse_m * cpu.score.rmse_m;
@@ -112,10 +112,11 @@ TEST(GpuBackend, MovingArrayKeepsTheFilterOnTheCpuAndMatchesTheCpuBackend) {
   const auto imu = engine::SynthesiseImu(engine::AttitudeTrajectory(motion), 200.0, 8.0, noise, 5);
   double rmse[2] = {0.0, 0.0};
   int backend_index = 0;
-  for (const char* backend : {"cpu", "gpu"}) {
-    SessionConfig config = engine::SessionConfigFor(scenario);
+  for (const engine::BackendChoice choice : {engine::BackendChoice::kCpu, engine::BackendChoice::kGpu}) {
+    const std::string backend = engine::BackendChoiceName(choice);
+    AudioSessionConfig config = engine::SessionConfigFor(scenario);
     config.array_in_body_frame = true;
-    config.backend = backend;
+    config.backend = choice;
     auto session = Session::Create(config);
     ASSERT_TRUE(session.ok()) << session.status().ToString();
     EXPECT_EQ((*session)->backend(), backend);
@@ -134,8 +135,8 @@ TEST(GpuBackend, MovingArrayKeepsTheFilterOnTheCpuAndMatchesTheCpuBackend) {
 
 TEST(GpuBackend, SameSeedSameEstimatesTwice) {
   LOCALIZER_SKIP_WITHOUT_GPU();
-  const auto first = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, "gpu");
-  const auto second = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, "gpu");
+  const auto first = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, engine::BackendChoice::kGpu);
+  const auto second = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, engine::BackendChoice::kGpu);
   ASSERT_EQ(first.estimates.size(), second.estimates.size());
   for (size_t i = 0; i < first.estimates.size(); ++i) {
     EXPECT_EQ(first.estimates[i].state, second.estimates[i].state) << "frame " << i;
@@ -154,8 +155,8 @@ TEST(GpuBackend, ThousandConcurrentSessionsGetWhatEachGetsAlone) {
   const engine::SimResult sim = *engine::Simulate(array, short_run.sim);
   const engine::BlockView block{1, sim.channel_count, sim.samples_per_channel, sim.samples.data()};
   auto run = [&](uint64_t seed, std::vector<Estimate>* out) {
-    SessionConfig config = engine::SessionConfigFor(short_run);
-    config.backend = "gpu";
+    AudioSessionConfig config = engine::SessionConfigFor(short_run);
+    config.backend = engine::BackendChoice::kGpu;
     config.seed = seed;
     auto session = Session::Create(config);
     ASSERT_TRUE(session.ok()) << session.status().ToString();
@@ -185,8 +186,8 @@ TEST(GpuBackend, AFullBankRefusesNewSessionsAndTheOthersContinue) {
   GpuBackendOptions small;
   small.bank_limit_bytes = 4 << 20;  // a few 4096-particle sessions
   ASSERT_TRUE(RegisterGpuBackend(small).ok());
-  SessionConfig config = TetraWaterConfig();
-  config.backend = "gpu";
+  AudioSessionConfig config = TetraWaterConfig();
+  config.backend = engine::BackendChoice::kGpu;
   std::vector<std::unique_ptr<Session>> open;
   Status refused = Status::Ok();
   for (int i = 0; i < 1000 && refused.ok(); ++i) {

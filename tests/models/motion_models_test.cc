@@ -156,7 +156,10 @@ TEST(CoordinatedTurn, ZeroTurnRateIsConstantVelocity) {
 TEST(MotionModels, NoiseIsSymmetricPsdAndZeroStepIsTheIdentity) {
   MotionModelOptions o;
   for (const char* name : {"cv", "ca", "ct", "singer"}) {
-    auto model = MakeMotionModel(name, o);
+    const auto kind = ParseMotionModelKind(name, "motion_model");
+    ASSERT_TRUE(kind.ok()) << name;
+    EXPECT_STREQ(MotionModelKindName(*kind), name);
+    auto model = MakeMotionModel(*kind, o);
     ASSERT_TRUE(model.ok()) << name;
     const MotionModel& m = **model;
     EXPECT_STREQ(m.name(), name);
@@ -179,15 +182,17 @@ TEST(MotionModels, NoiseIsSymmetricPsdAndZeroStepIsTheIdentity) {
 
 TEST(MotionModels, BadNamesAndOptionsAreInvalidArgument) {
   MotionModelOptions o;
-  EXPECT_EQ(MakeMotionModel("imm", o).status().code(), StatusCode::kInvalidArgument);
+  const auto imm = ParseMotionModelKind("imm", "motion_model");
+  EXPECT_EQ(imm.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(imm.status().message(), "motion_model 'imm' is not one of: cv, ca, ct, singer");
   o.singer_tau_s = 0.0;
-  EXPECT_EQ(MakeMotionModel("singer", o).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(MakeMotionModel(MotionModelKind::kSinger, o).status().code(), StatusCode::kInvalidArgument);
   o = {};
   o.jerk_psd = -1.0;
-  EXPECT_EQ(MakeMotionModel("ca", o).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(MakeMotionModel(MotionModelKind::kCa, o).status().code(), StatusCode::kInvalidArgument);
   o = {};
   o.accel_noise_mps2 = std::nan("");
-  EXPECT_EQ(MakeMotionModel("cv", o).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(MakeMotionModel(MotionModelKind::kCv, o).status().code(), StatusCode::kInvalidArgument);
 }
 
 }  // namespace

@@ -87,9 +87,11 @@ namespace {
 // against the particle filter's 0.23 / 0.35; turn models 0.12 / 0.11-0.14).
 TEST(Accuracy, KalmanFiltersBeatHalfThePerFrameCrlbOnGaussianScenes) {
   for (const char* scene : {"tetra-water", "tetra-air"}) {
-    for (const char* filter : {"ekf", "ukf"}) {
-      for (const char* model : {"cv", "ct"}) {
-        const ScenarioRun run = TrackScenario(scene, 1, Likelihood::kPeak, "cpu", filter, model);
+    for (const FilterKind filter_kind : {FilterKind::kEkf, FilterKind::kUkf}) {
+      for (const MotionModelKind model_kind : {MotionModelKind::kCv, MotionModelKind::kCt}) {
+        const char* filter = FilterKindName(filter_kind);
+        const char* model = MotionModelKindName(model_kind);
+        const ScenarioRun run = TrackScenario(scene, 1, Likelihood::kPeak, BackendChoice::kCpu, filter_kind, model_kind);
         Print(std::string(scene) + " " + filter + " " + model, run.score);
         EXPECT_GT(run.score.scored, 80) << scene << " " << filter << " " << model;
         EXPECT_LT(run.score.rmse_over_crlb, 0.5) << scene << " " << filter << " " << model;

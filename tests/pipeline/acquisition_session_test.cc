@@ -21,8 +21,8 @@ struct Run {
   std::vector<Estimate> estimates;
 };
 
-SessionConfig ConfigFor(const std::vector<Vec3>& sensors, double c, const SimOptions& sim) {
-  SessionConfig config;
+AudioSessionConfig ConfigFor(const std::vector<Vec3>& sensors, double c, const SimOptions& sim) {
+  AudioSessionConfig config;
   config.sensors_m = sensors;
   config.sound_speed_mps = c;
   config.sample_rate_hz = sim.sample_rate_hz;
@@ -32,7 +32,7 @@ SessionConfig ConfigFor(const std::vector<Vec3>& sensors, double c, const SimOpt
   return config;
 }
 
-std::vector<Estimate> Process(const SessionConfig& config, const SimResult& sim) {
+std::vector<Estimate> Process(const AudioSessionConfig& config, const SimResult& sim) {
   auto session = std::move(*Session::Create(config));
   std::vector<Estimate> out;
   EXPECT_TRUE(session->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &out).ok());
@@ -117,7 +117,7 @@ TEST(AcquisitionSession, APersistentlyBiasedPairTripsTheDivergenceTest) {
 // that survives, and the statistic stays below its threshold.
 TEST(AcquisitionSession, SixtySecondsOfNoiseHoldNoSource) {
   const Scenario scenario = *MakeScenario("tetra-water", 1);
-  SessionConfig config = SessionConfigFor(scenario);
+  AudioSessionConfig config = SessionConfigFor(scenario);
   config.band_low_hz = config.band_high_hz = 0.0;  // a user without a band hint
   SimResult noise;
   noise.channel_count = 4;
@@ -166,7 +166,7 @@ TEST(AcquisitionSession, ASourceSwitchedOffAndOnIsFlaggedDroppedAndReacquired) {
       v += static_cast<float>(gauss(rng));
     }
   }
-  SessionConfig config = SessionConfigFor(scenario);
+  AudioSessionConfig config = SessionConfigFor(scenario);
   const std::vector<Estimate> estimates = Process(config, sim);
   const double half_frame_s = 0.5 * config.frame_samples / fs;
   int first_present_after_on = -1, first_absent_after_off = -1, frames_after_on = 0, frames_after_off = 0;

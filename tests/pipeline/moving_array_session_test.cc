@@ -48,7 +48,7 @@ MovingRun TrackBuoy(bool compensate, uint64_t seed, bool noisy_imu = true) {
   noise.with_mag = false;
   const std::vector<ImuSample> imu = SynthesiseImu(platform, 200.0, scenario.sim.duration_s, noise, seed + 100);
 
-  SessionConfig config = SessionConfigFor(scenario);
+  AudioSessionConfig config = SessionConfigFor(scenario);
   config.seed = seed;
   config.array_in_body_frame = compensate;
   auto session = std::move(*Session::Create(config));
@@ -107,7 +107,7 @@ TEST(MovingArraySession, FramesBeforeTheFirstImuSampleAreNotTracked) {
   scenario.sim.duration_s = 1.0;
   const ArrayGeometry body = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
   const SimResult sim = *Simulate(body, scenario.sim);
-  SessionConfig config = SessionConfigFor(scenario);
+  AudioSessionConfig config = SessionConfigFor(scenario);
   config.array_in_body_frame = true;
   auto session = std::move(*Session::Create(config));
   std::vector<Estimate> out;
@@ -121,7 +121,7 @@ TEST(MovingArraySession, FramesBeforeTheFirstImuSampleAreNotTracked) {
 
 TEST(MovingArraySession, BadImuSamplesAreRefusedWholeAndFixedArraysRefuseThem) {
   Scenario scenario = *MakeScenario("tetra-water", 3);
-  SessionConfig config = SessionConfigFor(scenario);
+  AudioSessionConfig config = SessionConfigFor(scenario);
   auto fixed = std::move(*Session::Create(config));
   EXPECT_EQ(fixed->AddImu({ImuSample{}}).code(), StatusCode::kFailedPrecondition);
   config.array_in_body_frame = true;

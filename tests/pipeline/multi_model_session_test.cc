@@ -30,15 +30,15 @@ const Scene& Water() {
   return s;
 }
 
-SessionConfig Config(const std::string& filter) {
-  SessionConfig c = SessionConfigFor(Water().scenario);
-  c.filter_type = filter;
-  c.filter.particles = 1024;
+AudioSessionConfig Config(FilterKind filter) {
+  AudioSessionConfig c = SessionConfigFor(Water().scenario);
+  c.tracker.kind = filter;
+  c.tracker.particle.particles = 1024;
   c.seed = 3;
   return c;
 }
 
-std::vector<Estimate> Track(const SessionConfig& config) {
+std::vector<Estimate> Track(const AudioSessionConfig& config) {
   const Scene& s = Water();
   auto session = Session::Create(config);
   EXPECT_TRUE(session.ok()) << session.status().ToString();
@@ -49,15 +49,21 @@ std::vector<Estimate> Track(const SessionConfig& config) {
 
 TEST(MultiModelSession, EveryEstimateCarriesModelProbabilities) {
   struct Case {
-    std::string filter, imm_variant, robust;
+    FilterKind filter;
+    KalmanVariant imm_variant;
+    RobustUpdate robust;
     std::vector<std::string> models;
   };
-  for (const Case& c : {Case{"mmpf", "ekf", "none", {"cv", "cv-manoeuvre", "ct-left", "ct-right"}},
-                        Case{"imm", "ekf", "none", {"cv", "ct"}}, Case{"imm", "ukf", "huber", {"cv", "ct"}}}) {
-    SCOPED_TRACE(c.filter + " " + c.imm_variant + " " + c.robust);
-    SessionConfig config = Config(c.filter);
-    config.imm_variant = c.imm_variant;
-    config.robust = c.robust;
+  for (const Case& c : {Case{FilterKind::kMmpf, KalmanVariant::kExtended, RobustUpdate::kNone,
+                             {"cv", "cv-manoeuvre", "ct-left", "ct-right"}},
+                        Case{FilterKind::kImm, KalmanVariant::kExtended, RobustUpdate::kNone, {"cv", "ct"}},
+                        Case{FilterKind::kImm, KalmanVariant::kUnscented, RobustUpdate::kHuber, {"cv", "ct"}}}) {
+    const std::string name = std::string(FilterKindName(c.filter)) + "/" + KalmanVariantName(c.imm_variant) + "/" +
+                             RobustUpdateName(c.robust);
+    SCOPED_TRACE(name);
+    AudioSessionConfig config = Config(c.filter);
+    config.tracker.imm_variant = c.imm_variant;
+    config.tracker.kalman.robust = c.robust;
     const std::vector<Estimate> out = Track(config);
     int initialised = 0;
     for (const Estimate& e : out) {
@@ -78,23 +84,24 @@ TEST(MultiModelSession, EveryEstimateCarriesModelProbabilities) {
     EXPECT_GT(initialised, static_cast<int>(out.size()) / 2);
     // And the track is the source's: scored against the simulator's truth after 2 s.
     const TrackScore score = ScoreTrack(Water().array, Water().sim, out, 2.0);
-    std::printf("%s/%s/%s: scored %d rmse %.3f m (per-frame crlb %.3f m)\n", c.filter.c_str(), c.imm_variant.c_str(),
-                c.robust.c_str(), score.scored, score.rmse_m, score.crlb_m);
+    std::printf("%s: scored %d rmse %.3f m (per-frame crlb %.3f m)\n", name.c_str(), score.scored, score.rmse_m,
+                score.crlb_m);
     // Measured: 42 frames scored; mmpf 0.15 m, imm 0.05-0.06 m against a bound of 0.46 m.
     EXPECT_GT(score.scored, 30);
     EXPECT_LT(score.rmse_over_crlb, 0.5);
   }
   // Single-model filters report none.
-  for (const char* filter : {"pf", "ekf", "ukf"}) {
+  for (const FilterKind filter : {FilterKind::kPf, FilterKind::kEkf, FilterKind::kUkf}) {
     const std::vector<Estimate> out = Track(Config(filter));
     for (const Estimate& e : out) EXPECT_TRUE(e.model_probabilities.empty());
     const TrackScore score = ScoreTrack(Water().array, Water().sim, out, 2.0);
-    std::printf("%s: scored %d rmse %.3f m (per-frame crlb %.3f m)\n", filter, score.scored, score.rmse_m, score.crlb_m);
+    std::printf("%s: scored %d rmse %.3f m (per-frame crlb %.3f m)\n", FilterKindName(filter), score.scored,
+                score.rmse_m, score.crlb_m);
   }
 }
 
 TEST(MultiModelSession, SameSeedReplays) {
-  const std::vector<Estimate> a = Track(Config("mmpf")), b = Track(Config("mmpf"));
+  const std::vector<Estimate> a = Track(Config(FilterKind::kMmpf)), b = Track(Config(FilterKind::kMmpf));
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
     EXPECT_EQ(a[i].state, b[i].state) << i;
@@ -105,31 +112,24 @@ TEST(MultiModelSession, SameSeedReplays) {
   }
 }
 
+// The names are parsed at the edge (wire/config_wire.cc, the CLI flags), each error naming
+// its field; the session checks what the types cannot.
 TEST(MultiModelSession, ConfigurationErrorsNameTheField) {
-  auto message = [](SessionConfig c) { return Session::Create(c).status().message(); };
-  SessionConfig c = Config("kalman");
-  EXPECT_NE(message(c).find("filter"), std::string::npos);
-  c = Config("mmpf");
-  c.motion_model = "ct";  // the multiple-model filters choose their own models
-  EXPECT_NE(message(c).find("motion_model"), std::string::npos);
-  c = Config("imm");
-  c.imm_modes = "cv,cv";
-  EXPECT_NE(message(c).find("imm_modes"), std::string::npos);
-  c.imm_modes = "cv,bicycle";
-  EXPECT_NE(message(c).find("bicycle"), std::string::npos);
-  c.imm_modes = "";
-  EXPECT_NE(message(c).find("imm_modes"), std::string::npos);
-  c = Config("imm");
-  c.imm_variant = "pf";
-  EXPECT_NE(message(c).find("imm_variant"), std::string::npos);
-  c = Config("ekf");
-  c.robust = "tukey";
-  EXPECT_NE(message(c).find("robust"), std::string::npos);
-  c = Config("imm");
-  c.imm_modes = "cv,ca,ct";
+  auto message = [](const auto& parsed) { return parsed.status().message(); };
+  EXPECT_NE(message(ParseFilterKind("kalman", "filter")).find("filter"), std::string::npos);
+  AudioSessionConfig c = Config(FilterKind::kMmpf);
+  c.tracker.kalman.motion_model = MotionModelKind::kCt;  // the multiple-model filters choose their own models
+  EXPECT_NE(Session::Create(c).status().message().find("motion_model"), std::string::npos);
+  EXPECT_NE(message(ParseImmModes("cv,cv", "imm_modes")).find("imm_modes"), std::string::npos);
+  EXPECT_NE(message(ParseImmModes("cv,bicycle", "imm_modes")).find("bicycle"), std::string::npos);
+  EXPECT_NE(message(ParseImmModes("", "imm_modes")).find("imm_modes"), std::string::npos);
+  EXPECT_NE(message(ParseKalmanVariant("pf", "imm_variant")).find("imm_variant"), std::string::npos);
+  EXPECT_NE(message(ParseRobustUpdate("tukey", "robust")).find("robust"), std::string::npos);
+  c = Config(FilterKind::kImm);
+  c.tracker.imm_modes = *ParseImmModes("cv,ca,ct", "imm_modes");
   EXPECT_TRUE(Session::Create(c).ok());
   // Backend gpu without a GPU is refused for every filter, never a silent fallback.
-  c.backend = "gpu";
+  c.backend = BackendChoice::kGpu;
   EXPECT_EQ(Session::Create(c).status().code(), StatusCode::kFailedPrecondition);
 }
 

@@ -26,7 +26,7 @@ struct BoundScore {
   double nees_per_dim = 0.0;    // mean over scored frames of NEES / 6
 };
 
-inline BoundScore ScoreAgainstPcrlb(const ArrayGeometry& array, const SimResult& sim, const SessionConfig& config,
+inline BoundScore ScoreAgainstPcrlb(const ArrayGeometry& array, const SimResult& sim, const AudioSessionConfig& config,
                                     const std::vector<Estimate>& estimates, const TrackScore& score, double skip_s) {
   BoundScore out;
   if (score.scored == 0 || static_cast<int>(score.tdoa_sigma_s.size()) != array.pair_count()) return out;
@@ -50,8 +50,8 @@ inline BoundScore ScoreAgainstPcrlb(const ArrayGeometry& array, const SimResult&
   Eigen::MatrixXd j0 = TdoaInformation(array, truth[0].state, sigma);
   j0.bottomRightCorner<3, 3>() += Mat3::Identity() / (config.init_speed_sigma_mps * config.init_speed_sigma_mps);
   MotionModelOptions motion;
-  motion.accel_noise_mps2 = config.filter.accel_noise_mps2;
-  auto model = MakeMotionModel("cv", motion);
+  motion.accel_noise_mps2 = config.tracker.particle.accel_noise_mps2;
+  auto model = MakeMotionModel(MotionModelKind::kCv, motion);
   if (!model.ok()) return out;
   auto bound = PosteriorCrlb(array, **model, truth, sigma, j0);
   if (!bound.ok()) return out;

@@ -13,13 +13,13 @@ namespace localizer::engine {
 struct ScenarioRun {
   std::vector<Estimate> estimates;
   TrackScore score;  // estimates from 2 s on, against the simulator's truth
-  SessionConfig config;
+  AudioSessionConfig config;
   SimResult sim;     // the simulated recording and its truth
 };
 
 // The session config that tracks `scenario`: its array, sample rate and band.
-inline SessionConfig SessionConfigFor(const Scenario& scenario) {
-  SessionConfig config;
+inline AudioSessionConfig SessionConfigFor(const Scenario& scenario) {
+  AudioSessionConfig config;
   config.sensors_m = scenario.sensors_m;
   config.sound_speed_mps = scenario.sound_speed_mps;
   config.sample_rate_hz = scenario.sim.sample_rate_hz;
@@ -29,17 +29,17 @@ inline SessionConfig SessionConfigFor(const Scenario& scenario) {
 }
 
 inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelihood likelihood,
-                                 const std::string& backend = "cpu", const std::string& filter = "pf",
-                                 const std::string& motion_model = "cv") {
+                                 BackendChoice backend = BackendChoice::kCpu, FilterKind filter = FilterKind::kPf,
+                                 MotionModelKind motion_model = MotionModelKind::kCv) {
   const Scenario scenario = *MakeScenario(name, seed);
   const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
   SimResult sim = *Simulate(array, scenario.sim);
-  SessionConfig config = SessionConfigFor(scenario);
-  config.filter.likelihood = likelihood;
+  AudioSessionConfig config = SessionConfigFor(scenario);
+  config.tracker.particle.likelihood = likelihood;
   config.seed = seed;
   config.backend = backend;
-  config.filter_type = filter;
-  config.motion_model = motion_model;
+  config.tracker.kind = filter;
+  config.tracker.kalman.motion_model = motion_model;
   auto session = std::move(*Session::Create(config));
   ScenarioRun run;
   (void)session->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &run.estimates);

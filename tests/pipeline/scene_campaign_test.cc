@@ -196,7 +196,7 @@ TEST(SceneScore, TheoreticalTdoaSigmaMatchesTheHandValue) {
 TEST(SceneCampaign, ConfigHasNoBandHintAndScalesTheFrame) {
   for (uint64_t seed = 1; seed <= 40; ++seed) {
     const RandomScene scene = *DrawRandomScene(seed);
-    const SessionConfig c = CampaignSessionConfig(scene);
+    const AudioSessionConfig c = CampaignSessionConfig(scene);
     EXPECT_EQ(c.band_low_hz, 0.0);
     EXPECT_EQ(c.band_high_hz, 0.0);
     EXPECT_EQ(c.seed, seed);

@@ -29,14 +29,14 @@ const Fixture& WaterScene() {
   return f;
 }
 
-SessionConfig ConfigFor(const Scenario& s) {
-  SessionConfig c;
+AudioSessionConfig ConfigFor(const Scenario& s) {
+  AudioSessionConfig c;
   c.sensors_m = s.sensors_m;
   c.sound_speed_mps = s.sound_speed_mps;
   c.sample_rate_hz = s.sim.sample_rate_hz;
   c.frame_samples = 2048;
   c.hop_samples = 1024;
-  c.filter.particles = 1024;
+  c.tracker.particle.particles = 1024;
   c.seed = 9;
   return c;
 }
@@ -51,7 +51,7 @@ std::vector<float> Slice(const SimResult& sim, int64_t from, int64_t n) {
   return out;
 }
 
-std::vector<Estimate> RunInBlocks(const SessionConfig& config, const SimResult& sim,
+std::vector<Estimate> RunInBlocks(const AudioSessionConfig& config, const SimResult& sim,
                                   const std::vector<int64_t>& sizes) {
   auto session = std::move(*Session::Create(config));
   std::vector<Estimate> out;
@@ -78,7 +78,7 @@ void ExpectSameEstimates(const std::vector<Estimate>& a, const std::vector<Estim
 
 TEST(Session, OneEstimatePerFrameAtTheFrameCentre) {
   const Fixture& f = WaterScene();
-  const SessionConfig config = ConfigFor(f.scenario);
+  const AudioSessionConfig config = ConfigFor(f.scenario);
   const std::vector<Estimate> out = RunInBlocks(config, f.sim, {f.sim.samples_per_channel});
   const int64_t expected = (f.sim.samples_per_channel - config.frame_samples) / config.hop_samples + 1;
   ASSERT_EQ(static_cast<int64_t>(out.size()), expected);
@@ -94,7 +94,7 @@ TEST(Session, OneEstimatePerFrameAtTheFrameCentre) {
 
 TEST(Session, BlockSizesDoNotChangeTheEstimates) {
   const Fixture& f = WaterScene();
-  const SessionConfig config = ConfigFor(f.scenario);
+  const AudioSessionConfig config = ConfigFor(f.scenario);
   const auto whole = RunInBlocks(config, f.sim, {f.sim.samples_per_channel});
   ExpectSameEstimates(whole, RunInBlocks(config, f.sim, {1, 777, 4096, 13, 2500}));
   ExpectSameEstimates(whole, RunInBlocks(config, f.sim, {1024}));
@@ -102,7 +102,7 @@ TEST(Session, BlockSizesDoNotChangeTheEstimates) {
 
 TEST(Session, SameSeedReplaysOtherSeedDiffers) {
   const Fixture& f = WaterScene();
-  SessionConfig config = ConfigFor(f.scenario);
+  AudioSessionConfig config = ConfigFor(f.scenario);
   const auto a = RunInBlocks(config, f.sim, {3000});
   ExpectSameEstimates(a, RunInBlocks(config, f.sim, {3000}));
   config.seed = 10;
@@ -112,7 +112,7 @@ TEST(Session, SameSeedReplaysOtherSeedDiffers) {
 
 TEST(Session, BadBlocksAreRejectedAndTheSessionSurvives) {
   const Fixture& f = WaterScene();
-  const SessionConfig config = ConfigFor(f.scenario);
+  const AudioSessionConfig config = ConfigFor(f.scenario);
   const int64_t n = 5000;
   const std::vector<float> first = Slice(f.sim, 0, n), second = Slice(f.sim, n, n);
 
@@ -149,7 +149,7 @@ TEST(Session, BadBlocksAreRejectedAndTheSessionSurvives) {
 
 TEST(Session, ConfigurationErrorsNameTheField) {
   const Fixture& f = WaterScene();
-  SessionConfig c = ConfigFor(f.scenario);
+  AudioSessionConfig c = ConfigFor(f.scenario);
   c.sensors_m.pop_back();
   auto s = Session::Create(c);
   EXPECT_EQ(s.status().code(), StatusCode::kInvalidArgument);
@@ -168,15 +168,14 @@ TEST(Session, ConfigurationErrorsNameTheField) {
 
 TEST(Session, GpuWithoutOneIsAClearErrorNeverAFallback) {
   const Fixture& f = WaterScene();
-  SessionConfig c = ConfigFor(f.scenario);
-  c.backend = "gpu";
+  AudioSessionConfig c = ConfigFor(f.scenario);
+  c.backend = BackendChoice::kGpu;
   auto s = Session::Create(c);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.status().code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(s.status().message().find("gpu"), std::string::npos);
-  c.backend = "tpu";
-  EXPECT_EQ(Session::Create(c).status().code(), StatusCode::kInvalidArgument);
-  c.backend = "auto";
+  EXPECT_EQ(ParseBackendChoice("tpu", "backend").status().code(), StatusCode::kInvalidArgument);
+  c.backend = BackendChoice::kAuto;
   EXPECT_TRUE(Session::Create(c).ok());
 }
 
@@ -209,11 +208,11 @@ TEST(Session, StartsFromAConfiguredRegionWithoutWaitingForAFix) {
   const Scenario base = EightHydrophones();
   const Vec3 source(3.0, 2.0, -6.0);
   const SimResult sim = StationaryScene(base, source, 4.0, 5);
-  SessionConfig c = ConfigFor(base);
+  AudioSessionConfig c = ConfigFor(base);
   c.band_low_hz = base.sim.band_low_hz;
   c.band_high_hz = base.sim.band_high_hz;
   c.min_pair_quality = 1e9;  // no fix is ever good enough: only the region can start it
-  c.filter.particles = 16384;  // a 20 x 20 x 14 m box needs them to find a 2 cm TDOA peak
+  c.tracker.particle.particles = 16384;  // a 20 x 20 x 14 m box needs them to find a 2 cm TDOA peak
   c.init_region_min_m = Vec3(-10, -10, -15);
   c.init_region_max_m = Vec3(10, 10, -1);
   const std::vector<Estimate> out = RunInBlocks(c, sim, {4096});
@@ -226,7 +225,7 @@ TEST(Session, StartsFromAConfiguredRegionWithoutWaitingForAFix) {
 }
 
 // A session on recording a then b (its source moved from first to second).
-void ExpectRecoversFromAJump(const SessionConfig& c, const SimResult& a, const SimResult& b, const Vec3& first,
+void ExpectRecoversFromAJump(const AudioSessionConfig& c, const SimResult& a, const SimResult& b, const Vec3& first,
                              const Vec3& second) {
   auto session = std::move(*Session::Create(c));
   std::vector<Estimate> out;
@@ -248,12 +247,13 @@ TEST(Session, DivergenceReinitialisesFromTheCurrentFix) {
   const Scenario base = EightHydrophones();
   const Vec3 first(3.0, 2.0, -6.0), second(-3.0, -2.5, -12.0);
   const SimResult a = StationaryScene(base, first, 4.0, 6), b = StationaryScene(base, second, 4.0, 7);
-  for (const char* filter : {"pf", "ekf", "ukf", "mmpf", "imm"}) {
-    SCOPED_TRACE(filter);
-    SessionConfig c = ConfigFor(base);
+  for (const FilterKind filter :
+       {FilterKind::kPf, FilterKind::kEkf, FilterKind::kUkf, FilterKind::kMmpf, FilterKind::kImm}) {
+    SCOPED_TRACE(FilterKindName(filter));
+    AudioSessionConfig c = ConfigFor(base);
     c.band_low_hz = base.sim.band_low_hz;
     c.band_high_hz = base.sim.band_high_hz;
-    c.filter_type = filter;
+    c.tracker.kind = filter;
     ExpectRecoversFromAJump(c, a, b, first, second);
   }
 }

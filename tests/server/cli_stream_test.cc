@@ -154,7 +154,7 @@ class CliStreamTest : public ::testing::Test {
   }
 
   // The job `track --array A --wav W --out OUT` builds with default flags (cmd_track.cc:
-  // io::TrackConfigFor on engine::SessionConfig's defaults).
+  // io::TrackConfigFor on engine::AudioSessionConfig's defaults).
   static io::TrackJob TrackJobFor(const io::SimulationFiles& files, const std::string& out) {
     auto array = io::ReadArrayFile(files.array_path);
     EXPECT_TRUE(array.ok()) << array.status().ToString();
@@ -162,7 +162,7 @@ class CliStreamTest : public ::testing::Test {
     job.wav_paths = {files.wav_path};
     job.array_source = files.array_path;
     job.array_sample_rate_hz = array->sample_rate_hz;
-    job.config = io::TrackConfigFor(engine::SessionConfig{}, *array, {},
+    job.config = io::TrackConfigFor(engine::AudioSessionConfig{}, *array, {},
                                     array->sample_rate_hz.value_or(0.0));
     job.estimates_csv_path = out;
     return job;
@@ -226,8 +226,8 @@ TEST_F(CliStreamTest, RealtimePacingWithPcm16) {
   auto run = io::SimulateScenario("tetra-water", 2, 1.5);
   ASSERT_TRUE(run.ok()) << run.status().ToString();
   const engine::SimResult& sim = run->result;
-  engine::SessionConfig config = engine::SessionConfigFor(run->scenario);
-  config.filter.particles = 1024;
+  engine::AudioSessionConfig config = engine::SessionConfigFor(run->scenario);
+  config.tracker.particle.particles = 1024;
   auto stream = OpenTrackSession(channel_, config, "realtime", "");
   ASSERT_TRUE(stream.ok()) << stream.status().ToString();
   EXPECT_FALSE((*stream)->session_key().empty());
@@ -416,7 +416,7 @@ TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
   auto run = io::SimulateScenario("tetra-water", 1, 4.0);
   ASSERT_TRUE(run.ok()) << run.status().ToString();
   const engine::SimResult& sim = run->result;
-  engine::SessionConfig config = engine::SessionConfigFor(run->scenario);
+  engine::AudioSessionConfig config = engine::SessionConfigFor(run->scenario);
 
   // 0.25 s from t = 2 s: samples [22050, 24806) per channel.
   const int64_t start = 22050;
@@ -493,7 +493,7 @@ TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
 
 // (d) The server validates the config: 3 sensors are refused naming the proto field.
 TEST_F(CliStreamTest, ThreeSensorsIsInvalidArgumentNamingTheField) {
-  engine::SessionConfig config;
+  engine::AudioSessionConfig config;
   config.sensors_m = {engine::Vec3(0, 0, 0), engine::Vec3(1, 0, 0), engine::Vec3(0, 1, 0)};
   config.sample_rate_hz = 11025.0;
   auto stream = TrackStream::Open(channel_, wire::ConfigToProto(config, "three"), "key-3");
@@ -508,12 +508,12 @@ TEST_F(CliStreamTest, ThreeSensorsIsInvalidArgumentNamingTheField) {
 // A stream abandoned after `opened` leaves a resumable session; resuming it with the
 // token works, and with a wrong token is PERMISSION_DENIED.
 TEST_F(CliStreamTest, ResumeAfterCancel) {
-  engine::SessionConfig config;
+  engine::AudioSessionConfig config;
   auto scenario = engine::MakeScenario("tetra-water");
   ASSERT_TRUE(scenario.ok());
   config.sensors_m = scenario->sensors_m;
   config.sample_rate_hz = 11025.0;
-  config.filter.particles = 256;
+  config.tracker.particle.particles = 256;
   std::string id, token;
   {
     auto stream = OpenTrackSession(channel_, config, "resume", "key-resume");

@@ -18,12 +18,7 @@ namespace {
 
 constexpr int kScans = 12;
 
-engine::SessionConfig DetectionConfig() {
-  engine::SessionConfig c;
-  c.detections = true;
-  c.backend = "cpu";
-  return c;
-}
+engine::DetectionSessionConfig DetectionConfig() { return {}; }
 
 // Eight targets 5 km apart on a 20 km ring around the radar, clutter ~10 plots a scan.
 std::vector<engine::RadarScanFrame> Frames() {

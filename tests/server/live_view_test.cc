@@ -119,7 +119,7 @@ TEST_F(ServiceTest, SessionsJsonListsTheStreamedTrack) {
   EXPECT_EQ(session.at("id"), stream.opened().session_id());
   EXPECT_EQ(session.at("label"), label);
   EXPECT_EQ(session.at("backend"), "cpu");
-  EXPECT_EQ(session.at("filter_type"), s.config.filter_type);
+  EXPECT_EQ(session.at("filter_type"), engine::FilterKindName(s.config.tracker.kind));
   EXPECT_EQ(session.at("frames"), s.offline.size());
   ASSERT_EQ(session.at("sensors_m").size(), s.config.sensors_m.size());
   EXPECT_DOUBLE_EQ(session.at("sensors_m")[1][0].get<double>(), s.config.sensors_m[1].x());

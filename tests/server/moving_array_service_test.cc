@@ -37,9 +37,9 @@ MovingScenario MakeMoving() {
   const auto array = *engine::ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
   m.base.sim = *engine::Simulate(array, scenario.sim);
   m.base.config = engine::SessionConfigFor(scenario);
-  m.base.config.filter.particles = 1024;
+  m.base.config.tracker.particle.particles = 1024;
   m.base.config.seed = 4;
-  m.base.config.backend = "cpu";
+  m.base.config.backend = engine::BackendChoice::kCpu;
   m.base.config.array_in_body_frame = true;
   engine::ImuNoise noise;
   noise.gyro_noise_sd_rps = 0.002;

@@ -26,7 +26,7 @@ namespace localizer::server::testing {
 
 // A scenario simulated once, its engine config, and what the engine gives offline.
 struct Scenario {
-  engine::SessionConfig config;
+  engine::AudioSessionConfig config;
   engine::SimResult sim;
   std::vector<engine::Estimate> offline;  // the whole run in blocks of block_samples
 
@@ -67,9 +67,9 @@ inline Scenario MakeScenario(const std::string& name, double duration_s, uint64_
   const auto array = *engine::ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
   s.sim = *engine::Simulate(array, scenario.sim);
   s.config = engine::SessionConfigFor(scenario);
-  s.config.filter.particles = particles;
+  s.config.tracker.particle.particles = particles;
   s.config.seed = seed;
-  s.config.backend = "cpu";
+  s.config.backend = engine::BackendChoice::kCpu;
   auto session = std::move(*engine::Session::Create(s.config));
   for (int64_t k = 1; k <= s.BlockCount(block_samples); ++k) {
     const std::vector<float> b = s.Block(k, block_samples);

@@ -86,12 +86,7 @@ TEST(SessionTokenAttack, PredictsAnMt19937StreamSoTheTestCanFail) {
   for (uint64_t p : predicted) EXPECT_EQ(p, engine());
 }
 
-engine::SessionConfig DetectionConfig() {  // cheapest session to open
-  engine::SessionConfig c;
-  c.detections = true;
-  c.backend = "cpu";
-  return c;
-}
+engine::DetectionSessionConfig DetectionConfig() { return {}; }  // cheapest session to open
 
 TEST(SessionTokenAttack, RegistryIdsAndTokensCannotBePredictedFromEarlierSessions) {
   WorkerPool pool(1);

@@ -4,6 +4,8 @@
 // Status -> gRPC codes.
 #include <cmath>
 #include <limits>
+#include <variant>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -116,19 +118,29 @@ v1::SessionConfig MinimalConfig() {
   return c;
 }
 
+// The audio config ConfigFromProto decodes from `p` (a failure if it decoded another kind).
+StatusOr<engine::AudioSessionConfig> AudioFromProto(const v1::SessionConfig& p, const ConfigPolicy& policy) {
+  auto config = ConfigFromProto(p, policy);
+  if (!config.ok()) return config.status();
+  EXPECT_TRUE(std::holds_alternative<engine::AudioSessionConfig>(*config));
+  return std::get<engine::AudioSessionConfig>(*std::move(config));
+}
+
 TEST(ConfigWire, ZeroFieldsTakeTheEngineDefaults) {
   ConfigPolicy policy;
   policy.default_backend = "cpu";
-  auto config = ConfigFromProto(MinimalConfig(), policy);
+  auto config = AudioFromProto(MinimalConfig(), policy);
   ASSERT_TRUE(config.ok()) << config.status().ToString();
-  const engine::SessionConfig defaults;
+  const engine::AudioSessionConfig defaults;
   EXPECT_EQ(config->frame_samples, defaults.frame_samples);
   EXPECT_EQ(config->hop_samples, defaults.frame_samples / 2);
-  EXPECT_EQ(config->filter.particles, defaults.filter.particles);
-  EXPECT_EQ(config->filter.accel_noise_mps2, defaults.filter.accel_noise_mps2);
-  EXPECT_EQ(config->filter.min_peak_snr, defaults.filter.min_peak_snr);
+  EXPECT_EQ(config->tracker.particle.particles, defaults.tracker.particle.particles);
+  EXPECT_EQ(config->tracker.particle.accel_noise_mps2, defaults.tracker.particle.accel_noise_mps2);
+  EXPECT_EQ(config->tracker.particle.min_peak_snr, defaults.tracker.particle.min_peak_snr);
+  EXPECT_EQ(config->tracker.kalman.motion.accel_noise_mps2, defaults.tracker.kalman.motion.accel_noise_mps2);
+  EXPECT_EQ(config->tracker.kalman.min_peak_snr, defaults.tracker.kalman.min_peak_snr);
   EXPECT_EQ(config->seed, defaults.seed);
-  EXPECT_EQ(config->backend, "cpu");
+  EXPECT_EQ(config->backend, engine::BackendChoice::kCpu);
   EXPECT_EQ(config->max_block_samples, policy.max_block_samples);
   EXPECT_FALSE(config->init_region_min_m.allFinite());
 }
@@ -145,11 +157,11 @@ TEST(ConfigWire, EffectiveConfigRoundTrips) {
   p.set_seed(0);  // explicitly zero: kept, not defaulted
   p.mutable_init_region()->mutable_min_m()->set_x(-1.0);
   p.mutable_init_region()->mutable_max_m()->set_x(1.0);
-  auto config = ConfigFromProto(p, {});
+  auto config = AudioFromProto(p, {});
   ASSERT_TRUE(config.ok()) << config.status().ToString();
   EXPECT_EQ(config->seed, 0u);
   const v1::SessionConfig effective = ConfigToProto(*config, "label");
-  auto again = ConfigFromProto(effective, {});
+  auto again = AudioFromProto(effective, {});
   ASSERT_TRUE(again.ok());
   EXPECT_EQ(ConfigToProto(*again, "label").SerializeAsString(), effective.SerializeAsString());
   EXPECT_EQ(effective.filter().particles(), 777u);
@@ -160,19 +172,19 @@ TEST(ConfigWire, EffectiveConfigRoundTrips) {
 TEST(ConfigWire, MixtureLikelihoodAndItsOutlierProbabilityRoundTrip) {
   v1::SessionConfig p = MinimalConfig();
   p.mutable_filter()->set_likelihood(v1::LIKELIHOOD_MIXTURE);
-  auto defaulted = ConfigFromProto(p, {});
+  auto defaulted = AudioFromProto(p, {});
   ASSERT_TRUE(defaulted.ok()) << defaulted.status().ToString();
-  EXPECT_EQ(defaulted->filter.likelihood, engine::Likelihood::kMixture);
-  EXPECT_EQ(defaulted->filter.outlier_probability, 0.05);  // unset: the default
+  EXPECT_EQ(defaulted->tracker.particle.likelihood, engine::Likelihood::kMixture);
+  EXPECT_EQ(defaulted->tracker.particle.outlier_probability, 0.05);  // unset: the default
   p.mutable_filter()->set_outlier_probability(0.2);
-  auto config = ConfigFromProto(p, {});
+  auto config = AudioFromProto(p, {});
   ASSERT_TRUE(config.ok());
-  EXPECT_EQ(config->filter.outlier_probability, 0.2);
+  EXPECT_EQ(config->tracker.particle.outlier_probability, 0.2);
   const v1::SessionConfig effective = ConfigToProto(*config, "");
   EXPECT_EQ(effective.filter().likelihood(), v1::LIKELIHOOD_MIXTURE);
   EXPECT_EQ(effective.filter().outlier_probability(), 0.2);
   p.mutable_filter()->set_outlier_probability(1.0);
-  auto bad = ConfigFromProto(p, {});
+  auto bad = AudioFromProto(p, {});
   const Status status = bad.ok() ? (*bad).Validate() : bad.status();
   EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(status.message().find("outlier_probability"), std::string::npos) << status.message();
@@ -182,28 +194,28 @@ TEST(ConfigWire, FilterTypeAndMotionModelRoundTrip) {
   v1::SessionConfig p = MinimalConfig();
   p.mutable_filter()->set_type(v1::FILTER_TYPE_UKF);
   p.mutable_filter()->set_motion_model("singer");
-  auto config = ConfigFromProto(p, {});
+  auto config = AudioFromProto(p, {});
   ASSERT_TRUE(config.ok()) << config.status().ToString();
-  EXPECT_EQ(config->filter_type, "ukf");
-  EXPECT_EQ(config->motion_model, "singer");
+  EXPECT_EQ(config->tracker.kind, engine::FilterKind::kUkf);
+  EXPECT_EQ(config->tracker.kalman.motion_model, engine::MotionModelKind::kSinger);
   const v1::SessionConfig effective = ConfigToProto(*config, "");
   EXPECT_EQ(effective.filter().type(), v1::FILTER_TYPE_UKF);
   EXPECT_EQ(effective.filter().motion_model(), "singer");
   // Defaults: the particle filter with constant velocity.
-  auto plain = ConfigFromProto(MinimalConfig(), {});
+  auto plain = AudioFromProto(MinimalConfig(), {});
   ASSERT_TRUE(plain.ok());
-  EXPECT_EQ(plain->filter_type, "pf");
+  EXPECT_EQ(plain->tracker.kind, engine::FilterKind::kPf);
   EXPECT_EQ(ConfigToProto(*plain, "").filter().motion_model(), "cv");
   // The particle filter has no turn model; an unknown model is named.
   p.mutable_filter()->set_type(v1::FILTER_TYPE_PF);
   p.mutable_filter()->set_motion_model("ct");
-  EXPECT_EQ(ConfigFromProto(p, {}).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(AudioFromProto(p, {}).status().code(), StatusCode::kInvalidArgument);
   p.mutable_filter()->set_type(v1::FILTER_TYPE_EKF);
   p.mutable_filter()->set_motion_model("bicycle");
-  EXPECT_NE(ConfigFromProto(p, {}).status().message().find("bicycle"), std::string::npos);
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("bicycle"), std::string::npos);
   p.mutable_filter()->set_motion_model("cv");
   p.mutable_filter()->set_type(static_cast<v1::FilterType>(42));
-  EXPECT_EQ(ConfigFromProto(p, {}).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(AudioFromProto(p, {}).status().code(), StatusCode::kInvalidArgument);
 }
 
 TEST(ConfigWire, MultipleModelFiltersAndTheirFieldsRoundTrip) {
@@ -212,12 +224,13 @@ TEST(ConfigWire, MultipleModelFiltersAndTheirFieldsRoundTrip) {
   p.mutable_filter()->set_imm_modes("cv,ca");
   p.mutable_filter()->set_imm_variant("ukf");
   p.mutable_filter()->set_robust("huber");
-  auto config = ConfigFromProto(p, {});
+  auto config = AudioFromProto(p, {});
   ASSERT_TRUE(config.ok()) << config.status().ToString();
-  EXPECT_EQ(config->filter_type, "imm");
-  EXPECT_EQ(config->imm_modes, "cv,ca");
-  EXPECT_EQ(config->imm_variant, "ukf");
-  EXPECT_EQ(config->robust, "huber");
+  EXPECT_EQ(config->tracker.kind, engine::FilterKind::kImm);
+  EXPECT_EQ(config->tracker.imm_modes,
+            (std::vector<engine::MotionModelKind>{engine::MotionModelKind::kCv, engine::MotionModelKind::kCa}));
+  EXPECT_EQ(config->tracker.imm_variant, engine::KalmanVariant::kUnscented);
+  EXPECT_EQ(config->tracker.kalman.robust, engine::RobustUpdate::kHuber);
   const v1::SessionConfig effective = ConfigToProto(*config, "");
   EXPECT_EQ(effective.filter().type(), v1::FILTER_TYPE_IMM);
   EXPECT_EQ(effective.filter().imm_modes(), "cv,ca");
@@ -226,9 +239,9 @@ TEST(ConfigWire, MultipleModelFiltersAndTheirFieldsRoundTrip) {
   // Unset fields take the engine defaults and are reported.
   v1::SessionConfig mmpf = MinimalConfig();
   mmpf.mutable_filter()->set_type(v1::FILTER_TYPE_MMPF);
-  auto plain = ConfigFromProto(mmpf, {});
+  auto plain = AudioFromProto(mmpf, {});
   ASSERT_TRUE(plain.ok()) << plain.status().ToString();
-  EXPECT_EQ(plain->filter_type, "mmpf");
+  EXPECT_EQ(plain->tracker.kind, engine::FilterKind::kMmpf);
   const v1::SessionConfig reported = ConfigToProto(*plain, "");
   EXPECT_EQ(reported.filter().type(), v1::FILTER_TYPE_MMPF);
   EXPECT_EQ(reported.filter().imm_modes(), "cv,ct");
@@ -236,10 +249,10 @@ TEST(ConfigWire, MultipleModelFiltersAndTheirFieldsRoundTrip) {
   EXPECT_EQ(reported.filter().robust(), "none");
   // Bad values name the proto field.
   p.mutable_filter()->set_imm_modes("cv,warp");
-  EXPECT_NE(ConfigFromProto(p, {}).status().message().find("filter.imm_modes"), std::string::npos);
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("filter.imm_modes"), std::string::npos);
   p.mutable_filter()->set_imm_modes("");
   p.mutable_filter()->set_robust("tukey");
-  EXPECT_NE(ConfigFromProto(p, {}).status().message().find("filter.robust"), std::string::npos);
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("filter.robust"), std::string::npos);
 }
 
 TEST(EstimateWire, ModelProbabilitiesRoundTrip) {
@@ -275,24 +288,24 @@ TEST(ConfigWire, PolicyLimitsAreInvalidArgumentNamingTheField) {
   policy.max_channels = 4;
   v1::SessionConfig p = MinimalConfig();
   p.mutable_filter()->set_particles(1001);
-  auto config = ConfigFromProto(p, policy);
+  auto config = AudioFromProto(p, policy);
   EXPECT_EQ(config.status().code(), StatusCode::kInvalidArgument);
   EXPECT_NE(config.status().message().find("filter.particles"), std::string::npos);
   p = MinimalConfig();
   *p.mutable_array()->add_sensors_m() = p.array().sensors_m(1);
-  EXPECT_NE(ConfigFromProto(p, policy).status().message().find("array.sensors_m"), std::string::npos);
+  EXPECT_NE(AudioFromProto(p, policy).status().message().find("array.sensors_m"), std::string::npos);
   p = MinimalConfig();
   p.mutable_array()->clear_sound_speed_mps();
-  EXPECT_NE(ConfigFromProto(p, policy).status().message().find("array.sound_speed_mps"), std::string::npos);
+  EXPECT_NE(AudioFromProto(p, policy).status().message().find("array.sound_speed_mps"), std::string::npos);
   p = MinimalConfig();
   p.clear_array();
-  EXPECT_NE(ConfigFromProto(p, policy).status().message().find("array"), std::string::npos);
+  EXPECT_NE(AudioFromProto(p, policy).status().message().find("array"), std::string::npos);
 }
 
 TEST(ConfigWire, BoundsAndPresenceFieldsDefaultWhenUnset) {
-  auto config = ConfigFromProto(MinimalConfig(), {});
+  auto config = AudioFromProto(MinimalConfig(), {});
   ASSERT_TRUE(config.ok()) << config.status().ToString();
-  const engine::SessionConfig defaults;
+  const engine::AudioSessionConfig defaults;
   for (int i = 0; i < 3; ++i) {
     EXPECT_EQ(config->bounds_min_m(i), -std::numeric_limits<double>::infinity());
     EXPECT_EQ(config->bounds_max_m(i), std::numeric_limits<double>::infinity());
@@ -317,7 +330,7 @@ TEST(ConfigWire, WaterColumnBoundsAndPresenceFieldsRoundTrip) {
   p.set_search_radius_m(30.0);
   p.set_presence_false_alarm(0.01);
   p.set_source_timeout_s(5.0);
-  auto config = ConfigFromProto(p, {});
+  auto config = AudioFromProto(p, {});
   ASSERT_TRUE(config.ok()) << config.status().ToString();
   EXPECT_EQ(config->bounds_max_m.z(), 0.0);
   EXPECT_EQ(config->bounds_min_m.z(), -8.0);
@@ -340,14 +353,14 @@ TEST(ConfigWire, WaterColumnBoundsAndPresenceFieldsRoundTrip) {
   EXPECT_EQ(effective.search_radius_m(), 30.0);
   EXPECT_EQ(effective.presence_false_alarm(), 0.01);
   EXPECT_EQ(effective.source_timeout_s(), 5.0);
-  auto again = ConfigFromProto(effective, {});
+  auto again = AudioFromProto(effective, {});
   ASSERT_TRUE(again.ok());
   EXPECT_EQ(ConfigToProto(*again, "").SerializeAsString(), effective.SerializeAsString());
 }
 
 TEST(ConfigWire, BadBoundsAndPresenceFieldsAreInvalidArgumentNamingTheField) {
   const auto refused = [](const v1::SessionConfig& p, const std::string& field) {
-    auto config = ConfigFromProto(p, {});
+    auto config = AudioFromProto(p, {});
     ASSERT_FALSE(config.ok()) << field;
     EXPECT_EQ(config.status().code(), StatusCode::kInvalidArgument) << config.status().ToString();
     EXPECT_NE(config.status().message().find(field), std::string::npos) << config.status().message();

@@ -1,0 +1,117 @@
+// What a session is opened with: one config type per kind of session.
+//
+//   AudioSessionConfig      an audio session (session.h): a sensor array's samples in, one
+//                           tracked source out (fixed or moving array).
+//   DetectionSessionConfig  a detection session (scan_session.h): scans of plots from a
+//                           detecting sensor in, many target tracks out.
+//   SessionConfig           either of them: what the wire codec (wire/config_wire.h) decodes
+//                           and what the server's session factory opens. Only the codec and
+//                           that factory look at which kind it holds; the engine's sessions
+//                           each take their own kind.
+// Each kind's config holds everything its session reads (Session::Create and
+// ScanSession::Create take one argument), so SessionConfig is the variant alone: the fields
+// both kinds have (the seed) live in each.
+//
+// Every choice among named alternatives is an enum here (FilterKind, MotionModelKind,
+// KalmanVariant, RobustUpdate, BackendChoice, Weighting, ...); their names are parsed once,
+// at the edge (the proto codec, the CLI flags), by the Parse…(name, field) next to each
+// enum. Validate() checks what a type cannot: numeric ranges and the fields that depend on
+// each other.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <variant>
+#include <vector>
+
+#include "engine/attitude/attitude_filter.h"
+#include "engine/core/status.h"
+#include "engine/core/types.h"
+#include "engine/pipeline/backend.h"
+#include "engine/tdoa/gcc_phat.h"
+#include "engine/tws/tws_options.h"
+
+namespace localizer::engine {
+
+struct AudioSessionConfig {
+  // Array
+  std::vector<Vec3> sensors_m;        // >= 4, not coplanar
+  double sound_speed_mps = 1500.0;    // > 0 (1500 water, 343 air)
+  int reference_sensor = 0;
+  double sample_rate_hz = 0.0;        // > 0
+  // Framing
+  int frame_samples = 4096;           // per channel, in [64, 1 << 20]
+  int hop_samples = 2048;             // in [1, frame_samples]
+  int64_t max_block_samples = 1 << 22;  // per channel per block
+  // TDOA front end (engine/tdoa/gcc_phat.h; GccOptionsFor() adds the framing and the
+  // sample rate)
+  Weighting weighting = Weighting::kPhat;
+  double phat_beta = 0.8;
+  double band_low_hz = 0.0;
+  double band_high_hz = 0.0;          // 0: Nyquist
+  // Impulsive-noise front end (engine/tdoa/despike.h): each frame's channels are clipped at
+  // despike_k robust standard deviations before the GCC (0: off), keeping outliers that every
+  // channel shows within the array's largest delay (a coherent impulsive source).
+  double despike_k = 5.0;
+  // Tracker: its kind and each filter's own options (backend.h). The particle filters'
+  // seed is `seed` below. Only ekf and ukf take a motion model other than cv (pf and mmpf
+  // set their own models, imm takes imm_modes). The wire carries the options the proto's
+  // FilterConfig names; a session opened on a server has the defaults for the others.
+  TrackerOptions tracker;
+  // Former single-fix initialisation; kept for the wire contract, unused since acquisition
+  // (engine/acquisition) initialises from every mode the data allows.
+  double min_pair_quality = 1.5;
+  double max_fix_std_m = 0.0;
+  double init_speed_sigma_mps = 2.0;  // velocity spread at initialisation
+  // A region known to hold the source: when min <= max (all finite), the tracker starts
+  // from it at the first frame instead of waiting for a good fix. Unset by default.
+  Vec3 init_region_min_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  Vec3 init_region_max_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  int divergence_window = 8;          // frames averaged by the divergence test
+  // Physical bounds on the source position: a box whose sides may be infinite (unbounded;
+  // the default on every side). Particles, fixes and acquisition candidates outside it are
+  // impossible. A water column: bounds_max_m.z() = the surface, bounds_min_m.z() = the bottom.
+  Vec3 bounds_min_m = Vec3::Constant(-std::numeric_limits<double>::infinity());
+  Vec3 bounds_max_m = Vec3::Constant(std::numeric_limits<double>::infinity());
+  // Acquisition (engine/acquisition): the volume searched for a source when there is no
+  // trustworthy track, a sphere of this radius about the array centre intersected with the
+  // bounds (0: 10 apertures).
+  double search_radius_m = 0.0;
+  // Source presence: the per-frame false-alarm probability the presence test is set for,
+  // in (0, 0.1]; and how long a track coasts with no source heard before it is dropped and
+  // acquisition restarts (> 0).
+  double presence_false_alarm = 1e-3;
+  double source_timeout_s = 2.0;
+  // Moving array (platform_pose.h): sensors_m are in the platform's body frame (the IMU's
+  // axes) and the session is fed IMU samples (AddImu); each frame's TDOA model uses the
+  // sensors rotated by the platform's attitude at that frame and moved to its origin.
+  // Estimates carry the platform pose. The particle filter then runs on the CPU.
+  bool array_in_body_frame = false;
+  AttitudeFilterOptions attitude;     // the platform's attitude filter
+  Vec3 platform_origin_m = Vec3::Zero();  // body origin in the world until SetPlatformOrigin
+  // Compute backend (backend.h): cpu, gpu (a clear error where there is none) or auto.
+  BackendChoice backend = BackendChoice::kCpu;
+  uint64_t seed = 1;                  // every random draw of the session (particle filters)
+
+  // INVALID_ARGUMENT naming the field: a numeric field out of its range, a motion model
+  // other than cv for a filter kind other than ekf and ukf, the particle options (checked
+  // whatever the kind), the attitude options of a moving array.
+  Status Validate() const;
+  // The TDOA front end's options: frame length, sample rate, weighting, band; the GCC
+  // function is kept (acquisition, presence and multipath association read it).
+  GccOptions GccOptionsFor() const;
+};
+
+// A detection session's config: the track-while-scan tracker's options
+// (engine/tws/tws_options.h). A scan session draws nothing at random; `seed` is kept so
+// that the config reports back as it was given.
+struct DetectionSessionConfig {
+  tws::TwsOptions tws;
+  uint64_t seed = 1;
+
+  Status Validate() const;  // INVALID_ARGUMENT naming the tracker's field (tws_options.h)
+};
+
+using SessionConfig = std::variant<AudioSessionConfig, DetectionSessionConfig>;
+
+}  // namespace localizer::engine
