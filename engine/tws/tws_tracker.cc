@@ -134,7 +134,6 @@ class TrackerImpl final : public TwsTracker {
   }
 
   const TwsOptions& options() const override { return options_; }
-  double gate_threshold() const override { return gate_; }
   int track_count() const override { return static_cast<int>(tracks_.size()); }
   int64_t total_track_updates() const override { return total_updates_; }
 

@@ -83,7 +83,6 @@ class TwsTracker {
   }
 
   virtual const TwsOptions& options() const = 0;
-  virtual double gate_threshold() const = 0;  // g
   virtual int track_count() const = 0;
   virtual int64_t total_track_updates() const = 0;
 
