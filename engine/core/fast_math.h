@@ -6,17 +6,26 @@
 //     the result dominates for large |ln x|).
 //   NormalFromUniform: |error| < 2e-5 sigma for u in [1e-3, 1 - 1e-3], < 2e-3 sigma beyond
 //     (u itself is float); the counter draws' extremes map to about +-5.3.
+// Every function here runs on the host and on a CUDA device (host_device.h): the GPU's GCC
+// kernels weigh with these FastExp / FastLog, and the GPU tests' host model draws with the
+// counter hash. The host code is what it always was (the builtins the vectoriser wants); the
+// device branches spell the same operations with CUDA's intrinsics.
 #pragma once
 
-#include <bit>
 #include <cstdint>
+
+#include "engine/core/host_device.h"
 
 namespace localizer::engine {
 
 // e^x = 2^k * e^r with k = round(x / ln 2), |r| <= ln2 / 2; e^r by a degree-6 polynomial.
-inline float FastExp(float x) {
+LOCALIZER_HOST_DEVICE inline float FastExp(float x) {
   x = x < -87.0f ? -87.0f : (x > 88.0f ? 88.0f : x);
+#if defined(__CUDA_ARCH__)
+  const float k = roundf(x * 1.44269504088896341f);
+#else
   const float k = __builtin_roundf(x * 1.44269504088896341f);
+#endif
   const float r = x - k * 0.693145751953125f - k * 1.428606765330187e-06f;
   float p = 1.0f / 720.0f;
   p = p * r + 1.0f / 120.0f;
@@ -26,15 +35,15 @@ inline float FastExp(float x) {
   p = p * r + 1.0f;
   p = p * r + 1.0f;
   const int32_t bits = (static_cast<int32_t>(k) + 127) << 23;
-  return p * std::bit_cast<float>(bits);
+  return p * hd::FloatFromBits(bits);
 }
 
 // log(x) = e ln2 + log(m) with m in [sqrt(1/2), sqrt(2)); log(m) = 2 atanh(t), t = (m-1)/(m+1).
-inline float FastLog(float x) {
-  int32_t bits = std::bit_cast<int32_t>(x);
+LOCALIZER_HOST_DEVICE inline float FastLog(float x) {
+  int32_t bits = hd::BitsFromFloat(x);
   int32_t e = ((bits >> 23) & 0xff) - 127;
   bits = (bits & 0x007fffff) | 0x3f800000;  // m in [1, 2)
-  float m = std::bit_cast<float>(bits);
+  float m = hd::FloatFromBits(bits);
   const bool big = m > 1.41421356f;
   m = big ? m * 0.5f : m;
   e = big ? e + 1 : e;
@@ -50,7 +59,7 @@ inline float FastLog(float x) {
 
 // Standard normal quantile of u in (0, 1): sqrt(2) * erfinv(2u - 1), with M. Giles'
 // single-precision erfinv ("Approximating the erfinv function", GPU Computing Gems, 2011).
-inline float NormalFromUniform(float u) {
+LOCALIZER_HOST_DEVICE inline float NormalFromUniform(float u) {
   const float x = 2.0f * u - 1.0f;
   // 1 - x^2 written as 4u(1 - u): exact enough in the tails, where 1 - x cancels.
   float w = -FastLog(4.0f * u * (1.0f - u));
@@ -67,7 +76,11 @@ inline float NormalFromUniform(float u) {
     p = 0.246640727f + p * w;
     p = 1.50140941f + p * w;
   } else {
+#if defined(__CUDA_ARCH__)
+    w = sqrtf(w) - 3.0f;
+#else
     w = __builtin_sqrtf(w) - 3.0f;
+#endif
     p = -0.000200214257f;
     p = 0.000100950558f + p * w;
     p = 0.00134934322f + p * w;
@@ -86,10 +99,16 @@ inline float NormalFromUniform(float u) {
 // with sin/cos of the quarter-turn fraction by Taylor polynomials (|error| < 1e-7) and the
 // quadrant applied by exchanges and signs. Cheaper per normal than NormalFromUniform when
 // normals are wanted in bulk; same accuracy limits from float u1 in the far tails.
-inline void NormalPairFromUniforms(float u1, float u2, float* z1, float* z2) {
+LOCALIZER_HOST_DEVICE inline void NormalPairFromUniforms(float u1, float u2, float* z1, float* z2) {
+#if defined(__CUDA_ARCH__)
+  const float r = sqrtf(-2.0f * FastLog(u1));
+  const float turns = 4.0f * u2;
+  const float quadrant = floorf(turns);
+#else
   const float r = __builtin_sqrtf(-2.0f * FastLog(u1));
   const float turns = 4.0f * u2;
   const float quadrant = __builtin_floorf(turns);
+#endif
   const float x = (turns - quadrant) * 1.57079632679489662f;  // [0, pi/2)
   const float x2 = x * x;
   float sn = -1.0f / 39916800.0f;
@@ -116,7 +135,7 @@ inline void NormalPairFromUniforms(float u1, float u2, float* z1, float* z2) {
 // Counter-based uniform in (0, 1): a stateless hash of (key, counter), so draw i of step k
 // of a session is the same whatever order or thread computes it (replay, vectorisation).
 // 32-bit integer mixing (C. Wellons' "lowbias32" constants) vectorises with AVX2.
-inline uint32_t HashMix32(uint32_t x) {
+LOCALIZER_HOST_DEVICE inline uint32_t HashMix32(uint32_t x) {
   x ^= x >> 16;
   x *= 0x7feb352dU;
   x ^= x >> 15;
@@ -124,7 +143,7 @@ inline uint32_t HashMix32(uint32_t x) {
   x ^= x >> 16;
   return x;
 }
-inline float UniformFromCounter(uint32_t key, uint32_t counter) {
+LOCALIZER_HOST_DEVICE inline float UniformFromCounter(uint32_t key, uint32_t counter) {
   const uint32_t h = HashMix32(counter * 0x9e3779b9U + key);
   // 23 random bits, offset by half a step: (k + 0.5) / 2^23 needs 24 significant bits, which
   // float has, so the result is never exactly 0 or 1 (24 bits would round the top to 1).

@@ -138,7 +138,6 @@ StatusOr<std::unique_ptr<ImmFilter>> ImmFilter::Create(const ArrayGeometry& arra
 }
 
 bool ImmFilter::initialised() const { return impl_->initialised; }
-int ImmFilter::mode_count() const { return impl_->count(); }
 const KalmanFilter& ImmFilter::mode(int j) const { return *impl_->modes.at(j); }
 
 Status ImmFilter::Initialise(const TrackState& belief) {

@@ -88,7 +88,6 @@ class ImmFilter final : public Tracker {
   TrackState State() const override;
   std::vector<ModelProbability> ModelProbabilities() const override;
 
-  int mode_count() const;
   const KalmanFilter& mode(int j) const;
 
  private:

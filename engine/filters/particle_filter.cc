@@ -88,7 +88,6 @@ StatusOr<std::unique_ptr<ParticleFilter>> ParticleFilter::Create(const ArrayGeom
 }
 
 bool ParticleFilter::initialised() const { return impl_->initialised; }
-int ParticleFilter::particle_count() const { return impl_->options.particles; }
 double ParticleFilter::ess() const { return impl_->ess; }
 double ParticleFilter::tdoa_sigma_s() const { return impl_->noise.rms_sigma_s(); }
 

@@ -117,7 +117,6 @@ class ParticleFilter final : public Tracker {
   StatusOr<UpdateReport> Update(const Measurement& measurement) override;
   TrackState State() const override;
 
-  int particle_count() const;
   double ess() const;
   // The TDOA noise std the last update used (0 before the first update).
   double tdoa_sigma_s() const;

@@ -107,7 +107,7 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   std::array<Eigen::Matrix<float, 6, 6>, kMaxComponents> l;
   std::array<Eigen::Matrix<float, 6, 1>, kMaxComponents> shift;
   const double h = KernelBandwidth(kernel_scale, n_);
-  const double a = kernel_scale > 0.0 ? std::sqrt(1.0 - h * h) : 1.0;
+  const double a = kernel_scale > 0.0 ? KernelShrinkage(h) : 1.0;
   const LabelMoments moments = MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(),
                                                    cur_.vy.data(), cur_.vz.data()}, label_, w_);
   for (size_t c = 0; c < kMaxComponents; ++c) {

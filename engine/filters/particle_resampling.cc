@@ -26,15 +26,10 @@ Mat6 CovarianceRoot(const Mat6& covariance) {
   return r.transpose();
 }
 
-double KernelBandwidth(double kernel_scale, int n) {
-  const double d = 6.0;
-  return std::min(0.95, kernel_scale * std::pow(4.0 / (n * (d + 2.0)), 1.0 / (d + 4.0)));
-}
-
 namespace {
 
 // dst[m] = a src[index[m]] + shift + sum_{k <= kRow} l_row[k * stride] z_k[m]: one state
-// column resampled and moved by the kernel in one pass.
+// column resampled and moved by the kernel in one pass (particle_math.h LiuWestRow).
 template <int kRow>
 void MoveRow(int n, const int* __restrict index, const float* __restrict src, float* __restrict dst, float a,
              float shift, const float* l_row, Eigen::Index stride, const std::array<const float*, 6>& z) {
@@ -42,9 +37,7 @@ void MoveRow(int n, const int* __restrict index, const float* __restrict src, fl
   for (int k = 0; k <= kRow; ++k) coeff[k] = l_row[k * stride];
 #pragma omp simd
   for (int m = 0; m < n; ++m) {
-    float v = a * src[index[m]] + shift;
-    for (int k = 0; k <= kRow; ++k) v += coeff[k] * z[k][m];
-    dst[m] = v;
+    dst[m] = LiuWestRow(a, src[index[m]], shift, coeff, kRow, [&z, m](int k) { return z[k][m]; });
   }
 }
 
@@ -74,7 +67,7 @@ void ParticleSet::ResampleSystematic(double kernel_scale) {
   //   x'_m = a x_index[m] + (1 - a) mean + h L z_m
   const TrackState moments = MeanAndCovariance();
   const double h = KernelBandwidth(kernel_scale, n);
-  const double a = std::sqrt(1.0 - h * h);
+  const double a = KernelShrinkage(h);
   const Eigen::Matrix<float, 6, 6> l = (h * CovarianceRoot(moments.covariance)).cast<float>();
   Vec6 centre = moments.mean;
   centre.head<3>() -= origin_m_;

@@ -120,14 +120,20 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_
   float* __restrict vx = cur_.vx.data();
   float* __restrict vy = cur_.vy.data();
   float* __restrict vz = cur_.vz.data();
+  if (d == 1.0f) {  // constant velocity: the GPU filter's step (particle_math.h)
 #pragma omp simd
-  for (int i = 0; i < n; ++i) {
-    x[i] += vx[i] * dt + a_to_p * ax[i];
-    y[i] += vy[i] * dt + a_to_p * ay[i];
-    z[i] += vz[i] * dt + a_to_p * az[i];
-    vx[i] = d * vx[i] + a_to_v * ax[i];
-    vy[i] = d * vy[i] + a_to_v * ay[i];
-    vz[i] = d * vz[i] + a_to_v * az[i];
+    for (int i = 0; i < n; ++i) {
+      PredictAxis(x[i], vx[i], dt, a_to_p, a_to_v, ax[i]);
+      PredictAxis(y[i], vy[i], dt, a_to_p, a_to_v, ay[i]);
+      PredictAxis(z[i], vz[i], dt, a_to_p, a_to_v, az[i]);
+    }
+  } else {
+#pragma omp simd
+    for (int i = 0; i < n; ++i) {
+      PredictAxisReverting(x[i], vx[i], dt, d, a_to_p, a_to_v, ax[i]);
+      PredictAxisReverting(y[i], vy[i], dt, d, a_to_p, a_to_v, ay[i]);
+      PredictAxisReverting(z[i], vz[i], dt, d, a_to_p, a_to_v, az[i]);
+    }
   }
   if (bounded_) ApplyBounds();
 }
@@ -237,10 +243,9 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
     const float sx = sensor_x_[reference_], sy = sensor_y_[reference_], sz = sensor_z_[reference_];
 #pragma omp simd
     for (int i = 0; i < n_; ++i) {
-      const float dx = x[i] - sx, dy = y[i] - sy, dz = z[i] - sz;
-      const float r = std::sqrt(dx * dx + dy * dy + dz * dz) + 1e-6f;
-      r_ref[i] = r;
-      vr_ref[i] = (dx * vx[i] + dy * vy[i] + dz * vz[i]) / r;
+      const RangeRate ref = RangeAndRate(x[i] - sx, y[i] - sy, z[i] - sz, vx[i], vy[i], vz[i]);
+      r_ref[i] = ref.r;
+      vr_ref[i] = ref.vr;
       ll[i] = 0.0f;
     }
   }
@@ -262,7 +267,7 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
     if (use_gcc) UpsampleGcc(pm.gcc, kGccUpsampling, &fine_gcc_);
     const float* __restrict gcc = use_gcc ? fine_gcc_.data() : nullptr;
     // Cubic (Catmull-Rom) reads need fine lags 1 .. size-3 around the interval.
-    const float first = 1.0f, last = use_gcc ? static_cast<float>(fine_gcc_.size() - 3) - 1e-3f : 0.0f;
+    const float last = use_gcc ? static_cast<float>(fine_gcc_.size() - 3) - 1e-3f : 0.0f;
     const float lag_scale = static_cast<float>(m.sample_rate_hz * kGccUpsampling);
     const float lag0 = static_cast<float>(pm.first_lag_samples * kGccUpsampling);
     const float gcc_gain =
@@ -271,11 +276,9 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
     float* __restrict hk = delay_.data();
 #pragma omp simd reduction(+ : sum_e, sum_e2)
     for (int i = 0; i < n_; ++i) {
-      const float dx = x[i] - sx, dy = y[i] - sy, dz = z[i] - sz;
-      const float r = std::sqrt(dx * dx + dy * dy + dz * dz) + 1e-6f;
-      const float vr = (dx * vx[i] + dy * vy[i] + dz * vz[i]) / r;
+      const RangeRate sensor = RangeAndRate(x[i] - sx, y[i] - sy, z[i] - sz, vx[i], vy[i], vz[i]);
       // Delay at the instant the pair describes: d/2 before the frame centre (first order).
-      const float h = (r - r_ref[i]) * inv_c - half_d * (vr - vr_ref[i]) * inv_c;
+      const float h = PairDelay(sensor.r, sensor.vr, r_ref[i], vr_ref[i], half_d, inv_c);
       hk[i] = h;
       const float e = (d - h) * inv_sigma;
       sum_e += w[i] * e;
@@ -283,17 +286,7 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
     }
     if (gcc) {
 #pragma omp simd
-      for (int i = 0; i < n_; ++i) {
-        float lag = hk[i] * lag_scale - lag0;
-        lag = lag < first ? first : (lag > last ? last : lag);
-        const int i0 = static_cast<int>(lag);
-        const float t = lag - static_cast<float>(i0);
-        const float gm = gcc[i0 - 1], g0 = gcc[i0], g1 = gcc[i0 + 1], g2 = gcc[i0 + 2];
-        // Catmull-Rom: smooth between lags, so no particle is favoured for sitting on one.
-        const float g = g0 + 0.5f * t * ((g1 - gm) + t * ((2.0f * gm - 5.0f * g0 + 4.0f * g1 - g2) +
-                                                            t * (3.0f * (g0 - g1) + g2 - gm)));
-        ll[i] += gcc_gain * g;
-      }
+      for (int i = 0; i < n_; ++i) ll[i] += gcc_gain * CatmullRomRead(gcc, GccFineLag(hk[i], lag_scale, lag0), last);
     } else if (likelihood == Likelihood::kMixture) {
       // log(exp(-e^2 / 2) + floor) is the mixture's log-density up to a constant, with
       // floor = (eps / W) / ((1 - eps) / (sigma sqrt(2 pi))).

@@ -15,6 +15,7 @@
 #include "engine/core/measurement.h"
 #include "engine/filters/pair_noise.h"
 #include "engine/filters/particle_filter.h"
+#include "engine/filters/particle_math.h"
 #include "engine/filters/tracker.h"
 
 namespace localizer::engine {
@@ -26,9 +27,8 @@ double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharp
 
 // A lower-triangular root L L^T = covariance (Cholesky, or a triangularised eigen root when
 // a dimension has collapsed): the regularisation kernel's shape (particle_resampling.cc).
+// Its bandwidth and shrinkage, and the other per-particle formulas: particle_math.h.
 Mat6 CovarianceRoot(const Mat6& covariance);
-// The kernel's bandwidth h = kernel_scale (4 / (N (d + 2)))^(1 / (d + 4)), d = 6, at most 0.95.
-double KernelBandwidth(double kernel_scale, int n);
 
 // The GCC likelihood reads each pair's GCC upsampled this many times (gcc_upsampling.h).
 inline constexpr int kGccUpsampling = 8;

@@ -29,8 +29,6 @@ class Framer {
   // after the gap, whose stream index counts the lost ones.
   void Skip(int64_t samples);
 
-  int64_t samples_received() const { return received_; }  // including skipped ones
-
  private:
   int64_t pending() const { return stored_ - offset_; }
   void Compact();

@@ -40,7 +40,6 @@ Status PlatformPose::Add(const std::vector<ImuSample>& samples) {
     const AttitudeEstimate e = filter_->estimate();
     history_.push_back({sample.t_s, e.body_to_world, e.sd_rad});
     last_t_s_ = sample.t_s;
-    ++samples_seen_;
   }
   while (history_.size() > 2 && history_.back().t_s - history_[1].t_s > kHistory_s) history_.pop_front();
   return Status::Ok();

@@ -39,7 +39,6 @@ class PlatformPose {
   Status SetOrigin(const Vec3& origin_m);
   // The pose at t_s, or nothing before the first IMU sample.
   std::optional<PlatformAttitude> At(double t_s) const;
-  size_t samples_seen() const { return samples_seen_; }
 
  private:
   PlatformPose(std::unique_ptr<AttitudeFilter> filter, const Vec3& origin_m);
@@ -55,7 +54,6 @@ class PlatformPose {
   std::deque<Stamped> history_;  // ascending t_s, the last kHistory_s seconds
   Vec3 origin_m_;
   double last_t_s_;
-  size_t samples_seen_ = 0;
 };
 
 }  // namespace localizer::engine

@@ -40,7 +40,6 @@ class ScanSession {
   Status Process(const Scan& scan, ScanResult* out);
 
   const DetectionSessionConfig& config() const { return config_; }
-  uint64_t scans_processed() const { return scans_; }
   int64_t track_updates() const { return tracker_->total_track_updates(); }
 
  private:

@@ -1,5 +1,6 @@
 // The weighted cross-spectrum G = W(f) X_k(f) conj(X_r(f)) over a range of bins: the one
-// O(N) loop of GCC besides the FFTs (internal to the tdoa stage; see gcc_phat.h for the maths).
+// O(N) loop of GCC besides the FFTs (internal to the tdoa stage; see gcc_phat.h for the maths;
+// the per-bin arithmetic is gcc_math.h's, which the GPU kernels share).
 //
 // Spectra are interleaved (re, im) floats, as FFTW writes them. Each weighting is a small
 // functor that, given X_k conj(X_r) at bin b, returns W and |W X_k conj(X_r)|. WeighBins
@@ -21,26 +22,17 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/core/fast_math.h"
+#include "engine/tdoa/gcc_math.h"
 
 namespace localizer::engine {
 
-inline constexpr int kLanes = 16;              // one 512-bit register of floats
-inline constexpr double kRelativeFloor = 1e-12;  // of the frame's mean power; see gcc_phat.h
+inline constexpr int kLanes = 16;  // one 512-bit register of floats
 
-struct CrossBin {
-  float re;
-  float im;
-};
+// Bin i of an interleaved spectrum.
+inline CrossBin BinAt(const float* x, int i) { return {x[2 * i], x[2 * i + 1]}; }
 
 // X_k conj(X_r) at bin i.
-inline CrossBin CrossAt(const float* xr, const float* xk, int i) {
-  const float r_re = xr[2 * i];
-  const float r_im = xr[2 * i + 1];
-  const float k_re = xk[2 * i];
-  const float k_im = xk[2 * i + 1];
-  return {k_re * r_re + k_im * r_im, k_im * r_re - k_re * r_im};
-}
+inline CrossBin CrossAt(const float* xr, const float* xk, int i) { return CrossOf(BinAt(xr, i), BinAt(xk, i)); }
 
 // What a weighting gives for one bin: W, and |W G| for the normalising sum.
 struct BinWeight {
@@ -48,14 +40,12 @@ struct BinWeight {
   float weighted_mag;
 };
 
-inline float Magnitude(CrossBin c) { return std::sqrt(c.re * c.re + c.im * c.im); }
-
 // W = 1 / max(|G|, floor).
 struct PhatWeight {
   float floor_mag;
   BinWeight operator()(CrossBin c, const float*, const float*, int) const {
     const float mag = Magnitude(c);
-    const float weight = 1.0f / std::max(mag, floor_mag);
+    const float weight = PhatWeightOf(mag, floor_mag);
     return {weight, mag * weight};
   }
 };
@@ -82,7 +72,7 @@ struct PhatBetaWeight {
   float beta;
   BinWeight operator()(CrossBin c, const float*, const float*, int) const {
     const float mag = Magnitude(c);
-    const float weight = FastExp(-beta * FastLog(std::max(mag, floor_mag)));
+    const float weight = PhatBetaWeightOf(mag, floor_mag, beta);
     return {weight, mag * weight};
   }
 };
@@ -93,10 +83,7 @@ struct ScotWeight {
   float floor_ref_power;
   float floor_sensor_power;
   BinWeight operator()(CrossBin c, const float* xr, const float* xk, int i) const {
-    const float p_ref = xr[2 * i] * xr[2 * i] + xr[2 * i + 1] * xr[2 * i + 1];
-    const float p_sensor = xk[2 * i] * xk[2 * i] + xk[2 * i + 1] * xk[2 * i + 1];
-    const float weight = 1.0f / (std::sqrt(std::max(p_ref, floor_ref_power)) *
-                                 std::sqrt(std::max(p_sensor, floor_sensor_power)));
+    const float weight = ScotWeightOf(PowerOf(BinAt(xr, i)), PowerOf(BinAt(xk, i)), floor_ref_power, floor_sensor_power);
     return {weight, Magnitude(c) * weight};
   }
 };

@@ -20,7 +20,6 @@ namespace {
 
 constexpr int kMinFrameSamples = 64;
 constexpr int kMaxFrameSamples = 1 << 20;
-constexpr float kQualityCap = 1e9f;
 constexpr int kMaxCandidates = 32;
 // The envelope of a flat band of width B (rad/sample) is sinc-like with its first null at
 // 2 pi / B = (2 pi / sqrt(12)) / sigma_omega, sigma_omega = B / sqrt(12) its rms width.
@@ -83,17 +82,6 @@ int ArgMax(std::span<const float> r) {
   return static_cast<int>(std::max_element(r.begin(), r.end()) - r.begin());
 }
 
-// Main lobe around `peak`: the samples either side that stay positive and keep falling.
-// Returns the first and last index of the lobe within `r`.
-std::pair<int, int> MainLobe(std::span<const float> r, int peak) {
-  int first = peak;
-  while (first > 0 && r[first - 1] > 0.0f && r[first - 1] <= r[first]) --first;
-  int last = peak;
-  const int end = static_cast<int>(r.size()) - 1;
-  while (last < end && r[last + 1] > 0.0f && r[last + 1] <= r[last]) ++last;
-  return {first, last};
-}
-
 float MaxAbs(std::span<const float> r) {
   float best = 0.0f;
   for (float v : r) best = std::max(best, std::abs(v));
@@ -101,21 +89,14 @@ float MaxAbs(std::span<const float> r) {
 }
 
 // The fallback for a window that is all main lobe: the same lobe rule on the full circular
-// correlation of length n, and the largest |R| outside it.
+// correlation of length n (gcc_math.h), and the largest |R| outside it.
 float LargestOutsideLobe(const float* corr, int n, int peak_lag) {
-  const auto at = [&](int lag) { return corr[((lag % n) + n) % n]; };
-  int first = peak_lag;
-  int last = peak_lag;
-  while (last - first < n - 1 && at(first - 1) > 0.0f && at(first - 1) <= at(first)) --first;
-  while (last - first < n - 1 && at(last + 1) > 0.0f && at(last + 1) <= at(last)) ++last;
+  const auto at = [&](int lag) { return corr[WrapLag(lag, n)]; };
+  int first, last;
+  CircularMainLobe(at, n, peak_lag, &first, &last);
   float best = 0.0f;
   for (int lag = last + 1; lag < first + n; ++lag) best = std::max(best, std::abs(at(lag)));
   return best;
-}
-
-float QualityRatio(float peak, float sidelobe) {
-  if (!(sidelobe > 0.0f)) return peak > 0.0f ? kQualityCap : 0.0f;
-  return std::min(peak / sidelobe, kQualityCap);
 }
 
 }  // namespace
@@ -305,11 +286,7 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
 
   const double e_ref = energy[ref];
   const double e_sensor = energy[sensor];
-  const auto floor_of = [](double power) {  // within [FLT_MIN, FLT_MAX] whatever the input
-    return static_cast<float>(std::clamp(kRelativeFloor * power, static_cast<double>(FLT_MIN),
-                                         static_cast<double>(FLT_MAX)));
-  };
-  const float floor_mag = floor_of(std::sqrt(e_ref * e_sensor));
+  const float floor_mag = PowerFloor(std::sqrt(e_ref * e_sensor));
   const int lo = layout.band_first_bin;
   const int hi = layout.band_end_bin;
   float half_sum = 0.0f;
@@ -322,7 +299,7 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
                            PhatBetaWeight{floor_mag, static_cast<float>(options.phat_beta)}, g);
       break;
     case Weighting::kScot:
-      half_sum = WeighBins(xr, xk, lo, hi, ScotWeight{floor_of(e_ref), floor_of(e_sensor)}, g);
+      half_sum = WeighBins(xr, xk, lo, hi, ScotWeight{PowerFloor(e_ref), PowerFloor(e_sensor)}, g);
       break;
     case Weighting::kCc:
       half_sum = WeighBins(xr, xk, lo, hi, CcWeight{}, g);
@@ -355,7 +332,8 @@ void GccPhatEstimator::Impl::GatherWindow(int max_lag, float scale) {
 // outside it in the whole correlation (scaled like the window).
 float GccPhatEstimator::Impl::LargestSidelobe(std::span<const float> searched, int peak,
                                               int peak_lag, float scale) const {
-  const auto [first, last] = MainLobe(searched, peak);
+  int first, last;
+  MainLobe([&](int i) { return searched[i]; }, static_cast<int>(searched.size()), peak, &first, &last);
   if (first > 0 || last + 1 < static_cast<int>(searched.size())) {
     return std::max(MaxAbs(searched.first(first)), MaxAbs(searched.subspan(last + 1)));
   }

@@ -37,26 +37,23 @@
 // source PHAT whitens the out-of-band leakage of the frame edges and every method scatters
 // by 0.12-0.17 sample; at 20 dB without the band, kSinc gives 0.005 bias / 0.018 std and
 // kParabolic 0.057 / 0.023 (LeavingOutTheBandSpreadsTheEstimates checks the spread).
+//
+// The arithmetic (the enum, K, the three-point fits, the sinc reconstruction and its Newton
+// search) is in peak_math.h, which the GPU's peak kernel compiles too.
 #pragma once
 
 #include <span>
 
-namespace localizer::engine {
+#include "engine/tdoa/peak_math.h"
 
-enum class PeakInterpolation { kParabolic, kGaussian, kSinc };
+namespace localizer::engine {
 
 const char* PeakInterpolationName(PeakInterpolation method);
 
-// Samples either side of the peak that InterpolatePeak reads.
-inline constexpr int kPeakHalfWidth = 8;
-inline constexpr int kPeakSamples = 2 * kPeakHalfWidth + 1;
-
-// Offset of the true maximum from the centre sample, in samples; see above.
+// Offset of the true maximum from the centre sample, in samples; see above. (The CPU's entry
+// point, compiled out of line in peak_interpolation.cc as it always was; the GPU calls
+// peak_math.h's InterpolatePeak(method, const float*) directly.)
 double InterpolatePeak(PeakInterpolation method, std::span<const float, kPeakSamples> samples);
-
-// The three-point fits on their own (y_minus = R(peak - 1), y0 = R(peak), y_plus = R(peak + 1)).
-double ParabolicPeakOffset(double y_minus, double y0, double y_plus);
-double GaussianPeakOffset(double y_minus, double y0, double y_plus);
 
 // The Hann-windowed sinc reconstruction of the samples at offset x from the centre sample,
 // |x| <= 1 (exposed for tests).

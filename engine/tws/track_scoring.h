@@ -38,9 +38,6 @@ class TrackScoring {
   int identity_switches() const { return switches_; }
   double Purity() const;  // 1 when nothing was paired
   int64_t paired() const { return paired_; }
-  // Truths paired at least once, and distinct track ids that were ever paired.
-  int truths_seen() const { return static_cast<int>(last_track_of_truth_.size()); }
-  int tracks_seen() const { return static_cast<int>(counts_.size()); }
 
  private:
   double max_distance_m_;

@@ -9,7 +9,7 @@
 //   conversion                 kUnbiased  -      polar_conversion.h
 //   accel_noise_mps2           5          m/s^2  sigma_a of the constant-velocity model
 //   filter                     kKalman    -      kSteadyState: freeze the gain once it
-//                                                converges (cv_kalman.h)
+//                                                converges (updater.h)
 //   steady_state_tolerance     1e-3       -      relative gain change that counts as converged
 //   gate_probability           0.9995     -      P_G; the gate is g = chi^2_D quantile
 //   confirm_hits, confirm_window 3, 5     scans  M of N: tentative -> confirmed
@@ -25,12 +25,12 @@
 #pragma once
 
 #include "engine/core/status.h"
+#include "engine/tws/deleter.h"
+#include "engine/tws/initiator.h"
 #include "engine/tws/polar_conversion.h"
+#include "engine/tws/updater.h"
 
 namespace localizer::engine::tws {
-
-enum class FilterForm { kKalman, kSteadyState };
-enum class Initiation { kOnePoint, kTwoPoint };
 
 struct TwsOptions {
   int dimensions = 2;
@@ -51,6 +51,13 @@ struct TwsOptions {
 
   // INVALID_ARGUMENT naming the field and its value.
   Status Validate() const;
+
+  // The options of each role the tracker composes (updater.h, initiator.h, deleter.h).
+  UpdaterOptions updater() const { return {accel_noise_mps2, filter, steady_state_tolerance}; }
+  InitiatorOptions initiator() const {
+    return {initiation, initial_speed_sigma_mps, max_speed_mps, confirm_hits, confirm_window};
+  }
+  DeleterOptions deleter() const { return {confirm_hits, confirm_window, max_coast_scans, max_position_sigma_m}; }
 };
 
 }  // namespace localizer::engine::tws

@@ -1,12 +1,15 @@
 // Track-while-scan: multi-target tracking of radar/sonar plots with one constant-velocity
 // Kalman filter per track. The tracker only composes the roles (Stone Soup's
-// tracker/simple.py shape); each lives in its own header:
+// tracker/simple.py shape); each lives in its own header, with its contract:
 //   measurement model   polar / spherical -> Cartesian, unbiased   polar_conversion.h
-//   predictor, updater  constant-velocity Kalman (or constant gain) cv_kalman.h
-//   hypothesiser        chi^2 gate, coarse box test on a grid first chi_square.h, point_grid.h
-//   data associator     global nearest neighbour, optimal per cluster assignment.h, clustering.h
-//   initiator           one-point (velocity prior) or two-point     (this file's .cc)
-//   deleter             M-of-N, misses in a row, covariance bound   track_report.h, tws_options.h
+//   updater             predict, update, coast; steady-state form  updater.h (cv_kalman.h)
+//   associator          chi^2 gate, clusters, global nearest nbr   associator.h (chi_square.h,
+//                                                                  point_grid.h, clustering.h,
+//                                                                  assignment.h)
+//   initiator           one-point or two-point; M-of-N confirm     initiator.h (track_history.h)
+//   deleter             M-of-N, misses in a row, covariance bound  deleter.h
+// The roles know nothing of radars: they trade Gaussians (gaussian.h), a mean and its
+// covariance, whether a converted plot or a track's expected measurement.
 //
 // One scan at time t (Process):
 //  1. every track predicts to t (dt = t - previous scan's time);
@@ -18,13 +21,13 @@
 //  4. tentative tracks do the same with the plots left over (a clutter-born tentative track
 //     never takes a confirmed track's plot);
 //  5. tracks with a plot update; the others coast;
-//  6. plots still left initiate tentative tracks: one-point (x = (z, 0), P = diag(R,
-//     sigma_v^2 I)) or two-point (paired with a leftover plot of the previous scan within
-//     max_speed dt: v = (z2 - z1)/dt, P from both R); unpaired two-point plots wait one scan;
-//  7. status: tentative -> confirmed with M hits of the last N scans; a tentative track
+//  6. status: tentative -> confirmed with M hits of the last N scans; a tentative track
 //     that can no longer reach M is deleted; a confirmed track is deleted after
 //     max_coast_scans misses in a row; any track whose position variance exceeds
-//     max_position_sigma_m^2 is deleted.
+//     max_position_sigma_m^2 is deleted;
+//  7. plots still left initiate tentative tracks: one-point (x = (z, 0), P = diag(R,
+//     sigma_v^2 I)) or two-point (paired with a leftover plot of the previous scan within
+//     max_speed dt: v = (z2 - z1)/dt, P from both R); unpaired two-point plots wait one scan.
 // Clutter and P_D < 1 are handled by the gate (clutter rarely falls in it), by coasting
 // and by M-of-N (clutter rarely repeats near a prediction).
 //
@@ -83,7 +86,6 @@ class TwsTracker {
   }
 
   virtual const TwsOptions& options() const = 0;
-  virtual double gate_threshold() const = 0;  // g
   virtual int track_count() const = 0;
   virtual int64_t total_track_updates() const = 0;
 

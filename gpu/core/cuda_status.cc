@@ -48,13 +48,6 @@ Status FromCufft(cufftResult result, const char* what) {
   return Internal("cuFFT error in " + message);
 }
 
-Status FromCurand(curandStatus_t result, const char* what) {
-  if (result == CURAND_STATUS_SUCCESS) return Status::Ok();
-  const std::string message = std::string(what) + ": curandStatus " + std::to_string(static_cast<int>(result));
-  if (result == CURAND_STATUS_ALLOCATION_FAILED) return ResourceExhausted("GPU memory exhausted in " + message);
-  return Internal("cuRAND error in " + message);
-}
-
 Status LastLaunchError(const char* kernel) {
   return FromCuda(cudaGetLastError(), (std::string("launch of ") + kernel).c_str());
 }

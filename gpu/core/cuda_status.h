@@ -1,4 +1,4 @@
-// CUDA, cuFFT and cuRAND results as localizer Status values. Every call into the toolkit
+// CUDA and cuFFT results as localizer Status values. Every call into the toolkit
 // goes through one of these, so a device error reaches the caller (and the client) as a
 // Status naming the call — a server never exits because of a GPU error.
 //
@@ -11,7 +11,6 @@
 
 #include <cuda_runtime_api.h>
 #include <cufft.h>
-#include <curand.h>
 
 #include "engine/core/status.h"
 
@@ -19,7 +18,6 @@ namespace localizer::gpu {
 
 Status FromCuda(cudaError_t result, const char* what);
 Status FromCufft(cufftResult result, const char* what);
-Status FromCurand(curandStatus_t result, const char* what);
 
 // The error a kernel launch left behind (cudaGetLastError), as a Status.
 Status LastLaunchError(const char* kernel);

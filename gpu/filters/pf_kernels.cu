@@ -130,7 +130,8 @@ __global__ void __launch_bounds__(kBlockThreads)
     const float h = PairDelay(rk, ref, pp.half_delay_s, s.inv_c);
     const float e = (pp.delay_s - h) * pp.inv_sigma;
     if (pp.gcc_offset >= 0) {
-      ll += pp.gcc_gain * CatmullRomRead(gcc + pp.gcc_offset, GccFineLag(h, pp.lag_scale, pp.lag0), pp.last_lag);
+      ll += pp.gcc_gain *
+            engine::CatmullRomRead(gcc + pp.gcc_offset, engine::GccFineLag(h, pp.lag_scale, pp.lag0), pp.last_lag);
     } else {
       ll += StudentTLogLikelihood(e, s.inv_dof, s.half_dof_plus_1);
     }

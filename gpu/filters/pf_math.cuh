@@ -1,10 +1,14 @@
 // Per-particle maths of the GPU particle filter, as __host__ __device__ functions so the
 // kernels (pf_kernels.cu) and host tests (tests/gpu/pf_math_test.cu) run the same code.
-// Each function is the CPU engine's formula (engine/filters/particle_set.cc) for one
-// particle; see engine/filters/particle_filter.h for the model.
+// The formulas the CPU filter shares are the engine's own (engine/filters/particle_math.h:
+// prediction, range and range rate, pair delay, the GCC read, the kernel's bandwidth and
+// move), called here through adapters for the kernels' state arrays; what stays here is what
+// the GPU does its own way: the Student-t log with CUDA's logf, systematic resampling by a
+// per-slot search, the pivot-skipping Cholesky, and block-summed moments.
+// See engine/filters/particle_filter.h for the model.
 //
-// Plain C++ when not compiled by nvcc (the qualifiers vanish), so g++ tests can include it.
-// No Eigen, no engine headers: every type is float/double arrays.
+// Plain C++ when not compiled by nvcc (the qualifiers vanish, engine/core/host_device.h), so
+// g++ tests can include it. No Eigen: every type is float/double arrays.
 //
 // Conventions: a particle's state is float s[6] = (x, y, z, vx, vy, vz), m and m/s,
 // positions relative to the array centroid; a 6x6 matrix is double[36], row-major; a lower
@@ -13,75 +17,46 @@
 
 #include <math.h>
 
-#if defined(__CUDACC__)
-#define LOCALIZER_HD __host__ __device__ __forceinline__
-#else
-#define LOCALIZER_HD inline
-#endif
+#include "engine/core/host_device.h"
+#include "engine/filters/particle_math.h"
 
 namespace localizer::gpu::pf {
 
 // ---- Predict ------------------------------------------------------------------------------
 
 // Constant velocity with white acceleration a = accel_sigma * (ax, ay, az), (ax, ay, az) ~ N(0, I):
-//   p <- p + v dt + a dt^2 / 2,  v <- v + a dt
+//   p <- p + v dt + a dt^2 / 2,  v <- v + a dt   (engine::PredictAxis per axis)
 // a_to_p = accel_sigma dt^2 / 2 and a_to_v = accel_sigma dt, computed in double by the caller
 // and rounded to float, as ParticleSet::Predict does.
-LOCALIZER_HD void PredictParticle(float s[6], float dt, float a_to_p, float a_to_v, float ax, float ay,
-                                  float az) {
-  s[0] += s[3] * dt + a_to_p * ax;
-  s[1] += s[4] * dt + a_to_p * ay;
-  s[2] += s[5] * dt + a_to_p * az;
-  s[3] += a_to_v * ax;
-  s[4] += a_to_v * ay;
-  s[5] += a_to_v * az;
+LOCALIZER_HOST_DEVICE_INLINE void PredictParticle(float s[6], float dt, float a_to_p, float a_to_v, float ax,
+                                                  float ay, float az) {
+  engine::PredictAxis(s[0], s[3], dt, a_to_p, a_to_v, ax);
+  engine::PredictAxis(s[1], s[4], dt, a_to_p, a_to_v, ay);
+  engine::PredictAxis(s[2], s[5], dt, a_to_p, a_to_v, az);
 }
 
 // ---- Measurement model --------------------------------------------------------------------
 
-// Range r = |p - m| + 1e-6 (m; the epsilon keeps 1/r finite) and range rate vr = (p - m).v / r
-// (m/s) of a particle from a sensor at m (relative to the centroid, like the particle).
-struct RangeRate {
-  float r;
-  float vr;
-};
-
-LOCALIZER_HD RangeRate RangeAndRate(const float s[6], float mx, float my, float mz) {
-  const float dx = s[0] - mx, dy = s[1] - my, dz = s[2] - mz;
-  const float r = sqrtf(dx * dx + dy * dy + dz * dz) + 1e-6f;
-  return {r, (dx * s[3] + dy * s[4] + dz * s[5]) / r};
+// Range r = |p - m| + 1e-6 and range rate vr = (p - m).v / r of a particle from a sensor at
+// m (relative to the centroid, like the particle): engine::RangeAndRate.
+using engine::RangeRate;
+LOCALIZER_HOST_DEVICE_INLINE RangeRate RangeAndRate(const float s[6], float mx, float my, float mz) {
+  return engine::RangeAndRate(s[0] - mx, s[1] - my, s[2] - mz, s[3], s[4], s[5]);
 }
 
-// Predicted delay of pair (reference, k) at the instant the pair describes (d/2 before the
-// frame centre, first order), seconds:
-//   h' = (r_k - r_ref) / c - (d / 2) (vr_k - vr_ref) / c,   half_d = d / 2, inv_c = 1 / c.
-LOCALIZER_HD float PairDelay(RangeRate sensor, RangeRate reference, float half_d, float inv_c) {
-  return (sensor.r - reference.r) * inv_c - half_d * (sensor.vr - reference.vr) * inv_c;
+// Predicted delay of pair (reference, k): engine::PairDelay.
+LOCALIZER_HOST_DEVICE_INLINE float PairDelay(RangeRate sensor, RangeRate reference, float half_d, float inv_c) {
+  return engine::PairDelay(sensor.r, sensor.vr, reference.r, reference.vr, half_d, inv_c);
 }
 
 // Peak likelihood: log of a Student-t density in e = (d - h') / sigma, up to a constant,
 //   -(nu + 1) / 2 log(1 + e^2 / nu),   inv_dof = 1 / nu, half_dof_plus_1 = (nu + 1) / 2.
-LOCALIZER_HD float StudentTLogLikelihood(float e, float inv_dof, float half_dof_plus_1) {
+// With CUDA's logf (the CPU uses engine::FastLog; ~1e-7 relative apart).
+LOCALIZER_HOST_DEVICE_INLINE float StudentTLogLikelihood(float e, float inv_dof, float half_dof_plus_1) {
   return -half_dof_plus_1 * logf(1.0f + e * e * inv_dof);
 }
 
-// The fine-lag coordinate of delay h in a pair's upsampled GCC window:
-//   lag = h * fs * upsampling - first_lag * upsampling   (lag_scale, lag0 from the caller).
-LOCALIZER_HD float GccFineLag(float h, float lag_scale, float lag0) { return h * lag_scale - lag0; }
-
-// Catmull-Rom read of the fine GCC g at fractional index `lag`, clamped to [1, last] where
-// last = (fine length - 3) - 1e-3 (so g[i0 - 1 .. i0 + 2] exist). Smooth between lags, so
-// no particle is favoured for sitting on one. The GCC log-likelihood is gain * this value.
-// A NaN lag reads at 1 (the CPU's clamp would index out of bounds).
-LOCALIZER_HD float CatmullRomRead(const float* g, float lag, float last) {
-  lag = lag >= 1.0f ? lag : 1.0f;  // also maps NaN to 1
-  lag = lag <= last ? lag : last;
-  const int i0 = static_cast<int>(lag);
-  const float t = lag - static_cast<float>(i0);
-  const float gm = g[i0 - 1], g0 = g[i0], g1 = g[i0 + 1], g2 = g[i0 + 2];
-  return g0 + 0.5f * t * ((g1 - gm) + t * ((2.0f * gm - 5.0f * g0 + 4.0f * g1 - g2) +
-                                           t * (3.0f * (g0 - g1) + g2 - gm)));
-}
+// The GCC likelihood's read (engine::GccFineLag, engine::CatmullRomRead) is the engine's.
 
 // ---- Systematic resampling ----------------------------------------------------------------
 
@@ -93,7 +68,7 @@ LOCALIZER_HD float CatmullRomRead(const float* g, float lag, float last) {
 // and u0 (tests/gpu/pf_math_test.cu). Zero-weight particles (flat C) own no slot.
 // Cost: log2(n) reads of C. Each slot searches on its own: no sequential pass.
 template <typename Cumulative>
-LOCALIZER_HD int SystematicParent(const Cumulative& cum, int n, double u0, int m) {
+LOCALIZER_HOST_DEVICE_INLINE int SystematicParent(const Cumulative& cum, int n, double u0, int m) {
   const double scale = static_cast<double>(n);
   const double target = static_cast<double>(m);
   int lo = 0, hi = n - 1;  // answer in [lo, hi]; every j < lo has n C_j - u0 <= m
@@ -107,27 +82,21 @@ LOCALIZER_HD int SystematicParent(const Cumulative& cum, int n, double u0, int m
 
 // ---- Regularisation (Liu & West) ----------------------------------------------------------
 
-// Silverman's bandwidth for d = 6 scaled by kernel_scale, capped at 0.95, and the shrinkage
-// a = sqrt(1 - h^2) (ParticleSet::ResampleSystematic).
-LOCALIZER_HD double KernelBandwidth(double kernel_scale, int n) {
-  const double h = kernel_scale * pow(4.0 / (static_cast<double>(n) * 8.0), 0.1);
-  return h < 0.95 ? h : 0.95;
-}
-LOCALIZER_HD double KernelShrinkage(double h) { return sqrt(1.0 - h * h); }
+// The bandwidth and shrinkage are engine::KernelBandwidth and engine::KernelShrinkage.
 
 // x' = a x + shift + L z, shift = (1 - a) mean, L = h chol(cov) packed lower triangular,
-// z with zero mean and unit covariance: keeps the weighted mean and covariance.
-LOCALIZER_HD void LiuWestMove(const float x[6], float a, const float shift[6], const float root[21],
-                              const float z[6], float out[6]) {
-  int k = 0;
-  for (int r = 0; r < 6; ++r) {
-    float v = a * x[r] + shift[r];
-    for (int c = 0; c <= r; ++c) v += root[k++] * z[c];
-    out[r] = v;
-  }
+// z with zero mean and unit covariance: keeps the weighted mean and covariance
+// (engine::LiuWestRow per row; row r's coefficients start at r (r + 1) / 2).
+struct UnitDraws {  // z(c) for engine::LiuWestRow
+  const float* z;
+  LOCALIZER_HOST_DEVICE float operator()(int c) const { return z[c]; }
+};
+LOCALIZER_HOST_DEVICE_INLINE void LiuWestMove(const float x[6], float a, const float shift[6], const float root[21],
+                                              const float z[6], float out[6]) {
+  for (int r = 0; r < 6; ++r) out[r] = engine::LiuWestRow(a, x[r], shift[r], root + r * (r + 1) / 2, r, UnitDraws{z});
 }
 
-LOCALIZER_HD bool FiniteValue(double x) { return x - x == 0.0; }  // false for inf and NaN
+LOCALIZER_HOST_DEVICE_INLINE bool FiniteValue(double x) { return x - x == 0.0; }  // false for inf and NaN
 
 // Lower-triangular L (double[36], row-major, zeros above the diagonal) with L L^T = a, from
 // a's lower triangle. Returns true when a is numerically positive definite (every pivot
@@ -137,7 +106,7 @@ LOCALIZER_HD bool FiniteValue(double x) { return x - x == 0.0; }  // false for i
 // equals a up to about that tolerance in the collapsed directions — the kernel then adds
 // no spread there, like the CPU's eigen-root fallback. Non-finite input gives L = 0, false.
 // Cost: ~ 100 flops in double; run once per resampled session.
-LOCALIZER_HD bool CholeskyLower6(const double a[36], double l[36]) {
+LOCALIZER_HOST_DEVICE_INLINE bool CholeskyLower6(const double a[36], double l[36]) {
   bool finite = true;
   double max_diag = 0.0;
   for (int i = 0; i < 36; ++i) {
@@ -175,7 +144,7 @@ LOCALIZER_HD bool CholeskyLower6(const double a[36], double l[36]) {
 inline constexpr int kMomentSums = 28;
 
 template <typename T>
-LOCALIZER_HD void MomentTerms(const float s[6], const float shift[6], float w, T terms[kMomentSums]) {
+LOCALIZER_HOST_DEVICE_INLINE void MomentTerms(const float s[6], const float shift[6], float w, T terms[kMomentSums]) {
   float d[6];
   for (int r = 0; r < 6; ++r) d[r] = s[r] - shift[r];
   terms[0] = w;
@@ -189,7 +158,7 @@ LOCALIZER_HD void MomentTerms(const float s[6], const float shift[6], float w, T
 
 // mean = shift + S1 / S0, cov = S2 / S0 - (S1 / S0)(S1 / S0)^T (symmetric, double[36]).
 // S0 <= 0 (no weight) gives mean = shift and cov = 0.
-LOCALIZER_HD void FinishMoments(const double sums[kMomentSums], const float shift[6], double mean[6],
+LOCALIZER_HOST_DEVICE_INLINE void FinishMoments(const double sums[kMomentSums], const float shift[6], double mean[6],
                                 double cov[36]) {
   const double inv_w = sums[0] > 0.0 ? 1.0 / sums[0] : 0.0;
   double m[6];

@@ -29,8 +29,8 @@ StatusOr<SessionConfig> MakeSessionConfig(const engine::ArrayGeometry& array,
   for (int p = 0; p < config.pairs; ++p) relative(array.sensor_of_pair(p), config.pair_sensor[p]);
   config.inv_c = static_cast<float>(1.0 / array.sound_speed_mps());
   if (options.kernel_scale > 0.0) {
-    config.kernel_h = KernelBandwidth(options.kernel_scale, options.particles);
-    config.kernel_a = KernelShrinkage(config.kernel_h);
+    config.kernel_h = engine::KernelBandwidth(options.kernel_scale, options.particles);
+    config.kernel_a = engine::KernelShrinkage(config.kernel_h);
   }
   return config;
 }

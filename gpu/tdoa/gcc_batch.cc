@@ -11,7 +11,6 @@
 #include <utility>
 #include <vector>
 
-#include "engine/tdoa/cross_spectrum.h"
 #include "engine/tdoa/peak_interpolation.h"
 #include "gpu/core/cuda_status.h"
 #include "gpu/core/device.h"
@@ -23,10 +22,7 @@
 namespace localizer::gpu {
 namespace {
 
-// gcc_math.cuh restates these engine constants for device code; they must not drift.
-static_assert(gcc::kHalfWidth == engine::kPeakHalfWidth);
-static_assert(gcc::kPeakSamples == engine::kPeakSamples);
-static_assert(gcc::kRelativeFloor == engine::kRelativeFloor);
+// The descriptor's codes are the engine's enums as integers.
 static_assert(static_cast<int>(engine::Weighting::kPhat) == gcc::kPhat);
 static_assert(static_cast<int>(engine::Weighting::kPhatBeta) == gcc::kPhatBeta);
 static_assert(static_cast<int>(engine::Weighting::kScot) == gcc::kScot);

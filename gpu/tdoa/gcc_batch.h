@@ -18,7 +18,8 @@
 //      maximum over |lag| <= L_p, sub-sample refinement, quality, peak value
 //   7. results and (with keep_gcc) the GCC windows back to pinned memory in two copies
 // and the host fills each job's Measurement. Agreement with the CPU: every step but the FFTs
-// is the CPU's arithmetic (gcc_math.cuh; tests/gpu/gcc_math_test.cu checks it on the host),
+// is the CPU's arithmetic (the engine's own functions, engine/tdoa/gcc_math.h and
+// peak_math.h, compiled for the device; tests/gpu/gcc_math_test.cu checks it on the host),
 // so only cuFFT's rounding against FFTW's (~1e-6 relative) separates them;
 // tests/gpu/gcc_batch_test.cc holds delays to 1e-3 sample, quality, peak value and SNR to
 // 1e-3 relative, GCC windows to 1e-4 absolute. Within one bucket (below), a frame's results

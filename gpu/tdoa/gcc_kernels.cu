@@ -1,5 +1,6 @@
-// The kernels of the batched GCC-PHAT stage (see gcc_kernels.h for what each computes and
-// gcc_math.cuh for the maths they share with the host tests). Deterministic by construction:
+// The kernels of the batched GCC-PHAT stage (see gcc_kernels.h for what each computes; the
+// per-bin and per-window maths are the CPU stage's own, engine/tdoa/gcc_math.h and
+// peak_math.h, through gcc_math.cuh). Deterministic by construction:
 // one block owns each output row, every sum is a cub::BlockReduce of a fixed block size
 // (fixed order), the argmax combines (value, index) pairs by an order-independent rule, and
 // maxima of |R| are exact whatever the order. No atomics.
@@ -88,7 +89,7 @@ struct BetterPeakOp {
 };
 
 struct MaxOp {
-  __device__ float operator()(float a, float b) const { return gcc::Max(a, b); }
+  __device__ float operator()(float a, float b) const { return engine::hd::Max(a, b); }
 };
 
 // Thread 0 finds the main lobe while thread kRefineThread (another warp) refines the peak.
@@ -130,7 +131,7 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
     return;
   }
   const float scale = 1.0f / norm;
-  const auto scaled = [&](int lag) { return corr[gcc::WrapLag(lag, n)] * scale; };
+  const auto scaled = [&](int lag) { return corr[engine::WrapLag(lag, n)] * scale; };
   const auto in_window = [&](int i) { return scaled(i - max_lag); };
 
   // 1. The first maximum of R over the window; the window to the gcc output on the way.
@@ -149,18 +150,18 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
   if (threadIdx.x == 0) {
     int first = 0;
     int last = 0;
-    gcc::MainLobe(in_window, count, peak.index, &first, &last);
+    engine::MainLobe(in_window, count, peak.index, &first, &last);
     circular = !(first > 0 || last + 1 < count);
     if (circular) {  // unscaled, as the CPU walks it
-      const auto raw = [&](int lag) { return corr[gcc::WrapLag(lag, n)]; };
-      gcc::CircularMainLobe(raw, n, peak_lag, &first, &last);
+      const auto raw = [&](int lag) { return corr[engine::WrapLag(lag, n)]; };
+      engine::CircularMainLobe(raw, n, peak_lag, &first, &last);
     }
     lobe_first = first;
     lobe_last = last;
   }
   if (threadIdx.x == kRefineThread % kPeakThreads) {
-    float samples[gcc::kPeakSamples];
-    for (int m = 0; m < gcc::kPeakSamples; ++m) samples[m] = scaled(peak_lag + m - gcc::kHalfWidth);
+    float samples[engine::kPeakSamples];
+    for (int m = 0; m < engine::kPeakSamples; ++m) samples[m] = scaled(peak_lag + m - engine::kPeakHalfWidth);
     offset = gcc::InterpolatePeak(t.interpolation, samples);
   }
   __syncthreads();
@@ -169,11 +170,11 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
   float sidelobe = 0.0f;
   if (!circular) {
     for (int i = threadIdx.x; i < count; i += kPeakThreads) {
-      if (i < lobe_first || i > lobe_last) sidelobe = gcc::Max(sidelobe, fabsf(in_window(i)));
+      if (i < lobe_first || i > lobe_last) sidelobe = engine::hd::Max(sidelobe, fabsf(in_window(i)));
     }
   } else {
     for (int lag = lobe_last + 1 + threadIdx.x; lag < lobe_first + n; lag += kPeakThreads) {
-      sidelobe = gcc::Max(sidelobe, fabsf(corr[gcc::WrapLag(lag, n)]));
+      sidelobe = engine::hd::Max(sidelobe, fabsf(corr[engine::WrapLag(lag, n)]));
     }
   }
   sidelobe = MaxAbs(scratch.max_abs).Reduce(sidelobe, MaxOp());
@@ -182,7 +183,7 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
     result.peak_lag = peak_lag;
     result.offset_samples = offset;
     result.peak_value = peak.value;
-    result.quality = gcc::QualityRatio(peak.value, sidelobe);
+    result.quality = engine::QualityRatio(peak.value, sidelobe);
   }
 }
 

@@ -82,8 +82,8 @@ class HostBankModel {
           const float h = pf::PairDelay(pf::RangeAndRate(p, pp.sensor[0], pp.sensor[1], pp.sensor[2]), ref,
                                         pp.half_delay_s, s.inv_c);
           const float e = (pp.delay_s - h) * pp.inv_sigma;
-          ll += pp.gcc_offset >= 0 ? pp.gcc_gain * pf::CatmullRomRead(gcc.data() + pp.gcc_offset,
-                                                                      pf::GccFineLag(h, pp.lag_scale, pp.lag0),
+          ll += pp.gcc_offset >= 0 ? pp.gcc_gain * engine::CatmullRomRead(gcc.data() + pp.gcc_offset,
+                                                                      engine::GccFineLag(h, pp.lag_scale, pp.lag0),
                                                                       pp.last_lag)
                                    : pf::StudentTLogLikelihood(e, s.inv_dof, s.half_dof_plus_1);
           out->sum_e[k] += w_[i] * e;

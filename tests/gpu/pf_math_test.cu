@@ -130,17 +130,17 @@ TEST(PfMath, CatmullRomIsTheCpuRead) {
     const float gm = g[i0 - 1], g0 = g[i0], g1 = g[i0 + 1], g2 = g[i0 + 2];
     const float want = g0 + 0.5f * t * ((g1 - gm) + t * ((2.0f * gm - 5.0f * g0 + 4.0f * g1 - g2) +
                                                          t * (3.0f * (g0 - g1) + g2 - gm)));
-    EXPECT_EQ(CatmullRomRead(g.data(), lag_in, last), want) << lag_in;
+    EXPECT_EQ(engine::CatmullRomRead(g.data(), lag_in, last), want) << lag_in;
   }
-  for (int k = 1; k < 398; ++k) EXPECT_EQ(CatmullRomRead(g.data(), static_cast<float>(k), last), g[k]);
-  EXPECT_EQ(CatmullRomRead(g.data(), NAN, last), g[1]);  // a NaN delay reads inside the window
-  EXPECT_FLOAT_EQ(GccFineLag(1e-3f, 8 * 11025.0f, -8 * 40.0f), 1e-3f * 8 * 11025.0f + 8 * 40.0f);
+  for (int k = 1; k < 398; ++k) EXPECT_EQ(engine::CatmullRomRead(g.data(), static_cast<float>(k), last), g[k]);
+  EXPECT_EQ(engine::CatmullRomRead(g.data(), NAN, last), g[1]);  // a NaN delay reads inside the window
+  EXPECT_FLOAT_EQ(engine::GccFineLag(1e-3f, 8 * 11025.0f, -8 * 40.0f), 1e-3f * 8 * 11025.0f + 8 * 40.0f);
 }
 
 // Reads C_j for SystematicParent (a __host__ __device__ callable, as on the device).
 struct Cumulative {
   const double* c;
-  LOCALIZER_HD double operator()(int j) const { return c[j]; }
+  LOCALIZER_HOST_DEVICE double operator()(int j) const { return c[j]; }
 };
 
 // ParticleSet::SystematicIndices' marking and running max, fed the same cumulative weights.
@@ -313,8 +313,8 @@ TEST(PfMath, KernelBandwidthIsSilvermansAsTheCpu) {
     for (double scale : {0.1, 0.5, 1.0, 2.0}) {
       const double d = 6.0;
       const double want = std::min(0.95, scale * std::pow(4.0 / (n * (d + 2.0)), 1.0 / (d + 4.0)));
-      EXPECT_DOUBLE_EQ(KernelBandwidth(scale, n), want);
-      EXPECT_DOUBLE_EQ(KernelShrinkage(want), std::sqrt(1.0 - want * want));
+      EXPECT_DOUBLE_EQ(engine::KernelBandwidth(scale, n), want);
+      EXPECT_DOUBLE_EQ(engine::KernelShrinkage(want), std::sqrt(1.0 - want * want));
     }
   }
 }

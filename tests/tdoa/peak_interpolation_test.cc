@@ -163,5 +163,16 @@ TEST(PeakInterpolation, LeavingOutTheBandSpreadsTheEstimates) {
   EXPECT_GT(without_band.rms, 3.0 * with_band.rms);
 }
 
+// peak_math.h writes the window's tap phases as constants (the GPU needs no table set-up);
+// they are the values the CPU computed at start-up, libm's cos and sin of pi (m - K) / K, so
+// the refinement is what it was bit for bit.
+TEST(PeakInterpolation, TapTableIsLibmsCosAndSinOfTheTapAngles) {
+  for (int m = 0; m < kPeakSamples; ++m) {
+    const double angle = std::numbers::pi * (m - kPeakHalfWidth) / kPeakHalfWidth;
+    EXPECT_EQ(CosTap(m), std::cos(angle)) << m;
+    EXPECT_EQ(SinTap(m), std::sin(angle)) << m;
+  }
+}
+
 }  // namespace
 }  // namespace localizer::engine
