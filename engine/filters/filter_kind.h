@@ -5,7 +5,7 @@
 //   kMmpf  multiple-model particle filter (multi_model_pf.h: cv, cv-manoeuvre, ct-left,
 //          ct-right)
 //   kImm   interacting multiple model (imm_filter.h) over several Kalman filters
-// Names on the wire and in flags: "pf", "ekf", "ukf", "mmpf", "imm".
+// Names on the wire and in flags: pf, ekf, ukf, mmpf, imm (ParseFilterKind, FilterKindName).
 #pragma once
 
 #include <string>

@@ -49,13 +49,13 @@
 
 namespace localizer::engine {
 
-// Names on the wire and in flags: "ekf" (kExtended), "ukf" (kUnscented).
+// Names on the wire and in flags: ekf (kExtended), ukf (kUnscented).
 enum class KalmanVariant { kExtended, kUnscented };
 // INVALID_ARGUMENT "<field> 'x' is not one of: ekf, ukf".
 StatusOr<KalmanVariant> ParseKalmanVariant(const std::string& name, const std::string& field);
 const char* KalmanVariantName(KalmanVariant variant);
 
-// Names on the wire and in flags: "none", "huber", "student-t".
+// Names on the wire and in flags: none, huber, student-t.
 enum class RobustUpdate { kNone, kHuber, kStudentT };
 // INVALID_ARGUMENT "<field> 'x' is not one of: none, huber, student-t".
 StatusOr<RobustUpdate> ParseRobustUpdate(const std::string& name, const std::string& field);

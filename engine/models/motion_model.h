@@ -39,8 +39,8 @@ class MotionModel {
   }
 };
 
-// Which model MakeMotionModel builds. Names on the wire and in flags: "cv", "ca", "ct",
-// "singer" (each model's name()).
+// Which model MakeMotionModel builds. Names on the wire and in flags: cv, ca, ct, singer
+// (each model's name()).
 enum class MotionModelKind { kCv, kCa, kCt, kSinger };
 
 // INVALID_ARGUMENT "<field> 'x' is not one of: cv, ca, ct, singer".

@@ -25,7 +25,7 @@
 
 namespace localizer::engine {
 
-// Names on the wire and in flags: "cpu", "gpu", "auto".
+// Names on the wire and in flags: cpu, gpu, auto.
 enum class BackendChoice { kCpu, kGpu, kAuto };
 // INVALID_ARGUMENT "<field> 'x' is not one of: auto, cpu, gpu".
 StatusOr<BackendChoice> ParseBackendChoice(const std::string& name, const std::string& field);
