@@ -17,7 +17,8 @@ Status Reject(std::string* reason, const char* key, std::string message) {
 Status DecodeBlock(const v1::SampleBlock& block, const BlockLimits& limits, DecodedBlock* out,
                    std::string* reason) {
   const int64_t channels = block.channel_count();
-  if (channels != limits.channel_count) {
+  // Never divide by a client's zero, whatever the limits say (a session without channels).
+  if (channels < 1 || channels != limits.channel_count) {
     return Reject(reason, "channel_count",
                   "channel_count is " + std::to_string(channels) + "; the array has " +
                       std::to_string(limits.channel_count) + " sensors");

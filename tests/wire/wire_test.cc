@@ -79,6 +79,12 @@ TEST(BlockWire, EachBrokenRuleHasItsReason) {
   block.set_channel_count(3);
   EXPECT_EQ(DecodeBlock(block, {4, 1000}, &out, &reason).code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(reason, "channel_count");
+  // Zero channels against limits of zero channels (a session that takes no samples): a
+  // rejection, not a division by zero.
+  block = InterleavedBlock(4, 5);
+  block.set_channel_count(0);
+  EXPECT_EQ(DecodeBlock(block, {0, 0}, &out, &reason).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(reason, "channel_count");
 
   block = InterleavedBlock(4, 5);
   block.add_samples(1.0f);
