@@ -13,24 +13,21 @@
 namespace localizer::server {
 namespace {
 
-engine::SessionConfig AudioConfig() {
-  engine::SessionConfig c;
+engine::AudioSessionConfig Audio() {
+  engine::AudioSessionConfig c;
   c.sensors_m = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   c.sound_speed_mps = 1500.0;
   c.sample_rate_hz = 8000.0;
   c.frame_samples = 256;
   c.hop_samples = 256;
-  c.filter.particles = 256;
-  c.backend = "cpu";
+  c.tracker.particle.particles = 256;
+  c.backend = engine::BackendChoice::kCpu;
   return c;
 }
 
-engine::SessionConfig DetectionConfig() {
-  engine::SessionConfig c;
-  c.detections = true;
-  c.backend = "cpu";
-  return c;
-}
+engine::SessionConfig AudioConfig() { return Audio(); }
+
+engine::SessionConfig DetectionConfig() { return engine::DetectionSessionConfig{}; }
 
 class SessionRunnerTest : public ::testing::Test {
  protected:
@@ -66,9 +63,9 @@ TEST_F(SessionRunnerTest, AnAudioConfigMakesAnAudioRunner) {
   EXPECT_EQ(info.kind, "samples");
   EXPECT_EQ(info.backend, "cpu");
   EXPECT_EQ(info.channel_count, 4);
-  EXPECT_EQ(info.filter_type, AudioConfig().filter_type);
+  EXPECT_EQ(info.filter_type, engine::FilterKindName(Audio().tracker.kind));
   EXPECT_TRUE(info.reports_presence);
-  EXPECT_FALSE((*runner)->config().detections);
+  EXPECT_EQ((*runner)->config().sensors_m.size(), 4u);  // the audio config it was made from
 }
 
 TEST_F(SessionRunnerTest, ADetectionConfigMakesADetectionRunner) {
@@ -80,11 +77,12 @@ TEST_F(SessionRunnerTest, ADetectionConfigMakesADetectionRunner) {
   EXPECT_EQ(info.backend, "cpu");
   EXPECT_EQ(info.channel_count, 0);
   EXPECT_FALSE(info.reports_presence);
-  EXPECT_TRUE((*runner)->config().detections);
+  EXPECT_TRUE((*runner)->config().sensors_m.empty());  // a detection session has no array
+  EXPECT_TRUE((*runner)->EffectiveConfig("x").has_detections());
 }
 
 TEST_F(SessionRunnerTest, ABadConfigIsTheEnginesError) {
-  engine::SessionConfig bad = AudioConfig();
+  engine::AudioSessionConfig bad = Audio();
   bad.sensors_m.pop_back();  // three sensors
   auto runner = MakeSessionRunner(bad, metrics_.get());
   ASSERT_FALSE(runner.ok());
