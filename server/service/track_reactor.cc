@@ -11,11 +11,6 @@ TrackReactor::TrackReactor(grpc::CallbackServerContext* context, SessionRegistry
   StartRead(&read_buffer_);
 }
 
-SessionHost* TrackReactor::Host() const {
-  MutexLock lock(&mutex_);
-  return host_.get();
-}
-
 void TrackReactor::FinishOnce(const grpc::Status& status) {
   MutexLock lock(&mutex_);
   if (finished_) return;
@@ -109,10 +104,8 @@ void TrackReactor::HandleResume(const v1::ResumeSession& resume) {
 
 void TrackReactor::Attach(std::shared_ptr<SessionHost> host, bool resumed, const ResumePoint& resume) {
   SessionHost* const attached = host.get();
-  {
-    MutexLock lock(&mutex_);
-    host_ = std::move(host);
-  }
+  owner_ = std::move(host);
+  host_.store(attached, std::memory_order_release);
   if (!attached->Attach(this, resumed, resume)) {
     // Closed between Find and here (CloseSession or expiry raced us).
     return FinishOnce(grpc::Status(grpc::StatusCode::NOT_FOUND, "session " + attached->id() + " was just closed"));
@@ -132,8 +125,8 @@ void TrackReactor::HandleInput(const char* what) {
 }
 
 grpc::Status TrackReactor::Write(const v1::TrackResponse& response, bool more_waiting) {
-  MutexLock lock(&mutex_);
-  if (finished_) return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION, "the stream has ended");
+  // No lock of ours: the session calls this with its lock held, one write at a time, and never
+  // after it ended the stream (every end after attaching goes through the session).
   bool own_buffer = false;
   write_buffer_.Clear();  // the previous write's bytes (gRPC holds its own reference)
   const grpc::Status serialized =
@@ -161,13 +154,12 @@ void TrackReactor::OnCancel() {
 }
 
 void TrackReactor::OnDone() {
-  std::shared_ptr<SessionHost> host;
   {
-    // Also waits for a FinishOnce still inside its lock on another thread.
-    MutexLock lock(&mutex_);
-    host = host_;
+    MutexLock lock(&mutex_);  // waits for a FinishOnce still inside the lock on another thread
   }
-  // Detach takes the session's lock: any session call into this sink has returned after it.
+  // Every other reaction has returned: owner_ is read without a race. Detach takes the
+  // session's lock: any session call into this sink has returned after it.
+  const std::shared_ptr<SessionHost>& host = owner_;
   if (host && host->Detach(this)) LogEvent("info", "session_detached", {{"session", host->id()}, {"peer", peer_}});
   delete this;
 }

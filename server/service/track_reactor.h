@@ -27,11 +27,14 @@
 //
 // Thread-safety: gRPC may run OnReadDone, OnWriteDone and OnCancel concurrently, and the
 // session calls the StreamSink methods from its worker. `mutex_` (taken after the session's
-// lock, never before it) guards the attached session and the finished flag. The read path's
-// buffers are touched by one read at a time; the write buffer by Write, which the session
-// calls for one write at a time.
+// lock, never before it) orders Finish against StartRead. The attached session is published
+// once by the read path (an atomic pointer; its owning reference is read again only by
+// OnDone, after every other reaction). The read path's buffers are touched by one read at a
+// time; the write buffer by Write, which the session calls for one write at a time, with its
+// lock held, and never after it ended the stream.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <optional>
 #include <string>
@@ -59,14 +62,14 @@ class TrackReactor final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc
   void OnDone() override EXCLUDES(mutex_);
 
   // StreamSink (called by the session, its lock held)
-  grpc::Status Write(const v1::TrackResponse& response, bool more_waiting) override EXCLUDES(mutex_);
+  grpc::Status Write(const v1::TrackResponse& response, bool more_waiting) override;
   void ReadMore() override EXCLUDES(mutex_);
   void End(const grpc::Status& status) override EXCLUDES(mutex_);
   bool Cancelled() const override { return context_->IsCancelled(); }
 
  private:
   // The attached session, or null before open/resume (it never changes once set).
-  SessionHost* Host() const EXCLUDES(mutex_);
+  SessionHost* Host() const { return host_.load(std::memory_order_acquire); }
   void HandleOpen(const v1::SessionConfig& config) EXCLUDES(mutex_);
   void HandleResume(const v1::ResumeSession& resume) EXCLUDES(mutex_);
   // A block, IMU batch or scan: to the session (`what` names it if none is attached).
@@ -91,9 +94,10 @@ class TrackReactor final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc
   wire::DecodedBlock decoded_;     // read path: the session's runner decodes blocks into it
   grpc::ByteBuffer write_buffer_;  // Write: the response in flight, serialized
 
+  std::shared_ptr<SessionHost> owner_;          // set once by the read path, then read by OnDone
+  std::atomic<SessionHost*> host_{nullptr};      // owner_, published for the other threads
   mutable Mutex mutex_;
-  std::shared_ptr<SessionHost> host_ GUARDED_BY(mutex_);  // set once, by the read path
-  bool finished_ GUARDED_BY(mutex_) = false;              // Finish called
+  bool finished_ GUARDED_BY(mutex_) = false;     // Finish called
 };
 
 }  // namespace localizer::server
