@@ -142,7 +142,7 @@ TEST_F(ServiceTest, SessionsJsonListsTheStreamedTrack) {
   EXPECT_EQ(point.at("source_present").get<bool>(), last.source_present());
   EXPECT_EQ(point.at("ambiguous").get<bool>(), last.ambiguous());
   // The latest frame's presence and ambiguity, as the stream received them.
-  const v1::Estimate& latest = stream.estimates().back();
+  const v1::Estimate latest = stream.estimates().back();  // a copy: estimates() returns a temporary
   const auto& presence = session.at("presence");
   ASSERT_TRUE(presence.is_object()) << session.dump();
   EXPECT_EQ(presence.at("source_present").get<bool>(), latest.source_present());
