@@ -1,14 +1,14 @@
 // localizer-server: the localization service. `localizer-server --help` lists the flags.
 // Exit codes: 0 after a clean shutdown (SIGTERM/SIGINT), 1 when it cannot start (address
 // in use, ...), 2 for a usage error.
+#include <pthread.h>
+
 #include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
-
-#include <pthread.h>
 
 #include "engine/core/flags.h"
 #include "engine/pipeline/backend.h"

@@ -14,8 +14,7 @@ Status Reject(std::string* reason, const char* key, std::string message) {
 
 }  // namespace
 
-Status DecodeBlock(const v1::SampleBlock& block, const BlockLimits& limits, DecodedBlock* out,
-                   std::string* reason) {
+Status DecodeBlock(const v1::SampleBlock& block, const BlockLimits& limits, DecodedBlock* out, std::string* reason) {
   const int64_t channels = block.channel_count();
   // Never divide by a client's zero, whatever the limits say (a session without channels).
   if (channels < 1 || channels != limits.channel_count) {
@@ -25,7 +24,8 @@ Status DecodeBlock(const v1::SampleBlock& block, const BlockLimits& limits, Deco
   }
   const bool have_float = block.samples_size() > 0;
   const bool have_pcm = !block.pcm_s16le().empty();
-  if (!have_float && !have_pcm) return Reject(reason, "empty", "block has no samples (samples and pcm_s16le are empty)");
+  if (!have_float && !have_pcm)
+    return Reject(reason, "empty", "block has no samples (samples and pcm_s16le are empty)");
   if (have_float && have_pcm) return Reject(reason, "bad_samples", "block fills both samples and pcm_s16le; send one");
   if (have_pcm && block.pcm_s16le().size() % 2 != 0) {
     return Reject(reason, "bad_samples",
@@ -59,8 +59,8 @@ Status DecodeBlock(const v1::SampleBlock& block, const BlockLimits& limits, Deco
       const auto bad = std::find_if(src, src + values, [](float v) { return !std::isfinite(v); });
       const int64_t index = bad - src;
       return Reject(reason, "non_finite",
-                    "samples[" + std::to_string(index) + "] (frame " + std::to_string(index / channels) +
-                        ", channel " + std::to_string(index % channels) + ") is not finite");
+                    "samples[" + std::to_string(index) + "] (frame " + std::to_string(index / channels) + ", channel " +
+                        std::to_string(index % channels) + ") is not finite");
     }
     // De-interleave frame by frame: reads stream through the source once.
     for (int64_t i = 0; i < per_channel; ++i) {

@@ -18,21 +18,20 @@
 namespace localizer::wire {
 
 struct BlockLimits {
-  int channel_count = 0;           // the array's sensor count
+  int channel_count = 0;  // the array's sensor count
   int64_t max_samples_per_channel = 0;
 };
 
 struct DecodedBlock {
-  std::vector<float> samples;  // channel-major; reused between calls to save allocations
-  engine::BlockView view;      // points into `samples` after a successful decode
+  std::vector<float> samples;      // channel-major; reused between calls to save allocations
+  engine::BlockView view;          // points into `samples` after a successful decode
   std::vector<float> interleaved;  // scratch for pcm_s16le
 };
 
 // On failure returns INVALID_ARGUMENT naming the field and value and sets *reason to one
 // of: "channel_count", "empty", "oversize", "bad_samples" (both or neither encoding,
 // length not a multiple of channel_count), "non_finite". `out` keeps its capacity.
-Status DecodeBlock(const v1::SampleBlock& block, const BlockLimits& limits, DecodedBlock* out,
-                   std::string* reason);
+Status DecodeBlock(const v1::SampleBlock& block, const BlockLimits& limits, DecodedBlock* out, std::string* reason);
 
 // Channel-major samples -> a SampleBlock; `pcm16` quantises to pcm_s16le (clipping at
 // +-1), else fills `samples`.

@@ -22,21 +22,31 @@ void ToProto(const Vec3& v, v1::Vector3* out) {
 
 engine::Weighting WeightingFromProto(v1::Weighting w) {
   switch (w) {
-    case v1::WEIGHTING_PHAT_BETA: return engine::Weighting::kPhatBeta;
-    case v1::WEIGHTING_SCOT: return engine::Weighting::kScot;
-    case v1::WEIGHTING_CC: return engine::Weighting::kCc;
-    case v1::WEIGHTING_PHAT_COHERENCE: return engine::Weighting::kPhatCoherence;
-    default: return engine::Weighting::kPhat;
+    case v1::WEIGHTING_PHAT_BETA:
+      return engine::Weighting::kPhatBeta;
+    case v1::WEIGHTING_SCOT:
+      return engine::Weighting::kScot;
+    case v1::WEIGHTING_CC:
+      return engine::Weighting::kCc;
+    case v1::WEIGHTING_PHAT_COHERENCE:
+      return engine::Weighting::kPhatCoherence;
+    default:
+      return engine::Weighting::kPhat;
   }
 }
 
 v1::Weighting WeightingToProto(engine::Weighting w) {
   switch (w) {
-    case engine::Weighting::kPhatBeta: return v1::WEIGHTING_PHAT_BETA;
-    case engine::Weighting::kScot: return v1::WEIGHTING_SCOT;
-    case engine::Weighting::kCc: return v1::WEIGHTING_CC;
-    case engine::Weighting::kPhatCoherence: return v1::WEIGHTING_PHAT_COHERENCE;
-    case engine::Weighting::kPhat: break;
+    case engine::Weighting::kPhatBeta:
+      return v1::WEIGHTING_PHAT_BETA;
+    case engine::Weighting::kScot:
+      return v1::WEIGHTING_SCOT;
+    case engine::Weighting::kCc:
+      return v1::WEIGHTING_CC;
+    case engine::Weighting::kPhatCoherence:
+      return v1::WEIGHTING_PHAT_COHERENCE;
+    case engine::Weighting::kPhat:
+      break;
   }
   return v1::WEIGHTING_PHAT;
 }
@@ -46,10 +56,14 @@ Status Rename(Status status) {
   if (status.ok()) return status;
   std::string m = status.message();
   const std::pair<const char*, const char*> renames[] = {
-      {"sensors_m", "array.sensors_m"},         {"sound_speed_mps", "array.sound_speed_mps"},
-      {"reference_sensor", "array.reference_sensor"}, {"particles", "filter.particles"},
-      {"accel_noise_mps2", "filter.accel_noise_mps2"}, {"tdoa_sigma_s", "filter.tdoa_sigma_s"},
-      {"resample_threshold", "filter.resample_threshold"}, {"min_peak_snr", "filter.min_peak_snr"},
+      {"sensors_m", "array.sensors_m"},
+      {"sound_speed_mps", "array.sound_speed_mps"},
+      {"reference_sensor", "array.reference_sensor"},
+      {"particles", "filter.particles"},
+      {"accel_noise_mps2", "filter.accel_noise_mps2"},
+      {"tdoa_sigma_s", "filter.tdoa_sigma_s"},
+      {"resample_threshold", "filter.resample_threshold"},
+      {"min_peak_snr", "filter.min_peak_snr"},
   };
   for (const auto& [from, to] : renames) {
     const size_t at = m.find(from);
@@ -137,17 +151,16 @@ Status CheckStrings(const v1::SessionConfig& p) {
 template <typename IsValid>
 Status CheckEnum(const char* field, int value, IsValid is_valid, const char* allowed) {
   if (is_valid(value)) return Status::Ok();
-  return InvalidArgument(std::string(field) + " is " + std::to_string(value) + ", not a known value (" + allowed +
-                         ")");
+  return InvalidArgument(std::string(field) + " is " + std::to_string(value) + ", not a known value (" + allowed + ")");
 }
 
 Status CheckEnums(const v1::SessionConfig& p) {
-  LOCALIZER_RETURN_IF_ERROR(CheckEnum("weighting", p.weighting(), v1::Weighting_IsValid,
-                                      "PHAT, PHAT_BETA, SCOT, CC, PHAT_COHERENCE"));
-  LOCALIZER_RETURN_IF_ERROR(CheckEnum("filter.type", p.filter().type(), v1::FilterType_IsValid,
-                                      "PF, EKF, UKF, MMPF, IMM"));
-  LOCALIZER_RETURN_IF_ERROR(CheckEnum("filter.likelihood", p.filter().likelihood(), v1::Likelihood_IsValid,
-                                      "PEAK, GCC, MIXTURE"));
+  LOCALIZER_RETURN_IF_ERROR(
+      CheckEnum("weighting", p.weighting(), v1::Weighting_IsValid, "PHAT, PHAT_BETA, SCOT, CC, PHAT_COHERENCE"));
+  LOCALIZER_RETURN_IF_ERROR(
+      CheckEnum("filter.type", p.filter().type(), v1::FilterType_IsValid, "PF, EKF, UKF, MMPF, IMM"));
+  LOCALIZER_RETURN_IF_ERROR(
+      CheckEnum("filter.likelihood", p.filter().likelihood(), v1::Likelihood_IsValid, "PEAK, GCC, MIXTURE"));
   return Status::Ok();
 }
 
@@ -181,23 +194,34 @@ namespace {
 StatusOr<engine::FilterKind> FilterKindFromProto(v1::FilterType type) {
   switch (type) {
     case v1::FILTER_TYPE_UNSPECIFIED:
-    case v1::FILTER_TYPE_PF: return engine::FilterKind::kPf;
-    case v1::FILTER_TYPE_EKF: return engine::FilterKind::kEkf;
-    case v1::FILTER_TYPE_UKF: return engine::FilterKind::kUkf;
-    case v1::FILTER_TYPE_MMPF: return engine::FilterKind::kMmpf;
-    case v1::FILTER_TYPE_IMM: return engine::FilterKind::kImm;
-    default: break;
+    case v1::FILTER_TYPE_PF:
+      return engine::FilterKind::kPf;
+    case v1::FILTER_TYPE_EKF:
+      return engine::FilterKind::kEkf;
+    case v1::FILTER_TYPE_UKF:
+      return engine::FilterKind::kUkf;
+    case v1::FILTER_TYPE_MMPF:
+      return engine::FilterKind::kMmpf;
+    case v1::FILTER_TYPE_IMM:
+      return engine::FilterKind::kImm;
+    default:
+      break;
   }
   return InvalidArgument("filter.type " + std::to_string(type) + " is not one of: PF, EKF, UKF, MMPF, IMM");
 }
 
 v1::FilterType FilterKindToProto(engine::FilterKind kind) {
   switch (kind) {
-    case engine::FilterKind::kEkf: return v1::FILTER_TYPE_EKF;
-    case engine::FilterKind::kUkf: return v1::FILTER_TYPE_UKF;
-    case engine::FilterKind::kMmpf: return v1::FILTER_TYPE_MMPF;
-    case engine::FilterKind::kImm: return v1::FILTER_TYPE_IMM;
-    case engine::FilterKind::kPf: break;
+    case engine::FilterKind::kEkf:
+      return v1::FILTER_TYPE_EKF;
+    case engine::FilterKind::kUkf:
+      return v1::FILTER_TYPE_UKF;
+    case engine::FilterKind::kMmpf:
+      return v1::FILTER_TYPE_MMPF;
+    case engine::FilterKind::kImm:
+      return v1::FILTER_TYPE_IMM;
+    case engine::FilterKind::kPf:
+      break;
   }
   return v1::FILTER_TYPE_PF;
 }
@@ -208,8 +232,8 @@ v1::FilterType FilterKindToProto(engine::FilterKind kind) {
 // every filter go to both the particle and the Kalman filters' options.
 Status TrackerFromProto(const v1::FilterConfig& f, const ConfigPolicy& policy, engine::TrackerOptions* t) {
   if (f.particles() > static_cast<uint32_t>(policy.max_particles)) {
-    return InvalidArgument("filter.particles is " + std::to_string(f.particles()) +
-                           "; this server allows at most " + std::to_string(policy.max_particles));
+    return InvalidArgument("filter.particles is " + std::to_string(f.particles()) + "; this server allows at most " +
+                           std::to_string(policy.max_particles));
   }
   auto kind = FilterKindFromProto(f.type());
   if (!kind.ok()) return kind.status();
@@ -369,8 +393,8 @@ StatusOr<engine::AudioSessionConfig> AudioConfigFromProto(const v1::SessionConfi
   if (p.has_platform()) {
     const v1::PlatformConfig& platform = p.platform();
     c.array_in_body_frame = true;
-    auto kind = engine::ParseAttitudeFilterKind(platform.attitude_filter().empty() ? "quaternion"
-                                                                                 : platform.attitude_filter());
+    auto kind =
+        engine::ParseAttitudeFilterKind(platform.attitude_filter().empty() ? "quaternion" : platform.attitude_filter());
     if (!kind.ok()) return InvalidArgument("platform.attitude_filter: " + kind.status().message());
     c.attitude.kind = *kind;
     c.attitude.use_mag = platform.use_magnetometer();

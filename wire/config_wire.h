@@ -19,11 +19,11 @@ namespace localizer::wire {
 
 // What the server allows and what it fills in where the client left a field unset.
 struct ConfigPolicy {
-  std::string default_backend = "auto";     // for backend ""
-  int64_t max_block_samples = 1 << 22;      // per channel; also the default
+  std::string default_backend = "auto";  // for backend ""
+  int64_t max_block_samples = 1 << 22;   // per channel; also the default
   int max_channels = 64;
   int max_particles = 1 << 20;
-  int max_tracks = 1000000;                 // detection sessions: tracks held at once; also the default
+  int max_tracks = 1000000;  // detection sessions: tracks held at once; also the default
 };
 
 // INVALID_ARGUMENT naming the proto field ("array.sensors_m", "filter.particles",

@@ -75,8 +75,8 @@ engine::Estimate EstimateFromProto(const v1::Estimate& p) {
   e.t_s = p.t_s();
   e.initialised = p.initialised();
   e.reinitialised = p.reinitialised();
-  e.state << p.position_m().x(), p.position_m().y(), p.position_m().z(), p.velocity_mps().x(),
-      p.velocity_mps().y(), p.velocity_mps().z();
+  e.state << p.position_m().x(), p.position_m().y(), p.position_m().z(), p.velocity_mps().x(), p.velocity_mps().y(),
+      p.velocity_mps().z();
   if (p.covariance_size() == 36) {
     for (int r = 0; r < 6; ++r) {
       for (int c = 0; c < 6; ++c) e.covariance(r, c) = p.covariance(6 * r + c);
@@ -97,13 +97,14 @@ engine::Estimate EstimateFromProto(const v1::Estimate& p) {
   }
   e.timings.tdoa_s = p.latency().tdoa_s();
   e.timings.filter_s = p.latency().filter_s();
-  for (const v1::ModelProbability& m : p.model_probabilities()) e.model_probabilities.push_back({m.model(), m.probability()});
+  for (const v1::ModelProbability& m : p.model_probabilities())
+    e.model_probabilities.push_back({m.model(), m.probability()});
   if (p.has_platform()) {
     const v1::PlatformPose& pose = p.platform();
     const auto get = [](const v1::Vector3& v) { return engine::Vec3(v.x(), v.y(), v.z()); };
     engine::PlatformAttitude a;
-    a.body_to_world = Eigen::Quaterniond(pose.body_to_world().w(), pose.body_to_world().x(),
-                                         pose.body_to_world().y(), pose.body_to_world().z());
+    a.body_to_world = Eigen::Quaterniond(pose.body_to_world().w(), pose.body_to_world().x(), pose.body_to_world().y(),
+                                         pose.body_to_world().z());
     a.euler_rad = get(pose.euler_rad());
     a.euler_sd_rad = get(pose.euler_sd_rad());
     a.origin_m = get(pose.origin_m());

@@ -37,7 +37,8 @@ StatusOr<DecodedImu> DecodeImuBatch(const v1::ImuBatch& batch) {
       return InvalidArgument(field + ".t_s " + std::to_string(s.t_s) + " is not after the previous sample's " +
                              std::to_string(previous_t_s));
     }
-    if (!p.has_gyro_rps() || !s.gyro_rps.allFinite()) return InvalidArgument(field + ".gyro_rps is missing or not finite");
+    if (!p.has_gyro_rps() || !s.gyro_rps.allFinite())
+      return InvalidArgument(field + ".gyro_rps is missing or not finite");
     if (!p.has_accel_mps2() || !s.accel_mps2.allFinite()) {
       return InvalidArgument(field + ".accel_mps2 is missing or not finite");
     }

@@ -26,7 +26,7 @@ struct DecodedImu {
 StatusOr<DecodedImu> DecodeImuBatch(const v1::ImuBatch& batch);
 
 // The inverse, for clients: samples (and origin, when given) -> an ImuBatch.
-void EncodeImuBatch(const std::vector<engine::ImuSample>& samples, const engine::Vec3* origin_m,
-                    uint64_t sequence, v1::ImuBatch* out);
+void EncodeImuBatch(const std::vector<engine::ImuSample>& samples, const engine::Vec3* origin_m, uint64_t sequence,
+                    v1::ImuBatch* out);
 
 }  // namespace localizer::wire

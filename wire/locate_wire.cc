@@ -6,15 +6,15 @@ namespace localizer::wire {
 
 Status DecodeLocateRequest(const v1::LocateRequest& request, const ConfigPolicy& policy, DecodedLocate* out) {
   if (request.config().has_detections()) {
-    return InvalidArgument("config.detections: Locate measures one block of samples; detection configs open Track sessions");
+    return InvalidArgument(
+        "config.detections: Locate measures one block of samples; detection configs open Track sessions");
   }
   auto config = AudioConfigFromProto(request.config(), policy);
   if (!config.ok()) return config.status();
   out->config = std::move(config).value();
   std::string reason;
-  return DecodeBlock(request.block(),
-                     {static_cast<int>(out->config.sensors_m.size()), out->config.max_block_samples}, &out->block,
-                     &reason);
+  return DecodeBlock(request.block(), {static_cast<int>(out->config.sensors_m.size()), out->config.max_block_samples},
+                     &out->block, &reason);
 }
 
 void LocateResultToProto(const engine::LocateResult& result, const engine::ArrayGeometry& array,

@@ -15,18 +15,24 @@ void ToProto(const Eigen::Vector3d& v, v1::Vector3* out) {
 
 v1::TrackStatus StatusToProto(engine::tws::TrackStatus s) {
   switch (s) {
-    case engine::tws::TrackStatus::kTentative: return v1::TRACK_STATUS_TENTATIVE;
-    case engine::tws::TrackStatus::kConfirmed: return v1::TRACK_STATUS_CONFIRMED;
-    case engine::tws::TrackStatus::kCoasting: return v1::TRACK_STATUS_COASTING;
+    case engine::tws::TrackStatus::kTentative:
+      return v1::TRACK_STATUS_TENTATIVE;
+    case engine::tws::TrackStatus::kConfirmed:
+      return v1::TRACK_STATUS_CONFIRMED;
+    case engine::tws::TrackStatus::kCoasting:
+      return v1::TRACK_STATUS_COASTING;
   }
   return v1::TRACK_STATUS_UNSPECIFIED;
 }
 
 engine::tws::TrackStatus StatusFromProto(v1::TrackStatus s) {
   switch (s) {
-    case v1::TRACK_STATUS_CONFIRMED: return engine::tws::TrackStatus::kConfirmed;
-    case v1::TRACK_STATUS_COASTING: return engine::tws::TrackStatus::kCoasting;
-    default: return engine::tws::TrackStatus::kTentative;
+    case v1::TRACK_STATUS_CONFIRMED:
+      return engine::tws::TrackStatus::kConfirmed;
+    case v1::TRACK_STATUS_COASTING:
+      return engine::tws::TrackStatus::kCoasting;
+    default:
+      return engine::tws::TrackStatus::kTentative;
   }
 }
 
@@ -36,8 +42,8 @@ StatusOr<engine::Scan> DecodeScan(const v1::Scan& p) {
   engine::Scan scan;
   scan.time_s = p.time_s();
   if (!std::isfinite(scan.time_s)) return InvalidArgument("scan.time_s is not finite");
-  scan.sensor_position_m = Eigen::Vector3d(p.sensor_position_m().x(), p.sensor_position_m().y(),
-                                           p.sensor_position_m().z());
+  scan.sensor_position_m =
+      Eigen::Vector3d(p.sensor_position_m().x(), p.sensor_position_m().y(), p.sensor_position_m().z());
   if (!scan.sensor_position_m.allFinite()) return InvalidArgument("scan.sensor_position_m is not finite");
   scan.detections.reserve(static_cast<size_t>(p.detections_size()));
   for (int i = 0; i < p.detections_size(); ++i) {

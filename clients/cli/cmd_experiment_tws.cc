@@ -89,7 +89,8 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   flags.Double("max-range-m", &f.max_range_m, "M", "m", "outer edge of the surveillance annulus; 0: c / (2 PRF)");
   flags.Double("min-separation-m", &f.min_separation_m, "M", "m", "least distance between targets at the start");
   flags.Double("accel-noise-mps2", &f.accel_noise_mps2, "A", "m/s^2", "tracker's constant-velocity process noise std");
-  flags.String("filter", &f.filter, "kalman|steady-state", "per-track filter (steady-state freezes the converged gain)");
+  flags.String("filter", &f.filter, "kalman|steady-state",
+               "per-track filter (steady-state freezes the converged gain)");
   flags.String("initiation", &f.initiation, "one-point|two-point", "how unassociated plots start tentative tracks");
   flags.Double("ospa-cutoff-m", &f.ospa_cutoff_m, "C", "m", "OSPA / GOSPA cut-off c");
   flags.Double("ospa-order", &f.ospa_order, "P", "", "OSPA / GOSPA order p (GOSPA alpha = 2)");
@@ -118,8 +119,8 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   options.noise.bearing_sigma_rad = f.bearing_sigma_rad;
   options.accel_noise_mps2 = f.accel_noise_mps2;
   options.filter = f.filter == "kalman" ? engine::tws::FilterForm::kKalman : engine::tws::FilterForm::kSteadyState;
-  options.initiation = f.initiation == "one-point" ? engine::tws::Initiation::kOnePoint
-                                                    : engine::tws::Initiation::kTwoPoint;
+  options.initiation =
+      f.initiation == "one-point" ? engine::tws::Initiation::kOnePoint : engine::tws::Initiation::kTwoPoint;
   // One scan through the tracker: the confirmed (and coasting) tracks after it.
   std::unique_ptr<engine::tws::TwsTracker> tracker;
   std::unique_ptr<client::RemoteScanSession> remote;
@@ -190,10 +191,11 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   double ospa_mean = 0.0, gospa_mean = 0.0;
   for (double v : ospa) ospa_mean += v / static_cast<double>(ospa.size());
   for (double v : gospa) gospa_mean += v / static_cast<double>(gospa.size());
-  std::printf("# tws: %d targets, clutter %g /m^2 (%.1f false plots per scan), P_D %g, %d scans of %.4f s,"
-              " seed %llu\n",
-              f.targets, f.clutter_per_m2, f.clutter_per_m2 * radar.AreaM2(), f.pd, f.scans, radar.period_s(),
-              static_cast<unsigned long long>(f.seed));
+  std::printf(
+      "# tws: %d targets, clutter %g /m^2 (%.1f false plots per scan), P_D %g, %d scans of %.4f s,"
+      " seed %llu\n",
+      f.targets, f.clutter_per_m2, f.clutter_per_m2 * radar.AreaM2(), f.pd, f.scans, radar.period_s(),
+      static_cast<unsigned long long>(f.seed));
   std::printf("# filter %s, initiation %s; OSPA/GOSPA c = %g m, p = %g, over scans %d..%d\n", f.filter.c_str(),
               f.initiation.c_str(), f.ospa_cutoff_m, f.ospa_order, f.scans > skip ? skip : 0, f.scans - 1);
   std::printf("ospa_mean_m          %.1f\n", ospa_mean);
@@ -201,7 +203,8 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   std::printf("gospa_mean_m         %.1f\n", gospa_mean);
   std::printf("identity_switches    %d\n", scoring.identity_switches());
   std::printf("track_purity         %.4f\n", scoring.Purity());
-  std::printf("confirmed_tracks     %zu (mean %.1f)\n", tracks.size(), confirmed_sum / static_cast<double>(ospa.size()));
+  std::printf("confirmed_tracks     %zu (mean %.1f)\n", tracks.size(),
+              confirmed_sum / static_cast<double>(ospa.size()));
   std::printf("plots_per_scan       %.1f\n", static_cast<double>(plots) / f.scans);
   if (remote) {
     // Through the server: the scans' round trips (tentative tracks included in the count).

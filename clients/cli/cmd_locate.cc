@@ -29,16 +29,14 @@ struct Segment {
 };
 
 // Samples [start, start + length) per channel of the recording, fewer at its end.
-StatusOr<Segment> ReadSegment(const std::vector<std::string>& paths, double start_s,
-                              double duration_s) {
+StatusOr<Segment> ReadSegment(const std::vector<std::string>& paths, double start_s, double duration_s) {
   auto stream = io::WavStream::Open(paths);
   if (!stream.ok()) return stream.status();
   const double fs = stream->sample_rate_hz();
   const auto start = static_cast<int64_t>(std::llround(start_s * fs));
   const auto length = static_cast<int64_t>(std::llround(duration_s * fs));
   if (start >= stream->total_frames()) {
-    return OutOfRange(stream->Describe() + " is " +
-                      FormatDouble(static_cast<double>(stream->total_frames()) / fs) +
+    return OutOfRange(stream->Describe() + " is " + FormatDouble(static_cast<double>(stream->total_frames()) / fs) +
                       " s long; --start-s " + FormatDouble(start_s) + " is past its end");
   }
   std::vector<float> chunk;
@@ -77,12 +75,11 @@ StatusOr<Segment> ReadSegment(const std::vector<std::string>& paths, double star
 
 void PrintResponse(const v1::LocateResponse& r) {
   for (const v1::PairTdoa& pair : r.pairs()) {
-    std::printf("pair sensor=%u delay_us=%.3f quality=%.3f peak_snr=%.2f\n", pair.sensor(),
-                pair.delay_s() * 1e6, pair.quality(), pair.peak_snr());
+    std::printf("pair sensor=%u delay_us=%.3f quality=%.3f peak_snr=%.2f\n", pair.sensor(), pair.delay_s() * 1e6,
+                pair.quality(), pair.peak_snr());
   }
   if (!r.fix_found()) {
-    std::printf("no fix residual_rms_us=%.3f tdoa_ms=%.3f\n", r.residual_rms_s() * 1e6,
-                r.tdoa_s() * 1e3);
+    std::printf("no fix residual_rms_us=%.3f tdoa_ms=%.3f\n", r.residual_rms_s() * 1e6, r.tdoa_s() * 1e3);
     return;
   }
   const auto sd = [&r](int axis) {
@@ -91,8 +88,8 @@ void PrintResponse(const v1::LocateResponse& r) {
   std::printf(
       "fix x_m=%.3f y_m=%.3f z_m=%.3f sx_m=%.3f sy_m=%.3f sz_m=%.3f residual_rms_us=%.3f "
       "tdoa_ms=%.3f\n",
-      r.position_m().x(), r.position_m().y(), r.position_m().z(), sd(0), sd(1), sd(2),
-      r.residual_rms_s() * 1e6, r.tdoa_s() * 1e3);
+      r.position_m().x(), r.position_m().y(), r.position_m().z(), sd(0), sd(1), sd(2), r.residual_rms_s() * 1e6,
+      r.tdoa_s() * 1e3);
 }
 
 }  // namespace
@@ -113,17 +110,11 @@ int RunLocate(const std::vector<std::string>& args) {
       "delay, quality (peak / strongest sidelobe) and peak SNR, then the multilateration\n"
       "fix with its standard deviations, or \"no fix\". Nothing is tracked or kept.");
   RegisterServerFlag(flags, &server, /*required=*/true);
-  flags
-      .String("array", &array_path, "FILE",
-              "sensor array: array.json, or the XAV hydrophones_config CSV")
-      .Required();
-  flags
-      .Strings("wav", &wav_paths, "FILE",
-               "one multichannel WAV, or one mono WAV per sensor in sensor order")
+  flags.String("array", &array_path, "FILE", "sensor array: array.json, or the XAV hydrophones_config CSV").Required();
+  flags.Strings("wav", &wav_paths, "FILE", "one multichannel WAV, or one mono WAV per sensor in sensor order")
       .Required();
   flags.Double("start-s", &start_s, "S", "s", "start of the block in the recording");
-  flags.Double("duration-s", &duration_s, "S", "s",
-               "length of the block (cut short at the end of the recording)");
+  flags.Double("duration-s", &duration_s, "S", "s", "length of the block (cut short at the end of the recording)");
   RegisterGccFlags(flags, &session);
   flags.Double("timeout", &timeout_s, "S", "s", "deadline of the call");
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
@@ -137,9 +128,8 @@ int RunLocate(const std::vector<std::string>& args) {
   if (!segment.ok()) return RuntimeError(kCommand, segment.status());
   if (segment->channel_count != static_cast<int>(array->sensors_m.size())) {
     return RuntimeError(
-        kCommand, InvalidArgument("the recording has " + std::to_string(segment->channel_count) +
-                                  " channels but " + array_path + " has " +
-                                  std::to_string(array->sensors_m.size()) + " sensors"));
+        kCommand, InvalidArgument("the recording has " + std::to_string(segment->channel_count) + " channels but " +
+                                  array_path + " has " + std::to_string(array->sensors_m.size()) + " sensors"));
   }
   auto config = BuildSessionConfig(session, *array, segment->sample_rate_hz, Runs::kOnServer);
   if (!config.ok()) return UsageError(kCommand, config.status().message());
@@ -156,9 +146,9 @@ int RunLocate(const std::vector<std::string>& args) {
 
   auto stub = v1::Localizer::NewStub(client::Connect(server));
   grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() +
-                       std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                           std::chrono::duration<double>(timeout_s)));
+  context.set_deadline(
+      std::chrono::system_clock::now() +
+      std::chrono::duration_cast<std::chrono::system_clock::duration>(std::chrono::duration<double>(timeout_s)));
   v1::LocateResponse response;
   const grpc::Status status = stub->Locate(&context, request, &response);
   if (!status.ok()) return RuntimeError(kCommand, wire::FromGrpcStatus(status));

@@ -16,8 +16,7 @@ int RunScore(const std::vector<std::string>& args) {
                 "truth position interpolated linearly at its t_s (3-D error). Prints one line\n"
                 "n=..., rmse_m=..., median_m=..., p95_m=..., max_m=... (p95: nearest rank).\n"
                 "Exit 1 when no estimate can be scored.");
-  flags.String("truth", &truth_path, "FILE", "truth CSV (t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps)")
-      .Required();
+  flags.String("truth", &truth_path, "FILE", "truth CSV (t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps)").Required();
   flags.String("estimates", &estimates_path, "FILE", "estimates CSV written by track").Required();
   if (auto exit_code = ParseFlagsOrExit(command, flags, args)) return *exit_code;
 
@@ -28,8 +27,7 @@ int RunScore(const std::vector<std::string>& args) {
   auto score = io::Score(*truth, *estimates);
   if (!score.ok()) {
     return RuntimeError(
-        command, Status(score.status().code(),
-                        truth_path + " vs " + estimates_path + ": " + score.status().message()));
+        command, Status(score.status().code(), truth_path + " vs " + estimates_path + ": " + score.status().message()));
   }
   std::cout << io::FormatScore(*score) << "\n";
   return kExitOk;

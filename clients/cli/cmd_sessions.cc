@@ -13,9 +13,9 @@ namespace localizer::cli {
 namespace {
 
 void SetDeadline(grpc::ClientContext* context, double timeout_s) {
-  context->set_deadline(std::chrono::system_clock::now() +
-                        std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                            std::chrono::duration<double>(timeout_s)));
+  context->set_deadline(
+      std::chrono::system_clock::now() +
+      std::chrono::duration_cast<std::chrono::system_clock::duration>(std::chrono::duration<double>(timeout_s)));
 }
 
 void PrintSession(const v1::SessionInfo& s) {
@@ -24,11 +24,10 @@ void PrintSession(const v1::SessionInfo& s) {
       "session=%s label=\"%s\" backend=%s attached=%d channels=%u sample_rate_hz=%g "
       "blocks=%llu frames=%llu rejections=%llu last_sequence=%s queued=%u age_s=%.1f "
       "idle_s=%.1f expires_in_s=%.1f\n",
-      s.session_id().c_str(), s.label().c_str(), s.backend().c_str(), s.attached() ? 1 : 0,
-      s.channel_count(), s.sample_rate_hz(), static_cast<unsigned long long>(s.blocks_processed()),
-      static_cast<unsigned long long>(s.frames_processed()),
-      static_cast<unsigned long long>(s.rejections()), last_sequence.c_str(), s.queued_blocks(),
-      s.age_s(), s.idle_s(), s.expires_in_s());
+      s.session_id().c_str(), s.label().c_str(), s.backend().c_str(), s.attached() ? 1 : 0, s.channel_count(),
+      s.sample_rate_hz(), static_cast<unsigned long long>(s.blocks_processed()),
+      static_cast<unsigned long long>(s.frames_processed()), static_cast<unsigned long long>(s.rejections()),
+      last_sequence.c_str(), s.queued_blocks(), s.age_s(), s.idle_s(), s.expires_in_s());
 }
 
 }  // namespace

@@ -38,10 +38,9 @@ struct SimulateFlags {
 
 // The flags that only mean something with --server.
 std::vector<std::string> ServerOnlyFlags() {
-  std::vector<std::string> names = {"frame",       "hop",           "particles",   "likelihood",
-                                    "filter-seed", "tdoa-sigma-us", "accel-noise", "backend",
-                                    "sound-speed", "reference",     "weighting",   "phat-beta",
-                                    "band-low",    "band-high",     "print-every"};
+  std::vector<std::string> names = {"frame",         "hop",         "particles", "likelihood",  "filter-seed",
+                                    "tdoa-sigma-us", "accel-noise", "backend",   "sound-speed", "reference",
+                                    "weighting",     "phat-beta",   "band-low",  "band-high",   "print-every"};
   for (const std::string& name : StreamFlagNames()) names.push_back(name);
   return names;
 }
@@ -93,13 +92,11 @@ io::ArrayFile ArrayFileOf(const io::SimulationRun& run) {
 
 void PrintLiveEstimate(const engine::Estimate& e, const engine::SimResult& truth) {
   if (!e.initialised) {
-    std::printf("frame=%llu t_s=%.3f initialised=0\n",
-                static_cast<unsigned long long>(e.frame_index), e.t_s);
+    std::printf("frame=%llu t_s=%.3f initialised=0\n", static_cast<unsigned long long>(e.frame_index), e.t_s);
   } else {
     const double error_m = (e.state.head<3>() - truth.TruthAt(e.t_s).position_m).norm();
     std::printf("frame=%llu t_s=%.3f x_m=%.3f y_m=%.3f z_m=%.3f err_m=%.3f\n",
-                static_cast<unsigned long long>(e.frame_index), e.t_s, e.state[0], e.state[1],
-                e.state[2], error_m);
+                static_cast<unsigned long long>(e.frame_index), e.t_s, e.state[0], e.state[1], e.state[2], error_m);
   }
   std::fflush(stdout);
 }
@@ -113,11 +110,9 @@ void PrintScore(const client::StreamResult& result, const engine::SimResult& tru
     rows.push_back({e.t_s, e.state.head<3>(), e.state.tail<3>(), e.initialised});
     if (e.initialised) ++initialised;
   }
-  std::printf("estimates=%zu initialised=%llu blocks=%llu audio_s=%.3f wall_s=%.3f\n",
-              result.estimates.size(), static_cast<unsigned long long>(initialised),
-              static_cast<unsigned long long>(result.blocks_sent),
-              static_cast<double>(result.samples_sent_per_channel) / truth.sample_rate_hz,
-              result.wall_s);
+  std::printf("estimates=%zu initialised=%llu blocks=%llu audio_s=%.3f wall_s=%.3f\n", result.estimates.size(),
+              static_cast<unsigned long long>(initialised), static_cast<unsigned long long>(result.blocks_sent),
+              static_cast<double>(result.samples_sent_per_channel) / truth.sample_rate_hz, result.wall_s);
   auto score = io::Score(truth.truth, rows);
   if (score.ok()) {
     std::printf("error %s\n", io::FormatScore(*score).c_str());
@@ -133,22 +128,20 @@ int RunOnServer(const SimulateFlags& f, const io::SimulationRun& run) {
   const io::ArrayFile array_file = ArrayFileOf(run);
   auto config = BuildSessionConfig(f.session, array_file, sim.sample_rate_hz, Runs::kOnServer);
   if (!config.ok()) return UsageError(kCommand, config.status().message());
-  auto array = engine::ArrayGeometry::Create(config->sensors_m, config->sound_speed_mps,
-                                             config->reference_sensor);
+  auto array = engine::ArrayGeometry::Create(config->sensors_m, config->sound_speed_mps, config->reference_sensor);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
 
   std::unique_ptr<io::EstimatesCsvWriter> writer;
   if (!f.out_dir.empty()) {
     auto files = io::WriteSimulationFiles(f.out_dir, run);
     if (!files.ok()) return RuntimeError(kCommand, files.status());
-    auto opened =
-        io::OpenEstimatesCsv((std::filesystem::path(f.out_dir) / "estimates.csv").string(), *array);
+    auto opened = io::OpenEstimatesCsv((std::filesystem::path(f.out_dir) / "estimates.csv").string(), *array);
     if (!opened.ok()) return RuntimeError(kCommand, opened.status());
     writer = std::move(*opened);
   }
 
-  auto stream = client::OpenTrackSession(client::Connect(f.stream.server), *config, options->label,
-                                         options->session_key);
+  auto stream =
+      client::OpenTrackSession(client::Connect(f.stream.server), *config, options->label, options->session_key);
   if (!stream.ok()) return RuntimeError(kCommand, stream.status());
   PrintOpened((*stream)->opened());
 
@@ -170,12 +163,11 @@ int RunOnServer(const SimulateFlags& f, const io::SimulationRun& run) {
     }
   };
   callbacks.on_rejected = [](const client::BlockRejection& r) {
-    Warning(kCommand, "block " + std::to_string(r.sequence) + " rejected: " + r.code + " (" +
-                          r.reason + "): " + r.message);
+    Warning(kCommand,
+            "block " + std::to_string(r.sequence) + " rejected: " + r.code + " (" + r.reason + "): " + r.message);
   };
   const client::StreamResult result = client::StreamBlocks(
-      track_stream,
-      client::ChannelMajorSource(sim.samples.data(), sim.channel_count, sim.samples_per_channel),
+      track_stream, client::ChannelMajorSource(sim.samples.data(), sim.channel_count, sim.samples_per_channel),
       stream_options, callbacks);
   if (!csv_status.ok()) return RuntimeError(kCommand, csv_status);
   if (writer) {
@@ -210,11 +202,9 @@ int RunSimulate(const std::vector<std::string>& args) {
       "scene_campaign prints), written and streamed the same way.");
   flags.String("scenario", &f.scenario_name, "NAME", "scenario to simulate (see --list)");
   flags.String("out", &f.out_dir, "DIR", "output directory, created if missing");
-  flags.Uint64("random", &f.random_seed, "SEED",
-               "simulate a random scene drawn from SEED instead of a named scenario");
+  flags.Uint64("random", &f.random_seed, "SEED", "simulate a random scene drawn from SEED instead of a named scenario");
   flags.Uint64("seed", &f.seed, "S", "random seed of the scenario: source signal, noise, jitter");
-  flags.OptionalDouble("duration", &f.duration_s, "S", "the scenario's own",
-                       "seconds of recording to simulate");
+  flags.OptionalDouble("duration", &f.duration_s, "S", "the scenario's own", "seconds of recording to simulate");
   flags.Bool("list", &f.list, "print the scenario names and descriptions, then exit");
   RegisterServerFlag(flags, &f.stream.server, /*required=*/false);
   RegisterStreamFlags(flags, &f.stream, "realtime");
@@ -227,7 +217,8 @@ int RunSimulate(const std::vector<std::string>& args) {
   const bool remote = !f.stream.server.empty();
   const bool random = flags.seen("random");
   if (random && !f.scenario_name.empty()) return UsageError(kCommand, "--random and --scenario exclude each other");
-  if (random && flags.seen("seed")) return UsageError(kCommand, "--seed is a named scenario's; --random SEED seeds the whole scene");
+  if (random && flags.seen("seed"))
+    return UsageError(kCommand, "--seed is a named scenario's; --random SEED seeds the whole scene");
   if (!random && f.scenario_name.empty()) return UsageError(kCommand, "missing required flag --scenario");
   if (!remote) {
     if (f.out_dir.empty()) return UsageError(kCommand, "missing required flag --out");
@@ -251,9 +242,8 @@ int RunSimulate(const std::vector<std::string>& args) {
   std::printf(
       "simulated %s: %d channels, %.3f s at %g Hz, seed %llu -> %s (signals.wav, "
       "array.json, truth.csv)\n",
-      run->scenario.name.c_str(), r.channel_count,
-      static_cast<double>(r.samples_per_channel) / r.sample_rate_hz, r.sample_rate_hz,
-      static_cast<unsigned long long>(random ? f.random_seed : f.seed), f.out_dir.c_str());
+      run->scenario.name.c_str(), r.channel_count, static_cast<double>(r.samples_per_channel) / r.sample_rate_hz,
+      r.sample_rate_hz, static_cast<unsigned long long>(random ? f.random_seed : f.seed), f.out_dir.c_str());
   if (random) std::printf("scene: %s\n", run->scenario.description.c_str());
   return kExitOk;
 }

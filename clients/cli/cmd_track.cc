@@ -34,34 +34,28 @@ struct TrackFlags {
 };
 
 void RegisterFlags(FlagSet& flags, TrackFlags* f) {
-  flags
-      .String("array", &f->array_path, "FILE",
-              "sensor array: array.json, or the XAV hydrophones_config CSV")
+  flags.String("array", &f->array_path, "FILE", "sensor array: array.json, or the XAV hydrophones_config CSV")
       .Required();
-  flags
-      .Strings("wav", &f->wav_paths, "FILE",
-               "one multichannel WAV, or one mono WAV per sensor in sensor order")
+  flags.Strings("wav", &f->wav_paths, "FILE", "one multichannel WAV, or one mono WAV per sensor in sensor order")
       .Required();
   flags.String("out", &f->out_path, "FILE", "estimates CSV to write").Required();
   RegisterTrackerFlags(flags, &f->session, "seed");
   RegisterGccFlags(flags, &f->session);
   flags.Double("block", &f->block_s, "S", "s", "audio handed to the local session per call");
-  flags.Int("print-every", &f->print_every, "N", "frames",
-            "print every Nth estimate to stdout (0: none)");
+  flags.Int("print-every", &f->print_every, "N", "frames", "print every Nth estimate to stdout (0: none)");
   RegisterServerFlag(flags, &f->stream.server, /*required=*/false);
   RegisterStreamFlags(flags, &f->stream, "max");
 }
 
 void PrintEstimate(const engine::Estimate& e) {
   if (!e.initialised) {
-    std::printf("frame=%llu t_s=%.3f initialised=0\n",
-                static_cast<unsigned long long>(e.frame_index), e.t_s);
+    std::printf("frame=%llu t_s=%.3f initialised=0\n", static_cast<unsigned long long>(e.frame_index), e.t_s);
     return;
   }
   const auto sd = [&e](int axis) { return std::sqrt(std::max(0.0, e.covariance(axis, axis))); };
   std::printf("frame=%llu t_s=%.3f x_m=%.3f y_m=%.3f z_m=%.3f sx_m=%.3f sy_m=%.3f sz_m=%.3f\n",
-              static_cast<unsigned long long>(e.frame_index), e.t_s, e.state[0], e.state[1],
-              e.state[2], sd(0), sd(1), sd(2));
+              static_cast<unsigned long long>(e.frame_index), e.t_s, e.state[0], e.state[1], e.state[2], sd(0), sd(1),
+              sd(2));
 }
 
 void PrintSummary(const io::TrackSummary& s, const std::string& out_path) {
@@ -69,9 +63,8 @@ void PrintSummary(const io::TrackSummary& s, const std::string& out_path) {
   std::printf(
       "frames=%llu initialised=%llu audio_s=%.3f wall_s=%.3f audio_s_per_wall_s=%.1f "
       "tdoa_ms_mean=%.3f filter_ms_mean=%.3f out=%s\n",
-      static_cast<unsigned long long>(s.estimates),
-      static_cast<unsigned long long>(s.initialised_estimates), s.audio_s(), s.wall_s, speed,
-      s.mean_tdoa_s * 1e3, s.mean_filter_s * 1e3, out_path.c_str());
+      static_cast<unsigned long long>(s.estimates), static_cast<unsigned long long>(s.initialised_estimates),
+      s.audio_s(), s.wall_s, speed, s.mean_tdoa_s * 1e3, s.mean_filter_s * 1e3, out_path.c_str());
 }
 
 // The local run's summary, from what a server stream delivered.
@@ -113,12 +106,12 @@ io::TrackCallbacks MakeCallbacks(int print_every, ProgressReporter* progress) {
 client::StreamCallbacks RejectionWarnings() {
   client::StreamCallbacks callbacks;
   callbacks.on_rejected = [](const client::BlockRejection& r) {
-    Warning(kCommand, "block " + std::to_string(r.sequence) + " rejected: " + r.code + " (" +
-                          r.reason + "): " + r.message);
+    Warning(kCommand,
+            "block " + std::to_string(r.sequence) + " rejected: " + r.code + " (" + r.reason + "): " + r.message);
   };
   callbacks.on_gap = [](const v1::SequenceGap& g) {
-    Warning(kCommand, "sequence gap: " + std::to_string(g.missing_blocks()) +
-                          " block(s) missing after " + std::to_string(g.previous_sequence()));
+    Warning(kCommand, "sequence gap: " + std::to_string(g.missing_blocks()) + " block(s) missing after " +
+                          std::to_string(g.previous_sequence()));
   };
   return callbacks;
 }
@@ -136,9 +129,8 @@ int RunLocal(const TrackFlags& f, const io::TrackJob& job) {
 int RunOnServer(const TrackFlags& f, const io::TrackJob& job, client::RemoteTrackOptions options) {
   options.on_opened = PrintOpened;
   ProgressReporter progress;
-  auto result =
-      client::RunRemoteTrack(client::Connect(f.stream.server), job, options,
-                             MakeCallbacks(f.print_every, &progress), RejectionWarnings());
+  auto result = client::RunRemoteTrack(client::Connect(f.stream.server), job, options,
+                                       MakeCallbacks(f.print_every, &progress), RejectionWarnings());
   progress.Finish();
   if (!result.ok()) return RuntimeError(kCommand, result.status());
   PrintSummary(SummaryOf(*result, static_cast<int>(job.config.sensors_m.size())), f.out_path);
@@ -194,8 +186,7 @@ int RunTrack(const std::vector<std::string>& args) {
     if (!stream.ok()) return RuntimeError(kCommand, stream.status());
     sample_rate_hz = stream->sample_rate_hz();
   }
-  auto config = BuildSessionConfig(f.session, *array, sample_rate_hz,
-                                   remote ? Runs::kOnServer : Runs::kLocally);
+  auto config = BuildSessionConfig(f.session, *array, sample_rate_hz, remote ? Runs::kOnServer : Runs::kLocally);
   if (!config.ok()) return UsageError(kCommand, config.status().message());
 
   io::TrackJob job;

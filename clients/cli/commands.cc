@@ -4,8 +4,7 @@
 
 namespace localizer::cli {
 
-std::optional<int> ParseFlagsOrExit(const std::string& command, FlagSet& flags,
-                                    const std::vector<std::string>& args) {
+std::optional<int> ParseFlagsOrExit(const std::string& command, FlagSet& flags, const std::vector<std::string>& args) {
   const Status status = flags.Parse(args);
   if (flags.help_requested()) {
     std::cout << flags.Usage();

@@ -32,8 +32,7 @@ int RunAttitudeScore(const std::vector<std::string>& args);  // cmd_attitude.cc
 
 // Parses `args` into `flags`. Returns an exit code when the command should stop now:
 // 0 after printing --help to stdout, 2 after reporting a usage error on stderr.
-std::optional<int> ParseFlagsOrExit(const std::string& command, FlagSet& flags,
-                                    const std::vector<std::string>& args);
+std::optional<int> ParseFlagsOrExit(const std::string& command, FlagSet& flags, const std::vector<std::string>& args);
 // "localizer-cli CMD: MESSAGE" on stderr plus a pointer to --help; returns 2.
 int UsageError(const std::string& command, const std::string& message);
 // "localizer-cli CMD: MESSAGE" on stderr; returns 1.

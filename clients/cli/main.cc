@@ -28,15 +28,14 @@ constexpr Command kCommands[] = {
      "            (--server: on a server session, same CSV, plus latency percentiles)",
      RunTrack},
     {"score", "compare an estimates CSV with a truth CSV (rmse, median, p95, max error)", RunScore},
-    {"locate", "one block of a recording through the server's one-shot Locate: pairs and fix",
-     RunLocate},
+    {"locate", "one block of a recording through the server's one-shot Locate: pairs and fix", RunLocate},
     {"list", "the sessions a server holds, one line each", RunList},
     {"close", "end a server session (needs its resume token)", RunClose},
-    {"experiment", "reproduce a reference experiment and print its table\n"
-                   "            (pf-vs-ekf-2d, fwl, tws)",
+    {"experiment",
+     "reproduce a reference experiment and print its table\n"
+     "            (pf-vs-ekf-2d, fwl, tws)",
      RunExperiment},
-    {"attitude", "orientation from an IMU CSV (gyro + accelerometer [+ magnetometer]) to a CSV",
-     RunAttitude},
+    {"attitude", "orientation from an IMU CSV (gyro + accelerometer [+ magnetometer]) to a CSV", RunAttitude},
     {"attitude-score",
      "score an orientation CSV against the IMU CSV's motion-capture truth\n"
      "               (BROAD's total, heading and inclination RMSE, degrees)",

@@ -19,8 +19,7 @@ void RegisterStreamFlags(FlagSet& flags, StreamFlags* f, const std::string& defa
   flags.String("rate", &f->rate, "RATE",
                "with --server: realtime (each block sent once its audio has elapsed) | max "
                "(as fast as the server takes them)");
-  flags.Int("block-samples", &f->block_samples, "N", "samples",
-            "with --server: samples per channel per block sent");
+  flags.Int("block-samples", &f->block_samples, "N", "samples", "with --server: samples per channel per block sent");
   flags.String("encoding", &f->encoding, "ENC",
                "with --server: block encoding, float (float32) | pcm16 (16-bit PCM, clipped at "
                "+-1)");
@@ -31,8 +30,7 @@ void RegisterStreamFlags(FlagSet& flags, StreamFlags* f, const std::string& defa
 }
 
 const std::vector<std::string>& StreamFlagNames() {
-  static const std::vector<std::string> names = {"rate", "block-samples", "encoding", "label",
-                                                 "session-key"};
+  static const std::vector<std::string> names = {"rate", "block-samples", "encoding", "label", "session-key"};
   return names;
 }
 
@@ -62,8 +60,8 @@ void PrintOpened(const v1::SessionOpened& opened) {
 
 void PrintStreamTotals(const client::StreamResult& result) {
   const client::LatencySummary latency = client::SummariseLatencies(result.ClientLatencies());
-  std::printf("%s rejections=%zu gaps=%zu\n", client::FormatLatencyMs(latency).c_str(),
-              result.rejections.size(), result.gaps.size());
+  std::printf("%s rejections=%zu gaps=%zu\n", client::FormatLatencyMs(latency).c_str(), result.rejections.size(),
+              result.gaps.size());
   io::PresenceSummary presence;
   for (const client::StreamedEstimate& s : result.estimates) presence.Add(s.estimate);
   if (auto line = presence.NoSourceLine()) std::printf("%s\n", line->c_str());

@@ -8,10 +8,8 @@ namespace localizer::cli {
 
 void RegisterGccFlags(FlagSet& flags, SessionFlags* f) {
   engine::AudioSessionConfig& c = f->config;
-  flags.OptionalDouble("sound-speed", &f->array.sound_speed_mps, "MPS", "from the array file",
-                       "sound speed, m/s");
-  flags.OptionalInt("reference", &f->array.reference_sensor, "K", "from the array file",
-                    "reference sensor index");
+  flags.OptionalDouble("sound-speed", &f->array.sound_speed_mps, "MPS", "from the array file", "sound speed, m/s");
+  flags.OptionalInt("reference", &f->array.reference_sensor, "K", "from the array file", "reference sensor index");
   flags.String("weighting", &f->weighting, "NAME",
                "GCC weighting: phat|phat-beta|scot|cc|phat-coherence (learns the band; CPU only; "
                "its presence test is not calibrated)");
@@ -48,13 +46,11 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "TDOA noise std of the peak likelihood (0: estimated online from the innovations)");
   flags.Double("accel-noise", &c.tracker.particle.accel_noise_mps2, "MPS2", "m/s^2",
                "std of the white acceleration driving the motion model, per axis");
-  flags.String("backend", &f->backend, "NAME",
-               "compute backend: cpu|gpu|auto (with --server: on the server)");
+  flags.String("backend", &f->backend, "NAME", "compute backend: cpu|gpu|auto (with --server: on the server)");
   flags.String("bounds-min", &f->bounds_min, "X,Y,Z",
                "lower corner of the box that can hold the source, m; per axis a number or -inf "
                "(open) (default: the array file's bounds, else open)");
-  flags.String("bounds-max", &f->bounds_max, "X,Y,Z",
-               "upper corner of that box, m; per axis a number or inf (open)");
+  flags.String("bounds-max", &f->bounds_max, "X,Y,Z", "upper corner of that box, m; per axis a number or inf (open)");
   flags.OptionalDouble("surface-z", &f->array.surface_z_m, "Z", "from the array file, else open",
                        "water surface, m (z up): the upper z bound");
   flags.OptionalDouble("bottom-z", &f->array.bottom_z_m, "Z", "from the array file, else open",
@@ -80,8 +76,7 @@ StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::strin
     start = comma + 1;
   }
   if (parts.size() != 3) {
-    return InvalidArgument("--" + flag + " is \"" + text + "\"; expected X,Y,Z (a number or " + open +
-                           " per axis)");
+    return InvalidArgument("--" + flag + " is \"" + text + "\"; expected X,Y,Z (a number or " + open + " per axis)");
   }
   engine::Vec3 v;
   const char* axes = "xyz";
@@ -151,8 +146,7 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
     }
     overrides.bounds_max_m = *v;
   }
-  const engine::AudioSessionConfig config =
-      io::TrackConfigFor(std::move(base), array, overrides, sample_rate_hz);
+  const engine::AudioSessionConfig config = io::TrackConfigFor(std::move(base), array, overrides, sample_rate_hz);
   for (int axis = 0; axis < 3; ++axis) {
     if (!(config.bounds_min_m[axis] < config.bounds_max_m[axis])) {
       const char* names[3] = {"x", "y", "z"};

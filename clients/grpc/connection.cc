@@ -45,17 +45,17 @@ grpc::Status FromProxyReset(const grpc::Status& status) {
   }
   return grpc::Status(grpc::StatusCode::UNAVAILABLE,
                       "the server instance behind the proxy is gone (the proxy reset the "
-                      "stream: " + status.error_message() + ")");
+                      "stream: " +
+                          status.error_message() + ")");
 }
 
 Status WaitConnected(const std::shared_ptr<grpc::Channel>& channel, double timeout_s) {
   if (!(timeout_s >= 0.0) || !std::isfinite(timeout_s)) {
-    return InvalidArgument("connect timeout must be finite and >= 0 s, got " +
-                           std::to_string(timeout_s));
+    return InvalidArgument("connect timeout must be finite and >= 0 s, got " + std::to_string(timeout_s));
   }
-  const auto deadline = std::chrono::system_clock::now() +
-                        std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                            std::chrono::duration<double>(timeout_s));
+  const auto deadline =
+      std::chrono::system_clock::now() +
+      std::chrono::duration_cast<std::chrono::system_clock::duration>(std::chrono::duration<double>(timeout_s));
   grpc_connectivity_state state = channel->GetState(/*try_to_connect=*/true);
   while (state != GRPC_CHANNEL_READY) {
     if (!channel->WaitForStateChange(state, deadline)) break;  // deadline passed
@@ -64,8 +64,8 @@ Status WaitConnected(const std::shared_ptr<grpc::Channel>& channel, double timeo
   if (state == GRPC_CHANNEL_READY) return Status::Ok();
   char seconds[32];
   std::snprintf(seconds, sizeof(seconds), "%g", timeout_s);
-  return Unavailable(std::string("UNAVAILABLE: not connected after ") + seconds + " s (state " +
-                     StateName(state) + ")");
+  return Unavailable(std::string("UNAVAILABLE: not connected after ") + seconds + " s (state " + StateName(state) +
+                     ")");
 }
 
 void SetSessionKey(grpc::ClientContext* context, const std::string& session_key) {

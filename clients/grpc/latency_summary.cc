@@ -18,8 +18,8 @@ double NearestRank(const std::vector<double>& sorted, double fraction) {
 
 LatencySummary SummariseLatencies(std::vector<double> latencies_s) {
   LatencySummary summary;
-  const auto finite_end = std::partition(latencies_s.begin(), latencies_s.end(),
-                                         [](double v) { return std::isfinite(v); });
+  const auto finite_end =
+      std::partition(latencies_s.begin(), latencies_s.end(), [](double v) { return std::isfinite(v); });
   summary.unknown = latencies_s.end() - finite_end;
   latencies_s.erase(finite_end, latencies_s.end());
   summary.count = static_cast<int64_t>(latencies_s.size());
@@ -35,9 +35,8 @@ LatencySummary SummariseLatencies(std::vector<double> latencies_s) {
 std::string FormatLatencyMs(const LatencySummary& s) {
   if (s.count == 0) return "latency_ms n=0";
   char text[160];
-  std::snprintf(text, sizeof(text), "latency_ms p50=%.3f p95=%.3f p99=%.3f max=%.3f (n=%lld)",
-                s.p50_s * 1e3, s.p95_s * 1e3, s.p99_s * 1e3, s.max_s * 1e3,
-                static_cast<long long>(s.count));
+  std::snprintf(text, sizeof(text), "latency_ms p50=%.3f p95=%.3f p99=%.3f max=%.3f (n=%lld)", s.p50_s * 1e3,
+                s.p95_s * 1e3, s.p99_s * 1e3, s.max_s * 1e3, static_cast<long long>(s.count));
   return text;
 }
 

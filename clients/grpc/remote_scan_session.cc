@@ -25,7 +25,8 @@ Status RemoteScanSession::Ended() {
   if (!ended_) {
     ended_ = true;
     const grpc::Status status = stream_->Finish();
-    end_status_ = status.ok() ? FailedPrecondition("the server ended the detection session") : wire::FromGrpcStatus(status);
+    end_status_ =
+        status.ok() ? FailedPrecondition("the server ended the detection session") : wire::FromGrpcStatus(status);
   }
   return end_status_;
 }

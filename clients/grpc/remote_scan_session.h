@@ -10,10 +10,10 @@
 // Not thread-safe: one caller at a time.
 #pragma once
 
+#include <grpcpp/channel.h>
+
 #include <memory>
 #include <string>
-
-#include <grpcpp/channel.h>
 
 #include "clients/grpc/track_stream.h"
 #include "engine/core/detection.h"
@@ -27,8 +27,7 @@ class RemoteScanSession {
   // A refused open returns the server's status with its code name first.
   static StatusOr<std::unique_ptr<RemoteScanSession>> Open(std::shared_ptr<grpc::Channel> channel,
                                                            const engine::DetectionSessionConfig& config,
-                                                           const std::string& label,
-                                                           const std::string& session_key);
+                                                           const std::string& label, const std::string& session_key);
   ~RemoteScanSession();
 
   Status Process(const engine::Scan& scan, engine::ScanResult* out);

@@ -9,25 +9,22 @@
 
 namespace localizer::client {
 
-StatusOr<std::unique_ptr<TrackStream>> OpenTrackSession(
-    const std::shared_ptr<grpc::Channel>& channel, const engine::AudioSessionConfig& config,
-    const std::string& label, const std::string& session_key) {
+StatusOr<std::unique_ptr<TrackStream>> OpenTrackSession(const std::shared_ptr<grpc::Channel>& channel,
+                                                        const engine::AudioSessionConfig& config,
+                                                        const std::string& label, const std::string& session_key) {
   v1::SessionConfig proto = wire::ConfigToProto(config, label);
   proto.set_max_block_samples(0);  // the server's limit; it bounds block size, not numbers
   return TrackStream::Open(channel, proto, session_key);
 }
 
-StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>& channel,
-                                           const io::TrackJob& job,
-                                           const RemoteTrackOptions& options,
-                                           const io::TrackCallbacks& callbacks,
+StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>& channel, const io::TrackJob& job,
+                                           const RemoteTrackOptions& options, const io::TrackCallbacks& callbacks,
                                            const StreamCallbacks& stream_callbacks) {
   auto prepared = io::PrepareTrack(job, callbacks);
   if (!prepared.ok()) return prepared.status();
   const engine::AudioSessionConfig& config = prepared->config;
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
-  auto array = engine::ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps,
-                                             config.reference_sensor);
+  auto array = engine::ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
   if (!array.ok()) return array.status();
   StreamOptions stream_options;
   stream_options.channel_count = prepared->stream.channel_count();
@@ -50,8 +47,7 @@ StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>&
   // The source runs on the writer thread; the reader reports progress from this counter.
   io::WavStream& wav = prepared->stream;
   std::atomic<int64_t> samples_read{0};
-  const SampleSource source = [&wav, &samples_read](int64_t max_samples,
-                                                    std::vector<float>* out) -> StatusOr<int64_t> {
+  const SampleSource source = [&wav, &samples_read](int64_t max_samples, std::vector<float>* out) -> StatusOr<int64_t> {
     auto n = wav.Read(max_samples, out);
     if (n.ok()) samples_read += *n;
     return n;
@@ -69,10 +65,9 @@ StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>&
     if (callbacks.on_estimate) callbacks.on_estimate(e.estimate);
     if (stream_callbacks.on_estimate) stream_callbacks.on_estimate(e);
     if (callbacks.on_progress) {
-      const double wall_s =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      callbacks.on_progress(io::TrackProgress{samples_read.load(), total_samples,
-                                              stream_options.sample_rate_hz, wall_s});
+      const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      callbacks.on_progress(
+          io::TrackProgress{samples_read.load(), total_samples, stream_options.sample_rate_hz, wall_s});
     }
   };
   result.stream = StreamBlocks(track_stream, source, stream_options, reader);

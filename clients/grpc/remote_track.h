@@ -43,9 +43,9 @@ struct RemoteTrackResult {
 // Opens a Track session with `config` sent field by field (wire::ConfigToProto, label
 // attached, max_block_samples left 0 for the server's limit): what RunRemoteTrack and
 // `simulate --server` send. Errors as TrackStream::Open.
-StatusOr<std::unique_ptr<TrackStream>> OpenTrackSession(
-    const std::shared_ptr<grpc::Channel>& channel, const engine::AudioSessionConfig& config,
-    const std::string& label, const std::string& session_key);
+StatusOr<std::unique_ptr<TrackStream>> OpenTrackSession(const std::shared_ptr<grpc::Channel>& channel,
+                                                        const engine::AudioSessionConfig& config,
+                                                        const std::string& label, const std::string& session_key);
 
 // Errors before streaming (a file, the server refusing the config or unreachable: message
 // prefixed by the gRPC code name) are returned as a Status. Once the session is open the
@@ -54,10 +54,8 @@ StatusOr<std::unique_ptr<TrackStream>> OpenTrackSession(
 // written cancels the stream and is returned as the error. job.block_s is not used.
 // Callbacks: on_warning before streaming; on_estimate and on_progress on the calling
 // thread, as estimates arrive (progress counts samples read from the recording).
-StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>& channel,
-                                           const io::TrackJob& job,
-                                           const RemoteTrackOptions& options,
-                                           const io::TrackCallbacks& callbacks = {},
+StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>& channel, const io::TrackJob& job,
+                                           const RemoteTrackOptions& options, const io::TrackCallbacks& callbacks = {},
                                            const StreamCallbacks& stream_callbacks = {});
 
 }  // namespace localizer::client

@@ -52,8 +52,7 @@ class SendLog {
 // The writer thread's side: source -> encode -> pace -> Write, then WritesDone.
 class BlockWriter {
  public:
-  BlockWriter(TrackStream& stream, const SampleSource& source, const StreamOptions& options,
-              SendLog* log)
+  BlockWriter(TrackStream& stream, const SampleSource& source, const StreamOptions& options, SendLog* log)
       : stream_(stream), source_(source), options_(options), log_(log) {}
 
   // Ends the pacing wait early; the next Write fails anyway once the stream is over.
@@ -73,13 +72,10 @@ class BlockWriter {
         break;
       }
       if (*n == 0) break;
-      if (*n < 0 || *n > options_.block_samples ||
-          samples_.size() != channels * static_cast<size_t>(*n)) {
-        status_ =
-            Internal("the sample source returned " + std::to_string(*n) +
-                     " samples per channel in a buffer of " + std::to_string(samples_.size()) +
-                     " values (block_samples " + std::to_string(options_.block_samples) + ", " +
-                     std::to_string(channels) + " channels)");
+      if (*n < 0 || *n > options_.block_samples || samples_.size() != channels * static_cast<size_t>(*n)) {
+        status_ = Internal("the sample source returned " + std::to_string(*n) + " samples per channel in a buffer of " +
+                           std::to_string(samples_.size()) + " values (block_samples " +
+                           std::to_string(options_.block_samples) + ", " + std::to_string(channels) + " channels)");
         break;
       }
       engine::BlockView view;
@@ -143,8 +139,7 @@ StreamedEstimate FromWire(const v1::Estimate& wire_estimate) {
 }
 
 // Reads until the stream ends, sorting responses into `result`.
-void ReadResponses(TrackStream& stream, const StreamCallbacks& callbacks, SendLog* log,
-                   StreamResult* result) {
+void ReadResponses(TrackStream& stream, const StreamCallbacks& callbacks, SendLog* log, StreamResult* result) {
   v1::TrackResponse response;
   while (stream.Read(&response)) {
     const Clock::time_point received = Clock::now();
@@ -179,12 +174,10 @@ void ReadResponses(TrackStream& stream, const StreamCallbacks& callbacks, SendLo
 
 }  // namespace
 
-SampleSource ChannelMajorSource(const float* samples, int channel_count,
-                                int64_t samples_per_channel) {
+SampleSource ChannelMajorSource(const float* samples, int channel_count, int64_t samples_per_channel) {
   int64_t next = 0;
   return [=](int64_t max_samples, std::vector<float>* out) mutable -> StatusOr<int64_t> {
-    const int64_t n =
-        std::clamp<int64_t>(samples_per_channel - next, 0, std::max<int64_t>(max_samples, 0));
+    const int64_t n = std::clamp<int64_t>(samples_per_channel - next, 0, std::max<int64_t>(max_samples, 0));
     out->resize(static_cast<size_t>(channel_count) * static_cast<size_t>(n));
     for (int c = 0; c < channel_count; ++c) {
       const float* from = samples + c * samples_per_channel + next;
@@ -212,8 +205,7 @@ Status StreamOptions::Validate() const {
     return InvalidArgument("channel_count must be >= 1, got " + std::to_string(channel_count));
   }
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
-    return InvalidArgument("sample_rate_hz must be finite and > 0, got " +
-                           std::to_string(sample_rate_hz));
+    return InvalidArgument("sample_rate_hz must be finite and > 0, got " + std::to_string(sample_rate_hz));
   }
   if (block_samples < 1) {
     return InvalidArgument("block_samples must be >= 1, got " + std::to_string(block_samples));
@@ -241,8 +233,8 @@ std::vector<double> StreamResult::ClientLatencies() const {
   return out;
 }
 
-StreamResult StreamBlocks(TrackStream& stream, const SampleSource& source,
-                          const StreamOptions& options, const StreamCallbacks& callbacks) {
+StreamResult StreamBlocks(TrackStream& stream, const SampleSource& source, const StreamOptions& options,
+                          const StreamCallbacks& callbacks) {
   StreamResult result;
   result.client_status = options.Validate();
   if (!result.client_status.ok()) {

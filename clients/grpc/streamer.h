@@ -39,13 +39,12 @@ namespace localizer::client {
 // Fills `channel_major` (resized to channel_count * n, channel c at [c * n, (c + 1) * n))
 // with the next n <= max_samples_per_channel samples per channel and returns n; 0 at the
 // end. io::WavStream::Read has this shape.
-using SampleSource = std::function<StatusOr<int64_t>(int64_t max_samples_per_channel,
-                                                     std::vector<float>* channel_major)>;
+using SampleSource =
+    std::function<StatusOr<int64_t>(int64_t max_samples_per_channel, std::vector<float>* channel_major)>;
 
 // A source over channel-major samples held by the caller (channel c at
 // [c * samples_per_channel, (c + 1) * samples_per_channel)), which must outlive it.
-SampleSource ChannelMajorSource(const float* samples, int channel_count,
-                                int64_t samples_per_channel);
+SampleSource ChannelMajorSource(const float* samples, int channel_count, int64_t samples_per_channel);
 
 enum class Pacing { kMax, kRealtime };
 enum class Encoding { kFloat32, kPcm16 };
@@ -106,7 +105,7 @@ struct StreamCallbacks {
 
 // Runs the loop above on `stream` (opened, nothing written yet) and finishes it. Invalid
 // options cancel the stream and come back as client_status. Never throws.
-StreamResult StreamBlocks(TrackStream& stream, const SampleSource& source,
-                          const StreamOptions& options, const StreamCallbacks& callbacks = {});
+StreamResult StreamBlocks(TrackStream& stream, const SampleSource& source, const StreamOptions& options,
+                          const StreamCallbacks& callbacks = {});
 
 }  // namespace localizer::client

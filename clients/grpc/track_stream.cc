@@ -51,10 +51,11 @@ StatusOr<std::unique_ptr<TrackStream>> TrackStream::Open(std::shared_ptr<grpc::C
   return stream;
 }
 
-StatusOr<std::unique_ptr<TrackStream>> TrackStream::Resume(
-    std::shared_ptr<grpc::Channel> channel, const std::string& session_id,
-    const std::string& resume_token, std::optional<uint64_t> last_frame_received,
-    const std::string& session_key) {
+StatusOr<std::unique_ptr<TrackStream>> TrackStream::Resume(std::shared_ptr<grpc::Channel> channel,
+                                                           const std::string& session_id,
+                                                           const std::string& resume_token,
+                                                           std::optional<uint64_t> last_frame_received,
+                                                           const std::string& session_key) {
   std::unique_ptr<TrackStream> stream(new TrackStream(std::move(channel), session_key));
   v1::TrackRequest request;
   v1::ResumeSession* resume = request.mutable_resume();
@@ -80,9 +81,8 @@ Status TrackStream::Start(const v1::TrackRequest& first) {
     }
     const std::string kind = ResponseKind(response);
     Abandon();
-    return Internal(std::string("INTERNAL: the server answered ") +
-                    (first.has_open() ? "open" : "resume") + " with " + kind +
-                    " instead of opened");
+    return Internal(std::string("INTERNAL: the server answered ") + (first.has_open() ? "open" : "resume") + " with " +
+                    kind + " instead of opened");
   }
   const grpc::Status status = Finish();
   if (status.ok()) {

@@ -46,15 +46,13 @@ class TrackStream {
  public:
   // A new session with `config`.
   static StatusOr<std::unique_ptr<TrackStream>> Open(std::shared_ptr<grpc::Channel> channel,
-                                                     const v1::SessionConfig& config,
-                                                     const std::string& session_key);
+                                                     const v1::SessionConfig& config, const std::string& session_key);
   // An existing, detached session. `last_frame_received`: the frame_index of the last
   // estimate this client holds; the server resends later ones it still has. nullopt: this
   // client holds no estimate of the session (sent as ResumeSession.received_none), so the
   // server resends every estimate it still has, frame 0 included.
   static StatusOr<std::unique_ptr<TrackStream>> Resume(std::shared_ptr<grpc::Channel> channel,
-                                                       const std::string& session_id,
-                                                       const std::string& resume_token,
+                                                       const std::string& session_id, const std::string& resume_token,
                                                        std::optional<uint64_t> last_frame_received,
                                                        const std::string& session_key);
 

@@ -16,13 +16,12 @@ namespace {
 
 using nlohmann::json;
 
-const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz", "sensors_m",
-                                            "reference_sensor", "band_hz",  "bounds_min_m",
-                                            "bounds_max_m",    "surface_z_m", "bottom_z_m"};
+const std::set<std::string> kKnownFields = {"sound_speed_mps",  "sample_rate_hz", "sensors_m",
+                                            "reference_sensor", "band_hz",        "bounds_min_m",
+                                            "bounds_max_m",     "surface_z_m",    "bottom_z_m"};
 
 // A finite number at `value`, or an error naming `field`.
-StatusOr<double> FiniteNumber(const json& value, const std::string& source,
-                              const std::string& field) {
+StatusOr<double> FiniteNumber(const json& value, const std::string& source, const std::string& field) {
   if (!value.is_number()) {
     return InvalidArgument(source + ": " + field + " is " + value.dump() + ", not a number");
   }
@@ -31,8 +30,7 @@ StatusOr<double> FiniteNumber(const json& value, const std::string& source,
   return x;
 }
 
-StatusOr<double> PositiveNumber(const json& value, const std::string& source,
-                                const std::string& field) {
+StatusOr<double> PositiveNumber(const json& value, const std::string& source, const std::string& field) {
   auto x = FiniteNumber(value, source, field);
   if (x.ok() && *x <= 0.0) {
     return InvalidArgument(source + ": " + field + " is " + value.dump() + ", must be > 0");
@@ -48,8 +46,7 @@ StatusOr<std::vector<engine::Vec3>> ParseSensors(const json& rows, const std::st
   for (size_t k = 0; k < rows.size(); ++k) {
     const std::string row_name = "sensors_m[" + std::to_string(k) + "]";
     if (!rows[k].is_array() || rows[k].size() != 3) {
-      return InvalidArgument(source + ": " + row_name + " is " + rows[k].dump() +
-                             ", not [x, y, z]");
+      return InvalidArgument(source + ": " + row_name + " is " + rows[k].dump() + ", not [x, y, z]");
     }
     engine::Vec3 position_m;
     for (int axis = 0; axis < 3; ++axis) {
@@ -97,10 +94,12 @@ Status ParseBoundsSide(const json& row, const std::string& source, const std::st
 
 Status ParseBounds(const json& root, const std::string& source, ArrayFile* array) {
   if (root.contains("bounds_min_m")) {
-    LOCALIZER_RETURN_IF_ERROR(ParseBoundsSide(root["bounds_min_m"], source, "bounds_min_m", true, &array->bounds_min_m));
+    LOCALIZER_RETURN_IF_ERROR(
+        ParseBoundsSide(root["bounds_min_m"], source, "bounds_min_m", true, &array->bounds_min_m));
   }
   if (root.contains("bounds_max_m")) {
-    LOCALIZER_RETURN_IF_ERROR(ParseBoundsSide(root["bounds_max_m"], source, "bounds_max_m", false, &array->bounds_max_m));
+    LOCALIZER_RETURN_IF_ERROR(
+        ParseBoundsSide(root["bounds_max_m"], source, "bounds_max_m", false, &array->bounds_max_m));
   }
   if (root.contains("surface_z_m")) {
     auto z = FiniteNumber(root["surface_z_m"], source, "surface_z_m");
@@ -191,8 +190,7 @@ StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& s
   auto array = FromJson(root, source);
   if (!array.ok()) return array;
   // Validate the geometry now so that a bad array fails where the file is named.
-  auto geometry = engine::ArrayGeometry::Create(array->sensors_m, array->sound_speed_mps,
-                                                array->reference_sensor);
+  auto geometry = engine::ArrayGeometry::Create(array->sensors_m, array->sound_speed_mps, array->reference_sensor);
   if (!geometry.ok()) return InvalidArgument(source + ": " + geometry.status().message());
   return array;
 }

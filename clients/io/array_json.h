@@ -44,9 +44,7 @@ struct ArrayFile {
   // bounds_min_m.z().
   engine::Vec3 bounds_min_m = engine::Vec3::Constant(-std::numeric_limits<double>::infinity());
   engine::Vec3 bounds_max_m = engine::Vec3::Constant(std::numeric_limits<double>::infinity());
-  bool has_bounds() const {
-    return bounds_min_m.array().isFinite().any() || bounds_max_m.array().isFinite().any();
-  }
+  bool has_bounds() const { return bounds_min_m.array().isFinite().any() || bounds_max_m.array().isFinite().any(); }
 };
 
 // `source` names the text in messages (usually its path).

@@ -9,8 +9,7 @@ namespace localizer::io {
 
 namespace {
 
-constexpr std::array<const char*, 7> kStateNames = {"t_s",    "x_m",    "y_m",   "z_m",
-                                                    "vx_mps", "vy_mps", "vz_mps"};
+constexpr std::array<const char*, 7> kStateNames = {"t_s", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps"};
 
 void AppendRow(const std::vector<double>& values, std::string* line) {
   line->clear();
@@ -33,8 +32,7 @@ StatusOr<std::array<int, 7>> StateColumns(const CsvTable& table) {
 }
 
 // Reads the 7 state values of one row: t_s, position, velocity.
-StatusOr<std::array<double, 7>> StateValues(const CsvTable& table, size_t row,
-                                            const std::array<int, 7>& columns) {
+StatusOr<std::array<double, 7>> StateValues(const CsvTable& table, size_t row, const std::array<int, 7>& columns) {
   std::array<double, 7> values{};
   for (size_t i = 0; i < columns.size(); ++i) {
     auto value = table.Number(row, columns[i]);
@@ -131,8 +129,7 @@ StatusOr<std::vector<EstimateRow>> ReadEstimatesCsv(const std::string& path) {
   return estimates;
 }
 
-StatusOr<EstimatesCsvWriter> EstimatesCsvWriter::Open(const std::string& path,
-                                                      const std::vector<int>& pair_sensors) {
+StatusOr<EstimatesCsvWriter> EstimatesCsvWriter::Open(const std::string& path, const std::vector<int>& pair_sensors) {
   EstimatesCsvWriter writer;
   writer.path_ = path;
   writer.pair_count_ = pair_sensors.size();
@@ -156,10 +153,9 @@ Status EstimatesCsvWriter::Write(const engine::Estimate& e) {
     values.push_back(std::sqrt(std::max(0.0, e.covariance(axis, axis))));
   }
   values.insert(values.end(), {e.ess, e.nis, static_cast<double>(e.pairs_used), e.tdoa_sigma_s * 1e6,
-                               e.initialised ? 1.0 : 0.0, e.reinitialised ? 1.0 : 0.0,
-                               e.timings.tdoa_s * 1e3, e.timings.filter_s * 1e3,
-                               e.source_present ? 1.0 : 0.0, e.presence_statistic, e.presence_threshold,
-                               e.ambiguous ? 1.0 : 0.0, static_cast<double>(e.modes)});
+                               e.initialised ? 1.0 : 0.0, e.reinitialised ? 1.0 : 0.0, e.timings.tdoa_s * 1e3,
+                               e.timings.filter_s * 1e3, e.source_present ? 1.0 : 0.0, e.presence_statistic,
+                               e.presence_threshold, e.ambiguous ? 1.0 : 0.0, static_cast<double>(e.modes)});
   for (size_t p = 0; p < pair_count_; ++p) {
     values.push_back(p < e.delay_s.size() ? e.delay_s[p] : NAN);
     values.push_back(p < e.quality.size() ? e.quality[p] : NAN);

@@ -57,8 +57,7 @@ StatusOr<std::vector<EstimateRow>> ReadEstimatesCsv(const std::string& path);
 class EstimatesCsvWriter {
  public:
   // `pair_sensors[p]`: the non-reference sensor of pair p (ArrayGeometry::sensor_of_pair).
-  static StatusOr<EstimatesCsvWriter> Open(const std::string& path,
-                                           const std::vector<int>& pair_sensors);
+  static StatusOr<EstimatesCsvWriter> Open(const std::string& path, const std::vector<int>& pair_sensors);
   Status Write(const engine::Estimate& estimate);
   // Flushes and closes; reports a failed write that the stream only notices at the end.
   Status Close();

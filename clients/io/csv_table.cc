@@ -44,9 +44,8 @@ StatusOr<CsvTable> CsvTable::Read(const std::string& path) {
       continue;
     }
     if (fields.size() != table.header_.size()) {
-      return InvalidArgument(path + ":" + std::to_string(line_number) + ": " +
-                             std::to_string(fields.size()) + " fields, the header has " +
-                             std::to_string(table.header_.size()));
+      return InvalidArgument(path + ":" + std::to_string(line_number) + ": " + std::to_string(fields.size()) +
+                             " fields, the header has " + std::to_string(table.header_.size()));
     }
     table.rows_.push_back(Row{line_number, std::move(fields)});
   }
@@ -67,16 +66,15 @@ StatusOr<double> CsvTable::Number(size_t row, int column) const {
   const char* end = text.data() + text.size();
   const auto [ptr, ec] = std::from_chars(text.data(), end, value);
   if (text.empty() || ec != std::errc() || ptr != end) {
-    return InvalidArgument(path_ + ":" + std::to_string(rows_[row].line) + ": column " +
-                           header_[column] + " is \"" + text + "\", not a number");
+    return InvalidArgument(path_ + ":" + std::to_string(rows_[row].line) + ": column " + header_[column] + " is \"" +
+                           text + "\", not a number");
   }
   return value;
 }
 
 void AppendNumber(double value, std::string* out) {
   char buffer[32];
-  const auto result =
-      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, 10);
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, 10);
   out->append(buffer, result.ptr);
 }
 

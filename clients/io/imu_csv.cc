@@ -26,15 +26,14 @@ StatusOr<double> Value(const CsvTable& table, size_t row, int column, bool allow
   if (!value.ok()) return value.status();
   if (!std::isfinite(*value) && !(allow_nan && std::isnan(*value))) {
     return InvalidArgument(table.path() + ": data row " + std::to_string(row + 1) + ", column " +
-                           table.header()[static_cast<size_t>(column)] + ": value " +
-                           table.Text(row, column) + " is not finite");
+                           table.header()[static_cast<size_t>(column)] + ": value " + table.Text(row, column) +
+                           " is not finite");
   }
   return *value;
 }
 
 template <size_t N>
-Status ReadRow(const CsvTable& table, size_t row, const std::array<int, N>& columns,
-               bool allow_nan, double* out) {
+Status ReadRow(const CsvTable& table, size_t row, const std::array<int, N>& columns, bool allow_nan, double* out) {
   for (size_t i = 0; i < N; ++i) {
     auto value = Value(table, row, columns[i], allow_nan);
     if (!value.ok()) return value.status();
@@ -43,11 +42,10 @@ Status ReadRow(const CsvTable& table, size_t row, const std::array<int, N>& colu
   return Status::Ok();
 }
 
-Status CheckIncreasing(const CsvTable& table, size_t row, int column, double t_s,
-                       double previous_t_s) {
+Status CheckIncreasing(const CsvTable& table, size_t row, int column, double t_s, double previous_t_s) {
   if (row > 0 && !(t_s > previous_t_s)) {
-    return InvalidArgument(table.path() + ": data row " + std::to_string(row + 1) + ": t_s " +
-                           table.Text(row, column) + " is not after the previous row's");
+    return InvalidArgument(table.path() + ": data row " + std::to_string(row + 1) + ": t_s " + table.Text(row, column) +
+                           " is not after the previous row's");
   }
   return Status::Ok();
 }
@@ -57,8 +55,8 @@ Status CheckIncreasing(const CsvTable& table, size_t row, int column, double t_s
 StatusOr<ImuRecording> ReadImuCsv(const std::string& path, bool need_mag, bool need_truth) {
   auto table = CsvTable::Read(path);
   if (!table.ok()) return table.status();
-  auto imu = Columns<7>(*table, {"t_s", "gyr_x_rps", "gyr_y_rps", "gyr_z_rps", "acc_x_mps2",
-                                 "acc_y_mps2", "acc_z_mps2"});
+  auto imu =
+      Columns<7>(*table, {"t_s", "gyr_x_rps", "gyr_y_rps", "gyr_z_rps", "acc_x_mps2", "acc_y_mps2", "acc_z_mps2"});
   if (!imu.ok()) return imu.status();
   ImuRecording recording;
   std::array<int, 3> mag{};
@@ -99,9 +97,8 @@ StatusOr<ImuRecording> ReadImuCsv(const std::string& path, bool need_mag, bool n
       LOCALIZER_RETURN_IF_ERROR(ReadRow(*table, r, truth, /*allow_nan=*/true, q));
       const Eigen::Quaterniond truth_q(q[0], q[1], q[2], q[3]);  // (w, x, y, z)
       if (truth_q.coeffs().allFinite() && std::abs(truth_q.norm() - 1.0) > 1e-3) {
-        return InvalidArgument(path + ": data row " + std::to_string(r + 1) +
-                               ": truth quaternion has norm " + std::to_string(truth_q.norm()) +
-                               ", expected 1");
+        return InvalidArgument(path + ": data row " + std::to_string(r + 1) + ": truth quaternion has norm " +
+                               std::to_string(truth_q.norm()) + ", expected 1");
       }
       recording.truth.push_back(truth_q);
       recording.movement.push_back(q[4] == 1.0);
@@ -110,8 +107,7 @@ StatusOr<ImuRecording> ReadImuCsv(const std::string& path, bool need_mag, bool n
   return recording;
 }
 
-Status WriteOrientationCsv(const std::string& path,
-                           const std::vector<engine::AttitudeEstimate>& estimates) {
+Status WriteOrientationCsv(const std::string& path, const std::vector<engine::AttitudeEstimate>& estimates) {
   std::ofstream out(path);
   if (!out) return InvalidArgument(path + ": cannot open for writing");
   out << "t_s,qw,qx,qy,qz,roll_rad,pitch_rad,yaw_rad,roll_sd_rad,pitch_sd_rad,yaw_sd_rad\n";
@@ -119,9 +115,8 @@ Status WriteOrientationCsv(const std::string& path,
   for (const engine::AttitudeEstimate& e : estimates) {
     line.clear();
     const Eigen::Quaterniond& q = e.body_to_world;
-    const double values[] = {e.t_s,          q.w(),          q.x(),          q.y(),
-                             q.z(),          e.euler_rad.x(), e.euler_rad.y(), e.euler_rad.z(),
-                             e.sd_rad.x(),   e.sd_rad.y(),   e.sd_rad.z()};
+    const double values[] = {e.t_s,           q.w(),           q.x(),        q.y(),        q.z(),       e.euler_rad.x(),
+                             e.euler_rad.y(), e.euler_rad.z(), e.sd_rad.x(), e.sd_rad.y(), e.sd_rad.z()};
     for (size_t i = 0; i < std::size(values); ++i) {
       if (i > 0) line += ',';
       AppendNumber(values[i], &line);

@@ -16,10 +16,9 @@
 // Columns are found by name; extra columns are ignored.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "engine/attitude/attitude_filter.h"
 #include "engine/core/imu.h"
@@ -42,8 +41,7 @@ struct ImuRecording {
 StatusOr<ImuRecording> ReadImuCsv(const std::string& path, bool need_mag, bool need_truth);
 
 // Writes orientation.csv; INVALID_ARGUMENT (naming the path) when it cannot be written.
-Status WriteOrientationCsv(const std::string& path,
-                           const std::vector<engine::AttitudeEstimate>& estimates);
+Status WriteOrientationCsv(const std::string& path, const std::vector<engine::AttitudeEstimate>& estimates);
 
 struct OrientationRow {
   double t_s = 0.0;

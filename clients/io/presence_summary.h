@@ -16,10 +16,10 @@
 namespace localizer::io {
 
 struct PresenceSummary {
-  uint64_t frames = 0;    // estimates seen
-  uint64_t tested = 0;    // with presence_threshold > 0
-  uint64_t present = 0;   // with source_present
-  uint64_t ambiguous = 0; // with ambiguous
+  uint64_t frames = 0;         // estimates seen
+  uint64_t tested = 0;         // with presence_threshold > 0
+  uint64_t present = 0;        // with source_present
+  uint64_t ambiguous = 0;      // with ambiguous
   double max_statistic = 0.0;  // largest presence_statistic over the tested frames
   double threshold = 0.0;      // the threshold of the frame with that statistic
 

@@ -25,8 +25,7 @@ Status CheckTruthOrder(const std::vector<engine::TruthRow>& truth) {
 // Truth position at t_s, which must lie within the truth span.
 engine::Vec3 TruthPositionAt(const std::vector<engine::TruthRow>& truth, double t_s) {
   const auto after =
-      std::upper_bound(truth.begin(), truth.end(), t_s,
-                       [](double t, const engine::TruthRow& r) { return t < r.t_s; });
+      std::upper_bound(truth.begin(), truth.end(), t_s, [](double t, const engine::TruthRow& r) { return t < r.t_s; });
   if (after == truth.begin()) return truth.front().position_m;
   if (after == truth.end()) return truth.back().position_m;
   const engine::TruthRow& a = *(after - 1);
@@ -52,8 +51,7 @@ ScoreResult Summarise(std::vector<double> errors_m) {
 
 }  // namespace
 
-StatusOr<ScoreResult> Score(const std::vector<engine::TruthRow>& truth,
-                            const std::vector<EstimateRow>& estimates) {
+StatusOr<ScoreResult> Score(const std::vector<engine::TruthRow>& truth, const std::vector<EstimateRow>& estimates) {
   LOCALIZER_RETURN_IF_ERROR(CheckTruthOrder(truth));
   const double first_s = truth.front().t_s;
   const double last_s = truth.back().t_s;
@@ -64,19 +62,16 @@ StatusOr<ScoreResult> Score(const std::vector<engine::TruthRow>& truth,
     errors_m.push_back(std::isfinite(error_m) ? error_m : std::numeric_limits<double>::infinity());
   }
   if (errors_m.empty()) {
-    return FailedPrecondition("no initialised estimate within the truth span [" +
-                              std::to_string(first_s) + ", " + std::to_string(last_s) + "] s (" +
-                              std::to_string(estimates.size()) + " estimates)");
+    return FailedPrecondition("no initialised estimate within the truth span [" + std::to_string(first_s) + ", " +
+                              std::to_string(last_s) + "] s (" + std::to_string(estimates.size()) + " estimates)");
   }
   return Summarise(std::move(errors_m));
 }
 
 std::string FormatScore(const ScoreResult& score) {
   std::string line = "n=" + std::to_string(score.count);
-  const std::pair<const char*, double> fields[] = {{"rmse_m", score.rmse_m},
-                                                   {"median_m", score.median_m},
-                                                   {"p95_m", score.p95_m},
-                                                   {"max_m", score.max_m}};
+  const std::pair<const char*, double> fields[] = {
+      {"rmse_m", score.rmse_m}, {"median_m", score.median_m}, {"p95_m", score.p95_m}, {"max_m", score.max_m}};
   for (const auto& [name, value] : fields) {
     char number[32];
     std::snprintf(number, sizeof(number), "%.6g", value);  // 1 um at 1 m; enough to compare

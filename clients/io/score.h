@@ -34,8 +34,7 @@ struct ScoreResult {
 
 // INVALID_ARGUMENT when truth is empty or not ordered by t_s; FAILED_PRECONDITION when no
 // estimate could be scored (none initialised inside the truth span).
-StatusOr<ScoreResult> Score(const std::vector<engine::TruthRow>& truth,
-                            const std::vector<EstimateRow>& estimates);
+StatusOr<ScoreResult> Score(const std::vector<engine::TruthRow>& truth, const std::vector<EstimateRow>& estimates);
 
 // "n=31, rmse_m=0.1234, median_m=0.1, p95_m=0.3, max_m=0.41"
 std::string FormatScore(const ScoreResult& score);

@@ -10,8 +10,7 @@
 
 namespace localizer::io {
 
-StatusOr<SimulationRun> SimulateScenario(const std::string& name, uint64_t seed,
-                                         std::optional<double> duration_s) {
+StatusOr<SimulationRun> SimulateScenario(const std::string& name, uint64_t seed, std::optional<double> duration_s) {
   auto scenario = engine::MakeScenario(name, seed);
   if (!scenario.ok()) return scenario.status();
   if (duration_s) {
@@ -21,8 +20,7 @@ StatusOr<SimulationRun> SimulateScenario(const std::string& name, uint64_t seed,
     scenario->sim.duration_s = *duration_s;
   }
   SimulationRun run;
-  auto geometry = engine::ArrayGeometry::Create(scenario->sensors_m, scenario->sound_speed_mps,
-                                                run.reference_sensor);
+  auto geometry = engine::ArrayGeometry::Create(scenario->sensors_m, scenario->sound_speed_mps, run.reference_sensor);
   if (!geometry.ok()) return geometry.status();
   auto result = engine::Simulate(*geometry, scenario->sim);
   if (!result.ok()) return result.status();
@@ -36,11 +34,10 @@ StatusOr<SimulationFiles> WriteSimulationFiles(const std::string& dir, const Sim
   std::filesystem::create_directories(dir, error);
   if (error) return InvalidArgument(dir + ": cannot create directory: " + error.message());
   const std::filesystem::path base(dir);
-  SimulationFiles files{(base / "signals.wav").string(), (base / "array.json").string(),
-                        (base / "truth.csv").string()};
+  SimulationFiles files{(base / "signals.wav").string(), (base / "array.json").string(), (base / "truth.csv").string()};
   const engine::SimResult& r = run.result;
-  LOCALIZER_RETURN_IF_ERROR(WriteWavFloat(files.wav_path, r.sample_rate_hz, r.channel_count,
-                                          r.samples_per_channel, r.samples.data()));
+  LOCALIZER_RETURN_IF_ERROR(
+      WriteWavFloat(files.wav_path, r.sample_rate_hz, r.channel_count, r.samples_per_channel, r.samples.data()));
   ArrayFile array;
   array.sensors_m = run.scenario.sensors_m;
   array.sound_speed_mps = run.scenario.sound_speed_mps;

@@ -23,8 +23,7 @@ struct SimulationRun {
 };
 
 // engine::MakeScenario(name, seed), with the duration overridden when given (> 0).
-StatusOr<SimulationRun> SimulateScenario(const std::string& name, uint64_t seed,
-                                         std::optional<double> duration_s);
+StatusOr<SimulationRun> SimulateScenario(const std::string& name, uint64_t seed, std::optional<double> duration_s);
 
 struct SimulationFiles {
   std::string wav_path;

@@ -14,9 +14,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double SecondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 void Warn(const TrackCallbacks& callbacks, const std::string& message) {
   if (callbacks.on_warning) callbacks.on_warning(message);
@@ -27,17 +25,16 @@ StatusOr<engine::AudioSessionConfig> ConfigForStream(const TrackJob& job, const 
                                                      const TrackCallbacks& callbacks) {
   const int sensors = static_cast<int>(job.config.sensors_m.size());
   if (stream.channel_count() != sensors) {
-    return InvalidArgument(stream.Describe() + " has " + std::to_string(stream.channel_count()) +
-                           " channels but " + job.array_source + " has " + std::to_string(sensors) +
+    return InvalidArgument(stream.Describe() + " has " + std::to_string(stream.channel_count()) + " channels but " +
+                           job.array_source + " has " + std::to_string(sensors) +
                            " sensors; they must match (channel k = "
                            "sensor k)");
   }
   engine::AudioSessionConfig config = job.config;
   config.sample_rate_hz = stream.sample_rate_hz();
   if (job.array_sample_rate_hz && *job.array_sample_rate_hz != stream.sample_rate_hz()) {
-    Warn(callbacks, job.array_source + " says sample_rate_hz " +
-                        std::to_string(*job.array_sample_rate_hz) + " but " + stream.Describe() +
-                        " is sampled at " + std::to_string(stream.sample_rate_hz()) +
+    Warn(callbacks, job.array_source + " says sample_rate_hz " + std::to_string(*job.array_sample_rate_hz) + " but " +
+                        stream.Describe() + " is sampled at " + std::to_string(stream.sample_rate_hz()) +
                         " Hz; using the WAV header's rate");
   }
   return config;
@@ -46,18 +43,14 @@ StatusOr<engine::AudioSessionConfig> ConfigForStream(const TrackJob& job, const 
 // One run: the stream, the session and the writer, fed block by block.
 class TrackRun {
  public:
-  TrackRun(WavStream stream, std::unique_ptr<engine::Session> session,
-           std::unique_ptr<EstimatesCsvWriter> writer, const TrackCallbacks& callbacks)
-      : stream_(std::move(stream)),
-        session_(std::move(session)),
-        writer_(std::move(writer)),
-        callbacks_(callbacks) {}
+  TrackRun(WavStream stream, std::unique_ptr<engine::Session> session, std::unique_ptr<EstimatesCsvWriter> writer,
+           const TrackCallbacks& callbacks)
+      : stream_(std::move(stream)), session_(std::move(session)), writer_(std::move(writer)), callbacks_(callbacks) {}
 
   StatusOr<TrackSummary> Run(double block_s) {
     summary_.sample_rate_hz = stream_.sample_rate_hz();
     summary_.channel_count = stream_.channel_count();
-    const int64_t block_frames =
-        std::max<int64_t>(1, std::llround(block_s * stream_.sample_rate_hz()));
+    const int64_t block_frames = std::max<int64_t>(1, std::llround(block_s * stream_.sample_rate_hz()));
     const Clock::time_point start = Clock::now();
     while (true) {
       auto frames = stream_.Read(block_frames, &samples_);
@@ -85,10 +78,8 @@ class TrackRun {
     estimates_.clear();
     const Status status = session_->Process(block, &estimates_);
     if (!status.ok()) {
-      const double at_s =
-          static_cast<double>(summary_.samples_per_channel) / summary_.sample_rate_hz;
-      return Status(status.code(), stream_.Describe() + ": block " +
-                                       std::to_string(block.sequence) + " at " +
+      const double at_s = static_cast<double>(summary_.samples_per_channel) / summary_.sample_rate_hz;
+      return Status(status.code(), stream_.Describe() + ": block " + std::to_string(block.sequence) + " at " +
                                        std::to_string(at_s) + " s rejected: " + status.message());
     }
     summary_.samples_per_channel += frames;
@@ -109,8 +100,8 @@ class TrackRun {
 
   void ReportProgress(Clock::time_point start) const {
     if (!callbacks_.on_progress) return;
-    callbacks_.on_progress(TrackProgress{summary_.samples_per_channel, stream_.total_frames(),
-                                         summary_.sample_rate_hz, SecondsSince(start)});
+    callbacks_.on_progress(TrackProgress{summary_.samples_per_channel, stream_.total_frames(), summary_.sample_rate_hz,
+                                         SecondsSince(start)});
   }
 
   WavStream stream_;

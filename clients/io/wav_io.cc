@@ -26,23 +26,20 @@ StatusOr<std::pair<SndfilePtr, SF_INFO>> OpenForReading(const std::string& path)
   SF_INFO info{};
   SndfilePtr file(sf_open(path.c_str(), SFM_READ, &info));
   if (!file) {
-    return InvalidArgument(
-        path + ": not a readable sound file (libsndfile: " + SndfileError(nullptr) + ")");
+    return InvalidArgument(path + ": not a readable sound file (libsndfile: " + SndfileError(nullptr) + ")");
   }
   if (info.samplerate <= 0 || info.channels <= 0) {
-    return InvalidArgument(path + ": header gives sample rate " + std::to_string(info.samplerate) +
-                           " Hz and " + std::to_string(info.channels) + " channels");
+    return InvalidArgument(path + ": header gives sample rate " + std::to_string(info.samplerate) + " Hz and " +
+                           std::to_string(info.channels) + " channels");
   }
   // Explicit although it is libsndfile's default: our scaling contract depends on it.
   sf_command(file.get(), SFC_SET_NORM_FLOAT, nullptr, SF_TRUE);
   return std::make_pair(std::move(file), info);
 }
 
-Status ShortRead(const std::string& path, SNDFILE* file, sf_count_t got, int64_t wanted,
-                 int64_t at_frame) {
+Status ShortRead(const std::string& path, SNDFILE* file, sf_count_t got, int64_t wanted, int64_t at_frame) {
   return InvalidArgument(path + ": read " + std::to_string(got) + " of " + std::to_string(wanted) +
-                         " frames at frame " + std::to_string(at_frame) + " (" +
-                         SndfileError(file) + ")");
+                         " frames at frame " + std::to_string(at_frame) + " (" + SndfileError(file) + ")");
 }
 
 }  // namespace
@@ -72,27 +69,24 @@ StatusOr<int64_t> CheckMonoSet(const std::vector<FileT>& files, std::string* war
                              " channels; a set of several files needs one mono file per sensor");
     }
     if (f.info.samplerate != first.info.samplerate) {
-      return InvalidArgument(f.path + " is sampled at " + std::to_string(f.info.samplerate) +
-                             " Hz but " + first.path + " at " +
-                             std::to_string(first.info.samplerate) + " Hz");
+      return InvalidArgument(f.path + " is sampled at " + std::to_string(f.info.samplerate) + " Hz but " + first.path +
+                             " at " + std::to_string(first.info.samplerate) + " Hz");
     }
     if (f.info.frames < shortest->info.frames) shortest = &f;
     if (f.info.frames > longest->info.frames) longest = &f;
   }
   const int64_t spread = longest->info.frames - shortest->info.frames;
   const double spread_s = static_cast<double>(spread) / first.info.samplerate;
-  const std::string lengths = longest->path + " has " + std::to_string(longest->info.frames) +
-                              " frames, " + shortest->path + " has " +
-                              std::to_string(shortest->info.frames);
+  const std::string lengths = longest->path + " has " + std::to_string(longest->info.frames) + " frames, " +
+                              shortest->path + " has " + std::to_string(shortest->info.frames);
   if (spread_s > kMaxSetLengthMismatchS) {
-    return InvalidArgument(lengths + ": they differ by " + std::to_string(spread_s) +
-                           " s, more than " + std::to_string(kMaxSetLengthMismatchS) +
-                           " s, so they are not one recording");
+    return InvalidArgument(lengths + ": they differ by " + std::to_string(spread_s) + " s, more than " +
+                           std::to_string(kMaxSetLengthMismatchS) + " s, so they are not one recording");
   }
   warning->clear();
   if (spread > 0) {
-    *warning = lengths + ": all files truncated to " + std::to_string(shortest->info.frames) +
-               " frames (" + std::to_string(spread) + " dropped from the longest)";
+    *warning = lengths + ": all files truncated to " + std::to_string(shortest->info.frames) + " frames (" +
+               std::to_string(spread) + " dropped from the longest)";
   }
   return static_cast<int64_t>(shortest->info.frames);
 }
@@ -132,8 +126,8 @@ StatusOr<int64_t> WavStream::Read(int64_t max_frames, std::vector<float>* channe
   const int64_t frames = std::min(max_frames, total_frames_ - frames_read_);
   channel_major->resize(static_cast<size_t>(channel_count_) * std::max<int64_t>(frames, 0));
   if (frames <= 0) return int64_t{0};
-  const Status status = files_.size() == 1 ? ReadInterleaved(frames, channel_major)
-                                           : ReadMonoSet(frames, channel_major);
+  const Status status =
+      files_.size() == 1 ? ReadInterleaved(frames, channel_major) : ReadMonoSet(frames, channel_major);
   if (!status.ok()) return status;
   frames_read_ += frames;
   return frames;
@@ -193,8 +187,8 @@ Status CheckWritable(const std::string& path, double rate_hz, int channel_count,
                            " is not a positive integer, which WAV requires");
   }
   if (channel_count <= 0 || frames < 0) {
-    return InvalidArgument(path + ": cannot write " + std::to_string(channel_count) +
-                           " channels x " + std::to_string(frames) + " frames");
+    return InvalidArgument(path + ": cannot write " + std::to_string(channel_count) + " channels x " +
+                           std::to_string(frames) + " frames");
   }
   return Status::Ok();
 }
@@ -202,18 +196,18 @@ Status CheckWritable(const std::string& path, double rate_hz, int channel_count,
 }  // namespace
 
 Status WriteWavFloat(const std::string& path, const Recording& recording) {
-  if (recording.samples.size() != static_cast<size_t>(std::max(recording.channel_count, 0)) *
-                                      std::max<int64_t>(recording.frames, 0)) {
-    return InvalidArgument(path + ": recording has " + std::to_string(recording.samples.size()) +
-                           " samples for " + std::to_string(recording.channel_count) +
-                           " channels x " + std::to_string(recording.frames) + " frames");
+  if (recording.samples.size() !=
+      static_cast<size_t>(std::max(recording.channel_count, 0)) * std::max<int64_t>(recording.frames, 0)) {
+    return InvalidArgument(path + ": recording has " + std::to_string(recording.samples.size()) + " samples for " +
+                           std::to_string(recording.channel_count) + " channels x " + std::to_string(recording.frames) +
+                           " frames");
   }
   return WriteWavFloat(path, recording.sample_rate_hz, recording.channel_count, recording.frames,
                        recording.samples.data());
 }
 
-Status WriteWavFloat(const std::string& path, double sample_rate_hz, int channel_count,
-                     int64_t frames, const float* channel_major) {
+Status WriteWavFloat(const std::string& path, double sample_rate_hz, int channel_count, int64_t frames,
+                     const float* channel_major) {
   LOCALIZER_RETURN_IF_ERROR(CheckWritable(path, sample_rate_hz, channel_count, frames));
   SF_INFO info{};
   info.samplerate = static_cast<int>(sample_rate_hz);
@@ -235,8 +229,7 @@ Status WriteWavFloat(const std::string& path, double sample_rate_hz, int channel
       }
     }
     if (sf_writef_float(file.get(), interleaved.data(), n) != n) {
-      return InvalidArgument(path + ": write failed (libsndfile: " + SndfileError(file.get()) +
-                             ")");
+      return InvalidArgument(path + ": write failed (libsndfile: " + SndfileError(file.get()) + ")");
     }
   }
   // Closing writes the final header sizes; report a failure rather than leave a broken file.

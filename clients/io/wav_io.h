@@ -86,7 +86,7 @@ StatusOr<Recording> ReadWavSet(const std::vector<std::string>& paths, std::strin
 // Writes float32 WAV, channel k = sensor k. The sample rate must be a positive integer.
 Status WriteWavFloat(const std::string& path, const Recording& recording);
 // The same from channel-major samples held elsewhere (channel_count * frames values).
-Status WriteWavFloat(const std::string& path, double sample_rate_hz, int channel_count,
-                     int64_t frames, const float* channel_major);
+Status WriteWavFloat(const std::string& path, double sample_rate_hz, int channel_count, int64_t frames,
+                     const float* channel_major);
 
 }  // namespace localizer::io

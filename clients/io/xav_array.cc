@@ -42,8 +42,7 @@ StatusOr<XavArray> ReadXavHydrophoneCsv(const std::string& path) {
   return xav;
 }
 
-StatusOr<std::vector<std::string>> FindXavRecordings(const std::string& dir,
-                                                     const std::vector<std::string>& roots) {
+StatusOr<std::vector<std::string>> FindXavRecordings(const std::string& dir, const std::vector<std::string>& roots) {
   std::error_code error;
   std::vector<std::string> names;
   for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
@@ -61,8 +60,8 @@ StatusOr<std::vector<std::string>> FindXavRecordings(const std::string& dir,
     }
     if (matches.empty()) return NotFound(dir + ": no " + root + "*.wav");
     if (matches.size() > 1) {
-      return InvalidArgument(dir + ": several " + root + "*.wav (" + matches[0] + ", " +
-                             matches[1] + "); keep one recording per hydrophone");
+      return InvalidArgument(dir + ": several " + root + "*.wav (" + matches[0] + ", " + matches[1] +
+                             "); keep one recording per hydrophone");
     }
     paths.push_back((std::filesystem::path(dir) / matches.front()).string());
   }

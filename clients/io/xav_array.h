@@ -25,11 +25,11 @@ inline constexpr double kXavSoundSpeedMps = 1484.0;
 inline constexpr int kXavReferenceSensor = 3;
 inline constexpr double kXavSampleRateHz = 32000.0;
 inline constexpr double kXavWaterDepthM = 8.0;
-inline constexpr double kXavSurfaceZM = 7.03;                         // array frame, z up
+inline constexpr double kXavSurfaceZM = 7.03;                            // array frame, z up
 inline constexpr double kXavBottomZM = kXavSurfaceZM - kXavWaterDepthM;  // -0.97
 
 struct XavArray {
-  ArrayFile array;  // sensors, c = 1484 m/s, reference 3, 32 kHz, the water column as bounds
+  ArrayFile array;                           // sensors, c = 1484 m/s, reference 3, 32 kHz, the water column as bounds
   std::vector<std::string> file_name_roots;  // per hydrophone, e.g. "AMAR173.1."
 };
 
@@ -37,7 +37,6 @@ StatusOr<XavArray> ReadXavHydrophoneCsv(const std::string& path);
 
 // For each root, the one `<root>*.wav` in `dir`, in hydrophone order; NOT_FOUND naming the
 // root when there is none, INVALID_ARGUMENT when there are several.
-StatusOr<std::vector<std::string>> FindXavRecordings(const std::string& dir,
-                                                     const std::vector<std::string>& roots);
+StatusOr<std::vector<std::string>> FindXavRecordings(const std::string& dir, const std::vector<std::string>& roots);
 
 }  // namespace localizer::io

@@ -14,7 +14,6 @@
 namespace localizer::engine {
 namespace {
 
-
 Vec3 UnitFromCell(double mu, double phi) {
   const double s = std::sqrt(std::max(0.0, 1.0 - mu * mu));
   return Vec3(s * std::cos(phi), s * std::sin(phi), mu);
@@ -37,7 +36,8 @@ Status AcquisitionOptions::Validate() const {
       range_cells > 256) {
     return InvalidArgument("acquisition grid must have 4..1024 azimuth, 2..512 polar and 2..256 range cells");
   }
-  if (refinement_budget < 1 || refinement_budget > 4096) return InvalidArgument("refinement_budget must be in [1, 4096]");
+  if (refinement_budget < 1 || refinement_budget > 4096)
+    return InvalidArgument("refinement_budget must be in [1, 4096]");
   if (!(search_radius_m >= 0.0) || search_radius_m > 1e7) return InvalidArgument("search_radius_m must be in [0, 1e7]");
   for (int i = 0; i < 3; ++i) {
     if (std::isnan(bounds_min_m(i)) || std::isnan(bounds_max_m(i)) || !(bounds_min_m(i) < bounds_max_m(i))) {
@@ -160,7 +160,8 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
       if (DistanceToBox(x, options_.bounds_min_m, options_.bounds_max_m) > rad) continue;
       lag_windows(x, rad);
       double upper = 0.0;
-      for (int p = 0; p < pairs; ++p) upper += field_.MaxAround(p, lags[static_cast<size_t>(p)], widths[static_cast<size_t>(p)]);
+      for (int p = 0; p < pairs; ++p)
+        upper += field_.MaxAround(p, lags[static_cast<size_t>(p)], widths[static_cast<size_t>(p)]);
       cells.push_back({static_cast<float>(upper), d, s});
     }
   }

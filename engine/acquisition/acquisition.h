@@ -55,7 +55,7 @@ struct AcquisitionOptions {
   int azimuth_cells = 32;
   int polar_cells = 16;
   int range_cells = 12;
-  int refinement_budget = 64;    // cells refined at most
+  int refinement_budget = 64;  // cells refined at most
 
   Status Validate() const;
 };
@@ -64,8 +64,8 @@ struct AcquisitionOptions {
 struct PositionMode {
   Vec3 position_m = Vec3::Zero();
   Mat3 covariance_m2 = Mat3::Identity();
-  double score = 0.0;   // normalised spatial spectrum at the position, summed over pairs
-  int pairs_used = 0;   // pairs in the consensus subset of its solve
+  double score = 0.0;  // normalised spatial spectrum at the position, summed over pairs
+  int pairs_used = 0;  // pairs in the consensus subset of its solve
 };
 
 struct PresenceResult {
@@ -106,7 +106,8 @@ class Acquisition {
     double angular_radius_rad;
     double chord_per_range;  // 2 sin(angular radius / 2): the cell's half-width per metre of range
   };
-  bool Refine(const Vec3& start_m, const std::vector<double>& lo, const std::vector<double>& hi, PositionMode* mode) const;
+  bool Refine(const Vec3& start_m, const std::vector<double>& lo, const std::vector<double>& hi,
+              PositionMode* mode) const;
   bool InBounds(const Vec3& p) const;
   double Score(const Vec3& p) const;
 

@@ -9,7 +9,7 @@
 namespace localizer::engine {
 namespace {
 
-constexpr double kMinPickValue = 3.0;  // a pick below this normalised height is noise
+constexpr double kMinPickValue = 3.0;     // a pick below this normalised height is noise
 constexpr double kMinSigmaSamples = 0.1;  // ~ the sub-sample interpolation's bias (DESIGN.md)
 constexpr double kMinFrontEndSigmaSamples = 0.02;
 constexpr double kMaxSigmaSamples = 5.0;

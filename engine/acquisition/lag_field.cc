@@ -27,7 +27,8 @@ void LagField::Build(const Measurement& m, bool with_levels) {
     out.levels.resize(static_cast<size_t>(level_count));
     std::vector<float>& base = out.levels[0];
     base.resize(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i) base[static_cast<size_t>(i)] = static_cast<float>(pm.gcc[static_cast<size_t>(i)] * inv_sigma);
+    for (int i = 0; i < n; ++i)
+      base[static_cast<size_t>(i)] = static_cast<float>(pm.gcc[static_cast<size_t>(i)] * inv_sigma);
     for (int l = 1; l < level_count; ++l) {
       const std::vector<float>& prev = out.levels[static_cast<size_t>(l - 1)];
       std::vector<float>& next = out.levels[static_cast<size_t>(l)];
@@ -66,8 +67,8 @@ double LagField::MaxAround(int p, double lag_samples, double half_width_samples)
   const int centre = (i_lo + i_hi) / 2;
   const int need = std::max(centre - i_lo, i_hi - centre);  // half-width to cover [i_lo, i_hi]
   // The smallest level l with 2^l - 1 >= need: bit_width(need).
-  const int level = std::min(static_cast<int>(std::bit_width(static_cast<unsigned>(need))),
-                             static_cast<int>(pair.levels.size()) - 1);
+  const int level =
+      std::min(static_cast<int>(std::bit_width(static_cast<unsigned>(need))), static_cast<int>(pair.levels.size()) - 1);
   return pair.levels[static_cast<size_t>(level)][static_cast<size_t>(centre)];
 }
 
@@ -85,7 +86,8 @@ bool LagField::ArgMax(int p, double lo_samples, double hi_samples, double* lag_s
   }
   double offset = 0.0;
   if (best > 0 && best < n - 1) {
-    const double a = g[static_cast<size_t>(best - 1)], b = g[static_cast<size_t>(best)], c = g[static_cast<size_t>(best + 1)];
+    const double a = g[static_cast<size_t>(best - 1)], b = g[static_cast<size_t>(best)],
+                 c = g[static_cast<size_t>(best + 1)];
     const double denom = a - 2.0 * b + c;
     if (denom < 0.0) offset = std::clamp(0.5 * (a - c) / denom, -0.5, 0.5);
   }

@@ -1,9 +1,9 @@
 #include "engine/acquisition/presence.h"
 
-#include "engine/core/normal_quantile.h"
-
 #include <algorithm>
 #include <cmath>
+
+#include "engine/core/normal_quantile.h"
 
 namespace localizer::engine {
 double PresenceThreshold(double false_alarm, double combinations) {

@@ -10,16 +10,14 @@ StatusOr<ArrayGeometry> ArrayGeometry::Create(std::vector<Vec3> sensors_m, doubl
                                               int reference_sensor) {
   const int n = static_cast<int>(sensors_m.size());
   if (n < 4) {
-    return InvalidArgument("array has " + std::to_string(n) +
-                           " sensors; 3-D localisation needs at least 4");
+    return InvalidArgument("array has " + std::to_string(n) + " sensors; 3-D localisation needs at least 4");
   }
   if (!(sound_speed_mps > 0.0) || !std::isfinite(sound_speed_mps)) {
-    return InvalidArgument("sound_speed_mps must be positive and finite, got " +
-                           std::to_string(sound_speed_mps));
+    return InvalidArgument("sound_speed_mps must be positive and finite, got " + std::to_string(sound_speed_mps));
   }
   if (reference_sensor < 0 || reference_sensor >= n) {
-    return InvalidArgument("reference sensor " + std::to_string(reference_sensor) +
-                           " is not in 0.." + std::to_string(n - 1));
+    return InvalidArgument("reference sensor " + std::to_string(reference_sensor) + " is not in 0.." +
+                           std::to_string(n - 1));
   }
   for (int i = 0; i < n; ++i) {
     if (!sensors_m[i].allFinite()) {
@@ -41,8 +39,9 @@ StatusOr<ArrayGeometry> ArrayGeometry::Create(std::vector<Vec3> sensors_m, doubl
   if (sv(2) < 1e-3 * sv(0) || sv(2) < 1e-3) {
     return InvalidArgument(
         "array geometry is degenerate: the sensors are (nearly) coplanar or collinear "
-        "(singular values " + std::to_string(sv(0)) + ", " + std::to_string(sv(1)) + ", " +
-        std::to_string(sv(2)) + " m); 3-D localisation needs sensors off a common plane");
+        "(singular values " +
+        std::to_string(sv(0)) + ", " + std::to_string(sv(1)) + ", " + std::to_string(sv(2)) +
+        " m); 3-D localisation needs sensors off a common plane");
   }
   ArrayGeometry g;
   g.sensors_m_ = std::move(sensors_m);
@@ -95,8 +94,6 @@ Eigen::MatrixXd ArrayGeometry::TdoaJacobian(const Vec3& s) const {
   return jac;
 }
 
-double ArrayGeometry::TravelTime(const Vec3& s, int k) const {
-  return (s - sensors_m_[k]).norm() / sound_speed_mps_;
-}
+double ArrayGeometry::TravelTime(const Vec3& s, int k) const { return (s - sensors_m_[k]).norm() / sound_speed_mps_; }
 
 }  // namespace localizer::engine

@@ -23,8 +23,7 @@ namespace localizer::engine {
 
 class ArrayGeometry {
  public:
-  static StatusOr<ArrayGeometry> Create(std::vector<Vec3> sensors_m, double sound_speed_mps,
-                                        int reference_sensor = 0);
+  static StatusOr<ArrayGeometry> Create(std::vector<Vec3> sensors_m, double sound_speed_mps, int reference_sensor = 0);
 
   int sensor_count() const { return static_cast<int>(sensors_m_.size()); }
   int pair_count() const { return sensor_count() - 1; }

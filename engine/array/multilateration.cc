@@ -14,8 +14,7 @@ double Cost(const ArrayGeometry& array, const Vec3& s, const Eigen::VectorXd& d,
 }
 
 // Levenberg–Marquardt with Marquardt's diagonal scaling; returns the refined fix.
-Fix Refine(const ArrayGeometry& array, Vec3 s, const Eigen::VectorXd& d,
-           const MultilaterationOptions& options) {
+Fix Refine(const ArrayGeometry& array, Vec3 s, const Eigen::VectorXd& d, const MultilaterationOptions& options) {
   const double sigma = options.tdoa_sigma_s;
   double lambda = 1e-3;
   double cost = Cost(array, s, d, sigma);
@@ -94,7 +93,6 @@ std::vector<Vec3> ClosedFormCandidates(const ArrayGeometry& array, const Eigen::
   return candidates;
 }
 
-
 Mat3 TdoaPositionCrlb(const ArrayGeometry& array, const Vec3& source_m, double tdoa_sigma_s) {
   const Eigen::MatrixXd h = array.TdoaJacobian(source_m);
   const Mat3 info = h.transpose() * h;
@@ -111,8 +109,8 @@ Mat3 TdoaPositionCrlb(const ArrayGeometry& array, const Vec3& source_m, const Ei
 StatusOr<Fix> Multilaterate(const ArrayGeometry& array, const Eigen::VectorXd& tdoa_s,
                             const MultilaterationOptions& options) {
   if (tdoa_s.size() != array.pair_count()) {
-    return InvalidArgument("multilateration got " + std::to_string(tdoa_s.size()) +
-                           " TDOAs; the array has " + std::to_string(array.pair_count()) + " pairs");
+    return InvalidArgument("multilateration got " + std::to_string(tdoa_s.size()) + " TDOAs; the array has " +
+                           std::to_string(array.pair_count()) + " pairs");
   }
   if (!tdoa_s.allFinite()) return InvalidArgument("multilateration got a non-finite TDOA");
   if (!(options.tdoa_sigma_s > 0.0)) {

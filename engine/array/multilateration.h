@@ -15,9 +15,8 @@
 // Cost: a few hundred flops per iteration, ~10 iterations. Thread-safe (pure function).
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "engine/array/array_geometry.h"
 
@@ -34,9 +33,9 @@ struct Fix {
 };
 
 struct MultilaterationOptions {
-  double tdoa_sigma_s = 20e-6;  // per-pair TDOA standard deviation, > 0
-  int max_iterations = 50;      // LM iterations per candidate
-  const Vec3* hint_m = nullptr; // optional prior position to break ties
+  double tdoa_sigma_s = 20e-6;   // per-pair TDOA standard deviation, > 0
+  int max_iterations = 50;       // LM iterations per candidate
+  const Vec3* hint_m = nullptr;  // optional prior position to break ties
 };
 
 // INVALID_ARGUMENT if tdoa_s has the wrong size or non-finite values; FAILED_PRECONDITION

@@ -18,12 +18,11 @@ AttitudeError AttitudeErrorOf(const Eigen::Quaterniond& estimate, const Eigen::Q
 }
 
 StatusOr<AttitudeScore> ScoreAttitude(const std::vector<Eigen::Quaterniond>& estimates,
-                                      const std::vector<Eigen::Quaterniond>& truth,
-                                      const std::vector<bool>& scored) {
+                                      const std::vector<Eigen::Quaterniond>& truth, const std::vector<bool>& scored) {
   if (estimates.size() != truth.size() || scored.size() != truth.size()) {
-    return InvalidArgument("attitude score: " + std::to_string(estimates.size()) +
-                           " estimates, " + std::to_string(truth.size()) + " truth samples and " +
-                           std::to_string(scored.size()) + " flags: the lengths must match");
+    return InvalidArgument("attitude score: " + std::to_string(estimates.size()) + " estimates, " +
+                           std::to_string(truth.size()) + " truth samples and " + std::to_string(scored.size()) +
+                           " flags: the lengths must match");
   }
   AttitudeScore score;
   double total = 0.0, heading = 0.0, inclination = 0.0;

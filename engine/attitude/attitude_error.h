@@ -11,10 +11,9 @@
 // All in [0, pi]; the sign of q (q and -q are the same rotation) does not matter.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "engine/core/status.h"
 
@@ -41,7 +40,6 @@ struct AttitudeScore {
 // sample counts as an error of pi, so a broken filter cannot score well.
 // INVALID_ARGUMENT when the three lengths differ; FAILED_PRECONDITION when no sample is scored.
 StatusOr<AttitudeScore> ScoreAttitude(const std::vector<Eigen::Quaterniond>& estimates,
-                                      const std::vector<Eigen::Quaterniond>& truth,
-                                      const std::vector<bool>& scored);
+                                      const std::vector<Eigen::Quaterniond>& truth, const std::vector<bool>& scored);
 
 }  // namespace localizer::engine

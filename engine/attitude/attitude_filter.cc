@@ -19,25 +19,22 @@ std::string FormatDouble(double value) {
 
 Status CheckPositive(const char* name, double value) {
   if (!std::isfinite(value) || value <= 0.0) {
-    return InvalidArgument(std::string(name) + " is " + FormatDouble(value) +
-                           ", must be finite and > 0");
+    return InvalidArgument(std::string(name) + " is " + FormatDouble(value) + ", must be finite and > 0");
   }
   return Status::Ok();
 }
 
 Status CheckNonNegative(const char* name, double value) {
   if (!std::isfinite(value) || value < 0.0) {
-    return InvalidArgument(std::string(name) + " is " + FormatDouble(value) +
-                           ", must be finite and >= 0");
+    return InvalidArgument(std::string(name) + " is " + FormatDouble(value) + ", must be finite and >= 0");
   }
   return Status::Ok();
 }
 
 Status CheckFinite(const char* field, const Eigen::Vector3d& v, double t_s) {
   if (v.allFinite()) return Status::Ok();
-  return InvalidArgument(std::string("IMU sample at t_s=") + FormatDouble(t_s) + ": " + field +
-                         " is not finite (" + FormatDouble(v.x()) + ", " + FormatDouble(v.y()) +
-                         ", " + FormatDouble(v.z()) + ")");
+  return InvalidArgument(std::string("IMU sample at t_s=") + FormatDouble(t_s) + ": " + field + " is not finite (" +
+                         FormatDouble(v.x()) + ", " + FormatDouble(v.y()) + ", " + FormatDouble(v.z()) + ")");
 }
 
 }  // namespace

@@ -28,11 +28,10 @@
 // filter per stream. No heap allocation per update.
 #pragma once
 
-#include <memory>
-#include <string>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <memory>
+#include <string>
 
 #include "engine/core/imu.h"
 #include "engine/core/status.h"

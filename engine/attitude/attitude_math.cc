@@ -5,10 +5,9 @@
 namespace localizer::engine {
 
 Eigen::Quaterniond QuaternionFromEuler(const Eigen::Vector3d& roll_pitch_yaw_rad) {
-  const Eigen::Quaterniond q =
-      Eigen::AngleAxisd(roll_pitch_yaw_rad.z(), Eigen::Vector3d::UnitZ()) *
-      Eigen::AngleAxisd(roll_pitch_yaw_rad.y(), Eigen::Vector3d::UnitY()) *
-      Eigen::AngleAxisd(roll_pitch_yaw_rad.x(), Eigen::Vector3d::UnitX());
+  const Eigen::Quaterniond q = Eigen::AngleAxisd(roll_pitch_yaw_rad.z(), Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(roll_pitch_yaw_rad.y(), Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(roll_pitch_yaw_rad.x(), Eigen::Vector3d::UnitX());
   return q.normalized();
 }
 

@@ -11,10 +11,9 @@
 // and yaw are not separately defined (gimbal lock) and EulerFromQuaternion returns roll = 0.
 #pragma once
 
-#include <cmath>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 
 namespace localizer::engine {
 
@@ -44,8 +43,7 @@ inline Eigen::Quaterniond QuaternionFromRotationVector(const Eigen::Vector3d& th
   }
   const double angle = std::sqrt(x2);
   const double s = std::sin(0.5 * angle) / angle;
-  return Eigen::Quaterniond(std::cos(0.5 * angle), s * theta_rad.x(), s * theta_rad.y(),
-                            s * theta_rad.z());
+  return Eigen::Quaterniond(std::cos(0.5 * angle), s * theta_rad.x(), s * theta_rad.y(), s * theta_rad.z());
 }
 
 // Rz(yaw) Ry(pitch) Rx(roll) as a quaternion.
@@ -67,8 +65,6 @@ Eigen::Matrix3d EulerRateMatrix(double roll_rad, double pitch_rad);
 Eigen::Vector2d TiltFromAccelerometer(const Eigen::Vector3d& accel_mps2);
 
 // The angle of a world-frame horizontal vector east of North: atan2(v_east, v_north).
-inline double AzimuthEastOfNorth(const Eigen::Vector3d& v_world) {
-  return std::atan2(v_world.x(), v_world.y());
-}
+inline double AzimuthEastOfNorth(const Eigen::Vector3d& v_world) { return std::atan2(v_world.x(), v_world.y()); }
 
 }  // namespace localizer::engine

@@ -8,7 +8,7 @@
 namespace localizer::engine {
 namespace {
 
-constexpr double kInitialTiltSdRad = 0.1;     // as the quaternion filter's prior
+constexpr double kInitialTiltSdRad = 0.1;  // as the quaternion filter's prior
 constexpr double kInitialHeadingSdRad = 0.2;
 
 // The field with the estimated roll and pitch removed: Ry(pitch) Rx(roll) m_body.
@@ -23,16 +23,15 @@ Eigen::Vector3d LevelledField(const Eigen::Vector3d& mag_uT, double roll, double
 
 EulerEkf::EulerEkf(const AttitudeFilterOptions& options)
     : options_(options),
-      mag_reference_(options.mag_reference_s, options.mag_norm_tolerance,
-                     options.mag_dip_tolerance_rad) {}
+      mag_reference_(options.mag_reference_s, options.mag_norm_tolerance, options.mag_dip_tolerance_rad) {}
 
 void EulerEkf::Initialise(const ImuSample& sample) {
   const Eigen::Vector2d tilt = TiltFromAccelerometer(sample.accel_mps2);
   const bool mag = options_.use_mag && sample.mag_uT.allFinite();
   double yaw = 0.0;
   if (mag) {
-    yaw = WrapAngle(AzimuthEastOfNorth(LevelledField(sample.mag_uT, tilt.x(), tilt.y())) -
-                    options_.mag_declination_rad);
+    yaw =
+        WrapAngle(AzimuthEastOfNorth(LevelledField(sample.mag_uT, tilt.x(), tilt.y())) - options_.mag_declination_rad);
   }
   x_ << tilt.x(), tilt.y(), yaw;
   p_.setZero();
@@ -51,8 +50,7 @@ bool EulerEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2) {
   const double norm = accel_mps2.norm();
   const double departure = std::abs(norm - options_.gravity_mps2);
   if (departure > options_.accel_reject_mps2 || norm <= 0.0) return false;
-  const double sd = options_.accel_tilt_sd_rad *
-                    (1.0 + options_.accel_noise_gain * departure / options_.gravity_mps2);
+  const double sd = options_.accel_tilt_sd_rad * (1.0 + options_.accel_noise_gain * departure / options_.gravity_mps2);
   const Eigen::Vector2d z = TiltFromAccelerometer(accel_mps2);
   const Eigen::Vector2d nu(WrapAngle(z.x() - x_.x()), z.y() - x_.y());
   // H = [I2 0]: S = P_00..11 + R, K = P.leftCols(2) S^-1.
@@ -71,8 +69,8 @@ bool EulerEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2) {
 bool EulerEkf::MagUpdate(const Eigen::Vector3d& mag_uT, double t_s) {
   const Eigen::Vector3d levelled = LevelledField(mag_uT, x_.x(), x_.y());
   const double sy = std::sin(x_.z()), cy = std::cos(x_.z());
-  const Eigen::Vector3d field_world(cy * levelled.x() - sy * levelled.y(),
-                                    sy * levelled.x() + cy * levelled.y(), levelled.z());
+  const Eigen::Vector3d field_world(cy * levelled.x() - sy * levelled.y(), sy * levelled.x() + cy * levelled.y(),
+                                    levelled.z());
   if (!mag_reference_.Observe(field_world, t_s)) return false;
   if (levelled.head<2>().squaredNorm() < 1e-6) return false;
   const double z = AzimuthEastOfNorth(levelled) - options_.mag_declination_rad;
@@ -89,8 +87,7 @@ bool EulerEkf::MagUpdate(const Eigen::Vector3d& mag_uT, double t_s) {
 }
 
 Status EulerEkf::Update(const ImuSample& sample) {
-  LOCALIZER_RETURN_IF_ERROR(ValidateImuSample(
-      sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
+  LOCALIZER_RETURN_IF_ERROR(ValidateImuSample(sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
   if (!initialised_) {
     Initialise(sample);
     return Status::Ok();
@@ -134,8 +131,7 @@ AttitudeEstimate EulerEkf::estimate() const {
   Eigen::Matrix3d e_inverse;
   e_inverse << 1.0, 0.0, -sp, 0.0, cr, sr * cp, 0.0, -sr, cr * cp;
   const Eigen::Matrix3d to_world = e.body_to_world.toRotationMatrix() * e_inverse;
-  e.world_error_sd_rad =
-      (to_world * p_ * to_world.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+  e.world_error_sd_rad = (to_world * p_ * to_world.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
   e.accel_used = accel_used_;
   e.mag_used = mag_used_;
   return e;

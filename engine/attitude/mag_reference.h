@@ -11,10 +11,9 @@
 // a field disturbed from the very start is learnt as the reference.
 #pragma once
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Core>
 
 namespace localizer::engine {
 
@@ -46,8 +45,7 @@ class MagReference {
     }
     // |dip - dip_ref| <= tolerance as cos(dip - dip_ref) >= cos(tolerance) (both dips lie in
     // [-pi/2, pi/2], so their difference within [-pi, pi]): no arc tangent per sample.
-    const double cos_difference =
-        (horizontal * cos_dip_ref_ - field_world_uT.z() * sin_dip_ref_) / norm;
+    const double cos_difference = (horizontal * cos_dip_ref_ - field_world_uT.z() * sin_dip_ref_) / norm;
     return cos_difference >= cos_tolerance_;
   }
 

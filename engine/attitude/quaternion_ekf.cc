@@ -23,10 +23,8 @@ Eigen::Vector3d UpInBody(const Eigen::Quaterniond& q) {
 
 QuaternionEkf::QuaternionEkf(const AttitudeFilterOptions& options)
     : options_(options),
-      mag_reference_(options.mag_reference_s, options.mag_norm_tolerance,
-                     options.mag_dip_tolerance_rad),
-      rest_(options.rest_gyro_rps, options.rest_accel_mps2, options.rest_min_s,
-            options.gravity_mps2) {}
+      mag_reference_(options.mag_reference_s, options.mag_norm_tolerance, options.mag_dip_tolerance_rad),
+      rest_(options.rest_gyro_rps, options.rest_accel_mps2, options.rest_min_s, options.gravity_mps2) {}
 
 void QuaternionEkf::Initialise(const ImuSample& sample) {
   const Eigen::Vector2d tilt = TiltFromAccelerometer(sample.accel_mps2);
@@ -42,12 +40,11 @@ void QuaternionEkf::Initialise(const ImuSample& sample) {
   // Tilt and heading prior as a world-frame covariance, turned into the body frame.
   const Eigen::Matrix3d r = q_.toRotationMatrix();
   const double heading_sd = mag ? kInitialHeadingSdRad : 0.0;
-  const Eigen::Vector3d world_var(kInitialTiltSdRad * kInitialTiltSdRad,
-                                  kInitialTiltSdRad * kInitialTiltSdRad, heading_sd * heading_sd);
+  const Eigen::Vector3d world_var(kInitialTiltSdRad * kInitialTiltSdRad, kInitialTiltSdRad * kInitialTiltSdRad,
+                                  heading_sd * heading_sd);
   p_.setZero();
   p_.topLeftCorner<3, 3>() = r.transpose() * world_var.asDiagonal() * r;
-  p_.bottomRightCorner<3, 3>().diagonal().setConstant(options_.initial_bias_sd_rps *
-                                                      options_.initial_bias_sd_rps);
+  p_.bottomRightCorner<3, 3>().diagonal().setConstant(options_.initial_bias_sd_rps * options_.initial_bias_sd_rps);
   t_s_ = sample.t_s;
   initialised_ = true;
   accel_used_ = true;
@@ -91,8 +88,7 @@ bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) 
   const double norm = f.norm();
   const double departure = std::abs(norm - options_.gravity_mps2);
   if (departure > options_.accel_reject_mps2 || norm <= 0.0) return false;
-  const double sd = options_.accel_tilt_sd_rad *
-                    (1.0 + options_.accel_noise_gain * departure / options_.gravity_mps2);
+  const double sd = options_.accel_tilt_sd_rad * (1.0 + options_.accel_noise_gain * departure / options_.gravity_mps2);
   const Eigen::Vector3d h = UpInBody(q_);
   const Eigen::Matrix3d hx = Skew(h);
   // P H^T = P.leftCols(3) [h x]^T (6x3); S = [h x] P_tt [h x]^T + sd^2 I.
@@ -139,8 +135,7 @@ void QuaternionEkf::RestUpdate(const Eigen::Vector3d& gyro_rps) {
 }
 
 Status QuaternionEkf::Update(const ImuSample& sample) {
-  LOCALIZER_RETURN_IF_ERROR(ValidateImuSample(
-      sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
+  LOCALIZER_RETURN_IF_ERROR(ValidateImuSample(sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
   if (!initialised_) {
     Initialise(sample);
     return Status::Ok();

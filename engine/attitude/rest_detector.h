@@ -7,9 +7,8 @@
 // The platform is at rest once the quiet samples have lasted min_s without a break.
 #pragma once
 
-#include <cmath>
-
 #include <Eigen/Core>
+#include <cmath>
 
 namespace localizer::engine {
 
@@ -19,8 +18,7 @@ class RestDetector {
       : gyro_rps_(gyro_rps), accel_mps2_(accel_mps2), min_s_(min_s), gravity_mps2_(gravity_mps2) {}
 
   // Returns whether the platform is at rest after this sample; dt_s since the previous one.
-  bool Update(const Eigen::Vector3d& corrected_rate_rps, const Eigen::Vector3d& accel_mps2,
-              double dt_s) {
+  bool Update(const Eigen::Vector3d& corrected_rate_rps, const Eigen::Vector3d& accel_mps2, double dt_s) {
     if (!primed_) {
       lowpass_mps2_ = accel_mps2;
       primed_ = true;

@@ -2,10 +2,9 @@
 // hands a multi-target tracker for one scan: plots in the sensor's polar frame.
 #pragma once
 
+#include <Eigen/Core>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace localizer::engine {
 

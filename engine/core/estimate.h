@@ -1,12 +1,11 @@
 // What a session returns for each frame.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "engine/core/types.h"
 
@@ -29,7 +28,7 @@ struct ModelProbability {
 // the body origin in the world.
 struct PlatformAttitude {
   Eigen::Quaterniond body_to_world = Eigen::Quaterniond::Identity();
-  Vec3 euler_rad = Vec3::Zero();     // (roll, pitch, yaw)
+  Vec3 euler_rad = Vec3::Zero();  // (roll, pitch, yaw)
   Vec3 euler_sd_rad = Vec3::Zero();
   Vec3 origin_m = Vec3::Zero();
 };
@@ -57,12 +56,12 @@ struct Estimate {
   // not initialised.
   bool ambiguous = false;
   int modes = 0;
-  Vec6 state = Vec6::Zero();   // (x, y, z, vx, vy, vz): m, m/s
+  Vec6 state = Vec6::Zero();  // (x, y, z, vx, vy, vz): m, m/s
   Mat6 covariance = Mat6::Zero();
-  double ess = 0.0;            // effective sample size after the update (particle filter)
-  double tdoa_sigma_s = 0.0;   // TDOA noise std the tracker assumed (adaptive by default)
-  int pairs_used = 0;          // pairs the tracker conditioned on (peak_snr high enough)
-  double nis = 0.0;            // normalised innovation squared of this frame's TDOAs
+  double ess = 0.0;             // effective sample size after the update (particle filter)
+  double tdoa_sigma_s = 0.0;    // TDOA noise std the tracker assumed (adaptive by default)
+  int pairs_used = 0;           // pairs the tracker conditioned on (peak_snr high enough)
+  double nis = 0.0;             // normalised innovation squared of this frame's TDOAs
   std::vector<double> delay_s;  // measured TDOA per pair, as in Measurement
   std::vector<double> quality;  // quality per pair
   // Multiple-model trackers (filter mmpf, imm): each hypothesis' probability after this

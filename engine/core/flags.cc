@@ -48,8 +48,7 @@ std::string WithUnit(const std::string& value, const std::string& unit) {
 
 }  // namespace
 
-FlagSet::FlagSet(std::string usage, std::string summary)
-    : usage_(std::move(usage)), summary_(std::move(summary)) {}
+FlagSet::FlagSet(std::string usage, std::string summary) : usage_(std::move(usage)), summary_(std::move(summary)) {}
 
 FlagSet::Flag& FlagSet::Add(FlagText text, std::function<Status(const std::string&)> set) {
   Flag flag;
@@ -62,16 +61,16 @@ FlagSet::Flag& FlagSet::Add(FlagText text, std::function<Status(const std::strin
   return flags_.back();
 }
 
-FlagSet::Flag& FlagSet::String(const std::string& name, std::string* value,
-                               const std::string& metavar, const std::string& help) {
+FlagSet::Flag& FlagSet::String(const std::string& name, std::string* value, const std::string& metavar,
+                               const std::string& help) {
   return Add({name, metavar, help, value->empty() ? "" : *value}, [value](const std::string& text) {
     *value = text;
     return Status::Ok();
   });
 }
 
-FlagSet::Flag& FlagSet::Strings(const std::string& name, std::vector<std::string>* values,
-                                const std::string& metavar, const std::string& help) {
+FlagSet::Flag& FlagSet::Strings(const std::string& name, std::vector<std::string>* values, const std::string& metavar,
+                                const std::string& help) {
   Flag& flag = Add({name, metavar, help, ""}, [values](const std::string& text) {
     values->push_back(text);
     return Status::Ok();
@@ -80,41 +79,38 @@ FlagSet::Flag& FlagSet::Strings(const std::string& name, std::vector<std::string
   return flag;
 }
 
-FlagSet::Flag& FlagSet::Int(const std::string& name, int* value, const std::string& metavar,
-                            const std::string& unit, const std::string& help) {
-  return Add({name, metavar, help, WithUnit(std::to_string(*value), unit)},
-             [value](const std::string& text) -> Status {
-               auto parsed = ParseInt(text);
-               if (!parsed.ok()) return parsed.status();
-               *value = *parsed;
-               return Status::Ok();
-             });
+FlagSet::Flag& FlagSet::Int(const std::string& name, int* value, const std::string& metavar, const std::string& unit,
+                            const std::string& help) {
+  return Add({name, metavar, help, WithUnit(std::to_string(*value), unit)}, [value](const std::string& text) -> Status {
+    auto parsed = ParseInt(text);
+    if (!parsed.ok()) return parsed.status();
+    *value = *parsed;
+    return Status::Ok();
+  });
 }
 
 FlagSet::Flag& FlagSet::Uint64(const std::string& name, uint64_t* value, const std::string& metavar,
                                const std::string& help) {
-  return Add({name, metavar, help, std::to_string(*value)},
-             [value](const std::string& text) -> Status {
-               uint64_t parsed = 0;
-               const char* end = text.data() + text.size();
-               const auto [ptr, ec] = std::from_chars(text.data(), end, parsed);
-               if (text.empty() || ec != std::errc() || ptr != end) {
-                 return InvalidArgument("\"" + text + "\" is not a non-negative integer");
-               }
-               *value = parsed;
-               return Status::Ok();
-             });
+  return Add({name, metavar, help, std::to_string(*value)}, [value](const std::string& text) -> Status {
+    uint64_t parsed = 0;
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, parsed);
+    if (text.empty() || ec != std::errc() || ptr != end) {
+      return InvalidArgument("\"" + text + "\" is not a non-negative integer");
+    }
+    *value = parsed;
+    return Status::Ok();
+  });
 }
 
 FlagSet::Flag& FlagSet::Double(const std::string& name, double* value, const std::string& metavar,
                                const std::string& unit, const std::string& help) {
-  return Add({name, metavar, help, WithUnit(FormatDouble(*value), unit)},
-             [value](const std::string& text) -> Status {
-               auto parsed = ParseFiniteDouble(text);
-               if (!parsed.ok()) return parsed.status();
-               *value = *parsed;
-               return Status::Ok();
-             });
+  return Add({name, metavar, help, WithUnit(FormatDouble(*value), unit)}, [value](const std::string& text) -> Status {
+    auto parsed = ParseFiniteDouble(text);
+    if (!parsed.ok()) return parsed.status();
+    *value = *parsed;
+    return Status::Ok();
+  });
 }
 
 FlagSet::Flag& FlagSet::OptionalDouble(const std::string& name, std::optional<double>* value,
@@ -128,9 +124,8 @@ FlagSet::Flag& FlagSet::OptionalDouble(const std::string& name, std::optional<do
   });
 }
 
-FlagSet::Flag& FlagSet::OptionalInt(const std::string& name, std::optional<int>* value,
-                                    const std::string& metavar, const std::string& default_text,
-                                    const std::string& help) {
+FlagSet::Flag& FlagSet::OptionalInt(const std::string& name, std::optional<int>* value, const std::string& metavar,
+                                    const std::string& default_text, const std::string& help) {
   return Add({name, metavar, help, default_text}, [value](const std::string& text) -> Status {
     auto parsed = ParseInt(text);
     if (!parsed.ok()) return parsed.status();
@@ -171,8 +166,7 @@ Status FlagSet::Parse(const std::vector<std::string>& args) {
       return InvalidArgument("unexpected argument \"" + arg + "\" (flags start with --)");
     }
     const size_t equals = arg.find('=');
-    const std::string name =
-        arg.substr(2, equals == std::string::npos ? std::string::npos : equals - 2);
+    const std::string name = arg.substr(2, equals == std::string::npos ? std::string::npos : equals - 2);
     Flag* flag = Find(name);
     if (flag == nullptr) return InvalidArgument("unknown flag --" + name);
     if (flag->seen && !flag->repeatable) return InvalidArgument("--" + name + " given twice");
@@ -183,8 +177,7 @@ Status FlagSet::Parse(const std::vector<std::string>& args) {
       if (is_bool) return InvalidArgument("--" + name + " takes no value");
       value = arg.substr(equals + 1);
     } else if (!is_bool) {
-      if (i + 1 >= args.size())
-        return InvalidArgument("--" + name + " needs a value " + flag->metavar);
+      if (i + 1 >= args.size()) return InvalidArgument("--" + name + " needs a value " + flag->metavar);
       value = args[++i];
     }
     const Status status = flag->set(value);
@@ -242,8 +235,7 @@ std::string FlagSet::Usage() const {
     if (flag.required) description += " (required)";
     if (flag.repeatable) description += " (repeatable)";
     if (!flag.default_text.empty()) description += " (default: " + flag.default_text + ")";
-    text += FlagLine("  --" + flag.name + (flag.metavar.empty() ? "" : " " + flag.metavar),
-                     description);
+    text += FlagLine("  --" + flag.name + (flag.metavar.empty() ? "" : " " + flag.metavar), description);
   }
   return text + FlagLine("  --help", "print this help");
 }

@@ -38,22 +38,19 @@ class FlagSet {
   // `usage`: the synopsis line after "usage: "; `summary`: what the command does.
   FlagSet(std::string usage, std::string summary);
 
-  Flag& String(const std::string& name, std::string* value, const std::string& metavar,
-               const std::string& help);
+  Flag& String(const std::string& name, std::string* value, const std::string& metavar, const std::string& help);
   // Repeatable: every occurrence appends.
-  Flag& Strings(const std::string& name, std::vector<std::string>* values,
-                const std::string& metavar, const std::string& help);
+  Flag& Strings(const std::string& name, std::vector<std::string>* values, const std::string& metavar,
+                const std::string& help);
   // `unit` follows the default in the help ("4096 samples").
-  Flag& Int(const std::string& name, int* value, const std::string& metavar,
-            const std::string& unit, const std::string& help);
-  Flag& Uint64(const std::string& name, uint64_t* value, const std::string& metavar,
+  Flag& Int(const std::string& name, int* value, const std::string& metavar, const std::string& unit,
+            const std::string& help);
+  Flag& Uint64(const std::string& name, uint64_t* value, const std::string& metavar, const std::string& help);
+  Flag& Double(const std::string& name, double* value, const std::string& metavar, const std::string& unit,
                const std::string& help);
-  Flag& Double(const std::string& name, double* value, const std::string& metavar,
-               const std::string& unit, const std::string& help);
   // Unset by default; `default_text` says what applies then ("from array.json").
-  Flag& OptionalDouble(const std::string& name, std::optional<double>* value,
-                       const std::string& metavar, const std::string& default_text,
-                       const std::string& help);
+  Flag& OptionalDouble(const std::string& name, std::optional<double>* value, const std::string& metavar,
+                       const std::string& default_text, const std::string& help);
   Flag& OptionalInt(const std::string& name, std::optional<int>* value, const std::string& metavar,
                     const std::string& default_text, const std::string& help);
   Flag& Bool(const std::string& name, bool* value, const std::string& help);

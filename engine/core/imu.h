@@ -8,14 +8,13 @@
 //    body's up axis, about +9.81 on z when level), magnetometer µT.
 #pragma once
 
-#include <limits>
-
 #include <Eigen/Core>
+#include <limits>
 
 namespace localizer::engine {
 
 struct ImuSample {
-  double t_s = 0.0;                                  // on the same clock as the blocks
+  double t_s = 0.0;  // on the same clock as the blocks
   Eigen::Vector3d gyro_rps = Eigen::Vector3d::Zero();
   Eigen::Vector3d accel_mps2 = Eigen::Vector3d::Zero();
   // NaN components when the IMU has no magnetometer (or the sample carries none).

@@ -55,7 +55,7 @@ inline Status Cancelled(std::string m) { return {StatusCode::kCancelled, std::mo
 template <typename T>
 class [[nodiscard]] StatusOr {
  public:
-  StatusOr(T value) : value_(std::move(value)) {}  // NOLINT: implicit by design
+  StatusOr(T value) : value_(std::move(value)) {}         // NOLINT: implicit by design
   StatusOr(Status status) : status_(std::move(status)) {  // NOLINT
     assert(!status_.ok() && "StatusOr needs a value or an error");
     if (status_.ok()) status_ = Internal("StatusOr constructed from an OK status without a value");
@@ -80,8 +80,8 @@ class [[nodiscard]] StatusOr {
 }  // namespace localizer
 
 // Returns early from a function returning Status or StatusOr when `expr` fails.
-#define LOCALIZER_RETURN_IF_ERROR(expr)          \
-  do {                                           \
-    ::localizer::Status status_macro_ = (expr);  \
+#define LOCALIZER_RETURN_IF_ERROR(expr)            \
+  do {                                             \
+    ::localizer::Status status_macro_ = (expr);    \
     if (!status_macro_.ok()) return status_macro_; \
   } while (0)

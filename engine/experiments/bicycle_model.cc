@@ -24,8 +24,7 @@ PlanarState BicycleModel::Step(const PlanarState& s, const BicycleControl& u, do
           s[kHeading] + HeadingStep(u, dt_s)};
 }
 
-Eigen::Matrix3d BicycleModel::StateJacobian(const PlanarState& s, const BicycleControl& u,
-                                            double dt_s) const {
+Eigen::Matrix3d BicycleModel::StateJacobian(const PlanarState& s, const BicycleControl& u, double dt_s) const {
   const double travel_m = u.speed_mps * dt_s;
   Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
   f(kPx, kHeading) = -travel_m * std::sin(s[kHeading]);
@@ -33,15 +32,13 @@ Eigen::Matrix3d BicycleModel::StateJacobian(const PlanarState& s, const BicycleC
   return f;
 }
 
-Eigen::Matrix<double, 3, 2> BicycleModel::ControlJacobian(const PlanarState& s,
-                                                          const BicycleControl& u,
+Eigen::Matrix<double, 3, 2> BicycleModel::ControlJacobian(const PlanarState& s, const BicycleControl& u,
                                                           double dt_s) const {
   const double cos_delta = std::cos(u.steering_rad);
   Eigen::Matrix<double, 3, 2> g;
   g << dt_s * std::cos(s[kHeading]), 0.0,  //
       dt_s * std::sin(s[kHeading]), 0.0,   //
-      dt_s * std::tan(u.steering_rad) / wheelbase_m,
-      u.speed_mps * dt_s / (wheelbase_m * cos_delta * cos_delta);
+      dt_s * std::tan(u.steering_rad) / wheelbase_m, u.speed_mps * dt_s / (wheelbase_m * cos_delta * cos_delta);
   return g;
 }
 

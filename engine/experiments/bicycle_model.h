@@ -39,8 +39,7 @@ struct BicycleModel {
 
   PlanarState Step(const PlanarState& s, const BicycleControl& u, double dt_s) const;
   Eigen::Matrix3d StateJacobian(const PlanarState& s, const BicycleControl& u, double dt_s) const;
-  Eigen::Matrix<double, 3, 2> ControlJacobian(const PlanarState& s, const BicycleControl& u,
-                                              double dt_s) const;
+  Eigen::Matrix<double, 3, 2> ControlJacobian(const PlanarState& s, const BicycleControl& u, double dt_s) const;
   // Heading change of one step: v dt tan(delta) / L.
   double HeadingStep(const BicycleControl& u, double dt_s) const;
 };

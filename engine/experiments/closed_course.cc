@@ -46,19 +46,16 @@ Status CourseOptions::Validate(const BicycleModel& model) const {
     return Invalid("turn_radius_m", turn_radius_m, "must be positive");
   }
   if (laps < 1) return Invalid("laps", laps, "must be >= 1");
-  const double steps =
-      static_cast<double>(laps) * 4.0 *
-      (straight_m / (speed_mps * dt_s) + 2.0 * turn_radius_m / (speed_mps * dt_s) + 1.0);
+  const double steps = static_cast<double>(laps) * 4.0 *
+                       (straight_m / (speed_mps * dt_s) + 2.0 * turn_radius_m / (speed_mps * dt_s) + 1.0);
   if (steps > kMaxSteps) return Invalid("laps", laps, "the course would exceed 10^6 steps");
   if (CornerSteering(*this, model) > kMaxSteeringRad) {
-    return Invalid("turn_radius_m", turn_radius_m,
-                   "too tight for the wheelbase (corner steering above 1.2 rad)");
+    return Invalid("turn_radius_m", turn_radius_m, "too tight for the wheelbase (corner steering above 1.2 rad)");
   }
   return Status::Ok();
 }
 
-StatusOr<CourseSchedule> RoundedRectangleCourse(const CourseOptions& options,
-                                                const BicycleModel& model) {
+StatusOr<CourseSchedule> RoundedRectangleCourse(const CourseOptions& options, const BicycleModel& model) {
   LOCALIZER_RETURN_IF_ERROR(options.Validate(model));
   CourseSchedule course;
   course.straight_steps = StraightSteps(options);

@@ -41,7 +41,6 @@ struct CourseSchedule {
 };
 
 // The commands of `options.laps` laps for `model`; the errors of Validate.
-StatusOr<CourseSchedule> RoundedRectangleCourse(const CourseOptions& options,
-                                                const BicycleModel& model);
+StatusOr<CourseSchedule> RoundedRectangleCourse(const CourseOptions& options, const BicycleModel& model);
 
 }  // namespace localizer::engine::experiments

@@ -22,12 +22,10 @@ enum class ExperimentStream : uint32_t {
 
 // std::mt19937_64 seeded by std::seed_seq over the 32-bit halves of seed and run, the
 // stream and a sub-index (which filter, for kFilter).
-inline std::mt19937_64 ExperimentEngine(uint64_t seed, ExperimentStream stream, int64_t run,
-                                        uint32_t sub_index = 0) {
+inline std::mt19937_64 ExperimentEngine(uint64_t seed, ExperimentStream stream, int64_t run, uint32_t sub_index = 0) {
   const auto r = static_cast<uint64_t>(run);
-  std::seed_seq sequence{static_cast<uint32_t>(seed),    static_cast<uint32_t>(seed >> 32),
-                         static_cast<uint32_t>(stream),  static_cast<uint32_t>(r),
-                         static_cast<uint32_t>(r >> 32), sub_index};
+  std::seed_seq sequence{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32), static_cast<uint32_t>(stream),
+                         static_cast<uint32_t>(r),    static_cast<uint32_t>(r >> 32),    sub_index};
   return std::mt19937_64(sequence);
 }
 

@@ -50,11 +50,10 @@
 // Cost: runs x 30 steps x 11 word lengths of a 2-state filter: ~10 ms for 500 runs.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "engine/core/status.h"
 
@@ -62,13 +61,13 @@ namespace localizer::engine::experiments {
 
 struct FwlSystem {
   std::string name;
-  std::string units;               // of position ("full scale", "km")
-  double period_s = 1.0;           // T
-  double measurement_sigma = 0.05; // sigma_w, units
-  double accel_sigma = 1e-3;       // sigma_a, units / s^2
+  std::string units;                                // of position ("full scale", "km")
+  double period_s = 1.0;                            // T
+  double measurement_sigma = 0.05;                  // sigma_w, units
+  double accel_sigma = 1e-3;                        // sigma_a, units / s^2
   Eigen::Vector2d scale = Eigen::Vector2d::Ones();  // S = diag(s_p, s_v), powers of two
-  double start_position = 0.4;     // target truth, units
-  double velocity = -0.02;         // units / s
+  double start_position = 0.4;                      // target truth, units
+  double velocity = -0.02;                          // units / s
 };
 
 // 1 or 2 (the choices above); INVALID_ARGUMENT for another number.
@@ -76,11 +75,11 @@ StatusOr<FwlSystem> FwlSystemPreset(int system);
 
 struct FwlOptions {
   int system = 1;
-  int runs = 500;        // Monte-Carlo runs, 1..10^6
+  int runs = 500;  // Monte-Carlo runs, 1..10^6
   uint64_t seed = 1;
-  int min_bits = 6;      // word lengths min_bits..max_bits, within 4..24
+  int min_bits = 6;  // word lengths min_bits..max_bits, within 4..24
   int max_bits = 16;
-  int first_step = 11;   // the seed: steps 11..30
+  int first_step = 11;  // the seed: steps 11..30
   int last_step = 30;
   Status Validate() const;  // INVALID_ARGUMENT naming the field
 };

@@ -15,8 +15,7 @@ Status MixtureNoise::Validate() const {
     return sim_detail::Invalid("gaussian_probability", gaussian_probability, "must be in [0, 1]");
   }
   if (!(gaussian_sigma_m > 0.0 && std::isfinite(gaussian_sigma_m))) {
-    return sim_detail::Invalid("gaussian_sigma_m", gaussian_sigma_m,
-                                "must be positive and finite");
+    return sim_detail::Invalid("gaussian_sigma_m", gaussian_sigma_m, "must be positive and finite");
   }
   return stable.Validate();
 }
@@ -25,8 +24,7 @@ Eigen::Vector2d SampleMixtureNoise(const MixtureNoise& noise, std::mt19937_64& e
   Eigen::Vector2d n;
   for (int axis = 0; axis < 2; ++axis) {
     const bool gaussian = OpenUniform(engine) < noise.gaussian_probability;
-    n[axis] = gaussian ? noise.gaussian_sigma_m * StandardNormal(engine)
-                       : SampleAlphaStable(noise.stable, engine);
+    n[axis] = gaussian ? noise.gaussian_sigma_m * StandardNormal(engine) : SampleAlphaStable(noise.stable, engine);
   }
   return n;
 }
@@ -41,8 +39,7 @@ StatusOr<MixtureDensity> MixtureDensity::Create(const MixtureNoise& noise) {
 MixtureDensity::MixtureDensity(const MixtureNoise& noise, StableDensityTable stable)
     : noise_(noise), stable_(std::move(stable)) {
   const double e = noise.gaussian_probability;
-  log_gaussian_weight_ =
-      std::log(e) - std::log(noise.gaussian_sigma_m * std::sqrt(2.0 * std::numbers::pi));
+  log_gaussian_weight_ = std::log(e) - std::log(noise.gaussian_sigma_m * std::sqrt(2.0 * std::numbers::pi));
   log_stable_weight_ = std::log1p(-e);
 }
 

@@ -45,9 +45,7 @@ class MixtureDensity {
   // ln p(n) of one axis, n in m (p in 1/m); finite for every finite n.
   double LogDensity(double n_m) const;
   // ln p(n_x) + ln p(n_y): the axes are independent.
-  double LogDensity(const Eigen::Vector2d& n_m) const {
-    return LogDensity(n_m.x()) + LogDensity(n_m.y());
-  }
+  double LogDensity(const Eigen::Vector2d& n_m) const { return LogDensity(n_m.x()) + LogDensity(n_m.y()); }
   const MixtureNoise& noise() const { return noise_; }
 
  private:

@@ -7,9 +7,9 @@
 #include <tuple>
 
 #include "engine/experiments/experiment_random.h"
-#include "engine/sim/invalid_value.h"
 #include "engine/experiments/planar_kalman.h"
 #include "engine/experiments/planar_particle.h"
+#include "engine/sim/invalid_value.h"
 
 namespace localizer::engine::experiments {
 namespace {
@@ -46,14 +46,12 @@ Status ValidateFilters(const PfVsEkf2dOptions& options) {
   const std::vector<std::string> selected = SelectedFilters(options);
   const double alpha = options.measurement_noise.stable.alpha;
   if (std::find(selected.begin(), selected.end(), "PF") != selected.end() && !(alpha > 1.0)) {
-    return Invalid("alpha", alpha,
-                   "the PF's stable density needs alpha > 1 (or leave PF out of filters)");
+    return Invalid("alpha", alpha, "the PF's stable density needs alpha > 1 (or leave PF out of filters)");
   }
   return Status::Ok();
 }
 
-PlanarKalmanOptions KalmanOptions(const PfVsEkf2dOptions& options, PlanarPredictor predictor,
-                                  PlanarUpdater updater) {
+PlanarKalmanOptions KalmanOptions(const PfVsEkf2dOptions& options, PlanarPredictor predictor, PlanarUpdater updater) {
   PlanarKalmanOptions kalman;
   kalman.predictor = predictor;
   kalman.updater = updater;
@@ -95,9 +93,8 @@ FilterSummary Summarise(const std::string& name, const FilterTally& tally, doubl
   s.run_std_m = MeanAndStd(tally.run_means).second;
   s.median_error_m = Median(tally.step_errors);
   s.final_lap_error_m = MeanAndStd(tally.final_lap_means).first;
-  s.divergences =
-      static_cast<int>(std::count_if(tally.final_lap_means.begin(), tally.final_lap_means.end(),
-                                     [&](double e) { return e > divergence_m; }));
+  s.divergences = static_cast<int>(std::count_if(tally.final_lap_means.begin(), tally.final_lap_means.end(),
+                                                 [&](double e) { return e > divergence_m; }));
   s.us_per_step = 1e6 * tally.seconds / static_cast<double>(tally.step_errors.size());
   return s;
 }
@@ -142,10 +139,8 @@ StatusOr<PlanarRun> SimulatePlanarRun(const PfVsEkf2dOptions& options, int64_t r
   LOCALIZER_RETURN_IF_ERROR(options.Validate());
   StatusOr<CourseSchedule> course = RoundedRectangleCourse(options.course, options.model);
   if (!course.ok()) return course.status();
-  std::mt19937_64 control_engine =
-      ExperimentEngine(options.seed, ExperimentStream::kControlNoise, run);
-  std::mt19937_64 fix_engine =
-      ExperimentEngine(options.seed, ExperimentStream::kMeasurementNoise, run);
+  std::mt19937_64 control_engine = ExperimentEngine(options.seed, ExperimentStream::kControlNoise, run);
+  std::mt19937_64 fix_engine = ExperimentEngine(options.seed, ExperimentStream::kMeasurementNoise, run);
   PlanarRun r;
   r.commands = std::move(course->controls);
   r.truth.reserve(r.commands.size() + 1);
@@ -154,18 +149,15 @@ StatusOr<PlanarRun> SimulatePlanarRun(const PfVsEkf2dOptions& options, int64_t r
   for (const BicycleControl& command : r.commands) {
     const ControlNoise& w = options.control_noise;
     const double speed = command.speed_mps + w.speed_sigma_mps * StandardNormal(control_engine);
-    const double steering =
-        command.steering_rad + w.steering_sigma_rad * StandardNormal(control_engine);
+    const double steering = command.steering_rad + w.steering_sigma_rad * StandardNormal(control_engine);
     r.truth.push_back(options.model.Step(r.truth.back(), {speed, steering}, options.course.dt_s));
-    r.fixes_m.push_back(r.truth.back().head<2>() +
-                        SampleMixtureNoise(options.measurement_noise, fix_engine));
+    r.fixes_m.push_back(r.truth.back().head<2>() + SampleMixtureNoise(options.measurement_noise, fix_engine));
   }
   return r;
 }
 
-StatusOr<std::unique_ptr<PlanarFilter>> MakePlanarFilter(
-    const std::string& name, const PfVsEkf2dOptions& options,
-    std::shared_ptr<const MixtureDensity> mixture, int64_t run) {
+StatusOr<std::unique_ptr<PlanarFilter>> MakePlanarFilter(const std::string& name, const PfVsEkf2dOptions& options,
+                                                         std::shared_ptr<const MixtureDensity> mixture, int64_t run) {
   const int index = FilterIndex(name);
   if (index < 0) return InvalidArgument("filter \"" + name + "\" is unknown");
   const auto wrap = [](auto made) -> StatusOr<std::unique_ptr<PlanarFilter>> {
@@ -178,22 +170,19 @@ StatusOr<std::unique_ptr<PlanarFilter>> MakePlanarFilter(
     pf.likelihood = name == "PF" ? ParticleLikelihood::kMixture : ParticleLikelihood::kGaussian;
     pf.gaussian_sigma_m = options.KalmanSigma();
     pf.resample_ess_fraction = options.resample_ess_fraction;
-    std::mt19937_64 engine = ExperimentEngine(options.seed, ExperimentStream::kFilter, run,
-                                              static_cast<uint32_t>(index));
-    return wrap(PlanarParticleFilter::Create(options.model, options.control_noise, pf,
-                                             std::move(mixture), engine));
+    std::mt19937_64 engine =
+        ExperimentEngine(options.seed, ExperimentStream::kFilter, run, static_cast<uint32_t>(index));
+    return wrap(PlanarParticleFilter::Create(options.model, options.control_noise, pf, std::move(mixture), engine));
   }
-  const PlanarPredictor predictor =
-      name.starts_with("UKF") ? PlanarPredictor::kUnscented : PlanarPredictor::kExtended;
+  const PlanarPredictor predictor = name.starts_with("UKF") ? PlanarPredictor::kUnscented : PlanarPredictor::kExtended;
   const PlanarUpdater updater = name.ends_with("-Huber") ? PlanarUpdater::kHuber
                                 : name.ends_with("-t")   ? PlanarUpdater::kStudentT
                                                          : PlanarUpdater::kGaussian;
-  return wrap(PlanarKalmanFilter::Create(options.model, options.control_noise,
-                                         KalmanOptions(options, predictor, updater)));
+  return wrap(
+      PlanarKalmanFilter::Create(options.model, options.control_noise, KalmanOptions(options, predictor, updater)));
 }
 
-std::vector<double> TrackPlanarRun(PlanarFilter& filter, const PfVsEkf2dOptions& options,
-                                   const PlanarRun& run) {
+std::vector<double> TrackPlanarRun(PlanarFilter& filter, const PfVsEkf2dOptions& options, const PlanarRun& run) {
   PlanarBelief prior;
   prior.mean = run.truth.front();
   const double sp = options.initial_position_sigma_m, sh = options.initial_heading_sigma_rad;
@@ -208,8 +197,7 @@ std::vector<double> TrackPlanarRun(PlanarFilter& filter, const PfVsEkf2dOptions&
   return errors;
 }
 
-StatusOr<PfVsEkf2dResult> RunPfVsEkf2d(const PfVsEkf2dOptions& options,
-                                       const std::function<void(int)>& progress) {
+StatusOr<PfVsEkf2dResult> RunPfVsEkf2d(const PfVsEkf2dOptions& options, const std::function<void(int)>& progress) {
   LOCALIZER_RETURN_IF_ERROR(options.Validate());
   const std::vector<std::string> names = SelectedFilters(options);
   std::shared_ptr<const MixtureDensity> mixture;
@@ -227,13 +215,11 @@ StatusOr<PfVsEkf2dResult> RunPfVsEkf2d(const PfVsEkf2dOptions& options,
     result.steps_per_run = static_cast<int>(simulated->commands.size());
     result.steps_per_lap = result.steps_per_run / options.course.laps;
     for (size_t f = 0; f < names.size(); ++f) {
-      StatusOr<std::unique_ptr<PlanarFilter>> filter =
-          MakePlanarFilter(names[f], options, mixture, run);
+      StatusOr<std::unique_ptr<PlanarFilter>> filter = MakePlanarFilter(names[f], options, mixture, run);
       if (!filter.ok()) return filter.status();
       const auto start = std::chrono::steady_clock::now();
       const std::vector<double> errors = TrackPlanarRun(**filter, options, *simulated);
-      tallies[f].seconds +=
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      tallies[f].seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       tallies[f].step_errors.insert(tallies[f].step_errors.end(), errors.begin(), errors.end());
       tallies[f].run_means.push_back(MeanAndStd(errors).first);
       const std::vector<double> final_lap(errors.end() - result.steps_per_lap, errors.end());

@@ -44,7 +44,7 @@
 namespace localizer::engine::experiments {
 
 struct PfVsEkf2dOptions {
-  int runs = 100;                           // Monte-Carlo runs, 1..10^6
+  int runs = 100;  // Monte-Carlo runs, 1..10^6
   uint64_t seed = 1;
   BicycleModel model;                       // wheelbase 2.5 m
   CourseOptions course;                     // 3.5 m/s, 0.1 s, 2 laps of a rounded square
@@ -63,9 +63,7 @@ struct PfVsEkf2dOptions {
   // INVALID_ARGUMENT naming the field (runs, particles, kalman_sigma_m, ..., filters with
   // the unknown name) or the nested options' errors.
   Status Validate() const;
-  double KalmanSigma() const {
-    return kalman_sigma_m > 0.0 ? kalman_sigma_m : measurement_noise.gaussian_sigma_m;
-  }
+  double KalmanSigma() const { return kalman_sigma_m > 0.0 ? kalman_sigma_m : measurement_noise.gaussian_sigma_m; }
 };
 
 // Every filter the experiment knows, in table order.
@@ -81,13 +79,11 @@ StatusOr<PlanarRun> SimulatePlanarRun(const PfVsEkf2dOptions& options, int64_t r
 
 // The named filter for run `run` (its random engine keyed by seed and run). `mixture` is
 // needed (non-null) by "PF" only. INVALID_ARGUMENT for an unknown name.
-StatusOr<std::unique_ptr<PlanarFilter>> MakePlanarFilter(
-    const std::string& name, const PfVsEkf2dOptions& options,
-    std::shared_ptr<const MixtureDensity> mixture, int64_t run);
+StatusOr<std::unique_ptr<PlanarFilter>> MakePlanarFilter(const std::string& name, const PfVsEkf2dOptions& options,
+                                                         std::shared_ptr<const MixtureDensity> mixture, int64_t run);
 
 // Initialises `filter` at the options' prior and runs it over `run`: the K position errors.
-std::vector<double> TrackPlanarRun(PlanarFilter& filter, const PfVsEkf2dOptions& options,
-                                   const PlanarRun& run);
+std::vector<double> TrackPlanarRun(PlanarFilter& filter, const PfVsEkf2dOptions& options, const PlanarRun& run);
 
 struct FilterSummary {
   std::string name;
@@ -108,7 +104,6 @@ struct PfVsEkf2dResult {
 };
 
 // Runs the experiment; `progress(runs_done)` after each run when set. Single-threaded.
-StatusOr<PfVsEkf2dResult> RunPfVsEkf2d(const PfVsEkf2dOptions& options,
-                                       const std::function<void(int)>& progress = {});
+StatusOr<PfVsEkf2dResult> RunPfVsEkf2d(const PfVsEkf2dOptions& options, const std::function<void(int)>& progress = {});
 
 }  // namespace localizer::engine::experiments

@@ -28,8 +28,8 @@ Mat2 ControlCovariance(const ControlNoise& noise) {
       .asDiagonal();
 }
 
-PlanarBelief PredictExtended(const PlanarBelief& prior, const BicycleModel& model,
-                             const Mat2& control_covariance, const BicycleControl& u, double dt_s) {
+PlanarBelief PredictExtended(const PlanarBelief& prior, const BicycleModel& model, const Mat2& control_covariance,
+                             const BicycleControl& u, double dt_s) {
   const Mat3 f = model.StateJacobian(prior.mean, u, dt_s);
   const Mat32 g = model.ControlJacobian(prior.mean, u, dt_s);
   PlanarBelief next;
@@ -39,19 +39,16 @@ PlanarBelief PredictExtended(const PlanarBelief& prior, const BicycleModel& mode
 }
 
 // Scaled sigma points with alpha 1, beta 2, kappa 0 over the augmented state.
-PlanarBelief PredictUnscented(const PlanarBelief& prior, const BicycleModel& model,
-                              const Mat2& control_covariance, const BicycleControl& u,
-                              double dt_s) {
-  Eigen::Matrix<double, kAugmented, kAugmented> p =
-      Eigen::Matrix<double, kAugmented, kAugmented>::Zero();
+PlanarBelief PredictUnscented(const PlanarBelief& prior, const BicycleModel& model, const Mat2& control_covariance,
+                              const BicycleControl& u, double dt_s) {
+  Eigen::Matrix<double, kAugmented, kAugmented> p = Eigen::Matrix<double, kAugmented, kAugmented>::Zero();
   p.topLeftCorner<3, 3>() = prior.covariance;
   p.bottomRightCorner<2, 2>() = control_covariance;
   // LDLT tolerates the semi-definite covariances a zero noise term gives.
   const Eigen::LDLT<Eigen::Matrix<double, kAugmented, kAugmented>> ldlt(p);
-  Eigen::Matrix<double, kAugmented, kAugmented> root =
-      ldlt.transpositionsP().transpose() *
-      Eigen::Matrix<double, kAugmented, kAugmented>(ldlt.matrixL()) *
-      ldlt.vectorD().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  Eigen::Matrix<double, kAugmented, kAugmented> root = ldlt.transpositionsP().transpose() *
+                                                       Eigen::Matrix<double, kAugmented, kAugmented>(ldlt.matrixL()) *
+                                                       ldlt.vectorD().cwiseMax(0.0).cwiseSqrt().asDiagonal();
   root *= std::sqrt(static_cast<double>(kAugmented));  // sqrt(n + lambda), lambda = 0
   const auto propagate = [&](const Eigen::Matrix<double, kAugmented, 1>& a) {
     return model.Step(a.head<3>(), {u.speed_mps + a[3], u.steering_rad + a[4]}, dt_s);
@@ -75,8 +72,7 @@ PlanarBelief PredictUnscented(const PlanarBelief& prior, const BicycleModel& mod
 }
 
 // The Gaussian update with R = diag(variance_m2), Joseph form.
-PlanarBelief KalmanUpdate(const PlanarBelief& prior, const Eigen::Vector2d& z,
-                          const Eigen::Vector2d& variance_m2) {
+PlanarBelief KalmanUpdate(const PlanarBelief& prior, const Eigen::Vector2d& z, const Eigen::Vector2d& variance_m2) {
   Mat23 h = Mat23::Zero();
   h(0, kPx) = 1.0;
   h(1, kPy) = 1.0;
@@ -98,16 +94,14 @@ Status ControlNoise::Validate() const {
     return sim_detail::Invalid("speed_sigma_mps", speed_sigma_mps, "must be >= 0 and finite");
   }
   if (!NonNegativeFinite(steering_sigma_rad)) {
-    return sim_detail::Invalid("steering_sigma_rad", steering_sigma_rad,
-                                "must be >= 0 and finite");
+    return sim_detail::Invalid("steering_sigma_rad", steering_sigma_rad, "must be >= 0 and finite");
   }
   return Status::Ok();
 }
 
 Status PlanarKalmanOptions::Validate() const {
   if (!PositiveFinite(measurement_sigma_m)) {
-    return sim_detail::Invalid("measurement_sigma_m", measurement_sigma_m,
-                                "must be positive and finite");
+    return sim_detail::Invalid("measurement_sigma_m", measurement_sigma_m, "must be positive and finite");
   }
   if (!PositiveFinite(huber_threshold)) {
     return sim_detail::Invalid("huber_threshold", huber_threshold, "must be positive and finite");
@@ -118,9 +112,9 @@ Status PlanarKalmanOptions::Validate() const {
   return Status::Ok();
 }
 
-StatusOr<std::unique_ptr<PlanarKalmanFilter>> PlanarKalmanFilter::Create(
-    const BicycleModel& model, const ControlNoise& control_noise,
-    const PlanarKalmanOptions& options) {
+StatusOr<std::unique_ptr<PlanarKalmanFilter>> PlanarKalmanFilter::Create(const BicycleModel& model,
+                                                                         const ControlNoise& control_noise,
+                                                                         const PlanarKalmanOptions& options) {
   LOCALIZER_RETURN_IF_ERROR(model.Validate());
   LOCALIZER_RETURN_IF_ERROR(control_noise.Validate());
   LOCALIZER_RETURN_IF_ERROR(options.Validate());
@@ -131,9 +125,8 @@ void PlanarKalmanFilter::Initialise(const PlanarBelief& belief) { belief_ = beli
 
 void PlanarKalmanFilter::Predict(const BicycleControl& command, double dt_s) {
   const Mat2 m = ControlCovariance(control_noise_);
-  belief_ = options_.predictor == PlanarPredictor::kExtended
-                ? PredictExtended(belief_, model_, m, command, dt_s)
-                : PredictUnscented(belief_, model_, m, command, dt_s);
+  belief_ = options_.predictor == PlanarPredictor::kExtended ? PredictExtended(belief_, model_, m, command, dt_s)
+                                                             : PredictUnscented(belief_, model_, m, command, dt_s);
 }
 
 double PlanarKalmanFilter::Weight(double residual) const {

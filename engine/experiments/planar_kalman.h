@@ -61,8 +61,7 @@ class PlanarKalmanFilter final : public PlanarFilter {
   const PlanarBelief& belief() const { return belief_; }
 
  private:
-  PlanarKalmanFilter(const BicycleModel& model, const ControlNoise& control_noise,
-                     const PlanarKalmanOptions& options)
+  PlanarKalmanFilter(const BicycleModel& model, const ControlNoise& control_noise, const PlanarKalmanOptions& options)
       : model_(model), control_noise_(control_noise), options_(options) {}
   double Weight(double residual) const;  // the updater's w(r)
 

@@ -28,20 +28,17 @@ Status PlanarParticleOptions::Validate() const {
     return sim_detail::Invalid("particles", particles, "must be in [1, 1000000]");
   }
   if (!(gaussian_sigma_m > 0.0 && std::isfinite(gaussian_sigma_m))) {
-    return sim_detail::Invalid("gaussian_sigma_m", gaussian_sigma_m,
-                                "must be positive and finite");
+    return sim_detail::Invalid("gaussian_sigma_m", gaussian_sigma_m, "must be positive and finite");
   }
   if (!(resample_ess_fraction >= 0.0 && resample_ess_fraction <= 1.0)) {
-    return sim_detail::Invalid("resample_ess_fraction", resample_ess_fraction,
-                                "must be in [0, 1]");
+    return sim_detail::Invalid("resample_ess_fraction", resample_ess_fraction, "must be in [0, 1]");
   }
   return Status::Ok();
 }
 
 StatusOr<std::unique_ptr<PlanarParticleFilter>> PlanarParticleFilter::Create(
-    const BicycleModel& model, const ControlNoise& control_noise,
-    const PlanarParticleOptions& options, std::shared_ptr<const MixtureDensity> mixture,
-    std::mt19937_64 engine) {
+    const BicycleModel& model, const ControlNoise& control_noise, const PlanarParticleOptions& options,
+    std::shared_ptr<const MixtureDensity> mixture, std::mt19937_64 engine) {
   LOCALIZER_RETURN_IF_ERROR(model.Validate());
   LOCALIZER_RETURN_IF_ERROR(control_noise.Validate());
   LOCALIZER_RETURN_IF_ERROR(options.Validate());
@@ -52,11 +49,9 @@ StatusOr<std::unique_ptr<PlanarParticleFilter>> PlanarParticleFilter::Create(
       new PlanarParticleFilter(model, control_noise, options, std::move(mixture), engine));
 }
 
-PlanarParticleFilter::PlanarParticleFilter(const BicycleModel& model,
-                                           const ControlNoise& control_noise,
+PlanarParticleFilter::PlanarParticleFilter(const BicycleModel& model, const ControlNoise& control_noise,
                                            const PlanarParticleOptions& options,
-                                           std::shared_ptr<const MixtureDensity> mixture,
-                                           std::mt19937_64 engine)
+                                           std::shared_ptr<const MixtureDensity> mixture, std::mt19937_64 engine)
     : model_(model),
       control_noise_(control_noise),
       options_(options),
@@ -70,8 +65,7 @@ PlanarParticleFilter::PlanarParticleFilter(const BicycleModel& model,
 void PlanarParticleFilter::Initialise(const PlanarBelief& belief) {
   const Eigen::Matrix3d root = SemiDefiniteRoot(belief.covariance);
   for (PlanarState& s : particles_) {
-    const Eigen::Vector3d z(StandardNormal(engine_), StandardNormal(engine_),
-                            StandardNormal(engine_));
+    const Eigen::Vector3d z(StandardNormal(engine_), StandardNormal(engine_), StandardNormal(engine_));
     s = belief.mean + root * z;
   }
   std::fill(weights_.begin(), weights_.end(), 1.0 / options_.particles);
@@ -81,10 +75,8 @@ void PlanarParticleFilter::Initialise(const PlanarBelief& belief) {
 
 void PlanarParticleFilter::Predict(const BicycleControl& command, double dt_s) {
   for (PlanarState& s : particles_) {
-    const double speed =
-        command.speed_mps + control_noise_.speed_sigma_mps * StandardNormal(engine_);
-    const double steering =
-        command.steering_rad + control_noise_.steering_sigma_rad * StandardNormal(engine_);
+    const double speed = command.speed_mps + control_noise_.speed_sigma_mps * StandardNormal(engine_);
+    const double steering = command.steering_rad + control_noise_.steering_sigma_rad * StandardNormal(engine_);
     s = model_.Step(s, {speed, steering}, dt_s);
   }
   estimate_ = WeightedMean();

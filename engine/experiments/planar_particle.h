@@ -45,10 +45,11 @@ class PlanarParticleFilter final : public PlanarFilter {
  public:
   // `mixture` must be non-null for kMixture (INVALID_ARGUMENT otherwise); it is shared,
   // read-only, between filters. `seed` keys the filter's random engine.
-  static StatusOr<std::unique_ptr<PlanarParticleFilter>> Create(
-      const BicycleModel& model, const ControlNoise& control_noise,
-      const PlanarParticleOptions& options, std::shared_ptr<const MixtureDensity> mixture,
-      std::mt19937_64 engine);
+  static StatusOr<std::unique_ptr<PlanarParticleFilter>> Create(const BicycleModel& model,
+                                                                const ControlNoise& control_noise,
+                                                                const PlanarParticleOptions& options,
+                                                                std::shared_ptr<const MixtureDensity> mixture,
+                                                                std::mt19937_64 engine);
   PlanarParticleFilter(const PlanarParticleFilter&) = delete;
   PlanarParticleFilter& operator=(const PlanarParticleFilter&) = delete;
 
@@ -62,8 +63,8 @@ class PlanarParticleFilter final : public PlanarFilter {
 
  private:
   PlanarParticleFilter(const BicycleModel& model, const ControlNoise& control_noise,
-                       const PlanarParticleOptions& options,
-                       std::shared_ptr<const MixtureDensity> mixture, std::mt19937_64 engine);
+                       const PlanarParticleOptions& options, std::shared_ptr<const MixtureDensity> mixture,
+                       std::mt19937_64 engine);
   double LogLikelihood(const Eigen::Vector2d& noise_m) const;
   void ResampleSystematic();
   PlanarState WeightedMean() const;

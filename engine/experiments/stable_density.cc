@@ -39,8 +39,7 @@ struct Zolotarev {
   double d;
   double log_x_term;
 
-  Zolotarev(double x, double a, double b)
-      : alpha(a), theta0(std::atan(b * std::tan(kHalfPi * a)) / a) {
+  Zolotarev(double x, double a, double b) : alpha(a), theta0(std::atan(b * std::tan(kHalfPi * a)) / a) {
     d = std::max(kPi - a * (theta0 + kHalfPi), 0.0);  // rounding can make it -1e-16
     log_x_term = a / (a - 1.0) * std::log(x) + std::log(std::cos(a * theta0)) / (a - 1.0);
   }
@@ -108,11 +107,10 @@ double PositiveSideDensity(double x, double alpha, double beta) {
   const double top = 0.5 * (lo + hi);
   // Each side falls monotonically from its value at the top; a coarse pass sizes the
   // tolerance.
-  const double rough = CompositeSimpson(integrand, 0.0, top, kRoughPanels) +
-                       CompositeSimpson(integrand, top, z.upper(), kRoughPanels);
+  const double rough =
+      CompositeSimpson(integrand, 0.0, top, kRoughPanels) + CompositeSimpson(integrand, top, z.upper(), kRoughPanels);
   const double tolerance = 0.5 * kRelativeTolerance * rough;
-  const double integral =
-      Integrate(integrand, 0.0, top, tolerance) + Integrate(integrand, top, z.upper(), tolerance);
+  const double integral = Integrate(integrand, 0.0, top, tolerance) + Integrate(integrand, top, z.upper(), tolerance);
   return alpha / (kPi * (alpha - 1.0) * x) * integral;
 }
 
@@ -125,8 +123,7 @@ double StableStandardDensity(double x, double alpha, double beta) {
   if (x < -kNearZero) return PositiveSideDensity(-x, alpha, -beta);
   const double zeta = -beta * std::tan(kHalfPi * alpha);
   const double theta0 = std::atan(-zeta) / alpha;
-  return std::tgamma(1.0 + 1.0 / alpha) * std::cos(theta0) /
-         (kPi * std::pow(1.0 + zeta * zeta, 0.5 / alpha));
+  return std::tgamma(1.0 + 1.0 / alpha) * std::cos(theta0) / (kPi * std::pow(1.0 + zeta * zeta, 0.5 / alpha));
 }
 
 namespace {
@@ -145,12 +142,10 @@ std::vector<double> BuildStandardTable(double alpha, double beta) {
 std::shared_ptr<const std::vector<double>> CachedStandardTable(double alpha, double beta) {
   static std::mutex mutex;
   // Never destroyed, so no exit-time ordering problem.
-  static auto* cache =
-      new std::map<std::pair<double, double>, std::shared_ptr<const std::vector<double>>>;
+  static auto* cache = new std::map<std::pair<double, double>, std::shared_ptr<const std::vector<double>>>;
   const std::lock_guard<std::mutex> lock(mutex);
   auto& entry = (*cache)[{alpha, beta}];
-  if (entry == nullptr)
-    entry = std::make_shared<const std::vector<double>>(BuildStandardTable(alpha, beta));
+  if (entry == nullptr) entry = std::make_shared<const std::vector<double>>(BuildStandardTable(alpha, beta));
   return entry;
 }
 
@@ -159,8 +154,7 @@ std::shared_ptr<const std::vector<double>> CachedStandardTable(double alpha, dou
 StatusOr<StableDensityTable> StableDensityTable::Create(const AlphaStable& params) {
   LOCALIZER_RETURN_IF_ERROR(params.Validate());
   if (!(params.alpha > 1.0)) {
-    return sim_detail::Invalid("alpha", params.alpha,
-                                "the stable density table needs 1 < alpha <= 2");
+    return sim_detail::Invalid("alpha", params.alpha, "the stable density table needs 1 < alpha <= 2");
   }
   StableDensityTable table(params);
   table.log_scale_ = std::log(params.scale);

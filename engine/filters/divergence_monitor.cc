@@ -1,9 +1,9 @@
 #include "engine/filters/divergence_monitor.h"
 
-#include "engine/core/normal_quantile.h"
-
 #include <algorithm>
 #include <cmath>
+
+#include "engine/core/normal_quantile.h"
 
 namespace localizer::engine {
 
@@ -30,7 +30,8 @@ bool DivergenceMonitor::Add(double nis, int dof, const std::vector<double>& z) {
     // A run of extreme innovations of one sign: a pair the track cannot explain at all.
     if (static_cast<int>(w.size()) >= kRunFrames) {
       bool run = true;
-      for (size_t i = w.size() - kRunFrames; i < w.size(); ++i) run &= std::abs(w[i]) >= kRunSigmas && w[i] * w.back() > 0.0;
+      for (size_t i = w.size() - kRunFrames; i < w.size(); ++i)
+        run &= std::abs(w[i]) >= kRunSigmas && w[i] * w.back() > 0.0;
       biased |= run;
     }
     if (static_cast<int>(w.size()) < window_) continue;

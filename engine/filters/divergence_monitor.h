@@ -18,8 +18,8 @@
 #pragma once
 
 #include <deque>
-#include <vector>
 #include <utility>
+#include <vector>
 
 namespace localizer::engine {
 

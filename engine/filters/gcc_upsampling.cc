@@ -33,7 +33,7 @@ void UpsampleGcc(const std::vector<float>& gcc, int factor, std::vector<float>* 
     for (int phase = 0; phase < factor; ++phase) {
       for (int t = 0; t < kSpan; ++t) {
         const double x = static_cast<double>(phase) / factor - (t - kGccUpsampleTaps + 1);
-      weights[static_cast<size_t>(phase * kSpan + t)] = static_cast<float>(Kernel(x));
+        weights[static_cast<size_t>(phase * kSpan + t)] = static_cast<float>(Kernel(x));
       }
     }
   }

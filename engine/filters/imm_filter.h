@@ -48,7 +48,7 @@
 namespace localizer::engine {
 
 struct ImmMode {
-  std::string name;              // reported in ModelProbabilities; "" -> the motion model's name
+  std::string name;  // reported in ModelProbabilities; "" -> the motion model's name
   MotionModelKind motion_model;
   MotionModelOptions motion;
 };
@@ -66,7 +66,7 @@ struct ImmOptions {
   KalmanOptions kalman;
   std::vector<ImmMode> modes = {{"cv", MotionModelKind::kCv, {}},
                                 {"ct", MotionModelKind::kCt, {}}};  // >= 1, <= 8, unique names
-  double stay_probability = 0.95;  // pi_ii, in [0, 1]
+  double stay_probability = 0.95;                                   // pi_ii, in [0, 1]
 
   Status Validate() const;  // INVALID_ARGUMENT naming the field
 };

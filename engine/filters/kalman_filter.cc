@@ -38,7 +38,7 @@ struct Innovation {
 };
 
 constexpr EnumName<KalmanVariant> kKalmanVariants[] = {{KalmanVariant::kExtended, "ekf"},
-                                                     {KalmanVariant::kUnscented, "ukf"}};
+                                                       {KalmanVariant::kUnscented, "ukf"}};
 constexpr EnumName<RobustUpdate> kRobustUpdates[] = {
     {RobustUpdate::kNone, "none"}, {RobustUpdate::kHuber, "huber"}, {RobustUpdate::kStudentT, "student-t"}};
 
@@ -60,8 +60,10 @@ Status KalmanOptions::Validate() const {
   if (!(tdoa_sigma_s >= 0.0) || !std::isfinite(tdoa_sigma_s)) {
     return InvalidArgument("tdoa_sigma_s must be finite and >= 0 (0: adaptive)");
   }
-  if (!(min_peak_snr >= 0.0) || !std::isfinite(min_peak_snr)) return InvalidArgument("min_peak_snr must be finite and >= 0");
-  if (!(gate_probability > 0.0 && gate_probability <= 1.0)) return InvalidArgument("gate_probability must be in (0, 1]");
+  if (!(min_peak_snr >= 0.0) || !std::isfinite(min_peak_snr))
+    return InvalidArgument("min_peak_snr must be finite and >= 0");
+  if (!(gate_probability > 0.0 && gate_probability <= 1.0))
+    return InvalidArgument("gate_probability must be in (0, 1]");
   if (!(extra_state_std >= 0.0) || !std::isfinite(extra_state_std)) {
     return InvalidArgument("extra_state_std must be finite and >= 0");
   }
@@ -228,7 +230,8 @@ StatusOr<std::unique_ptr<KalmanFilter>> KalmanFilter::Create(const ArrayGeometry
   LOCALIZER_RETURN_IF_ERROR(options.Validate());
   auto model = MakeMotionModel(options.motion_model, options.motion);
   if (!model.ok()) return model.status();
-  return std::unique_ptr<KalmanFilter>(new KalmanFilter(std::make_unique<Impl>(array, options, std::move(model).value())));
+  return std::unique_ptr<KalmanFilter>(
+      new KalmanFilter(std::make_unique<Impl>(array, options, std::move(model).value())));
 }
 
 bool KalmanFilter::initialised() const { return impl_->initialised; }
@@ -275,8 +278,10 @@ Status KalmanFilter::Initialise(const TrackState& belief) {
 
 void KalmanFilter::Predict(double dt_s) {
   if (!impl_->initialised || !(dt_s > 0.0)) return;
-  if (impl_->options.variant == KalmanVariant::kExtended) impl_->PredictEkf(dt_s);
-  else impl_->PredictUkf(dt_s);
+  if (impl_->options.variant == KalmanVariant::kExtended)
+    impl_->PredictEkf(dt_s);
+  else
+    impl_->PredictUkf(dt_s);
 }
 
 StatusOr<UpdateReport> KalmanFilter::Update(const Measurement& m) {

@@ -64,15 +64,15 @@ const char* RobustUpdateName(RobustUpdate robust);
 struct KalmanOptions {
   KalmanVariant variant = KalmanVariant::kExtended;
   MotionModelKind motion_model = MotionModelKind::kCv;
-  MotionModelOptions motion;             // its noise parameters
-  double tdoa_sigma_s = 0.0;             // TDOA noise std; 0: adaptive (pair_noise.h)
-  double min_peak_snr = 5.0;             // pairs below are left out
-  double gate_probability = 0.9999;      // chi-square gate on the whole innovation, in (0, 1]; 1: no gate
-  double extra_state_std = 1.0;          // initial std of the model's entries beyond (p, v):
-                                         // m/s^2 for acceleration, rad/s for the turn rate
+  MotionModelOptions motion;                  // its noise parameters
+  double tdoa_sigma_s = 0.0;                  // TDOA noise std; 0: adaptive (pair_noise.h)
+  double min_peak_snr = 5.0;                  // pairs below are left out
+  double gate_probability = 0.9999;           // chi-square gate on the whole innovation, in (0, 1]; 1: no gate
+  double extra_state_std = 1.0;               // initial std of the model's entries beyond (p, v):
+                                              // m/s^2 for acceleration, rad/s for the turn rate
   RobustUpdate robust = RobustUpdate::kNone;  // reweighted pairs (above)
-  double huber_threshold = 1.345;        // c, in noise stds, > 0 (robust kHuber only)
-  double student_dof = 4.0;              // nu, > 0 (robust kStudentT only)
+  double huber_threshold = 1.345;             // c, in noise stds, > 0 (robust kHuber only)
+  double student_dof = 4.0;                   // nu, > 0 (robust kStudentT only)
 
   Status Validate() const;  // INVALID_ARGUMENT naming the field
 };

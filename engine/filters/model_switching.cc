@@ -34,7 +34,7 @@ bool UpdateModelProbabilities(const std::vector<double>& log_likelihoods, Eigen:
   if (!std::isfinite(top)) return false;
   Eigen::VectorXd posterior(k);
   for (int i = 0; i < k; ++i) {
-    posterior(i) = std::isfinite(log_likelihoods[i]) ? (*mu)(i) * std::exp(log_likelihoods[i] - top) : 0.0;
+    posterior(i) = std::isfinite(log_likelihoods[i]) ? (*mu)(i)*std::exp(log_likelihoods[i] - top) : 0.0;
   }
   const double total = posterior.sum();
   if (!(total > 0.0) || !std::isfinite(total)) return false;

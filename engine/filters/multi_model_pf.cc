@@ -36,7 +36,8 @@ Status MultiModelPfOptions::Validate() const {
     if (!(m.accel_noise_mps2 >= 0.0) || !std::isfinite(m.accel_noise_mps2)) {
       return InvalidArgument("models[" + m.name + "].accel_noise_mps2 must be finite and >= 0");
     }
-    if (!std::isfinite(m.turn_rate_radps)) return InvalidArgument("models[" + m.name + "].turn_rate_radps must be finite");
+    if (!std::isfinite(m.turn_rate_radps))
+      return InvalidArgument("models[" + m.name + "].turn_rate_radps must be finite");
   }
   return ValidateStayProbability(stay_probability, "stay_probability");
 }
@@ -85,7 +86,7 @@ struct MultiModelParticleFilter::Impl {
   std::vector<uint8_t> label, prior_label;  // hypothesis kept per particle; before Predict
   std::vector<std::vector<InnovationMoments>> innovations;
   std::vector<float> log_alpha, alpha, log_weight;  // scratch, K N and N
-  bool predicted = false;  // the K clouds hold predictions not yet weighed
+  bool predicted = false;                           // the K clouds hold predictions not yet weighed
   bool initialised = false;
   double ess = 0.0;
 };
@@ -265,8 +266,7 @@ StatusOr<UpdateReport> MultiModelParticleFilter::Update(const Measurement& m) {
     s.noise.Finish(s.innovations[likeliest], m.sample_rate_hz, &report);
     ess = s.PickByLikelihood();
   } else {  // the first frame after a restart: one cloud, labels as they are
-    s.base.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness,
-                 &s.innovations[0]);
+    s.base.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness, &s.innovations[0]);
     s.noise.Finish(s.innovations[0], m.sample_rate_hz, &report);
     ess = s.base.NormaliseWeights();
     s.mu = s.LabelMasses(s.label);

@@ -67,8 +67,8 @@ struct ParticleMotion {
 std::vector<ParticleMotion> DefaultParticleMotions(double accel_noise_mps2, double turn_rate_radps = 0.1);
 
 struct MultiModelPfOptions {
-  ParticleFilterOptions particle;  // N, likelihood, TDOA noise, resampling, seed (its
-                                   // accel_noise_mps2 is unused: each hypothesis has its own)
+  ParticleFilterOptions particle;      // N, likelihood, TDOA noise, resampling, seed (its
+                                       // accel_noise_mps2 is unused: each hypothesis has its own)
   std::vector<ParticleMotion> models;  // >= 1, <= 16; empty: DefaultParticleMotions(
                                        // particle.accel_noise_mps2)
   double stay_probability = 0.95;      // Markov prior per step, in [0, 1] (1 with K = 1)

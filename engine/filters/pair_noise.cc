@@ -62,8 +62,7 @@ int PairNoise::Select(const Measurement& m, double min_peak_snr) {
   return count;
 }
 
-void PairNoise::Finish(const std::vector<InnovationMoments>& innovations, double sample_rate_hz,
-                       UpdateReport* report) {
+void PairNoise::Finish(const std::vector<InnovationMoments>& innovations, double sample_rate_hz, UpdateReport* report) {
   double mean_var_s2 = 0.0;
   report->anchored_z.assign(sigmas_s_.size(), std::numeric_limits<double>::quiet_NaN());
   // The divergence test's terms: signed, capped at kAnchoredCap sigmas.

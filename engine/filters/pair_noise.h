@@ -19,9 +19,9 @@
 // kept within [0.5, 8] and fed only by innovations inside a 4-sigma
 // gate (an outlier is an outlier, not noise). So the adaptation can absorb a model that is
 // several times too optimistic (multipath biases peaks beyond their curvature's
-// bound), never a divergence: the divergence test caps the scale at 2 (below). Without an anchor (no GCC and no delay_sigma_s) the pair falls back to the
-// former absolute adaptation: sigma from 0.1 sample, kept within [0.01, 2] samples.
-// A fixed sigma (> 0) is used as it is, for every pair.
+// bound), never a divergence: the divergence test caps the scale at 2 (below). Without an anchor (no GCC and no
+// delay_sigma_s) the pair falls back to the former absolute adaptation: sigma from 0.1 sample, kept within [0.01, 2]
+// samples. A fixed sigma (> 0) is used as it is, for every pair.
 //
 // Finish folds the innovation moments (e = d - E[h'], Var[h'] under the prior) into
 //     nis          = sum_used e^2 / (sigma_k^2 + Var[h'])     (what the filter assumed)
@@ -67,9 +67,9 @@ class PairNoise {
 
  private:
   double fixed_sigma_s_;
-  std::vector<double> sigmas_s_;   // this frame's
-  std::vector<double> anchors_s_;  // this frame's (0: none)
-  std::vector<double> scale2_;     // adapted s_k^2 (anchored pairs)
+  std::vector<double> sigmas_s_;      // this frame's
+  std::vector<double> anchors_s_;     // this frame's (0: none)
+  std::vector<double> scale2_;        // adapted s_k^2 (anchored pairs)
   std::vector<double> free_sigma_s_;  // fallback absolute adaptation (pairs without anchor)
   std::vector<int> used_;
 };

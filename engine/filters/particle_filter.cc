@@ -30,8 +30,7 @@ Status ParticleFilterOptions::Validate() const {
     return InvalidArgument("accel_noise_mps2 must be finite and >= 0, got " + std::to_string(accel_noise_mps2));
   }
   if (!(tdoa_sigma_s >= 0.0) || !std::isfinite(tdoa_sigma_s)) {
-    return InvalidArgument("tdoa_sigma_s must be finite and >= 0 (0: adaptive), got " +
-                           std::to_string(tdoa_sigma_s));
+    return InvalidArgument("tdoa_sigma_s must be finite and >= 0 (0: adaptive), got " + std::to_string(tdoa_sigma_s));
   }
   if (!(outlier_probability >= 0.0 && outlier_probability < 1.0)) {
     return InvalidArgument("outlier_probability must be in [0, 1), got " + std::to_string(outlier_probability));
@@ -61,7 +60,6 @@ Status ParticleFilterOptions::Validate() const {
   return Status::Ok();
 }
 
-
 struct ParticleFilter::Impl {
   Impl(const ArrayGeometry& a, const ParticleFilterOptions& o)
       : array(a), options(o), set(a, o), noise(o.tdoa_sigma_s) {}
@@ -73,7 +71,7 @@ struct ParticleFilter::Impl {
   PairNoise noise;  // pairs used and their TDOA noise std
   std::vector<InnovationMoments> innovations;
   std::vector<InnovationMoments> later_innovations;  // of a tempered update's later stages
-  int tempered_updates_left = 0;  // updates still applied progressively after a (re)start
+  int tempered_updates_left = 0;                     // updates still applied progressively after a (re)start
 };
 
 constexpr int kTemperedStages = 4;

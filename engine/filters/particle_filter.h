@@ -37,8 +37,8 @@
 // at 0.1 sample and kept within [0.01, 2] samples.
 // Then log-weights are normalised (log-sum-exp), ESS = 1 / sum w^2, and when
 // ESS < resample_threshold * N the particles are resampled systematically (weights reset)
-// and moved by a shrunk kernel (regularised PF, Liu & West 2001; see particle_set.h) so that a likelihood far narrower than the prior — TDOAs are precise to
-// centimetres — does not collapse the cloud onto a few clones for good.
+// and moved by a shrunk kernel (regularised PF, Liu & West 2001; see particle_set.h) so that a likelihood far narrower
+// than the prior — TDOAs are precise to centimetres — does not collapse the cloud onto a few clones for good.
 //
 // Cost per step: O(N * pairs), about 15 ns per particle with 3 pairs on one Zen 4 core
 // (BENCHMARKS.md); memory about 30 floats per particle (states twice, weights, scratch).
@@ -60,8 +60,8 @@ StatusOr<Likelihood> ParseLikelihood(const std::string& name);  // "peak" | "gcc
 const char* LikelihoodName(Likelihood l);
 
 struct ParticleFilterOptions {
-  int particles = 4096;               // N, in [16, 1 << 22]
-  double accel_noise_mps2 = 1.0;      // std of the white acceleration, per axis (m/s^2)
+  int particles = 4096;           // N, in [16, 1 << 22]
+  double accel_noise_mps2 = 1.0;  // std of the white acceleration, per axis (m/s^2)
   // Velocity mean reversion (particle_set.h Predict): each step keeps exp(-dt / tau) of the
   // velocity; 0 (the default) is constant velocity. Meant for a range the array cannot
   // observe (4 sensors, a source several apertures out), which otherwise runs away:
@@ -80,15 +80,15 @@ struct ParticleFilterOptions {
   double outlier_probability = 0.05;  // mixture likelihood: eps, the chance a pair's peak
                                       // is an outlier, in [0, 1)
   Likelihood likelihood = Likelihood::kPeak;
-  double min_peak_snr = 5.0;          // pairs whose peak_snr is below are not used: the
-                                      // frame holds no coherent source for them (noise
-                                      // alone stays below ~4 at p99)
-  double resample_threshold = 0.8;    // resample when ESS < threshold * N (seed: 0.8)
-  double kernel_scale = 0.5;          // regularisation after resampling, x Silverman's
-                                      // bandwidth (0: plain bootstrap filter)
-  int tempered_updates = 2;           // updates after each (re)start applied in 4 tempered
-                                      // stages (progressive correction, particle_filter.cc),
-                                      // in [0, 100]; the GPU filter has none yet
+  double min_peak_snr = 5.0;        // pairs whose peak_snr is below are not used: the
+                                    // frame holds no coherent source for them (noise
+                                    // alone stays below ~4 at p99)
+  double resample_threshold = 0.8;  // resample when ESS < threshold * N (seed: 0.8)
+  double kernel_scale = 0.5;        // regularisation after resampling, x Silverman's
+                                    // bandwidth (0: plain bootstrap filter)
+  int tempered_updates = 2;         // updates after each (re)start applied in 4 tempered
+                                    // stages (progressive correction, particle_filter.cc),
+                                    // in [0, 100]; the GPU filter has none yet
   uint64_t seed = 1;
 
   Status Validate() const;

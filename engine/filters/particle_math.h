@@ -70,7 +70,8 @@ LOCALIZER_HOST_DEVICE_INLINE float CatmullRomRead(const float* g, float lag, flo
   const int i0 = static_cast<int>(lag);
   const float t = lag - static_cast<float>(i0);
   const float gm = g[i0 - 1], g0 = g[i0], g1 = g[i0 + 1], g2 = g[i0 + 2];
-  return g0 + 0.5f * t * ((g1 - gm) + t * ((2.0f * gm - 5.0f * g0 + 4.0f * g1 - g2) + t * (3.0f * (g0 - g1) + g2 - gm)));
+  return g0 +
+         0.5f * t * ((g1 - gm) + t * ((2.0f * gm - 5.0f * g0 + 4.0f * g1 - g2) + t * (3.0f * (g0 - g1) + g2 - gm)));
 }
 
 // The regularisation kernel's bandwidth h = kernel_scale (4 / (N (d + 2)))^(1 / (d + 4)),

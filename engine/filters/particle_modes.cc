@@ -82,8 +82,8 @@ void ParticleSet::SampleMixture(const std::vector<Component>& components) {
 
 std::vector<WeightedBelief> ParticleSet::Modes(double min_weight) const {
   if (labels_ <= 1) return {WeightedBelief{1.0, MeanAndCovariance()}};
-  const LabelMoments m = MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(),
-                                             cur_.vy.data(), cur_.vz.data()}, label_, w_);
+  const LabelMoments m = MomentsByLabel(
+      n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()}, label_, w_);
   std::vector<WeightedBelief> out;
   double kept = 0.0;
   for (size_t c = 0; c < kMaxComponents; ++c) {
@@ -98,7 +98,8 @@ std::vector<WeightedBelief> ParticleSet::Modes(double min_weight) const {
   }
   if (out.empty()) return {WeightedBelief{1.0, MeanAndCovariance()}};
   for (WeightedBelief& b : out) b.weight /= kept;
-  std::sort(out.begin(), out.end(), [](const WeightedBelief& a, const WeightedBelief& b) { return a.weight > b.weight; });
+  std::sort(out.begin(), out.end(),
+            [](const WeightedBelief& a, const WeightedBelief& b) { return a.weight > b.weight; });
   return out;
 }
 
@@ -108,8 +109,8 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   std::array<Eigen::Matrix<float, 6, 1>, kMaxComponents> shift;
   const double h = KernelBandwidth(kernel_scale, n_);
   const double a = kernel_scale > 0.0 ? KernelShrinkage(h) : 1.0;
-  const LabelMoments moments = MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(),
-                                                   cur_.vy.data(), cur_.vz.data()}, label_, w_);
+  const LabelMoments moments = MomentsByLabel(
+      n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()}, label_, w_);
   for (size_t c = 0; c < kMaxComponents; ++c) {
     l[c].setZero();
     shift[c].setZero();
@@ -140,7 +141,8 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   std::swap(cur_, next_);
   std::swap(label_, next_label_);
   labels_ = static_cast<int>(std::count(alive.begin(), alive.end(), true));
-  if (labels_ == 1) std::fill(label_.begin(), label_.end(), 0);
+  if (labels_ == 1)
+    std::fill(label_.begin(), label_.end(), 0);
   else {
     // Keep labels dense so the next pass stays within the live count.
     std::array<int, kMaxComponents> remap{};
@@ -172,7 +174,7 @@ void ParticleSet::ApplyBounds() {
     if (!std::isfinite(lo) && !std::isfinite(hi)) continue;
 #pragma omp simd
     for (int i = 0; i < n_; ++i) {
-      const bool below = p[i] < lo, above = p[i] > hi;
+      const bool below = p[i]<lo, above = p[i]> hi;
       v[i] = (below && v[i] < 0.0f) || (above && v[i] > 0.0f) ? 0.0f : v[i];
       p[i] = below ? lo : above ? hi : p[i];
     }

@@ -1,13 +1,12 @@
 // ParticleSet's resampling (particle_set.h): systematic resampling and the Liu & West kernel
 // move that follows it. Split from particle_set.cc, which holds sampling, prediction and
 // weighing.
-#include <algorithm>
-#include <cmath>
-#include <utility>
-
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <utility>
 
 #include "engine/core/fast_math.h"
 #include "engine/filters/particle_set.h"
@@ -79,7 +78,8 @@ void ParticleSet::ResampleSystematic(double kernel_scale) {
   // The root is lower triangular: row r reads z_0 .. z_r only (21 terms, not 36).
   [&]<int... kRow>(std::integer_sequence<int, kRow...>) {
     (MoveRow<kRow>(n, index, from[kRow], to[kRow], fa, shift(kRow), l.row(kRow).data(), l.rows(), z), ...);
-  }(std::make_integer_sequence<int, 6>{});
+  }
+  (std::make_integer_sequence<int, 6>{});
   std::swap(cur_, next_);
   SetEqualWeights();
   // Shrinkage and kernel keep the mean and covariance (Liu & West): the moments computed

@@ -199,8 +199,8 @@ void ParticleSet::CopyCloudFrom(const ParticleSet& other) {
   labels_ = other.labels_;
 }
 
-double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candidates,
-                                  const std::vector<uint8_t>& choice, const std::vector<float>& log_weights) {
+double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candidates, const std::vector<uint8_t>& choice,
+                                  const std::vector<float>& log_weights) {
   moments_valid_ = false;
   for (int i = 0; i < n_; ++i) {
     const Columns& from = candidates[choice[i]]->cur_;
@@ -226,8 +226,8 @@ double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharp
 }
 
 void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Likelihood likelihood,
-                        const std::vector<double>& sigmas_s, double peak_dof,
-                        double gcc_sharpness, std::vector<InnovationMoments>* innovations, float exponent) {
+                        const std::vector<double>& sigmas_s, double peak_dof, double gcc_sharpness,
+                        std::vector<InnovationMoments>* innovations, float exponent) {
   innovations->resize(m.pairs.size());
   const float* __restrict x = cur_.x.data();
   const float* __restrict y = cur_.y.data();
@@ -368,8 +368,8 @@ TrackState ParticleSet::MeanAndCovariance() const {
   }
   const Vec6 m(m0, m1, m2, m3, m4, m5);
   Mat6 c;
-  c << c00, c01, c02, c03, c04, c05, c01, c11, c12, c13, c14, c15, c02, c12, c22, c23, c24, c25,
-      c03, c13, c23, c33, c34, c35, c04, c14, c24, c34, c44, c45, c05, c15, c25, c35, c45, c55;
+  c << c00, c01, c02, c03, c04, c05, c01, c11, c12, c13, c14, c15, c02, c12, c22, c23, c24, c25, c03, c13, c23, c33,
+      c34, c35, c04, c14, c24, c34, c44, c45, c05, c15, c25, c35, c45, c55;
   TrackState state;
   state.covariance = c - m * m.transpose();
   state.mean = m + Vec6(s0, s1, s2, s3, s4, s5);

@@ -65,7 +65,7 @@ class ParticleSet {
   // (the multiple-model filter's per-particle pick among its hypotheses' predictions);
   // then the weights are normalised and the ESS returned, as NormaliseWeights.
   double TakeParticles(const std::vector<const ParticleSet*>& candidates, const std::vector<uint8_t>& choice,
-                     const std::vector<float>& log_weights);
+                       const std::vector<float>& log_weights);
   // Log-weights as last left (normalised after NormaliseWeights), one per particle.
   const std::vector<float>& log_weights() const { return logw_; }
   // Normalised linear weights as of the last NormaliseWeights (or sampling, resampling).
@@ -77,8 +77,8 @@ class ParticleSet {
   // sigmas_s holds one TDOA noise std per pair; pairs with used[p] == 0 are skipped.
   // `exponent` < 1 tempers the likelihood (log-weights += exponent x log-likelihood).
   void Weigh(const Measurement& m, const std::vector<int>& used, Likelihood likelihood,
-             const std::vector<double>& sigmas_s, double peak_dof,
-             double gcc_sharpness, std::vector<InnovationMoments>* innovations, float exponent = 1.0f);
+             const std::vector<double>& sigmas_s, double peak_dof, double gcc_sharpness,
+             std::vector<InnovationMoments>* innovations, float exponent = 1.0f);
   // Normalises the weights (log-sum-exp) and returns the ESS = 1 / sum w^2.
   double NormaliseWeights();
   // Systematic resampling (one uniform offset, N evenly spaced pointers); weights equal.
@@ -125,8 +125,8 @@ class ParticleSet {
   // Particles [first, end) ~ N(mean, root root^T), normals keyed by (key, 6 i + k).
   void SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32_t key, int first, int end);
   void SetEqualWeights();
-  void SystematicIndices();  // fills index_: the particle each slot copies
-  void DrawKernelNoise();    // fills noise_ with unit-variance kernel draws
+  void SystematicIndices();                 // fills index_: the particle each slot copies
+  void DrawKernelNoise();                   // fills noise_ with unit-variance kernel draws
   void ResampleModes(double kernel_scale);  // ResampleSystematic while labels_ > 1
   void ApplyBounds();
 
@@ -141,20 +141,20 @@ class ParticleSet {
   float outlier_probability_;
   float inv_c_;
   Columns cur_, next_;
-  std::vector<float> logw_, w_;          // log-weights; normalised linear weights
+  std::vector<float> logw_, w_;                         // log-weights; normalised linear weights
   std::vector<float> r_ref_, vr_ref_, loglik_, delay_;  // scratch for Weigh
-  std::array<std::vector<float>, 6> noise_;       // scratch: kernel draws
-  std::vector<float> accel_;                      // scratch: 3N process-noise normals
-  std::vector<float> fine_gcc_;                   // scratch: a pair's GCC upsampled
-  std::vector<int> index_, first_slot_;           // scratch for ResampleSystematic
+  std::array<std::vector<float>, 6> noise_;             // scratch: kernel draws
+  std::vector<float> accel_;                            // scratch: 3N process-noise normals
+  std::vector<float> fine_gcc_;                         // scratch: a pair's GCC upsampled
+  std::vector<int> index_, first_slot_;                 // scratch for ResampleSystematic
   // Weighted mean and covariance of the current particles, computed on demand and kept
   // until the particles or weights change (State() and the regulariser share them).
   mutable TrackState moments_;
   mutable bool moments_valid_ = false;
   std::vector<uint8_t> label_, next_label_;  // mixture component per particle
-  int labels_ = 1;                            // components alive (1: single-mode)
+  int labels_ = 1;                           // components alive (1: single-mode)
   bool bounded_ = false;
-  Eigen::Vector3f bound_lo_, bound_hi_;       // relative to origin_m_
+  Eigen::Vector3f bound_lo_, bound_hi_;  // relative to origin_m_
 };
 
 }  // namespace localizer::engine

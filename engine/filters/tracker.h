@@ -13,7 +13,7 @@
 namespace localizer::engine {
 
 struct TrackState {
-  Vec6 mean = Vec6::Zero();       // (x, y, z, vx, vy, vz): m, m/s
+  Vec6 mean = Vec6::Zero();  // (x, y, z, vx, vy, vz): m, m/s
   Mat6 covariance = Mat6::Zero();
 };
 
@@ -36,8 +36,8 @@ struct UpdateReport {
   // Per pair, the signed anchored innovation e / sqrt(anchor^2 + Var[h']), capped at +-6;
   // NaN for pairs the update did not use. The divergence test looks for a persistent bias.
   std::vector<double> anchored_z;
-  int pair_count = 0;  // pairs used (those that heard a source); 0: the update did nothing
-  double ess = 0.0;  // effective sample size after the update (0 for non-particle filters)
+  int pair_count = 0;         // pairs used (those that heard a source); 0: the update did nothing
+  double ess = 0.0;           // effective sample size after the update (0 for non-particle filters)
   double tdoa_sigma_s = 0.0;  // TDOA noise std the update assumed
   // The gate refused the frame (Kalman filters): the state is unchanged, but nis and
   // pair_count still describe it, so a run of refused frames trips the divergence test.

@@ -49,12 +49,12 @@ const char* MotionModelKindName(MotionModelKind kind);
 
 // Options for MakeMotionModel; each model reads the fields its header names.
 struct MotionModelOptions {
-  double accel_noise_mps2 = 1.0;     // cv: std of the piecewise-constant white acceleration
-                                     // ct: the same, per axis
-  double jerk_psd = 1.0;             // ca: power spectral density of the white jerk, m^2/s^5
+  double accel_noise_mps2 = 1.0;         // cv: std of the piecewise-constant white acceleration
+                                         // ct: the same, per axis
+  double jerk_psd = 1.0;                 // ca: power spectral density of the white jerk, m^2/s^5
   double turn_rate_noise_radps2 = 0.05;  // ct: std of the turn rate's random walk, rad/s per sqrt(s)
-  double singer_tau_s = 5.0;         // singer: manoeuvre time constant
-  double singer_accel_std_mps2 = 2.0;  // singer: std of the manoeuvre acceleration
+  double singer_tau_s = 5.0;             // singer: manoeuvre time constant
+  double singer_accel_std_mps2 = 2.0;    // singer: std of the manoeuvre acceleration
 };
 
 // The model `kind` names with `options`' noise; INVALID_ARGUMENT for invalid options.

@@ -38,7 +38,7 @@ StatusOr<std::unique_ptr<Tracker>> MakeKalman(const ArrayGeometry& array, const 
 }
 
 StatusOr<std::unique_ptr<Tracker>> MakeMultiModelParticleFilter(const ArrayGeometry& array,
-                                                                 const TrackerOptions& tracker) {
+                                                                const TrackerOptions& tracker) {
   MultiModelPfOptions options;
   options.particle = tracker.particle;
   options.models = tracker.mmpf_models;
@@ -61,17 +61,20 @@ StatusOr<std::unique_ptr<Tracker>> MakeImm(const ArrayGeometry& array, const Tra
 // Every tracker but the plain particle filter: CPU whatever the backend.
 StatusOr<std::unique_ptr<Tracker>> MakeCpuOnly(const ArrayGeometry& array, const TrackerOptions& tracker) {
   switch (tracker.kind) {
-    case FilterKind::kMmpf: return MakeMultiModelParticleFilter(array, tracker);
-    case FilterKind::kImm: return MakeImm(array, tracker);
+    case FilterKind::kMmpf:
+      return MakeMultiModelParticleFilter(array, tracker);
+    case FilterKind::kImm:
+      return MakeImm(array, tracker);
     case FilterKind::kEkf:
     case FilterKind::kUkf:
-    case FilterKind::kPf: break;
+    case FilterKind::kPf:
+      break;
   }
   return MakeKalman(array, tracker);
 }
 
 StatusOr<std::unique_ptr<Tracker>> MakeCpuParticleFilter(const ArrayGeometry& array,
-                                                          const ParticleFilterOptions& options) {
+                                                         const ParticleFilterOptions& options) {
   return AsTracker(ParticleFilter::Create(array, options));
 }
 
@@ -95,9 +98,8 @@ std::string GpuUnavailableReason() {
   return provider->UnavailableReason();
 }
 
-StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGeometry& array,
-                                            const GccOptions& gcc, const TrackerOptions& tracker,
-                                            bool moving_array) {
+StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGeometry& array, const GccOptions& gcc,
+                                            const TrackerOptions& tracker, bool moving_array) {
   const bool particle = tracker.kind == FilterKind::kPf;
   SessionComponents parts;
   // The learnt coherence weighting keeps per-pair state across frames that the device GCC
@@ -115,10 +117,10 @@ StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGe
       // The device kernels weigh by the peak or GCC likelihood of a fixed array; the mixture
       // likelihood's particle filter, and one on a moving array, run on the CPU beside the
       // GPU GCC, as the Kalman filters do.
-      const bool on_device =
-          particle && tracker.particle.likelihood != Likelihood::kMixture && !moving_array;
-      auto made = on_device ? provider->MakeTracker(array, tracker.particle)
-                            : particle ? MakeCpuParticleFilter(array, tracker.particle) : MakeCpuOnly(array, tracker);
+      const bool on_device = particle && tracker.particle.likelihood != Likelihood::kMixture && !moving_array;
+      auto made = on_device  ? provider->MakeTracker(array, tracker.particle)
+                  : particle ? MakeCpuParticleFilter(array, tracker.particle)
+                             : MakeCpuOnly(array, tracker);
       if (!made.ok()) return made.status();
       parts.estimator = std::move(estimator).value();
       parts.tracker = std::move(made).value();

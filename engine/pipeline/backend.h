@@ -82,7 +82,7 @@ struct TrackerOptions {
   // its mode filters' variant.
   std::vector<MotionModelKind> imm_modes = {MotionModelKind::kCv, MotionModelKind::kCt};
   KalmanVariant imm_variant = KalmanVariant::kExtended;
-  double stay_probability = 0.95;           // mmpf, imm: the Markov switching prior per step
+  double stay_probability = 0.95;  // mmpf, imm: the Markov switching prior per step
 };
 
 // FAILED_PRECONDITION for kGpu without a usable GPU; otherwise whatever the estimator's or
@@ -90,9 +90,8 @@ struct TrackerOptions {
 // (a platform's attitude, Tracker::SetArray every frame); the GPU filter keeps its sensors
 // on the device, so such a particle filter runs on the CPU beside the GPU GCC (the GCC's lag
 // window depends only on sensor distances, which do not change).
-StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGeometry& array,
-                                            const GccOptions& gcc, const TrackerOptions& tracker,
-                                            bool moving_array);
+StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGeometry& array, const GccOptions& gcc,
+                                            const TrackerOptions& tracker, bool moving_array);
 
 // Why the GPU backend cannot be used here, or "" when it can.
 std::string GpuUnavailableReason();

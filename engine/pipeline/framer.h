@@ -35,9 +35,9 @@ class Framer {
 
   int channels_, frame_, hop_;
   std::vector<std::vector<float>> channels_buffer_;  // per channel, [0, stored_)
-  int64_t stored_ = 0;       // samples per channel held in the buffers
-  int64_t offset_ = 0;       // start of the next frame within the buffers
-  int64_t next_first_ = 0;   // stream index of the next frame's first sample
+  int64_t stored_ = 0;                               // samples per channel held in the buffers
+  int64_t offset_ = 0;                               // start of the next frame within the buffers
+  int64_t next_first_ = 0;                           // stream index of the next frame's first sample
   int64_t received_ = 0;
   std::vector<float> frame_buffer_;
 };

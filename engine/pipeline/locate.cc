@@ -17,9 +17,8 @@ Status ValidateLocateBlock(const BlockView& block, int channels, int64_t max_sam
                            std::to_string(channels) + " sensors");
   }
   if (block.samples_per_channel < kMinLocateSamples || block.samples_per_channel > max_samples) {
-    return InvalidArgument("samples per channel is " + std::to_string(block.samples_per_channel) +
-                           "; locate needs [" + std::to_string(kMinLocateSamples) + ", " +
-                           std::to_string(max_samples) + "]");
+    return InvalidArgument("samples per channel is " + std::to_string(block.samples_per_channel) + "; locate needs [" +
+                           std::to_string(kMinLocateSamples) + ", " + std::to_string(max_samples) + "]");
   }
   const int64_t total = block.samples_per_channel * channels;
   for (int64_t i = 0; i < total; ++i) {
@@ -36,8 +35,8 @@ Status ValidateLocateBlock(const BlockView& block, int channels, int64_t max_sam
 StatusOr<LocateResult> Locate(const AudioSessionConfig& config, const BlockView& block) {
   if (block.samples == nullptr) return InvalidArgument("samples is empty");
   AudioSessionConfig checked = config;
-  checked.frame_samples = static_cast<int>(
-      std::min<int64_t>(std::max<int64_t>(block.samples_per_channel, kMinLocateSamples), 1 << 20));
+  checked.frame_samples =
+      static_cast<int>(std::min<int64_t>(std::max<int64_t>(block.samples_per_channel, kMinLocateSamples), 1 << 20));
   checked.hop_samples = checked.frame_samples;
   LOCALIZER_RETURN_IF_ERROR(checked.Validate());
   auto array = ArrayGeometry::Create(checked.sensors_m, checked.sound_speed_mps, checked.reference_sensor);
@@ -65,7 +64,8 @@ StatusOr<LocateResult> Locate(const AudioSessionConfig& config, const BlockView&
   if (!fix.ok() || !fix->converged || !fix->position_m.allFinite()) return result;
   // Rescale the covariance from the floor to the std the residuals show, when larger.
   const double dof = static_cast<double>(pairs) - 3.0;
-  const double sigma_s = dof > 0.0 ? std::max(floor_s, fix->rms_residual_s * std::sqrt(static_cast<double>(pairs) / dof)) : floor_s;
+  const double sigma_s =
+      dof > 0.0 ? std::max(floor_s, fix->rms_residual_s * std::sqrt(static_cast<double>(pairs) / dof)) : floor_s;
   fix->covariance_m2 *= (sigma_s * sigma_s) / (floor_s * floor_s);
   result.fix = *fix;
   result.fix_found = true;

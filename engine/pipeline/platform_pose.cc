@@ -11,8 +11,7 @@ namespace {
 // (roll, pitch, yaw) of R = Rz(yaw) Ry(pitch) Rx(roll).
 Vec3 EulerZyx(const Eigen::Quaterniond& q) {
   const Mat3 r = q.toRotationMatrix();
-  return Vec3(std::atan2(r(2, 1), r(2, 2)), std::asin(std::clamp(-r(2, 0), -1.0, 1.0)),
-              std::atan2(r(1, 0), r(0, 0)));
+  return Vec3(std::atan2(r(2, 1), r(2, 2)), std::asin(std::clamp(-r(2, 0), -1.0, 1.0)), std::atan2(r(1, 0), r(0, 0)));
 }
 
 }  // namespace

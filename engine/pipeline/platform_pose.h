@@ -28,8 +28,7 @@ namespace localizer::engine {
 
 class PlatformPose {
  public:
-  static StatusOr<std::unique_ptr<PlatformPose>> Create(const AttitudeFilterOptions& options,
-                                                        const Vec3& origin_m);
+  static StatusOr<std::unique_ptr<PlatformPose>> Create(const AttitudeFilterOptions& options, const Vec3& origin_m);
 
   // Validates every sample first (finite, times increasing from the previous call's last);
   // on INVALID_ARGUMENT (naming the sample and field) nothing is consumed.

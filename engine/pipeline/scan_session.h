@@ -22,11 +22,11 @@
 namespace localizer::engine {
 
 struct ScanResult {
-  uint64_t scan_index = 0;           // 0, 1, 2, ... within the session
-  double time_s = 0.0;               // the scan's instant
+  uint64_t scan_index = 0;               // 0, 1, 2, ... within the session
+  double time_s = 0.0;                   // the scan's instant
   std::vector<tws::TrackReport> tracks;  // in order of id, tentative ones included
   tws::ScanSummary summary;
-  double process_s = 0.0;            // wall time of the tracker's scan cycle
+  double process_s = 0.0;  // wall time of the tracker's scan cycle
 };
 
 class ScanSession {

@@ -1,11 +1,10 @@
 #include "engine/pipeline/scene_campaign.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numbers>
-
-#include <Eigen/Cholesky>
 
 #include "engine/array/multilateration.h"
 
@@ -214,16 +213,15 @@ AudioSessionConfig CampaignSessionConfig(const RandomScene& scene) {
   while (16000.0 * scale < config.sample_rate_hz) scale *= 2;
   config.frame_samples = 4096 * scale;
   config.hop_samples = config.frame_samples / 2;
-  config.band_low_hz = 0.0;   // no band hint: users do not know their source's band
+  config.band_low_hz = 0.0;  // no band hint: users do not know their source's band
   config.band_high_hz = 0.0;
   config.backend = BackendChoice::kCpu;
   config.seed = scene.seed;
   return config;
 }
 
-SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
-                        const SceneScoreOptions& score_options, bool keep_frames,
-                        const std::function<void(AudioSessionConfig*)>& adjust) {
+SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options, const SceneScoreOptions& score_options,
+                        bool keep_frames, const std::function<void(AudioSessionConfig*)>& adjust) {
   const auto start = std::chrono::steady_clock::now();
   SceneRow row;
   row.seed = seed;
@@ -248,9 +246,9 @@ SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options,
   const Status processed =
       (*session)->Process({1, sim->channel_count, sim->samples_per_channel, sim->samples.data()}, &estimates);
   if (!processed.ok()) return fail(processed);
-  row.score = ScoreScene(*array, *sim, estimates,
-                         TheoreticalTdoaSigma(scene->scenario.sim, array->pair_count(), config.frame_samples),
-                         score_options);
+  row.score =
+      ScoreScene(*array, *sim, estimates,
+                 TheoreticalTdoaSigma(scene->scenario.sim, array->pair_count(), config.frame_samples), score_options);
   if (!keep_frames) row.score.per_frame.clear();
   row.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return row;

@@ -27,8 +27,8 @@
 #pragma once
 
 #include <cstdint>
-#include <limits>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -43,13 +43,13 @@ namespace localizer::engine {
 struct SceneScoreOptions {
   double acquire_crlb_multiple = 3.0;
   double lost_crlb_multiple = 10.0;
-  double silent_nees = 50.0;    // position NEES (3 degrees of freedom, not per dimension)
+  double silent_nees = 50.0;  // position NEES (3 degrees of freedom, not per dimension)
   double silent_min_s = 1.0;
 };
 
 struct FrameScore {
   double t_s = 0.0;
-  bool counted = false;        // inside the truth and present (see above)
+  bool counted = false;  // inside the truth and present (see above)
   bool initialised = false;
   double error_m = std::numeric_limits<double>::quiet_NaN();
   double crlb_m = std::numeric_limits<double>::quiet_NaN();
@@ -70,9 +70,9 @@ struct SceneScore {
   int frames = 0;
   int initialised_frames = 0;
   bool presence_reported = false;
-  std::vector<double> tdoa_sigma_robust_s;   // per pair
-  std::vector<double> tdoa_sigma_theory_s;   // per pair, as given (empty: not computed)
-  double crlb_median_m = std::numeric_limits<double>::quiet_NaN();         // over counted frames
+  std::vector<double> tdoa_sigma_robust_s;                          // per pair
+  std::vector<double> tdoa_sigma_theory_s;                          // per pair, as given (empty: not computed)
+  double crlb_median_m = std::numeric_limits<double>::quiet_NaN();  // over counted frames
   double crlb_theory_median_m = std::numeric_limits<double>::quiet_NaN();
   bool acquired = false;
   double time_to_acquire_s = std::numeric_limits<double>::infinity();
@@ -138,9 +138,9 @@ struct CampaignSummary {
   int scenes = 0;
   int run_errors = 0;
   int acquired = 0;
-  int lost = 0;               // scenes with lost frames
+  int lost = 0;  // scenes with lost frames
   int silent_failures = 0;
-  int acquired_theory = 0;    // against 3 x the theoretical CRLB
+  int acquired_theory = 0;                                                           // against 3 x the theoretical CRLB
   double median_time_to_acquire_theory_s = std::numeric_limits<double>::infinity();  // all scenes
   // Over every scene run, a scene never acquired counting as +inf.
   double median_time_to_acquire_s = std::numeric_limits<double>::infinity();
@@ -151,7 +151,7 @@ struct CampaignSummary {
   double median_rmse_over_crlb_gaussian = std::numeric_limits<double>::quiet_NaN();
   double median_rmse_over_crlb_hard = std::numeric_limits<double>::quiet_NaN();  // multipath + impulsive
   ClassSummary gaussian, multipath, impulsive;
-  double median_nees_per_dim = std::numeric_limits<double>::quiet_NaN();  // acquired scenes
+  double median_nees_per_dim = std::numeric_limits<double>::quiet_NaN();           // acquired scenes
   double median_rmse_over_crlb_theory = std::numeric_limits<double>::quiet_NaN();  // acquired scenes
   std::vector<SceneRow> rows;
 };

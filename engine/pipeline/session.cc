@@ -17,16 +17,16 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 Status ValidateBlock(const BlockView& block, int channels, int64_t max_samples, bool have_last,
                      uint64_t last_sequence) {
   if (have_last && block.sequence <= last_sequence) {
-    return InvalidArgument("sequence " + std::to_string(block.sequence) +
-                           " is not greater than the previous block's " + std::to_string(last_sequence));
+    return InvalidArgument("sequence " + std::to_string(block.sequence) + " is not greater than the previous block's " +
+                           std::to_string(last_sequence));
   }
   if (block.channel_count != channels) {
     return InvalidArgument("channel_count is " + std::to_string(block.channel_count) + "; the array has " +
                            std::to_string(channels) + " sensors");
   }
   if (block.samples_per_channel < 1 || block.samples_per_channel > max_samples) {
-    return InvalidArgument("samples per channel is " + std::to_string(block.samples_per_channel) +
-                           "; must be in [1, " + std::to_string(max_samples) + "]");
+    return InvalidArgument("samples per channel is " + std::to_string(block.samples_per_channel) + "; must be in [1, " +
+                           std::to_string(max_samples) + "]");
   }
   if (block.samples == nullptr) return InvalidArgument("samples is null");
   const int64_t total = block.samples_per_channel * channels;
@@ -88,8 +88,8 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
     TrackFrame(e.t_s - last_t_s, measured, &e);
   } else if (config.init_region_min_m.allFinite()) {
     // The region is the belief at this frame; this frame's TDOAs then refine it.
-    live = tracker.InitialiseRegion(config.init_region_min_m, config.init_region_max_m,
-                                    config.init_speed_sigma_mps).ok();
+    live =
+        tracker.InitialiseRegion(config.init_region_min_m, config.init_region_max_m, config.init_speed_sigma_mps).ok();
     monitor.Reset();
     if (live && measured) {
       e.source_present = true;  // the user says so; the presence test runs once tracking
@@ -135,8 +135,8 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const AudioSessionConfig& con
 
 Status Session::Process(const BlockView& block, std::vector<Estimate>* out) {
   Impl& s = *impl_;
-  LOCALIZER_RETURN_IF_ERROR(ValidateBlock(block, s.array.sensor_count(), s.config.max_block_samples,
-                                          s.have_sequence, s.last_sequence));
+  LOCALIZER_RETURN_IF_ERROR(
+      ValidateBlock(block, s.array.sensor_count(), s.config.max_block_samples, s.have_sequence, s.last_sequence));
   s.have_sequence = true;
   s.last_sequence = block.sequence;
   s.framer.Append(block);
@@ -156,8 +156,9 @@ Status Session::Skip(int64_t samples_per_channel) {
 
 Status Session::AddImu(const std::vector<ImuSample>& samples) {
   if (impl_->platform == nullptr) {
-    return FailedPrecondition("IMU samples for a session whose array is fixed in the world "
-                              "(open it with the array in the platform's body frame)");
+    return FailedPrecondition(
+        "IMU samples for a session whose array is fixed in the world "
+        "(open it with the array in the platform's body frame)");
   }
   return impl_->platform->Add(samples);
 }

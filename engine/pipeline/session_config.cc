@@ -42,8 +42,8 @@ Status AudioSessionConfig::Validate() const {
     return InvalidArgument("frame_samples must be in [64, 1048576], got " + std::to_string(frame_samples));
   }
   if (hop_samples < 1 || hop_samples > frame_samples) {
-    return InvalidArgument("hop_samples must be in [1, frame_samples=" + std::to_string(frame_samples) +
-                           "], got " + std::to_string(hop_samples));
+    return InvalidArgument("hop_samples must be in [1, frame_samples=" + std::to_string(frame_samples) + "], got " +
+                           std::to_string(hop_samples));
   }
   if (max_block_samples < 1) {
     return InvalidArgument("max_block_samples must be >= 1, got " + std::to_string(max_block_samples));
@@ -67,8 +67,8 @@ Status AudioSessionConfig::Validate() const {
   for (int i = 0; i < 3; ++i) {
     const double lo = bounds_min_m(i), hi = bounds_max_m(i);
     if (std::isnan(lo) || std::isnan(hi) || lo == std::numeric_limits<double>::infinity() ||
-        hi == -std::numeric_limits<double>::infinity() || !(lo < hi) ||
-        (std::isfinite(lo) && std::abs(lo) > 1e7) || (std::isfinite(hi) && std::abs(hi) > 1e7)) {
+        hi == -std::numeric_limits<double>::infinity() || !(lo < hi) || (std::isfinite(lo) && std::abs(lo) > 1e7) ||
+        (std::isfinite(hi) && std::abs(hi) > 1e7)) {
       return InvalidArgument("bounds on axis " + std::to_string(i) + " must be lo < hi, each finite within 1e7 m or " +
                              "unbounded (-inf / +inf), got [" + Num(lo) + ", " + Num(hi) + "]");
     }
@@ -93,7 +93,7 @@ GccOptions AudioSessionConfig::GccOptionsFor() const {
   gcc.phat_beta = phat_beta;
   gcc.band_low_hz = band_low_hz;
   gcc.band_high_hz = band_high_hz;
-  gcc.keep_gcc = true;  // acquisition, presence, multipath association and the noise anchor read it
+  gcc.keep_gcc = true;     // acquisition, presence, multipath association and the noise anchor read it
   gcc.max_candidates = 1;  // the session looks for other peaks in the kept GCC, near its track
   return gcc;
 }

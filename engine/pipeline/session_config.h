@@ -35,20 +35,20 @@ namespace localizer::engine {
 
 struct AudioSessionConfig {
   // Array
-  std::vector<Vec3> sensors_m;        // >= 4, not coplanar
-  double sound_speed_mps = 1500.0;    // > 0 (1500 water, 343 air)
+  std::vector<Vec3> sensors_m;      // >= 4, not coplanar
+  double sound_speed_mps = 1500.0;  // > 0 (1500 water, 343 air)
   int reference_sensor = 0;
-  double sample_rate_hz = 0.0;        // > 0
+  double sample_rate_hz = 0.0;  // > 0
   // Framing
-  int frame_samples = 4096;           // per channel, in [64, 1 << 20]
-  int hop_samples = 2048;             // in [1, frame_samples]
+  int frame_samples = 4096;             // per channel, in [64, 1 << 20]
+  int hop_samples = 2048;               // in [1, frame_samples]
   int64_t max_block_samples = 1 << 22;  // per channel per block
   // TDOA front end (engine/tdoa/gcc_phat.h; GccOptionsFor() adds the framing and the
   // sample rate)
   Weighting weighting = Weighting::kPhat;
   double phat_beta = 0.8;
   double band_low_hz = 0.0;
-  double band_high_hz = 0.0;          // 0: Nyquist
+  double band_high_hz = 0.0;  // 0: Nyquist
   // Impulsive-noise front end (engine/tdoa/despike.h): each frame's channels are clipped at
   // despike_k robust standard deviations before the GCC (0: off), keeping outliers that every
   // channel shows within the array's largest delay (a coherent impulsive source).
@@ -67,7 +67,7 @@ struct AudioSessionConfig {
   // from it at the first frame instead of waiting for a good fix. Unset by default.
   Vec3 init_region_min_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   Vec3 init_region_max_m = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
-  int divergence_window = 8;          // frames averaged by the divergence test
+  int divergence_window = 8;  // frames averaged by the divergence test
   // Physical bounds on the source position: a box whose sides may be infinite (unbounded;
   // the default on every side). Particles, fixes and acquisition candidates outside it are
   // impossible. A water column: bounds_max_m.z() = the surface, bounds_min_m.z() = the bottom.
@@ -87,11 +87,11 @@ struct AudioSessionConfig {
   // sensors rotated by the platform's attitude at that frame and moved to its origin.
   // Estimates carry the platform pose. The particle filter then runs on the CPU.
   bool array_in_body_frame = false;
-  AttitudeFilterOptions attitude;     // the platform's attitude filter
+  AttitudeFilterOptions attitude;         // the platform's attitude filter
   Vec3 platform_origin_m = Vec3::Zero();  // body origin in the world until SetPlatformOrigin
   // Compute backend (backend.h): cpu, gpu (a clear error where there is none) or auto.
   BackendChoice backend = BackendChoice::kCpu;
-  uint64_t seed = 1;                  // every random draw of the session (particle filters)
+  uint64_t seed = 1;  // every random draw of the session (particle filters)
 
   // INVALID_ARGUMENT naming the field: a numeric field out of its range, a motion model
   // other than cv for a filter kind other than ekf and ukf, the particle options (checked

@@ -18,7 +18,8 @@
 namespace localizer::engine {
 
 struct Session::Impl {
-  Impl(AudioSessionConfig c, ArrayGeometry a, SessionComponents parts, std::unique_ptr<PlatformPose> pose, Acquisition acq)
+  Impl(AudioSessionConfig c, ArrayGeometry a, SessionComponents parts, std::unique_ptr<PlatformPose> pose,
+       Acquisition acq)
       : config(std::move(c)),
         body_array(a),
         array(std::move(a)),
@@ -65,16 +66,16 @@ struct Session::Impl {
   bool MoveArray(double t_s, Estimate* e);
 
   AudioSessionConfig config;
-  ArrayGeometry body_array;  // as configured (the body frame, for a moving array)
-  ArrayGeometry array;       // in the world at the current frame
+  ArrayGeometry body_array;                // as configured (the body frame, for a moving array)
+  ArrayGeometry array;                     // in the world at the current frame
   std::unique_ptr<PlatformPose> platform;  // moving arrays only
   SessionComponents components;
   Acquisition acquisition;
-  bool live = false;         // the tracker holds a track (not dropped)
+  bool live = false;           // the tracker holds a track (not dropped)
   int frames_since_audit = 0;  // see Audit
   int outscored = 0;           // audits in a row that found the frame better explained elsewhere
-  double silent_s = 0.0;     // time since the source was last heard near the track
-  int heard_elsewhere = 0;   // consecutive frames with the source present away from the track
+  double silent_s = 0.0;       // time since the source was last heard near the track
+  int heard_elsewhere = 0;     // consecutive frames with the source present away from the track
   Framer framer;
   DespikeOptions despike;
   DespikeScratch despike_scratch;

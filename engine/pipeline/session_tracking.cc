@@ -134,8 +134,8 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
   tracker.Predict(dt_s);
   if (!measured) return;
   const TrackState predicted = tracker.Hypotheses().front().belief;
-  const PresenceResult near = acquisition.Around(measurement, predicted.mean.head<3>(),
-                                                 predicted.covariance.topLeftCorner<3, 3>());
+  const PresenceResult near =
+      acquisition.Around(measurement, predicted.mean.head<3>(), predicted.covariance.topLeftCorner<3, 3>());
   e->presence_statistic = near.statistic;
   e->presence_threshold = near.threshold;
   if (near.present) {
@@ -201,6 +201,5 @@ void Session::Impl::Report(Estimate* e) const {
   e->ambiguous = e->modes > 1;
   e->model_probabilities = components.tracker->ModelProbabilities();
 }
-
 
 }  // namespace localizer::engine

@@ -1,11 +1,12 @@
 #include "engine/sim/alpha_stable.h"
-#include "engine/sim/invalid_value.h"
 
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <numbers>
 #include <string>
+
+#include "engine/sim/invalid_value.h"
 
 namespace localizer::engine {
 namespace {
@@ -42,16 +43,15 @@ double SampleAlphaStable(const AlphaStable& params, double u_uniform_0_1, double
   const double w = w_exponential;
   if (a == 1.0) {
     const double half_pi_bv = 0.5 * kPi + b * v;
-    const double x = (2.0 / kPi) * (half_pi_bv * std::tan(v) -
-                                    b * std::log(0.5 * kPi * w * std::cos(v) / half_pi_bv));
+    const double x = (2.0 / kPi) * (half_pi_bv * std::tan(v) - b * std::log(0.5 * kPi * w * std::cos(v) / half_pi_bv));
     return g * x + (2.0 / kPi) * b * g * std::log(g) + params.location;
   }
   const double zeta = b * std::tan(0.5 * kPi * a);
-  const double shift = std::atan(zeta) / a;  // B
+  const double shift = std::atan(zeta) / a;                     // B
   const double stretch = std::pow(1.0 + zeta * zeta, 0.5 / a);  // S
   const double av = a * (v + shift);
-  const double x = stretch * std::sin(av) / std::pow(std::cos(v), 1.0 / a) *
-                   std::pow(std::cos(v - av) / w, (1.0 - a) / a);
+  const double x =
+      stretch * std::sin(av) / std::pow(std::cos(v), 1.0 / a) * std::pow(std::cos(v - av) / w, (1.0 - a) / a);
   return g * x + params.location;
 }
 

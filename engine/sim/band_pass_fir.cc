@@ -33,8 +33,7 @@ double TransitionWidthHz(double low_hz, double high_hz, double sample_rate_hz) {
 int OddTapCount(double transition_hz, double sample_rate_hz) {
   const double width_rad = 2.0 * std::numbers::pi * transition_hz / sample_rate_hz;
   const double taps = (kStopbandAttenuationDb - 8.0) / (2.285 * width_rad) + 1.0;
-  const int count =
-      static_cast<int>(std::clamp(std::ceil(taps), double{kMinTaps}, double{kMaxTaps}));
+  const int count = static_cast<int>(std::clamp(std::ceil(taps), double{kMinTaps}, double{kMaxTaps}));
   return count | 1;  // odd: a whole-sample group delay
 }
 

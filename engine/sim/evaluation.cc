@@ -6,8 +6,8 @@
 #include "engine/array/multilateration.h"
 
 namespace localizer::engine {
-TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth,
-                      const std::vector<Estimate>& estimates, double skip_s) {
+TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth, const std::vector<Estimate>& estimates,
+                      double skip_s) {
   return ScoreTrack([&array](double) { return array; }, truth, estimates, skip_s);
 }
 

@@ -10,7 +10,6 @@
 #pragma once
 
 #include <functional>
-
 #include <vector>
 
 #include "engine/core/estimate.h"
@@ -19,20 +18,20 @@
 namespace localizer::engine {
 
 struct TrackScore {
-  int scored = 0;              // initialised estimates at or after skip_s, inside the truth
-  int reinitialisations = 0;   // estimates flagged reinitialised (whole run)
+  int scored = 0;             // initialised estimates at or after skip_s, inside the truth
+  int reinitialisations = 0;  // estimates flagged reinitialised (whole run)
   double rmse_m = 0.0;
   double median_m = 0.0;
-  double p95_m = 0.0;          // nearest-rank 95th percentile of the 3-D error
+  double p95_m = 0.0;  // nearest-rank 95th percentile of the 3-D error
   double max_m = 0.0;
-  double crlb_m = 0.0;         // RMS over scored frames of the per-frame position CRLB
+  double crlb_m = 0.0;  // RMS over scored frames of the per-frame position CRLB
   double rmse_over_crlb = 0.0;
   std::vector<double> tdoa_sigma_s;  // measured TDOA spread per pair
 };
 
 // Estimates before skip_s (convergence) are not scored.
-TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth,
-                      const std::vector<Estimate>& estimates, double skip_s);
+TrackScore ScoreTrack(const ArrayGeometry& array, const SimResult& truth, const std::vector<Estimate>& estimates,
+                      double skip_s);
 // The same for an array that moves: array_at(t_s) is where it was at reception time t_s
 // (a moving array's true pose: ArrayGeometry::Moved by the platform's attitude).
 TrackScore ScoreTrack(const std::function<ArrayGeometry(double)>& array_at, const SimResult& truth,

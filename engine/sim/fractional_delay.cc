@@ -22,8 +22,8 @@ double WindowedSinc(double u) {
 }
 
 // The same sum with samples outside [0, size) taken as zero.
-double EvaluateNearEdge(const double* samples, int64_t size, int64_t first, const double* row0,
-                        const double* row1, double blend) {
+double EvaluateNearEdge(const double* samples, int64_t size, int64_t first, const double* row0, const double* row1,
+                        double blend) {
   double value = 0.0;
   for (int j = 0; j < FractionalDelayInterpolator::kTaps; ++j) {
     const int64_t i = first + j;
@@ -35,8 +35,7 @@ double EvaluateNearEdge(const double* samples, int64_t size, int64_t first, cons
 
 }  // namespace
 
-FractionalDelayInterpolator::FractionalDelayInterpolator()
-    : table_(static_cast<size_t>(kPhases + 1) * kTaps) {
+FractionalDelayInterpolator::FractionalDelayInterpolator() : table_(static_cast<size_t>(kPhases + 1) * kTaps) {
   for (int p = 0; p <= kPhases; ++p) {
     const double fraction = static_cast<double>(p) / kPhases;
     for (int j = 0; j < kTaps; ++j) {
@@ -45,8 +44,7 @@ FractionalDelayInterpolator::FractionalDelayInterpolator()
   }
 }
 
-double FractionalDelayInterpolator::Evaluate(const double* samples, int64_t size,
-                                             double position) const {
+double FractionalDelayInterpolator::Evaluate(const double* samples, int64_t size, double position) const {
   const double floor_position = std::floor(position);
   // Phase index and the blend towards the next phase. A fraction that rounds up to 1.0 (x just
   // below an integer) lands on the last interval with blend 1, which is the same kernel.

@@ -19,23 +19,22 @@
 // (the platform shakes in place; it is not integrated into a position).
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
 
 #include "engine/core/imu.h"
 
 namespace localizer::engine {
 
 struct AttitudeTrajectoryOptions {
-  Eigen::Vector3d euler0_rad = Eigen::Vector3d::Zero();        // (roll, pitch, yaw) at t = 0
-  Eigen::Vector3d euler_rate_rps = Eigen::Vector3d::Zero();    // linear growth of each angle
-  Eigen::Vector3d amplitude_rad = Eigen::Vector3d::Zero();     // sinusoid amplitude per angle
-  Eigen::Vector3d frequency_hz = Eigen::Vector3d::Zero();      // sinusoid frequency per angle
-  Eigen::Vector3d phase_rad = Eigen::Vector3d::Zero();         // sinusoid phase per angle
-  Eigen::Vector3d constant_rate_rps = Eigen::Vector3d::Zero(); // omega_c, body frame
+  Eigen::Vector3d euler0_rad = Eigen::Vector3d::Zero();             // (roll, pitch, yaw) at t = 0
+  Eigen::Vector3d euler_rate_rps = Eigen::Vector3d::Zero();         // linear growth of each angle
+  Eigen::Vector3d amplitude_rad = Eigen::Vector3d::Zero();          // sinusoid amplitude per angle
+  Eigen::Vector3d frequency_hz = Eigen::Vector3d::Zero();           // sinusoid frequency per angle
+  Eigen::Vector3d phase_rad = Eigen::Vector3d::Zero();              // sinusoid phase per angle
+  Eigen::Vector3d constant_rate_rps = Eigen::Vector3d::Zero();      // omega_c, body frame
   Eigen::Vector3d linear_amplitude_mps2 = Eigen::Vector3d::Zero();  // world frame
   double linear_frequency_hz = 0.0;
 };
@@ -44,11 +43,10 @@ class AttitudeTrajectory {
  public:
   explicit AttitudeTrajectory(const AttitudeTrajectoryOptions& options) : options_(options) {}
   // Rotation at a constant body rate from `start` (start (x) exp(omega t / 2)).
-  static AttitudeTrajectory ConstantRate(const Eigen::Vector3d& start_euler_rad,
-                                         const Eigen::Vector3d& body_rate_rps);
+  static AttitudeTrajectory ConstantRate(const Eigen::Vector3d& start_euler_rad, const Eigen::Vector3d& body_rate_rps);
 
-  Eigen::Quaterniond At(double t_s) const;                 // body -> world, unit
-  Eigen::Vector3d BodyRate(double t_s) const;              // rad/s, body frame
+  Eigen::Quaterniond At(double t_s) const;                    // body -> world, unit
+  Eigen::Vector3d BodyRate(double t_s) const;                 // rad/s, body frame
   Eigen::Vector3d LinearAccelerationWorld(double t_s) const;  // m/s^2, world frame
   const AttitudeTrajectoryOptions& options() const { return options_; }
 
@@ -58,14 +56,14 @@ class AttitudeTrajectory {
 
 // Sensor errors of the synthetic IMU. Defaults: a clean sensor at rest on Earth.
 struct ImuNoise {
-  double gyro_noise_sd_rps = 0.0;     // white noise std per sample, each axis
+  double gyro_noise_sd_rps = 0.0;                           // white noise std per sample, each axis
   Eigen::Vector3d gyro_bias_rps = Eigen::Vector3d::Zero();  // constant bias
-  double accel_noise_sd_mps2 = 0.0;   // per sample, each axis
-  double mag_noise_sd_uT = 0.0;       // per sample, each axis
+  double accel_noise_sd_mps2 = 0.0;                         // per sample, each axis
+  double mag_noise_sd_uT = 0.0;                             // per sample, each axis
   double gravity_mps2 = 9.81;
   // Earth's field in the world frame (about Berlin's: 17 µT North, 46 µT down; dip 70 deg).
   Eigen::Vector3d mag_world_uT = Eigen::Vector3d(0.0, 17.0, -46.0);
-  bool with_mag = true;               // false: mag_uT is NaN (an IMU without magnetometer)
+  bool with_mag = true;  // false: mag_uT is NaN (an IMU without magnetometer)
   // A magnetic disturbance (a nearby iron object, fixed in the world) added to the field
   // for t in [disturbance_start_s, disturbance_end_s).
   Eigen::Vector3d mag_disturbance_world_uT = Eigen::Vector3d::Zero();
@@ -79,7 +77,7 @@ struct ImuNoise {
 //     mag   = R(t_k)^T (m_world + disturbance) + n_m.
 // Noise from one std::mt19937_64 seeded by `seed` alone (same seed, same samples).
 // rate_hz and duration_s must be > 0 (an empty vector otherwise).
-std::vector<ImuSample> SynthesiseImu(const AttitudeTrajectory& trajectory, double rate_hz,
-                                     double duration_s, const ImuNoise& noise, uint64_t seed);
+std::vector<ImuSample> SynthesiseImu(const AttitudeTrajectory& trajectory, double rate_hz, double duration_s,
+                                     const ImuNoise& noise, uint64_t seed);
 
 }  // namespace localizer::engine

@@ -36,9 +36,8 @@ Trajectory MirrorInHorizontalPlane(const Trajectory& trajectory, double plane_z_
 
 double Speed(const Trajectory& trajectory) { return trajectory.velocity_mps.norm(); }
 
-double MaxTravelTimeBound(const std::vector<Trajectory>& sources,
-                          const std::vector<Vec3>& sensors_m, double sound_speed_mps,
-                          double duration_s) {
+double MaxTravelTimeBound(const std::vector<Trajectory>& sources, const std::vector<Vec3>& sensors_m,
+                          double sound_speed_mps, double duration_s) {
   double range0_m = 0.0;
   double speed_mps = 0.0;
   for (const Trajectory& source : sources) {

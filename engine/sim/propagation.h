@@ -30,8 +30,8 @@ struct Emission {
 // needs one or two steps instead of four.
 Emission SolveEmission(const Trajectory& trajectory, const Vec3& sensor_m, double sound_speed_mps,
                        double reception_time_s, double initial_guess_s);
-inline Emission SolveEmission(const Trajectory& trajectory, const Vec3& sensor_m,
-                              double sound_speed_mps, double reception_time_s) {
+inline Emission SolveEmission(const Trajectory& trajectory, const Vec3& sensor_m, double sound_speed_mps,
+                              double reception_time_s) {
   return SolveEmission(trajectory, sensor_m, sound_speed_mps, reception_time_s, reception_time_s);
 }
 
@@ -47,8 +47,7 @@ double Speed(const Trajectory& trajectory);
 // sound received during [0, duration_s]. With R0 the largest distance at emission time 0 and
 // |p(te) - p(0)| <= |v| |te|, the travel time T obeys T <= (R0 + |v| (duration + T)) / c, so
 //     T <= (R0 + |v| duration) / (c - |v|).
-double MaxTravelTimeBound(const std::vector<Trajectory>& sources,
-                          const std::vector<Vec3>& sensors_m, double sound_speed_mps,
-                          double duration_s);
+double MaxTravelTimeBound(const std::vector<Trajectory>& sources, const std::vector<Vec3>& sensors_m,
+                          double sound_speed_mps, double duration_s);
 
 }  // namespace localizer::engine

@@ -42,7 +42,8 @@ Status RadarScanOptions::Validate() const {
   if (!(min_range_m >= 0.0)) return Bad("min_range_m", min_range_m, "must be >= 0");
   if (!(OuterRangeM() > min_range_m) || !std::isfinite(max_range_m))
     return Bad("max_range_m", max_range_m, "must exceed min_range_m");
-  if (!(range_sigma_m >= 0.0 && std::isfinite(range_sigma_m))) return Bad("range_sigma_m", range_sigma_m, "must be >= 0");
+  if (!(range_sigma_m >= 0.0 && std::isfinite(range_sigma_m)))
+    return Bad("range_sigma_m", range_sigma_m, "must be >= 0");
   if (!(bearing_sigma_rad >= 0.0 && bearing_sigma_rad <= 1.0))
     return Bad("bearing_sigma_rad", bearing_sigma_rad, "must be in [0, 1]");
   if (!(detection_probability >= 0.0 && detection_probability <= 1.0))
@@ -125,8 +126,7 @@ std::vector<RadarTarget> SeedCaseTargets() {
   return {t};
 }
 
-std::vector<RadarTarget> RingTargets(int n, double radius_m, double speed_mps,
-                                     const Eigen::Vector2d& centre_m) {
+std::vector<RadarTarget> RingTargets(int n, double radius_m, double speed_mps, const Eigen::Vector2d& centre_m) {
   std::vector<RadarTarget> out;
   for (int i = 0; i < n; ++i) {
     const double a = 2.0 * kPi * i / n;
@@ -154,8 +154,8 @@ std::vector<RadarTarget> CrossingTargets(int n, double radius_m, double speed_mp
   return out;
 }
 
-std::vector<RadarTarget> RandomTargets(int n, double min_range_m, double max_range_m,
-                                       double min_separation_m, uint64_t seed) {
+std::vector<RadarTarget> RandomTargets(int n, double min_range_m, double max_range_m, double min_separation_m,
+                                       uint64_t seed) {
   std::mt19937_64 engine = Engine(seed, kTargetsStream, n);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   std::vector<RadarTarget> out;

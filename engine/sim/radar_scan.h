@@ -21,10 +21,9 @@
 // Truth per scan: id, position and velocity of every target inside the annulus.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "engine/core/detection.h"
 #include "engine/core/status.h"
@@ -33,14 +32,14 @@
 namespace localizer::engine {
 
 struct RadarScanOptions {
-  double rotation_rpm = 33.0;          // scan period 60 / rpm seconds
-  double prf_hz = 1800.0;              // max_range_m defaults to c / (2 PRF)
+  double rotation_rpm = 33.0;  // scan period 60 / rpm seconds
+  double prf_hz = 1800.0;      // max_range_m defaults to c / (2 PRF)
   double min_range_m = 200.0;
-  double max_range_m = 0.0;            // 0: the unambiguous range, 83275 m at 1800 Hz
+  double max_range_m = 0.0;  // 0: the unambiguous range, 83275 m at 1800 Hz
   double range_sigma_m = 10.0;
-  double bearing_sigma_rad = 0.01;     // 0.57 degrees
-  double detection_probability = 0.9;  // P_D in [0, 1]
-  double clutter_density_per_m2 = 0.0; // false plots per m^2 per scan, >= 0
+  double bearing_sigma_rad = 0.01;      // 0.57 degrees
+  double detection_probability = 0.9;   // P_D in [0, 1]
+  double clutter_density_per_m2 = 0.0;  // false plots per m^2 per scan, >= 0
   Eigen::Vector3d sensor_position_m = Eigen::Vector3d::Zero();
   uint64_t seed = 1;
 
@@ -69,8 +68,7 @@ struct RadarScanFrame {
 
 class RadarScanSimulator {
  public:
-  static StatusOr<RadarScanSimulator> Create(const RadarScanOptions& options,
-                                             std::vector<RadarTarget> targets);
+  static StatusOr<RadarScanSimulator> Create(const RadarScanOptions& options, std::vector<RadarTarget> targets);
   // Scan k (k >= 0) at t = k T; deterministic in (options, targets, k).
   RadarScanFrame Frame(int64_t k) const;
   const RadarScanOptions& options() const { return options_; }
@@ -88,8 +86,7 @@ std::vector<RadarTarget> SeedCaseTargets();
 // n targets evenly spaced on a circle of radius_m around `centre_m`, each moving at
 // speed_mps at right angles to its radius (counter-clockwise): neighbours stay about
 // 2 radius sin(pi / n) apart for a while (they drift apart slowly).
-std::vector<RadarTarget> RingTargets(int n, double radius_m, double speed_mps,
-                                     const Eigen::Vector2d& centre_m);
+std::vector<RadarTarget> RingTargets(int n, double radius_m, double speed_mps, const Eigen::Vector2d& centre_m);
 // n targets on an arc of arc_rad (centred on the -x direction) at radius_m from
 // `crossing_m`, all heading for it at speed_mps: they meet there at t = radius / speed,
 // neighbours crossing at arc / (n - 1) radians.
@@ -98,7 +95,7 @@ std::vector<RadarTarget> CrossingTargets(int n, double radius_m, double speed_mp
 // n targets placed uniformly in area over the annulus min_range_m .. max_range_m (at least
 // min_separation_m apart, by rejection), headings uniform, speeds U(50, 300) m/s; every
 // fifth in a coordinated turn of U(1, 3) deg/s, either sense. Seeded.
-std::vector<RadarTarget> RandomTargets(int n, double min_range_m, double max_range_m,
-                                       double min_separation_m, uint64_t seed);
+std::vector<RadarTarget> RandomTargets(int n, double min_range_m, double max_range_m, double min_separation_m,
+                                       uint64_t seed);
 
 }  // namespace localizer::engine

@@ -1,14 +1,13 @@
 #include "engine/sim/random_scene.h"
 
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <numbers>
 #include <random>
-
-#include <Eigen/Geometry>
-#include <Eigen/SVD>
 
 #include "engine/sim/invalid_value.h"
 
@@ -18,7 +17,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kMinApertureM = 0.2;
 constexpr double kMaxApertureM = 40.0;
-constexpr double kMaxAirApertureM = 5.0;   // larger microphone arrays are rare
+constexpr double kMaxAirApertureM = 5.0;  // larger microphone arrays are rare
 constexpr double kMaxSpeedMps = 5.0;
 constexpr double kNearestSensorApertures = 0.1;  // closest a track may pass a sensor
 constexpr double kFarthestApertures = 10.0;      // farthest it may go from the centre
@@ -73,7 +72,8 @@ double Thickness(const std::vector<Vec3>& sensors) {
   Eigen::MatrixXd centred(static_cast<Eigen::Index>(sensors.size()), 3);
   Vec3 mean = Vec3::Zero();
   for (const Vec3& s : sensors) mean += s / static_cast<double>(sensors.size());
-  for (size_t i = 0; i < sensors.size(); ++i) centred.row(static_cast<Eigen::Index>(i)) = (sensors[i] - mean).transpose();
+  for (size_t i = 0; i < sensors.size(); ++i)
+    centred.row(static_cast<Eigen::Index>(i)) = (sensors[i] - mean).transpose();
   const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::MatrixXd>(centred).singularValues();
   return sv(0) > 0.0 ? sv(2) / sv(0) : 0.0;
 }
@@ -145,9 +145,12 @@ const char* SpectrumName(const SimOptions& o) {
 
 const char* SceneClassName(SceneClass scene_class) {
   switch (scene_class) {
-    case SceneClass::kGaussian: return "gaussian";
-    case SceneClass::kMultipath: return "multipath";
-    case SceneClass::kImpulsive: return "impulsive";
+    case SceneClass::kGaussian:
+      return "gaussian";
+    case SceneClass::kMultipath:
+      return "multipath";
+    case SceneClass::kImpulsive:
+      return "impulsive";
   }
   return "unknown";
 }
@@ -234,8 +237,8 @@ StatusOr<RandomScene> DrawRandomScene(uint64_t seed, const RandomSceneOptions& o
   // Class-specific parts, always drawn so that forcing a class changes only these.
   const double surface_r = air ? draw.Uniform(0.3, 0.8) : draw.Uniform(-0.95, -0.6);
   const double bottom_r = air ? draw.Uniform(0.3, 0.8) : draw.Uniform(0.2, 0.7);
-  const bool upper_on = air ? draw.Chance(0.5) : true;   // ceiling (air) / surface (water)
-  const bool lower_on = air ? true : draw.Chance(0.7);   // floor (air) / bottom (water)
+  const bool upper_on = air ? draw.Chance(0.5) : true;  // ceiling (air) / surface (water)
+  const bool lower_on = air ? true : draw.Chance(0.7);  // floor (air) / bottom (water)
   const double ceiling_gap_m = draw.Uniform(0.5, 2.0);
   const double bottom_gap_m = std::max(0.5, draw.Uniform(0.2, 2.0) * aperture_m);
   const double impulse_probability = draw.LogUniform(0.002, 0.02);

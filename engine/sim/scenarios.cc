@@ -12,8 +12,7 @@ namespace {
 // of side edge / sqrt(2).
 std::vector<Vec3> Tetrahedron(const Vec3& centre_m, double edge_m) {
   const double a = edge_m / (2.0 * std::numbers::sqrt2);
-  return {centre_m + Vec3(a, a, a), centre_m + Vec3(a, -a, -a), centre_m + Vec3(-a, a, -a),
-          centre_m + Vec3(-a, -a, a)};
+  return {centre_m + Vec3(a, a, a), centre_m + Vec3(a, -a, -a), centre_m + Vec3(-a, a, -a), centre_m + Vec3(-a, -a, a)};
 }
 
 // Two horizontal squares of side `side_m` at depths z_upper and z_lower, the lower rotated
@@ -21,9 +20,8 @@ std::vector<Vec3> Tetrahedron(const Vec3& centre_m, double edge_m) {
 std::vector<Vec3> TwoRotatedSquares(double side_m, double z_upper_m, double z_lower_m) {
   const double h = 0.5 * side_m;
   const double r = side_m / std::numbers::sqrt2;  // the squares' circumradius
-  return {Vec3(h, h, z_upper_m),  Vec3(-h, h, z_upper_m), Vec3(-h, -h, z_upper_m),
-          Vec3(h, -h, z_upper_m), Vec3(r, 0, z_lower_m),  Vec3(0, r, z_lower_m),
-          Vec3(-r, 0, z_lower_m), Vec3(0, -r, z_lower_m)};
+  return {Vec3(h, h, z_upper_m), Vec3(-h, h, z_upper_m), Vec3(-h, -h, z_upper_m), Vec3(h, -h, z_upper_m),
+          Vec3(r, 0, z_lower_m), Vec3(0, r, z_lower_m),  Vec3(-r, 0, z_lower_m),  Vec3(0, -r, z_lower_m)};
 }
 
 // Hydrophones 2 m apart centred at 10 m depth; the source at 8 m depth runs a straight line

@@ -7,10 +7,10 @@
 
 #include "engine/sim/alpha_stable.h"
 #include "engine/sim/fractional_delay.h"
+#include "engine/sim/invalid_value.h"
 #include "engine/sim/propagation.h"
 #include "engine/sim/seeding.h"
 #include "engine/sim/source_signal.h"
-#include "engine/sim/invalid_value.h"
 
 namespace localizer::engine {
 namespace {
@@ -36,13 +36,12 @@ Status ValidateTiming(const SimOptions& o) {
   }
   const double samples = o.duration_s * o.sample_rate_hz;
   if (samples > kMaxTotalSamples) {
-    return Invalid("duration_s", o.duration_s,
-                   "duration_s * sample_rate_hz = " + Num(samples) +
-                       " samples per channel, more than the limit of 2^31");
+    return Invalid(
+        "duration_s", o.duration_s,
+        "duration_s * sample_rate_hz = " + Num(samples) + " samples per channel, more than the limit of 2^31");
   }
   if (SamplesPerChannel(o) < 1) {
-    return Invalid("duration_s", o.duration_s,
-                   "covers no sample at " + Num(o.sample_rate_hz) + " Hz");
+    return Invalid("duration_s", o.duration_s, "covers no sample at " + Num(o.sample_rate_hz) + " Hz");
   }
   if (!IsPositiveFinite(o.truth_step_s)) {
     return Invalid("truth_step_s", o.truth_step_s, "must be positive and finite");
@@ -61,12 +60,10 @@ Status ValidateSignal(const SimOptions& o) {
     return Invalid("band_low_hz", o.band_low_hz, "must be >= 0 and finite");
   }
   if (!(o.band_high_hz <= nyquist_hz)) {
-    return Invalid("band_high_hz", o.band_high_hz,
-                   "must be at most sample_rate_hz / 2 = " + Num(nyquist_hz) + " Hz");
+    return Invalid("band_high_hz", o.band_high_hz, "must be at most sample_rate_hz / 2 = " + Num(nyquist_hz) + " Hz");
   }
   if (!(o.band_low_hz < o.band_high_hz)) {
-    return Invalid("band_low_hz", o.band_low_hz,
-                   "must be below band_high_hz (" + Num(o.band_high_hz) + " Hz)");
+    return Invalid("band_low_hz", o.band_low_hz, "must be below band_high_hz (" + Num(o.band_high_hz) + " Hz)");
   }
   if (o.signal == SourceSignal::kClicks && !IsPositiveFinite(o.click_rate_hz)) {
     return Invalid("click_rate_hz", o.click_rate_hz, "must be positive and finite");
@@ -83,8 +80,7 @@ Status ValidateSignal(const SimOptions& o) {
     return Invalid("impulse_probability", o.impulse_probability, "must lie in [0, 1]");
   }
   if (!IsPositiveFinite(o.impulse_scale_over_noise_std)) {
-    return Invalid("impulse_scale_over_noise_std", o.impulse_scale_over_noise_std,
-                   "must be positive and finite");
+    return Invalid("impulse_scale_over_noise_std", o.impulse_scale_over_noise_std, "must be positive and finite");
   }
   if (!(o.impulse_alpha > 0.0 && o.impulse_alpha <= 2.0)) {
     return Invalid("impulse_alpha", o.impulse_alpha, "must lie in (0, 2]");
@@ -144,26 +140,24 @@ std::vector<Trajectory> Trajectories(const std::vector<SourcePath>& paths) {
 }
 
 // Checks that need the array, and the source signal's length, before anything is allocated.
-Status ValidateAgainstArray(const ArrayGeometry& array, const SimOptions& o,
-                            double travel_bound_s) {
+Status ValidateAgainstArray(const ArrayGeometry& array, const SimOptions& o, double travel_bound_s) {
   const double c = array.sound_speed_mps();
   const double speed_mps = Speed(o.trajectory);
   if (speed_mps >= kMaxSpeedFractionOfSound * c) {
     return InvalidArgument("trajectory.velocity_mps has speed " + Num(speed_mps) +
-                           " m/s; must be below half the sound speed (" +
-                           Num(kMaxSpeedFractionOfSound * c) + " m/s)");
+                           " m/s; must be below half the sound speed (" + Num(kMaxSpeedFractionOfSound * c) + " m/s)");
   }
   const double total = static_cast<double>(SamplesPerChannel(o)) * array.sensor_count();
   if (total > kMaxTotalSamples) {
-    return Invalid("duration_s", o.duration_s,
-                   "gives " + Num(total) + " samples over " + std::to_string(array.sensor_count()) +
-                       " channels, more than 2^31");
+    return Invalid(
+        "duration_s", o.duration_s,
+        "gives " + Num(total) + " samples over " + std::to_string(array.sensor_count()) + " channels, more than 2^31");
   }
   const double source_samples = (travel_bound_s + o.duration_s) * o.sample_rate_hz;
   if (source_samples > kMaxTotalSamples) {
     return InvalidArgument("trajectory.position_m is up to " + Num(travel_bound_s) +
-                           " s of travel from the array; the source signal would need " +
-                           Num(source_samples) + " samples, more than 2^31");
+                           " s of travel from the array; the source signal would need " + Num(source_samples) +
+                           " samples, more than 2^31");
   }
   return Status::Ok();
 }
@@ -189,14 +183,11 @@ void RenderPath(const Trajectory& path, const SensorTrack& sensor, double sound_
     const double t_s = static_cast<double>(n) / source.sample_rate_hz;
     // te(t) is smooth, so extrapolating the last two solutions starts the iteration within
     // ~1e-12 s of the answer: usually one or two trajectory evaluations per sample.
-    const double guess_s = n == 0   ? t_s
-                           : n == 1 ? te_last_s + period_s
-                                    : 2.0 * te_last_s - te_before_s;
+    const double guess_s = n == 0 ? t_s : n == 1 ? te_last_s + period_s : 2.0 * te_last_s - te_before_s;
     const Emission e = SolveEmission(path, sensor.At(t_s), sound_speed_mps, t_s, guess_s);
     te_before_s = te_last_s;
     te_last_s = e.time_s;
-    const double s =
-        interpolator.Evaluate(source.samples.data(), size, source.PositionOf(e.time_s));
+    const double s = interpolator.Evaluate(source.samples.data(), size, source.PositionOf(e.time_s));
     out[n] = gain * s / std::max(e.range_m, 1.0);
   }
 }
@@ -209,8 +200,7 @@ double MeanPower(const std::vector<double>& x) {
 
 // Adds white Gaussian noise of power signal_power / 10^(snr_db / 10) from the channel's own
 // engine.
-void AddChannelNoise(const SimOptions& o, int channel, double signal_power,
-                     std::vector<double>& x) {
+void AddChannelNoise(const SimOptions& o, int channel, double signal_power, std::vector<double>& x) {
   if (o.snr_db >= kNoNoiseSnrDb) return;
   const double sigma = std::sqrt(signal_power * std::pow(10.0, -o.snr_db / 10.0));
   std::mt19937_64 engine = SeededEngine(o.seed, RandomStream::kChannelNoise, channel);
@@ -255,8 +245,8 @@ TruthRow SimResult::TruthAt(double t_s) const {
   if (truth.empty()) return TruthRow{t_s};
   if (t_s <= truth.front().t_s) return truth.front();
   if (t_s >= truth.back().t_s) return truth.back();
-  const auto after = std::upper_bound(truth.begin(), truth.end(), t_s,
-                                      [](double t, const TruthRow& row) { return t < row.t_s; });
+  const auto after =
+      std::upper_bound(truth.begin(), truth.end(), t_s, [](double t, const TruthRow& row) { return t < row.t_s; });
   const TruthRow& b = *after;
   const TruthRow& a = *(after - 1);
   const double w = (t_s - a.t_s) / (b.t_s - a.t_s);
@@ -284,15 +274,15 @@ StatusOr<SimResult> Simulate(const ArrayGeometry& array, const SimOptions& optio
   // A moving sensor is at most reach_m from the origin, which adds at most
   // reach_m / (c - |v|) < 2 reach_m / c (|v| < c / 2) to any travel time.
   const double travel_bound_s =
-      platform ? MaxTravelTimeBound(path_trajectories, {options.platform_origin_m}, c, options.duration_s) + 2.0 * reach_m / c
+      platform ? MaxTravelTimeBound(path_trajectories, {options.platform_origin_m}, c, options.duration_s) +
+                     2.0 * reach_m / c
                : MaxTravelTimeBound(path_trajectories, array.sensors_m(), c, options.duration_s);
   LOCALIZER_RETURN_IF_ERROR(ValidateAgainstArray(array, options, travel_bound_s));
 
   // Emission time never exceeds reception time, and precedes it by at most the travel bound;
   // the pad keeps the interpolator's reach on real samples.
   const double pad_s = (FractionalDelayInterpolator::kReach + 2) / fs;
-  const SourceWaveform source =
-      MakeSourceWaveform(options, -travel_bound_s - pad_s, options.duration_s + pad_s);
+  const SourceWaveform source = MakeSourceWaveform(options, -travel_bound_s - pad_s, options.duration_s + pad_s);
   const FractionalDelayInterpolator interpolator;
 
   SimResult result;

@@ -55,23 +55,23 @@ struct SimOptions {
                                     // samples per channel, at most 2^31 over all channels
   Trajectory trajectory;
   SourceSignal signal = SourceSignal::kBroadband;
-  double band_low_hz = 200.0;       // source band, 0 <= low < high <= fs / 2; keep high
-                                    // well below fs / 2 for accurate fractional delays
+  double band_low_hz = 200.0;  // source band, 0 <= low < high <= fs / 2; keep high
+                               // well below fs / 2 for accurate fractional delays
   double band_high_hz = 4000.0;
-  double click_rate_hz = 20.0;      // kClicks: clicks per second (regular, jittered by seed)
-  int tone_count = 3;               // kTonalBroadband: tones, in [1, 16]
-  double tone_power_fraction = 0.5; // kTonalBroadband: share of the power in tones, [0, 1]
-  double snr_db = 20.0;             // per channel, direct path; +inf (or >= 200) for no noise
+  double click_rate_hz = 20.0;       // kClicks: clicks per second (regular, jittered by seed)
+  int tone_count = 3;                // kTonalBroadband: tones, in [1, 16]
+  double tone_power_fraction = 0.5;  // kTonalBroadband: share of the power in tones, [0, 1]
+  double snr_db = 20.0;              // per channel, direct path; +inf (or >= 200) for no noise
   bool surface_reflection_enabled = false;
-  double surface_z_m = 0.0;         // reflecting plane z = surface_z_m
-  double surface_reflection = -0.9; // pressure-release surface: negative, |r| <= 1
+  double surface_z_m = 0.0;          // reflecting plane z = surface_z_m
+  double surface_reflection = -0.9;  // pressure-release surface: negative, |r| <= 1
   bool bottom_reflection_enabled = false;
-  double bottom_z_m = -100.0;       // reflecting plane z = bottom_z_m
-  double bottom_reflection = 0.5;   // hard bottom: positive, |r| <= 1
-  double impulse_probability = 0.0; // per sample and channel, in [0, 1]; 0: no impulses
+  double bottom_z_m = -100.0;                  // reflecting plane z = bottom_z_m
+  double bottom_reflection = 0.5;              // hard bottom: positive, |r| <= 1
+  double impulse_probability = 0.0;            // per sample and channel, in [0, 1]; 0: no impulses
   double impulse_scale_over_noise_std = 30.0;  // alpha-stable scale / Gaussian noise std, > 0
-  double impulse_alpha = 1.5;       // tail index of the impulses, in (0, 2]
-  double truth_step_s = 0.01;       // spacing of truth rows, >= 1 / fs
+  double impulse_alpha = 1.5;                  // tail index of the impulses, in (0, 2]
+  double truth_step_s = 0.01;                  // spacing of truth rows, >= 1 / fs
   uint64_t seed = 1;
   // A moving array: the sensors given to Simulate are in the platform's body frame and
   // sensor k receives at time t at  At(t) m_k + platform_origin_m  (platform_motion.h); the
@@ -86,8 +86,8 @@ struct SimOptions {
 };
 
 struct TruthRow {
-  double t_s = 0.0;  // reception time at the reference sensor, seconds from the first sample
-  Vec3 position_m = Vec3::Zero();    // at the emission instant heard at t_s
+  double t_s = 0.0;                // reception time at the reference sensor, seconds from the first sample
+  Vec3 position_m = Vec3::Zero();  // at the emission instant heard at t_s
   Vec3 velocity_mps = Vec3::Zero();
 };
 

@@ -38,12 +38,10 @@ std::vector<double> WhiteNoise(uint64_t seed, int64_t first, int64_t count) {
 }
 
 std::vector<double> BroadbandSamples(const SimOptions& options, int64_t first, int64_t count) {
-  const BandPassFir fir =
-      DesignBandPassFir(options.band_low_hz, options.band_high_hz, options.sample_rate_hz);
+  const BandPassFir fir = DesignBandPassFir(options.band_low_hz, options.band_high_hz, options.sample_rate_hz);
   const auto half = static_cast<int64_t>(fir.taps.size() - 1) / 2;
   // Draw `half` extra samples each side so every output sample sees a full filter.
-  std::vector<double> filtered =
-      FilterValid(WhiteNoise(options.seed, first - half, count + 2 * half), fir.taps);
+  std::vector<double> filtered = FilterValid(WhiteNoise(options.seed, first - half, count + 2 * half), fir.taps);
   double noise_gain = 0.0;
   for (double h : fir.taps) noise_gain += h * h;
   const double scale = 1.0 / std::sqrt(noise_gain);
@@ -52,8 +50,7 @@ std::vector<double> BroadbandSamples(const SimOptions& options, int64_t first, i
 }
 
 // Adds every click whose pulse overlaps the grid; returns the click times it used.
-std::vector<double> AddClicks(const SimOptions& options, int64_t first,
-                              std::vector<double>& samples) {
+std::vector<double> AddClicks(const SimOptions& options, int64_t first, std::vector<double>& samples) {
   const ClickPulse pulse(options.band_low_hz, options.band_high_hz);
   const double fs = options.sample_rate_hz;
   const double half_s = 0.5 * pulse.duration_s();
@@ -62,10 +59,8 @@ std::vector<double> AddClicks(const SimOptions& options, int64_t first,
   const double end_s = static_cast<double>(first + count - 1) / fs;
   std::vector<double> times = ClickEmissionTimes(options, start_s - half_s, end_s + half_s);
   for (double t_click_s : times) {
-    const auto lo =
-        std::max<int64_t>(static_cast<int64_t>(std::ceil((t_click_s - half_s) * fs)), first);
-    const auto hi = std::min<int64_t>(static_cast<int64_t>(std::floor((t_click_s + half_s) * fs)),
-                                      first + count - 1);
+    const auto lo = std::max<int64_t>(static_cast<int64_t>(std::ceil((t_click_s - half_s) * fs)), first);
+    const auto hi = std::min<int64_t>(static_cast<int64_t>(std::floor((t_click_s + half_s) * fs)), first + count - 1);
     for (int64_t n = lo; n <= hi; ++n) {
       samples[n - first] += pulse(static_cast<double>(n) / fs - t_click_s);
     }
@@ -76,8 +71,7 @@ std::vector<double> AddClicks(const SimOptions& options, int64_t first,
 }  // namespace
 
 ClickPulse::ClickPulse(double band_low_hz, double band_high_hz)
-    : centre_hz_(0.5 * (band_low_hz + band_high_hz)),
-      duration_s_(6.0 / (band_high_hz - band_low_hz)) {}
+    : centre_hz_(0.5 * (band_low_hz + band_high_hz)), duration_s_(6.0 / (band_high_hz - band_low_hz)) {}
 
 double ClickPulse::operator()(double t_s) const {
   const double u = t_s / duration_s_;  // window coordinate, [-1/2, 1/2] inside the pulse
@@ -110,8 +104,7 @@ std::vector<Tone> SourceTones(const SimOptions& options) {
   std::uniform_real_distribution<double> frequency(options.band_low_hz + 0.1 * width_hz,
                                                    options.band_high_hz - 0.1 * width_hz);
   std::uniform_real_distribution<double> phase(0.0, 2.0 * std::numbers::pi);
-  const double amplitude =
-      std::sqrt(2.0 * options.tone_power_fraction / static_cast<double>(options.tone_count));
+  const double amplitude = std::sqrt(2.0 * options.tone_power_fraction / static_cast<double>(options.tone_count));
   for (int i = 0; i < options.tone_count; ++i) {
     Tone tone;
     tone.frequency_hz = frequency(engine);

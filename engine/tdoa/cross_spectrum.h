@@ -83,16 +83,15 @@ struct ScotWeight {
   float floor_ref_power;
   float floor_sensor_power;
   BinWeight operator()(CrossBin c, const float* xr, const float* xk, int i) const {
-    const float weight = ScotWeightOf(PowerOf(BinAt(xr, i)), PowerOf(BinAt(xk, i)), floor_ref_power, floor_sensor_power);
+    const float weight =
+        ScotWeightOf(PowerOf(BinAt(xr, i)), PowerOf(BinAt(xk, i)), floor_ref_power, floor_sensor_power);
     return {weight, Magnitude(c) * weight};
   }
 };
 
 // W = 1.
 struct CcWeight {
-  BinWeight operator()(CrossBin c, const float*, const float*, int) const {
-    return {1.0f, Magnitude(c)};
-  }
+  BinWeight operator()(CrossBin c, const float*, const float*, int) const { return {1.0f, Magnitude(c)}; }
 };
 
 inline constexpr int kBlockBins = 256;  // 2 spectra x 2 KiB + 2 KiB of scratch: in L1

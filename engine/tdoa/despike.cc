@@ -12,12 +12,11 @@ Status DespikeOptions::Validate() const {
   if (!(despike_k >= 1.0 && despike_k <= 1e6)) {
     char text[32];
     std::snprintf(text, sizeof text, "%g", despike_k);
-    return InvalidArgument(std::string("DespikeOptions.despike_k is ") + text +
-                           "; must be 0 (off) or in [1, 1e6]");
+    return InvalidArgument(std::string("DespikeOptions.despike_k is ") + text + "; must be 0 (off) or in [1, 1e6]");
   }
   if (coincidence_samples < 0 || coincidence_samples > (1 << 20)) {
-    return InvalidArgument("DespikeOptions.coincidence_samples is " +
-                           std::to_string(coincidence_samples) + "; must be in [0, 1048576]");
+    return InvalidArgument("DespikeOptions.coincidence_samples is " + std::to_string(coincidence_samples) +
+                           "; must be in [0, 1048576]");
   }
   return Status::Ok();
 }
@@ -51,8 +50,8 @@ float ApproximateMedian(const float* values, int n) {
 
 }  // namespace
 
-Status Despike(const DespikeOptions& options, float* frame, int channels, int samples,
-               DespikeScratch* scratch, DespikeStats* stats) {
+Status Despike(const DespikeOptions& options, float* frame, int channels, int samples, DespikeScratch* scratch,
+               DespikeStats* stats) {
   if (Status s = options.Validate(); !s.ok()) return s;
   if (frame == nullptr) return InvalidArgument("frame is null");
   if (channels < 1) return InvalidArgument("channels is " + std::to_string(channels) + "; must be >= 1");
@@ -108,7 +107,7 @@ Status Despike(const DespikeOptions& options, float* frame, int channels, int sa
     float* x = frame + static_cast<std::size_t>(c) * samples;
     const float limit = limits[c];
     if (!(limit > 0.0f)) continue;  // a silent (or mostly zero) channel: nothing to scale by
-    float peak = 0.0f;  // most frames have nothing to clip: one vectorised pass says so
+    float peak = 0.0f;              // most frames have nothing to clip: one vectorised pass says so
 #pragma omp simd reduction(max : peak)
     for (int i = 0; i < samples; ++i) peak = std::max(peak, std::abs(x[i]));
     if (!(peak > limit)) continue;

@@ -71,7 +71,7 @@ struct DespikeScratch {  // reused buffers; a caller that keeps one allocates no
 // INVALID_ARGUMENT when frame is null, channels < 1, samples < 1 or options are invalid;
 // the frame is then untouched. Non-finite samples are left to the estimator to reject (the
 // median ignores nothing: a NaN channel's scale is unspecified but the call is safe).
-Status Despike(const DespikeOptions& options, float* frame, int channels, int samples,
-               DespikeScratch* scratch, DespikeStats* stats = nullptr);
+Status Despike(const DespikeOptions& options, float* frame, int channels, int samples, DespikeScratch* scratch,
+               DespikeStats* stats = nullptr);
 
 }  // namespace localizer::engine

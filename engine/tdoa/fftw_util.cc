@@ -1,6 +1,6 @@
-#include <algorithm>
 #include "engine/tdoa/fftw_util.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 

@@ -27,9 +27,7 @@ using FftwFloats = std::unique_ptr<float[], FftwFree>;
 // `count` zeroed floats, SIMD-aligned. Aborts (like operator new) when memory runs out.
 FftwFloats AllocateFftwFloats(std::size_t count);
 
-inline fftwf_complex* AsComplex(float* interleaved) {
-  return reinterpret_cast<fftwf_complex*>(interleaved);
-}
+inline fftwf_complex* AsComplex(float* interleaved) { return reinterpret_cast<fftwf_complex*>(interleaved); }
 
 // A move-only fftwf_plan.
 class FftwPlan {

@@ -41,8 +41,7 @@ StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOption
   // Zero padding to N >= frame + reach + 1 makes the circular correlation equal the linear one
   // at every lag |l| <= reach (the alias of lag l sits at l -/+ N, beyond the frame). Twice
   // the frame would also be linear at lags nobody reads, at twice the FFT cost.
-  const double reach =
-      std::min(widest_wanted, static_cast<double>(options.frame_samples)) + kPeakHalfWidth;
+  const double reach = std::min(widest_wanted, static_cast<double>(options.frame_samples)) + kPeakHalfWidth;
   layout.fft_size = NextFastFftSize(options.frame_samples + static_cast<int>(reach) + 1);
   layout.bin_count = layout.fft_size / 2 + 1;
 
@@ -53,12 +52,10 @@ StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOption
                             : layout.bin_count;
   layout.band_end_bin = std::min(layout.band_end_bin, layout.bin_count);
   if (layout.band_first_bin >= layout.band_end_bin) {
-    return InvalidArgument("band [" + Value(options.band_low_hz) + ", " +
-                           Value(options.band_high_hz) + "] Hz holds no FFT bin (bin spacing " +
-                           Value(fs / layout.fft_size) + " Hz)");
+    return InvalidArgument("band [" + Value(options.band_low_hz) + ", " + Value(options.band_high_hz) +
+                           "] Hz holds no FFT bin (bin spacing " + Value(fs / layout.fft_size) + " Hz)");
   }
-  layout.noise_floor_inverse =
-      static_cast<float>(std::sqrt(2.0 * (layout.band_end_bin - layout.band_first_bin)));
+  layout.noise_floor_inverse = static_cast<float>(std::sqrt(2.0 * (layout.band_end_bin - layout.band_first_bin)));
 
   // Keep each window and the interpolator's reach inside half the transform.
   const double lag_limit = layout.fft_size / 2 - 1.0 - kPeakHalfWidth;

@@ -25,12 +25,12 @@
 namespace localizer::engine {
 
 struct GccLayout {
-  int frame_samples = 0;   // samples per channel per frame (options.frame_samples)
-  int channels = 0;        // the array's sensor count
-  int fft_size = 0;        // N, samples
-  int bin_count = 0;       // N/2 + 1
-  int band_first_bin = 0;  // bins [band_first_bin, band_end_bin) are in the band;
-  int band_end_bin = 0;    // band_first_bin < band_end_bin <= bin_count
+  int frame_samples = 0;             // samples per channel per frame (options.frame_samples)
+  int channels = 0;                  // the array's sensor count
+  int fft_size = 0;                  // N, samples
+  int bin_count = 0;                 // N/2 + 1
+  int band_first_bin = 0;            // bins [band_first_bin, band_end_bin) are in the band;
+  int band_end_bin = 0;              // band_first_bin < band_end_bin <= bin_count
   float noise_floor_inverse = 0.0f;  // sqrt(2 * (band_end_bin - band_first_bin))
   std::vector<int> max_lag_samples;  // L_p per pair, in [0, N/2 - 1 - kPeakHalfWidth]
 

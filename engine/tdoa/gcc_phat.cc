@@ -33,8 +33,8 @@ constexpr double kSincFloorSamples = 0.002;
 // The refinement's systematic error on this peak: for kParabolic and kGaussian their distance
 // from the (nearly unbiased) kSinc refinement of the same samples, which is their bias here
 // (0.04-0.06 sample at 11 kHz, far less on a peak many samples wide); kSinc's floor else.
-double InterpolationErrorSamples(PeakInterpolation method,
-                                 std::span<const float, kPeakSamples> samples, double offset) {
+double InterpolationErrorSamples(PeakInterpolation method, std::span<const float, kPeakSamples> samples,
+                                 double offset) {
   if (method == PeakInterpolation::kSinc) return kSincFloorSamples;
   const double bias = offset - InterpolatePeak(PeakInterpolation::kSinc, samples);
   return std::sqrt(bias * bias + kSincFloorSamples * kSincFloorSamples);
@@ -78,9 +78,7 @@ double CopyChannel(const float* src, int n, float* dst) {
   return energy;
 }
 
-int ArgMax(std::span<const float> r) {
-  return static_cast<int>(std::max_element(r.begin(), r.end()) - r.begin());
-}
+int ArgMax(std::span<const float> r) { return static_cast<int>(std::max_element(r.begin(), r.end()) - r.begin()); }
 
 float MaxAbs(std::span<const float> r) {
   float best = 0.0f;
@@ -116,11 +114,16 @@ StatusOr<Weighting> ParseWeighting(const std::string& name) {
 
 const char* WeightingName(Weighting w) {
   switch (w) {
-    case Weighting::kPhat: return "phat";
-    case Weighting::kPhatBeta: return "phat-beta";
-    case Weighting::kScot: return "scot";
-    case Weighting::kCc: return "cc";
-    case Weighting::kPhatCoherence: return "phat-coherence";
+    case Weighting::kPhat:
+      return "phat";
+    case Weighting::kPhatBeta:
+      return "phat-beta";
+    case Weighting::kScot:
+      return "scot";
+    case Weighting::kCc:
+      return "cc";
+    case Weighting::kPhatCoherence:
+      return "phat-coherence";
   }
   return "unknown";
 }
@@ -128,25 +131,21 @@ const char* WeightingName(Weighting w) {
 Status GccOptions::Validate() const {
   if (frame_samples < kMinFrameSamples || frame_samples > kMaxFrameSamples) {
     return BadOption("frame_samples", frame_samples,
-                     "must be in [" + std::to_string(kMinFrameSamples) + ", " +
-                         std::to_string(kMaxFrameSamples) + "]");
+                     "must be in [" + std::to_string(kMinFrameSamples) + ", " + std::to_string(kMaxFrameSamples) + "]");
   }
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
     return BadOption("sample_rate_hz", sample_rate_hz, "must be positive and finite");
   }
   const double nyquist_hz = 0.5 * sample_rate_hz;
   if (!(band_low_hz >= 0.0) || !(band_low_hz < nyquist_hz)) {
-    return BadOption("band_low_hz", band_low_hz,
-                     "must be in [0, sample_rate_hz / 2 = " + Value(nyquist_hz) + ")");
+    return BadOption("band_low_hz", band_low_hz, "must be in [0, sample_rate_hz / 2 = " + Value(nyquist_hz) + ")");
   }
   if (!(band_high_hz >= 0.0) || !(band_high_hz <= nyquist_hz)) {
     return BadOption("band_high_hz", band_high_hz,
-                     "must be 0 (up to Nyquist) or in (band_low_hz, sample_rate_hz / 2 = " +
-                         Value(nyquist_hz) + "]");
+                     "must be 0 (up to Nyquist) or in (band_low_hz, sample_rate_hz / 2 = " + Value(nyquist_hz) + "]");
   }
   if (band_high_hz > 0.0 && !(band_high_hz > band_low_hz)) {
-    return BadOption("band_high_hz", band_high_hz,
-                     "must exceed band_low_hz = " + Value(band_low_hz));
+    return BadOption("band_high_hz", band_high_hz, "must exceed band_low_hz = " + Value(band_low_hz));
   }
   if (!(phat_beta >= 0.0 && phat_beta <= 1.0)) {
     return BadOption("phat_beta", phat_beta, "must be in [0, 1]");
@@ -155,12 +154,10 @@ Status GccOptions::Validate() const {
     return BadOption("lag_margin_samples", lag_margin_samples, "must be >= 0");
   }
   if (max_candidates < 1 || max_candidates > kMaxCandidates) {
-    return BadOption("max_candidates", max_candidates,
-                     "must be in [1, " + std::to_string(kMaxCandidates) + "]");
+    return BadOption("max_candidates", max_candidates, "must be in [1, " + std::to_string(kMaxCandidates) + "]");
   }
   if (!(coherence_time_constant_frames >= 1.0) || !std::isfinite(coherence_time_constant_frames)) {
-    return BadOption("coherence_time_constant_frames", coherence_time_constant_frames,
-                     "must be finite and >= 1");
+    return BadOption("coherence_time_constant_frames", coherence_time_constant_frames, "must be finite and >= 1");
   }
   if (coherence_smoothing_bins < 0 || coherence_smoothing_bins > 4096) {
     return BadOption("coherence_smoothing_bins", coherence_smoothing_bins, "must be in [0, 4096]");
@@ -181,8 +178,7 @@ struct GccPhatEstimator::Impl {
   float WeighCrossSpectrum(int pair);
   void MeasurePair(int pair, PairMeasurement* out);
   void GatherWindow(int max_lag, float scale);
-  float LargestSidelobe(std::span<const float> searched, int peak, int peak_lag,
-                        float scale) const;
+  float LargestSidelobe(std::span<const float> searched, int peak, int peak_lag, float scale) const;
   struct SpectrumStats {
     double level = 0.0;      // sum c_k Re_k            (S R at the delay)
     double first = 0.0;      // sum c_k w_k Re_k
@@ -191,22 +187,22 @@ struct GccPhatEstimator::Impl {
   };
   SpectrumStats AnalyseSpectrum(int pair, double delay_samples);
   void LearnCoherence(int pair);
-  void PickCandidates(std::span<const float> searched, int peak, int max_lag, double radius,
-                      double slope_std, PairMeasurement* out);
+  void PickCandidates(std::span<const float> searched, int peak, int max_lag, double radius, double slope_std,
+                      PairMeasurement* out);
   double SigmaCapSamples(int max_lag) const { return (2.0 * max_lag + 1.0) / std::sqrt(12.0); }
 
   ArrayGeometry array;
   GccOptions options;
   // N, bins, band, noise floor and L_p per pair (gcc_layout.h).
   GccLayout layout;
-  int spectrum_stride = 0;  // floats from one channel's spectrum to the next (64-byte multiple)
-  std::vector<double> energy;        // sum of squares per channel, this frame
-  std::vector<float> window;         // scaled R at lags -(L + K) .. L + K, K = kPeakHalfWidth
-  FftwFloats padded;                 // N: one channel, zero padded
-  FftwFloats spectra;                // channels * spectrum_stride: interleaved X per channel
-  FftwFloats cross;                  // 2 * bin_count: weighted cross-spectrum (c2r input)
-  FftwFloats corr;                   // N: inverse transform output, lag l at index l mod N
-  FftwFloats weighed;                // 2 * bin_count: `cross` kept before c2r destroys it
+  int spectrum_stride = 0;     // floats from one channel's spectrum to the next (64-byte multiple)
+  std::vector<double> energy;  // sum of squares per channel, this frame
+  std::vector<float> window;   // scaled R at lags -(L + K) .. L + K, K = kPeakHalfWidth
+  FftwFloats padded;           // N: one channel, zero padded
+  FftwFloats spectra;          // channels * spectrum_stride: interleaved X per channel
+  FftwFloats cross;            // 2 * bin_count: weighted cross-spectrum (c2r input)
+  FftwFloats corr;             // N: inverse transform output, lag l at index l mod N
+  FftwFloats weighed;          // 2 * bin_count: `cross` kept before c2r destroys it
   // kPhatCoherence, per pair (pair * bin_count + bin): the running average of the aligned
   // coherence (not yet bias corrected), the weight w it gives the next frame, the frames
   // averaged, and whether the weights hold anything (else the pair falls back to PHAT).
@@ -262,8 +258,7 @@ Status GccPhatEstimator::Impl::Init() {
 Status GccPhatEstimator::Impl::TransformChannel(const float* samples, int channel) {
   const double e = CopyChannel(samples, options.frame_samples, padded.get());
   if (!std::isfinite(e)) {
-    return InvalidArgument("channel " + std::to_string(channel) +
-                           " holds a non-finite sample (NaN or Inf)");
+    return InvalidArgument("channel " + std::to_string(channel) + " holds a non-finite sample (NaN or Inf)");
   }
   energy[channel] = e;
   float* spectrum = spectra.get() + static_cast<std::size_t>(channel) * spectrum_stride;
@@ -281,8 +276,7 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
   // Out-of-band bins are zeroed every time: c2r destroys its input.
   const int bin_count = layout.bin_count;
   std::memset(g, 0, sizeof(float) * 2 * layout.band_first_bin);
-  std::memset(g + 2 * layout.band_end_bin, 0,
-              sizeof(float) * 2 * (bin_count - layout.band_end_bin));
+  std::memset(g + 2 * layout.band_end_bin, 0, sizeof(float) * 2 * (bin_count - layout.band_end_bin));
 
   const double e_ref = energy[ref];
   const double e_sensor = energy[sensor];
@@ -295,8 +289,7 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
       half_sum = WeighBins(xr, xk, lo, hi, PhatWeight{floor_mag}, g);
       break;
     case Weighting::kPhatBeta:
-      half_sum = WeighBins(xr, xk, lo, hi,
-                           PhatBetaWeight{floor_mag, static_cast<float>(options.phat_beta)}, g);
+      half_sum = WeighBins(xr, xk, lo, hi, PhatBetaWeight{floor_mag, static_cast<float>(options.phat_beta)}, g);
       break;
     case Weighting::kScot:
       half_sum = WeighBins(xr, xk, lo, hi, ScotWeight{PowerFloor(e_ref), PowerFloor(e_sensor)}, g);
@@ -330,8 +323,8 @@ void GccPhatEstimator::Impl::GatherWindow(int max_lag, float scale) {
 
 // Largest |R| outside the main lobe within the window, or, when the lobe fills the window,
 // outside it in the whole correlation (scaled like the window).
-float GccPhatEstimator::Impl::LargestSidelobe(std::span<const float> searched, int peak,
-                                              int peak_lag, float scale) const {
+float GccPhatEstimator::Impl::LargestSidelobe(std::span<const float> searched, int peak, int peak_lag,
+                                              float scale) const {
   int first, last;
   MainLobe([&](int i) { return searched[i]; }, static_cast<int>(searched.size()), peak, &first, &last);
   if (first > 0 || last + 1 < static_cast<int>(searched.size())) {
@@ -345,8 +338,7 @@ float GccPhatEstimator::Impl::LargestSidelobe(std::span<const float> searched, i
 // the bins that stand for a conjugate pair and 1 for DC and Nyquist. With kPhatCoherence it
 // also folds this frame's aligned coherence Re(X_k X_r* e^{j w_k d}) / |X_k X_r*| into the
 // pair's running average.
-GccPhatEstimator::Impl::SpectrumStats GccPhatEstimator::Impl::AnalyseSpectrum(
-    int pair, double delay_samples) {
+GccPhatEstimator::Impl::SpectrumStats GccPhatEstimator::Impl::AnalyseSpectrum(int pair, double delay_samples) {
   const int n = layout.fft_size;
   const int lo = layout.band_first_bin;
   const int hi = layout.band_end_bin;
@@ -355,8 +347,7 @@ GccPhatEstimator::Impl::SpectrumStats GccPhatEstimator::Impl::AnalyseSpectrum(
   const float* xr = spectra.get() + static_cast<std::size_t>(array.reference_sensor()) * spectrum_stride;
   const float* xk = spectra.get() + static_cast<std::size_t>(array.sensor_of_pair(pair)) * spectrum_stride;
   const bool learn = options.weighting == Weighting::kPhatCoherence;
-  float* average = learn ? coherence.data() + static_cast<std::size_t>(pair) * layout.bin_count
-                         : nullptr;
+  float* average = learn ? coherence.data() + static_cast<std::size_t>(pair) * layout.bin_count : nullptr;
   const float alpha = static_cast<float>(1.0 / options.coherence_time_constant_frames);
   const double step_angle = bin_rate * delay_samples;
   SpectrumStats stats;
@@ -399,8 +390,7 @@ GccPhatEstimator::Impl::SpectrumStats GccPhatEstimator::Impl::AnalyseSpectrum(
         for (int l = 0; l < count; ++l) {
           const int k = b + l;
           const CrossBin x = CrossAt(xr, xk, k);
-          const double mag = std::sqrt(static_cast<double>(x.re) * x.re +
-                                       static_cast<double>(x.im) * x.im);
+          const double mag = std::sqrt(static_cast<double>(x.re) * x.re + static_cast<double>(x.im) * x.im);
           const double x_re = x.re * ph_re[l] - x.im * ph_im[l];
           const float aligned = mag > 0.0 ? static_cast<float>(x_re / mag) : 0.0f;
           average[k] += alpha * (aligned - average[k]);
@@ -476,9 +466,8 @@ void GccPhatEstimator::Impl::LearnCoherence(int pair) {
 // Local extrema of R in the searched window (the padding either side gives the end samples
 // a neighbour), the main peak first, then by decreasing |R|, each at least `radius` lags
 // from those taken; each refined like the main peak (negative ones on -R).
-void GccPhatEstimator::Impl::PickCandidates(std::span<const float> searched, int peak,
-                                            int max_lag, double radius, double slope_std,
-                                            PairMeasurement* out) {
+void GccPhatEstimator::Impl::PickCandidates(std::span<const float> searched, int peak, int max_lag, double radius,
+                                            double slope_std, PairMeasurement* out) {
   const int count = static_cast<int>(searched.size());
   const double fs = options.sample_rate_hz;
   const double cap = SigmaCapSamples(max_lag);
@@ -517,8 +506,7 @@ void GccPhatEstimator::Impl::PickCandidates(std::span<const float> searched, int
     candidate.delay_s = (e.index - max_lag + offset) / fs;
     candidate.value = w[e.index];
     candidate.delay_sigma_s =
-        sigma_of(SincCurvature(around, offset),
-                 InterpolationErrorSamples(options.interpolation, around, offset)) / fs;
+        sigma_of(SincCurvature(around, offset), InterpolationErrorSamples(options.interpolation, around, offset)) / fs;
     out->candidates.push_back(candidate);
   }
 }
@@ -537,8 +525,10 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
     out->peak_snr = 0.0;
     out->delay_sigma_s = SigmaCapSamples(max_lag) / options.sample_rate_hz;
     out->candidates.clear();
-    if (options.keep_gcc) out->gcc.assign(searched_count, 0.0f);
-    else out->gcc.clear();
+    if (options.keep_gcc)
+      out->gcc.assign(searched_count, 0.0f);
+    else
+      out->gcc.clear();
     return;
   }
   std::memcpy(weighed.get(), cross.get(), sizeof(float) * 2 * layout.bin_count);
@@ -561,8 +551,7 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
 
   // delay_sigma (gcc_phat.h): sigma = sqrt((N / M) sum c^2 w^2 Im^2) / sum c w^2 Re.
   const SpectrumStats stats = AnalyseSpectrum(pair, delay_samples);
-  const double padding_factor =
-      static_cast<double>(layout.fft_size) / static_cast<double>(options.frame_samples);
+  const double padding_factor = static_cast<double>(layout.fft_size) / static_cast<double>(options.frame_samples);
   const double slope_std = std::sqrt(padding_factor * stats.slope_var) / norm;  // std of R'
   const double floor = InterpolationErrorSamples(options.interpolation, around, offset_samples);
   const double cap = SigmaCapSamples(max_lag);
@@ -579,8 +568,8 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
   if (stats.level > 0.0) {
     const double mean = stats.first / stats.level;
     const double var = stats.curvature / stats.level - mean * mean;
-    if (var > 0.0) radius = std::clamp(kEnvelopeNullPerRmsWidth / std::sqrt(var), 1.0,
-                                       static_cast<double>(searched_count));
+    if (var > 0.0)
+      radius = std::clamp(kEnvelopeNullPerRmsWidth / std::sqrt(var), 1.0, static_cast<double>(searched_count));
   }
   if (options.max_candidates > 1) {
     PickCandidates(searched, peak, max_lag, radius, slope_std, out);
@@ -589,8 +578,10 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
   }
   out->candidates[0] = DelayCandidate{out->delay_s, out->peak_value, out->delay_sigma_s};
 
-  if (options.keep_gcc) out->gcc.assign(searched.begin(), searched.end());
-  else out->gcc.clear();
+  if (options.keep_gcc)
+    out->gcc.assign(searched.begin(), searched.end());
+  else
+    out->gcc.clear();
 }
 
 GccPhatEstimator::GccPhatEstimator(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -604,19 +595,17 @@ StatusOr<std::unique_ptr<GccPhatEstimator>> GccPhatEstimator::Create(const Array
   return std::unique_ptr<GccPhatEstimator>(new GccPhatEstimator(std::move(impl)));
 }
 
-Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double t_s,
-                                  Measurement* out) {
+Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double t_s, Measurement* out) {
   Impl& s = *impl_;
   if (frame == nullptr) return InvalidArgument("frame is null");
   if (out == nullptr) return InvalidArgument("out (the Measurement to fill) is null");
   if (frame_samples != s.options.frame_samples) {
-    return InvalidArgument("frame_samples is " + std::to_string(frame_samples) +
-                           "; the estimator was created for frame_samples = " +
-                           std::to_string(s.options.frame_samples));
+    return InvalidArgument(
+        "frame_samples is " + std::to_string(frame_samples) +
+        "; the estimator was created for frame_samples = " + std::to_string(s.options.frame_samples));
   }
   for (int ch = 0; ch < s.array.sensor_count(); ++ch) {
-    LOCALIZER_RETURN_IF_ERROR(
-        s.TransformChannel(frame + static_cast<std::size_t>(ch) * frame_samples, ch));
+    LOCALIZER_RETURN_IF_ERROR(s.TransformChannel(frame + static_cast<std::size_t>(ch) * frame_samples, ch));
   }
   out->t_s = t_s;
   out->sample_rate_hz = s.options.sample_rate_hz;

@@ -158,18 +158,18 @@ StatusOr<Weighting> ParseWeighting(const std::string& name);
 const char* WeightingName(Weighting w);
 
 struct GccOptions {
-  int frame_samples = 4096;       // samples per channel per frame, in [64, 2^20]
-  double sample_rate_hz = 0.0;    // > 0, finite
+  int frame_samples = 4096;     // samples per channel per frame, in [64, 2^20]
+  double sample_rate_hz = 0.0;  // > 0, finite
   Weighting weighting = Weighting::kPhat;
-  double phat_beta = 0.8;         // only used by kPhatBeta; must be in [0, 1]
-  double band_low_hz = 0.0;       // 0: from DC; in [0, fs/2), < band_high_hz when that is set
-  double band_high_hz = 0.0;      // 0: up to Nyquist; else in (band_low_hz, fs/2]
-  int lag_margin_samples = 2;     // searched beyond the physical maximum delay, >= 0
-  bool keep_gcc = true;           // copy the GCC over the lag window into the Measurement
+  double phat_beta = 0.8;      // only used by kPhatBeta; must be in [0, 1]
+  double band_low_hz = 0.0;    // 0: from DC; in [0, fs/2), < band_high_hz when that is set
+  double band_high_hz = 0.0;   // 0: up to Nyquist; else in (band_low_hz, fs/2]
+  int lag_margin_samples = 2;  // searched beyond the physical maximum delay, >= 0
+  bool keep_gcc = true;        // copy the GCC over the lag window into the Measurement
   PeakInterpolation interpolation = PeakInterpolation::kSinc;  // sub-sample refinement
-  bool measure_fft_plans = false; // FFTW_MEASURE instead of FFTW_ESTIMATE (see above)
-  int max_candidates = 4;         // PairMeasurement::candidates per pair, in [1, 32]; 1: the
-                                  // main peak only
+  bool measure_fft_plans = false;                              // FFTW_MEASURE instead of FFTW_ESTIMATE (see above)
+  int max_candidates = 4;  // PairMeasurement::candidates per pair, in [1, 32]; 1: the
+                           // main peak only
   // kPhatCoherence: the exponential average's time constant in frames (>= 1; the weight of
   // a frame falls by e after this many frames) and the frames measured with plain PHAT before
   // the averaged coherence is used (>= 1).
@@ -186,8 +186,7 @@ class GccPhatEstimator final : public TdoaEstimator {
  public:
   // INVALID_ARGUMENT when options.Validate() fails or the band holds no FFT bin; INTERNAL
   // when FFTW cannot plan.
-  static StatusOr<std::unique_ptr<GccPhatEstimator>> Create(const ArrayGeometry& array,
-                                                            const GccOptions& options);
+  static StatusOr<std::unique_ptr<GccPhatEstimator>> Create(const ArrayGeometry& array, const GccOptions& options);
   ~GccPhatEstimator() override;
   GccPhatEstimator(const GccPhatEstimator&) = delete;
   GccPhatEstimator& operator=(const GccPhatEstimator&) = delete;
@@ -201,8 +200,8 @@ class GccPhatEstimator final : public TdoaEstimator {
   void Reset();
 
   const GccOptions& options() const;
-  int fft_size() const;                    // N
-  int max_lag_samples(int pair) const;     // L_p, the half-width of the searched window
+  int fft_size() const;                 // N
+  int max_lag_samples(int pair) const;  // L_p, the half-width of the searched window
 
  private:
   struct Impl;

@@ -4,9 +4,12 @@ namespace localizer::engine {
 
 const char* PeakInterpolationName(PeakInterpolation method) {
   switch (method) {
-    case PeakInterpolation::kParabolic: return "parabolic";
-    case PeakInterpolation::kGaussian: return "gaussian";
-    case PeakInterpolation::kSinc: return "sinc";
+    case PeakInterpolation::kParabolic:
+      return "parabolic";
+    case PeakInterpolation::kGaussian:
+      return "gaussian";
+    case PeakInterpolation::kSinc:
+      return "sinc";
   }
   return "unknown";
 }

@@ -36,21 +36,43 @@ LOCALIZER_HOST_DEVICE inline double GaussianPeakOffset(double y_minus, double y0
 // which the CPU stage computed at start-up before they were written here; tests/tdoa checks
 // that they still are.
 LOCALIZER_HOST_DEVICE inline double CosTap(int m) {
-  constexpr double kTable[kPeakSamples] = {
-      -0x1p+0, -0x1.d906bcf328d46p-1, -0x1.6a09e667f3bccp-1, -0x1.87de2a6aea962p-2,
-      0x1.1a62633145c07p-54, 0x1.87de2a6aea964p-2, 0x1.6a09e667f3bcdp-1, 0x1.d906bcf328d46p-1,
-      0x1p+0, 0x1.d906bcf328d46p-1, 0x1.6a09e667f3bcdp-1, 0x1.87de2a6aea964p-2,
-      0x1.1a62633145c07p-54, -0x1.87de2a6aea962p-2, -0x1.6a09e667f3bccp-1, -0x1.d906bcf328d46p-1,
-      -0x1p+0};
+  constexpr double kTable[kPeakSamples] = {-0x1p+0,
+                                           -0x1.d906bcf328d46p-1,
+                                           -0x1.6a09e667f3bccp-1,
+                                           -0x1.87de2a6aea962p-2,
+                                           0x1.1a62633145c07p-54,
+                                           0x1.87de2a6aea964p-2,
+                                           0x1.6a09e667f3bcdp-1,
+                                           0x1.d906bcf328d46p-1,
+                                           0x1p+0,
+                                           0x1.d906bcf328d46p-1,
+                                           0x1.6a09e667f3bcdp-1,
+                                           0x1.87de2a6aea964p-2,
+                                           0x1.1a62633145c07p-54,
+                                           -0x1.87de2a6aea962p-2,
+                                           -0x1.6a09e667f3bccp-1,
+                                           -0x1.d906bcf328d46p-1,
+                                           -0x1p+0};
   return kTable[m];
 }
 LOCALIZER_HOST_DEVICE inline double SinTap(int m) {
-  constexpr double kTable[kPeakSamples] = {
-      -0x1.1a62633145c07p-53, -0x1.87de2a6aea965p-2, -0x1.6a09e667f3bcdp-1, -0x1.d906bcf328d46p-1,
-      -0x1p+0, -0x1.d906bcf328d46p-1, -0x1.6a09e667f3bccp-1, -0x1.87de2a6aea963p-2,
-      0x0p+0, 0x1.87de2a6aea963p-2, 0x1.6a09e667f3bccp-1, 0x1.d906bcf328d46p-1,
-      0x1p+0, 0x1.d906bcf328d46p-1, 0x1.6a09e667f3bcdp-1, 0x1.87de2a6aea965p-2,
-      0x1.1a62633145c07p-53};
+  constexpr double kTable[kPeakSamples] = {-0x1.1a62633145c07p-53,
+                                           -0x1.87de2a6aea965p-2,
+                                           -0x1.6a09e667f3bcdp-1,
+                                           -0x1.d906bcf328d46p-1,
+                                           -0x1p+0,
+                                           -0x1.d906bcf328d46p-1,
+                                           -0x1.6a09e667f3bccp-1,
+                                           -0x1.87de2a6aea963p-2,
+                                           0x0p+0,
+                                           0x1.87de2a6aea963p-2,
+                                           0x1.6a09e667f3bccp-1,
+                                           0x1.d906bcf328d46p-1,
+                                           0x1p+0,
+                                           0x1.d906bcf328d46p-1,
+                                           0x1.6a09e667f3bcdp-1,
+                                           0x1.87de2a6aea965p-2,
+                                           0x1.1a62633145c07p-53};
   return kTable[m];
 }
 
@@ -141,9 +163,12 @@ LOCALIZER_HOST_DEVICE inline double InterpolatePeak(PeakInterpolation method, co
   const double y0 = samples[kPeakHalfWidth];
   const double y_plus = samples[kPeakHalfWidth + 1];
   switch (method) {
-    case PeakInterpolation::kParabolic: return ParabolicPeakOffset(y_minus, y0, y_plus);
-    case PeakInterpolation::kGaussian: return GaussianPeakOffset(y_minus, y0, y_plus);
-    case PeakInterpolation::kSinc: return MaximiseSinc(samples, ParabolicPeakOffset(y_minus, y0, y_plus));
+    case PeakInterpolation::kParabolic:
+      return ParabolicPeakOffset(y_minus, y0, y_plus);
+    case PeakInterpolation::kGaussian:
+      return GaussianPeakOffset(y_minus, y0, y_plus);
+    case PeakInterpolation::kSinc:
+      return MaximiseSinc(samples, ParabolicPeakOffset(y_minus, y0, y_plus));
   }
   return 0.0;
 }

@@ -39,8 +39,7 @@ bool AssignmentSolver::Solve(const double* cost, int rows, int cols, int* col_fo
           shortest_[j] = reduced;
         }
         // Ties go to an unassigned column: the path ends sooner.
-        if (shortest_[j] < lowest || (shortest_[j] == lowest && lowest < kForbidden &&
-                                      row4col_[j] < 0)) {
+        if (shortest_[j] < lowest || (shortest_[j] == lowest && lowest < kForbidden && row4col_[j] < 0)) {
           lowest = shortest_[j];
           index = it;
         }
@@ -77,8 +76,7 @@ bool AssignmentSolver::Solve(const double* cost, int rows, int cols, int* col_fo
   return true;
 }
 
-void AssignmentSolver::SolveGnn(const double* cost, int rows, int cols, const double* miss_cost,
-                                int* col_for_row) {
+void AssignmentSolver::SolveGnn(const double* cost, int rows, int cols, const double* miss_cost, int* col_for_row) {
   const int wide = cols + rows;
   augmented_.assign(static_cast<size_t>(rows) * wide, kForbidden);
   for (int i = 0; i < rows; ++i) {

@@ -29,8 +29,7 @@ inline constexpr double kForbidden = std::numeric_limits<double>::infinity();
 class AssignmentSolver {
  public:
   bool Solve(const double* cost, int rows, int cols, int* col_for_row);
-  void SolveGnn(const double* cost, int rows, int cols, const double* miss_cost,
-                int* col_for_row);
+  void SolveGnn(const double* cost, int rows, int cols, const double* miss_cost, int* col_for_row);
 
  private:
   std::vector<double> u_, v_, shortest_, augmented_;

@@ -1,9 +1,8 @@
 #include "engine/tws/associator.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/LU>
 
 namespace localizer::engine::tws {
 

@@ -30,9 +30,8 @@
 // targets crowd).
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "engine/tws/assignment.h"
 #include "engine/tws/clustering.h"
@@ -53,8 +52,7 @@ class GnnAssociator {
   explicit GnnAssociator(double gate_threshold) : gate_(gate_threshold) {}
 
   void BeginScan(const std::vector<Gaussian<D>>& measurements);
-  void Associate(const std::vector<Gaussian<D>>& expected, std::vector<int>* assigned,
-                 AssociationStats* stats);
+  void Associate(const std::vector<Gaussian<D>>& expected, std::vector<int>* assigned, AssociationStats* stats);
 
   // Per measurement of the scan: 1 when a track took it.
   const std::vector<char>& taken() const { return taken_; }

@@ -60,9 +60,7 @@ struct Cv {
     return k;
   }
 
-  static void UpdateConstantGain(State& x, const Gain& k, const Pos& z) {
-    x += k * (z - x.template head<D>());
-  }
+  static void UpdateConstantGain(State& x, const Gain& k, const Pos& z) { x += k * (z - x.template head<D>()); }
 };
 
 }  // namespace localizer::engine::tws

@@ -9,10 +9,14 @@ Deleter::Deleter(const DeleterOptions& options)
 
 const char* DeletionName(Deletion d) {
   switch (d) {
-    case Deletion::kKeep: return "keep";
-    case Deletion::kUnconfirmable: return "unconfirmable";
-    case Deletion::kCoasted: return "coasted";
-    case Deletion::kDiverged: return "diverged";
+    case Deletion::kKeep:
+      return "keep";
+    case Deletion::kUnconfirmable:
+      return "unconfirmable";
+    case Deletion::kCoasted:
+      return "coasted";
+    case Deletion::kDiverged:
+      return "diverged";
   }
   return "unknown";
 }

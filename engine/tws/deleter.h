@@ -15,9 +15,9 @@
 namespace localizer::engine::tws {
 
 struct DeleterOptions {
-  int confirm_hits = 3;       // M of the M-of-N confirmation (initiator.h)
-  int confirm_window = 5;     // N
-  int max_coast_scans = 5;    // >= 1
+  int confirm_hits = 3;                  // M of the M-of-N confirmation (initiator.h)
+  int confirm_window = 5;                // N
+  int max_coast_scans = 5;               // >= 1
   double max_position_sigma_m = 2000.0;  // > 0
 };
 

@@ -18,8 +18,8 @@ void Initiator<D>::Start(const State& x, const Cov& p, int hits, std::vector<Sta
 }
 
 template <int D>
-void Initiator<D>::Initiate(const std::vector<Gaussian<D>>& measurements, const std::vector<char>& taken,
-                            double dt, int room, std::vector<Started>* started) {
+void Initiator<D>::Initiate(const std::vector<Gaussian<D>>& measurements, const std::vector<char>& taken, double dt,
+                            int room, std::vector<Started>* started) {
   using Pos = typename Cv<D>::Pos;
   using PosCov = typename Cv<D>::PosCov;
   started->clear();

@@ -20,9 +20,8 @@
 // Deterministic; work arrays persist (no allocation once grown). Not thread-safe.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "engine/tws/cv_kalman.h"
 #include "engine/tws/gaussian.h"
@@ -56,8 +55,8 @@ class Initiator {
   explicit Initiator(const InitiatorOptions& options)
       : options_(options), rule_(options.confirm_hits, options.confirm_window) {}
 
-  void Initiate(const std::vector<Gaussian<D>>& measurements, const std::vector<char>& taken, double dt,
-                int room, std::vector<Started>* started);
+  void Initiate(const std::vector<Gaussian<D>>& measurements, const std::vector<char>& taken, double dt, int room,
+                std::vector<Started>* started);
 
   // Returns whether the track is (now) confirmed.
   bool Confirm(TrackHistory& history) const {

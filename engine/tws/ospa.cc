@@ -7,8 +7,8 @@
 
 namespace localizer::engine::tws {
 
-double Ospa(const std::vector<Eigen::Vector3d>& truth, const std::vector<Eigen::Vector3d>& estimates,
-            double cutoff, double order) {
+double Ospa(const std::vector<Eigen::Vector3d>& truth, const std::vector<Eigen::Vector3d>& estimates, double cutoff,
+            double order) {
   const bool swap = truth.size() > estimates.size();
   const auto& small = swap ? estimates : truth;
   const auto& large = swap ? truth : estimates;
@@ -31,8 +31,8 @@ double Ospa(const std::vector<Eigen::Vector3d>& truth, const std::vector<Eigen::
   return std::pow(total / n, 1.0 / order);
 }
 
-GospaResult Gospa(const std::vector<Eigen::Vector3d>& truth,
-                  const std::vector<Eigen::Vector3d>& estimates, double cutoff, double order) {
+GospaResult Gospa(const std::vector<Eigen::Vector3d>& truth, const std::vector<Eigen::Vector3d>& estimates,
+                  double cutoff, double order) {
   const int m = static_cast<int>(truth.size()), n = static_cast<int>(estimates.size());
   const double cp = std::pow(cutoff, order);
   GospaResult r;

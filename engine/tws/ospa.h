@@ -11,9 +11,8 @@
 // Both solve their assignment exactly (assignment.h): O(max(m, n)^3).
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 namespace localizer::engine::tws {
 
@@ -21,13 +20,13 @@ struct GospaResult {
   double gospa = 0.0;
   double localisation = 0.0;  // sum of |x - y|^p over assigned pairs
   int assigned = 0;
-  int missed = 0;  // truths without an estimate
+  int missed = 0;        // truths without an estimate
   int false_tracks = 0;  // estimates without a truth
 };
 
-double Ospa(const std::vector<Eigen::Vector3d>& truth, const std::vector<Eigen::Vector3d>& estimates,
-            double cutoff, double order);
-GospaResult Gospa(const std::vector<Eigen::Vector3d>& truth,
-                  const std::vector<Eigen::Vector3d>& estimates, double cutoff, double order);
+double Ospa(const std::vector<Eigen::Vector3d>& truth, const std::vector<Eigen::Vector3d>& estimates, double cutoff,
+            double order);
+GospaResult Gospa(const std::vector<Eigen::Vector3d>& truth, const std::vector<Eigen::Vector3d>& estimates,
+                  double cutoff, double order);
 
 }  // namespace localizer::engine::tws

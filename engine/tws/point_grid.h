@@ -6,11 +6,10 @@
 // allocation once grown). Not thread-safe.
 #pragma once
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace localizer::engine::tws {
 

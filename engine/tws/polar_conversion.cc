@@ -4,8 +4,7 @@
 
 namespace localizer::engine::tws {
 
-Converted3 ConvertSpherical(double r, double theta, double phi, const PolarNoise& noise,
-                            Conversion method) {
+Converted3 ConvertSpherical(double r, double theta, double phi, const PolarNoise& noise, Conversion method) {
   const double ct = std::cos(theta), st = std::sin(theta);
   const double cp = std::cos(phi), sp = std::sin(phi);
   const double sr2 = noise.range_sigma_m * noise.range_sigma_m;
@@ -14,7 +13,7 @@ Converted3 ConvertSpherical(double r, double theta, double phi, const PolarNoise
   Converted3 out;
   if (method == Conversion::kNaive) {
     out.position_m = r * Eigen::Vector3d(cp * ct, cp * st, sp);
-    Eigen::Matrix3d j;  // columns: d/dr, d/dtheta, d/dphi
+    Eigen::Matrix3d j;                         // columns: d/dr, d/dtheta, d/dphi
     j << cp * ct, -r * cp * st, -r * sp * ct,  //
         cp * st, r * cp * ct, -r * sp * st,    //
         sp, 0.0, r * cp;

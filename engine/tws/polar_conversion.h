@@ -51,10 +51,9 @@ struct Converted3 {
 };
 
 // (range, bearing) -> (x, y) relative to the sensor.
-Converted2 ConvertPolar(double range_m, double bearing_rad, const PolarNoise& noise,
-                        Conversion method);
+Converted2 ConvertPolar(double range_m, double bearing_rad, const PolarNoise& noise, Conversion method);
 // (range, bearing, elevation) -> (x, y, z) relative to the sensor.
-Converted3 ConvertSpherical(double range_m, double bearing_rad, double elevation_rad,
-                            const PolarNoise& noise, Conversion method);
+Converted3 ConvertSpherical(double range_m, double bearing_rad, double elevation_rad, const PolarNoise& noise,
+                            Conversion method);
 
 }  // namespace localizer::engine::tws

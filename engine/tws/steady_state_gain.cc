@@ -5,9 +5,8 @@
 
 namespace localizer::engine::tws {
 
-SteadyStateResult SteadyStateKalman(const Eigen::MatrixXd& f, const Eigen::MatrixXd& q,
-                                    const Eigen::MatrixXd& h, const Eigen::MatrixXd& r,
-                                    double tolerance, int max_iterations,
+SteadyStateResult SteadyStateKalman(const Eigen::MatrixXd& f, const Eigen::MatrixXd& q, const Eigen::MatrixXd& h,
+                                    const Eigen::MatrixXd& r, double tolerance, int max_iterations,
                                     double initial_variance) {
   const auto n = f.rows();
   const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(n, n);

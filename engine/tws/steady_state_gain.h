@@ -19,17 +19,16 @@
 namespace localizer::engine::tws {
 
 struct SteadyStateResult {
-  Eigen::MatrixXd gain;          // K, n x m
-  Eigen::MatrixXd predicted;     // P(k+1|k) in the limit
-  Eigen::MatrixXd updated;       // P(k+1|k+1) in the limit
-  Eigen::MatrixXd closed_loop;   // Phi = (I - K H) F
+  Eigen::MatrixXd gain;         // K, n x m
+  Eigen::MatrixXd predicted;    // P(k+1|k) in the limit
+  Eigen::MatrixXd updated;      // P(k+1|k+1) in the limit
+  Eigen::MatrixXd closed_loop;  // Phi = (I - K H) F
   int iterations = 0;
   bool converged = false;
 };
 
-SteadyStateResult SteadyStateKalman(const Eigen::MatrixXd& f, const Eigen::MatrixXd& q,
-                                    const Eigen::MatrixXd& h, const Eigen::MatrixXd& r,
-                                    double tolerance = 1e-12, int max_iterations = 100000,
+SteadyStateResult SteadyStateKalman(const Eigen::MatrixXd& f, const Eigen::MatrixXd& q, const Eigen::MatrixXd& h,
+                                    const Eigen::MatrixXd& r, double tolerance = 1e-12, int max_iterations = 100000,
                                     double initial_variance = 1e6);
 
 struct AlphaBeta {

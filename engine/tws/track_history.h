@@ -22,7 +22,7 @@ struct TrackHistory {
   uint32_t bits = 0;  // bit k: the scan k before the latest brought a measurement
   int age = 0;        // scans since initiation, the initiating one(s) counting
   int hits = 0;
-  int misses = 0;     // in a row
+  int misses = 0;  // in a row
   bool confirmed = false;
 
   void Record(bool hit) {

@@ -4,9 +4,12 @@ namespace localizer::engine::tws {
 
 const char* TrackStatusName(TrackStatus status) {
   switch (status) {
-    case TrackStatus::kTentative: return "tentative";
-    case TrackStatus::kConfirmed: return "confirmed";
-    case TrackStatus::kCoasting: return "coasting";
+    case TrackStatus::kTentative:
+      return "tentative";
+    case TrackStatus::kConfirmed:
+      return "confirmed";
+    case TrackStatus::kCoasting:
+      return "coasting";
   }
   return "unknown";
 }

@@ -6,9 +6,8 @@
 // tracker.
 #pragma once
 
-#include <cstdint>
-
 #include <Eigen/Core>
+#include <cstdint>
 
 namespace localizer::engine::tws {
 
@@ -18,7 +17,7 @@ const char* TrackStatusName(TrackStatus status);  // "tentative" | "confirmed" |
 struct TrackReport {
   uint64_t id = 0;
   TrackStatus status = TrackStatus::kTentative;
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();    // world frame; z = 0 in 2-D
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // world frame; z = 0 in 2-D
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
   // Of (x, y, z, vx, vy, vz); in 2-D the z and vz rows and columns are 0.
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
@@ -30,15 +29,15 @@ struct TrackReport {
 
 struct ScanSummary {
   int plots = 0;
-  int assigned = 0;          // plots that updated a track
-  int initiated = 0;         // new tentative tracks
+  int assigned = 0;   // plots that updated a track
+  int initiated = 0;  // new tentative tracks
   int deleted = 0;
-  int confirmed = 0;         // confirmed + coasting tracks after the scan
+  int confirmed = 0;  // confirmed + coasting tracks after the scan
   int tentative = 0;
-  int clusters = 0;          // gate-graph components with >= 1 edge
-  int largest_cluster = 0;   // tracks in the largest of them
-  int64_t track_updates = 0; // tracks that went through the scan's cycle (predict, gate,
-                             // update or coast); the unit of "track updates per second"
+  int clusters = 0;           // gate-graph components with >= 1 edge
+  int largest_cluster = 0;    // tracks in the largest of them
+  int64_t track_updates = 0;  // tracks that went through the scan's cycle (predict, gate,
+                              // update or coast); the unit of "track updates per second"
 };
 
 }  // namespace localizer::engine::tws

@@ -16,11 +16,10 @@
 //     followed one target only).
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <map>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace localizer::engine::tws {
 

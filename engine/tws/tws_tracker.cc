@@ -56,8 +56,8 @@ class TrackerImpl final : public TwsTracker {
         plots_[i].mean = c.position_m + scan.sensor_position_m.head<2>();
         plots_[i].covariance = c.covariance_m2;
       } else {
-        const Converted3 c = ConvertSpherical(d.range_m, d.bearing_rad, *d.elevation_rad,
-                                              options_.noise, options_.conversion);
+        const Converted3 c =
+            ConvertSpherical(d.range_m, d.bearing_rad, *d.elevation_rad, options_.noise, options_.conversion);
         plots_[i].mean = c.position_m + scan.sensor_position_m;
         plots_[i].covariance = c.covariance_m2;
       }
@@ -66,8 +66,7 @@ class TrackerImpl final : public TwsTracker {
     return Status::Ok();
   }
 
-  Status ProcessCartesian(double time_s, const std::vector<CartesianPlot>& plots,
-                          ScanSummary* summary) override {
+  Status ProcessCartesian(double time_s, const std::vector<CartesianPlot>& plots, ScanSummary* summary) override {
     LOCALIZER_RETURN_IF_ERROR(CheckTime(time_s));
     for (size_t i = 0; i < plots.size(); ++i) {
       if (!plots[i].position_m.allFinite() || !plots[i].covariance_m2.allFinite())

@@ -38,11 +38,10 @@
 // Not thread-safe; one tracker per session. Deterministic: no random draws.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "engine/core/detection.h"
 #include "engine/core/status.h"

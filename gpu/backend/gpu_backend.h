@@ -30,10 +30,10 @@
 namespace localizer::gpu {
 
 struct GpuBackendOptions {
-  double batch_window_s = 0.001;    // longest a queued frame waits for others, in [0, 1]
-  int max_batch_frames = 1024;      // a batch launches as soon as this many frames wait, >= 1
-  std::size_t bank_limit_bytes = 0; // device memory the particle bank may use; 0: 3/4 of the
-                                    // memory free when the first GPU session opens
+  double batch_window_s = 0.001;     // longest a queued frame waits for others, in [0, 1]
+  int max_batch_frames = 1024;       // a batch launches as soon as this many frames wait, >= 1
+  std::size_t bank_limit_bytes = 0;  // device memory the particle bank may use; 0: 3/4 of the
+                                     // memory free when the first GPU session opens
 
   Status Validate() const;  // INVALID_ARGUMENT naming the field
 };

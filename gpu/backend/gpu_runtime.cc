@@ -35,14 +35,13 @@ StatusOr<std::shared_ptr<GpuRuntime>> GpuRuntime::Create(const GpuBackendOptions
   auto bank = ParticleBank::Create(limit);
   if (!bank.ok()) return bank.status();
   runtime->bank_ = std::move(bank).value();
-  const auto window = std::chrono::duration_cast<std::chrono::nanoseconds>(
-      std::chrono::duration<double>(options.batch_window_s));
+  const auto window =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(options.batch_window_s));
   GpuRuntime* self = runtime.get();
   runtime->gcc_queue_ = std::make_unique<BatchQueue<GccQueueJob>>(
       [self](std::span<GccQueueJob* const> jobs) { self->RunGccBatch(jobs); }, window, options.max_batch_frames);
   runtime->filter_queue_ = std::make_unique<BatchQueue<FilterQueueJob>>(
-      [self](std::span<FilterQueueJob* const> jobs) { self->RunFilterBatch(jobs); }, window,
-      options.max_batch_frames);
+      [self](std::span<FilterQueueJob* const> jobs) { self->RunFilterBatch(jobs); }, window, options.max_batch_frames);
   return runtime;
 }
 
@@ -53,13 +52,17 @@ GpuRuntime::~GpuRuntime() {
 }
 
 void GpuRuntime::AddProducer(Stage stage) {
-  if (stage == Stage::kGcc) gcc_queue_->AddProducer();
-  else filter_queue_->AddProducer();
+  if (stage == Stage::kGcc)
+    gcc_queue_->AddProducer();
+  else
+    filter_queue_->AddProducer();
 }
 
 void GpuRuntime::RemoveProducer(Stage stage) {
-  if (stage == Stage::kGcc) gcc_queue_->RemoveProducer();
-  else filter_queue_->RemoveProducer();
+  if (stage == Stage::kGcc)
+    gcc_queue_->RemoveProducer();
+  else
+    filter_queue_->RemoveProducer();
 }
 
 void GpuRuntime::RunGcc(GccQueueJob* job) { gcc_queue_->Submit(job); }

@@ -45,8 +45,7 @@ class BatchQueue {
   using RunBatch = std::function<void(std::span<Job* const>)>;
 
   BatchQueue(RunBatch run, std::chrono::nanoseconds window, int max_batch)
-      : run_(std::move(run)), window_(window), max_batch_(max_batch < 1 ? 1 : max_batch),
-        thread_([this] { Loop(); }) {}
+      : run_(std::move(run)), window_(window), max_batch_(max_batch < 1 ? 1 : max_batch), thread_([this] { Loop(); }) {}
 
   ~BatchQueue() {
     {

@@ -26,14 +26,15 @@ const char* CufftResultName(cufftResult result);
 
 }  // namespace localizer::gpu
 
-#define LOCALIZER_GPU_CHECK_IMPL_(status_expr)      \
-  do {                                              \
+#define LOCALIZER_GPU_CHECK_IMPL_(status_expr)       \
+  do {                                               \
     ::localizer::Status gpu_status_ = (status_expr); \
-    if (!gpu_status_.ok()) return gpu_status_;      \
+    if (!gpu_status_.ok()) return gpu_status_;       \
   } while (false)
 
 // Returns the failure of a CUDA runtime call as a Status from the enclosing function.
 #define LOCALIZER_CUDA_RETURN_IF_ERROR(call, what) LOCALIZER_GPU_CHECK_IMPL_(::localizer::gpu::FromCuda((call), (what)))
-#define LOCALIZER_CUFFT_RETURN_IF_ERROR(call, what) LOCALIZER_GPU_CHECK_IMPL_(::localizer::gpu::FromCufft((call), (what)))
+#define LOCALIZER_CUFFT_RETURN_IF_ERROR(call, what) \
+  LOCALIZER_GPU_CHECK_IMPL_(::localizer::gpu::FromCufft((call), (what)))
 // After a <<<...>>> launch: configuration errors surface here, not at the next sync.
 #define LOCALIZER_LAUNCH_RETURN_IF_ERROR(kernel) LOCALIZER_GPU_CHECK_IMPL_(::localizer::gpu::LastLaunchError(kernel))

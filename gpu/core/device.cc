@@ -15,8 +15,8 @@ Probe RunProbe() {
   int count = 0;
   const cudaError_t result = cudaGetDeviceCount(&count);
   if (result != cudaSuccess) {
-    probe.reason = std::string("cudaGetDeviceCount: ") + cudaGetErrorString(result) + " (" +
-                   cudaGetErrorName(result) + ")";
+    probe.reason =
+        std::string("cudaGetDeviceCount: ") + cudaGetErrorString(result) + " (" + cudaGetErrorName(result) + ")";
     return probe;
   }
   if (count < 1) {

@@ -7,7 +7,7 @@
 namespace localizer::gpu {
 
 struct DeviceInfo {
-  std::string name;               // e.g. "NVIDIA H100 80GB HBM3"
+  std::string name;  // e.g. "NVIDIA H100 80GB HBM3"
   int compute_major = 0;
   int compute_minor = 0;
   int multiprocessors = 0;

@@ -20,7 +20,8 @@ class CudaMemory {
  public:
   CudaMemory() = default;
   ~CudaMemory() { Reset(); }
-  CudaMemory(CudaMemory&& other) noexcept : data_(std::exchange(other.data_, nullptr)), size_(std::exchange(other.size_, 0)) {}
+  CudaMemory(CudaMemory&& other) noexcept
+      : data_(std::exchange(other.data_, nullptr)), size_(std::exchange(other.size_, 0)) {}
   CudaMemory& operator=(CudaMemory&& other) noexcept {
     if (this != &other) {
       Reset();
@@ -37,7 +38,8 @@ class CudaMemory {
     CudaMemory memory;
     if (count == 0) return StatusOr<CudaMemory>(std::move(memory));
     void* raw = nullptr;
-    const cudaError_t result = kPinnedHost ? cudaMallocHost(&raw, count * sizeof(T)) : cudaMalloc(&raw, count * sizeof(T));
+    const cudaError_t result =
+        kPinnedHost ? cudaMallocHost(&raw, count * sizeof(T)) : cudaMalloc(&raw, count * sizeof(T));
     LOCALIZER_CUDA_RETURN_IF_ERROR(result, kPinnedHost ? "cudaMallocHost" : "cudaMalloc");
     memory.data_ = static_cast<T*>(raw);
     memory.size_ = count;
@@ -55,8 +57,10 @@ class CudaMemory {
 
   void Reset() {
     if (data_ != nullptr) {
-      if (kPinnedHost) cudaFreeHost(data_);
-      else cudaFree(data_);
+      if (kPinnedHost)
+        cudaFreeHost(data_);
+      else
+        cudaFree(data_);
     }
     data_ = nullptr;
     size_ = 0;

@@ -35,10 +35,10 @@ struct Slot {
   pf::SessionConfig config;
   pf::SlotLayout layout;
   DeviceBuffer<unsigned char> memory;
-  int current = 0;                 // which state buffer is current
-  unsigned long long draws = 0;    // Philox windows used so far
+  int current = 0;               // which state buffer is current
+  unsigned long long draws = 0;  // Philox windows used so far
   bool initialised = false;
-  double ess = 0.0;                // after the last update
+  double ess = 0.0;  // after the last update
   pf::SlotView View() const { return layout.View(memory.data(), current); }
 };
 
@@ -314,9 +314,9 @@ Status ParticleBank::Impl::Launch() {
   launch.requests = static_cast<int>(requests);
   launch.blocks = static_cast<int>(block_request.size());
   LOCALIZER_RETURN_IF_ERROR(pf::LaunchStep(launch, s));
-  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(host_out.data(), device_out.data(), requests * sizeof(pf::StepOutput),
-                                                 cudaMemcpyDeviceToHost, s),
-                                 "cudaMemcpyAsync(particle bank step outputs)");
+  LOCALIZER_CUDA_RETURN_IF_ERROR(
+      cudaMemcpyAsync(host_out.data(), device_out.data(), requests * sizeof(pf::StepOutput), cudaMemcpyDeviceToHost, s),
+      "cudaMemcpyAsync(particle bank step outputs)");
   return stream.Synchronize();
 }
 

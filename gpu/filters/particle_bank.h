@@ -52,8 +52,8 @@
 #include "engine/core/measurement.h"
 #include "engine/core/status.h"
 #include "engine/core/types.h"
-#include "engine/filters/particle_filter.h"
 #include "engine/filters/pair_noise.h"
+#include "engine/filters/particle_filter.h"
 #include "engine/filters/tracker.h"
 
 namespace localizer::gpu {
@@ -82,16 +82,15 @@ class ParticleBank {
   // or a non-finite mean/root.
   Status InitialiseGaussian(int slot, const engine::Vec6& mean, const engine::Mat6& root);
   // Position uniform in [min_m, max_m], velocity ~ N(0, speed_sigma_mps^2 I3); weights equal.
-  Status InitialiseRegion(int slot, const engine::Vec3& min_m, const engine::Vec3& max_m,
-                          double speed_sigma_mps);
+  Status InitialiseRegion(int slot, const engine::Vec3& min_m, const engine::Vec3& max_m, double speed_sigma_mps);
 
   struct StepRequest {
     int slot = -1;
-    double dt_s = 0.0;                                // predict by this first (<= 0: no predict)
+    double dt_s = 0.0;                                 // predict by this first (<= 0: no predict)
     const engine::Measurement* measurement = nullptr;  // nullptr or no used pair: predict only
-                                                      // (no weighing/normalising/resampling)
-    const int* used = nullptr;                        // per pair: 1 to use it
-    const double* sigmas_s = nullptr;                 // per pair: TDOA noise std (s)
+                                                       // (no weighing/normalising/resampling)
+    const int* used = nullptr;                         // per pair: 1 to use it
+    const double* sigmas_s = nullptr;                  // per pair: TDOA noise std (s)
   };
   struct StepResult {
     Status status;
@@ -100,7 +99,7 @@ class ParticleBank {
                                // moments of the weighted particles before it, as the CPU)
     double ess = 0;            // after normalisation (unchanged on predict-only)
     bool resampled = false;
-    bool cholesky_fallback = false;  // resampled with a singular covariance (see pf_math.cuh)
+    bool cholesky_fallback = false;                      // resampled with a singular covariance (see pf_math.cuh)
     std::vector<engine::InnovationMoments> innovations;  // per pair (zeros for unused pairs),
                                                          // as ParticleSet::Weigh reports
   };
@@ -116,8 +115,8 @@ class ParticleBank {
   // The slot's current weighted mean and covariance (absolute coordinates). Draws nothing.
   StatusOr<engine::TrackState> Moments(int slot);
 
-  std::size_t bytes_in_use() const;          // device bytes held by open slots
-  std::size_t memory_limit_bytes() const;    // as given to Create (0: none)
+  std::size_t bytes_in_use() const;        // device bytes held by open slots
+  std::size_t memory_limit_bytes() const;  // as given to Create (0: none)
   int open_slots() const;
 
  private:

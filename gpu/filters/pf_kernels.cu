@@ -5,13 +5,13 @@
 // per-session passes walk only that session's blocks, in a fixed order. Random numbers are
 // Philox, keyed by (seed, particle index, draw window): a session's results depend only on
 // its own inputs and history.
-#include "gpu/filters/pf_kernels.h"
-
-#include <cub/block/block_scan.cuh>
 #include <curand_kernel.h>
 #include <math_constants.h>
 
+#include <cub/block/block_scan.cuh>
+
 #include "gpu/core/cuda_status.h"
+#include "gpu/filters/pf_kernels.h"
 #include "gpu/filters/pf_math.cuh"
 
 namespace localizer::gpu::pf {
@@ -24,7 +24,9 @@ using BlockScan = cub::BlockScan<double, kBlockThreads>;
 
 struct SumOp {
   template <typename T>
-  __device__ __forceinline__ T operator()(T a, T b) const { return a + b; }
+  __device__ __forceinline__ T operator()(T a, T b) const {
+    return a + b;
+  }
 };
 struct MaxOp {
   __device__ __forceinline__ float operator()(float a, float b) const { return fmaxf(a, b); }

@@ -38,30 +38,30 @@
 namespace localizer::gpu::pf {
 
 inline constexpr int kBlockThreads = 256;
-inline constexpr int kMaxPairs = 15;  // at most 16 sensors
-inline constexpr int kWeighedSums = 28;  // = kMomentSums (pf_math.cuh)
-inline constexpr unsigned long long kDrawWindow = 16;           // 32-bit values per draw
+inline constexpr int kMaxPairs = 15;                                  // at most 16 sensors
+inline constexpr int kWeighedSums = 28;                               // = kMomentSums (pf_math.cuh)
+inline constexpr unsigned long long kDrawWindow = 16;                 // 32-bit values per draw
 inline constexpr unsigned long long kOffsetSubsequence = 1ull << 40;  // beyond any particle
 
 // Per-block partial results (float within a block, as the CPU sums in float).
 struct BlockPartial {
-  float max_logw;                 // m_b
-  float sum_u;                    // sum exp(logw - m_b)
-  float sum_u2;                   // sum exp(logw - m_b)^2
-  float sum_e[kMaxPairs];         // sum w_prior e (e in sigmas)
-  float sum_e2[kMaxPairs];        // sum w_prior e^2
-  float moments[kWeighedSums];    // MomentTerms summed over the block
-  double w_total;                 // sum of the normalised weights (resampling sessions)
-  double w_offset;                // sum of the w_total of the blocks before (idem)
+  float max_logw;               // m_b
+  float sum_u;                  // sum exp(logw - m_b)
+  float sum_u2;                 // sum exp(logw - m_b)^2
+  float sum_e[kMaxPairs];       // sum w_prior e (e in sigmas)
+  float sum_e2[kMaxPairs];      // sum w_prior e^2
+  float moments[kWeighedSums];  // MomentTerms summed over the block
+  double w_total;               // sum of the normalised weights (resampling sessions)
+  double w_offset;              // sum of the w_total of the blocks before (idem)
 };
 
 // A slot's device arrays (one session's particles).
 struct SlotView {
-  float* state[6] = {};   // current columns x, y, z, vx, vy, vz (relative to the centroid)
-  float* next[6] = {};    // the other buffer: resampling writes here, then the slot flips
-  float* logw = nullptr;  // normalised log-weights
-  float* w = nullptr;     // normalised weights
-  double* cumsum = nullptr;  // scratch: within-block inclusive prefix sums of w
+  float* state[6] = {};              // current columns x, y, z, vx, vy, vz (relative to the centroid)
+  float* next[6] = {};               // the other buffer: resampling writes here, then the slot flips
+  float* logw = nullptr;             // normalised log-weights
+  float* w = nullptr;                // normalised weights
+  double* cumsum = nullptr;          // scratch: within-block inclusive prefix sums of w
   BlockPartial* partials = nullptr;  // one per block
   int particles = 0;
   int blocks = 0;  // ceil(particles / kBlockThreads)
@@ -69,33 +69,33 @@ struct SlotView {
 
 // One pair's inputs to the likelihood.
 struct PairParams {
-  float sensor[3];        // sensor position relative to the centroid (m)
-  float delay_s;          // measured TDOA d
-  float half_delay_s;     // d / 2
-  float inv_sigma;        // 1 / TDOA noise std (1/s)
-  int used;               // 0: the pair is left out
-  int gcc_offset;         // >= 0: GCC likelihood, fine window at gcc + gcc_offset; -1: peak
-  float lag_scale;        // fs * upsampling
-  float lag0;             // first_lag_samples * upsampling
-  float last_lag;         // fine length - 3 - 1e-3
-  float gcc_gain;         // GccGain of the fine window
+  float sensor[3];     // sensor position relative to the centroid (m)
+  float delay_s;       // measured TDOA d
+  float half_delay_s;  // d / 2
+  float inv_sigma;     // 1 / TDOA noise std (1/s)
+  int used;            // 0: the pair is left out
+  int gcc_offset;      // >= 0: GCC likelihood, fine window at gcc + gcc_offset; -1: peak
+  float lag_scale;     // fs * upsampling
+  float lag0;          // first_lag_samples * upsampling
+  float last_lag;      // fine length - 3 - 1e-3
+  float gcc_gain;      // GccGain of the fine window
 };
 
 // One request of a Step, as the kernels read it.
 struct SessionStep {
   SlotView slot;
-  int first_block = 0;      // this session's first block in the step's grid
-  int pairs = 0;            // pair count of the array (<= kMaxPairs)
+  int first_block = 0;  // this session's first block in the step's grid
+  int pairs = 0;        // pair count of the array (<= kMaxPairs)
   int do_predict = 0;
   int do_update = 0;
-  float dt = 0, a_to_p = 0, a_to_v = 0;  // predict (pf_math.cuh PredictParticle)
-  float reference[3] = {};  // reference sensor relative to the centroid
-  float inv_c = 0;          // 1 / sound speed (s/m)
+  float dt = 0, a_to_p = 0, a_to_v = 0;    // predict (pf_math.cuh PredictParticle)
+  float reference[3] = {};                 // reference sensor relative to the centroid
+  float inv_c = 0;                         // 1 / sound speed (s/m)
   float inv_dof = 0, half_dof_plus_1 = 0;  // Student-t
-  double resample_below = 0;  // resample when ESS < this (threshold * N)
-  int kernel = 0;            // 1: Liu-West move after resampling
-  double kernel_h = 0, kernel_a = 0;  // bandwidth h and shrinkage a = sqrt(1 - h^2)
-  double prior_ess = 0;      // reported unchanged when there is no update
+  double resample_below = 0;               // resample when ESS < this (threshold * N)
+  int kernel = 0;                          // 1: Liu-West move after resampling
+  double kernel_h = 0, kernel_a = 0;       // bandwidth h and shrinkage a = sqrt(1 - h^2)
+  double prior_ess = 0;                    // reported unchanged when there is no update
   unsigned long long seed = 0;
   unsigned long long draw = 0;  // the Philox window of this step
   PairParams pair[kMaxPairs] = {};
@@ -103,14 +103,14 @@ struct SessionStep {
 
 // Per-request scalars passed between kernels (device only).
 struct SessionWork {
-  float max_logw;      // M
-  float inv_sum;       // 1 / S
-  float log_norm;      // M + log S
-  int resample;        // this session resamples in this step
-  double u0;           // systematic offset in [0, 1)
-  float lw_a;          // Liu-West shrinkage
-  float lw_shift[6];   // (1 - a) mean (relative to the centroid)
-  float lw_root[21];   // h chol(cov), packed lower triangular
+  float max_logw;     // M
+  float inv_sum;      // 1 / S
+  float log_norm;     // M + log S
+  int resample;       // this session resamples in this step
+  double u0;          // systematic offset in [0, 1)
+  float lw_a;         // Liu-West shrinkage
+  float lw_shift[6];  // (1 - a) mean (relative to the centroid)
+  float lw_root[21];  // h chol(cov), packed lower triangular
 };
 
 // Per-request results copied back (relative to the centroid; the host adds it).
@@ -118,10 +118,10 @@ struct StepOutput {
   double mean[6];
   double cov[36];
   double ess;
-  double sum_e[kMaxPairs];   // sum w_prior e over the session (e in sigmas)
+  double sum_e[kMaxPairs];  // sum w_prior e over the session (e in sigmas)
   double sum_e2[kMaxPairs];
   int resampled;
-  int cholesky_fallback;     // the covariance was not positive definite (see CholeskyLower6)
+  int cholesky_fallback;  // the covariance was not positive definite (see CholeskyLower6)
 };
 
 struct StepLaunch {
@@ -139,15 +139,15 @@ Status LaunchStep(const StepLaunch& launch, cudaStream_t stream);
 
 // x = mean + root z, z ~ N(0, I6) (Philox window `draw`); weights 1/N.
 struct GaussianInit {
-  float mean[6];    // relative to the centroid
-  float root[36];   // row-major
+  float mean[6];   // relative to the centroid
+  float root[36];  // row-major
   unsigned long long seed, draw;
 };
 Status LaunchInitialiseGaussian(const SlotView& slot, const GaussianInit& init, cudaStream_t stream);
 
 // Position uniform in [lo, lo + span], velocity ~ N(0, speed_sigma^2 I3); weights 1/N.
 struct RegionInit {
-  float lo[3];      // relative to the centroid
+  float lo[3];  // relative to the centroid
   float span[3];
   float speed_sigma;
   unsigned long long seed, draw;

@@ -28,8 +28,8 @@ namespace localizer::gpu::pf {
 //   p <- p + v dt + a dt^2 / 2,  v <- v + a dt   (engine::PredictAxis per axis)
 // a_to_p = accel_sigma dt^2 / 2 and a_to_v = accel_sigma dt, computed in double by the caller
 // and rounded to float, as ParticleSet::Predict does.
-LOCALIZER_HOST_DEVICE_INLINE void PredictParticle(float s[6], float dt, float a_to_p, float a_to_v, float ax,
-                                                  float ay, float az) {
+LOCALIZER_HOST_DEVICE_INLINE void PredictParticle(float s[6], float dt, float a_to_p, float a_to_v, float ax, float ay,
+                                                  float az) {
   engine::PredictAxis(s[0], s[3], dt, a_to_p, a_to_v, ax);
   engine::PredictAxis(s[1], s[4], dt, a_to_p, a_to_v, ay);
   engine::PredictAxis(s[2], s[5], dt, a_to_p, a_to_v, az);
@@ -74,8 +74,10 @@ LOCALIZER_HOST_DEVICE_INLINE int SystematicParent(const Cumulative& cum, int n, 
   int lo = 0, hi = n - 1;  // answer in [lo, hi]; every j < lo has n C_j - u0 <= m
   while (lo < hi) {
     const int mid = lo + (hi - lo) / 2;
-    if (cum(mid) * scale - u0 <= target) lo = mid + 1;
-    else hi = mid;
+    if (cum(mid) * scale - u0 <= target)
+      lo = mid + 1;
+    else
+      hi = mid;
   }
   return lo;
 }
@@ -159,7 +161,7 @@ LOCALIZER_HOST_DEVICE_INLINE void MomentTerms(const float s[6], const float shif
 // mean = shift + S1 / S0, cov = S2 / S0 - (S1 / S0)(S1 / S0)^T (symmetric, double[36]).
 // S0 <= 0 (no weight) gives mean = shift and cov = 0.
 LOCALIZER_HOST_DEVICE_INLINE void FinishMoments(const double sums[kMomentSums], const float shift[6], double mean[6],
-                                double cov[36]) {
+                                                double cov[36]) {
   const double inv_w = sums[0] > 0.0 ? 1.0 / sums[0] : 0.0;
   double m[6];
   for (int r = 0; r < 6; ++r) {

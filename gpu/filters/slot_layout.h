@@ -18,7 +18,7 @@ struct SlotLayout {
   int blocks = 0;
   std::size_t state[2][6] = {};  // byte offsets of the two buffers' columns
   std::size_t logw = 0, w = 0, cumsum = 0, partials = 0;
-  std::size_t bytes = 0;         // the allocation's size
+  std::size_t bytes = 0;  // the allocation's size
 
   static SlotLayout For(int particles) {
     constexpr std::size_t kAlign = 256;

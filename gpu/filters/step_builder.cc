@@ -35,8 +35,7 @@ StatusOr<SessionConfig> MakeSessionConfig(const engine::ArrayGeometry& array,
   return config;
 }
 
-Status FillSessionStep(const SessionConfig& config, const StepInputs& in, std::vector<float>* gcc,
-                       SessionStep* step) {
+Status FillSessionStep(const SessionConfig& config, const StepInputs& in, std::vector<float>* gcc, SessionStep* step) {
   const engine::ParticleFilterOptions& o = config.options;
   if (std::isnan(in.dt_s) || std::isinf(in.dt_s)) {
     return InvalidArgument("dt_s must be finite, got " + std::to_string(in.dt_s));

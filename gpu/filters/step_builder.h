@@ -33,10 +33,10 @@ StatusOr<SessionConfig> MakeSessionConfig(const engine::ArrayGeometry& array,
 
 // One step's inputs, as in ParticleBank::StepRequest.
 struct StepInputs {
-  double dt_s = 0.0;                                // > 0: predict by this first
+  double dt_s = 0.0;                                 // > 0: predict by this first
   const engine::Measurement* measurement = nullptr;  // nullptr: predict only
-  const int* used = nullptr;                        // per pair, 1: use it
-  const double* sigmas_s = nullptr;                 // per pair TDOA noise std (s)
+  const int* used = nullptr;                         // per pair, 1: use it
+  const double* sigmas_s = nullptr;                  // per pair TDOA noise std (s)
 };
 
 // Fills every field of `step` but slot, first_block, draw and prior_ess (the bank's); appends
@@ -45,7 +45,6 @@ struct StepInputs {
 // measurement whose pair count differs from the array's, missing used/sigmas, a used pair
 // with a non-finite delay or a sigma not > 0, or a GCC pair without sample_rate_hz > 0.
 // step->do_update is 1 only with a measurement and at least one used pair.
-Status FillSessionStep(const SessionConfig& config, const StepInputs& in, std::vector<float>* gcc,
-                       SessionStep* step);
+Status FillSessionStep(const SessionConfig& config, const StepInputs& in, std::vector<float>* gcc, SessionStep* step);
 
 }  // namespace localizer::gpu::pf

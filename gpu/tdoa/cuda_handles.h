@@ -40,9 +40,9 @@ class CufftPlan {
     long long size = n;
     const std::string what = std::string("cufftMakePlanMany64(") + (type == CUFFT_R2C ? "R2C" : "C2R") +
                              ", n=" + std::to_string(n) + ", batch=" + std::to_string(batch) + ")";
-    LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftMakePlanMany64(plan.handle_, 1, &size, nullptr, 1, 0, nullptr,
-                                                        1, 0, type, batch, work_bytes),
-                                    what.c_str());
+    LOCALIZER_CUFFT_RETURN_IF_ERROR(
+        cufftMakePlanMany64(plan.handle_, 1, &size, nullptr, 1, 0, nullptr, 1, 0, type, batch, work_bytes),
+        what.c_str());
     LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftSetStream(plan.handle_, stream), "cufftSetStream");
     return plan;
   }

@@ -87,23 +87,23 @@ struct GccBatch::Impl {
   int bins = 0;
 
   CudaStream stream;
-  PinnedBuffer<float> staged_frames;   // max_frames * channels * frame_samples
+  PinnedBuffer<float> staged_frames;             // max_frames * channels * frame_samples
   PinnedBuffer<const float*> staged_frame_ptrs;  // max_frames: where each frame lies
   PinnedBuffer<GccPairTask> staged_tasks;
   PinnedBuffer<GccPairResult> staged_results;
-  PinnedBuffer<float> staged_gcc;      // grows to the largest batch's windows
+  PinnedBuffer<float> staged_gcc;  // grows to the largest batch's windows
   DeviceBuffer<const float*> frame_ptrs;
   DeviceBuffer<GccPairTask> tasks;
-  DeviceBuffer<double> energy;         // max_frames * channels
-  DeviceBuffer<float> signal;          // max_frames * channels * N
-  DeviceBuffer<float> spectra;         // max_frames * channels * (N/2 + 1) complex
-  DeviceBuffer<float> cross;           // max_frames * pairs * (N/2 + 1) complex
-  DeviceBuffer<float> corr;            // max_frames * pairs * N
-  DeviceBuffer<GccPairResult> results; // max_frames * pairs
+  DeviceBuffer<double> energy;          // max_frames * channels
+  DeviceBuffer<float> signal;           // max_frames * channels * N
+  DeviceBuffer<float> spectra;          // max_frames * channels * (N/2 + 1) complex
+  DeviceBuffer<float> cross;            // max_frames * pairs * (N/2 + 1) complex
+  DeviceBuffer<float> corr;             // max_frames * pairs * N
+  DeviceBuffer<GccPairResult> results;  // max_frames * pairs
   DeviceBuffer<float> gcc;
-  DeviceBuffer<char> work_area;        // shared by every plan (they run one after another)
-  std::map<int, FftPlans> plans;       // by bucket
-  std::vector<CudaEvent> marks;        // kMarks events with collect_timing, else none
+  DeviceBuffer<char> work_area;   // shared by every plan (they run one after another)
+  std::map<int, FftPlans> plans;  // by bucket
+  std::vector<CudaEvent> marks;   // kMarks events with collect_timing, else none
   Timing timing;
 };
 
@@ -147,11 +147,11 @@ StatusOr<GccBatch::Impl::FftPlans*> GccBatch::Impl::PlansFor(int bucket) {
   if (found != plans.end()) return &found->second;
   std::size_t forward_work = 0;
   std::size_t inverse_work = 0;
-  auto forward = CufftPlan::Make(key.fft_size, CUFFT_R2C, static_cast<long long>(bucket) * channels,
-                                 stream.get(), &forward_work);
+  auto forward =
+      CufftPlan::Make(key.fft_size, CUFFT_R2C, static_cast<long long>(bucket) * channels, stream.get(), &forward_work);
   if (!forward.ok()) return forward.status();
-  auto inverse = CufftPlan::Make(key.fft_size, CUFFT_C2R, static_cast<long long>(bucket) * pairs,
-                                 stream.get(), &inverse_work);
+  auto inverse =
+      CufftPlan::Make(key.fft_size, CUFFT_C2R, static_cast<long long>(bucket) * pairs, stream.get(), &inverse_work);
   if (!inverse.ok()) return inverse.status();
   // The previous Run has completed (Run synchronises), so the old area may be freed.
   LOCALIZER_RETURN_IF_ERROR(work_area.Reserve(std::max(forward_work, inverse_work)));
@@ -224,10 +224,9 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
   LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(frame_ptrs.data(), staged_frame_ptrs.data(),
                                                  sizeof(const float*) * count, cudaMemcpyHostToDevice, s),
                                  "cudaMemcpyAsync(frame pointers)");
-  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(tasks.data(), staged_tasks.data(),
-                                                 sizeof(GccPairTask) * task_count,
-                                                 cudaMemcpyHostToDevice, s),
-                                 "cudaMemcpyAsync(tasks)");
+  LOCALIZER_CUDA_RETURN_IF_ERROR(
+      cudaMemcpyAsync(tasks.data(), staged_tasks.data(), sizeof(GccPairTask) * task_count, cudaMemcpyHostToDevice, s),
+      "cudaMemcpyAsync(tasks)");
   LOCALIZER_RETURN_IF_ERROR(Record(kCopiedIn));
 
   GccPackArgs pack;
@@ -245,9 +244,8 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
   if (work_area.data() != nullptr) {
     LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftSetWorkArea(fft.forward.get(), work_area.data()), "cufftSetWorkArea(R2C)");
   }
-  LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftExecR2C(fft.forward.get(), signal.data(),
-                                               reinterpret_cast<cufftComplex*>(spectra.data())),
-                                  "cufftExecR2C");
+  LOCALIZER_CUFFT_RETURN_IF_ERROR(
+      cufftExecR2C(fft.forward.get(), signal.data(), reinterpret_cast<cufftComplex*>(spectra.data())), "cufftExecR2C");
   LOCALIZER_RETURN_IF_ERROR(Record(kR2cEnd));
 
   GccWeighArgs weigh;
@@ -270,9 +268,8 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
   if (work_area.data() != nullptr) {
     LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftSetWorkArea(fft.inverse.get(), work_area.data()), "cufftSetWorkArea(C2R)");
   }
-  LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftExecC2R(fft.inverse.get(), reinterpret_cast<cufftComplex*>(cross.data()),
-                                               corr.data()),
-                                  "cufftExecC2R");
+  LOCALIZER_CUFFT_RETURN_IF_ERROR(
+      cufftExecC2R(fft.inverse.get(), reinterpret_cast<cufftComplex*>(cross.data()), corr.data()), "cufftExecC2R");
   LOCALIZER_RETURN_IF_ERROR(Record(kC2rEnd));
 
   GccPeakArgs peak;
@@ -286,13 +283,12 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
   LOCALIZER_RETURN_IF_ERROR(Record(kKernelsDone));
 
   LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(staged_results.data(), results.data(),
-                                                 sizeof(GccPairResult) * task_count,
-                                                 cudaMemcpyDeviceToHost, s),
+                                                 sizeof(GccPairResult) * task_count, cudaMemcpyDeviceToHost, s),
                                  "cudaMemcpyAsync(results)");
   if (gcc_floats > 0) {
-    LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(staged_gcc.data(), gcc.data(), sizeof(float) * gcc_floats,
-                                                   cudaMemcpyDeviceToHost, s),
-                                   "cudaMemcpyAsync(gcc)");
+    LOCALIZER_CUDA_RETURN_IF_ERROR(
+        cudaMemcpyAsync(staged_gcc.data(), gcc.data(), sizeof(float) * gcc_floats, cudaMemcpyDeviceToHost, s),
+        "cudaMemcpyAsync(gcc)");
   }
   return Record(kEnd);
 }
@@ -394,8 +390,7 @@ Status GccBatch::Run(std::span<const GccJob> jobs) {
       return InvalidArgument(which + " has a null plan, frame or out");
     }
     if (!(job.plan->key() == s.key)) {
-      return InvalidArgument(which + " has key " + job.plan->key().ToString() + "; the batch's is " +
-                             s.key.ToString());
+      return InvalidArgument(which + " has key " + job.plan->key().ToString() + "; the batch's is " + s.key.ToString());
     }
     gcc_floats += job.plan->gcc_floats();
   }

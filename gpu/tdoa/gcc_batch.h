@@ -56,10 +56,10 @@ namespace localizer::gpu {
 
 // One frame to measure.
 struct GccJob {
-  const GccPlan* plan = nullptr;          // the session's plan; its key must be the batch's
-  const float* frame = nullptr;           // channel-major host memory: channels * frame_samples
-  double t_s = 0.0;                       // copied into out->t_s (the frame centre)
-  engine::Measurement* out = nullptr;     // filled as GccPhatEstimator::Estimate fills it
+  const GccPlan* plan = nullptr;       // the session's plan; its key must be the batch's
+  const float* frame = nullptr;        // channel-major host memory: channels * frame_samples
+  double t_s = 0.0;                    // copied into out->t_s (the frame centre)
+  engine::Measurement* out = nullptr;  // filled as GccPhatEstimator::Estimate fills it
   // Optional: this job's own outcome. OK, or INVALID_ARGUMENT "channel c holds a non-finite
   // sample (NaN or Inf)" (the CPU's message), in which case *out is untouched.
   Status* status = nullptr;

@@ -7,9 +7,8 @@
 // nvcc's front end flags engine/core/status.h's assignment of a [[nodiscard]] Status to a
 // member as "ignoring return value" (g++ does not); the engine code is fine.
 #pragma nv_diag_suppress 2810
-#include <cub/block/block_reduce.cuh>
-
 #include <cstddef>
+#include <cub/block/block_reduce.cuh>
 
 #include "gpu/core/cuda_status.h"
 #include "gpu/tdoa/gcc_kernels.h"
@@ -28,8 +27,8 @@ __global__ void __launch_bounds__(kPackThreads) GccPackKernel(GccPackArgs a) {
   const int row = blockIdx.x;
   const bool live = row < a.live_rows;
   // Rows past the live ones are the bucket's padding frames: zeros, and no frame to read.
-  const float* in = live ? a.frames[row / a.channels] + static_cast<std::size_t>(row % a.channels) * a.frame_samples
-                         : nullptr;
+  const float* in =
+      live ? a.frames[row / a.channels] + static_cast<std::size_t>(row % a.channels) * a.frame_samples : nullptr;
   float* out = a.signal + static_cast<std::size_t>(row) * a.fft_size;
   double energy = 0.0;
   for (int i = threadIdx.x; i < a.fft_size; i += kPackThreads) {
@@ -82,8 +81,7 @@ __global__ void __launch_bounds__(kWeighThreads) GccWeighKernel(GccWeighArgs a) 
 }
 
 struct BetterPeakOp {
-  __device__ gcc::PeakCandidate operator()(const gcc::PeakCandidate& a,
-                                           const gcc::PeakCandidate& b) const {
+  __device__ gcc::PeakCandidate operator()(const gcc::PeakCandidate& a, const gcc::PeakCandidate& b) const {
     return gcc::BetterPeak(a, b);
   }
 };
@@ -103,9 +101,9 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
     typename MaxAbs::TempStorage max_abs;
   } scratch;
   __shared__ gcc::PeakCandidate peak;
-  __shared__ int lobe_first;      // window indices (window mode) or lags (circular mode)
+  __shared__ int lobe_first;  // window indices (window mode) or lags (circular mode)
   __shared__ int lobe_last;
-  __shared__ bool circular;       // the lobe filled the window: sidelobe from the full corr
+  __shared__ bool circular;  // the lobe filled the window: sidelobe from the full corr
   __shared__ double offset;
 
   const int task = blockIdx.x;

@@ -29,9 +29,9 @@ struct GccPairTask {
   float beta = 0.0f;           // PHAT-beta exponent
   int32_t band_first_bin = 0;  // bins [band_first_bin, band_end_bin) are weighed; others 0
   int32_t band_end_bin = 0;
-  int32_t max_lag = 0;         // L_p: lags -L_p..L_p are searched
-  int32_t interpolation = 0;   // gcc::InterpolationCode
-  int64_t gcc_offset = -1;     // first float of the pair's window in the gcc output; -1: none
+  int32_t max_lag = 0;        // L_p: lags -L_p..L_p are searched
+  int32_t interpolation = 0;  // gcc::InterpolationCode
+  int64_t gcc_offset = -1;    // first float of the pair's window in the gcc output; -1: none
 };
 
 // What the kernels found for one (frame, pair). delay in samples = peak_lag + offset_samples.
@@ -39,10 +39,10 @@ struct GccPairResult {
   double offset_samples = 0.0;  // sub-sample refinement, [-1, 1]
   double energy_ref = 0.0;      // sum of squares of the two channels (non-finite: NaN/Inf input)
   double energy_sensor = 0.0;
-  float norm = 0.0f;            // S, sum of |G| over the full spectrum; <= 0: nothing measured
-  float peak_value = 0.0f;      // R at the integer peak
-  float quality = 0.0f;         // peak over largest sidelobe (gcc_phat.h), capped at 1e9
-  int32_t peak_lag = 0;         // integer lag of the peak, samples
+  float norm = 0.0f;        // S, sum of |G| over the full spectrum; <= 0: nothing measured
+  float peak_value = 0.0f;  // R at the integer peak
+  float quality = 0.0f;     // peak over largest sidelobe (gcc_phat.h), capped at 1e9
+  int32_t peak_lag = 0;     // integer lag of the peak, samples
 };
 
 // rows = padded_frames * channels rows of fft_size floats: row r < live_rows gets frame row
@@ -53,9 +53,9 @@ struct GccPackArgs {
   // memory that the device reads in place (cudaMallocHost: mapped at the same address under
   // unified addressing), so no separate host-to-device copy of the frames is needed.
   const float* const* frames = nullptr;
-  float* signal = nullptr;        // rows * fft_size
-  double* energy = nullptr;       // rows
-  int live_rows = 0;              // live frames * channels
+  float* signal = nullptr;   // rows * fft_size
+  double* energy = nullptr;  // rows
+  int live_rows = 0;         // live frames * channels
   int rows = 0;
   int channels = 0;
   int frame_samples = 0;

@@ -66,8 +66,7 @@ LOCALIZER_HOST_DEVICE inline WeighedBin WeighBin(const WeighParams& p, engine::C
       weighted_mag = mag * weight;
       break;
     case kScot:
-      weight = engine::ScotWeightOf(engine::PowerOf(xr), engine::PowerOf(xk), p.floor_ref_power,
-                                    p.floor_sensor_power);
+      weight = engine::ScotWeightOf(engine::PowerOf(xr), engine::PowerOf(xk), p.floor_ref_power, p.floor_sensor_power);
       weighted_mag = mag * weight;
       break;
     default:  // kCc

@@ -16,8 +16,7 @@ std::size_t GccBatchKeyHash::operator()(const GccBatchKey& key) const {
   return h;
 }
 
-StatusOr<GccPlan> GccPlan::Create(const engine::ArrayGeometry& array,
-                                  const engine::GccOptions& options) {
+StatusOr<GccPlan> GccPlan::Create(const engine::ArrayGeometry& array, const engine::GccOptions& options) {
   auto layout = engine::ComputeGccLayout(array, options);
   if (!layout.ok()) return layout.status();
   GccPlan plan;

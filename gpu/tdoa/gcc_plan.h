@@ -41,8 +41,7 @@ class GccPlan {
   // The same validation and errors as engine::GccPhatEstimator::Create: INVALID_ARGUMENT
   // naming the option and value when options.Validate() fails, or when the band holds no FFT
   // bin. (measure_fft_plans is ignored: cuFFT plans do not depend on it.)
-  static StatusOr<GccPlan> Create(const engine::ArrayGeometry& array,
-                                  const engine::GccOptions& options);
+  static StatusOr<GccPlan> Create(const engine::ArrayGeometry& array, const engine::GccOptions& options);
 
   const engine::GccOptions& options() const { return options_; }
   const engine::GccLayout& layout() const { return layout_; }

@@ -26,13 +26,12 @@ Family<T>::Family(std::string name, std::string help, std::vector<std::string> l
 template <typename T>
 StatusOr<T*> Family<T>::WithLabels(const std::vector<std::string>& label_values) {
   if (label_values.size() != label_names_.size()) {
-    return InvalidArgument("metric \"" + name_ + "\" has " + std::to_string(label_names_.size()) +
-                           " label(s), got " + std::to_string(label_values.size()) + " value(s)");
+    return InvalidArgument("metric \"" + name_ + "\" has " + std::to_string(label_names_.size()) + " label(s), got " +
+                           std::to_string(label_values.size()) + " value(s)");
   }
   for (size_t i = 0; i < label_values.size(); ++i) {
     if (!IsValidUtf8(label_values[i])) {
-      return InvalidArgument("metric \"" + name_ + "\": value of label \"" + label_names_[i] +
-                             "\" is not valid UTF-8");
+      return InvalidArgument("metric \"" + name_ + "\": value of label \"" + label_names_[i] + "\" is not valid UTF-8");
     }
   }
   MutexLock lock(&mutex_);

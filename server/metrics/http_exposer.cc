@@ -67,8 +67,8 @@ StatusOr<std::string> ToCivetwebListeningPort(const std::string& listen) {
   if (colon == std::string::npos) return bad("has no port");
   std::string host = listen.substr(0, colon);
   const std::string port = listen.substr(colon + 1);
-  if (port.empty() || port.size() > 5 ||
-      port.find_first_not_of("0123456789") != std::string::npos || std::stoi(port) > 65535) {
+  if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
+      std::stoi(port) > 65535) {
     return bad("has no port number in 0..65535");
   }
   if (host == "localhost") host = "127.0.0.1";
@@ -88,16 +88,16 @@ StatusOr<std::string> ToCivetwebListeningPort(const std::string& listen) {
 bool IsValidPagePath(const std::string& path) {
   if (path.empty() || path.front() != '/') return false;
   for (const char c : path) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '/' || c == '.' || c == '_' || c == '~' || c == '-';
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '/' ||
+                    c == '.' || c == '_' || c == '~' || c == '-';
     if (!ok) return false;
   }
   return true;
 }
 
 // Writes a complete response; `body` is omitted for HEAD but Content-Length still counts it.
-int SendResponse(mg_connection* connection, int status, const std::string& content_type,
-                 const std::string& body, bool head_only, const char* extra_headers = "") {
+int SendResponse(mg_connection* connection, int status, const std::string& content_type, const std::string& body,
+                 bool head_only, const char* extra_headers = "") {
   mg_printf(connection,
             "HTTP/1.1 %d %s\r\n"
             "Content-Type: %s\r\n"
@@ -106,8 +106,7 @@ int SendResponse(mg_connection* connection, int status, const std::string& conte
             "%s"
             "Connection: close\r\n"
             "\r\n",
-            status, mg_get_response_code_text(connection, status), content_type.c_str(),
-            body.size(), extra_headers);
+            status, mg_get_response_code_text(connection, status), content_type.c_str(), body.size(), extra_headers);
   if (!head_only && !body.empty()) mg_write(connection, body.data(), body.size());
   return status;
 }
@@ -137,12 +136,11 @@ HttpExposer::~HttpExposer() {
   if (waker.joinable()) waker.join();
 }
 
-StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& listen,
-                                                          Registry* registry, int threads) {
+StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& listen, Registry* registry, int threads) {
   if (registry == nullptr) return InvalidArgument("HttpExposer needs a registry, got null");
   if (threads < 1 || threads > kMaxThreads) {
-    return InvalidArgument("HttpExposer threads is " + std::to_string(threads) +
-                           ", must be in 1.." + std::to_string(kMaxThreads));
+    return InvalidArgument("HttpExposer threads is " + std::to_string(threads) + ", must be in 1.." +
+                           std::to_string(kMaxThreads));
   }
   StatusOr<std::string> listening_ports = ToCivetwebListeningPort(listen);
   if (!listening_ports.ok()) return listening_ports.status();
@@ -188,8 +186,7 @@ StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& lis
     const std::string reason = !log.empty()            ? log
                                : error_text[0] != '\0' ? std::string(error_text)
                                                        : "civetweb failed to start";
-    return Status(StatusCode::kUnavailable,
-                  "cannot serve metrics on \"" + listen + "\": " + reason);
+    return Status(StatusCode::kUnavailable, "cannot serve metrics on \"" + listen + "\": " + reason);
   }
   const std::string host = listening_ports->substr(0, listening_ports->rfind(':'));
   exposer->wake_host_ = host == "0.0.0.0" ? "127.0.0.1" : host == "[::]" ? "[::1]" : host;
@@ -203,11 +200,9 @@ StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& lis
   return exposer;
 }
 
-Status HttpExposer::AddPage(const std::string& path, PageHandler handler,
-                            std::string content_type) {
+Status HttpExposer::AddPage(const std::string& path, PageHandler handler, std::string content_type) {
   if (!IsValidPagePath(path)) {
-    return InvalidArgument("page path \"" + path +
-                           "\" must start with '/' and use only [A-Za-z0-9/._~-]");
+    return InvalidArgument("page path \"" + path + "\" must start with '/' and use only [A-Za-z0-9/._~-]");
   }
   if (!handler) return InvalidArgument("page \"" + path + "\" has an empty handler");
   if (content_type.empty()) return InvalidArgument("page \"" + path + "\" has no content type");
@@ -280,13 +275,11 @@ int HttpExposer::HandleRequest(mg_connection* connection) {
 
     Page page;
     if (!self->FindPage(path, &page)) {
-      return SendResponse(connection, 404, "text/plain; charset=utf-8", "404 not found\n",
-                          head_only);
+      return SendResponse(connection, 404, "text/plain; charset=utf-8", "404 not found\n", head_only);
     }
     if (method != "GET" && !head_only) {
       return SendResponse(connection, 405, "text/plain; charset=utf-8",
-                          "405 method not allowed: " + method + " (use GET or HEAD)\n", false,
-                          "Allow: GET, HEAD\r\n");
+                          "405 method not allowed: " + method + " (use GET or HEAD)\n", false, "Allow: GET, HEAD\r\n");
     }
     std::pair<int, std::string> result;
     try {
@@ -297,8 +290,7 @@ int HttpExposer::HandleRequest(mg_connection* connection) {
     }
     if (result.first < 100 || result.first > 599) {
       return SendResponse(connection, 500, "text/plain; charset=utf-8",
-                          "500 page handler returned status " + std::to_string(result.first) + "\n",
-                          head_only);
+                          "500 page handler returned status " + std::to_string(result.first) + "\n", head_only);
     }
     return SendResponse(connection, result.first, page.content_type, result.second, head_only);
   } catch (...) {

@@ -49,8 +49,7 @@ class HttpExposer final {
   // Errors: INVALID_ARGUMENT for a malformed address, a null registry or a thread count out
   // of range; UNAVAILABLE when the server cannot start (port in use, address not local,
   // permission denied), with the address and civetweb's reason in the message.
-  static StatusOr<std::unique_ptr<HttpExposer>> Start(const std::string& listen, Registry* registry,
-                                                      int threads = 8);
+  static StatusOr<std::unique_ptr<HttpExposer>> Start(const std::string& listen, Registry* registry, int threads = 8);
 
   ~HttpExposer();
   HttpExposer(const HttpExposer&) = delete;

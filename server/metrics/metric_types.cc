@@ -14,8 +14,7 @@ void Counter::Increment(double amount) {
 void Gauge::Add(double delta) { value_.fetch_add(delta, std::memory_order_relaxed); }
 
 Histogram::Histogram(std::vector<double> upper_bounds)
-    : upper_bounds_(std::move(upper_bounds)),
-      bucket_counts_(new std::atomic<uint64_t>[upper_bounds_.size() + 1]) {
+    : upper_bounds_(std::move(upper_bounds)), bucket_counts_(new std::atomic<uint64_t>[upper_bounds_.size() + 1]) {
   for (size_t i = 0; i <= upper_bounds_.size(); ++i) {
     bucket_counts_[i].store(0, std::memory_order_relaxed);
   }

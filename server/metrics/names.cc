@@ -31,8 +31,7 @@ Status ValidateMetricName(std::string_view name) {
     const char c = name[i];
     const bool ok = IsAsciiLetter(c) || c == '_' || c == ':' || (i > 0 && IsAsciiDigit(c));
     if (!ok) {
-      return InvalidArgument("metric name " + Quoted(name) +
-                             " must match [a-zA-Z_:][a-zA-Z0-9_:]* (bad character at " +
+      return InvalidArgument("metric name " + Quoted(name) + " must match [a-zA-Z_:][a-zA-Z0-9_:]* (bad character at " +
                              std::to_string(i) + ")");
     }
   }
@@ -45,14 +44,12 @@ Status ValidateLabelName(std::string_view name) {
     const char c = name[i];
     const bool ok = IsAsciiLetter(c) || c == '_' || (i > 0 && IsAsciiDigit(c));
     if (!ok) {
-      return InvalidArgument("label name " + Quoted(name) +
-                             " must match [a-zA-Z_][a-zA-Z0-9_]* (bad character at " +
+      return InvalidArgument("label name " + Quoted(name) + " must match [a-zA-Z_][a-zA-Z0-9_]* (bad character at " +
                              std::to_string(i) + ")");
     }
   }
   if (name.starts_with("__")) {
-    return InvalidArgument("label name " + Quoted(name) +
-                           " starts with \"__\", which Prometheus reserves");
+    return InvalidArgument("label name " + Quoted(name) + " starts with \"__\", which Prometheus reserves");
   }
   return Status::Ok();
 }
@@ -78,14 +75,12 @@ Status ValidateBucketBounds(const std::vector<double>& upper_bounds) {
   }
   for (size_t i = 0; i < upper_bounds.size(); ++i) {
     if (!std::isfinite(upper_bounds[i])) {
-      return InvalidArgument("bucket upper bound " + std::to_string(i) + " is " +
-                             FormatNumber(upper_bounds[i]) +
+      return InvalidArgument("bucket upper bound " + std::to_string(i) + " is " + FormatNumber(upper_bounds[i]) +
                              "; bounds must be finite (the +Inf bucket is implicit)");
     }
     if (i > 0 && !(upper_bounds[i] > upper_bounds[i - 1])) {
-      return InvalidArgument("bucket upper bounds must be strictly increasing; bound " +
-                             std::to_string(i) + " (" + FormatNumber(upper_bounds[i]) +
-                             ") <= bound " + std::to_string(i - 1) + " (" +
+      return InvalidArgument("bucket upper bounds must be strictly increasing; bound " + std::to_string(i) + " (" +
+                             FormatNumber(upper_bounds[i]) + ") <= bound " + std::to_string(i - 1) + " (" +
                              FormatNumber(upper_bounds[i - 1]) + ")");
     }
   }
@@ -125,8 +120,7 @@ bool IsValidUtf8(std::string_view text) {
       if ((b & 0xC0) != 0x80) return false;
       code_point = (code_point << 6) | (b & 0x3Fu);
     }
-    if (code_point < minimum || code_point > 0x10FFFF ||
-        (code_point >= 0xD800 && code_point <= 0xDFFF)) {
+    if (code_point < minimum || code_point > 0x10FFFF || (code_point >= 0xD800 && code_point <= 0xDFFF)) {
       return false;
     }
     i += length;

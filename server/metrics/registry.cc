@@ -23,8 +23,7 @@ std::vector<double> ExponentialBuckets(double start, double factor, int count) {
 }
 
 std::vector<double> DefaultLatencyBucketsSeconds() {
-  return {1e-5, 2.5e-5, 5e-5,  1e-4, 2.5e-4, 5e-4, 1e-3, 2.5e-3,
-          5e-3, 0.01,   0.025, 0.05, 0.1,    0.25, 0.5,  1.0};
+  return {1e-5, 2.5e-5, 5e-5, 1e-4, 2.5e-4, 5e-4, 1e-3, 2.5e-3, 5e-3, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0};
 }
 
 Registry::Registry() = default;
@@ -62,13 +61,12 @@ StatusOr<Family<T>*> Registry::Add(const std::string& name, const std::string& h
   }
   for (const std::string& series : series_names) {
     if (auto it = series_names_.find(series); it != series_names_.end()) {
-      return InvalidArgument("metric \"" + name + "\" would write series \"" + series +
-                             "\", which metric \"" + it->second + "\" already writes");
+      return InvalidArgument("metric \"" + name + "\" would write series \"" + series + "\", which metric \"" +
+                             it->second + "\" already writes");
     }
   }
   // The constructor is private to Registry, hence `new` rather than std::make_unique.
-  std::unique_ptr<Family<T>> family(
-      new Family<T>(name, help, label_names, std::move(bucket_upper_bounds)));
+  std::unique_ptr<Family<T>> family(new Family<T>(name, help, label_names, std::move(bucket_upper_bounds)));
   Family<T>* const result = family.get();
   families_.emplace(name, std::move(family));
   for (std::string& series : series_names) series_names_.emplace(std::move(series), name);
@@ -85,8 +83,7 @@ StatusOr<Family<Gauge>*> Registry::AddGauge(const std::string& name, const std::
   return Add<Gauge>(name, help, label_names, {});
 }
 
-StatusOr<Family<Histogram>*> Registry::AddHistogram(const std::string& name,
-                                                    const std::string& help,
+StatusOr<Family<Histogram>*> Registry::AddHistogram(const std::string& name, const std::string& help,
                                                     const std::vector<std::string>& label_names,
                                                     std::vector<double> bucket_upper_bounds) {
   return Add<Histogram>(name, help, label_names, std::move(bucket_upper_bounds));

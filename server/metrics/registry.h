@@ -92,8 +92,8 @@ class Registry final {
  private:
   template <typename T>
   StatusOr<Family<T>*> Add(const std::string& name, const std::string& help,
-                           const std::vector<std::string>& label_names,
-                           std::vector<double> bucket_upper_bounds) EXCLUDES(mutex_);
+                           const std::vector<std::string>& label_names, std::vector<double> bucket_upper_bounds)
+      EXCLUDES(mutex_);
 
   // Taken after collectors_mutex_ (Collect holds that one while the collectors run, and
   // they may register metrics).

@@ -24,8 +24,7 @@ void AppendNumber(double value, std::string* out) {
     // Shortest round-trip digits, laid out as Go's strconv.FormatFloat(v, 'g', -1, 64)
     // (what Prometheus' own client writes): exponent form when the decimal exponent is
     // below -4 or at least 6, plain decimals otherwise.
-    const std::to_chars_result scientific =
-        std::to_chars(buffer, end, value, std::chars_format::scientific);
+    const std::to_chars_result scientific = std::to_chars(buffer, end, value, std::chars_format::scientific);
     const char* e = std::find(buffer, scientific.ptr, 'e');
     int exponent = 0;
     std::from_chars(e + 1 + (e[1] == '+' ? 1 : 0), scientific.ptr, exponent);
@@ -39,8 +38,8 @@ void AppendNumber(double value, std::string* out) {
 
 // `{a="x",b="y"` with an optional extra label (histograms' `le`) and the closing brace;
 // nothing at all when there are no labels.
-void AppendLabels(const std::vector<LabelPair>& labels, const char* extra_name,
-                  std::string_view extra_value, std::string* out) {
+void AppendLabels(const std::vector<LabelPair>& labels, const char* extra_name, std::string_view extra_value,
+                  std::string* out) {
   if (labels.empty() && extra_name == nullptr) return;
   out->push_back('{');
   bool first = true;
@@ -56,9 +55,8 @@ void AppendLabels(const std::vector<LabelPair>& labels, const char* extra_name,
   out->push_back('}');
 }
 
-void AppendSample(std::string_view name, std::string_view suffix,
-                  const std::vector<LabelPair>& labels, const char* extra_name,
-                  std::string_view extra_value, double value, std::string* out) {
+void AppendSample(std::string_view name, std::string_view suffix, const std::vector<LabelPair>& labels,
+                  const char* extra_name, std::string_view extra_value, double value, std::string* out) {
   out->append(name).append(suffix);
   AppendLabels(labels, extra_name, extra_value, out);
   out->push_back(' ');
@@ -72,8 +70,7 @@ void AppendHistogram(const MetricFamily& family, const MetricPoint& point, std::
     AppendSample(family.name, "_bucket", point.labels, "le", FormatNumber(h.upper_bounds[i]),
                  static_cast<double>(h.cumulative_counts[i]), out);
   }
-  AppendSample(family.name, "_bucket", point.labels, "le", "+Inf", static_cast<double>(h.count),
-               out);
+  AppendSample(family.name, "_bucket", point.labels, "le", "+Inf", static_cast<double>(h.count), out);
   AppendSample(family.name, "_sum", point.labels, nullptr, {}, h.sum, out);
   AppendSample(family.name, "_count", point.labels, nullptr, {}, static_cast<double>(h.count), out);
 }
@@ -82,9 +79,12 @@ void AppendHistogram(const MetricFamily& family, const MetricPoint& point, std::
 
 const char* MetricTypeName(MetricType type) {
   switch (type) {
-    case MetricType::kCounter: return "counter";
-    case MetricType::kGauge: return "gauge";
-    case MetricType::kHistogram: return "histogram";
+    case MetricType::kCounter:
+      return "counter";
+    case MetricType::kGauge:
+      return "gauge";
+    case MetricType::kHistogram:
+      return "histogram";
   }
   return "untyped";
 }
@@ -100,10 +100,17 @@ std::string EscapeLabelValue(std::string_view text) {
   out.reserve(text.size());
   for (const char c : text) {
     switch (c) {
-      case '\\': out.append("\\\\"); break;
-      case '"': out.append("\\\""); break;
-      case '\n': out.append("\\n"); break;
-      default: out.push_back(c);
+      case '\\':
+        out.append("\\\\");
+        break;
+      case '"':
+        out.append("\\\"");
+        break;
+      case '\n':
+        out.append("\\n");
+        break;
+      default:
+        out.push_back(c);
     }
   }
   return out;
@@ -114,9 +121,14 @@ std::string EscapeHelp(std::string_view text) {
   out.reserve(text.size());
   for (const char c : text) {
     switch (c) {
-      case '\\': out.append("\\\\"); break;
-      case '\n': out.append("\\n"); break;
-      default: out.push_back(c);
+      case '\\':
+        out.append("\\\\");
+        break;
+      case '\n':
+        out.append("\\n");
+        break;
+      default:
+        out.push_back(c);
     }
   }
   return out;

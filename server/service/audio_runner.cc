@@ -12,7 +12,8 @@ AudioRunner::AudioRunner(std::unique_ptr<engine::Session> session, ServiceMetric
     : session_(std::move(session)),
       metrics_(metrics),
       stages_(metrics->stages(session_->backend())),
-      info_{"samples", engine::FilterKindName(session_->config().tracker.kind), session_->backend(), session_->array().sensor_count(), true},
+      info_{"samples", engine::FilterKindName(session_->config().tracker.kind), session_->backend(),
+            session_->array().sensor_count(), true},
       block_limits_{session_->array().sensor_count(), session_->config().max_block_samples} {}
 
 WorkItem AudioRunner::DecodeBlock(const v1::SampleBlock& block, Clock::time_point received,
@@ -42,7 +43,8 @@ WorkItem AudioRunner::DecodeScan(const v1::Scan& scan, Clock::time_point receive
 
 void AudioRunner::Process(WorkItem& item, Clock::time_point started, TrackHistory* track,
                           std::vector<ResponsePtr>* out) {
-  if (const auto* block = std::get_if<BlockWork>(&item.work)) return ProcessBlock(*block, item.received, started, track, out);
+  if (const auto* block = std::get_if<BlockWork>(&item.work))
+    return ProcessBlock(*block, item.received, started, track, out);
   if (const auto* imu = std::get_if<ImuWork>(&item.work)) return ProcessImu(*imu, out);
 }
 

@@ -33,19 +33,18 @@ class AudioRunner final : public SessionRunner {
   WorkItem DecodeImu(const v1::ImuBatch& batch, Clock::time_point received) const override;
   WorkItem DecodeScan(const v1::Scan& scan, Clock::time_point received) const override;
 
-  void Process(WorkItem& item, Clock::time_point started, TrackHistory* track,
-               std::vector<ResponsePtr>* out) override;
+  void Process(WorkItem& item, Clock::time_point started, TrackHistory* track, std::vector<ResponsePtr>* out) override;
 
  private:
-  void ProcessBlock(const BlockWork& block, Clock::time_point received, Clock::time_point started,
-                    TrackHistory* track, std::vector<ResponsePtr>* out);
+  void ProcessBlock(const BlockWork& block, Clock::time_point received, Clock::time_point started, TrackHistory* track,
+                    std::vector<ResponsePtr>* out);
   void ProcessImu(const ImuWork& imu, std::vector<ResponsePtr>* out);
 
   const std::unique_ptr<engine::Session> session_;  // touched by Process only
   ServiceMetrics* const metrics_;
-  const StageHistograms& stages_;      // of the session's backend
+  const StageHistograms& stages_;  // of the session's backend
   const RunnerInfo info_;
-  const wire::BlockLimits block_limits_;  // what DecodeBlock accepts
+  const wire::BlockLimits block_limits_;     // what DecodeBlock accepts
   std::vector<engine::Estimate> estimates_;  // Process's scratch
 };
 

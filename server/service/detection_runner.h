@@ -30,8 +30,7 @@ class DetectionRunner final : public SessionRunner {
   WorkItem DecodeImu(const v1::ImuBatch& batch, Clock::time_point received) const override;
   WorkItem DecodeScan(const v1::Scan& scan, Clock::time_point received) const override;
 
-  void Process(WorkItem& item, Clock::time_point started, TrackHistory* track,
-               std::vector<ResponsePtr>* out) override;
+  void Process(WorkItem& item, Clock::time_point started, TrackHistory* track, std::vector<ResponsePtr>* out) override;
 
  private:
   static inline const engine::AudioSessionConfig kNoAudio{};

@@ -12,9 +12,12 @@ constexpr size_t kFreeBuffers = 4;
 
 const char* RequestKindName(RequestKind kind) {
   switch (kind) {
-    case RequestKind::kBlock: return "block";
-    case RequestKind::kImu: return "imu";
-    case RequestKind::kScan: return "scan";
+    case RequestKind::kBlock:
+      return "block";
+    case RequestKind::kImu:
+      return "imu";
+    case RequestKind::kScan:
+      return "scan";
   }
   return "block";
 }
@@ -34,10 +37,10 @@ std::optional<Rejection> Inbox::CheckSequence(BlockWork* block) const {
   const uint64_t last = *last_sequence_;
   if (block->sequence <= last) {
     const bool duplicate = block->sequence == last;
-    const std::string message =
-        "sequence " + std::to_string(block->sequence) +
-        (duplicate ? " repeats the last accepted block's" : " is below the last accepted block's " + std::to_string(last)) +
-        "; the block was ignored";
+    const std::string message = "sequence " + std::to_string(block->sequence) +
+                                (duplicate ? " repeats the last accepted block's"
+                                           : " is below the last accepted block's " + std::to_string(last)) +
+                                "; the block was ignored";
     return Rejection{RequestKind::kBlock, block->sequence, duplicate ? "duplicate" : "out_of_order",
                      InvalidArgument(message)};
   }

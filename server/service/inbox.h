@@ -60,15 +60,15 @@ struct Rejection {
 struct SequenceGap {
   uint64_t previous_sequence = 0;  // the last block accepted before the jump
   uint64_t missing_blocks = 0;
-  uint64_t skipped_samples = 0;    // per channel: min(missing_blocks, 2^20) x this block's length
+  uint64_t skipped_samples = 0;  // per channel: min(missing_blocks, 2^20) x this block's length
 };
 
 struct BlockWork {
   uint64_t sequence = 0;
-  std::vector<float> samples;       // channel-major
+  std::vector<float> samples;  // channel-major
   int64_t samples_per_channel = 0;
-  std::optional<SequenceGap> gap;   // set by the inbox: the jump before this block
-  int64_t skip_samples = 0;         // set by the inbox: what the engine skips first (<= 2^40)
+  std::optional<SequenceGap> gap;  // set by the inbox: the jump before this block
+  int64_t skip_samples = 0;        // set by the inbox: what the engine skips first (<= 2^40)
 };
 
 struct ImuWork {
@@ -95,8 +95,8 @@ class Inbox final {
   Inbox& operator=(const Inbox&) = delete;
 
   struct Offered {
-    bool room = true;   // fewer than `capacity` items wait: the reader may read on
-    bool gap = false;   // a block accepted after a jump in sequence numbers
+    bool room = true;  // fewer than `capacity` items wait: the reader may read on
+    bool gap = false;  // a block accepted after a jump in sequence numbers
     // The refusal queued, when the item was one or became one (a duplicate); valid until
     // the inbox changes.
     const Rejection* rejected = nullptr;

@@ -54,8 +54,10 @@ grpc::ServerUnaryReactor* LocalizerService::Locate(grpc::CallbackServerContext* 
     const Status status = LocateOnce(parsed, policy_, &typed);
     if (status.ok()) {
       bool own_buffer = false;
-      const grpc::Status serialized = grpc::SerializationTraits<v1::LocateResponse>::Serialize(typed, response, &own_buffer);
-      if (!serialized.ok()) return finish(Internal("could not serialize the LocateResponse: " + serialized.error_message()));
+      const grpc::Status serialized =
+          grpc::SerializationTraits<v1::LocateResponse>::Serialize(typed, response, &own_buffer);
+      if (!serialized.ok())
+        return finish(Internal("could not serialize the LocateResponse: " + serialized.error_message()));
     }
     finish(status);
   });

@@ -17,8 +17,9 @@ namespace localizer::server {
 // parse from the client's half-close (see track_reactor.h); Locate is raw so that an
 // unparseable request is INVALID_ARGUMENT with a message (gRPC's typed unary handler answers
 // UNIMPLEMENTED with none before our code runs); the rest are typed.
-using LocalizerCallbackBase = v1::Localizer::WithRawCallbackMethod_Track<v1::Localizer::WithRawCallbackMethod_Locate<
-    v1::Localizer::WithCallbackMethod_ListSessions<v1::Localizer::WithCallbackMethod_CloseSession<v1::Localizer::Service>>>>;
+using LocalizerCallbackBase = v1::Localizer::WithRawCallbackMethod_Track<
+    v1::Localizer::WithRawCallbackMethod_Locate<v1::Localizer::WithCallbackMethod_ListSessions<
+        v1::Localizer::WithCallbackMethod_CloseSession<v1::Localizer::Service>>>>;
 
 class LocalizerService final : public LocalizerCallbackBase {
  public:
@@ -27,11 +28,9 @@ class LocalizerService final : public LocalizerCallbackBase {
   grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Track(grpc::CallbackServerContext* context) override;
   grpc::ServerUnaryReactor* Locate(grpc::CallbackServerContext* context, const grpc::ByteBuffer* request,
                                    grpc::ByteBuffer* response) override;
-  grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* context,
-                                         const v1::ListSessionsRequest* request,
+  grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* context, const v1::ListSessionsRequest* request,
                                          v1::ListSessionsResponse* response) override;
-  grpc::ServerUnaryReactor* CloseSession(grpc::CallbackServerContext* context,
-                                         const v1::CloseSessionRequest* request,
+  grpc::ServerUnaryReactor* CloseSession(grpc::CallbackServerContext* context, const v1::CloseSessionRequest* request,
                                          v1::CloseSessionResponse* response) override;
 
   // From now on Locate answers UNAVAILABLE (Track refusals come from the registry).

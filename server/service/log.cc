@@ -36,12 +36,23 @@ void AppendValue(std::string* line, std::string_view value) {
   for (char ch : value) {
     const auto u = static_cast<unsigned char>(ch);
     switch (ch) {
-      case '"': line->append("\\\""); continue;
-      case '\\': line->append("\\\\"); continue;
-      case '\n': line->append("\\n"); continue;
-      case '\r': line->append("\\r"); continue;
-      case '\t': line->append("\\t"); continue;
-      default: break;
+      case '"':
+        line->append("\\\"");
+        continue;
+      case '\\':
+        line->append("\\\\");
+        continue;
+      case '\n':
+        line->append("\\n");
+        continue;
+      case '\r':
+        line->append("\\r");
+        continue;
+      case '\t':
+        line->append("\\t");
+        continue;
+      default:
+        break;
     }
     if (u < 0x20 || u == 0x7f) {
       char buf[5];
@@ -61,8 +72,8 @@ std::string Timestamp() {
   std::tm utc{};
   gmtime_r(&secs, &utc);
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", utc.tm_year + 1900, utc.tm_mon + 1,
-                utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, static_cast<int>(ms));
+  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday,
+                utc.tm_hour, utc.tm_min, utc.tm_sec, static_cast<int>(ms));
   return buf;
 }
 

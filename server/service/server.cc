@@ -1,9 +1,9 @@
 #include "server/service/server.h"
 
-#include <thread>
-
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
+
+#include <thread>
 
 #include "engine/pipeline/backend.h"
 #include "gpu/backend/gpu_backend.h"
@@ -21,11 +21,11 @@ Status AddGpuBatchMetrics(metrics::Registry* registry) {
   auto batches = registry->AddCounter("localizer_gpu_batches_total",
                                       "GPU launch sequences run, by stage (gcc, filter).", {"stage"});
   if (!batches.ok()) return batches.status();
-  auto batched = registry->AddCounter(
-      "localizer_gpu_batched_total",
-      "Frames (stage gcc) or filter steps (stage filter) run in GPU batches; divided by "
-      "localizer_gpu_batches_total it is the mean batch size.",
-      {"stage"});
+  auto batched =
+      registry->AddCounter("localizer_gpu_batched_total",
+                           "Frames (stage gcc) or filter steps (stage filter) run in GPU batches; divided by "
+                           "localizer_gpu_batches_total it is the mean batch size.",
+                           {"stage"});
   if (!batched.ok()) return batched.status();
   std::vector<metrics::Counter*> series;
   for (auto* family : {*batches, *batched}) {
@@ -135,9 +135,12 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
     health->SetServingStatus("localizer.v1.Localizer", true);
   }
   LogEvent("info", "server_start",
-           {{"version", kLocalizerVersion}, {"grpc_port", std::to_string(s->grpc_port_)},
-            {"metrics_port", std::to_string(s->metrics_port())}, {"workers", std::to_string(workers)},
-            {"backend", options.backend}, {"max_sessions", std::to_string(options.max_sessions)},
+           {{"version", kLocalizerVersion},
+            {"grpc_port", std::to_string(s->grpc_port_)},
+            {"metrics_port", std::to_string(s->metrics_port())},
+            {"workers", std::to_string(workers)},
+            {"backend", options.backend},
+            {"max_sessions", std::to_string(options.max_sessions)},
             {"gpu", gpu_reason.empty() ? gpu::DeviceName() : "none: " + gpu_reason}});
   return s;
 }
@@ -158,8 +161,8 @@ void Server::Shutdown() {
   const auto hosts = sessions_->Snapshot();
   LogEvent("info", "drain_start", {{"sessions", std::to_string(hosts.size())}});
   for (const auto& host : hosts) host->Drain();
-  const auto deadline = start + std::chrono::duration_cast<Clock::duration>(
-                                    std::chrono::duration<double>(options_.drain_timeout_s));
+  const auto deadline =
+      start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.drain_timeout_s));
   for (;;) {
     bool drained = true;
     for (const auto& host : hosts) drained &= host->Drained();

@@ -13,9 +13,9 @@
 // /metrics closes. Thread-safe; Shutdown is idempotent and also run by the destructor.
 #pragma once
 
-#include <memory>
-
 #include <grpcpp/grpcpp.h>
+
+#include <memory>
 
 #include "server/metrics/http_exposer.h"
 #include "server/metrics/registry.h"

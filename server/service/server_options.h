@@ -10,32 +10,32 @@
 namespace localizer::server {
 
 struct ServerOptions {
-  std::string listen = "127.0.0.1:50051";          // gRPC address; port 0 picks a free one
-  std::string metrics_listen = "127.0.0.1:9464";   // /metrics HTTP address; "" disables it
-  std::string backend = "auto";                    // default for sessions that leave it ""
-  int max_sessions = 1024;                         // open sessions (attached or detached)
-  int workers = 0;                                 // engine threads; 0: one per core
-                                                   // (with a GPU: one per session up
-                                                   // to 1024, as they wait on batches)
-  double session_ttl_s = 60.0;                     // a detached session waits this long
-  int max_queued_requests = 8;                     // requests (blocks, IMU batches, scans,
-                                                   // refusals) queued per session before
-                                                   // reading pauses (backpressure);
-                                                   // flag --max-queue-blocks
-  int64_t max_block_samples = 1 << 22;             // per channel per block (the message
-                                                   // size limit usually binds first)
-  int max_channels = 64;                           // sensors per array
-  int max_particles = 1 << 20;                     // filter.particles allowed
-  int max_message_bytes = 64 << 20;                // largest gRPC message accepted
-  double drain_timeout_s = 10.0;                   // SIGTERM: time to finish in-flight work
-  double memory_trim_s = 30.0;                     // hand the allocator's free pages back
-                                                   // to the system this often; 0: never
-  std::string ready_file;                          // written once serving: JSON with ports
-  std::string log_level = "info";                  // debug | info | warn | error
+  std::string listen = "127.0.0.1:50051";         // gRPC address; port 0 picks a free one
+  std::string metrics_listen = "127.0.0.1:9464";  // /metrics HTTP address; "" disables it
+  std::string backend = "auto";                   // default for sessions that leave it ""
+  int max_sessions = 1024;                        // open sessions (attached or detached)
+  int workers = 0;                                // engine threads; 0: one per core
+                                                  // (with a GPU: one per session up
+                                                  // to 1024, as they wait on batches)
+  double session_ttl_s = 60.0;                    // a detached session waits this long
+  int max_queued_requests = 8;                    // requests (blocks, IMU batches, scans,
+                                                  // refusals) queued per session before
+                                                  // reading pauses (backpressure);
+                                                  // flag --max-queue-blocks
+  int64_t max_block_samples = 1 << 22;            // per channel per block (the message
+                                                  // size limit usually binds first)
+  int max_channels = 64;                          // sensors per array
+  int max_particles = 1 << 20;                    // filter.particles allowed
+  int max_message_bytes = 64 << 20;               // largest gRPC message accepted
+  double drain_timeout_s = 10.0;                  // SIGTERM: time to finish in-flight work
+  double memory_trim_s = 30.0;                    // hand the allocator's free pages back
+                                                  // to the system this often; 0: never
+  std::string ready_file;                         // written once serving: JSON with ports
+  std::string log_level = "info";                 // debug | info | warn | error
   // GPU backend (gpu/backend/gpu_backend.h); ignored without a device.
-  double gpu_batch_window_ms = 1.0;                // longest a frame waits for others
-  int gpu_max_batch = 1024;                        // frames (or filter steps) per launch
-  int gpu_bank_mib = 0;                            // particle memory; 0: 3/4 of free
+  double gpu_batch_window_ms = 1.0;  // longest a frame waits for others
+  int gpu_max_batch = 1024;          // frames (or filter steps) per launch
+  int gpu_bank_mib = 0;              // particle memory; 0: 3/4 of free
 
   Status Validate() const;  // INVALID_ARGUMENT naming the field
 };

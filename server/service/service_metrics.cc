@@ -43,8 +43,8 @@ StatusOr<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(metrics::Regist
                           "Worker-thread CPU time spent inside the engine (TDOA and filter), seconds.");
   m->gaps = counter("localizer_sequence_gaps_total", "Sequence-number jumps: blocks lost upstream.");
   m->scans = counter("localizer_scans_total", "Detection-session scans processed.");
-  m->track_updates = counter("localizer_track_updates_total",
-                             "Tracks taken through a scan cycle (predict, gate, update or coast).");
+  m->track_updates =
+      counter("localizer_track_updates_total", "Tracks taken through a scan cycle (predict, gate, update or coast).");
   auto scan = r->AddHistogram("localizer_scan_seconds",
                               "Detection sessions: tracker = the track-while-scan cycle of one scan, total = scan "
                               "received to its track list ready.",
@@ -52,11 +52,12 @@ StatusOr<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(metrics::Regist
   if (!scan.ok()) return scan.status();
   m->scan_tracker = Series(*scan, {"tracker"});
   m->scan_total = Series(*scan, {"total"});
-  auto rejections = r->AddCounter("localizer_rejections_total", "Blocks, IMU batches and scans refused, by reason.", {"reason"});
+  auto rejections =
+      r->AddCounter("localizer_rejections_total", "Blocks, IMU batches and scans refused, by reason.", {"reason"});
   if (!rejections.ok()) return rejections.status();
   m->rejections_ = *rejections;
-  auto opened = r->AddCounter("localizer_sessions_opened_total", "Track streams that opened or resumed a session.",
-                              {"how"});
+  auto opened =
+      r->AddCounter("localizer_sessions_opened_total", "Track streams that opened or resumed a session.", {"how"});
   if (!opened.ok()) return opened.status();
   m->opened = Series(*opened, {"open"});
   m->resumed = Series(*opened, {"resume"});
@@ -78,8 +79,7 @@ StatusOr<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(metrics::Regist
   if (!info.ok()) return info.status();
   if (auto* g = Series(*info, {kLocalizerVersion, grpc::Version(), default_backend})) g->Set(1.0);
   for (const char* reason : {"channel_count", "non_finite", "empty", "oversize", "bad_samples", "duplicate",
-                             "out_of_order", "imu", "not_moving", "scan",
-                             "not_detections", "not_samples"}) {
+                             "out_of_order", "imu", "not_moving", "scan", "not_detections", "not_samples"}) {
     (void)m->rejections(reason);  // exported at 0 from the start, so rate() works at once
   }
   return m;

@@ -50,7 +50,8 @@ bool SessionHost::Attach(StreamSink* sink, bool resumed, const ResumePoint& resu
   if (sink_ != nullptr && sink_ != sink) {
     StreamSink* old = sink_;
     sink_ = nullptr;
-    if (!stream_ended_) old->End(grpc::Status(grpc::StatusCode::ABORTED, "session " + id_ + " was resumed on another stream"));
+    if (!stream_ended_)
+      old->End(grpc::Status(grpc::StatusCode::ABORTED, "session " + id_ + " was resumed on another stream"));
     Bump(metrics_->sessions_closed("replaced"));
   }
   sink_ = sink;
@@ -136,7 +137,8 @@ void SessionHost::PumpLocked() {
     const grpc::Status started = sink_->Write(*next, /*more_waiting=*/outbox_.waiting() > 0);
     if (!started.ok()) {  // cannot happen for a well-formed message; never loop on it
       outbox_.Failed();
-      EndStreamLocked(grpc::Status(grpc::StatusCode::INTERNAL, "could not serialize a response: " + started.error_message()));
+      EndStreamLocked(
+          grpc::Status(grpc::StatusCode::INTERNAL, "could not serialize a response: " + started.error_message()));
     }
     return;
   }

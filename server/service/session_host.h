@@ -34,13 +34,13 @@
 // Lock order: host -> a stream's own lock; host -> registry (on_finished).
 #pragma once
 
+#include <grpcpp/support/status.h>
+
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <grpcpp/support/status.h>
 
 #include "engine/pipeline/session.h"
 #include "localizer/v1/localizer.pb.h"
@@ -93,8 +93,8 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   // when the reader may read on; false when the inbox is full (the host calls
   // sink->ReadMore once there is room) or the stream no longer takes input (ended,
   // replaced, draining, session closed: the request is dropped).
-  bool Offer(StreamSink* sink, const v1::TrackRequest& request, Clock::time_point received,
-             wire::DecodedBlock* scratch) EXCLUDES(mutex_);
+  bool Offer(StreamSink* sink, const v1::TrackRequest& request, Clock::time_point received, wire::DecodedBlock* scratch)
+      EXCLUDES(mutex_);
   // The client half-closed: finish once everything accepted is answered and written.
   void InputDone(StreamSink* sink) EXCLUDES(mutex_);
   // The write the host handed `sink` completed: written (`ok`), or the stream broke (the

@@ -42,8 +42,7 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
     MutexLock lock(&mutex_);
     if (draining_) return Unavailable("server is draining; open the session on another instance");
     if (static_cast<int>(sessions_.size()) >= options_.max_sessions) {
-      return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) +
-                               " sessions");
+      return ResourceExhausted("server holds its maximum of " + std::to_string(options_.max_sessions) + " sessions");
     }
   }
   auto engine_config = wire::ConfigFromProto(config, options_.policy);
@@ -66,8 +65,8 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   // A session that finishes (the client half-closed, all written) is forgotten before its
   // stream sees OK; the host calls this with its lock held (lock order: host -> registry).
   auto forget = [this, id] { Forget(id, "finished"); };
-  auto host = std::make_shared<SessionHost>(id, *token, config.label(), std::move(runner).value(), options_.host,
-                                            pool_, metrics_, std::move(forget));
+  auto host = std::make_shared<SessionHost>(id, *token, config.label(), std::move(runner).value(), options_.host, pool_,
+                                            metrics_, std::move(forget));
   sessions_[id] = host;
   return host;
 }

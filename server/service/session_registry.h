@@ -3,9 +3,9 @@
 //
 // A session id is 16 hex digits (64 bits) and its resume token 32 (128 bits), drawn
 // independently from the operating system's CSPRNG (secure_random.h): seeing any number of
-// ids and tokens tells nothing of another session's. Tokens are compared in constant time. A detached session (its stream gone) is kept for `ttl_s`, then closed by a sweep
-// that runs every ~0.25 s on a thread of its own (which also hands the allocator's free
-// pages back to the system every memory_trim_s, so RSS follows the memory in use).
+// ids and tokens tells nothing of another session's. Tokens are compared in constant time. A detached session (its
+// stream gone) is kept for `ttl_s`, then closed by a sweep that runs every ~0.25 s on a thread of its own (which also
+// hands the allocator's free pages back to the system every memory_trim_s, so RSS follows the memory in use).
 // Thread-safe. Lock order: a session's lock may be held when calling Forget (a session that
 // finishes forgets itself); the registry never takes a session's lock while holding its own.
 #pragma once
@@ -46,8 +46,7 @@ class SessionRegistry final {
   // RESOURCE_EXHAUSTED at max_sessions; UNAVAILABLE while draining.
   StatusOr<std::shared_ptr<SessionHost>> Open(const v1::SessionConfig& config) EXCLUDES(mutex_);
   // NOT_FOUND unknown or expired; PERMISSION_DENIED wrong token; UNAVAILABLE draining.
-  StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const
-      EXCLUDES(mutex_);
+  StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const EXCLUDES(mutex_);
   // Removes and closes; `reason` labels the closed-sessions metric. No-op if unknown.
   void Remove(const std::string& id, const std::string& reason, const grpc::Status& status) EXCLUDES(mutex_);
   // Removes without touching the session (the session itself calls this as it finishes).

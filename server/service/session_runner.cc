@@ -22,10 +22,14 @@ StatusOr<std::unique_ptr<SessionRunner>> MakeSessionRunner(const engine::Session
 WorkItem SessionRunner::Decode(const v1::TrackRequest& request, Clock::time_point received,
                                wire::DecodedBlock* scratch) const {
   switch (request.kind_case()) {
-    case v1::TrackRequest::kBlock: return DecodeBlock(request.block(), received, scratch);
-    case v1::TrackRequest::kImu: return DecodeImu(request.imu(), received);
-    case v1::TrackRequest::kScan: return DecodeScan(request.scan(), received);
-    default: break;
+    case v1::TrackRequest::kBlock:
+      return DecodeBlock(request.block(), received, scratch);
+    case v1::TrackRequest::kImu:
+      return DecodeImu(request.imu(), received);
+    case v1::TrackRequest::kScan:
+      return DecodeScan(request.scan(), received);
+    default:
+      break;
   }
   return {Rejection{RequestKind::kBlock, 0, "bad_request", InvalidArgument("TrackRequest has no block, imu or scan")},
           received};

@@ -38,10 +38,10 @@ namespace localizer::server {
 // What a session tells about itself (SessionOpened, SessionInfo, GET /sessions); fixed at
 // creation.
 struct RunnerInfo {
-  std::string kind;            // "samples" | "detections" (the sessions JSON's "kind")
-  std::string filter_type;     // the sessions JSON's "filter_type": the tracker ("tws" for detections)
-  std::string backend;         // where it runs: "cpu" | "gpu"
-  int channel_count = 0;       // SessionInfo.channel_count: sensors per sample block (0: takes none)
+  std::string kind;               // "samples" | "detections" (the sessions JSON's "kind")
+  std::string filter_type;        // the sessions JSON's "filter_type": the tracker ("tws" for detections)
+  std::string backend;            // where it runs: "cpu" | "gpu"
+  int channel_count = 0;          // SessionInfo.channel_count: sensors per sample block (0: takes none)
   bool reports_presence = false;  // its estimates carry source presence (the sessions JSON's "presence")
 };
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <nlohmann/json.hpp>
 
 #include "server/service/version.h"
@@ -31,8 +30,8 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
   // A moving array's sensors where its latest pose put them (in the body frame until then).
   json sensors = json::array();
   for (const engine::Vec3& body : config.sensors_m) {
-    const engine::Vec3 p = track.platform ? engine::Vec3(track.platform->body_to_world * body + track.platform->origin_m)
-                                          : body;
+    const engine::Vec3 p =
+        track.platform ? engine::Vec3(track.platform->body_to_world * body + track.platform->origin_m) : body;
     const double xyz[3] = {p.x(), p.y(), p.z()};
     sensors.push_back(Triple(xyz));
   }
@@ -60,7 +59,9 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
   // presence test: threshold 0).
   if (track.presence && host.runner_info().reports_presence) {
     const PresencePoint& p = *track.presence;
-    s["presence"] = {{"state", !p.tested ? "untested" : p.present ? "present" : "silent"},
+    s["presence"] = {{"state", !p.tested   ? "untested"
+                               : p.present ? "present"
+                                           : "silent"},
                      {"source_present", p.present},
                      {"statistic", Number(p.statistic)},
                      {"threshold", Number(p.threshold)},
@@ -97,8 +98,8 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
 
 }  // namespace
 
-std::string SessionsJson(const std::vector<std::shared_ptr<SessionHost>>& hosts, Clock::time_point now,
-                         double ttl_s, size_t max_track_sessions) {
+std::string SessionsJson(const std::vector<std::shared_ptr<SessionHost>>& hosts, Clock::time_point now, double ttl_s,
+                         size_t max_track_sessions) {
   std::vector<std::pair<double, const SessionHost*>> by_age;  // (age_s, host), oldest first
   by_age.reserve(hosts.size());
   for (const auto& host : hosts) {

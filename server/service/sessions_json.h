@@ -30,7 +30,7 @@ namespace localizer::server {
 inline constexpr size_t kMaxTrackSessions = 32;
 
 // Thread-safe (takes each host's locks in turn, never two at once).
-std::string SessionsJson(const std::vector<std::shared_ptr<SessionHost>>& hosts, Clock::time_point now,
-                         double ttl_s, size_t max_track_sessions = kMaxTrackSessions);
+std::string SessionsJson(const std::vector<std::shared_ptr<SessionHost>>& hosts, Clock::time_point now, double ttl_s,
+                         size_t max_track_sessions = kMaxTrackSessions);
 
 }  // namespace localizer::server

@@ -23,9 +23,9 @@ namespace localizer::server {
 
 struct TrackPoint {
   uint64_t frame_index = 0;
-  double t_s = 0.0;              // the estimate's reception instant (engine::Estimate::t_s)
-  double position_m[3] = {};     // x, y, z
-  double velocity_mps[3] = {};   // vx, vy, vz
+  double t_s = 0.0;               // the estimate's reception instant (engine::Estimate::t_s)
+  double position_m[3] = {};      // x, y, z
+  double velocity_mps[3] = {};    // vx, vy, vz
   double position_std_m[3] = {};  // square roots of the covariance's position diagonal
   bool reinitialised = false;     // the tracker restarted from a new fix at this frame
   bool source_present = false;    // a source was heard at this frame (else a prediction)
@@ -35,7 +35,7 @@ struct TrackPoint {
 // A detection session's target after its latest scan.
 struct TargetPoint {
   uint64_t id = 0;
-  const char* status = "";     // "tentative" | "confirmed" | "coasting"
+  const char* status = "";  // "tentative" | "confirmed" | "coasting"
   double position_m[3] = {};
 };
 
@@ -52,14 +52,14 @@ struct PresencePoint {
 };
 
 struct TrackSnapshot {
-  std::vector<TrackPoint> points;  // oldest first, at most capacity
+  std::vector<TrackPoint> points;                             // oldest first, at most capacity
   std::vector<engine::ModelProbability> model_probabilities;  // of the latest estimate
-  std::optional<engine::PlatformAttitude> platform;  // moving arrays: the latest pose
-  std::vector<TargetPoint> targets;  // detection sessions: the latest scan's tracks
-  std::optional<PresencePoint> presence;  // audio sessions: the latest frame's; none before it
-  uint64_t present_frames = 0;       // frames that held a source
-  uint64_t frames = 0;             // estimates appended, initialised or not (detection
-                                   // sessions: scans)
+  std::optional<engine::PlatformAttitude> platform;           // moving arrays: the latest pose
+  std::vector<TargetPoint> targets;                           // detection sessions: the latest scan's tracks
+  std::optional<PresencePoint> presence;                      // audio sessions: the latest frame's; none before it
+  uint64_t present_frames = 0;                                // frames that held a source
+  uint64_t frames = 0;                                        // estimates appended, initialised or not (detection
+                                                              // sessions: scans)
   uint64_t initialised_frames = 0;
   size_t capacity = 0;
 };

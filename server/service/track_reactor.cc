@@ -5,8 +5,7 @@
 
 namespace localizer::server {
 
-TrackReactor::TrackReactor(grpc::CallbackServerContext* context, SessionRegistry* registry,
-                           ServiceMetrics* metrics)
+TrackReactor::TrackReactor(grpc::CallbackServerContext* context, SessionRegistry* registry, ServiceMetrics* metrics)
     : context_(context), registry_(registry), metrics_(metrics), peer_(context->peer()) {
   StartRead(&read_buffer_);
 }
@@ -53,12 +52,18 @@ void TrackReactor::OnReadDone(bool ok) {
   read_buffer_.Clear();
   if (!parsed.ok()) return ParseFailed(bytes);
   switch (request_.kind_case()) {
-    case v1::TrackRequest::kOpen: return HandleOpen(request_.open());
-    case v1::TrackRequest::kResume: return HandleResume(request_.resume());
-    case v1::TrackRequest::kBlock: return HandleInput("a block");
-    case v1::TrackRequest::kImu: return HandleInput("an imu batch");
-    case v1::TrackRequest::kScan: return HandleInput("a scan");
-    default: break;
+    case v1::TrackRequest::kOpen:
+      return HandleOpen(request_.open());
+    case v1::TrackRequest::kResume:
+      return HandleResume(request_.resume());
+    case v1::TrackRequest::kBlock:
+      return HandleInput("a block");
+    case v1::TrackRequest::kImu:
+      return HandleInput("an imu batch");
+    case v1::TrackRequest::kScan:
+      return HandleInput("a scan");
+    default:
+      break;
   }
   EndStream(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "TrackRequest has no open, resume, block, imu or scan"));
 }
@@ -75,7 +80,10 @@ void TrackReactor::HandleOpen(const v1::SessionConfig& config) {
   }
   if (metrics_->opened != nullptr) metrics_->opened->Increment();
   LogEvent("info", "session_open",
-           {{"session", (*host)->id()}, {"peer", peer_}, {"label", config.label()}, {"backend", (*host)->backend()},
+           {{"session", (*host)->id()},
+            {"peer", peer_},
+            {"label", config.label()},
+            {"backend", (*host)->backend()},
             {"sensors", std::to_string(config.array().sensors_m_size())},
             {"sample_rate_hz", std::to_string(config.sample_rate_hz())}});
   Attach(std::move(host).value(), false, ResumePoint{});
@@ -116,8 +124,9 @@ void TrackReactor::Attach(std::shared_ptr<SessionHost> host, bool resumed, const
 void TrackReactor::HandleInput(const char* what) {
   SessionHost* host = Host();
   if (host == nullptr) {
-    return FinishOnce(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                                   std::string(what) + " arrived before open or resume; the first request must open a session"));
+    return FinishOnce(
+        grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                     std::string(what) + " arrived before open or resume; the first request must open a session"));
   }
   // False: the inbox is full (the session calls ReadMore when it has room) or the stream
   // takes no more input (it is ending).

@@ -34,12 +34,12 @@
 // lock held, and never after it ended the stream.
 #pragma once
 
+#include <grpcpp/grpcpp.h>
+
 #include <atomic>
 #include <memory>
 #include <optional>
 #include <string>
-
-#include <grpcpp/grpcpp.h>
 
 #include "localizer/v1/localizer.grpc.pb.h"
 #include "server/service/session_host.h"
@@ -50,8 +50,7 @@
 
 namespace localizer::server {
 
-class TrackReactor final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>,
-                           public StreamSink {
+class TrackReactor final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>, public StreamSink {
  public:
   TrackReactor(grpc::CallbackServerContext* context, SessionRegistry* registry, ServiceMetrics* metrics);
 
@@ -94,10 +93,10 @@ class TrackReactor final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc
   wire::DecodedBlock decoded_;     // read path: the session's runner decodes blocks into it
   grpc::ByteBuffer write_buffer_;  // Write: the response in flight, serialized
 
-  std::shared_ptr<SessionHost> owner_;          // set once by the read path, then read by OnDone
-  std::atomic<SessionHost*> host_{nullptr};      // owner_, published for the other threads
+  std::shared_ptr<SessionHost> owner_;       // set once by the read path, then read by OnDone
+  std::atomic<SessionHost*> host_{nullptr};  // owner_, published for the other threads
   mutable Mutex mutex_;
-  bool finished_ GUARDED_BY(mutex_) = false;     // Finish called
+  bool finished_ GUARDED_BY(mutex_) = false;  // Finish called
 };
 
 }  // namespace localizer::server

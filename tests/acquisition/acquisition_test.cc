@@ -2,11 +2,11 @@
 // Frames are made by tests/tdoa's independent signal generator (exact fractional delays).
 #include "engine/acquisition/acquisition.h"
 
+#include <gtest/gtest.h>
+
 #include <Eigen/Cholesky>
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "engine/acquisition/presence.h"
 #include "engine/tdoa/gcc_phat.h"
@@ -50,7 +50,8 @@ Measurement Measure(const ArrayGeometry& array, const SignalSpec& spec, const st
 const Vec3 kAxisSource(5.0, 5.0, 5.0);
 Measurement AxisSourceFrame(const ArrayGeometry& array) {
   const SignalSpec spec;
-  return Measure(array, spec, DelayedNoiseFrame(spec, ChannelDelaysSamples(array, kAxisSource, spec.sample_rate_hz), 10.0, 7));
+  return Measure(array, spec,
+                 DelayedNoiseFrame(spec, ChannelDelaysSamples(array, kAxisSource, spec.sample_rate_hz), 10.0, 7));
 }
 
 // The other exact TDOA solution of a 4-sensor array (the mirror the closed form finds).

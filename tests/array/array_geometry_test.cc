@@ -5,9 +5,7 @@
 namespace localizer::engine {
 namespace {
 
-std::vector<Vec3> Tetrahedron() {
-  return {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 2)};
-}
+std::vector<Vec3> Tetrahedron() { return {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 2)}; }
 
 TEST(ArrayGeometry, RejectsFewerThanFourSensors) {
   auto g = ArrayGeometry::Create({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, 1500.0);
@@ -17,12 +15,11 @@ TEST(ArrayGeometry, RejectsFewerThanFourSensors) {
 }
 
 TEST(ArrayGeometry, RejectsCoplanarAndCoincidentSensors) {
-  auto planar = ArrayGeometry::Create(
-      {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0), Vec3(0.5, 0.2, 1e-5)}, 1500.0);
+  auto planar =
+      ArrayGeometry::Create({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0), Vec3(0.5, 0.2, 1e-5)}, 1500.0);
   ASSERT_FALSE(planar.ok());
   EXPECT_NE(planar.status().message().find("coplanar"), std::string::npos);
-  auto same = ArrayGeometry::Create({Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)},
-                                    1500.0);
+  auto same = ArrayGeometry::Create({Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, 1500.0);
   ASSERT_FALSE(same.ok());
   EXPECT_NE(same.status().message().find("coincide"), std::string::npos);
 }

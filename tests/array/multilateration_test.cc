@@ -15,14 +15,12 @@ ArrayGeometry Make(std::vector<Vec3> sensors, double c) {
 
 std::vector<Vec3> Tetrahedron(double edge_m, const Vec3& centre) {
   const double a = edge_m / (2.0 * std::sqrt(2.0));
-  return {centre + Vec3(a, a, a), centre + Vec3(a, -a, -a), centre + Vec3(-a, a, -a),
-          centre + Vec3(-a, -a, a)};
+  return {centre + Vec3(a, a, a), centre + Vec3(a, -a, -a), centre + Vec3(-a, a, -a), centre + Vec3(-a, -a, a)};
 }
 
 TEST(Multilateration, ExactOnNoiselessTdoasForManyPositions) {
-  const ArrayGeometry six = Make({Vec3(0, 0, 0), Vec3(3, 0, 0), Vec3(0, 3, 0), Vec3(0, 0, -3),
-                                  Vec3(3, 3, -1), Vec3(-2, 1, -2)},
-                                 1500.0);
+  const ArrayGeometry six =
+      Make({Vec3(0, 0, 0), Vec3(3, 0, 0), Vec3(0, 3, 0), Vec3(0, 0, -3), Vec3(3, 3, -1), Vec3(-2, 1, -2)}, 1500.0);
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-15.0, 15.0);
   for (int trial = 0; trial < 50; ++trial) {
@@ -49,9 +47,8 @@ TEST(Multilateration, FourSensorsExactWithHintResolvingAmbiguity) {
 }
 
 TEST(Multilateration, CovarianceMatchesMonteCarloSpread) {
-  const ArrayGeometry six = Make({Vec3(0, 0, 0), Vec3(3, 0, 0), Vec3(0, 3, 0), Vec3(0, 0, -3),
-                                  Vec3(3, 3, -1), Vec3(-2, 1, -2)},
-                                 1500.0);
+  const ArrayGeometry six =
+      Make({Vec3(0, 0, 0), Vec3(3, 0, 0), Vec3(0, 3, 0), Vec3(0, 0, -3), Vec3(3, 3, -1), Vec3(-2, 1, -2)}, 1500.0);
   const Vec3 s(6.0, 4.0, -5.0);
   const double sigma_s = 5e-6;
   const Eigen::VectorXd h = six.Tdoa(s);

@@ -1,9 +1,9 @@
 // The benchmark's error split on hand-made quaternions with known answers.
 #include "engine/attitude/attitude_error.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 namespace localizer::engine {
 namespace {
@@ -33,8 +33,7 @@ TEST(AttitudeErrorTest, PureTiltErrorIsInclinationOnly) {
 TEST(AttitudeErrorTest, SwingTwistSplitOfACombinedError) {
   // Error = heading 30 deg after a 10 deg tilt about East: q_err = Rz(30) Rx(10).
   const double heading = 30.0 * M_PI / 180.0, tilt = 10.0 * M_PI / 180.0;
-  const Eigen::Quaterniond error = About(Eigen::Vector3d::UnitZ(), heading) *
-                                   About(Eigen::Vector3d::UnitX(), tilt);
+  const Eigen::Quaterniond error = About(Eigen::Vector3d::UnitZ(), heading) * About(Eigen::Vector3d::UnitX(), tilt);
   const AttitudeError e = AttitudeErrorOf(error * kTruth, kTruth);
   EXPECT_NEAR(e.heading_rad, heading, 1e-12);
   EXPECT_NEAR(e.inclination_rad, tilt, 1e-12);
@@ -61,8 +60,7 @@ TEST(AttitudeErrorTest, HeadingOfAHalfTurnIsPi) {
 
 TEST(AttitudeErrorTest, ScoreIsRmsOverScoredFiniteSamples) {
   const double nan = std::nan("");
-  const std::vector<Eigen::Quaterniond> truth = {kTruth, kTruth, kTruth,
-                                                 Eigen::Quaterniond(nan, nan, nan, nan)};
+  const std::vector<Eigen::Quaterniond> truth = {kTruth, kTruth, kTruth, Eigen::Quaterniond(nan, nan, nan, nan)};
   const std::vector<Eigen::Quaterniond> estimates = {
       About(Eigen::Vector3d::UnitZ(), 0.3) * kTruth,  // scored: heading 0.3
       About(Eigen::Vector3d::UnitX(), 0.4) * kTruth,  // scored: inclination 0.4
@@ -84,10 +82,8 @@ TEST(AttitudeErrorTest, NonFiniteEstimateScoresAsPi) {
 }
 
 TEST(AttitudeErrorTest, MismatchedLengthsAndNothingScoredAreErrors) {
-  EXPECT_EQ(ScoreAttitude({kTruth}, {kTruth, kTruth}, {true, true}).status().code(),
-            StatusCode::kInvalidArgument);
-  EXPECT_EQ(ScoreAttitude({kTruth}, {kTruth}, {false}).status().code(),
-            StatusCode::kFailedPrecondition);
+  EXPECT_EQ(ScoreAttitude({kTruth}, {kTruth, kTruth}, {true, true}).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(ScoreAttitude({kTruth}, {kTruth}, {false}).status().code(), StatusCode::kFailedPrecondition);
 }
 
 }  // namespace

@@ -2,11 +2,11 @@
 // against the trajectory that made them.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "engine/attitude/attitude_error.h"
 #include "engine/attitude/attitude_filter.h"

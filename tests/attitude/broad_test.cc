@@ -9,14 +9,14 @@
 // below), so the total error needs no heading offset. Without the magnetometer heading is
 // unobservable and only inclination is asserted. The seed's Euler EKF is run and printed
 // beside it, not asserted (it fails the goals; see euler_ekf_test for why).
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 
-#include <gtest/gtest.h>
-
+#include "clients/io/imu_csv.h"
 #include "engine/attitude/attitude_error.h"
 #include "engine/attitude/attitude_filter.h"
-#include "clients/io/imu_csv.h"
 
 namespace localizer::engine {
 namespace {
@@ -65,12 +65,13 @@ TEST_P(BroadTest, MeetsTheGoalsWithDefaults) {
     const TrialResult six_d = RunTrial(trial, options);
     options.use_mag = true;
     const TrialResult nine_d = RunTrial(trial, options);
-    std::printf("%s %-10s n=%ld  6D: inclination %.2f deg | 9D: total %.2f heading %.2f "
-                "inclination %.2f deg (mean signed heading %.2f deg)\n",
-                name.c_str(), AttitudeFilterKindName(kind), static_cast<long>(six_d.score.count),
-                six_d.score.inclination_rmse_rad / kDeg, nine_d.score.total_rmse_rad / kDeg,
-                nine_d.score.heading_rmse_rad / kDeg, nine_d.score.inclination_rmse_rad / kDeg,
-                nine_d.mean_signed_heading_rad / kDeg);
+    std::printf(
+        "%s %-10s n=%ld  6D: inclination %.2f deg | 9D: total %.2f heading %.2f "
+        "inclination %.2f deg (mean signed heading %.2f deg)\n",
+        name.c_str(), AttitudeFilterKindName(kind), static_cast<long>(six_d.score.count),
+        six_d.score.inclination_rmse_rad / kDeg, nine_d.score.total_rmse_rad / kDeg,
+        nine_d.score.heading_rmse_rad / kDeg, nine_d.score.inclination_rmse_rad / kDeg,
+        nine_d.mean_signed_heading_rad / kDeg);
     if (kind == AttitudeFilterKind::kQuaternion) {
       EXPECT_GT(six_d.score.count, 20000);
       EXPECT_LT(six_d.score.inclination_rmse_rad, 2.3 * kDeg);

@@ -2,17 +2,17 @@
 // from +-90 degrees pitch, and degrades there (the reason the quaternion filter is default).
 #include "engine/attitude/euler_ekf.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "tests/attitude/attitude_test_util.h"
 
 namespace localizer::engine {
 namespace {
 
-using testing::kDeg;
 using testing::ConsumerImuNoise;
+using testing::kDeg;
 using testing::RunFilter;
 using testing::ThroughNinetyDegreesPitch;
 
@@ -58,9 +58,9 @@ TEST(EulerEkfTest, AgreesWithQuaternionFilterAwayFromNinetyDegrees) {
     ASSERT_TRUE((*euler)->Update(s).ok());
     ASSERT_TRUE((*quaternion)->Update(s).ok());
     if (s.t_s < 2.0) continue;
-    max_difference = std::max(max_difference, AttitudeErrorOf((*euler)->estimate().body_to_world,
-                                                              (*quaternion)->estimate().body_to_world)
-                                                  .total_rad);
+    max_difference = std::max(
+        max_difference,
+        AttitudeErrorOf((*euler)->estimate().body_to_world, (*quaternion)->estimate().body_to_world).total_rad);
   }
   EXPECT_LT(max_difference, 1.5 * kDeg);
   EXPECT_LT(RunFilter(Euler(true), truth, samples, 2.0).max_total_rad, 1.5 * kDeg);
@@ -77,8 +77,8 @@ TEST(EulerEkfTest, DegradesThroughNinetyDegreesPitch) {
   AttitudeFilterOptions q_options;
   q_options.use_mag = true;
   const auto quaternion = RunFilter(q_options, truth, samples, 2.0);
-  std::printf("through 90 deg pitch: max total error euler %.2f deg, quaternion %.3f deg\n",
-              euler.max_total_rad / kDeg, quaternion.max_total_rad / kDeg);
+  std::printf("through 90 deg pitch: max total error euler %.2f deg, quaternion %.3f deg\n", euler.max_total_rad / kDeg,
+              quaternion.max_total_rad / kDeg);
   EXPECT_GT(euler.max_total_rad, 5.0 * kDeg);
   EXPECT_LT(quaternion.max_total_rad, 1.0 * kDeg);
   EXPECT_TRUE(euler.last.body_to_world.coeffs().allFinite());  // degraded, not broken

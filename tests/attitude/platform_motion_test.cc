@@ -1,9 +1,9 @@
 // The simulator's attitude trajectory and synthetic IMU against first principles.
 #include "engine/sim/platform_motion.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 namespace localizer::engine {
 namespace {

@@ -2,10 +2,10 @@
 // (engine/sim/platform_motion.h). Seeds fixed; tolerances stated per test.
 #include "engine/attitude/quaternion_ekf.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
-
-#include <gtest/gtest.h>
 
 #include "engine/attitude/attitude_math.h"
 #include "tests/attitude/attitude_test_util.h"
@@ -13,8 +13,8 @@
 namespace localizer::engine {
 namespace {
 
-using testing::kDeg;
 using testing::ConsumerImuNoise;
+using testing::kDeg;
 using testing::RunFilter;
 using testing::ThroughNinetyDegreesPitch;
 
@@ -37,8 +37,7 @@ TEST(QuaternionEkfTest, StaticAttitudeIsExact) {
 }
 
 TEST(QuaternionEkfTest, ConstantRateRotationIsExact) {
-  const AttitudeTrajectory truth =
-      AttitudeTrajectory::ConstantRate({0.2, 0.1, -0.5}, {0.3, -0.2, 0.9});
+  const AttitudeTrajectory truth = AttitudeTrajectory::ConstantRate({0.2, 0.1, -0.5}, {0.3, -0.2, 0.9});
   const auto samples = SynthesiseImu(truth, 200.0, 20.0, ImuNoise{}, 2);
   EXPECT_LT(RunFilter(Defaults(true), truth, samples).max_total_rad, 1e-6);
   EXPECT_LT(RunFilter(Defaults(false), truth, samples).max_inclination_rad, 1e-6);
@@ -145,9 +144,7 @@ TEST(QuaternionEkfTest, AccelNormRejectionSkipsTheUpdate) {
   s.accel_mps2 = {3.0, 0.0, 12.0};  // |f| = 12.4: 2.6 m/s^2 from g
   ASSERT_TRUE((*filter)->Update(s).ok());
   EXPECT_FALSE((*filter)->estimate().accel_used);
-  EXPECT_LT(AttitudeErrorOf((*filter)->estimate().body_to_world, Eigen::Quaterniond::Identity())
-                .inclination_rad,
-            1e-9);
+  EXPECT_LT(AttitudeErrorOf((*filter)->estimate().body_to_world, Eigen::Quaterniond::Identity()).inclination_rad, 1e-9);
 }
 
 // A magnetic disturbance fixed in the world, from 5 s to 15 s, turning the field's
@@ -177,7 +174,7 @@ TEST_P(MagDisturbanceTest, RejectsDisturbedField) {
 }
 
 INSTANTIATE_TEST_SUITE_P(NormAndDip, MagDisturbanceTest,
-                         ::testing::Values(Eigen::Vector3d(25.0, 0.0, 0.0),     // norm +17 %
+                         ::testing::Values(Eigen::Vector3d(25.0, 0.0, 0.0),    // norm +17 %
                                            Eigen::Vector3d(12.0, 8.0, 6.0)));  // dip -15 deg
 
 TEST(QuaternionEkfTest, BadSamplesAreErrorsAndLeaveTheStateAlone) {

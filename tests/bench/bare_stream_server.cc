@@ -4,15 +4,15 @@
 // drives localizer-server. Process CPU per block here is what gRPC and the kernel cost;
 // tests/bench/service_capacity.py --server-binary points at it.
 //   build/tests/bench/bare_stream_server --listen 127.0.0.1:0 --ready-file F
+#include <grpcpp/grpcpp.h>
+#include <unistd.h>
+
 #include <csignal>
 #include <cstdio>
 #include <deque>
 #include <fstream>
 #include <mutex>
 #include <string>
-
-#include <grpcpp/grpcpp.h>
-#include <unistd.h>
 
 #include "localizer/v1/localizer.grpc.pb.h"
 
@@ -99,8 +99,10 @@ int main(int argc, char** argv) {
   std::string listen = "127.0.0.1:0", ready_file;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--listen") listen = argv[i + 1];
-    else if (flag == "--ready-file") ready_file = argv[i + 1];
+    if (flag == "--listen")
+      listen = argv[i + 1];
+    else if (flag == "--ready-file")
+      ready_file = argv[i + 1];
   }
   sigset_t stop;
   sigemptyset(&stop);

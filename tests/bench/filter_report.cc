@@ -45,8 +45,8 @@ StatusOr<std::vector<FilterChoice>> Choices(const std::string& list) {
 int Main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 3;
   const std::string list = argc > 2 ? argv[2] : "pf,ekf,ukf,ekf-ct,ukf-ct,mmpf,imm";
-  std::printf("%-15s %-7s %4s %8s %9s %9s %8s %6s\n", "scenario", "filter", "seed", "rmse_m", "rmse/crlb",
-              "rmse/pcrlb", "nees/dim", "reinit");
+  std::printf("%-15s %-7s %4s %8s %9s %9s %8s %6s\n", "scenario", "filter", "seed", "rmse_m", "rmse/crlb", "rmse/pcrlb",
+              "nees/dim", "reinit");
   const auto choices = Choices(list);
   if (!choices.ok()) {
     std::fprintf(stderr, "filter_report: %s\n", choices.status().ToString().c_str());
@@ -61,9 +61,8 @@ int Main(int argc, char** argv) {
         const ScenarioRun run = TrackScenario(name, seed, Likelihood::kPeak, BackendChoice::kCpu, f.filter, f.model);
         const ArrayGeometry array = *ArrayGeometry::Create(run.config.sensors_m, run.config.sound_speed_mps);
         const BoundScore b = ScoreAgainstPcrlb(array, run.sim, run.config, run.estimates, run.score, 2.0);
-        std::printf("%-15s %-7s %4d %8.3f %9.3f %9.3f %8.2f %6d\n", name.c_str(), label.c_str(), seed,
-                    run.score.rmse_m, run.score.rmse_over_crlb, b.rmse_over_pcrlb, b.nees_per_dim,
-                    run.score.reinitialisations);
+        std::printf("%-15s %-7s %4d %8.3f %9.3f %9.3f %8.2f %6d\n", name.c_str(), label.c_str(), seed, run.score.rmse_m,
+                    run.score.rmse_over_crlb, b.rmse_over_pcrlb, b.nees_per_dim, run.score.reinitialisations);
         std::fflush(stdout);
         rmse.push_back(run.score.rmse_m);
         crlb.push_back(run.score.rmse_over_crlb);

@@ -34,9 +34,7 @@ namespace {
 constexpr int kChannels = 4;
 constexpr int kFrameSamples = 4096;
 
-unsigned PlannerFlags(const benchmark::State& state) {
-  return state.range(1) != 0 ? FFTW_MEASURE : FFTW_ESTIMATE;
-}
+unsigned PlannerFlags(const benchmark::State& state) { return state.range(1) != 0 ? FFTW_MEASURE : FFTW_ESTIMATE; }
 
 std::vector<float> BenchFrame(double sample_rate_hz, const ArrayGeometry& array) {
   testing::SignalSpec spec;
@@ -48,9 +46,7 @@ std::vector<float> BenchFrame(double sample_rate_hz, const ArrayGeometry& array)
   return testing::DelayedNoiseFrame(spec, delays, 20.0, 42);
 }
 
-ArrayGeometry BenchArray() {
-  return *ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
-}
+ArrayGeometry BenchArray() { return *ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0); }
 
 void SetCounters(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());  // frames

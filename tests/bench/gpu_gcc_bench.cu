@@ -64,13 +64,15 @@ class BareFft {
   static StatusOr<std::unique_ptr<BareFft>> Create(int n, int frames) {
     std::unique_ptr<BareFft> bare(new BareFft());
     const std::size_t floats = static_cast<std::size_t>(frames) * kChannels * 2 * (n / 2 + 1);
-    LOCALIZER_CUDA_RETURN_IF_ERROR(cudaStreamCreateWithFlags(&bare->stream_, cudaStreamNonBlocking), "cudaStreamCreate");
+    LOCALIZER_CUDA_RETURN_IF_ERROR(cudaStreamCreateWithFlags(&bare->stream_, cudaStreamNonBlocking),
+                                   "cudaStreamCreate");
     LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMalloc(&bare->real_, sizeof(float) * floats), "cudaMalloc");
     LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMalloc(&bare->complex_, sizeof(float) * floats), "cudaMalloc");
     LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemset(bare->real_, 0, sizeof(float) * floats), "cudaMemset");
     LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemset(bare->complex_, 0, sizeof(float) * floats), "cudaMemset");
     LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftPlan1d(&bare->forward_, n, CUFFT_R2C, frames * kChannels), "cufftPlan1d(R2C)");
-    LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftPlan1d(&bare->inverse_, n, CUFFT_C2R, frames * (kChannels - 1)), "cufftPlan1d(C2R)");
+    LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftPlan1d(&bare->inverse_, n, CUFFT_C2R, frames * (kChannels - 1)),
+                                    "cufftPlan1d(C2R)");
     LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftSetStream(bare->forward_, bare->stream_), "cufftSetStream");
     LOCALIZER_CUFFT_RETURN_IF_ERROR(cufftSetStream(bare->inverse_, bare->stream_), "cufftSetStream");
     LOCALIZER_CUDA_RETURN_IF_ERROR(cudaEventCreate(&bare->start_), "cudaEventCreate");
@@ -210,8 +212,8 @@ int Main(int repetitions) {
       fft.push_back(t.fft_ms);
       bare_ms.push_back(*b);
     }
-    rows.push_back({count, Median(wall), Median(total), Median(device), Median(fft), Median(bare_ms),
-                    Median(pinned_wall)});
+    rows.push_back(
+        {count, Median(wall), Median(total), Median(device), Median(fft), Median(bare_ms), Median(pinned_wall)});
   }
 
   std::printf("GPU GCC-PHAT batch, %s; %d channels x %d samples at %.0f Hz, N = %d; medians of %d\n",
@@ -220,10 +222,9 @@ int Main(int repetitions) {
   std::printf("%7s %10s %10s %10s %10s %10s %10s %10s %9s %11s %11s\n", "frames", "run ms", "us/frame", "pinned ms",
               "events ms", "device ms", "in-run fft", "bare fft", "run/bare", "pinned/bare", "device/bare");
   for (const Row& r : rows) {
-    std::printf("%7d %10.3f %10.2f %10.3f %10.3f %10.3f %10.3f %10.3f %9.2f %11.2f %11.2f\n", r.frames,
-                r.run_wall_ms, 1000.0 * r.run_wall_ms / r.frames, r.pinned_wall_ms, r.run_total_ms, r.run_device_ms,
-                r.run_fft_ms, r.bare_ms, r.run_wall_ms / r.bare_ms, r.pinned_wall_ms / r.bare_ms,
-                r.run_device_ms / r.bare_ms);
+    std::printf("%7d %10.3f %10.2f %10.3f %10.3f %10.3f %10.3f %10.3f %9.2f %11.2f %11.2f\n", r.frames, r.run_wall_ms,
+                1000.0 * r.run_wall_ms / r.frames, r.pinned_wall_ms, r.run_total_ms, r.run_device_ms, r.run_fft_ms,
+                r.bare_ms, r.run_wall_ms / r.bare_ms, r.pinned_wall_ms / r.bare_ms, r.run_device_ms / r.bare_ms);
   }
   return 0;
 }

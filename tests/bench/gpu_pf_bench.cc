@@ -69,7 +69,7 @@ double CopyBandwidth() {
 struct Result {
   double seconds_per_step = 0.0;  // median
   double particle_steps_per_s = 0.0;
-  int resampled_sessions = 0;     // in the last step
+  int resampled_sessions = 0;  // in the last step
 };
 
 // Opens `sessions` sessions of `particles`, steps them all together `steps` times (after 3

@@ -17,9 +17,9 @@
 // Exits 0 with a message when the backend is gpu and there is no device.
 #include <algorithm>
 #include <atomic>
-#include <latch>
 #include <chrono>
 #include <cstdio>
+#include <latch>
 #include <random>
 #include <sstream>
 #include <string>
@@ -216,7 +216,8 @@ int Main(int argc, char** argv) {
     std::printf("%-8s %8s %10s %9s %9s %9s %10s %8s %7s %10s %10s\n", "backend", "sessions", "frames", "p50_ms",
                 "p99_ms", "max_ms", "steady_p99", "failed", "open_s", "gcc_batch", "pf_batch");
     std::stringstream list(sessions_list);
-    for (std::string item; std::getline(list, item, ',');) code |= RunRealtime(audio, *backend, std::stoi(item), particles);
+    for (std::string item; std::getline(list, item, ',');)
+      code |= RunRealtime(audio, *backend, std::stoi(item), particles);
   }
   SetGpuProvider(nullptr);
   return code;

@@ -58,14 +58,12 @@ void BM_ParticleFilterStep(benchmark::State& state) {
     TrackState s = pf->State();
     benchmark::DoNotOptimize(s);
   }
-  state.counters["ns_per_particle_step"] = benchmark::Counter(
-      static_cast<double>(state.iterations()) * particles * 1e-9,
-      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_particle_step"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * particles * 1e-9,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.SetLabel(LikelihoodName(likelihood));
 }
-BENCHMARK(BM_ParticleFilterStep)
-    ->ArgsProduct({{1024, 4096, 16384}, {0, 1}})
-    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ParticleFilterStep)->ArgsProduct({{1024, 4096, 16384}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace localizer::engine

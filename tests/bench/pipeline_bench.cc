@@ -18,7 +18,8 @@ const SimResult& Audio(double fs, Scenario* scenario_out) {
     s.sim.duration_s = 6.0;
     return s;
   }();
-  static const SimResult sim = *Simulate(*ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps), scenario.sim);
+  static const SimResult sim =
+      *Simulate(*ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps), scenario.sim);
   (void)fs;
   *scenario_out = scenario;
   return sim;

@@ -7,6 +7,8 @@
 //
 // Scene i of a campaign has seed  seed * 1000000 + i, so `localizer-cli simulate --random
 // <that seed>` writes the same recording (and a campaign seed never overlaps another's scenes).
+#include "engine/pipeline/scene_campaign.h"
+
 #include <atomic>
 #include <cerrno>
 #include <cinttypes>
@@ -19,8 +21,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include "engine/pipeline/scene_campaign.h"
 
 using namespace localizer::engine;
 
@@ -47,19 +47,20 @@ void Adjust(const Args& a, AudioSessionConfig* c) {
 }
 
 void Usage(FILE* out) {
-  std::fprintf(out,
-               "usage: scene_campaign [--scenes N] [--seed S] [--json FILE] [--class all|gaussian|multipath|impulsive]\n"
-               "                      [--duration SECONDS] [--jobs J] [--weighting phat|phat-coherence|...]\n"
-               "                      [--filter pf|ekf|ukf|mmpf|imm] [--particles N] [--trace SEED]\n"
-               "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
-               "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
-               "within 3 x CRLB to the end), RMSE/CRLB and median NEES/dim after acquisition, lost frames\n"
-               "(> 10 x CRLB after a first good frame), silent failures (> 1 s of error > 10 x CRLB with\n"
-               "position NEES > 50 while initialised, present, not ambiguous).\n"
-               "--weighting, --filter and --particles override the session's defaults.\n"
-               "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
-               "initialised, present, ambiguous, error, CRLB, error/CRLB, reported sd, position NEES.\n"
-               "Defaults: --scenes 200 --seed 1 --class all --duration 12 --jobs 1.\n");
+  std::fprintf(
+      out,
+      "usage: scene_campaign [--scenes N] [--seed S] [--json FILE] [--class all|gaussian|multipath|impulsive]\n"
+      "                      [--duration SECONDS] [--jobs J] [--weighting phat|phat-coherence|...]\n"
+      "                      [--filter pf|ekf|ukf|mmpf|imm] [--particles N] [--trace SEED]\n"
+      "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
+      "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
+      "within 3 x CRLB to the end), RMSE/CRLB and median NEES/dim after acquisition, lost frames\n"
+      "(> 10 x CRLB after a first good frame), silent failures (> 1 s of error > 10 x CRLB with\n"
+      "position NEES > 50 while initialised, present, not ambiguous).\n"
+      "--weighting, --filter and --particles override the session's defaults.\n"
+      "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
+      "initialised, present, ambiguous, error, CRLB, error/CRLB, reported sd, position NEES.\n"
+      "Defaults: --scenes 200 --seed 1 --class all --duration 12 --jobs 1.\n");
 }
 
 bool ParseArgs(int argc, char** argv, Args* a) {
@@ -87,7 +88,8 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->filter = *parsed;
     } else if (flag == "--particles") {
       a->particles = static_cast<int>(std::strtol(value.c_str(), &end, 10));
-      if (*end != '\0' || a->particles < 1) return std::fprintf(stderr, "scene_campaign: --particles must be >= 1\n"), false;
+      if (*end != '\0' || a->particles < 1)
+        return std::fprintf(stderr, "scene_campaign: --particles must be >= 1\n"), false;
     } else if (flag == "--trace") {
       a->trace_seed = std::strtoull(value.c_str(), &end, 10);
       if (*end != '\0') return std::fprintf(stderr, "scene_campaign: --trace must be a scene seed\n"), false;
@@ -98,15 +100,18 @@ bool ParseArgs(int argc, char** argv, Args* a) {
         a->scene_class.reset();
       } else {
         auto parsed = ParseSceneClass(value);
-        if (!parsed.ok()) return std::fprintf(stderr, "scene_campaign: --class: %s\n", parsed.status().ToString().c_str()), false;
+        if (!parsed.ok())
+          return std::fprintf(stderr, "scene_campaign: --class: %s\n", parsed.status().ToString().c_str()), false;
         a->scene_class = *parsed;
       }
     } else if (flag == "--duration") {
       a->duration_s = std::strtod(value.c_str(), &end);
-      if (*end != '\0' || !(a->duration_s > 0.0)) return std::fprintf(stderr, "scene_campaign: --duration must be > 0\n"), false;
+      if (*end != '\0' || !(a->duration_s > 0.0))
+        return std::fprintf(stderr, "scene_campaign: --duration must be > 0\n"), false;
     } else if (flag == "--weighting") {
       auto parsed = ParseWeighting(value);
-      if (!parsed.ok()) return std::fprintf(stderr, "scene_campaign: --weighting: %s\n", parsed.status().ToString().c_str()), false;
+      if (!parsed.ok())
+        return std::fprintf(stderr, "scene_campaign: --weighting: %s\n", parsed.status().ToString().c_str()), false;
       a->weighting = *parsed;
     } else if (flag == "--jobs") {
       a->jobs = static_cast<int>(std::strtol(value.c_str(), &end, 10));
@@ -153,9 +158,8 @@ void PrintRow(FILE* out, const SceneRow& r) {
   std::fprintf(out, "%10" PRIu64 " %-9s %-3s %7s %4d %8s %8s %9s %9s %8s %6d %6s %6.1f  %s\n", r.seed,
                SceneClassName(r.scene_class), s.acquired ? "yes" : "no", Num(s.time_to_acquire_s, "%.2f").c_str(),
                s.initialised_frames, Num(s.crlb_median_m).c_str(), Num(s.crlb_theory_median_m).c_str(),
-               Num(s.rmse_over_crlb).c_str(), Num(s.rmse_over_crlb_theory).c_str(),
-               Num(s.median_nees_per_dim).c_str(), s.lost_frames, Num(s.silent_failure_s, "%.1f").c_str(), r.wall_s,
-               r.description.c_str());
+               Num(s.rmse_over_crlb).c_str(), Num(s.rmse_over_crlb_theory).c_str(), Num(s.median_nees_per_dim).c_str(),
+               s.lost_frames, Num(s.silent_failure_s, "%.1f").c_str(), r.wall_s, r.description.c_str());
 }
 
 void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s) {
@@ -169,31 +173,35 @@ void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s)
                JsonNum(a.duration_s).c_str());
   std::fprintf(f,
                "  \"summary\": {\"scenes\": %d, \"run_errors\": %d, \"acquired\": %d, \"lost\": %d, "
-               "\"silent_failures\": %d, \"acquired_theory\": %d, \"median_time_to_acquire_s\": %s, \"p95_time_to_acquire_s\": %s, "
+               "\"silent_failures\": %d, \"acquired_theory\": %d, \"median_time_to_acquire_s\": %s, "
+               "\"p95_time_to_acquire_s\": %s, "
                "\"median_time_to_acquire_acquired_s\": %s, \"p95_time_to_acquire_acquired_s\": %s, "
                "\"median_rmse_over_crlb_gaussian\": %s, \"median_rmse_over_crlb_hard\": %s, "
                "\"median_nees_per_dim\": %s, \"median_rmse_over_crlb_theory\": %s},\n  \"scenes\": [\n",
-               s.scenes, s.run_errors, s.acquired, s.lost, s.silent_failures, s.acquired_theory, JsonNum(s.median_time_to_acquire_s).c_str(),
-               JsonNum(s.p95_time_to_acquire_s).c_str(), JsonNum(s.median_time_to_acquire_acquired_s).c_str(),
-               JsonNum(s.p95_time_to_acquire_acquired_s).c_str(), JsonNum(s.median_rmse_over_crlb_gaussian).c_str(),
-               JsonNum(s.median_rmse_over_crlb_hard).c_str(), JsonNum(s.median_nees_per_dim).c_str(), JsonNum(s.median_rmse_over_crlb_theory).c_str());
+               s.scenes, s.run_errors, s.acquired, s.lost, s.silent_failures, s.acquired_theory,
+               JsonNum(s.median_time_to_acquire_s).c_str(), JsonNum(s.p95_time_to_acquire_s).c_str(),
+               JsonNum(s.median_time_to_acquire_acquired_s).c_str(), JsonNum(s.p95_time_to_acquire_acquired_s).c_str(),
+               JsonNum(s.median_rmse_over_crlb_gaussian).c_str(), JsonNum(s.median_rmse_over_crlb_hard).c_str(),
+               JsonNum(s.median_nees_per_dim).c_str(), JsonNum(s.median_rmse_over_crlb_theory).c_str());
   for (size_t i = 0; i < s.rows.size(); ++i) {
     const SceneRow& r = s.rows[i];
     const SceneScore& c = r.score;
-    std::fprintf(f,
-                 "    {\"seed\": %" PRIu64 ", \"class\": %s, \"description\": %s, \"error\": %s, \"frames\": %d, "
-                 "\"initialised_frames\": %d, \"acquired\": %s, \"time_to_acquire_s\": %s, \"time_to_acquire_theory_s\": %s, \"crlb_median_m\": %s, "
-                 "\"crlb_theory_median_m\": %s, \"rmse_over_crlb\": %s, \"rmse_over_crlb_theory\": %s, \"median_error_m\": %s, "
-                 "\"median_nees_per_dim\": %s, \"lost_frames\": %d, \"silent_failure_s\": %s, "
-                 "\"silent_failure\": %s, \"wall_s\": %s}%s\n",
-                 r.seed, JsonString(SceneClassName(r.scene_class)).c_str(), JsonString(r.description).c_str(),
-                 JsonString(r.error).c_str(), c.frames, c.initialised_frames, c.acquired ? "true" : "false",
-                 JsonNum(c.time_to_acquire_s).c_str(), JsonNum(c.time_to_acquire_theory_s).c_str(), JsonNum(c.crlb_median_m).c_str(),
-                 JsonNum(c.crlb_theory_median_m).c_str(), JsonNum(c.rmse_over_crlb).c_str(),
-                 JsonNum(c.rmse_over_crlb_theory).c_str(),
-                 JsonNum(c.median_error_m).c_str(), JsonNum(c.median_nees_per_dim).c_str(), c.lost_frames,
-                 JsonNum(c.silent_failure_s).c_str(), c.silent_failure ? "true" : "false", JsonNum(r.wall_s).c_str(),
-                 i + 1 < s.rows.size() ? "," : "");
+    std::fprintf(
+        f,
+        "    {\"seed\": %" PRIu64
+        ", \"class\": %s, \"description\": %s, \"error\": %s, \"frames\": %d, "
+        "\"initialised_frames\": %d, \"acquired\": %s, \"time_to_acquire_s\": %s, \"time_to_acquire_theory_s\": %s, "
+        "\"crlb_median_m\": %s, "
+        "\"crlb_theory_median_m\": %s, \"rmse_over_crlb\": %s, \"rmse_over_crlb_theory\": %s, \"median_error_m\": %s, "
+        "\"median_nees_per_dim\": %s, \"lost_frames\": %d, \"silent_failure_s\": %s, "
+        "\"silent_failure\": %s, \"wall_s\": %s}%s\n",
+        r.seed, JsonString(SceneClassName(r.scene_class)).c_str(), JsonString(r.description).c_str(),
+        JsonString(r.error).c_str(), c.frames, c.initialised_frames, c.acquired ? "true" : "false",
+        JsonNum(c.time_to_acquire_s).c_str(), JsonNum(c.time_to_acquire_theory_s).c_str(),
+        JsonNum(c.crlb_median_m).c_str(), JsonNum(c.crlb_theory_median_m).c_str(), JsonNum(c.rmse_over_crlb).c_str(),
+        JsonNum(c.rmse_over_crlb_theory).c_str(), JsonNum(c.median_error_m).c_str(),
+        JsonNum(c.median_nees_per_dim).c_str(), c.lost_frames, JsonNum(c.silent_failure_s).c_str(),
+        c.silent_failure ? "true" : "false", JsonNum(r.wall_s).c_str(), i + 1 < s.rows.size() ? "," : "");
   }
   std::fprintf(f, "  ]\n}\n");
   std::fclose(f);
@@ -248,7 +256,8 @@ int main(int argc, char** argv) {
   auto worker = [&] {
     for (int i = next++; i < a.scenes; i = next++) {
       const uint64_t seed = a.seed * 1000000ULL + static_cast<uint64_t>(i);
-      rows[static_cast<size_t>(i)] = RunRandomScene(seed, scene_options, {}, false, [&](AudioSessionConfig* c) { Adjust(a, c); });
+      rows[static_cast<size_t>(i)] =
+          RunRandomScene(seed, scene_options, {}, false, [&](AudioSessionConfig* c) { Adjust(a, c); });
       const std::lock_guard<std::mutex> lock(print_mutex);
       std::fprintf(stderr, "[%d/%d] ", ++done, a.scenes);
       PrintRow(stderr, rows[static_cast<size_t>(i)]);
@@ -259,13 +268,13 @@ int main(int argc, char** argv) {
   for (std::thread& t : threads) t.join();
 
   const CampaignSummary s = SummariseCampaign(rows);
-  std::printf("%10s %-9s %-3s %7s %4s %8s %8s %9s %9s %8s %6s %6s %6s  %s\n", "seed", "class", "acq", "t_acq_s",
-              "init", "crlb_m", "crlb_th_m", "rmse/crlb", "rmse/crth", "nees/dim", "lost", "silent", "wall_s", "scene");
+  std::printf("%10s %-9s %-3s %7s %4s %8s %8s %9s %9s %8s %6s %6s %6s  %s\n", "seed", "class", "acq", "t_acq_s", "init",
+              "crlb_m", "crlb_th_m", "rmse/crlb", "rmse/crth", "nees/dim", "lost", "silent", "wall_s", "scene");
   for (const SceneRow& r : s.rows) PrintRow(stdout, r);
   std::printf("\nscenes %d (run errors %d), duration %g s, campaign seed %" PRIu64 "\n", s.scenes, s.run_errors,
               a.duration_s, a.seed);
-  std::printf("acquired %d / %d; scenes with lost frames %d; silent failures %d\n", s.acquired,
-              s.scenes - s.run_errors, s.lost, s.silent_failures);
+  std::printf("acquired %d / %d; scenes with lost frames %d; silent failures %d\n", s.acquired, s.scenes - s.run_errors,
+              s.lost, s.silent_failures);
   std::printf("acquired against 3 x the theoretical CRLB: %d; median time (never = inf) %s s\n", s.acquired_theory,
               Num(s.median_time_to_acquire_theory_s, "%.2f").c_str());
   std::printf("time to acquire, all scenes (never = inf): median %s s, p95 %s s\n",

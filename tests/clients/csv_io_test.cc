@@ -1,11 +1,11 @@
 #include "clients/io/csv_io.h"
-#include "clients/io/presence_summary.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 
+#include "clients/io/presence_summary.h"
 #include "tests/clients/test_util.h"
 
 namespace localizer::io {
@@ -13,7 +13,6 @@ namespace {
 
 using testing::FirstLine;
 using testing::TempDir;
-
 
 TEST(CsvIo, TruthRoundTrips) {
   TempDir dir;

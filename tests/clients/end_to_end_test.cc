@@ -21,7 +21,6 @@ namespace {
 using testing::FirstLine;
 using testing::TempDir;
 
-
 // Callbacks that collect the warnings RunTrack reports.
 TrackCallbacks CollectWarnings(std::vector<std::string>* warnings) {
   TrackCallbacks callbacks;
@@ -101,8 +100,7 @@ TEST(EndToEnd, TetraWaterTracksBelowOneMetreRmse) {
 }
 
 // One second of tetra-water written to `dir`, and its array.json read back.
-void SimulateOneSecond(const TempDir& dir, std::optional<SimulationFiles>* files,
-                       std::optional<ArrayFile>* array) {
+void SimulateOneSecond(const TempDir& dir, std::optional<SimulationFiles>* files, std::optional<ArrayFile>* array) {
   auto run = SimulateScenario("tetra-water", 1, 1.0);
   ASSERT_TRUE(run.ok());
   auto written = WriteSimulationFiles(dir.path().string(), *run);
@@ -121,8 +119,7 @@ TEST(EndToEnd, TrackRejectsAChannelCountThatDoesNotMatchTheArray) {
   array->sensors_m.push_back(engine::Vec3(3, 3, -12));  // 5 sensors, 4 channels
   auto summary = RunTrack(JobFor(*files, *array, ""));
   ASSERT_FALSE(summary.ok());
-  EXPECT_NE(summary.status().message().find("has 4 channels but"), std::string::npos)
-      << summary.status().message();
+  EXPECT_NE(summary.status().message().find("has 4 channels but"), std::string::npos) << summary.status().message();
   EXPECT_NE(summary.status().message().find("5 sensors"), std::string::npos);
 }
 

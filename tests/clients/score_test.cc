@@ -56,8 +56,8 @@ TEST(Score, StatisticsFollowTheDocumentedDefinitions) {
 }
 
 TEST(Score, SkipsUninitialisedAndOutOfSpan) {
-  std::vector<EstimateRow> estimates = {At(1.0, {0.1, 0, 0}), At(2.0, {50, 0, 0}, false),
-                                        At(-0.5, {50, 0, 0}), At(10.5, {50, 0, 0})};
+  std::vector<EstimateRow> estimates = {At(1.0, {0.1, 0, 0}), At(2.0, {50, 0, 0}, false), At(-0.5, {50, 0, 0}),
+                                        At(10.5, {50, 0, 0})};
   auto score = Score(LineTruth(), estimates);
   ASSERT_TRUE(score.ok());
   EXPECT_EQ(score->count, 1);

@@ -18,8 +18,7 @@ class TempDir {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     std::random_device entropy;
     path_ = std::filesystem::temp_directory_path() /
-            ("localizer_" + std::string(info ? info->name() : "test") + "_" +
-             std::to_string(entropy()));
+            ("localizer_" + std::string(info ? info->name() : "test") + "_" + std::to_string(entropy()));
     std::filesystem::create_directories(path_);
   }
   ~TempDir() {

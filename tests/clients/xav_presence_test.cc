@@ -41,10 +41,10 @@ namespace {
 
 constexpr int kFrame = 4096;
 constexpr int kHop = 2048;
-constexpr double kCallRatio = 8.0;       // band energy above this x running median: a call
+constexpr double kCallRatio = 8.0;  // band energy above this x running median: a call
 constexpr double kMedianHalfWindowS = 1.5;
-constexpr double kMinCallsHeard = 0.8;   // measured 0.88 (PHAT 50-1000 Hz), 1.0 otherwise
-constexpr int kDetectorChannel = 3;      // detection_config_large_array.yaml: channel 3
+constexpr double kMinCallsHeard = 0.8;  // measured 0.88 (PHAT 50-1000 Hz), 1.0 otherwise
+constexpr int kDetectorChannel = 3;     // detection_config_large_array.yaml: channel 3
 
 struct Xav {
   XavArray array;
@@ -168,13 +168,13 @@ Counts Measure(const std::vector<engine::Estimate>& estimates, const engine::Aud
     if (e.source_present) {
       ++c.present;
       const engine::Vec3 p = e.state.head<3>();
-      const bool inside = (p.array() >= config.bounds_min_m.array()).all() &&
-                          (p.array() <= config.bounds_max_m.array()).all();
+      const bool inside =
+          (p.array() >= config.bounds_min_m.array()).all() && (p.array() <= config.bounds_max_m.array()).all();
       if (!inside) {
         ++c.present_outside;
         if (check_bounds) {
-          ADD_FAILURE() << "present frame " << i << " at t = " << e.t_s << " s outside the bounds: ("
-                        << p.x() << ", " << p.y() << ", " << p.z() << ")";
+          ADD_FAILURE() << "present frame " << i << " at t = " << e.t_s << " s outside the bounds: (" << p.x() << ", "
+                        << p.y() << ", " << p.z() << ")";
         }
       }
     }
@@ -186,8 +186,7 @@ Counts Measure(const std::vector<engine::Estimate>& estimates, const engine::Aud
   return c;
 }
 
-void ExpectContractOnTheRecording(const engine::AudioSessionConfig& base, const char* name,
-                                  bool check_bounds) {
+void ExpectContractOnTheRecording(const engine::AudioSessionConfig& base, const char* name, bool check_bounds) {
   const Xav& xav = LoadXav();
   ASSERT_EQ(xav.recording.channel_count, 6);
   const engine::AudioSessionConfig config = ConfigFor(base);
@@ -198,8 +197,8 @@ void ExpectContractOnTheRecording(const engine::AudioSessionConfig& base, const 
   ASSERT_EQ(static_cast<int64_t>(estimates.size()), expected);
   const std::vector<double> ratio = EnergyRatio(xav.recording, kDetectorChannel, estimates.size());
   const Counts c = Measure(estimates, config, &ratio, check_bounds);
-  std::printf("XAV %s: %d frames, %d present, %d present outside the bounds, calls heard %d/%d\n",
-              name, c.frames, c.present, c.present_outside, c.calls_heard, c.calls);
+  std::printf("XAV %s: %d frames, %d present, %d present outside the bounds, calls heard %d/%d\n", name, c.frames,
+              c.present, c.present_outside, c.calls_heard, c.calls);
   EXPECT_TRUE(c.finite);
   EXPECT_GT(c.present, 0);
   if (check_bounds) {

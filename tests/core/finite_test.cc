@@ -13,8 +13,8 @@ namespace {
 
 TEST(AllFinite, AgreesWithIsfiniteOnEveryClassOfValue) {
   using L = std::numeric_limits<float>;
-  const std::vector<float> finite = {0.0f, -0.0f, 1.0f, -1.0f, L::max(), L::lowest(), L::min(), L::denorm_min(),
-                                     -L::denorm_min(), 1e-30f, 3.4e38f};
+  const std::vector<float> finite = {
+      0.0f, -0.0f, 1.0f, -1.0f, L::max(), L::lowest(), L::min(), L::denorm_min(), -L::denorm_min(), 1e-30f, 3.4e38f};
   const std::vector<float> non_finite = {L::infinity(), -L::infinity(), L::quiet_NaN(), -L::quiet_NaN(),
                                          L::signaling_NaN()};
   EXPECT_TRUE(AllFinite(finite.data(), static_cast<int64_t>(finite.size())));

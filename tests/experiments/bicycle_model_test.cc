@@ -12,8 +12,7 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-PlanarState DriveCourse(const BicycleModel& model, const CourseSchedule& course, double dt_s,
-                        int steps) {
+PlanarState DriveCourse(const BicycleModel& model, const CourseSchedule& course, double dt_s, int steps) {
   PlanarState s = PlanarState::Zero();
   for (int k = 0; k < steps; ++k) s = model.Step(s, course.controls[k], dt_s);
   return s;
@@ -85,12 +84,10 @@ TEST(ClosedCourse, RejectsBadOptionsNamingTheField) {
   EXPECT_NE(course.status().message().find("turn_radius_m"), std::string::npos);
   options = CourseOptions();
   options.speed_mps = -1.0;
-  EXPECT_NE(RoundedRectangleCourse(options, model).status().message().find("speed_mps"),
-            std::string::npos);
+  EXPECT_NE(RoundedRectangleCourse(options, model).status().message().find("speed_mps"), std::string::npos);
   BicycleModel bad;
   bad.wheelbase_m = 0.0;
-  EXPECT_NE(RoundedRectangleCourse(CourseOptions(), bad).status().message().find("wheelbase_m"),
-            std::string::npos);
+  EXPECT_NE(RoundedRectangleCourse(CourseOptions(), bad).status().message().find("wheelbase_m"), std::string::npos);
 }
 
 // Central differences with step h: error O(h^2) ~ 1e-10 for these smooth maps.
@@ -98,28 +95,22 @@ TEST(BicycleModel, JacobiansMatchFiniteDifferences) {
   const BicycleModel model{2.7};
   const double dt_s = 0.1;
   const double h = 1e-6;
-  for (const PlanarState& s :
-       {PlanarState(1.0, -2.0, 0.3), PlanarState(-5.0, 4.0, 2.9), PlanarState(0.0, 0.0, -1.7)}) {
-    for (const BicycleControl& u :
-         {BicycleControl{3.5, 0.0}, BicycleControl{3.5, 0.36}, BicycleControl{1.2, -0.8}}) {
+  for (const PlanarState& s : {PlanarState(1.0, -2.0, 0.3), PlanarState(-5.0, 4.0, 2.9), PlanarState(0.0, 0.0, -1.7)}) {
+    for (const BicycleControl& u : {BicycleControl{3.5, 0.0}, BicycleControl{3.5, 0.36}, BicycleControl{1.2, -0.8}}) {
       const Eigen::Matrix3d f = model.StateJacobian(s, u, dt_s);
       for (int j = 0; j < 3; ++j) {
         PlanarState plus = s, minus = s;
         plus[j] += h;
         minus[j] -= h;
-        const Eigen::Vector3d column =
-            (model.Step(plus, u, dt_s) - model.Step(minus, u, dt_s)) / (2 * h);
+        const Eigen::Vector3d column = (model.Step(plus, u, dt_s) - model.Step(minus, u, dt_s)) / (2 * h);
         EXPECT_LT((column - f.col(j)).norm(), 1e-8) << "state column " << j;
       }
       const Eigen::Matrix<double, 3, 2> g = model.ControlJacobian(s, u, dt_s);
       const BicycleControl du[2] = {{h, 0.0}, {0.0, h}};
       for (int j = 0; j < 2; ++j) {
-        const BicycleControl plus{u.speed_mps + du[j].speed_mps,
-                                  u.steering_rad + du[j].steering_rad};
-        const BicycleControl minus{u.speed_mps - du[j].speed_mps,
-                                   u.steering_rad - du[j].steering_rad};
-        const Eigen::Vector3d column =
-            (model.Step(s, plus, dt_s) - model.Step(s, minus, dt_s)) / (2 * h);
+        const BicycleControl plus{u.speed_mps + du[j].speed_mps, u.steering_rad + du[j].steering_rad};
+        const BicycleControl minus{u.speed_mps - du[j].speed_mps, u.steering_rad - du[j].steering_rad};
+        const Eigen::Vector3d column = (model.Step(s, plus, dt_s) - model.Step(s, minus, dt_s)) / (2 * h);
         EXPECT_LT((column - g.col(j)).norm(), 1e-8) << "control column " << j;
       }
     }

@@ -18,9 +18,8 @@ FwlResult RunStudy(int system, int runs, uint64_t seed) {
   StatusOr<FwlResult> r = RunFwlStudy(o);
   EXPECT_TRUE(r.ok()) << r.status().ToString();
   for (const FwlRow& row : r->rows) {
-    std::printf("system %d bits %2d simulated %.3e computed %.3e (unscaled %.3e) overflows %lld\n",
-                system, row.bits, row.simulated, row.computed_scaled, row.computed_unscaled,
-                static_cast<long long>(row.overflows));
+    std::printf("system %d bits %2d simulated %.3e computed %.3e (unscaled %.3e) overflows %lld\n", system, row.bits,
+                row.simulated, row.computed_scaled, row.computed_unscaled, static_cast<long long>(row.overflows));
   }
   return *r;
 }

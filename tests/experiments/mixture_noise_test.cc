@@ -52,8 +52,7 @@ TEST(MixtureNoise, EmpiricalCdfIsTheMixtureOfGaussianAndNolanS1) {
     const double x = noise.stable.scale * table->at(r, 0) + noise.stable.location;
     const double e = noise.gaussian_probability;
     const double p = e * NormalCdf(x / noise.gaussian_sigma_m) + (1.0 - e) * table->at(r, 1);
-    const double tolerance =
-        kSigmas * std::sqrt(p * (1.0 - p) / static_cast<double>(draws.size())) + kTableRounding;
+    const double tolerance = kSigmas * std::sqrt(p * (1.0 - p) / static_cast<double>(draws.size())) + kTableRounding;
     EXPECT_NEAR(Ecdf(draws, x), p, tolerance) << "x " << x;
     ++checked;
   }
@@ -95,8 +94,7 @@ TEST(MixtureNoise, AxesChooseTheirComponentIndependently) {
     y_near += y;
     both_near += x && y;
   }
-  const double px = static_cast<double>(x_near) / kSamples,
-               py = static_cast<double>(y_near) / kSamples;
+  const double px = static_cast<double>(x_near) / kSamples, py = static_cast<double>(y_near) / kSamples;
   const double p_both = static_cast<double>(both_near) / kSamples;
   // One shared choice would give P(both) ~ 0.5 * 0.95 = 0.48; independent ones ~ 0.25.
   EXPECT_NEAR(p_both, px * py, kSigmas * std::sqrt(px * py / kSamples) + 0.005);
@@ -130,11 +128,11 @@ TEST(MixtureDensity, IsTheWeightedSumOfItsComponentsAndIntegratesToOne) {
     for (double n = lo + 0.5 * h; n < hi; n += h) sum += std::exp(density->LogDensity(n)) * h;
     return sum;
   };
-  const double mass = mass_over(-20000.0, -100.0, 0.5) + mass_over(-100.0, 100.0, 0.005) +
-                      mass_over(100.0, 20000.0, 0.5);
+  const double mass =
+      mass_over(-20000.0, -100.0, 0.5) + mass_over(-100.0, 100.0, 0.005) + mass_over(100.0, 20000.0, 0.5);
   EXPECT_NEAR(mass, 1.0, 1e-4);
-  EXPECT_NEAR(density->LogDensity(Eigen::Vector2d(0.3, -2.0)),
-              density->LogDensity(0.3) + density->LogDensity(-2.0), 1e-15);
+  EXPECT_NEAR(density->LogDensity(Eigen::Vector2d(0.3, -2.0)), density->LogDensity(0.3) + density->LogDensity(-2.0),
+              1e-15);
 }
 
 TEST(MixtureDensity, RejectsBadOptionsNamingTheField) {
@@ -145,8 +143,7 @@ TEST(MixtureDensity, RejectsBadOptionsNamingTheField) {
   EXPECT_NE(density.status().message().find("gaussian_probability"), std::string::npos);
   noise = MixtureNoise();
   noise.gaussian_sigma_m = 0.0;
-  EXPECT_NE(MixtureDensity::Create(noise).status().message().find("gaussian_sigma_m"),
-            std::string::npos);
+  EXPECT_NE(MixtureDensity::Create(noise).status().message().find("gaussian_sigma_m"), std::string::npos);
   noise = MixtureNoise();
   noise.stable.alpha = 0.8;
   EXPECT_NE(MixtureDensity::Create(noise).status().message().find("alpha"), std::string::npos);

@@ -31,8 +31,8 @@ TEST(PfVsEkf2d, ParticleFilterBeatsTheEkfByAWideMargin) {
   const FilterSummary& pf = Row(*result, "PF");
   const FilterSummary& ekf = Row(*result, "EKF");
   for (const FilterSummary& row : result->filters) {
-    std::printf("%-10s mean %.3f m  std %.3f m  divergences %d\n", row.name.c_str(),
-                row.mean_error_m, row.step_std_m, row.divergences);
+    std::printf("%-10s mean %.3f m  std %.3f m  divergences %d\n", row.name.c_str(), row.mean_error_m, row.step_std_m,
+                row.divergences);
   }
   // A wide margin: a tenth of the EKF's error. The bound on the PF: the set-up's floor
   // (3000 particles: 0.29 m) plus room for 100 particles and 10 runs (run std ~0.05 m).

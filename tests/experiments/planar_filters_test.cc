@@ -1,7 +1,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/LU>
-
 #include <cmath>
 #include <memory>
 #include <random>
@@ -39,8 +38,7 @@ TEST(PlanarFilters, NoiseFreeFixesAreTrackedToNearZero) {
     // The truth does leave the nominal course (else following it would prove nothing).
     EXPECT_GT((simulated->truth.back().head<2>()).norm(), 1.0);
     for (const std::string& name : PfVsEkf2dFilterNames()) {
-      StatusOr<std::unique_ptr<PlanarFilter>> filter =
-          MakePlanarFilter(name, options, density, run);
+      StatusOr<std::unique_ptr<PlanarFilter>> filter = MakePlanarFilter(name, options, density, run);
       ASSERT_TRUE(filter.ok()) << name << ": " << filter.status().ToString();
       const std::vector<double> errors = TrackPlanarRun(**filter, options, *simulated);
       double sum = 0.0, worst = 0.0;
@@ -60,8 +58,8 @@ PlanarBelief StartBelief() {
   return belief;
 }
 
-std::unique_ptr<PlanarKalmanFilter> Kalman(PlanarPredictor predictor, PlanarUpdater updater,
-                                           double c = 1.345, double nu = 3.0) {
+std::unique_ptr<PlanarKalmanFilter> Kalman(PlanarPredictor predictor, PlanarUpdater updater, double c = 1.345,
+                                           double nu = 3.0) {
   PlanarKalmanOptions options;
   options.predictor = predictor;
   options.updater = updater;
@@ -93,7 +91,7 @@ TEST(PlanarKalman, OneUpdateOnTheLinearPositionModelEqualsTheTextbookStep) {
   PlanarBelief prior;
   prior.mean << 3.0, -1.0, 0.4;
   prior.covariance << 0.50, 0.10, 0.02,  //
-      0.10, 0.30, 0.01,                   //
+      0.10, 0.30, 0.01,                  //
       0.02, 0.01, 0.04;
   const Eigen::Vector2d z(3.6, -1.5);
   const double sigma_m = 0.7;
@@ -188,8 +186,8 @@ std::unique_ptr<PlanarParticleFilter> Particles(uint64_t seed, ParticleLikelihoo
                                                 std::shared_ptr<const MixtureDensity> density) {
   PlanarParticleOptions options;
   options.likelihood = likelihood;
-  StatusOr<std::unique_ptr<PlanarParticleFilter>> filter = PlanarParticleFilter::Create(
-      BicycleModel(), ControlNoise(), options, std::move(density), std::mt19937_64(seed));
+  StatusOr<std::unique_ptr<PlanarParticleFilter>> filter =
+      PlanarParticleFilter::Create(BicycleModel(), ControlNoise(), options, std::move(density), std::mt19937_64(seed));
   EXPECT_TRUE(filter.ok()) << filter.status().ToString();
   (*filter)->Initialise(StartBelief());
   return std::move(*filter);
@@ -229,19 +227,18 @@ TEST(PlanarParticle, SameSeedReplaysBitForBit) {
 TEST(PlanarParticle, RejectsBadOptionsNamingTheField) {
   PlanarParticleOptions options;
   options.particles = 0;
-  EXPECT_NE(PlanarParticleFilter::Create(BicycleModel(), ControlNoise(), options, nullptr,
-                                         std::mt19937_64(1))
+  EXPECT_NE(PlanarParticleFilter::Create(BicycleModel(), ControlNoise(), options, nullptr, std::mt19937_64(1))
                 .status()
                 .message()
                 .find("particles"),
             std::string::npos);
   // The mixture likelihood without its density.
-  EXPECT_NE(PlanarParticleFilter::Create(BicycleModel(), ControlNoise(), PlanarParticleOptions(),
-                                         nullptr, std::mt19937_64(1))
-                .status()
-                .message()
-                .find("mixture"),
-            std::string::npos);
+  EXPECT_NE(
+      PlanarParticleFilter::Create(BicycleModel(), ControlNoise(), PlanarParticleOptions(), nullptr, std::mt19937_64(1))
+          .status()
+          .message()
+          .find("mixture"),
+      std::string::npos);
 }
 
 }  // namespace

@@ -98,8 +98,7 @@ TEST(StableDensityTable, IntegratesToOne) {
     StatusOr<StableDensityTable> table = StableDensityTable::Create({1.7, beta, 1.0, 0.0});
     ASSERT_TRUE(table.ok());
     const double x_far = 2000.0;
-    const double mass = Mass(*table, -x_far, x_far, 0.005) + TailMass(1.0 + beta, x_far) +
-                        TailMass(1.0 - beta, x_far);
+    const double mass = Mass(*table, -x_far, x_far, 0.005) + TailMass(1.0 + beta, x_far) + TailMass(1.0 - beta, x_far);
     EXPECT_NEAR(mass, 1.0, 1e-4) << beta;
   }
 }
@@ -128,8 +127,7 @@ TEST(StableDensityTable, AlphaTwoIsTheGaussianOfVarianceTwoScaleSquared) {
   ASSERT_TRUE(table.ok());
   const double variance = 2.0 * 9.0;
   for (const double x : {-5.0, 1.0, 4.0}) {
-    const double expected =
-        -0.5 * (x - 1.0) * (x - 1.0) / variance - 0.5 * std::log(2.0 * std::numbers::pi * variance);
+    const double expected = -0.5 * (x - 1.0) * (x - 1.0) / variance - 0.5 * std::log(2.0 * std::numbers::pi * variance);
     EXPECT_NEAR(table->LogDensity(x), expected, 1e-12);
   }
 }

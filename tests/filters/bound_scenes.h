@@ -25,7 +25,7 @@
 namespace localizer::engine::testing {
 
 struct BoundScene {
-  std::string path = "cv";  // cv | ca | turn | cv-random
+  std::string path = "cv";      // cv | ca | turn | cv-random
   double accel_std_mps2 = 1.0;  // cv-random's white acceleration (the filters' default)
   double duration_s = 12.0;
   double dt_s = 0.05;

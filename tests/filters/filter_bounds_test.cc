@@ -36,7 +36,7 @@ struct FilterCase {
 
 struct CaseResult {
   double rmse_m = 0.0;
-  double bound_m = 0.0;     // RMS over scored steps of sqrt(trace(position block of the PCRLB))
+  double bound_m = 0.0;  // RMS over scored steps of sqrt(trace(position block of the PCRLB))
   double nees_per_dim = 0.0;
   double ratio() const { return rmse_m / bound_m; }
 };
@@ -57,10 +57,12 @@ std::vector<FilterCase> Filters(double sigma_s) {
                      o.seed = seed;
                      return std::unique_ptr<Tracker>(std::move(*ParticleFilter::Create(a, o)));
                    }});
-  for (const auto& [variant, vname] : {std::pair{KalmanVariant::kExtended, "ekf"}, {KalmanVariant::kUnscented, "ukf"}}) {
+  for (const auto& [variant, vname] :
+       {std::pair{KalmanVariant::kExtended, "ekf"}, {KalmanVariant::kUnscented, "ukf"}}) {
     for (const char* model : {"cv", "ca", "ct"}) {
       cases.push_back({std::string(vname) + "-" + model, model, [=](const ArrayGeometry& a, uint64_t) {
-                         return std::unique_ptr<Tracker>(std::move(*KalmanFilter::Create(a, Kalman(variant, model, sigma_s))));
+                         return std::unique_ptr<Tracker>(
+                             std::move(*KalmanFilter::Create(a, Kalman(variant, model, sigma_s))));
                        }});
     }
   }
@@ -113,8 +115,7 @@ CaseResult RunCase(const ArrayGeometry& array, const BoundScene& scene, const Fi
       const double t = k * scene.dt_s;
       const testing::PathPoint& truth = path[k];
       tracker->Predict(scene.dt_s);
-      EXPECT_TRUE(
-          tracker->Update(testing::TdoaFrame(array, truth.position_m, truth.velocity_mps, t, noise, rng)).ok());
+      EXPECT_TRUE(tracker->Update(testing::TdoaFrame(array, truth.position_m, truth.velocity_mps, t, noise, rng)).ok());
       if (t < kSkipS) continue;
       const TrackState s = tracker->State();
       Vec6 e;

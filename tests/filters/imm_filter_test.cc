@@ -109,7 +109,7 @@ TEST(ImmFilter, MixingKeepsTheTurnModesOwnRate) {
   const double omega = imm->mode(1).mean()(6);
   EXPECT_NEAR(omega, scene.turn_rate_radps, 0.02);
   EXPECT_GT(imm->ModelProbabilities()[0].probability, 1e-3);  // CV does take part in the mix
-  imm->Predict(scene.dt_s);  // mixing, then CT's own prediction (omega a random walk)
+  imm->Predict(scene.dt_s);                                   // mixing, then CT's own prediction (omega a random walk)
   EXPECT_NEAR(imm->mode(1).mean()(6), omega, 1e-12);
 }
 
@@ -130,10 +130,11 @@ TEST(ImmFilter, FollowsATurnBetterThanTheSingleModelEkf) {
       const int turn = scene.first_turn_step(), settle = static_cast<int>(2.0 / scene.dt_s);
       const double ct_straight = MeanProbability(imm_score, "ct", settle, turn);
       const double ct_turning = MeanProbability(imm_score, "ct", turn + settle, scene.steps());
-      std::printf("%s seed %d: rmse imm %.4f m (turn %.4f), cv %.4f m (turn %.4f), ct %.4f m (turn %.4f); "
-                  "P(ct) straight %.3f turning %.3f\n",
-                  name, static_cast<int>(seed), imm_score.rmse_m, imm_score.turn_rmse_m, cv_score.rmse_m,
-                  cv_score.turn_rmse_m, ct_score.rmse_m, ct_score.turn_rmse_m, ct_straight, ct_turning);
+      std::printf(
+          "%s seed %d: rmse imm %.4f m (turn %.4f), cv %.4f m (turn %.4f), ct %.4f m (turn %.4f); "
+          "P(ct) straight %.3f turning %.3f\n",
+          name, static_cast<int>(seed), imm_score.rmse_m, imm_score.turn_rmse_m, cv_score.rmse_m, cv_score.turn_rmse_m,
+          ct_score.rmse_m, ct_score.turn_rmse_m, ct_straight, ct_turning);
       // Measured: imm 0.02-0.03 m against cv 2.2 m (the CV filter's gate loses the turn).
       EXPECT_LT(imm_score.rmse_m, 0.5 * cv_score.rmse_m) << name << " seed " << seed;
       EXPECT_LT(imm_score.turn_rmse_m, 0.5 * cv_score.turn_rmse_m) << name << " seed " << seed;

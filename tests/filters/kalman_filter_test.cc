@@ -7,7 +7,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-
 #include <cmath>
 #include <random>
 
@@ -83,7 +82,8 @@ TEST(KalmanFilter, OneEkfUpdateEqualsTheTextbookFormulas) {
   for (int k = 0; k < j.rows(); ++k) h.block(k, 3, 1, 3) = -0.5 * m.pairs[k].delay_s * j.row(k);
   Eigen::VectorXd z(j.rows());
   for (int k = 0; k < j.rows(); ++k) z(k) = m.pairs[k].delay_s;
-  const Eigen::MatrixXd s = h * prior.covariance * h.transpose() + sigma * sigma * Eigen::MatrixXd::Identity(j.rows(), j.rows());
+  const Eigen::MatrixXd s =
+      h * prior.covariance * h.transpose() + sigma * sigma * Eigen::MatrixXd::Identity(j.rows(), j.rows());
   const Eigen::MatrixXd k = prior.covariance * h.transpose() * s.inverse();
   const Eigen::VectorXd x = prior.mean + k * (z - array.Tdoa(prior.mean.head<3>()));
   const Eigen::MatrixXd p = (Eigen::MatrixXd::Identity(6, 6) - k * h) * prior.covariance;
@@ -129,7 +129,8 @@ TrackResult Track(KalmanVariant variant, const std::string& model, uint64_t seed
   for (int step = 0; step < 400; ++step) {
     // Truth: coordinated turn at w in x-y (constant velocity when w = 0).
     const double c = std::cos(w * dt), s = std::sin(w * dt);
-    p += w == 0.0 ? Vec3(v * dt) : Vec3((s * v.x() - (1 - c) * v.y()) / w, ((1 - c) * v.x() + s * v.y()) / w, v.z() * dt);
+    p += w == 0.0 ? Vec3(v * dt)
+                  : Vec3((s * v.x() - (1 - c) * v.y()) / w, ((1 - c) * v.x() + s * v.y()) / w, v.z() * dt);
     v = Vec3(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
     filter->Predict(dt);
     EXPECT_TRUE(filter->Update(Tdoas(array, p, v, step * dt, sigma, &rng)).ok());
@@ -162,8 +163,8 @@ TEST(KalmanFilter, EveryModelTracksAStraightSourceConsistently) {
       EXPECT_LT(rmse, 0.15);
       EXPECT_GT(nees, 0.3);
       EXPECT_LT(nees, 3.0);
-      std::printf("%s %-6s straight: rmse %.4f m, NEES/dim %.2f\n",
-                  variant == KalmanVariant::kExtended ? "ekf" : "ukf", model, rmse, nees);
+      std::printf("%s %-6s straight: rmse %.4f m, NEES/dim %.2f\n", variant == KalmanVariant::kExtended ? "ekf" : "ukf",
+                  model, rmse, nees);
     }
   }
 }

@@ -71,10 +71,11 @@ TEST(KalmanRobust, OneOutlierPairMovesTheHuberFilterFarLess) {
       const double huber_bad = ErrorAfter(*Held(array, RobustUpdate::kHuber, 1.0, variant), bad);
       const double t_clean = ErrorAfter(*Held(array, RobustUpdate::kStudentT, 1.0, variant), clean);
       const double t_bad = ErrorAfter(*Held(array, RobustUpdate::kStudentT, 1.0, variant), bad);
-      std::printf("seed %d %s: error after a clean frame plain %.4f huber %.4f student-t %.4f m; with one 50-sigma "
-                  "pair plain %.4f huber %.4f student-t %.4f m\n",
-                  static_cast<int>(seed), variant == KalmanVariant::kExtended ? "ekf" : "ukf", plain_clean,
-                  huber_clean, t_clean, plain_bad, huber_bad, t_bad);
+      std::printf(
+          "seed %d %s: error after a clean frame plain %.4f huber %.4f student-t %.4f m; with one 50-sigma "
+          "pair plain %.4f huber %.4f student-t %.4f m\n",
+          static_cast<int>(seed), variant == KalmanVariant::kExtended ? "ekf" : "ukf", plain_clean, huber_clean,
+          t_clean, plain_bad, huber_bad, t_bad);
       // The outlier's pull on the estimate, beyond the clean frame's error (measured: plain
       // 0.08-0.09 m, robust < 0.001 m).
       EXPECT_LT(huber_bad - huber_clean, 0.1 * (plain_bad - plain_clean)) << seed;
@@ -96,8 +97,8 @@ TEST(KalmanRobust, AFrameWithOneBadPairIsUsedNotGated) {
     RobustUpdate robust;
     double outlier_sigmas;
   };
-  for (const Case& c : {Case{RobustUpdate::kHuber, 8.0}, Case{RobustUpdate::kStudentT, 8.0},
-                        Case{RobustUpdate::kStudentT, 50.0}}) {
+  for (const Case& c :
+       {Case{RobustUpdate::kHuber, 8.0}, Case{RobustUpdate::kStudentT, 8.0}, Case{RobustUpdate::kStudentT, 50.0}}) {
     Measurement bad = StillTdoas(array, kSource, 4);
     bad.pairs[5].delay_s -= c.outlier_sigmas * kSigma;
     auto plain = Held(array, RobustUpdate::kNone, 0.9999);

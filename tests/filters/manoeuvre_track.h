@@ -94,8 +94,8 @@ inline TrackState StartBelief(double pos_std_m = 0.02, double vel_std_mps = 0.05
 }
 
 struct ManoeuvreScore {
-  double rmse_m = 0.0;        // position, from 1 s on (the start transient left out)
-  double turn_rmse_m = 0.0;   // position, during the turn only
+  double rmse_m = 0.0;                                       // position, from 1 s on (the start transient left out)
+  double turn_rmse_m = 0.0;                                  // position, during the turn only
   std::vector<std::vector<ModelProbability>> probabilities;  // per step, after the update
 };
 

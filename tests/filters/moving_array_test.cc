@@ -3,13 +3,12 @@
 // with the first pose it is dragged off. SetArray refuses anything but a rigid motion.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <random>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "engine/filters/imm_filter.h"
 #include "engine/filters/kalman_filter.h"

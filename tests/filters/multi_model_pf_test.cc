@@ -108,7 +108,8 @@ TEST(MultiModelPf, SameSeedReplaysOtherSeedDiffers) {
   auto a = std::move(*MultiModelParticleFilter::Create(array, MultiModel(5)));
   auto b = std::move(*MultiModelParticleFilter::Create(array, MultiModel(5)));
   auto c = std::move(*MultiModelParticleFilter::Create(array, MultiModel(6)));
-  const auto sa = RunManoeuvre(*a, scene, truth), sb = RunManoeuvre(*b, scene, truth), sc = RunManoeuvre(*c, scene, truth);
+  const auto sa = RunManoeuvre(*a, scene, truth), sb = RunManoeuvre(*b, scene, truth),
+             sc = RunManoeuvre(*c, scene, truth);
   EXPECT_EQ(a->State().mean, b->State().mean);
   EXPECT_EQ(sa.rmse_m, sb.rmse_m);
   EXPECT_NE(a->State().mean, c->State().mean);

@@ -13,17 +13,16 @@ namespace {
 
 ArrayGeometry Tetrahedron(double edge_m, const Vec3& centre, double c) {
   const double a = edge_m / (2.0 * std::sqrt(2.0));
-  auto g = ArrayGeometry::Create({centre + Vec3(a, a, a), centre + Vec3(a, -a, -a),
-                                  centre + Vec3(-a, a, -a), centre + Vec3(-a, -a, a)},
-                                 c);
+  auto g = ArrayGeometry::Create(
+      {centre + Vec3(a, a, a), centre + Vec3(a, -a, -a), centre + Vec3(-a, a, -a), centre + Vec3(-a, -a, a)}, c);
   EXPECT_TRUE(g.ok());
   return *g;
 }
 
 // TDOAs a frame centred at t_s measures for a source at p0 + v t: pair k describes the
 // instant t_s - d_k / 2 (solved by fixed-point iteration), plus Gaussian noise.
-Measurement MakeMeasurement(const ArrayGeometry& array, const Vec3& p0, const Vec3& v, double t_s,
-                            double sigma_s, double fs, std::mt19937_64& rng) {
+Measurement MakeMeasurement(const ArrayGeometry& array, const Vec3& p0, const Vec3& v, double t_s, double sigma_s,
+                            double fs, std::mt19937_64& rng) {
   std::normal_distribution<double> noise(0.0, sigma_s);
   Measurement m;
   m.t_s = t_s;
@@ -217,8 +216,10 @@ TEST(ParticleFilter, MixtureLikelihoodShrugsOffOutlierPairsTheGaussianFollows) {
     gaussian += RunCv(o, seed, 60, 3).rmse_m / 4.0;
     student += RunCv(Options(Likelihood::kPeak), seed, 60, 3).rmse_m / 4.0;
   }
-  std::printf("rmse with outliers: mixture %.3f m, gaussian %.3f m, student-t peak %.3f m; "
-              "mixture without outliers %.3f m\n", mixture, gaussian, student, clean);
+  std::printf(
+      "rmse with outliers: mixture %.3f m, gaussian %.3f m, student-t peak %.3f m; "
+      "mixture without outliers %.3f m\n",
+      mixture, gaussian, student, clean);
   EXPECT_LT(mixture, 0.1 * gaussian);
   EXPECT_LT(mixture, 2.0 * clean);
   EXPECT_LT(clean, 0.15);

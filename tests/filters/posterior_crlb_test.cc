@@ -33,8 +33,8 @@ class RandomWalk final : public MotionModel {
 };
 
 std::vector<TrueState> StraightLine(const MotionModel& model, int steps, double dt_s,
-                                   const Vec3& start_m = Vec3(20.0, -5.0, 3.0),
-                                   const Vec3& velocity_mps = Vec3(1.0, 0.5, 0.0)) {
+                                    const Vec3& start_m = Vec3(20.0, -5.0, 3.0),
+                                    const Vec3& velocity_mps = Vec3(1.0, 0.5, 0.0)) {
   std::vector<TrueState> truth;
   Eigen::VectorXd x = model.FromPositionVelocity(start_m, velocity_mps);
   for (int k = 0; k < steps; ++k) {

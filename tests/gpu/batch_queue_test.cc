@@ -66,15 +66,21 @@ TEST(BatchQueue, EveryJobRunsExactlyOnceAndGetsItsOwnResult) {
 TEST(BatchQueue, AFullBatchLaunchesWithoutWaitingForTheWindow) {
   std::atomic<int> batches{0};
   // A window far longer than the test: only the max_batch rule can launch.
-  BatchQueue<Job> queue([&](std::span<Job* const> jobs) {
-    EXPECT_EQ(jobs.size(), 4u);
-    for (Job* job : jobs) job->output = job->input;
-    ++batches;
-  }, std::chrono::seconds(30), 4);
+  BatchQueue<Job> queue(
+      [&](std::span<Job* const> jobs) {
+        EXPECT_EQ(jobs.size(), 4u);
+        for (Job* job : jobs) job->output = job->input;
+        ++batches;
+      },
+      std::chrono::seconds(30), 4);
   std::vector<Job> jobs(4);
   std::vector<std::thread> threads;
   const auto start = std::chrono::steady_clock::now();
-  for (int i = 0; i < 4; ++i) threads.emplace_back([&, i] { jobs[i].input = i; queue.Submit(&jobs[i]); });
+  for (int i = 0; i < 4; ++i)
+    threads.emplace_back([&, i] {
+      jobs[i].input = i;
+      queue.Submit(&jobs[i]);
+    });
   for (auto& thread : threads) thread.join();
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
   EXPECT_EQ(batches.load(), 1);
@@ -82,8 +88,11 @@ TEST(BatchQueue, AFullBatchLaunchesWithoutWaitingForTheWindow) {
 }
 
 TEST(BatchQueue, ALoneJobWaitsAtMostTheWindow) {
-  BatchQueue<Job> queue([](std::span<Job* const> jobs) { for (Job* job : jobs) job->output = 7; },
-                        std::chrono::milliseconds(20), 64);
+  BatchQueue<Job> queue(
+      [](std::span<Job* const> jobs) {
+        for (Job* job : jobs) job->output = 7;
+      },
+      std::chrono::milliseconds(20), 64);
   Job job;
   const auto start = std::chrono::steady_clock::now();
   queue.Submit(&job);
@@ -97,11 +106,13 @@ TEST(BatchQueue, WhenEveryProducerWaitsTheBatchRunsWithoutTheWindow) {
   std::atomic<int> batches{0};
   std::atomic<size_t> largest{0};
   // A window far longer than the test: only the producer rule can launch these.
-  BatchQueue<Job> queue([&](std::span<Job* const> jobs) {
-    for (Job* job : jobs) job->output = job->input;
-    largest = std::max(largest.load(), jobs.size());
-    ++batches;
-  }, std::chrono::seconds(30), 64);
+  BatchQueue<Job> queue(
+      [&](std::span<Job* const> jobs) {
+        for (Job* job : jobs) job->output = job->input;
+        largest = std::max(largest.load(), jobs.size());
+        ++batches;
+      },
+      std::chrono::seconds(30), 64);
   const auto start = std::chrono::steady_clock::now();
   queue.AddProducer();  // a lone session: each of its jobs runs at once
   for (int i = 0; i < 20; ++i) {
@@ -116,7 +127,11 @@ TEST(BatchQueue, WhenEveryProducerWaitsTheBatchRunsWithoutTheWindow) {
   queue.AddProducer();
   std::vector<Job> jobs(3);
   std::vector<std::thread> threads;
-  for (int i = 0; i < 3; ++i) threads.emplace_back([&, i] { jobs[i].input = 10 + i; queue.Submit(&jobs[i]); });
+  for (int i = 0; i < 3; ++i)
+    threads.emplace_back([&, i] {
+      jobs[i].input = 10 + i;
+      queue.Submit(&jobs[i]);
+    });
   for (auto& thread : threads) thread.join();
   EXPECT_EQ(largest.load(), 3u);
   EXPECT_EQ(batches.load(), 21);
@@ -132,8 +147,11 @@ TEST(BatchQueue, WhenEveryProducerWaitsTheBatchRunsWithoutTheWindow) {
 }
 
 TEST(BatchQueue, ZeroWindowRunsAtOnce) {
-  BatchQueue<Job> queue([](std::span<Job* const> jobs) { for (Job* job : jobs) job->output = 1; },
-                        std::chrono::nanoseconds(0), 64);
+  BatchQueue<Job> queue(
+      [](std::span<Job* const> jobs) {
+        for (Job* job : jobs) job->output = 1;
+      },
+      std::chrono::nanoseconds(0), 64);
   for (int i = 0; i < 100; ++i) {
     Job job;
     queue.Submit(&job);
@@ -146,8 +164,11 @@ TEST(BatchQueue, DestructionFinishesQueuedJobs) {
   std::vector<Job> jobs(8);
   std::vector<std::thread> threads;
   {
-    BatchQueue<Job> queue([](std::span<Job* const> batch) { for (Job* job : batch) job->output = 5; },
-                          std::chrono::seconds(30), 64);
+    BatchQueue<Job> queue(
+        [](std::span<Job* const> batch) {
+          for (Job* job : batch) job->output = 5;
+        },
+        std::chrono::seconds(30), 64);
     for (int i = 0; i < 8; ++i) threads.emplace_back([&, i] { queue.Submit(&jobs[i]); });
     // All eight wait in a window far longer than the test; destroy the queue then.
     while (queue.stats().waiting < 8) std::this_thread::yield();

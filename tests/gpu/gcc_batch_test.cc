@@ -66,8 +66,8 @@ struct Session {
   engine::SimResult recording;
 };
 
-GccOptions Options(double sample_rate_hz, Weighting weighting, PeakInterpolation interpolation,
-                   double band_low_hz, double band_high_hz, bool keep_gcc = true) {
+GccOptions Options(double sample_rate_hz, Weighting weighting, PeakInterpolation interpolation, double band_low_hz,
+                   double band_high_hz, bool keep_gcc = true) {
   GccOptions o;
   o.frame_samples = kFrameSamples;
   o.sample_rate_hz = sample_rate_hz;
@@ -97,7 +97,10 @@ struct Item {
 };
 
 Item MakeItem(Session& session, int64_t start) {
-  Item item{&session, session.Frame(start), static_cast<double>(start + kFrameSamples / 2) / session.options.sample_rate_hz, {}};
+  Item item{&session,
+            session.Frame(start),
+            static_cast<double>(start + kFrameSamples / 2) / session.options.sample_rate_hz,
+            {}};
   EXPECT_TRUE(session.cpu->Estimate(item.frame.data(), kFrameSamples, item.t_s, &item.cpu).ok());
   return item;
 }
@@ -175,8 +178,10 @@ TEST(GccBatch, SessionsWithDifferentArraysAndOptionsShareOneBatch) {
   // tetra-water (11025 Hz, 2 m) and tetra-air (48 kHz, 0.5 m): both N = 5120, 4 channels.
   std::vector<std::unique_ptr<Session>> sessions;
   sessions.push_back(MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000)));
-  sessions.push_back(MakeSession("tetra-water", Options(0, Weighting::kScot, PeakInterpolation::kParabolic, 0, 0, false)));
-  sessions.push_back(MakeSession("tetra-air", Options(0, Weighting::kPhatBeta, PeakInterpolation::kGaussian, 300, 8000)));
+  sessions.push_back(
+      MakeSession("tetra-water", Options(0, Weighting::kScot, PeakInterpolation::kParabolic, 0, 0, false)));
+  sessions.push_back(
+      MakeSession("tetra-air", Options(0, Weighting::kPhatBeta, PeakInterpolation::kGaussian, 300, 8000)));
   sessions.push_back(MakeSession("tetra-air", Options(0, Weighting::kCc, PeakInterpolation::kSinc, 0, 0)));
   GccOptions wide_margin = Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000);
   wide_margin.lag_margin_samples = 40;
@@ -319,7 +324,8 @@ TEST(GccBatch, NonFiniteSampleFailsOnlyItsJob) {
   out[1].t_s = -7.0;  // must stay untouched
   std::vector<Status> statuses(3);
   std::vector<GccJob> jobs;
-  for (int i = 0; i < 3; ++i) jobs.push_back({&session->plan, items[i].frame.data(), items[i].t_s, &out[i], &statuses[i]});
+  for (int i = 0; i < 3; ++i)
+    jobs.push_back({&session->plan, items[i].frame.data(), items[i].t_s, &out[i], &statuses[i]});
   ASSERT_TRUE(batch->Run(jobs).ok());
   EXPECT_TRUE(statuses[0].ok());
   EXPECT_TRUE(statuses[2].ok());

@@ -41,14 +41,11 @@ namespace {
 using engine::PeakInterpolation;
 using engine::Weighting;
 
-constexpr PeakInterpolation kMethods[] = {PeakInterpolation::kParabolic,
-                                          PeakInterpolation::kGaussian, PeakInterpolation::kSinc};
-constexpr Weighting kWeightings[] = {Weighting::kPhat, Weighting::kPhatBeta, Weighting::kScot,
-                                     Weighting::kCc};
+constexpr PeakInterpolation kMethods[] = {PeakInterpolation::kParabolic, PeakInterpolation::kGaussian,
+                                          PeakInterpolation::kSinc};
+constexpr Weighting kWeightings[] = {Weighting::kPhat, Weighting::kPhatBeta, Weighting::kScot, Weighting::kCc};
 
-double RelativeDifference(double a, double b) {
-  return std::abs(a - b) / std::max({std::abs(a), std::abs(b), 1e-30});
-}
+double RelativeDifference(double a, double b) { return std::abs(a - b) / std::max({std::abs(a), std::abs(b), 1e-30}); }
 
 // ---- Fast exp/log and the weightings --------------------------------------------------------
 
@@ -72,8 +69,8 @@ TEST(GccMath, FastExpAndLogEqualTheEngines) {
 
 TEST(GccMath, FloorEqualsTheCpusClampedFloor) {
   for (double power : {0.0, 1e-300, 1e-30, 1.0, 4096.0, 1e30, 1e60, 1e300}) {
-    const float cpu = static_cast<float>(std::clamp(engine::kRelativeFloor * power, static_cast<double>(FLT_MIN),
-                                                    static_cast<double>(FLT_MAX)));
+    const float cpu = static_cast<float>(
+        std::clamp(engine::kRelativeFloor * power, static_cast<double>(FLT_MIN), static_cast<double>(FLT_MAX)));
     EXPECT_EQ(engine::PowerFloor(power), cpu) << power;
   }
 }
@@ -114,14 +111,18 @@ TEST(GccMath, WeighBinEqualsTheCpuPerBinForEveryWeighting) {
     std::vector<float> cpu;
     float cpu_sum = 0.0f;
     switch (w) {
-      case Weighting::kPhat: cpu_sum = CpuWeigh(s, 0, bins, engine::PhatWeight{p.floor_mag}, &cpu); break;
+      case Weighting::kPhat:
+        cpu_sum = CpuWeigh(s, 0, bins, engine::PhatWeight{p.floor_mag}, &cpu);
+        break;
       case Weighting::kPhatBeta:
         cpu_sum = CpuWeigh(s, 0, bins, engine::PhatBetaWeight{p.floor_mag, beta}, &cpu);
         break;
       case Weighting::kScot:
         cpu_sum = CpuWeigh(s, 0, bins, engine::ScotWeight{p.floor_ref_power, p.floor_sensor_power}, &cpu);
         break;
-      case Weighting::kCc: cpu_sum = CpuWeigh(s, 0, bins, engine::CcWeight{}, &cpu); break;
+      case Weighting::kCc:
+        cpu_sum = CpuWeigh(s, 0, bins, engine::CcWeight{}, &cpu);
+        break;
     }
     double sum = 0.0;
     for (int b = 0; b < bins; ++b) {
@@ -335,8 +336,8 @@ std::vector<EmulatedPair> EmulateFrame(const engine::ArrayGeometry& array, const
     }
     const float norm = gcc::FullSpectrumNorm(half_sum, cross[0], cross[2 * (bins - 1)]);
     fftwf_execute(inverse.get());
-    pairs.push_back(PeakLikeTheKernel(corr.get(), n, layout.max_lag_samples[p], norm,
-                                      static_cast<int32_t>(options.interpolation)));
+    pairs.push_back(
+        PeakLikeTheKernel(corr.get(), n, layout.max_lag_samples[p], norm, static_cast<int32_t>(options.interpolation)));
   }
   return pairs;
 }
@@ -472,7 +473,8 @@ TEST(GccMath, InterpolationEqualsTheEngineOnRealGccWindows) {
       ASSERT_TRUE((*cpu)->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
       for (const engine::PairMeasurement& pair : m.pairs) {
         const int peak = static_cast<int>(std::max_element(pair.gcc.begin(), pair.gcc.end()) - pair.gcc.begin());
-        if (peak < engine::kPeakHalfWidth || peak + engine::kPeakHalfWidth >= static_cast<int>(pair.gcc.size())) continue;
+        if (peak < engine::kPeakHalfWidth || peak + engine::kPeakHalfWidth >= static_cast<int>(pair.gcc.size()))
+          continue;
         const float* samples = pair.gcc.data() + peak - engine::kPeakHalfWidth;
         const double gpu = gcc::InterpolatePeak(static_cast<int32_t>(method), samples);
         EXPECT_NEAR(gpu, EngineOffset(method, samples), 1e-4);

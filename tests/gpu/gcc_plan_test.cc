@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "engine/sim/simulator.h"
-#include "gpu/tdoa/gcc_batch.h"
 #include "gpu/core/device.h"
+#include "gpu/tdoa/gcc_batch.h"
 
 namespace localizer::gpu {
 namespace {

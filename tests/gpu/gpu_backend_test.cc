@@ -20,9 +20,9 @@
 namespace localizer::gpu {
 namespace {
 
+using engine::AudioSessionConfig;
 using engine::Estimate;
 using engine::Session;
-using engine::AudioSessionConfig;
 
 AudioSessionConfig TetraWaterConfig() {
   const engine::Scenario scenario = *engine::MakeScenario("tetra-water", 1);
@@ -122,7 +122,8 @@ TEST(GpuBackend, MovingArrayKeepsTheFilterOnTheCpuAndMatchesTheCpuBackend) {
     EXPECT_EQ((*session)->backend(), backend);
     ASSERT_TRUE((*session)->AddImu(imu).ok());
     std::vector<Estimate> estimates;
-    ASSERT_TRUE((*session)->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &estimates).ok());
+    ASSERT_TRUE(
+        (*session)->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &estimates).ok());
     const auto array_at = [&](double t_s) {
       return body.Moved(engine::AttitudeTrajectory(motion).At(t_s).toRotationMatrix(), engine::Vec3::Zero());
     };
@@ -192,8 +193,10 @@ TEST(GpuBackend, AFullBankRefusesNewSessionsAndTheOthersContinue) {
   Status refused = Status::Ok();
   for (int i = 0; i < 1000 && refused.ok(); ++i) {
     auto session = Session::Create(config);
-    if (session.ok()) open.push_back(std::move(session).value());
-    else refused = session.status();
+    if (session.ok())
+      open.push_back(std::move(session).value());
+    else
+      refused = session.status();
   }
   EXPECT_EQ(refused.code(), StatusCode::kResourceExhausted) << refused.ToString();
   ASSERT_FALSE(open.empty());

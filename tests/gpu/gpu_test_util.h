@@ -19,8 +19,8 @@ inline std::string GpuSkipReason() {
 }  // namespace localizer::gpu::testing
 
 // Use first thing in a test body that needs a device.
-#define LOCALIZER_SKIP_WITHOUT_GPU()                                              \
-  do {                                                                            \
-    const std::string gpu_skip_reason_ = ::localizer::gpu::testing::GpuSkipReason(); \
+#define LOCALIZER_SKIP_WITHOUT_GPU()                                                      \
+  do {                                                                                    \
+    const std::string gpu_skip_reason_ = ::localizer::gpu::testing::GpuSkipReason();      \
     if (!gpu_skip_reason_.empty()) GTEST_SKIP() << "no usable GPU: " << gpu_skip_reason_; \
   } while (false)

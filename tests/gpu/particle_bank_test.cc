@@ -305,9 +305,9 @@ TEST(ParticleBank, BadRequestsGetTheirOwnStatusAndTheOthersRun) {
   const Frame frame = MakeFrame(s, 0.0, rng);
   Frame short_frame = frame;
   short_frame.m.pairs.pop_back();
-  const std::vector<ParticleBank::StepRequest> requests = {
-      frame.Request(ready, 0.1), frame.Request(fresh, 0.1), frame.Request(ready, 0.1), frame.Request(99, 0.1),
-      short_frame.Request(ready, 0.1)};
+  const std::vector<ParticleBank::StepRequest> requests = {frame.Request(ready, 0.1), frame.Request(fresh, 0.1),
+                                                           frame.Request(ready, 0.1), frame.Request(99, 0.1),
+                                                           short_frame.Request(ready, 0.1)};
   std::vector<ParticleBank::StepResult> results(requests.size());
   ASSERT_TRUE(bank->Step(requests, results).ok());
   EXPECT_TRUE(results[0].status.ok()) << results[0].status.ToString();

@@ -27,9 +27,7 @@ namespace localizer::gpu::testing {
 class HostBankModel {
  public:
   HostBankModel(const engine::ArrayGeometry& array, const engine::ParticleFilterOptions& options)
-      : config_(std::move(pf::MakeSessionConfig(array, options)).value()),
-        n_(options.particles),
-        seed_(options.seed) {
+      : config_(std::move(pf::MakeSessionConfig(array, options)).value()), n_(options.particles), seed_(options.seed) {
     for (int c = 0; c < 6; ++c) {
       x_[c].assign(static_cast<size_t>(n_), 0.0f);
       next_[c].assign(static_cast<size_t>(n_), 0.0f);
@@ -52,8 +50,7 @@ class HostBankModel {
   }
 
   // One Step of the bank for this session; returns the device-shaped output.
-  Status Step(double dt_s, const engine::Measurement* m, const int* used, const double* sigmas_s,
-              pf::StepOutput* out) {
+  Status Step(double dt_s, const engine::Measurement* m, const int* used, const double* sigmas_s, pf::StepOutput* out) {
     pf::SessionStep s{};
     std::vector<float> gcc;
     LOCALIZER_RETURN_IF_ERROR(pf::FillSessionStep(config_, {dt_s, m, used, sigmas_s}, &gcc, &s));
@@ -82,10 +79,10 @@ class HostBankModel {
           const float h = pf::PairDelay(pf::RangeAndRate(p, pp.sensor[0], pp.sensor[1], pp.sensor[2]), ref,
                                         pp.half_delay_s, s.inv_c);
           const float e = (pp.delay_s - h) * pp.inv_sigma;
-          ll += pp.gcc_offset >= 0 ? pp.gcc_gain * engine::CatmullRomRead(gcc.data() + pp.gcc_offset,
-                                                                      engine::GccFineLag(h, pp.lag_scale, pp.lag0),
-                                                                      pp.last_lag)
-                                   : pf::StudentTLogLikelihood(e, s.inv_dof, s.half_dof_plus_1);
+          ll += pp.gcc_offset >= 0
+                    ? pp.gcc_gain * engine::CatmullRomRead(gcc.data() + pp.gcc_offset,
+                                                           engine::GccFineLag(h, pp.lag_scale, pp.lag0), pp.last_lag)
+                    : pf::StudentTLogLikelihood(e, s.inv_dof, s.half_dof_plus_1);
           out->sum_e[k] += w_[i] * e;
           out->sum_e2[k] += w_[i] * e * e;
         }

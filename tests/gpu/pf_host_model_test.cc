@@ -43,13 +43,13 @@ TEST(PfHostModel, RmseWithinTenPercentOfTheCpuFilter) {
   const CvScenario s = WellConditionedScenario();
   const int runs = 40;
   int fallbacks = 0;
-  const double cpu = PooledRmse(
-      [&](uint64_t seed) { return CpuCvRmse(s, CvOptions(kComparisonParticles, 100 + seed), seed); }, runs);
+  const double cpu =
+      PooledRmse([&](uint64_t seed) { return CpuCvRmse(s, CvOptions(kComparisonParticles, 100 + seed), seed); }, runs);
   const double model = PooledRmse(
       [&](uint64_t seed) { return ModelCvRmse(s, CvOptions(kComparisonParticles, 100 + seed), seed, &fallbacks); },
       runs);
-  std::printf("pooled rmse over %d runs: cpu %.4f m, gpu model %.4f m (ratio %.3f), cholesky fallbacks %d\n", runs,
-              cpu, model, model / cpu, fallbacks);
+  std::printf("pooled rmse over %d runs: cpu %.4f m, gpu model %.4f m (ratio %.3f), cholesky fallbacks %d\n", runs, cpu,
+              model, model / cpu, fallbacks);
   EXPECT_LT(model, 1.10 * cpu);
   EXPECT_GT(model, 0.90 * cpu);
   EXPECT_EQ(fallbacks, 0);

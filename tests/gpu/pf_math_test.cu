@@ -2,8 +2,6 @@
 // each function against the CPU engine's formula (engine/filters/particle_set.cc, copied
 // here as the reference where the engine keeps it inside a loop) and against physics.
 // Compiled by nvcc, so the functions are the very __host__ __device__ code the kernels use.
-#include "gpu/filters/pf_math.cuh"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +9,8 @@
 #include <cstdint>
 #include <random>
 #include <vector>
+
+#include "gpu/filters/pf_math.cuh"
 
 namespace localizer::gpu::pf {
 namespace {
@@ -128,8 +128,8 @@ TEST(PfMath, CatmullRomIsTheCpuRead) {
     const int i0 = static_cast<int>(lag);
     const float t = lag - static_cast<float>(i0);
     const float gm = g[i0 - 1], g0 = g[i0], g1 = g[i0 + 1], g2 = g[i0 + 2];
-    const float want = g0 + 0.5f * t * ((g1 - gm) + t * ((2.0f * gm - 5.0f * g0 + 4.0f * g1 - g2) +
-                                                         t * (3.0f * (g0 - g1) + g2 - gm)));
+    const float want =
+        g0 + 0.5f * t * ((g1 - gm) + t * ((2.0f * gm - 5.0f * g0 + 4.0f * g1 - g2) + t * (3.0f * (g0 - g1) + g2 - gm)));
     EXPECT_EQ(engine::CatmullRomRead(g.data(), lag_in, last), want) << lag_in;
   }
   for (int k = 1; k < 398; ++k) EXPECT_EQ(engine::CatmullRomRead(g.data(), static_cast<float>(k), last), g[k]);
@@ -195,7 +195,7 @@ TEST(PfMath, SystematicParentsMatchTheCpuWithZeroWeights) {
   for (int n : {16, 300, 4096}) {
     std::vector<float> w(n);
     for (float& v : w) v = Uniform(rng, 0.0f, 1.0f) < 0.7f ? 0.0f : Uniform(rng, 0.0f, 1.0f);
-    w[0] = 0.0f;      // leading and trailing zeros
+    w[0] = 0.0f;  // leading and trailing zeros
     w[n - 1] = 0.0f;
     w[n / 2] = 0.5f;  // at least one positive
     const std::vector<float> normalised = Normalised(w);

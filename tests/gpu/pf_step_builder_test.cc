@@ -7,8 +7,6 @@
 // reports itself skipped.
 #if defined(LOCALIZER_HAVE_CUDA)
 
-#include "gpu/filters/step_builder.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,6 +18,7 @@
 #include "engine/filters/gcc_upsampling.h"
 #include "engine/filters/particle_set.h"
 #include "gpu/filters/slot_layout.h"
+#include "gpu/filters/step_builder.h"
 #include "tests/gpu/pf_test_scenarios.h"
 
 namespace localizer::gpu::pf {
@@ -88,7 +87,7 @@ TEST(PfStepBuilder, PredictOnlyStepsCarryTheCpuProcessNoise) {
   EXPECT_EQ(step.do_predict, 1);
   EXPECT_EQ(step.do_update, 0);
   EXPECT_EQ(step.dt, 0.125f);
-  EXPECT_EQ(step.a_to_v, static_cast<float>(0.7 * 0.125));                // ParticleSet::Predict
+  EXPECT_EQ(step.a_to_v, static_cast<float>(0.7 * 0.125));  // ParticleSet::Predict
   EXPECT_EQ(step.a_to_p, static_cast<float>(0.5 * 0.7 * 0.125 * 0.125));
   EXPECT_EQ(step.seed, 99u);
   EXPECT_EQ(step.resample_below, 0.6 * 1000);

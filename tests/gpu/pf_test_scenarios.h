@@ -4,13 +4,12 @@
 // that scores any filter on it by position RMSE after convergence.
 #pragma once
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstdint>
 #include <functional>
 #include <random>
 #include <vector>
-
-#include <Eigen/Eigenvalues>
 
 #include "engine/array/array_geometry.h"
 #include "engine/core/measurement.h"

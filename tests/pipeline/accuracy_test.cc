@@ -19,9 +19,8 @@ TrackedRun Track(const std::string& name, uint64_t seed, Likelihood likelihood) 
 }
 
 void Print(const std::string& name, const TrackScore& s) {
-  std::printf("%s: scored %d rmse %.3f m median %.3f p95 %.3f max %.3f crlb %.3f ratio %.3f reinit %d\n",
-              name.c_str(), s.scored, s.rmse_m, s.median_m, s.p95_m, s.max_m, s.crlb_m, s.rmse_over_crlb,
-              s.reinitialisations);
+  std::printf("%s: scored %d rmse %.3f m median %.3f p95 %.3f max %.3f crlb %.3f ratio %.3f reinit %d\n", name.c_str(),
+              s.scored, s.rmse_m, s.median_m, s.p95_m, s.max_m, s.crlb_m, s.rmse_over_crlb, s.reinitialisations);
 }
 
 // Gaussian-noise scenes: the filter averages many frames through its motion model, so it
@@ -91,7 +90,8 @@ TEST(Accuracy, KalmanFiltersBeatHalfThePerFrameCrlbOnGaussianScenes) {
       for (const MotionModelKind model_kind : {MotionModelKind::kCv, MotionModelKind::kCt}) {
         const char* filter = FilterKindName(filter_kind);
         const char* model = MotionModelKindName(model_kind);
-        const ScenarioRun run = TrackScenario(scene, 1, Likelihood::kPeak, BackendChoice::kCpu, filter_kind, model_kind);
+        const ScenarioRun run =
+            TrackScenario(scene, 1, Likelihood::kPeak, BackendChoice::kCpu, filter_kind, model_kind);
         Print(std::string(scene) + " " + filter + " " + model, run.score);
         EXPECT_GT(run.score.scored, 80) << scene << " " << filter << " " << model;
         EXPECT_LT(run.score.rmse_over_crlb, 0.5) << scene << " " << filter << " " << model;

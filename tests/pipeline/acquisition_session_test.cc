@@ -2,11 +2,11 @@
 // (engine/sim), asserted against the simulator's truth: several exact solutions are all
 // kept and honestly reported, a biased pair trips the divergence test whatever the noise
 // adaptation did, noise alone is not a source, and a source switched on and off is followed.
+#include <gtest/gtest.h>
+
 #include <Eigen/Cholesky>
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "engine/pipeline/session.h"
 #include "engine/sim/simulator.h"
@@ -184,7 +184,8 @@ TEST(AcquisitionSession, ASourceSwitchedOffAndOnIsFlaggedDroppedAndReacquired) {
       ++frames_after_on;
       if (e.source_present && first_present_after_on < 0) first_present_after_on = frames_after_on;
       if (frames_after_on >= 3 && e.initialised) {
-        error_after_reacquire = std::max(error_after_reacquire, (e.state.head<3>() - sim.TruthAt(e.t_s).position_m).norm());
+        error_after_reacquire =
+            std::max(error_after_reacquire, (e.state.head<3>() - sim.TruthAt(e.t_s).position_m).norm());
       }
     }
   }

@@ -79,11 +79,11 @@ TEST(MovingArraySession, AttitudeCompensationKeepsTheAccuracyBound) {
   const MovingRun clean_imu = TrackBuoy(true, 1, /*noisy_imu=*/false);
   std::printf("rotating tetra-water with a noiseless IMU: rmse %.3f m (ratio %.3f)\n", clean_imu.score.rmse_m,
               clean_imu.score.rmse_over_crlb);
-  std::printf("rotating tetra-water: with IMU rmse %.3f m (crlb %.3f, ratio %.3f, %d scored, %d reinit); "
-              "without: rmse %.3f m (ratio %.2f, %d scored, %d reinit)\n",
-              with.score.rmse_m, with.score.crlb_m, with.score.rmse_over_crlb, with.score.scored,
-              with.score.reinitialisations, without.score.rmse_m, without.score.rmse_over_crlb,
-              without.score.scored, without.score.reinitialisations);
+  std::printf(
+      "rotating tetra-water: with IMU rmse %.3f m (crlb %.3f, ratio %.3f, %d scored, %d reinit); "
+      "without: rmse %.3f m (ratio %.2f, %d scored, %d reinit)\n",
+      with.score.rmse_m, with.score.crlb_m, with.score.rmse_over_crlb, with.score.scored, with.score.reinitialisations,
+      without.score.rmse_m, without.score.rmse_over_crlb, without.score.scored, without.score.reinitialisations);
   // 18 s scored at 5.4 frames/s.
   ASSERT_GT(with.score.scored, 90);
   EXPECT_LT(with.score.rmse_over_crlb, 0.5);

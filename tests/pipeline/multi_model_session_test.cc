@@ -43,7 +43,8 @@ std::vector<Estimate> Track(const AudioSessionConfig& config) {
   auto session = Session::Create(config);
   EXPECT_TRUE(session.ok()) << session.status().ToString();
   std::vector<Estimate> out;
-  EXPECT_TRUE((*session)->Process({1, s.sim.channel_count, s.sim.samples_per_channel, s.sim.samples.data()}, &out).ok());
+  EXPECT_TRUE(
+      (*session)->Process({1, s.sim.channel_count, s.sim.samples_per_channel, s.sim.samples.data()}, &out).ok());
   return out;
 }
 
@@ -54,7 +55,9 @@ TEST(MultiModelSession, EveryEstimateCarriesModelProbabilities) {
     RobustUpdate robust;
     std::vector<std::string> models;
   };
-  for (const Case& c : {Case{FilterKind::kMmpf, KalmanVariant::kExtended, RobustUpdate::kNone,
+  for (const Case& c : {Case{FilterKind::kMmpf,
+                             KalmanVariant::kExtended,
+                             RobustUpdate::kNone,
                              {"cv", "cv-manoeuvre", "ct-left", "ct-right"}},
                         Case{FilterKind::kImm, KalmanVariant::kExtended, RobustUpdate::kNone, {"cv", "ct"}},
                         Case{FilterKind::kImm, KalmanVariant::kUnscented, RobustUpdate::kHuber, {"cv", "ct"}}}) {

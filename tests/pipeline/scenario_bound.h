@@ -21,9 +21,9 @@
 namespace localizer::engine {
 
 struct BoundScore {
-  double pcrlb_m = 0.0;         // RMS over scored frames of sqrt(trace(position block))
+  double pcrlb_m = 0.0;  // RMS over scored frames of sqrt(trace(position block))
   double rmse_over_pcrlb = 0.0;
-  double nees_per_dim = 0.0;    // mean over scored frames of NEES / 6
+  double nees_per_dim = 0.0;  // mean over scored frames of NEES / 6
 };
 
 inline BoundScore ScoreAgainstPcrlb(const ArrayGeometry& array, const SimResult& sim, const AudioSessionConfig& config,

@@ -14,7 +14,7 @@ struct ScenarioRun {
   std::vector<Estimate> estimates;
   TrackScore score;  // estimates from 2 s on, against the simulator's truth
   AudioSessionConfig config;
-  SimResult sim;     // the simulated recording and its truth
+  SimResult sim;  // the simulated recording and its truth
 };
 
 // The session config that tracks `scenario`: its array, sample rate and band.

@@ -19,8 +19,7 @@ constexpr double kTdoaSigmaS = 2e-6;
 ArrayGeometry Array() {
   const double a = 2.0 / (2.0 * std::sqrt(2.0));
   const Vec3 c(0.0, 0.0, -10.0);
-  return *ArrayGeometry::Create({c + Vec3(a, a, a), c + Vec3(a, -a, -a), c + Vec3(-a, a, -a), c + Vec3(-a, -a, a)},
-                                kC);
+  return *ArrayGeometry::Create({c + Vec3(a, a, a), c + Vec3(a, -a, -a), c + Vec3(-a, a, -a), c + Vec3(-a, -a, a)}, kC);
 }
 
 // Truth of a source passing at 1 m/s, 6 s, rows every 10 ms (the scorer reads only the truth).
@@ -66,7 +65,8 @@ std::vector<Estimate> Estimates(const ArrayGeometry& array, const SimResult& sim
 TEST(SceneScore, PerfectEstimatesAcquireAtOnceWithNoError) {
   const ArrayGeometry array = Array();
   const SimResult sim = Truth();
-  const auto estimates = Estimates(array, sim, [](double, const Vec3& truth) { return truth; }, 0.01);
+  const auto estimates = Estimates(
+      array, sim, [](double, const Vec3& truth) { return truth; }, 0.01);
   const SceneScore s = ScoreScene(array, sim, estimates);
   ASSERT_EQ(s.tdoa_sigma_robust_s.size(), 3u);
   for (double sigma : s.tdoa_sigma_robust_s) EXPECT_NEAR(sigma, kTdoaSigmaS, 0.3 * kTdoaSigmaS);
@@ -91,7 +91,8 @@ TEST(SceneScore, PerfectEstimatesAcquireAtOnceWithNoError) {
 TEST(SceneScore, ErrorsOfAKnownSizeGiveThatRatioToTheBound) {
   const ArrayGeometry array = Array();
   const SimResult sim = Truth();
-  const auto perfect = Estimates(array, sim, [](double, const Vec3& truth) { return truth; }, 0.01);
+  const auto perfect = Estimates(
+      array, sim, [](double, const Vec3& truth) { return truth; }, 0.01);
   const SceneScore base = ScoreScene(array, sim, perfect);
   // Every frame off by exactly 2 x its own CRLB (along x): acquired, RMSE/CRLB = 2.
   std::vector<Estimate> off = perfect;
@@ -108,7 +109,8 @@ TEST(SceneScore, ErrorsOfAKnownSizeGiveThatRatioToTheBound) {
 TEST(SceneScore, AConstantWrongPositionIsNeverAcquiredAndASilentFailure) {
   const ArrayGeometry array = Array();
   const SimResult sim = Truth();
-  const auto wrong = Estimates(array, sim, [](double, const Vec3&) { return Vec3(30.0, -20.0, -2.0); }, 0.01);
+  const auto wrong = Estimates(
+      array, sim, [](double, const Vec3&) { return Vec3(30.0, -20.0, -2.0); }, 0.01);
   const SceneScore s = ScoreScene(array, sim, wrong);
   EXPECT_FALSE(s.acquired);
   EXPECT_TRUE(std::isinf(s.time_to_acquire_s));
@@ -122,7 +124,8 @@ TEST(SceneScore, AConstantWrongPositionIsNeverAcquiredAndASilentFailure) {
   EXPECT_NEAR(s.silent_failure_s, kHopS * beyond, 1e-6);
   // The same wrong position, honestly uncertain (a 100 m covariance) or flagged ambiguous:
   // a failure, but not a silent one.
-  const auto honest = Estimates(array, sim, [](double, const Vec3&) { return Vec3(30.0, -20.0, -2.0); }, 100.0);
+  const auto honest = Estimates(
+      array, sim, [](double, const Vec3&) { return Vec3(30.0, -20.0, -2.0); }, 100.0);
   EXPECT_FALSE(ScoreScene(array, sim, honest).silent_failure);
   std::vector<Estimate> ambiguous = wrong;
   for (Estimate& e : ambiguous) e.ambiguous = true, e.modes = 2;
@@ -134,16 +137,16 @@ TEST(SceneScore, LateAcquisitionAndLaterLoss) {
   const SimResult sim = Truth();
   const Vec3 ghost(30.0, -20.0, -2.0);
   // Wrong until 2 s, then right: acquired at the first right frame.
-  const auto late = Estimates(array, sim, [&](double t, const Vec3& truth) { return t < 2.0 - 1e-9 ? ghost : truth; },
-                              0.01);
+  const auto late = Estimates(
+      array, sim, [&](double t, const Vec3& truth) { return t < 2.0 - 1e-9 ? ghost : truth; }, 0.01);
   const SceneScore s = ScoreScene(array, sim, late);
   EXPECT_TRUE(s.acquired);
   EXPECT_NEAR(s.time_to_acquire_s, 2.0, 1e-9);
   EXPECT_EQ(s.lost_frames, 0);
   // Right, then wrong from 4 s on: never acquired (the definition needs it to the end), and the
   // frames after the first good one that are far off are lost.
-  const auto lost = Estimates(array, sim, [&](double t, const Vec3& truth) { return t < 4.0 - 1e-9 ? truth : ghost; },
-                              0.01);
+  const auto lost = Estimates(
+      array, sim, [&](double t, const Vec3& truth) { return t < 4.0 - 1e-9 ? truth : ghost; }, 0.01);
   const SceneScore l = ScoreScene(array, sim, lost);
   EXPECT_FALSE(l.acquired);
   int after = 0, beyond = 0;
@@ -156,7 +159,8 @@ TEST(SceneScore, LateAcquisitionAndLaterLoss) {
 TEST(SceneScore, OutlierTdoasDoNotInflateTheRobustSpread) {
   const ArrayGeometry array = Array();
   const SimResult sim = Truth();
-  auto estimates = Estimates(array, sim, [](double, const Vec3& truth) { return truth; }, 0.01);
+  auto estimates = Estimates(
+      array, sim, [](double, const Vec3& truth) { return truth; }, 0.01);
   for (size_t i = 0; i < estimates.size(); i += 5) estimates[i].delay_s[1] += 1e-3;  // 20 % ghost peaks
   const SceneScore s = ScoreScene(array, sim, estimates);
   EXPECT_NEAR(s.tdoa_sigma_robust_s[1], kTdoaSigmaS, 0.5 * kTdoaSigmaS);
@@ -166,7 +170,8 @@ TEST(SceneScore, FramesSayingNoSourceAreNotScoredWhenTheEngineReportsPresence) {
   const ArrayGeometry array = Array();
   const SimResult sim = Truth();
   const Vec3 ghost(30.0, -20.0, -2.0);
-  auto estimates = Estimates(array, sim, [&](double t, const Vec3& truth) { return t < 1.0 ? ghost : truth; }, 0.01);
+  auto estimates = Estimates(
+      array, sim, [&](double t, const Vec3& truth) { return t < 1.0 ? ghost : truth; }, 0.01);
   for (Estimate& e : estimates) {
     e.presence_threshold = 10.0;
     e.source_present = e.t_s >= 1.0;

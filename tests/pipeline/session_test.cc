@@ -211,7 +211,7 @@ TEST(Session, StartsFromAConfiguredRegionWithoutWaitingForAFix) {
   AudioSessionConfig c = ConfigFor(base);
   c.band_low_hz = base.sim.band_low_hz;
   c.band_high_hz = base.sim.band_high_hz;
-  c.min_pair_quality = 1e9;  // no fix is ever good enough: only the region can start it
+  c.min_pair_quality = 1e9;              // no fix is ever good enough: only the region can start it
   c.tracker.particle.particles = 16384;  // a 20 x 20 x 14 m box needs them to find a 2 cm TDOA peak
   c.init_region_min_m = Vec3(-10, -10, -15);
   c.init_region_max_m = Vec3(10, 10, -1);

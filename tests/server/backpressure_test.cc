@@ -62,8 +62,7 @@ TEST_F(BackpressureTest, FullQueueStallsTheClientInsteadOfGrowingMemory) {
     if (now == stalled_at) break;
     stalled_at = now;
   }
-  std::printf("writes stalled after %d of %d blocks; largest queue depth seen %.0f\n", stalled_at, kBlocks,
-              max_depth);
+  std::printf("writes stalled after %d of %d blocks; largest queue depth seen %.0f\n", stalled_at, kBlocks, max_depth);
   EXPECT_LT(stalled_at, kBlocks / 2) << "the client was never held back";
   EXPECT_LE(max_depth, 2.0) << "the server queued more than --max-queue-blocks";
 

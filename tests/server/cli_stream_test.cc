@@ -42,12 +42,12 @@
 #include "clients/io/array_json.h"
 #include "clients/io/simulation_files.h"
 #include "clients/io/track_runner.h"
-#include "tests/clients/test_util.h"
-#include "tests/pipeline/scenario_run.h"
 #include "engine/array/multilateration.h"
 #include "engine/pipeline/locate.h"
 #include "localizer/v1/localizer.grpc.pb.h"
 #include "server/service/server.h"
+#include "tests/clients/test_util.h"
+#include "tests/pipeline/scenario_run.h"
 #include "wire/block_wire.h"
 #include "wire/config_wire.h"
 #include "wire/status_wire.h"
@@ -105,8 +105,7 @@ void ExpectBitIdentical(const engine::Estimate& want, const engine::Estimate& go
   EXPECT_EQ(got.t_s, want.t_s) << "frame " << want.frame_index;
   EXPECT_EQ(got.initialised, want.initialised);
   EXPECT_EQ(got.reinitialised, want.reinitialised);
-  for (int i = 0; i < 6; ++i)
-    EXPECT_EQ(got.state(i), want.state(i)) << "frame " << want.frame_index;
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(got.state(i), want.state(i)) << "frame " << want.frame_index;
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) EXPECT_EQ(got.covariance(r, c), want.covariance(r, c));
   }
@@ -162,8 +161,7 @@ class CliStreamTest : public ::testing::Test {
     job.wav_paths = {files.wav_path};
     job.array_source = files.array_path;
     job.array_sample_rate_hz = array->sample_rate_hz;
-    job.config = io::TrackConfigFor(engine::AudioSessionConfig{}, *array, {},
-                                    array->sample_rate_hz.value_or(0.0));
+    job.config = io::TrackConfigFor(engine::AudioSessionConfig{}, *array, {}, array->sample_rate_hz.value_or(0.0));
     job.estimates_csv_path = out;
     return job;
   }
@@ -242,16 +240,14 @@ TEST_F(CliStreamTest, RealtimePacingWithPcm16) {
   StreamCallbacks callbacks;
   callbacks.on_estimate = [&seen](const StreamedEstimate&) { ++seen; };
   const StreamResult result = StreamBlocks(
-      **stream, ChannelMajorSource(sim.samples.data(), sim.channel_count, sim.samples_per_channel),
-      options, callbacks);
+      **stream, ChannelMajorSource(sim.samples.data(), sim.channel_count, sim.samples_per_channel), options, callbacks);
   ASSERT_TRUE(result.status().ok()) << result.status().ToString();
   const double audio_s = static_cast<double>(sim.samples_per_channel) / sim.sample_rate_hz;
   EXPECT_EQ(result.samples_sent_per_channel, sim.samples_per_channel);
   EXPECT_EQ(result.blocks_sent, static_cast<uint64_t>((sim.samples_per_channel + 1023) / 1024));
   EXPECT_GE(result.wall_s, audio_s);
   // Frames of 4096 samples every 2048: floor((N - 4096) / 2048) + 1.
-  EXPECT_EQ(result.estimates.size(),
-            static_cast<size_t>((sim.samples_per_channel - 4096) / 2048 + 1));
+  EXPECT_EQ(result.estimates.size(), static_cast<size_t>((sim.samples_per_channel - 4096) / 2048 + 1));
   EXPECT_EQ(seen, static_cast<int>(result.estimates.size()));
   const LatencySummary latency = SummariseLatencies(result.ClientLatencies());
   EXPECT_EQ(latency.count, static_cast<int64_t>(result.estimates.size()));
@@ -296,16 +292,13 @@ TEST_F(CliStreamTest, CliUnreachableServerExitsOne) {
 #else
   TempDir dir;
   const io::SimulationFiles files = SimulateToFiles(dir, 1.0);
-  const auto [code, err] =
-      RunCli("track --server 127.0.0.1:" + std::to_string(UnusedPort()) + " --array " +
-                 files.array_path + " --wav " + files.wav_path + " --out " + dir.File("e.csv"),
-             dir);
+  const auto [code, err] = RunCli("track --server 127.0.0.1:" + std::to_string(UnusedPort()) + " --array " +
+                                      files.array_path + " --wav " + files.wav_path + " --out " + dir.File("e.csv"),
+                                  dir);
   EXPECT_EQ(code, 1) << err;
   EXPECT_EQ(err.rfind("localizer-cli track: UNAVAILABLE: ", 0), 0u) << err;
-  const auto [usage_code, usage_err] =
-      RunCli("track --rate max --array " + files.array_path + " --wav " + files.wav_path +
-                 " --out " + dir.File("e.csv"),
-             dir);
+  const auto [usage_code, usage_err] = RunCli(
+      "track --rate max --array " + files.array_path + " --wav " + files.wav_path + " --out " + dir.File("e.csv"), dir);
   EXPECT_EQ(usage_code, 2) << usage_err;  // --rate without --server
 #endif
 }
@@ -337,8 +330,8 @@ TEST_F(CliStreamTest, BoundsAndPresenceSettingsReachTheServer) {
   EXPECT_EQ(effective.source_timeout_s(), 4.0);
   EXPECT_EQ(effective.search_radius_m(), 80.0);
 #ifdef LOCALIZER_CLI_BIN
-  const std::string track = "track --server " + target_ + " --array " + files.array_path + " --wav " +
-                            files.wav_path + " --out " + dir.File("e.csv");
+  const std::string track = "track --server " + target_ + " --array " + files.array_path + " --wav " + files.wav_path +
+                            " --out " + dir.File("e.csv");
   auto [code, err] = RunCli(track + " --bounds-min 0,0,inf", dir);
   EXPECT_EQ(code, 2) << err;
   EXPECT_NE(err.find("--bounds-min"), std::string::npos) << err;
@@ -423,8 +416,7 @@ TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
   const int64_t n = 2756;
   std::vector<float> block(static_cast<size_t>(n * sim.channel_count));
   for (int c = 0; c < sim.channel_count; ++c) {
-    std::copy_n(sim.samples.begin() + c * sim.samples_per_channel + start, n,
-                block.begin() + c * n);
+    std::copy_n(sim.samples.begin() + c * sim.samples_per_channel + start, n, block.begin() + c * n);
   }
   const engine::BlockView view{1, sim.channel_count, n, block.data()};
   v1::LocateRequest request;
@@ -443,8 +435,7 @@ TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
   auto local = engine::Locate(config, view);
   ASSERT_TRUE(local.ok()) << local.status().ToString();
   for (int p = 0; p < 3; ++p) {
-    EXPECT_EQ(response.pairs(p).delay_s(),
-              local->measurement.pairs[static_cast<size_t>(p)].delay_s);
+    EXPECT_EQ(response.pairs(p).delay_s(), local->measurement.pairs[static_cast<size_t>(p)].delay_s);
   }
   EXPECT_EQ(response.position_m().x(), local->fix.position_m.x());
 
@@ -463,11 +454,10 @@ TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
   const double duration_s = static_cast<double>(n) / fs;
   const double band_low_hz = run->scenario.sim.band_low_hz;
   const double band_high_hz = run->scenario.sim.band_high_hz;
-  const double s =
-      std::pow(10.0, run->scenario.sim.snr_db / 10.0) * (0.5 * fs) / (band_high_hz - band_low_hz);
+  const double s = std::pow(10.0, run->scenario.sim.snr_db / 10.0) * (0.5 * fs) / (band_high_hz - band_low_hz);
   const double two_pi_sq = 4.0 * std::numbers::pi * std::numbers::pi;
-  const double integral = two_pi_sq * (std::pow(band_high_hz, 3) - std::pow(band_low_hz, 3)) / 3.0 *
-                          (s * s / (1.0 + 2.0 * s));
+  const double integral =
+      two_pi_sq * (std::pow(band_high_hz, 3) - std::pow(band_low_hz, 3)) / 3.0 * (s * s / (1.0 + 2.0 * s));
   const double sigma_tdoa_s = 1.0 / std::sqrt(2.0 * duration_s * integral);
   const double t_c = (static_cast<double>(start) + 0.5 * static_cast<double>(n)) / fs;
   const engine::Vec3 truth = sim.TruthAt(t_c).position_m;
@@ -477,16 +467,14 @@ TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
     // Arrival at sensor k minus arrival at the reference (engine/core/measurement.h).
     const int k = array->sensor_of_pair(p);
     const double true_delay_s =
-        ((truth - array->sensor_m(k)).norm() - (truth - array->sensor_m(0)).norm()) /
-        config.sound_speed_mps;
+        ((truth - array->sensor_m(k)).norm() - (truth - array->sensor_m(0)).norm()) / config.sound_speed_mps;
     EXPECT_NEAR(response.pairs(p).delay_s(), true_delay_s, 4.0 * sigma_tdoa_s)
         << "pair " << p << ", sigma_tdoa_s " << sigma_tdoa_s;
   }
   const double crlb_m = std::sqrt(engine::TdoaPositionCrlb(*array, truth, sigma_tdoa_s).trace());
   const double speed_mps = run->scenario.sim.trajectory.velocity_mps.norm();  // 1 m/s, CV
   const double bound_m = 4.0 * crlb_m + speed_mps * duration_s / 2.0;
-  const engine::Vec3 fix(response.position_m().x(), response.position_m().y(),
-                         response.position_m().z());
+  const engine::Vec3 fix(response.position_m().x(), response.position_m().y(), response.position_m().z());
   EXPECT_LT((fix - truth).norm(), bound_m)
       << "fix " << fix.transpose() << " truth " << truth.transpose() << " crlb_m " << crlb_m;
 }
@@ -499,10 +487,8 @@ TEST_F(CliStreamTest, ThreeSensorsIsInvalidArgumentNamingTheField) {
   auto stream = TrackStream::Open(channel_, wire::ConfigToProto(config, "three"), "key-3");
   ASSERT_FALSE(stream.ok());
   EXPECT_EQ(stream.status().code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(stream.status().message().rfind("INVALID_ARGUMENT: ", 0), 0u)
-      << stream.status().message();
-  EXPECT_NE(stream.status().message().find("array.sensors_m"), std::string::npos)
-      << stream.status().message();
+  EXPECT_EQ(stream.status().message().rfind("INVALID_ARGUMENT: ", 0), 0u) << stream.status().message();
+  EXPECT_NE(stream.status().message().find("array.sensors_m"), std::string::npos) << stream.status().message();
 }
 
 // A stream abandoned after `opened` leaves a resumable session; resuming it with the

@@ -17,14 +17,13 @@ TEST(StatusWire, FromGrpcStatusPrefixesTheCodeName) {
   EXPECT_EQ(s.code(), StatusCode::kNotFound);
   EXPECT_EQ(s.message(), "NOT_FOUND: no session x");
   EXPECT_TRUE(wire::FromGrpcStatus(grpc::Status::OK).ok());
-  const Status deadline =
-      wire::FromGrpcStatus(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "late"));
+  const Status deadline = wire::FromGrpcStatus(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "late"));
   EXPECT_EQ(deadline.code(), StatusCode::kUnavailable);
   EXPECT_EQ(deadline.message(), "DEADLINE_EXCEEDED: late");
   // Round trip of every StatusCode.
-  for (const Status& original : {InvalidArgument("a"), FailedPrecondition("b"), OutOfRange("c"),
-                                 NotFound("d"), Unavailable("e"), Internal("f"),
-                                 PermissionDenied("g"), ResourceExhausted("h"), Cancelled("i")}) {
+  for (const Status& original :
+       {InvalidArgument("a"), FailedPrecondition("b"), OutOfRange("c"), NotFound("d"), Unavailable("e"), Internal("f"),
+        PermissionDenied("g"), ResourceExhausted("h"), Cancelled("i")}) {
     const Status back = wire::FromGrpcStatus(wire::ToGrpcStatus(original));
     EXPECT_EQ(back.code(), original.code());
     EXPECT_EQ(back.message(), original.ToString());
@@ -43,8 +42,7 @@ TEST(ProxyReset, AResetFromTheProxyReadsAsUnavailableAndNothingElseChanges) {
        {grpc::Status(grpc::StatusCode::INTERNAL, "engine: non-finite covariance"),
         grpc::Status(grpc::StatusCode::INTERNAL, "Received RST_STREAM with error code 8"),
         grpc::Status(grpc::StatusCode::UNAVAILABLE, "server shutting down"),
-        grpc::Status(grpc::StatusCode::CANCELLED, "Received RST_STREAM with error code 2"),
-        grpc::Status::OK}) {
+        grpc::Status(grpc::StatusCode::CANCELLED, "Received RST_STREAM with error code 2"), grpc::Status::OK}) {
     const grpc::Status same = FromProxyReset(other);
     EXPECT_EQ(same.error_code(), other.error_code());
     EXPECT_EQ(same.error_message(), other.error_message());

@@ -4,14 +4,13 @@
 // refused in-band (request "scan", the field named) and the session goes on as if it had
 // never come; blocks to a detection session and scans to an audio one are refused.
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "engine/pipeline/scan_session.h"
 #include "engine/sim/radar_scan.h"
-#include <nlohmann/json.hpp>
-
-#include "wire/scan_wire.h"
 #include "tests/server/http_client.h"
 #include "tests/server/service_fixture.h"
+#include "wire/scan_wire.h"
 
 namespace localizer::server::testing {
 namespace {
@@ -129,9 +128,9 @@ TEST_F(DetectionServiceTest, LiveViewJsonListsTheLatestTargets) {
   for (int i = 0; i < last.tracks_size(); ++i) {
     EXPECT_EQ(targets[i].at("id"), last.tracks(i).id());
     EXPECT_DOUBLE_EQ(targets[i].at("position_m")[0].get<double>(), last.tracks(i).position_m().x());
-    EXPECT_EQ(targets[i].at("status"), last.tracks(i).status() == v1::TRACK_STATUS_TENTATIVE ? "tentative"
+    EXPECT_EQ(targets[i].at("status"), last.tracks(i).status() == v1::TRACK_STATUS_TENTATIVE   ? "tentative"
                                        : last.tracks(i).status() == v1::TRACK_STATUS_CONFIRMED ? "confirmed"
-                                                                                              : "coasting");
+                                                                                               : "coasting");
   }
   ASSERT_TRUE(stream.Close().ok());
 }
@@ -235,10 +234,12 @@ TEST(ScanWire, DecodeValidatesEveryPlotAndRoundTrips) {
     mutate(bad);
     return wire::DecodeScan(bad).status().message();
   };
-  EXPECT_NE(field_of([](v1::Scan& s) { s.mutable_detections(1)->set_bearing_rad(4.0); }).find("detections[1].bearing_rad"),
-            std::string::npos);
-  EXPECT_NE(field_of([](v1::Scan& s) { s.mutable_detections(0)->set_range_m(std::nan("")); }).find("detections[0].range_m"),
-            std::string::npos);
+  EXPECT_NE(
+      field_of([](v1::Scan& s) { s.mutable_detections(1)->set_bearing_rad(4.0); }).find("detections[1].bearing_rad"),
+      std::string::npos);
+  EXPECT_NE(
+      field_of([](v1::Scan& s) { s.mutable_detections(0)->set_range_m(std::nan("")); }).find("detections[0].range_m"),
+      std::string::npos);
   EXPECT_NE(field_of([](v1::Scan& s) { s.mutable_detections(1)->set_elevation_rad(2.0); }).find("elevation_rad"),
             std::string::npos);
   EXPECT_NE(field_of([](v1::Scan& s) { s.set_time_s(INFINITY); }).find("scan.time_s"), std::string::npos);

@@ -64,8 +64,7 @@ inline HttpResponse RawRequest(int port, const std::string& request) {
   while (line_end != std::string::npos) {
     const size_t start = line_end + 2;
     line_end = head.find("\r\n", start);
-    const std::string line = head.substr(start, line_end == std::string::npos ? std::string::npos
-                                                                              : line_end - start);
+    const std::string line = head.substr(start, line_end == std::string::npos ? std::string::npos : line_end - start);
     const size_t colon = line.find(':');
     if (colon == std::string::npos) continue;
     std::string name = line.substr(0, colon);
@@ -79,8 +78,7 @@ inline HttpResponse RawRequest(int port, const std::string& request) {
 }
 
 inline HttpResponse Request(int port, const std::string& method, const std::string& path) {
-  return RawRequest(port, method + " " + path +
-                              " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
+  return RawRequest(port, method + " " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
 }
 
 }  // namespace localizer::testing

@@ -4,7 +4,6 @@
 // serving the self-contained page.
 #include <cmath>
 #include <limits>
-
 #include <nlohmann/json.hpp>
 
 #include "server/service/sessions_json.h"

@@ -1,11 +1,8 @@
 // HttpExposer (server/metrics/http_exposer.h) over loopback, with the plain POSIX-socket
 // client of tests/server/http_client.h (no curl): status lines, the text-format
 // Content-Type, bodies, 404/405, extra pages, and start-up failures returned as statuses.
-#include "server/metrics/http_exposer.h"
-
-#include <gtest/gtest.h>
-
 #include <arpa/inet.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -17,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "server/metrics/http_exposer.h"
 #include "tests/server/http_client.h"
 
 namespace localizer::server::metrics {
@@ -29,8 +27,7 @@ using ::localizer::testing::Request;
 class HttpExposerTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    Family<Counter>* blocks =
-        registry_.AddCounter("test_blocks_total", "Blocks seen.", {"backend"}).value();
+    Family<Counter>* blocks = registry_.AddCounter("test_blocks_total", "Blocks seen.", {"backend"}).value();
     blocks->WithLabels({"cpu"}).value()->Increment(42);
     auto exposer = HttpExposer::Start("127.0.0.1:0", &registry_);
     ASSERT_TRUE(exposer.ok()) << exposer.status().ToString();
@@ -63,10 +60,8 @@ TEST_F(HttpExposerTest, QueryStringIsIgnored) {
 TEST_F(HttpExposerTest, EachScrapeRunsTheCollectors) {
   Gauge* scrapes = registry_.AddGauge("test_scrapes", "Scrapes.").value()->WithLabels({}).value();
   registry_.AddCollector([scrapes] { scrapes->Increment(); });
-  EXPECT_NE(Request(exposer_->port(), "GET", "/metrics").body.find("test_scrapes 1\n"),
-            std::string::npos);
-  EXPECT_NE(Request(exposer_->port(), "GET", "/metrics").body.find("test_scrapes 2\n"),
-            std::string::npos);
+  EXPECT_NE(Request(exposer_->port(), "GET", "/metrics").body.find("test_scrapes 1\n"), std::string::npos);
+  EXPECT_NE(Request(exposer_->port(), "GET", "/metrics").body.find("test_scrapes 2\n"), std::string::npos);
 }
 
 TEST_F(HttpExposerTest, HeadSendsHeadersWithoutBody) {
@@ -87,10 +82,9 @@ TEST_F(HttpExposerTest, UnknownPathIs404) {
 
 TEST_F(HttpExposerTest, OtherMethodsAre405WithAllow) {
   for (const char* method : {"POST", "PUT", "DELETE"}) {
-    const HttpResponse r =
-        RawRequest(exposer_->port(), std::string(method) +
-                                         " /metrics HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n"
-                                         "Connection: close\r\n\r\n");
+    const HttpResponse r = RawRequest(exposer_->port(), std::string(method) +
+                                                            " /metrics HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n"
+                                                            "Connection: close\r\n\r\n");
     ASSERT_TRUE(r.ok) << method;
     EXPECT_EQ(r.status, 405) << method;
     EXPECT_EQ(r.headers.at("allow"), "GET, HEAD");
@@ -100,8 +94,7 @@ TEST_F(HttpExposerTest, OtherMethodsAre405WithAllow) {
 TEST_F(HttpExposerTest, IndexLinksMetricsAndAddedPages) {
   ASSERT_TRUE(exposer_
                   ->AddPage(
-                      "/healthz", [] { return std::pair(200, std::string("ok\n")); },
-                      "text/plain; charset=utf-8")
+                      "/healthz", [] { return std::pair(200, std::string("ok\n")); }, "text/plain; charset=utf-8")
                   .ok());
   const HttpResponse r = Request(exposer_->port(), "GET", "/");
   EXPECT_EQ(r.status, 200);
@@ -132,9 +125,7 @@ TEST_F(HttpExposerTest, AddedPagesServeTheirHandlersStatusAndType) {
 
   ASSERT_TRUE(exposer_
                   ->AddPage(
-                      "/boom",
-                      []() -> std::pair<int, std::string> { throw std::runtime_error("kaput"); },
-                      "text/plain")
+                      "/boom", []() -> std::pair<int, std::string> { throw std::runtime_error("kaput"); }, "text/plain")
                   .ok());
   EXPECT_EQ(Request(exposer_->port(), "GET", "/boom").status, 500);
   ASSERT_TRUE(exposer_
@@ -147,12 +138,10 @@ TEST_F(HttpExposerTest, AddedPagesServeTheirHandlersStatusAndType) {
 TEST_F(HttpExposerTest, AddPageRejectsBadPathsAndContentTypes) {
   const auto handler = [] { return std::pair(200, std::string()); };
   for (const char* path : {"", "healthz", "/a b", "/a?b", "/<x>", "/a\"b"}) {
-    EXPECT_EQ(exposer_->AddPage(path, handler, "text/plain").code(), StatusCode::kInvalidArgument)
-        << path;
+    EXPECT_EQ(exposer_->AddPage(path, handler, "text/plain").code(), StatusCode::kInvalidArgument) << path;
   }
   EXPECT_EQ(exposer_->AddPage("/x", handler, "").code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(exposer_->AddPage("/x", handler, "text/plain\r\nX-Evil: 1").code(),
-            StatusCode::kInvalidArgument);
+  EXPECT_EQ(exposer_->AddPage("/x", handler, "text/plain\r\nX-Evil: 1").code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(exposer_->AddPage("/x", nullptr, "text/plain").code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(Request(exposer_->port(), "GET", "/x").status, 404);
 }
@@ -212,8 +201,7 @@ TEST(HttpExposerStart, SecondExposerOnTheSamePortFailsWithAStatus) {
   auto second = HttpExposer::Start(address, &registry);
   ASSERT_FALSE(second.ok());
   EXPECT_EQ(second.status().code(), StatusCode::kUnavailable);
-  EXPECT_NE(second.status().message().find(address), std::string::npos)
-      << second.status().message();
+  EXPECT_NE(second.status().message().find(address), std::string::npos) << second.status().message();
   // civetweb's reason comes along (its log line "cannot bind to <address>: ...").
   EXPECT_NE(second.status().message().find("bind"), std::string::npos) << second.status().message();
   // The first one still serves.
@@ -223,18 +211,16 @@ TEST(HttpExposerStart, SecondExposerOnTheSamePortFailsWithAStatus) {
 TEST(HttpExposerStart, MalformedAddressesAreInvalidArgument) {
   Registry registry;
   for (const char* listen :
-       {"", "9100", "127.0.0.1", "127.0.0.1:", "127.0.0.1:65536", "127.0.0.1:-1", "127.0.0.1:80,81",
-        "127.0.0.1:80s", "1.2.3:80", "example.com:80", "[::1:80", "[zz]:80", ":80"}) {
+       {"", "9100", "127.0.0.1", "127.0.0.1:", "127.0.0.1:65536", "127.0.0.1:-1", "127.0.0.1:80,81", "127.0.0.1:80s",
+        "1.2.3:80", "example.com:80", "[::1:80", "[zz]:80", ":80"}) {
     auto exposer = HttpExposer::Start(listen, &registry);
     ASSERT_FALSE(exposer.ok()) << listen;
     EXPECT_EQ(exposer.status().code(), StatusCode::kInvalidArgument) << listen;
     EXPECT_NE(exposer.status().message().find(std::string("\"") + listen + "\""), std::string::npos)
         << exposer.status().message();
   }
-  EXPECT_EQ(HttpExposer::Start("127.0.0.1:0", nullptr).status().code(),
-            StatusCode::kInvalidArgument);
-  EXPECT_EQ(HttpExposer::Start("127.0.0.1:0", &registry, 0).status().code(),
-            StatusCode::kInvalidArgument);
+  EXPECT_EQ(HttpExposer::Start("127.0.0.1:0", nullptr).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(HttpExposer::Start("127.0.0.1:0", &registry, 0).status().code(), StatusCode::kInvalidArgument);
 }
 
 TEST(HttpExposerStart, AddressThatIsNotLocalIsUnavailable) {

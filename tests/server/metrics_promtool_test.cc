@@ -1,10 +1,9 @@
 // The Registry's text output checked by Prometheus' own parser and linter:
 // `promtool check metrics` (Debian package `prometheus`) must exit 0 and print nothing.
 // Skips, saying why, where promtool is not installed.
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
@@ -41,43 +40,34 @@ CommandResult RunCommand(const std::string& command) {
 // escaping, special values, and a labelled and an unlabelled histogram.
 void Fill(Registry* registry) {
   Family<Counter>* blocks =
-      registry
-          ->AddCounter("localizer_blocks_total", "Blocks processed.\nBy backend \\ result.",
-                       {"backend", "result"})
+      registry->AddCounter("localizer_blocks_total", "Blocks processed.\nBy backend \\ result.", {"backend", "result"})
           .value();
   blocks->WithLabels({"cpu", "ok"}).value()->Increment(1234);
   blocks->WithLabels({"gpu \"cuda\"", "rejected\nbad \\ block"}).value()->Increment(0.5);
   blocks->WithLabels({"", "naïve ☃"}).value()->Increment();
 
-  Family<Gauge>* sessions =
-      registry->AddGauge("localizer_sessions", "Sessions open.", {"tracker"}).value();
+  Family<Gauge>* sessions = registry->AddGauge("localizer_sessions", "Sessions open.", {"tracker"}).value();
   sessions->WithLabels({"particle_filter"}).value()->Set(3);
   sessions->WithLabels({"ekf"}).value()->Set(-1.25e-7);
   sessions->WithLabels({"inf"}).value()->Set(std::numeric_limits<double>::infinity());
   sessions->WithLabels({"nan"}).value()->Set(std::numeric_limits<double>::quiet_NaN());
-  registry->AddGauge("localizer_queue_depth", "Blocks waiting.")
-      .value()
-      ->WithLabels({})
-      .value()
-      ->Set(7);
+  registry->AddGauge("localizer_queue_depth", "Blocks waiting.").value()->WithLabels({}).value()->Set(7);
 
   std::mt19937_64 rng(7);
   std::lognormal_distribution<double> latency_s(std::log(1e-3), 1.5);
-  Family<Histogram>* stages =
-      registry
-          ->AddHistogram("localizer_stage_latency_seconds", "Stage latency per block.", {"stage"},
-                         DefaultLatencyBucketsSeconds())
-          .value();
+  Family<Histogram>* stages = registry
+                                  ->AddHistogram("localizer_stage_latency_seconds", "Stage latency per block.",
+                                                 {"stage"}, DefaultLatencyBucketsSeconds())
+                                  .value();
   for (const char* stage : {"gcc_phat", "tracker \"pf\""}) {
     Histogram* h = stages->WithLabels({stage}).value();
     for (int i = 0; i < 1000; ++i) h->Observe(latency_s(rng));
   }
-  Histogram* sizes = registry
-                         ->AddHistogram("localizer_block_size_bytes", "Block sizes.", {},
-                                        ExponentialBuckets(1024, 4, 6))
-                         .value()
-                         ->WithLabels({})
-                         .value();
+  Histogram* sizes =
+      registry->AddHistogram("localizer_block_size_bytes", "Block sizes.", {}, ExponentialBuckets(1024, 4, 6))
+          .value()
+          ->WithLabels({})
+          .value();
   sizes->Observe(1024);
   sizes->Observe(1e9);
   // A family that has no series yet.
@@ -92,15 +82,13 @@ TEST(Promtool, CheckMetricsAcceptsTheSerializedRegistryWithoutLintWarnings) {
   Registry registry;
   Fill(&registry);
   const std::string text = registry.Serialize();
-  const std::string path =
-      ::testing::TempDir() + "metrics_promtool_test_" + std::to_string(getpid()) + ".prom";
+  const std::string path = ::testing::TempDir() + "metrics_promtool_test_" + std::to_string(getpid()) + ".prom";
   {
     std::ofstream file(path, std::ios::binary);
     file << text;
     ASSERT_TRUE(file.good()) << "cannot write " << path;
   }
-  const CommandResult result =
-      RunCommand(std::string(kPromtool) + " check metrics < '" + path + "'");
+  const CommandResult result = RunCommand(std::string(kPromtool) + " check metrics < '" + path + "'");
   std::remove(path.c_str());
   EXPECT_EQ(result.exit_code, 0) << result.output << "\n--- input ---\n" << text;
   EXPECT_EQ(result.output, "") << "\n--- input ---\n" << text;
@@ -111,14 +99,12 @@ TEST(Promtool, CheckMetricsReportsALintProblem) {
   if (access(kPromtool, X_OK) != 0) GTEST_SKIP() << kPromtool << " not found";
   Registry registry;
   registry.AddCounter("requests", "Requests.").value()->WithLabels({}).value()->Increment();
-  const std::string path =
-      ::testing::TempDir() + "metrics_promtool_lint_" + std::to_string(getpid()) + ".prom";
+  const std::string path = ::testing::TempDir() + "metrics_promtool_lint_" + std::to_string(getpid()) + ".prom";
   {
     std::ofstream file(path, std::ios::binary);
     file << registry.Serialize();
   }
-  const CommandResult result =
-      RunCommand(std::string(kPromtool) + " check metrics < '" + path + "'");
+  const CommandResult result = RunCommand(std::string(kPromtool) + " check metrics < '" + path + "'");
   std::remove(path.c_str());
   EXPECT_NE(result.output.find("_total"), std::string::npos) << result.output;
 }

@@ -1,8 +1,6 @@
 // Registry, Family and the text format (server/metrics/registry.h, family.h,
 // text_format.h): name rules, label handling, the exact exposition text of a small
 // registry, escaping, number formatting and scrape-time collectors.
-#include "server/metrics/registry.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,6 +11,7 @@
 #include <vector>
 
 #include "server/metrics/names.h"
+#include "server/metrics/registry.h"
 #include "server/metrics/text_format.h"
 
 namespace localizer::server::metrics {
@@ -61,8 +60,7 @@ TEST(Registry, AddReturnsInvalidArgumentNamingTheProblem) {
 
   for (const std::vector<double>& bounds :
        std::vector<std::vector<double>>{{}, {1.0, 1.0}, {2.0, 1.0}, {1.0, kInf}, {std::nan("")}}) {
-    EXPECT_EQ(registry.AddHistogram("h", "Histogram.", {}, bounds).status().code(),
-              StatusCode::kInvalidArgument);
+    EXPECT_EQ(registry.AddHistogram("h", "Histogram.", {}, bounds).status().code(), StatusCode::kInvalidArgument);
   }
   // Nothing above registered anything but gauge_with_le.
   EXPECT_EQ(registry.Collect().size(), 1u);
@@ -110,9 +108,7 @@ TEST(TextFormat, SmallRegistryGivesTheExactText) {
   // Registered out of name order: families come out sorted by name.
   Family<Gauge>* temperature = registry.AddGauge("app_temperature_celsius", "Temperature.").value();
   Family<Counter>* requests =
-      registry
-          .AddCounter("app_requests_total", "Requests served.\nBy path \\ code.", {"path", "code"})
-          .value();
+      registry.AddCounter("app_requests_total", "Requests served.\nBy path \\ code.", {"path", "code"}).value();
   Family<Histogram>* latency =
       registry.AddHistogram("app_latency_seconds", "Latency.", {"stage"}, {0.25, 0.5, 1.0}).value();
 
@@ -190,12 +186,10 @@ TEST(TextFormat, NumbersRoundTripThroughStrtod) {
 
 TEST(Registry, CollectorsRunBeforeEverySerialization) {
   Registry registry;
-  Gauge* depth =
-      registry.AddGauge("queue_depth", "Blocks waiting.").value()->WithLabels({}).value();
+  Gauge* depth = registry.AddGauge("queue_depth", "Blocks waiting.").value()->WithLabels({}).value();
   int scrapes = 0;
   registry.AddCollector([&] { depth->Set(++scrapes * 10); });
-  EXPECT_EQ(registry.Serialize(),
-            "# HELP queue_depth Blocks waiting.\n# TYPE queue_depth gauge\nqueue_depth 10\n");
+  EXPECT_EQ(registry.Serialize(), "# HELP queue_depth Blocks waiting.\n# TYPE queue_depth gauge\nqueue_depth 10\n");
   EXPECT_NE(registry.Serialize().find("queue_depth 20\n"), std::string::npos);
   EXPECT_EQ(scrapes, 2);
 }

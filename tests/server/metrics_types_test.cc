@@ -1,8 +1,6 @@
 // Counter, Gauge and Histogram (server/metrics/metric_types.h): values, monotonicity,
 // Prometheus bucket semantics (`le` inclusive, cumulative) and exact totals under
 // concurrent updates.
-#include "server/metrics/metric_types.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +8,8 @@
 #include <limits>
 #include <thread>
 #include <vector>
+
+#include "server/metrics/metric_types.h"
 
 namespace localizer::server::metrics {
 namespace {

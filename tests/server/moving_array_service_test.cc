@@ -3,13 +3,12 @@
 // the same samples, each estimate carrying the platform pose; a bad batch is refused in-band
 // (request "imu") and the session goes on; a fixed-array session refuses IMU batches.
 #include <cmath>
-
-#include "engine/sim/platform_motion.h"
 #include <nlohmann/json.hpp>
 
-#include "wire/imu_wire.h"
+#include "engine/sim/platform_motion.h"
 #include "tests/server/http_client.h"
 #include "tests/server/service_fixture.h"
+#include "wire/imu_wire.h"
 
 namespace localizer::server::testing {
 namespace {

@@ -3,10 +3,10 @@
 // SessionOpened dropped instead), and the replay a resume asks for.
 #include "server/service/outbox.h"
 
+#include <gtest/gtest.h>
+
 #include <memory>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace localizer::server {
 namespace {

@@ -1,9 +1,9 @@
 // Sessions outlive their streams: a resume continues with no estimate lost or repeated;
 // wrong tokens, unknown and expired sessions are refused with the documented codes;
 // CloseSession and the session limit.
-#include <set>
-
 #include <grpcpp/generic/generic_stub.h>
+
+#include <set>
 
 #include "tests/server/service_fixture.h"
 
@@ -77,7 +77,10 @@ class RawTrack {
 };
 
 // A block field (3) announcing 16 bytes and carrying 3: truncated, fails to parse.
-const std::string kTruncated("\x1a\x10" "abc", 5);
+const std::string kTruncated(
+    "\x1a\x10"
+    "abc",
+    5);
 
 TEST_F(ServiceTest, UnparseableRequestIsInvalidArgumentAndTheSessionResumes) {
   const Scenario s = MakeScenario("tetra-water", 2.0, 1, kBlock);

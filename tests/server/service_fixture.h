@@ -2,6 +2,9 @@
 // stream through it, and a synchronous test client for one Track stream.
 #pragma once
 
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
 #include <chrono>
 #include <condition_variable>
 #include <functional>
@@ -11,16 +14,13 @@
 #include <thread>
 #include <vector>
 
-#include <grpcpp/grpcpp.h>
-#include <gtest/gtest.h>
-
 #include "engine/pipeline/session.h"
 #include "engine/sim/simulator.h"
 #include "localizer/v1/localizer.grpc.pb.h"
 #include "server/service/server.h"
+#include "tests/pipeline/scenario_run.h"
 #include "wire/block_wire.h"
 #include "wire/config_wire.h"
-#include "tests/pipeline/scenario_run.h"
 
 namespace localizer::server::testing {
 
@@ -107,9 +107,9 @@ class TestStream {
   // Waits until `done(responses)` holds or the stream ends; false on timeout.
   bool WaitFor(const std::function<bool(const std::vector<v1::TrackResponse>&)>& done, double timeout_s = 30.0) {
     std::unique_lock<std::mutex> lock(mutex_);
-    return changed_.wait_for(lock, std::chrono::duration<double>(timeout_s),
-                             [&] { return done(responses_) || read_done_; }) &&
-           done(responses_);
+    return changed_.wait_for(lock, std::chrono::duration<double>(timeout_s), [&] {
+      return done(responses_) || read_done_;
+    }) && done(responses_);
   }
   bool WaitForEstimates(size_t n, double timeout_s = 30.0) {
     return WaitFor([n](const auto& r) { return CountEstimates(r) >= n; }, timeout_s);
@@ -177,8 +177,8 @@ class ServiceTest : public ::testing::Test {
     auto server = Server::Start(options);
     ASSERT_TRUE(server.ok()) << server.status().ToString();
     server_ = std::move(server).value();
-    channel_ = grpc::CreateChannel("127.0.0.1:" + std::to_string(server_->grpc_port()),
-                                   grpc::InsecureChannelCredentials());
+    channel_ =
+        grpc::CreateChannel("127.0.0.1:" + std::to_string(server_->grpc_port()), grpc::InsecureChannelCredentials());
     stub_ = v1::Localizer::NewStub(channel_);
   }
   void SetUp() override { StartServer(); }

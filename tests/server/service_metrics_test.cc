@@ -1,12 +1,12 @@
 // /metrics after real traffic: promtool accepts it and the histograms count exactly what
 // was processed. gRPC health: SERVING, then NOT_SERVING while a SIGTERM-style drain
 // finishes in-flight frames, whose estimates all reach the client.
+#include <grpcpp/generic/generic_stub.h>
+
 #include <cstdio>
 #include <fstream>
 #include <future>
 #include <regex>
-
-#include <grpcpp/generic/generic_stub.h>
 
 #include "tests/server/http_client.h"
 #include "tests/server/service_fixture.h"
@@ -64,8 +64,7 @@ TEST_F(ServiceTest, MetricsCountWhatWasProcessedAndPassPromtool) {
   EXPECT_EQ(SeriesValue(text, "localizer_stage_seconds_count{stage=\"total\",backend=\"cpu\"}"), estimates);
   EXPECT_EQ(SeriesValue(text, "localizer_stage_seconds_count{stage=\"queue\",backend=\"cpu\"}"),
             static_cast<double>(blocks));
-  EXPECT_EQ(SeriesValue(text, "localizer_stage_seconds_bucket{stage=\"tdoa\",backend=\"cpu\",le=\"+Inf\"}"),
-            estimates);
+  EXPECT_EQ(SeriesValue(text, "localizer_stage_seconds_bucket{stage=\"tdoa\",backend=\"cpu\",le=\"+Inf\"}"), estimates);
   EXPECT_GT(SeriesValue(text, "localizer_stage_seconds_sum{stage=\"tdoa\",backend=\"cpu\"}"), 0.0);
   EXPECT_EQ(SeriesValue(text, "localizer_estimates_total{backend=\"cpu\"}"), estimates);
   EXPECT_EQ(SeriesValue(text, "localizer_blocks_total"), static_cast<double>(blocks));

@@ -4,13 +4,13 @@
 // were raw outputs): untemper 312 consecutive outputs, run the recurrence forward and
 // predict the next session's id and token. It is shown to work on an mt19937_64 stream
 // (so the test can fail), then run against the registry.
+#include <gtest/gtest.h>
+
 #include <cstdint>
 #include <random>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "server/metrics/registry.h"
 #include "server/service/secure_random.h"

@@ -50,8 +50,8 @@ std::vector<TableRow> RowsFor(double alpha, double beta) {
   const testing::NpyMatrix& t = *Table();
   for (int64_t r = 0; r < t.rows; ++r) {
     const double p = t.at(r, 1);
-    if (std::abs(t.at(r, 2) - alpha) < 1e-9 && std::abs(t.at(r, 3) - beta) < 1e-9 &&
-        p >= 0.01 - 1e-9 && p <= 0.99 + 1e-9) {
+    if (std::abs(t.at(r, 2) - alpha) < 1e-9 && std::abs(t.at(r, 3) - beta) < 1e-9 && p >= 0.01 - 1e-9 &&
+        p <= 0.99 + 1e-9) {
       rows.push_back({t.at(r, 0), p});
     }
   }
@@ -74,8 +74,8 @@ double Ecdf(const std::vector<double>& sorted, double x) {
 
 // Checks the empirical CDF of `sorted` (standardised by (s - location) / scale) against every
 // table row of (alpha, beta); returns the number of rows checked.
-int ExpectMatchesTable(const std::vector<double>& sorted, double alpha, double beta,
-                       double scale = 1.0, double location = 0.0) {
+int ExpectMatchesTable(const std::vector<double>& sorted, double alpha, double beta, double scale = 1.0,
+                       double location = 0.0) {
   const std::vector<TableRow> rows = RowsFor(alpha, beta);
   for (const TableRow& row : rows) {
     const double n = static_cast<double>(sorted.size());
@@ -92,8 +92,7 @@ class AlphaStableTable : public ::testing::Test {
     if (Table() == nullptr) {
       StatusOr<testing::NpyMatrix> read = testing::ReadNpyMatrix(kNolanCdfTable);
       FAIL() << "cannot use Nolan's table (install python3-scipy: deploy/install.sh): "
-             << (read.ok() ? "expected 5 columns, got " + std::to_string(read->cols)
-                           : read.status().ToString());
+             << (read.ok() ? "expected 5 columns, got " + std::to_string(read->cols) : read.status().ToString());
     }
   }
 };
@@ -168,8 +167,7 @@ TEST(AlphaStable, TransformIsAffineInScaleAndLocation) {
         const double x = SampleAlphaStable({alpha, beta}, u, w);
         const double y = SampleAlphaStable({alpha, beta, 3.0, -2.0}, u, w);
         // alpha = 1 adds (2/pi) beta g ln g to the location (S1's alpha = 1 scale rule).
-        const double extra =
-            alpha == 1.0 ? 2.0 / std::numbers::pi * beta * 3.0 * std::log(3.0) : 0.0;
+        const double extra = alpha == 1.0 ? 2.0 / std::numbers::pi * beta * 3.0 * std::log(3.0) : 0.0;
         EXPECT_NEAR(y, 3.0 * x - 2.0 + extra, 1e-12 * (1.0 + std::abs(y)))
             << alpha << " " << beta << " u " << u << " w " << w;
       }
@@ -180,8 +178,7 @@ TEST(AlphaStable, TransformIsAffineInScaleAndLocation) {
 TEST(AlphaStable, SymmetricIsOddInTheUniform) {
   for (double alpha : {0.7, 1.0, 1.5}) {
     for (double u : {0.05, 0.3, 0.49}) {
-      EXPECT_NEAR(SampleAlphaStable({alpha, 0.0}, u, 0.8),
-                  -SampleAlphaStable({alpha, 0.0}, 1 - u, 0.8), 1e-9);
+      EXPECT_NEAR(SampleAlphaStable({alpha, 0.0}, u, 0.8), -SampleAlphaStable({alpha, 0.0}, 1 - u, 0.8), 1e-9);
     }
   }
 }
@@ -212,11 +209,20 @@ TEST(AlphaStable, ValidateRejectsOutOfRangeNamingTheField) {
     AlphaStable params;
     const char* field;
   } cases[] = {
-      {{0.0, 0.0}, "alpha"},        {{-1.0, 0.0}, "alpha"},      {{2.0000001, 0.0}, "alpha"},
-      {{nan, 0.0}, "alpha"},        {{inf, 0.0}, "alpha"},       {{1.5, 1.0000001}, "beta"},
-      {{1.5, -1.5}, "beta"},        {{1.5, nan}, "beta"},        {{1.5, 0.0, 0.0}, "scale"},
-      {{1.5, 0.0, -1.0}, "scale"},  {{1.5, 0.0, inf}, "scale"},  {{1.5, 0.0, nan}, "scale"},
-      {{1.5, 0.0, 1.0, inf}, "location"}, {{1.5, 0.0, 1.0, nan}, "location"},
+      {{0.0, 0.0}, "alpha"},
+      {{-1.0, 0.0}, "alpha"},
+      {{2.0000001, 0.0}, "alpha"},
+      {{nan, 0.0}, "alpha"},
+      {{inf, 0.0}, "alpha"},
+      {{1.5, 1.0000001}, "beta"},
+      {{1.5, -1.5}, "beta"},
+      {{1.5, nan}, "beta"},
+      {{1.5, 0.0, 0.0}, "scale"},
+      {{1.5, 0.0, -1.0}, "scale"},
+      {{1.5, 0.0, inf}, "scale"},
+      {{1.5, 0.0, nan}, "scale"},
+      {{1.5, 0.0, 1.0, inf}, "location"},
+      {{1.5, 0.0, 1.0, nan}, "location"},
   };
   for (const auto& c : cases) {
     const Status status = c.params.Validate();

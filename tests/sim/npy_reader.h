@@ -28,9 +28,7 @@ struct NpyMatrix {
   bool fortran_order = false;
   std::vector<double> data;  // in file order
 
-  double at(int64_t row, int64_t col) const {
-    return fortran_order ? data[col * rows + row] : data[row * cols + col];
-  }
+  double at(int64_t row, int64_t col) const { return fortran_order ? data[col * rows + row] : data[row * cols + col]; }
 };
 
 namespace npy_internal {
@@ -110,13 +108,13 @@ inline StatusOr<NpyMatrix> ReadNpyMatrix(const std::string& path) {
   }
   const size_t payload = bytes.size() - header_start - header_len;
   if (m.cols > 0 && m.rows > static_cast<int64_t>(payload / sizeof(double)) / m.cols) {
-    return InvalidArgument(where + "shape (" + std::to_string(m.rows) + ", " +
-                           std::to_string(m.cols) + ") is larger than the file");
+    return InvalidArgument(where + "shape (" + std::to_string(m.rows) + ", " + std::to_string(m.cols) +
+                           ") is larger than the file");
   }
   const auto count = static_cast<size_t>(m.rows * m.cols);
   if (payload != count * sizeof(double)) {
-    return InvalidArgument(where + "payload is " + std::to_string(payload) +
-                           " bytes, the shape needs " + std::to_string(count * sizeof(double)));
+    return InvalidArgument(where + "payload is " + std::to_string(payload) + " bytes, the shape needs " +
+                           std::to_string(count * sizeof(double)));
   }
   m.data.resize(count);
   if (count > 0) std::memcpy(m.data.data(), bytes.data() + header_start + header_len, payload);

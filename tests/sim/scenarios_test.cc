@@ -36,8 +36,7 @@ std::pair<double, double> RangeSpan(const Scenario& s) {
 }
 
 TEST(Scenarios, NamesAreTheDocumentedFour) {
-  EXPECT_EQ(ScenarioNames(), (std::vector<std::string>{"tetra-water", "tetra-air", "turn-multipath",
-                                                       "clicks-water"}));
+  EXPECT_EQ(ScenarioNames(), (std::vector<std::string>{"tetra-water", "tetra-air", "turn-multipath", "clicks-water"}));
 }
 
 TEST(Scenarios, UnknownNameIsNotFoundAndListsTheValidOnes) {

@@ -20,9 +20,8 @@ constexpr double kFs = 11025.0;
 ArrayGeometry Tetrahedron(int reference_sensor = 0) {
   const double a = 2.0 / (2.0 * std::sqrt(2.0));
   const Vec3 c(0.0, 0.0, -10.0);
-  auto g = ArrayGeometry::Create(
-      {c + Vec3(a, a, a), c + Vec3(a, -a, -a), c + Vec3(-a, a, -a), c + Vec3(-a, -a, a)},
-      kSoundSpeed, reference_sensor);
+  auto g = ArrayGeometry::Create({c + Vec3(a, a, a), c + Vec3(a, -a, -a), c + Vec3(-a, a, -a), c + Vec3(-a, -a, a)},
+                                 kSoundSpeed, reference_sensor);
   EXPECT_TRUE(g.ok()) << g.status().ToString();
   return *g;
 }
@@ -77,8 +76,8 @@ PulseFit FitPulse(const std::vector<double>& y, const ClickPulse& g, double gues
   const auto correlate = [&](double tau_s, bool energy) {
     const double half_s = 0.5 * g.duration_s();
     const auto lo = std::max<int64_t>(0, static_cast<int64_t>(std::ceil((tau_s - half_s) * kFs)));
-    const auto hi = std::min<int64_t>(static_cast<int64_t>(y.size()) - 1,
-                                      static_cast<int64_t>(std::floor((tau_s + half_s) * kFs)));
+    const auto hi =
+        std::min<int64_t>(static_cast<int64_t>(y.size()) - 1, static_cast<int64_t>(std::floor((tau_s + half_s) * kFs)));
     double sum = 0.0;
     for (int64_t n = lo; n <= hi; ++n) {
       const double template_value = g(static_cast<double>(n) / kFs - tau_s);
@@ -285,8 +284,7 @@ TEST(Simulator, SurfaceEchoIsANegativeCopyAtTheImagePathDifference) {
     EXPECT_NEAR(lowest, a * b / (a * a + b * b), 0.05) << "sensor " << k;
     const std::vector<double> plain = Channel(no_echo, k);
     const int lag = static_cast<int>(std::lround(echo_lag));
-    EXPECT_LT(std::abs(CrossCorrelation(plain, plain, lag) / CrossCorrelation(plain, plain, 0)),
-              0.05);
+    EXPECT_LT(std::abs(CrossCorrelation(plain, plain, lag) / CrossCorrelation(plain, plain, 0)), 0.05);
   }
 }
 
@@ -322,8 +320,7 @@ TEST(Simulator, TruthIsTheSourceStateAtTheEmissionHeardByTheReference) {
   // Velocity against central differences of the truth positions over emission time (over
   // reception time they would carry the Doppler factor dte/dt = 1 / (1 + dr/dt / c)).
   for (size_t i = 1; i + 1 < r.truth.size(); ++i) {
-    const Vec3 difference =
-        (r.truth[i + 1].position_m - r.truth[i - 1].position_m) / (te[i + 1] - te[i - 1]);
+    const Vec3 difference = (r.truth[i + 1].position_m - r.truth[i - 1].position_m) / (te[i + 1] - te[i - 1]);
     EXPECT_LT((difference - r.truth[i].velocity_mps).norm(), 1e-5) << r.truth[i].t_s;
   }
 }
@@ -452,7 +449,6 @@ TEST(Simulator, OptionsBadForThisArrayAreInvalidArguments) {
   ASSERT_FALSE(r3.ok());
   EXPECT_NE(r3.status().message().find("trajectory.position_m"), std::string::npos);
 }
-
 
 // A hard bottom: a positive copy at the image-source delay, on top of the direct path.
 TEST(Simulator, BottomEchoIsAPositiveCopyAtTheImagePathDifference) {

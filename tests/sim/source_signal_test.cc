@@ -92,8 +92,8 @@ TEST(SourceSignal, BroadbandNoiseHasUnitRmsAndStaysInItsBand) {
   power /= static_cast<double>(s.samples.size());
   // Unit RMS in expectation; 10 s of a 2700 Hz band estimates the power within ~1 %.
   EXPECT_NEAR(std::sqrt(power), 1.0, 0.02);
-  const double in_band = std::min(PowerNear(s.samples, 1000.0, o.sample_rate_hz),
-                                  PowerNear(s.samples, 2000.0, o.sample_rate_hz));
+  const double in_band =
+      std::min(PowerNear(s.samples, 1000.0, o.sample_rate_hz), PowerNear(s.samples, 2000.0, o.sample_rate_hz));
   for (double f_hz : {50.0, 150.0, 3300.0, 4500.0, 5400.0}) {
     EXPECT_LT(Db(PowerNear(s.samples, f_hz, o.sample_rate_hz) / in_band), -55.0) << f_hz;
   }
@@ -173,7 +173,6 @@ TEST(SourceSignal, ClicksComeAtTheRateWithBoundedJitter) {
   EXPECT_GE(s.click_times_s.size(), times.size());
 }
 
-
 // A low-pass source (band_low_hz = 0): unit RMS, DC and low frequencies pass, above the edge
 // is stopped.
 TEST(SourceSignal, LowPassSourceHasUnitRmsAndStaysBelowItsEdge) {
@@ -185,8 +184,8 @@ TEST(SourceSignal, LowPassSourceHasUnitRmsAndStaysBelowItsEdge) {
   double power = 0.0;
   for (double v : s.samples) power += v * v;
   EXPECT_NEAR(std::sqrt(power / static_cast<double>(s.samples.size())), 1.0, 0.02);
-  const double in_band = std::min(PowerNear(s.samples, 100.0, o.sample_rate_hz),
-                                  PowerNear(s.samples, 1500.0, o.sample_rate_hz));
+  const double in_band =
+      std::min(PowerNear(s.samples, 100.0, o.sample_rate_hz), PowerNear(s.samples, 1500.0, o.sample_rate_hz));
   for (double f_hz : {2600.0, 3500.0, 5000.0}) {
     EXPECT_LT(Db(PowerNear(s.samples, f_hz, o.sample_rate_hz) / in_band), -55.0) << f_hz;
   }

@@ -72,8 +72,7 @@ TEST(Trajectory, VanishingTurnRateGivesConstantVelocity) {
     for (double time_s : {-5.0, 0.0, 2.5, 30.0}) {
       // The turn deviates from the line by |v| w t^2 / 2.
       const double bound = 2.0 * std::abs(w) * time_s * time_s + 1e-12;
-      EXPECT_LT((t.PositionAt(time_s) - straight.PositionAt(time_s)).norm(), bound)
-          << "w " << w << " t " << time_s;
+      EXPECT_LT((t.PositionAt(time_s) - straight.PositionAt(time_s)).norm(), bound) << "w " << w << " t " << time_s;
       EXPECT_TRUE(t.PositionAt(time_s).allFinite());
     }
   }
@@ -88,8 +87,7 @@ TEST(Trajectory, SmallTurnSeriesMatchesTheClosedForm) {
     const double s = std::sin(x);
     const double one_minus_c = 2.0 * std::sin(0.5 * x) * std::sin(0.5 * x);
     const Vec3 expected(t.position_m.x() + v0.x() * s - v0.y() * one_minus_c,
-                        t.position_m.y() + v0.x() * one_minus_c + v0.y() * s,
-                        t.position_m.z() + v0.z() * time_s);
+                        t.position_m.y() + v0.x() * one_minus_c + v0.y() * s, t.position_m.z() + v0.z() * time_s);
     EXPECT_LT((t.PositionAt(time_s) - expected).norm(), 1e-15);
   }
 }

@@ -20,7 +20,6 @@ namespace {
 using testing::DelayedNoiseFrame;
 using testing::SignalSpec;
 
-
 ArrayGeometry Tetrahedron() { return testing::TetrahedronArray(); }
 
 std::unique_ptr<GccPhatEstimator> BandEstimator(const SignalSpec& spec) {
@@ -46,7 +45,7 @@ void AddImpulses(std::vector<float>* frame, double rate, double scale, uint64_t 
 }
 
 struct Errors {
-  double rms = 0.0;      // samples, all pairs and frames
+  double rms = 0.0;        // samples, all pairs and frames
   double far_share = 0.0;  // share more than one sample off
 };
 
@@ -66,8 +65,7 @@ Errors Measure(bool impulses, bool despike, int frames, int coincidence = 0) {
     auto frame = DelayedNoiseFrame(spec, delays, snr_db, 300 + f);
     if (impulses) AddImpulses(&frame, 0.01, 30.0 * noise_std, 900 + f);
     if (despike) {
-      EXPECT_TRUE(Despike(DespikeOptions{5.0, coincidence}, frame.data(), 4, spec.frame_samples,
-                          &scratch).ok());
+      EXPECT_TRUE(Despike(DespikeOptions{5.0, coincidence}, frame.data(), 4, spec.frame_samples, &scratch).ok());
     }
     EXPECT_TRUE(gcc->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
     for (const PairMeasurement& p : m.pairs) {
@@ -88,10 +86,8 @@ TEST(Despike, OptionsAndArgumentsAreValidated) {
     EXPECT_NE(s.message().find("despike_k"), std::string::npos) << s.message();
   }
   EXPECT_EQ(Despike(DespikeOptions{}, nullptr, 1, 64, nullptr).code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(Despike(DespikeOptions{}, frame.data(), 0, 64, nullptr).code(),
-            StatusCode::kInvalidArgument);
-  EXPECT_EQ(Despike(DespikeOptions{}, frame.data(), 1, 0, nullptr).code(),
-            StatusCode::kInvalidArgument);
+  EXPECT_EQ(Despike(DespikeOptions{}, frame.data(), 0, 64, nullptr).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(Despike(DespikeOptions{}, frame.data(), 1, 0, nullptr).code(), StatusCode::kInvalidArgument);
 }
 
 TEST(Despike, ClipsAtKRobustStandardDeviationsPerChannel) {
@@ -134,8 +130,8 @@ TEST(Despike, AlphaStableImpulsesAreTamed) {
   const Errors clean = Measure(false, false, 30);
   const Errors without = Measure(true, false, 30);
   const Errors with = Measure(true, true, 30);
-  std::printf("impulses: rms %.4f (%.0f %% > 1 sample) without, %.4f (%.0f %%) with; clean %.4f\n",
-              without.rms, 100 * without.far_share, with.rms, 100 * with.far_share, clean.rms);
+  std::printf("impulses: rms %.4f (%.0f %% > 1 sample) without, %.4f (%.0f %%) with; clean %.4f\n", without.rms,
+              100 * without.far_share, with.rms, 100 * with.far_share, clean.rms);
   EXPECT_GT(without.far_share, 0.03);  // the scene is bad without the despiker
   EXPECT_GT(without.rms, 1.0);
   EXPECT_EQ(with.far_share, 0.0);
@@ -177,8 +173,7 @@ TEST(Despike, ClickTrainSourceKeepsItsDelays) {
   Measurement m;
   for (int64_t start = 0; start + o.frame_samples <= total; start += o.frame_samples) {
     for (int c = 0; c < 4; ++c) {
-      std::copy_n(result->samples.begin() + c * total + start, o.frame_samples,
-                  frame.begin() + c * o.frame_samples);
+      std::copy_n(result->samples.begin() + c * total + start, o.frame_samples, frame.begin() + c * o.frame_samples);
     }
     ASSERT_TRUE(gcc->Estimate(frame.data(), o.frame_samples, 0.0, &m).ok());
     for (int p = 0; p < 3; ++p) {
@@ -198,8 +193,8 @@ TEST(Despike, ClickTrainSourceKeepsItsDelays) {
       worst_with = std::max(worst_with, std::abs(m.pairs[p].delay_s - tdoa_s(p)) * o.sample_rate_hz);
     }
   }
-  std::printf("clicks: worst error %.4f without, %.4f with (%d samples clipped), %.4f gated\n",
-              worst_without, worst_with, clipped, worst_gated);
+  std::printf("clicks: worst error %.4f without, %.4f with (%d samples clipped), %.4f gated\n", worst_without,
+              worst_with, clipped, worst_gated);
   EXPECT_GT(clipped, 0);  // the clicks were clipped ...
   // ... which distorts them a little differently per channel (each has its own clip level and
   // sampling phase): measured 0.25 sample worst against 0.025 unclipped, still far inside the

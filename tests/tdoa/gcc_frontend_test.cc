@@ -31,13 +31,12 @@ GccOptions Options(const SignalSpec& spec, bool band_hint) {
 }
 
 struct Spread {
-  double error_std = 0.0;    // samples, about the true delay (rms, bias included)
-  double sigma_rms = 0.0;    // samples, sqrt(mean reported sigma^2)
-  double outliers = 0.0;     // share of errors beyond 1 sample
+  double error_std = 0.0;  // samples, about the true delay (rms, bias included)
+  double sigma_rms = 0.0;  // samples, sqrt(mean reported sigma^2)
+  double outliers = 0.0;   // share of errors beyond 1 sample
 };
 
-Spread MeasureSpread(GccPhatEstimator& gcc, const SignalSpec& spec, double snr_db, int frames,
-                     uint64_t seed) {
+Spread MeasureSpread(GccPhatEstimator& gcc, const SignalSpec& spec, double snr_db, int frames, uint64_t seed) {
   const std::vector<double> delays = {0.0, 3.3, -7.6, 11.45};
   double sum_sq = 0.0, sigma_sq = 0.0;
   int count = 0, outliers = 0;
@@ -47,7 +46,10 @@ Spread MeasureSpread(GccPhatEstimator& gcc, const SignalSpec& spec, double snr_d
     EXPECT_TRUE(gcc.Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
     for (const PairMeasurement& p : m.pairs) {
       const double e = p.delay_s * spec.sample_rate_hz - delays[p.sensor];
-      if (std::abs(e) > 1.0) { ++outliers; continue; }
+      if (std::abs(e) > 1.0) {
+        ++outliers;
+        continue;
+      }
       sum_sq += e * e;
       const double s = p.delay_sigma_s * spec.sample_rate_hz;
       sigma_sq += s * s;
@@ -91,8 +93,8 @@ TEST(DelaySigma, AgreesWithTheMeasuredSpread) {
       auto gcc = std::move(*GccPhatEstimator::Create(Tetrahedron(), o));
       const Spread s = MeasureSpread(*gcc, c.spec, snr, 24, 1000);
       const double ratio = s.sigma_rms / s.error_std;
-      std::printf("%-14s %5.1f dB: spread %.4f sample, sigma %.4f, ratio %.2f\n", c.name, snr,
-                  s.error_std, s.sigma_rms, ratio);
+      std::printf("%-14s %5.1f dB: spread %.4f sample, sigma %.4f, ratio %.2f\n", c.name, snr, s.error_std, s.sigma_rms,
+                  ratio);
       EXPECT_EQ(s.outliers, 0.0) << c.name << " " << snr;
       EXPECT_GT(ratio, 0.67) << c.name << " " << snr;
       EXPECT_LT(ratio, 1.5) << c.name << " " << snr;
@@ -154,7 +156,9 @@ TEST(Candidates, TwoPathSignalGivesBothDelays) {
       const double lag = c.delay_s * spec.sample_rate_hz;
       if (std::abs(lag - direct) < 0.3 && c.value > 0.0) has_direct = true;
       if (std::abs(lag - echo) < 0.3 && c.value < 0.0) has_echo = true;
-      if (f == 0) std::printf("candidate %.3f samples, value %.3f, sigma %.4f sample\n", lag, c.value, c.delay_sigma_s * spec.sample_rate_hz);
+      if (f == 0)
+        std::printf("candidate %.3f samples, value %.3f, sigma %.4f sample\n", lag, c.value,
+                    c.delay_sigma_s * spec.sample_rate_hz);
     }
     found += has_direct && has_echo;
   }
@@ -210,7 +214,10 @@ Track RunFrames(const GccOptions& o, const SignalSpec& spec, double snr_db, uint
     if (f < 8) continue;
     for (const PairMeasurement& p : m.pairs) {
       const double e = p.delay_s * spec.sample_rate_hz - delays[p.sensor];
-      if (std::abs(e) > 1.0) { ++t.lost; continue; }
+      if (std::abs(e) > 1.0) {
+        ++t.lost;
+        continue;
+      }
       sum_sq += e * e;
       ++count;
     }
@@ -229,9 +236,10 @@ TEST(PhatCoherence, WithoutABandHintMatchesPhatWithTheTrueBand) {
     GccOptions coherence = Options(spec, false);
     coherence.weighting = Weighting::kPhatCoherence;
     const Track learnt = RunFrames(coherence, spec, snr, 5000);
-    std::printf("%5.1f dB: PHAT with band %.4f (%d lost), without %.4f (%d lost), "
-                "phat-coherence without %.4f (%d lost)\n",
-                snr, hinted.spread, hinted.lost, blind.spread, blind.lost, learnt.spread, learnt.lost);
+    std::printf(
+        "%5.1f dB: PHAT with band %.4f (%d lost), without %.4f (%d lost), "
+        "phat-coherence without %.4f (%d lost)\n",
+        snr, hinted.spread, hinted.lost, blind.spread, blind.lost, learnt.spread, learnt.lost);
     EXPECT_EQ(learnt.lost, 0) << snr;
     EXPECT_LT(learnt.spread, 1.3 * hinted.spread) << snr;
     // Without the band plain PHAT is far worse (measured 2.5-5x), so the test has teeth.
@@ -258,8 +266,10 @@ TEST(PhatCoherence, FreshEstimatorAndResetReplayBitForBit) {
       for (int p = 0; p < 3; ++p) {
         EXPECT_EQ(ma.pairs[p].delay_s, mb.pairs[p].delay_s);
         EXPECT_EQ(ma.pairs[p].delay_sigma_s, mb.pairs[p].delay_sigma_s);
-        if (pass == 0) first_run.push_back(ma.pairs[p].delay_s);
-        else EXPECT_EQ(ma.pairs[p].delay_s, first_run[3 * f + p]);
+        if (pass == 0)
+          first_run.push_back(ma.pairs[p].delay_s);
+        else
+          EXPECT_EQ(ma.pairs[p].delay_s, first_run[3 * f + p]);
       }
     }
     if (pass == 0) {  // the state matters: after 12 frames frame 1 is measured differently
@@ -283,8 +293,7 @@ TEST(GccOptions, NewOptionsAreValidatedNamingTheField) {
       {"max_candidates", [](GccOptions& o) { o.max_candidates = 0; }},
       {"max_candidates", [](GccOptions& o) { o.max_candidates = 33; }},
       {"coherence_time_constant_frames", [](GccOptions& o) { o.coherence_time_constant_frames = 0.5; }},
-      {"coherence_time_constant_frames",
-       [](GccOptions& o) { o.coherence_time_constant_frames = std::nan(""); }},
+      {"coherence_time_constant_frames", [](GccOptions& o) { o.coherence_time_constant_frames = std::nan(""); }},
       {"coherence_warmup_frames", [](GccOptions& o) { o.coherence_warmup_frames = 0; }},
       {"coherence_smoothing_bins", [](GccOptions& o) { o.coherence_smoothing_bins = -1; }},
   };

@@ -37,16 +37,14 @@ GccOptions SourceBandOptions(const SignalSpec& spec, Weighting weighting) {
   return options;
 }
 
-std::unique_ptr<GccPhatEstimator> MakeEstimator(const ArrayGeometry& array,
-                                                const GccOptions& options) {
+std::unique_ptr<GccPhatEstimator> MakeEstimator(const ArrayGeometry& array, const GccOptions& options) {
   auto gcc = GccPhatEstimator::Create(array, options);
   EXPECT_TRUE(gcc.ok()) << gcc.status().ToString();
   return gcc.ok() ? std::move(*gcc) : nullptr;
 }
 
 // Largest |estimated - true| lag over the pairs, samples.
-double WorstLagError(const Measurement& m, const std::vector<double>& channel_delays,
-                     double sample_rate_hz) {
+double WorstLagError(const Measurement& m, const std::vector<double>& channel_delays, double sample_rate_hz) {
   double worst = 0.0;
   for (const PairMeasurement& pair : m.pairs) {
     worst = std::max(worst, std::abs(pair.delay_s * sample_rate_hz - channel_delays[pair.sensor]));
@@ -86,15 +84,16 @@ TEST(GccOptions, BadValuesAreRejectedNamingFieldAndValue) {
       {"frame_samples", "63", [](GccOptions& o) { o.frame_samples = 63; }},
       {"frame_samples", "2097152", [](GccOptions& o) { o.frame_samples = 1 << 21; }},
       {"sample_rate_hz", "0", [](GccOptions& o) { o.sample_rate_hz = 0.0; }},
-      {"sample_rate_hz", "inf",
-       [](GccOptions& o) { o.sample_rate_hz = std::numeric_limits<double>::infinity(); }},
-      {"sample_rate_hz", "nan",
-       [](GccOptions& o) { o.sample_rate_hz = std::numeric_limits<double>::quiet_NaN(); }},
+      {"sample_rate_hz", "inf", [](GccOptions& o) { o.sample_rate_hz = std::numeric_limits<double>::infinity(); }},
+      {"sample_rate_hz", "nan", [](GccOptions& o) { o.sample_rate_hz = std::numeric_limits<double>::quiet_NaN(); }},
       {"band_low_hz", "-1", [](GccOptions& o) { o.band_low_hz = -1.0; }},
       {"band_low_hz", "6000", [](GccOptions& o) { o.band_low_hz = 6000.0; }},
       {"band_high_hz", "6000", [](GccOptions& o) { o.band_high_hz = 6000.0; }},
       {"band_high_hz", "500",
-       [](GccOptions& o) { o.band_low_hz = 1000.0; o.band_high_hz = 500.0; }},
+       [](GccOptions& o) {
+         o.band_low_hz = 1000.0;
+         o.band_high_hz = 500.0;
+       }},
       {"phat_beta", "1.5", [](GccOptions& o) { o.phat_beta = 1.5; }},
       {"phat_beta", "-0.1", [](GccOptions& o) { o.phat_beta = -0.1; }},
       {"lag_margin_samples", "-1", [](GccOptions& o) { o.lag_margin_samples = -1; }},
@@ -143,8 +142,7 @@ TEST(GccPhatEstimator, EstimateRejectsBadInputsAndLeavesTheOutputAlone) {
   EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(status.message().find("frame"), std::string::npos);
 
-  EXPECT_EQ(gcc->Estimate(frame.data(), spec.frame_samples, 0.5, nullptr).code(),
-            StatusCode::kInvalidArgument);
+  EXPECT_EQ(gcc->Estimate(frame.data(), spec.frame_samples, 0.5, nullptr).code(), StatusCode::kInvalidArgument);
 
   frame[2 * spec.frame_samples + 17] = std::numeric_limits<float>::quiet_NaN();
   status = gcc->Estimate(frame.data(), spec.frame_samples, 0.5, &m);
@@ -159,11 +157,11 @@ TEST(GccPhatEstimator, EstimateRejectsBadInputsAndLeavesTheOutputAlone) {
 class GccWeighting : public ::testing::TestWithParam<Weighting> {};
 
 INSTANTIATE_TEST_SUITE_P(AllWeightings, GccWeighting,
-                         ::testing::Values(Weighting::kPhat, Weighting::kPhatBeta,
-                                           Weighting::kScot, Weighting::kCc),
+                         ::testing::Values(Weighting::kPhat, Weighting::kPhatBeta, Weighting::kScot, Weighting::kCc),
                          [](const auto& param_info) {
                            std::string name = WeightingName(param_info.param);
-                           for (char& ch : name) if (ch == '-') ch = '_';
+                           for (char& ch : name)
+                             if (ch == '-') ch = '_';
                            return name;
                          });
 
@@ -189,15 +187,14 @@ TEST_P(GccWeighting, KnownGeometryGivesKnownDelaysAtTenDb) {
   const SignalSpec spec;
   const ArrayGeometry array = Tetrahedron();
   auto gcc = MakeEstimator(array, SourceBandOptions(spec, GetParam()));
-  const std::vector<Vec3> sources_m = {Vec3(30, 5, -2), Vec3(-12, 40, 8), Vec3(0.5, -0.3, 60),
-                                       Vec3(-25, -25, -25), Vec3(3, 1, 0.5)};
+  const std::vector<Vec3> sources_m = {Vec3(30, 5, -2), Vec3(-12, 40, 8), Vec3(0.5, -0.3, 60), Vec3(-25, -25, -25),
+                                       Vec3(3, 1, 0.5)};
   double worst = 0.0;
   double sum_sq = 0.0;
   int count = 0;
   Measurement m;
   for (std::size_t i = 0; i < sources_m.size(); ++i) {
-    const std::vector<double> delays =
-        ChannelDelaysSamples(array, sources_m[i], spec.sample_rate_hz);
+    const std::vector<double> delays = ChannelDelaysSamples(array, sources_m[i], spec.sample_rate_hz);
     for (int trial = 0; trial < 4; ++trial) {
       const auto frame = DelayedNoiseFrame(spec, delays, 10.0, 100 * i + trial);
       ASSERT_TRUE(gcc->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
@@ -303,8 +300,7 @@ TEST(GccPhatEstimator, QualityFallsBackToTheFullCorrelationWhenTheWindowIsAllMai
   options.lag_margin_samples = 0;
   auto gcc = MakeEstimator(*array, options);
   EXPECT_EQ(gcc->max_lag_samples(0), 1);
-  const std::vector<double> delays =
-      ChannelDelaysSamples(*array, Vec3(10, 4, 2), spec.sample_rate_hz);
+  const std::vector<double> delays = ChannelDelaysSamples(*array, Vec3(10, 4, 2), spec.sample_rate_hz);
   const auto frame = DelayedNoiseFrame(spec, delays, 30.0, 8);
   Measurement m;
   ASSERT_TRUE(gcc->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
@@ -318,12 +314,11 @@ TEST(GccPhatEstimator, QualityFallsBackToTheFullCorrelationWhenTheWindowIsAllMai
 
 // ---- Band limits, quality, outputs -------------------------------------------------------
 
-std::vector<float> WithTone(std::vector<float> frame, const SignalSpec& spec, double tone_hz,
-                            double amplitude) {
+std::vector<float> WithTone(std::vector<float> frame, const SignalSpec& spec, double tone_hz, double amplitude) {
   for (std::size_t c = 0; c < frame.size() / spec.frame_samples; ++c) {
     for (int i = 0; i < spec.frame_samples; ++i) {
-      frame[c * spec.frame_samples + i] += static_cast<float>(
-          amplitude * std::sin(2.0 * std::numbers::pi * tone_hz * i / spec.sample_rate_hz));
+      frame[c * spec.frame_samples + i] +=
+          static_cast<float>(amplitude * std::sin(2.0 * std::numbers::pi * tone_hz * i / spec.sample_rate_hz));
     }
   }
   return frame;
@@ -335,8 +330,7 @@ TEST_P(GccWeighting, ToneOutsideTheBandDoesNotMoveTheEstimate) {
   const SignalSpec spec;
   const ArrayGeometry array = Tetrahedron();
   auto gcc = MakeEstimator(array, SourceBandOptions(spec, GetParam()));
-  const std::vector<double> delays =
-      ChannelDelaysSamples(array, Vec3(20, -8, 5), spec.sample_rate_hz);
+  const std::vector<double> delays = ChannelDelaysSamples(array, Vec3(20, -8, 5), spec.sample_rate_hz);
   const auto clean = DelayedNoiseFrame(spec, delays, 20.0, 33);
   const auto hum = WithTone(clean, spec, 4800.0, 5.0);  // 11 dB above the source
   Measurement without_tone;
@@ -345,8 +339,7 @@ TEST_P(GccWeighting, ToneOutsideTheBandDoesNotMoveTheEstimate) {
   ASSERT_TRUE(gcc->Estimate(hum.data(), spec.frame_samples, 0.0, &with_tone).ok());
   double moved = 0.0;
   for (int p = 0; p < array.pair_count(); ++p) {
-    moved = std::max(moved, std::abs(with_tone.pairs[p].delay_s - without_tone.pairs[p].delay_s) *
-                                spec.sample_rate_hz);
+    moved = std::max(moved, std::abs(with_tone.pairs[p].delay_s - without_tone.pairs[p].delay_s) * spec.sample_rate_hz);
   }
   // 0.01 sample: the band zeroes the tone's bins; what is left is its leakage through the
   // frame's rectangular window, about -60 dB 800 Hz away.
@@ -367,8 +360,7 @@ TEST(GccPhatEstimator, QualityIsHigherAtHighSnr) {
   const SignalSpec spec;
   const ArrayGeometry array = Tetrahedron();
   auto gcc = MakeEstimator(array, SourceBandOptions(spec, Weighting::kPhat));
-  const std::vector<double> delays =
-      ChannelDelaysSamples(array, Vec3(-7, 15, 3), spec.sample_rate_hz);
+  const std::vector<double> delays = ChannelDelaysSamples(array, Vec3(-7, 15, 3), spec.sample_rate_hz);
   const auto mean_quality = [&](double snr_db) {
     double sum = 0.0;
     Measurement m;
@@ -403,8 +395,7 @@ TEST(GccPhatEstimator, OutputsAreReusedAndConsistent) {
     EXPECT_EQ(pair.sensor, &pair - m.pairs.data() + 1);
     // peak_value is the GCC at the integer lag nearest the refined delay's integer peak.
     const int peak_lag = static_cast<int>(std::lround(delays[pair.sensor]));
-    EXPECT_FLOAT_EQ(pair.gcc[peak_lag - pair.first_lag_samples],
-                    static_cast<float>(pair.peak_value));
+    EXPECT_FLOAT_EQ(pair.gcc[peak_lag - pair.first_lag_samples], static_cast<float>(pair.peak_value));
     EXPECT_GT(pair.quality, 3.0);
   }
 
@@ -444,8 +435,7 @@ TEST(GccPhatEstimator, MeasuredPlansGiveTheSameAnswer) {
   ASSERT_TRUE(estimated->Estimate(frame.data(), spec.frame_samples, 0.0, &a).ok());
   ASSERT_TRUE(measured->Estimate(frame.data(), spec.frame_samples, 0.0, &b).ok());
   for (int p = 0; p < 3; ++p) {
-    EXPECT_NEAR(a.pairs[p].delay_s * spec.sample_rate_hz,
-                b.pairs[p].delay_s * spec.sample_rate_hz, 1e-4);
+    EXPECT_NEAR(a.pairs[p].delay_s * spec.sample_rate_hz, b.pairs[p].delay_s * spec.sample_rate_hz, 1e-4);
   }
 }
 

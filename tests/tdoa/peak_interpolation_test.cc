@@ -61,8 +61,7 @@ struct BiasStats {
 
 // Sweeps the true fractional delay 0, 0.1, ..., 1.0 sample on GCC-PHAT of band-limited
 // noise (three pairs per frame, `trials` frames per fraction) and returns bias and spread.
-BiasStats MeasureBias(PeakInterpolation method, int trials, double snr_db, bool band_limited,
-                      bool print) {
+BiasStats MeasureBias(PeakInterpolation method, int trials, double snr_db, bool band_limited, bool print) {
   const SignalSpec spec;
   auto array = ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
   GccOptions options;
@@ -85,8 +84,7 @@ BiasStats MeasureBias(PeakInterpolation method, int trials, double snr_db, bool 
     double sum_sq = 0.0;
     int n = 0;
     for (int t = 0; t < trials; ++t) {
-      const std::vector<double> delays = {0.0, whole[0] + fraction, whole[1] + fraction,
-                                          whole[2] + fraction};
+      const std::vector<double> delays = {0.0, whole[0] + fraction, whole[1] + fraction, whole[2] + fraction};
       const auto frame = DelayedNoiseFrame(spec, delays, snr_db, 1000 + 37 * t + step);
       EXPECT_TRUE((*gcc)->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
       for (int p = 0; p < 3; ++p) {
@@ -101,8 +99,7 @@ BiasStats MeasureBias(PeakInterpolation method, int trials, double snr_db, bool 
     const double bias = sum / n;
     const double stddev = std::sqrt(std::max(0.0, sum_sq / n - bias * bias));
     if (print) {
-      std::printf("  %-9s frac %.1f bias %+.5f std %.5f\n", PeakInterpolationName(method),
-                  fraction, bias, stddev);
+      std::printf("  %-9s frac %.1f bias %+.5f std %.5f\n", PeakInterpolationName(method), fraction, bias, stddev);
     }
     stats.max_abs_bias = std::max(stats.max_abs_bias, std::abs(bias));
     stats.max_std = std::max(stats.max_std, stddev);
@@ -140,12 +137,11 @@ TEST(PeakInterpolation, BiasAndSpreadOnGccPhatAtTwentyDb) {
   const BiasStats parabolic = MeasureBias(PeakInterpolation::kParabolic, 16, 20.0, true, false);
   const BiasStats gaussian = MeasureBias(PeakInterpolation::kGaussian, 16, 20.0, true, false);
   const BiasStats sinc = MeasureBias(PeakInterpolation::kSinc, 16, 20.0, true, true);
-  std::printf("20 dB: gaussian max|bias| %.5f max std %.5f rms %.5f\n", gaussian.max_abs_bias,
-              gaussian.max_std, gaussian.rms);
-  std::printf("20 dB: parabolic max|bias| %.5f max std %.5f rms %.5f\n",
-              parabolic.max_abs_bias, parabolic.max_std, parabolic.rms);
-  std::printf("20 dB: sinc      max|bias| %.5f max std %.5f rms %.5f\n", sinc.max_abs_bias,
-              sinc.max_std, sinc.rms);
+  std::printf("20 dB: gaussian max|bias| %.5f max std %.5f rms %.5f\n", gaussian.max_abs_bias, gaussian.max_std,
+              gaussian.rms);
+  std::printf("20 dB: parabolic max|bias| %.5f max std %.5f rms %.5f\n", parabolic.max_abs_bias, parabolic.max_std,
+              parabolic.rms);
+  std::printf("20 dB: sinc      max|bias| %.5f max std %.5f rms %.5f\n", sinc.max_abs_bias, sinc.max_std, sinc.rms);
   // 0.003: the bias of 48 draws with std ~0.003 scatters by 0.003 / sqrt(48) = 0.0005, 6x.
   EXPECT_LT(sinc.max_abs_bias, 0.003);
   EXPECT_LT(sinc.max_std, 0.006);

@@ -37,8 +37,7 @@ inline constexpr double kNoiseless = std::numeric_limits<double>::infinity();
 
 // Channel-major frame; channel c is the sum of channels[c]'s paths of one source (unit RMS
 // over the frame on a unit-gain path) plus noise at snr_db (kNoiseless for none).
-inline std::vector<float> MultipathFrame(const SignalSpec& spec,
-                                         const std::vector<std::vector<Path>>& channels,
+inline std::vector<float> MultipathFrame(const SignalSpec& spec, const std::vector<std::vector<Path>>& channels,
                                          double snr_db, uint64_t seed) {
   const int frame = spec.frame_samples;
   const int length = NextFastFftSize(8 * frame);
@@ -90,8 +89,7 @@ inline std::vector<float> MultipathFrame(const SignalSpec& spec,
 }
 
 // One unit-gain path per channel, delayed by delays_samples[c].
-inline std::vector<float> DelayedNoiseFrame(const SignalSpec& spec,
-                                            const std::vector<double>& delays_samples,
+inline std::vector<float> DelayedNoiseFrame(const SignalSpec& spec, const std::vector<double>& delays_samples,
                                             double snr_db, uint64_t seed) {
   std::vector<std::vector<Path>> channels;
   for (double d : delays_samples) channels.push_back({Path{d, 1.0}});

@@ -5,13 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
 #include <vector>
-
-#include <Eigen/LU>
 
 #include "engine/tws/chi_square.h"
 
@@ -163,10 +162,8 @@ TEST(Associator, ClustersAreTheGateGraphsComponents) {
   // candidates, one track alone with none.
   GnnAssociator<2> associator(ChiSquareQuantile(2, 0.9995));
   const Eigen::Matrix2d r = 100.0 * Eigen::Matrix2d::Identity();
-  const std::vector<Gaussian<2>> z = {
-      {{0.0, 0.0}, r}, {{30.0, 0.0}, r}, {{10000.0, 0.0}, r}, {{10020.0, 5.0}, r}};
-  const std::vector<Gaussian<2>> tracks = {
-      {{5.0, 0.0}, r}, {{25.0, 0.0}, r}, {{10015.0, 0.0}, r}, {{20000.0, 0.0}, r}};
+  const std::vector<Gaussian<2>> z = {{{0.0, 0.0}, r}, {{30.0, 0.0}, r}, {{10000.0, 0.0}, r}, {{10020.0, 5.0}, r}};
+  const std::vector<Gaussian<2>> tracks = {{{5.0, 0.0}, r}, {{25.0, 0.0}, r}, {{10015.0, 0.0}, r}, {{20000.0, 0.0}, r}};
   std::vector<int> assigned;
   AssociationStats stats;
   associator.BeginScan(z);

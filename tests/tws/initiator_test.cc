@@ -5,20 +5,17 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
 #include <cmath>
 #include <random>
 #include <vector>
-
-#include <Eigen/Cholesky>
 
 namespace localizer::engine::tws {
 namespace {
 
 using Started2 = Initiator<2>::Started;
 
-Gaussian<2> At(double x, double y, double sigma_m) {
-  return {{x, y}, sigma_m * sigma_m * Eigen::Matrix2d::Identity()};
-}
+Gaussian<2> At(double x, double y, double sigma_m) { return {{x, y}, sigma_m * sigma_m * Eigen::Matrix2d::Identity()}; }
 
 TEST(Initiator, OnePointStartsAtTheMeasurementWithTheVelocityPrior) {
   InitiatorOptions o;
@@ -159,7 +156,8 @@ TEST(Initiator, ATrackIsConfirmedWhenMOfItsLastNScansHit) {
           pattern.push_back(b);
           h.Record(b);
           int in_window = 0;
-          for (int k = 0; k < n && k < static_cast<int>(pattern.size()); ++k) in_window += pattern[pattern.size() - 1 - k];
+          for (int k = 0; k < n && k < static_cast<int>(pattern.size()); ++k)
+            in_window += pattern[pattern.size() - 1 - k];
           expected = expected || in_window >= m;  // never withdrawn
           EXPECT_EQ(initiator.Confirm(h), expected) << m << " of " << n << ", scan " << scan;
           EXPECT_EQ(h.confirmed, expected);

@@ -18,13 +18,13 @@ struct Stats {
   double nees = 0.0;
 };
 
-Stats Draw(bool spherical, Conversion method, const PolarNoise& noise, double r, double theta,
-           double phi, int draws, uint64_t seed) {
+Stats Draw(bool spherical, Conversion method, const PolarNoise& noise, double r, double theta, double phi, int draws,
+           uint64_t seed) {
   std::mt19937_64 engine(seed);
   std::normal_distribution<double> n(0.0, 1.0);
-  const Eigen::Vector3d truth = spherical ? r * Eigen::Vector3d(std::cos(phi) * std::cos(theta),
-                                                                std::cos(phi) * std::sin(theta), std::sin(phi))
-                                          : r * Eigen::Vector3d(std::cos(theta), std::sin(theta), 0.0);
+  const Eigen::Vector3d truth =
+      spherical ? r * Eigen::Vector3d(std::cos(phi) * std::cos(theta), std::cos(phi) * std::sin(theta), std::sin(phi))
+                : r * Eigen::Vector3d(std::cos(theta), std::sin(theta), 0.0);
   Stats s;
   Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
   for (int i = 0; i < draws; ++i) {

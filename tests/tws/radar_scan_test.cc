@@ -11,8 +11,8 @@ namespace {
 
 TEST(RadarScan, SeedTimingRangeAndTruth) {
   RadarScanOptions o;
-  EXPECT_NEAR(o.period_s(), 1.8182, 1e-4);          // 33 rpm
-  EXPECT_NEAR(o.OuterRangeM(), 83275.0, 1.0);       // c / (2 x 1800 Hz)
+  EXPECT_NEAR(o.period_s(), 1.8182, 1e-4);     // 33 rpm
+  EXPECT_NEAR(o.OuterRangeM(), 83275.0, 1.0);  // c / (2 x 1800 Hz)
   auto sim = RadarScanSimulator::Create(o, SeedCaseTargets());
   ASSERT_TRUE(sim.ok());
   const RadarScanFrame f = sim->Frame(10);

@@ -1,7 +1,5 @@
 // The steady-state (constant-gain) filter: its gain is the limit of the Riccati recursion
 // (Kalata's alpha-beta for one axis), and the tracker in that form follows the seed's case.
-#include "engine/tws/steady_state_gain.h"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -9,6 +7,7 @@
 
 #include "engine/sim/radar_scan.h"
 #include "engine/tws/cv_kalman.h"
+#include "engine/tws/steady_state_gain.h"
 #include "engine/tws/tws_tracker.h"
 
 namespace localizer::engine::tws {
@@ -101,8 +100,8 @@ TEST(SteadyState, SeedCaseTrackedWithinStatedError) {
   const double steady = RmsError(FilterForm::kSteadyState, 30, 80, &frozen);
   const double kalman = RmsError(FilterForm::kKalman, 30, 80, &kalman_frozen);
   std::printf("rms position error after scan 30: steady-state %.2f m, Kalman %.2f m\n", steady, kalman);
-  EXPECT_TRUE(frozen);           // the gain froze by scan 30 (at 22) and stayed frozen
-  EXPECT_FALSE(kalman_frozen);   // the Kalman form never freezes
+  EXPECT_TRUE(frozen);          // the gain froze by scan 30 (at 22) and stayed frozen
+  EXPECT_FALSE(kalman_frozen);  // the Kalman form never freezes
   // Stated error: under 5 m rms (a single plot's error is ~7 m rms here), and within
   // 30 % of the full Kalman filter's (R turns with the bearing; the frozen gain does not).
   EXPECT_LT(steady, 5.0);

@@ -14,17 +14,17 @@
 namespace localizer::engine::tws {
 
 struct ScenarioScore {
-  std::vector<double> ospa_m;        // per scan, confirmed tracks vs truth
-  std::vector<int> confirmed;        // confirmed + coasting tracks per scan
-  std::vector<int> truths_covered;   // truths with a confirmed track within `near_m`, per scan
+  std::vector<double> ospa_m;       // per scan, confirmed tracks vs truth
+  std::vector<int> confirmed;       // confirmed + coasting tracks per scan
+  std::vector<int> truths_covered;  // truths with a confirmed track within `near_m`, per scan
   int identity_switches = 0;
   double purity = 1.0;
   int max_tracks = 0;
   uint64_t max_id = 0;
 };
 
-inline ScenarioScore RunScenario(const RadarScanSimulator& sim, TwsTracker& tracker, int scans,
-                                 double ospa_cutoff_m, double near_m) {
+inline ScenarioScore RunScenario(const RadarScanSimulator& sim, TwsTracker& tracker, int scans, double ospa_cutoff_m,
+                                 double near_m) {
   ScenarioScore score;
   TrackScoring scoring(near_m);
   std::vector<TrackReport> tracks;

@@ -50,8 +50,8 @@ TEST(TwsTracker, EightTargetsInClutterConfirmWithinFiveScansWithoutSwitches) {
     // (cross-range 200 m per plot, ~100 m filtered) plus rare false or lost tracks.
     const double mean_ospa =
         std::accumulate(score.ospa_m.begin() + 5, score.ospa_m.end(), 0.0) / (score.ospa_m.size() - 5);
-    std::printf("seed %llu: mean OSPA %.1f m, max tracks %d\n", static_cast<unsigned long long>(seed),
-                mean_ospa, score.max_tracks);
+    std::printf("seed %llu: mean OSPA %.1f m, max tracks %d\n", static_cast<unsigned long long>(seed), mean_ospa,
+                score.max_tracks);
     EXPECT_LT(mean_ospa, 250.0) << "seed " << seed;
     for (size_t k = 5; k < score.confirmed.size(); ++k) {
       EXPECT_GE(score.truths_covered[k], 7) << "scan " << k;
@@ -84,8 +84,8 @@ TEST(TwsTracker, CrossingTargetsSwitchIdentityABoundedNumberOfTimes) {
     auto tracker = TwsTracker::Create(TrackerFor(radar));
     ASSERT_TRUE(tracker.ok());
     const ScenarioScore score = RunScenario(*sim, **tracker, 60, 1000.0, 1000.0);
-    std::printf("seed %llu: %d switches, purity %.3f\n", static_cast<unsigned long long>(seed),
-                score.identity_switches, score.purity);
+    std::printf("seed %llu: %d switches, purity %.3f\n", static_cast<unsigned long long>(seed), score.identity_switches,
+                score.purity);
     switches += score.identity_switches;
     // Every target keeps a confirmed track near it through the crossings (tracks may swap;
     // one may be lost for a scan or two and come back).

@@ -6,13 +6,12 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <cstdio>
-#include <random>
-
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <cmath>
+#include <cstdio>
+#include <random>
 
 #include "engine/tws/steady_state_gain.h"
 
@@ -82,7 +81,8 @@ TEST(Updater, ACoastingTracksPositionVarianceGrowsAsTheClosedForm) {
   for (int n = 1; n <= 40; ++n) {
     updater.Predict(f, t);
     KalmanUpdater<2>::Miss(f);
-    const double want = sp * sp + n * n * t * t * sv * sv + sigma_a * sigma_a * std::pow(t, 4) * n * (4.0 * n * n - 1) / 12.0;
+    const double want =
+        sp * sp + n * n * t * t * sv * sv + sigma_a * sigma_a * std::pow(t, 4) * n * (4.0 * n * n - 1) / 12.0;
     EXPECT_NEAR(KalmanUpdater<2>::LargestPositionVariance(f), want, 1e-9 * want) << n;
   }
 }
@@ -110,7 +110,7 @@ TEST(Updater, UpdateIsTheDenseKalmanUpdate) {
     const Eigen::Matrix4d p_want = (Eigen::Matrix4d::Identity() - gain * h) * p;
     EXPECT_LT((f.x - x_want).cwiseAbs().maxCoeff(), 1e-9 * (1.0 + x_want.cwiseAbs().maxCoeff()));
     EXPECT_LT((f.p - p_want).cwiseAbs().maxCoeff(), 1e-9 * p.cwiseAbs().maxCoeff());
-    EXPECT_EQ(f.p, f.p.transpose());  // symmetrised
+    EXPECT_EQ(f.p, f.p.transpose());                                                           // symmetrised
     EXPECT_LT((f.last_gain - gain).cwiseAbs().maxCoeff(), 1e-9 * gain.cwiseAbs().maxCoeff());  // kept
     EXPECT_TRUE(f.have_last_gain);
     // Physics: a measurement never increases the uncertainty.

@@ -2,12 +2,12 @@
 // bad block breaks, config defaults and round trips (the multiple-model filters' fields
 // included), estimates with model probabilities both ways, Locate's request and response,
 // Status -> gRPC codes.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
 #include <variant>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "wire/block_wire.h"
 #include "wire/config_wire.h"
@@ -262,8 +262,8 @@ TEST(ConfigWire, MultipleModelFiltersAndTheirFieldsRoundTrip) {
 }
 
 TEST(EstimateWire, ModelProbabilitiesRoundTrip) {
-  const engine::ArrayGeometry array = *engine::ArrayGeometry::Create(
-      {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, 1500.0);
+  const engine::ArrayGeometry array =
+      *engine::ArrayGeometry::Create({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, 1500.0);
   engine::Estimate e;
   e.frame_index = 4;
   e.initialised = true;
@@ -409,8 +409,8 @@ TEST(ConfigWire, BadBoundsAndPresenceFieldsAreInvalidArgumentNamingTheField) {
 }
 
 TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
-  const engine::ArrayGeometry array = *engine::ArrayGeometry::Create(
-      {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, 1500.0);
+  const engine::ArrayGeometry array =
+      *engine::ArrayGeometry::Create({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, 1500.0);
   engine::Estimate e;
   e.initialised = true;
   e.source_present = true;
