@@ -1,6 +1,7 @@
 #include "wire/scan_wire.h"
 
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <string>
 
@@ -111,7 +112,34 @@ void TrackListToProto(const engine::ScanResult& result, uint64_t sequence, v1::T
   out->set_assigned(static_cast<uint32_t>(result.summary.assigned));
   out->set_initiated(static_cast<uint32_t>(result.summary.initiated));
   out->set_deleted(static_cast<uint32_t>(result.summary.deleted));
+  out->set_truncated_gates(static_cast<uint32_t>(result.summary.truncated_gates));
+  out->set_greedy_clusters(static_cast<uint32_t>(result.summary.greedy_clusters));
   out->set_process_s(result.process_s);
+}
+
+int64_t MaxTrackListBytes(int tracks) {
+  // Every field at its widest: varints at their maximum, doubles non-zero (so present).
+  engine::ScanResult widest;
+  widest.scan_index = UINT64_MAX;
+  widest.time_s = widest.process_s = 1.5;
+  engine::tws::ScanSummary& s = widest.summary;
+  s.plots = s.assigned = s.initiated = s.deleted = s.truncated_gates = s.greedy_clusters = INT32_MAX;
+  engine::tws::TrackReport track;
+  track.id = UINT64_MAX;
+  track.status = engine::tws::TrackStatus::kCoasting;
+  track.position_m = track.velocity_mps = Eigen::Vector3d::Constant(1.5);
+  track.covariance.setConstant(1.5);
+  track.hits = track.consecutive_misses = INT32_MAX;
+  v1::TrackList empty, one;
+  TrackListToProto(widest, UINT64_MAX, &empty);
+  empty.set_total_s(1.5);
+  widest.tracks.push_back(track);
+  TrackListToProto(widest, UINT64_MAX, &one);
+  one.set_total_s(1.5);
+  const int64_t header = static_cast<int64_t>(empty.ByteSizeLong());
+  const int64_t per_track = static_cast<int64_t>(one.ByteSizeLong()) - header;
+  // The TrackResponse around it: a tag and a length of at most 5 bytes.
+  return header + 6 + per_track * static_cast<int64_t>(tracks);
 }
 
 engine::ScanResult TrackListFromProto(const v1::TrackList& p) {
@@ -123,6 +151,8 @@ engine::ScanResult TrackListFromProto(const v1::TrackList& p) {
   result.summary.assigned = static_cast<int>(p.assigned());
   result.summary.initiated = static_cast<int>(p.initiated());
   result.summary.deleted = static_cast<int>(p.deleted());
+  result.summary.truncated_gates = static_cast<int>(p.truncated_gates());
+  result.summary.greedy_clusters = static_cast<int>(p.greedy_clusters());
   for (const v1::TargetTrack& t : p.tracks()) {
     engine::tws::TrackReport r;
     r.id = t.id();

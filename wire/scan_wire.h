@@ -21,6 +21,9 @@ void EncodeScan(const engine::Scan& scan, uint64_t sequence, v1::Scan* out);
 
 // A scan's result; total_s is the server's to set.
 void TrackListToProto(const engine::ScanResult& result, uint64_t sequence, v1::TrackList* out);
+// The largest encoded TrackResponse holding `tracks` tracks (every field at its widest), in
+// bytes: what a detection session's max_tracks must keep under the send limit.
+int64_t MaxTrackListBytes(int tracks);
 // The inverse, for clients (summary fields the wire does not carry stay 0; tracks'
 // time_s is the list's).
 engine::ScanResult TrackListFromProto(const v1::TrackList& list);

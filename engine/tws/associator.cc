@@ -35,7 +35,7 @@ void GnnAssociator<D>::Associate(const std::vector<Gaussian<D>>& expected, std::
     // scan's largest R_kk.
     const double hx = std::sqrt(gate_ * (a(0, 0) + max_r_diag_(0)));
     const double hy = std::sqrt(gate_ * (a(1, 1) + max_r_diag_(1)));
-    grid_.Query(p(0) - hx, p(0) + hx, p(1) - hy, p(1) + hy, [&](int j) {
+    const auto test = [&](int j) {
       if (taken_[j]) return;
       const Gaussian<D>& z = measurements[j];
       const PosCov sm = a + z.covariance;
@@ -45,7 +45,10 @@ void GnnAssociator<D>::Associate(const std::vector<Gaussian<D>>& expected, std::
       }
       const double d2 = nu.dot(sm.inverse() * nu);
       if (d2 <= gate_) edges_.push_back({i, j, d2});
-    });
+    };
+    if (!grid_.QueryWithin(p(0) - hx, p(0) + hx, p(1) - hy, p(1) + hy, limits_.gate_search_budget, test)) {
+      ++stats->truncated_gates;
+    }
   }
   if (edges_.empty()) return;
   // Connected components: track nodes 0..n_tracks-1, measurement nodes n_tracks + j.
@@ -98,12 +101,16 @@ void GnnAssociator<D>::SolveCluster(const Edge* begin, const Edge* end, int n_tr
     }
   }
   stats->largest_cluster = std::max(stats->largest_cluster, static_cast<int>(rows_.size()));
+  const int64_t cells = static_cast<int64_t>(rows_.size()) * static_cast<int64_t>(cols_.size());
   if (rows_.size() == 1) {  // every measurement of the cluster sees this track only
     const Edge* best = begin;
     for (const Edge* e = begin; e != end; ++e) {
       if (e->d2 < best->d2) best = e;
     }
     take(best->track, best->measurement);
+  } else if (cells > limits_.max_assignment_cells) {
+    ++stats->greedy_clusters;
+    SolveGreedy(begin, end, assigned);
   } else {
     const int nr = static_cast<int>(rows_.size()), nc = static_cast<int>(cols_.size());
     cost_.assign(static_cast<size_t>(nr) * nc, kForbidden);
@@ -119,6 +126,21 @@ void GnnAssociator<D>::SolveCluster(const Edge* begin, const Edge* end, int n_tr
   }
   for (int r : rows_) local_index_[r] = -1;
   for (int c : cols_) local_index_[n_tracks + c] = -1;
+}
+
+template <int D>
+void GnnAssociator<D>::SolveGreedy(const Edge* begin, const Edge* end, std::vector<int>* assigned) {
+  greedy_edges_.assign(begin, end);
+  std::sort(greedy_edges_.begin(), greedy_edges_.end(), [](const Edge& a, const Edge& b) {
+    if (a.d2 != b.d2) return a.d2 < b.d2;
+    if (a.track != b.track) return a.track < b.track;
+    return a.measurement < b.measurement;
+  });
+  for (const Edge& e : greedy_edges_) {
+    if ((*assigned)[e.track] >= 0 || taken_[e.measurement]) continue;
+    (*assigned)[e.track] = e.measurement;
+    taken_[e.measurement] = 1;
+  }
 }
 
 template class GnnAssociator<2>;

@@ -52,14 +52,16 @@ void Initiator<D>::Initiate(const std::vector<Gaussian<D>>& measurements, const 
       const double reach =
           options_.max_speed_mps * dt + 3.0 * std::sqrt(second.covariance.trace() + max_candidate_r_trace_);
       const Pos z = second.mean;
-      candidate_grid_.Query(z(0) - reach, z(0) + reach, z(1) - reach, z(1) + reach, [&](int c) {
+      const auto consider = [&](int c) {
         if (candidate_used_[c]) return;
         const double d2 = (candidates_[c].mean - z).squaredNorm();
         if (d2 <= reach * reach && (best < 0 || d2 < best_d2)) {
           best = c;
           best_d2 = d2;
         }
-      });
+      };
+      candidate_grid_.QueryWithin(z(0) - reach, z(0) + reach, z(1) - reach, z(1) + reach, options_.search_budget,
+                                  consider);
     }
     if (best < 0) {
       next_candidates_.push_back(second);

@@ -12,7 +12,9 @@
 //              (each previous one pairs once): x = (z_2, (z_2 - z_1) / dt),
 //              P = [R_2, R_2 / dt; R_2 / dt, (R_1 + R_2) / dt^2]; history: 2 hits, age 2.
 //              Free measurements left unpaired (also those beyond `room`) wait for the next
-//              scan, and only for that one; on the first scan (dt <= 0) all wait.
+//              scan, and only for that one; on the first scan (dt <= 0) all wait. Each
+//              search looks at most search_budget grid rows and candidates
+//              (PointGrid::QueryWithin): the nearest among those seen.
 // A started track is confirmed at once when its hits already reach M (M = 1, or M = 2 with
 // two-point initiation). Confirm(history), once per scan for every track after its
 // TrackHistory::Record: a tentative track becomes confirmed when M of its last N scans
@@ -21,6 +23,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "engine/tws/cv_kalman.h"
@@ -38,6 +41,7 @@ struct InitiatorOptions {
   double max_speed_mps = 400.0;            // two-point: fastest target to pair for, > 0
   int confirm_hits = 3;                    // M
   int confirm_window = 5;                  // N; 1 <= M <= N <= 32
+  int64_t search_budget = 256;             // two-point: work per pairing search (grid rows + candidates)
 };
 
 template <int D>

@@ -36,6 +36,8 @@ struct ScanSummary {
   int tentative = 0;
   int clusters = 0;           // gate-graph components with >= 1 edge
   int largest_cluster = 0;    // tracks in the largest of them
+  int truncated_gates = 0;    // tracks whose gate search ran out of its budget (clutter)
+  int greedy_clusters = 0;    // components matched greedily, too large to solve optimally
   int64_t track_updates = 0;  // tracks that went through the scan's cycle (predict, gate,
                               // update or coast); the unit of "track updates per second"
 };

@@ -21,10 +21,24 @@
 //   initiation                 kOnePoint  -      kTwoPoint: pair plots of consecutive scans
 //   initial_speed_sigma_mps    150        m/s    one-point: velocity prior std per axis
 //   max_speed_mps              400        m/s    two-point: fastest target to pair plots for
-//   max_tracks                 1000000    -      a scan that would exceed it initiates fewer
+//   max_tracks                 10000      -      a scan that would exceed it initiates fewer
+//                                                (a TrackList of 10^4 tracks is ~3.6 MB)
+// Bounds on one scan's work, so that no scan (adversarial or cluttered) costs more than
+// O(plots + tracks x budget) time and memory (associator.h):
+//   max_plots_per_scan         65536      -      a larger scan is refused (INVALID_ARGUMENT)
+//   gate_search_budget         256        -      grid rows + plots one track's gate search
+//                                                (and one two-point pairing) looks at; a gate
+//                                                holding more is cluttered beyond what GNN
+//                                                resolves, and keeps what it found
+//   max_assignment_cells       65536      -      a gate cluster of tracks x plots above this
+//                                                is matched greedily (by d^2), not optimally
+//                                                (the optimal solver is cubic: 256^3 ~ 2e7)
 #pragma once
 
+#include <cstdint>
+
 #include "engine/core/status.h"
+#include "engine/tws/associator.h"
 #include "engine/tws/deleter.h"
 #include "engine/tws/initiator.h"
 #include "engine/tws/polar_conversion.h"
@@ -47,7 +61,10 @@ struct TwsOptions {
   Initiation initiation = Initiation::kOnePoint;
   double initial_speed_sigma_mps = 150.0;
   double max_speed_mps = 400.0;
-  int max_tracks = 1000000;
+  int max_tracks = 10000;
+  int max_plots_per_scan = 65536;
+  int64_t gate_search_budget = 256;
+  int64_t max_assignment_cells = 65536;
 
   // INVALID_ARGUMENT naming the field and its value.
   Status Validate() const;
@@ -55,8 +72,9 @@ struct TwsOptions {
   // The options of each role the tracker composes (updater.h, initiator.h, deleter.h).
   UpdaterOptions updater() const { return {accel_noise_mps2, filter, steady_state_tolerance}; }
   InitiatorOptions initiator() const {
-    return {initiation, initial_speed_sigma_mps, max_speed_mps, confirm_hits, confirm_window};
+    return {initiation, initial_speed_sigma_mps, max_speed_mps, confirm_hits, confirm_window, gate_search_budget};
   }
+  AssociatorLimits associator() const { return {gate_search_budget, max_assignment_cells}; }
   DeleterOptions deleter() const { return {confirm_hits, confirm_window, max_coast_scans, max_position_sigma_m}; }
 };
 

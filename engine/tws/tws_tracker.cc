@@ -28,11 +28,12 @@ class TrackerImpl final : public TwsTracker {
   explicit TrackerImpl(const TwsOptions& options)
       : options_(options),
         updater_(options.updater()),
-        associator_(ChiSquareQuantile(D, options.gate_probability)),
+        associator_(ChiSquareQuantile(D, options.gate_probability), options.associator()),
         initiator_(options.initiator()),
         deleter_(options.deleter()) {}
 
   Status Process(const Scan& scan, ScanSummary* summary) override {
+    LOCALIZER_RETURN_IF_ERROR(CheckPlotCount(scan.detections.size()));
     LOCALIZER_RETURN_IF_ERROR(CheckTime(scan.time_s));
     for (size_t i = 0; i < scan.detections.size(); ++i) {
       const Detection& d = scan.detections[i];
@@ -67,6 +68,7 @@ class TrackerImpl final : public TwsTracker {
   }
 
   Status ProcessCartesian(double time_s, const std::vector<CartesianPlot>& plots, ScanSummary* summary) override {
+    LOCALIZER_RETURN_IF_ERROR(CheckPlotCount(plots.size()));
     LOCALIZER_RETURN_IF_ERROR(CheckTime(time_s));
     for (size_t i = 0; i < plots.size(); ++i) {
       if (!plots[i].position_m.allFinite() || !plots[i].covariance_m2.allFinite())
@@ -110,6 +112,12 @@ class TrackerImpl final : public TwsTracker {
   int64_t total_track_updates() const override { return total_updates_; }
 
  private:
+  Status CheckPlotCount(size_t plots) const {
+    if (plots <= static_cast<size_t>(options_.max_plots_per_scan)) return Status::Ok();
+    return InvalidArgument("the scan has " + std::to_string(plots) + " plots; max_plots_per_scan is " +
+                           std::to_string(options_.max_plots_per_scan));
+  }
+
   Status CheckTime(double t) const {
     if (!std::isfinite(t)) return InvalidArgument("time_s is not finite");
     if (have_time_ && !(t > last_time_))
@@ -164,6 +172,8 @@ class TrackerImpl final : public TwsTracker {
     }
     s.clusters = stats.clusters;
     s.largest_cluster = stats.largest_cluster;
+    s.truncated_gates = stats.truncated_gates;
+    s.greedy_clusters = stats.greedy_clusters;
   }
 
   void Delete(ScanSummary& s) {

@@ -1,5 +1,7 @@
 #include "server/service/detection_runner.h"
 
+#include <string>
+
 #include "server/service/runner_util.h"
 #include "wire/config_wire.h"
 #include "wire/scan_wire.h"
@@ -21,6 +23,15 @@ WorkItem DetectionRunner::DecodeImu(const v1::ImuBatch& batch, Clock::time_point
 }
 
 WorkItem DetectionRunner::DecodeScan(const v1::Scan& scan, Clock::time_point received) const {
+  // Refused before decoding: an oversized scan costs nothing past its parse.
+  const int max_plots = scans_->config().tws.max_plots_per_scan;
+  if (scan.detections_size() > max_plots) {
+    return {Rejection{RequestKind::kScan, scan.sequence(), "scan",
+                      InvalidArgument("scan.detections has " + std::to_string(scan.detections_size()) +
+                                      " plots; this session allows at most " + std::to_string(max_plots) +
+                                      " (detections.max_plots_per_scan)")},
+            received};
+  }
   auto decoded = wire::DecodeScan(scan);
   if (!decoded.ok()) return {Rejection{RequestKind::kScan, scan.sequence(), "scan", decoded.status()}, received};
   return {ScanWork{scan.sequence(), std::move(decoded).value()}, received};

@@ -4,7 +4,9 @@
 // refused in-band (request "scan", the field named) and the session goes on as if it had
 // never come; blocks to a detection session and scans to an audio one are refused.
 #include <cmath>
+#include <cstdint>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "engine/pipeline/scan_session.h"
 #include "engine/sim/radar_scan.h"
@@ -212,6 +214,90 @@ TEST_F(DetectionServiceTest, BadDetectionConfigIsInvalidArgument) {
   const grpc::Status status = stream.Close();
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("detections"), std::string::npos) << status.error_message();
+}
+
+TEST_F(DetectionServiceTest, AdversarialScansAreBoundedAndOversizedOnesRefusedInBand) {
+  // The security review's crash: two scans of 8000 co-located plots (N^2 gate pairs, a cubic
+  // assignment: bad_alloc under 3.5 GB). Now: both answered, the second with every gate
+  // truncated and its cluster matched greedily; a scan above the session's
+  // max_plots_per_scan is refused in-band naming the field, and the session goes on.
+  v1::TrackRequest open = OpenDetections();
+  open.mutable_open()->mutable_detections()->set_max_plots_per_scan(8000);
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(open));
+  engine::Scan crowd;
+  crowd.detections.assign(8000, {5000.0, 0.25, std::nullopt, std::nullopt});
+  for (int k = 0; k < 2; ++k) {
+    crowd.time_s = 1.0 + k;
+    ASSERT_TRUE(stream.Send(ScanRequest(crowd, k)));
+  }
+  engine::Scan too_many = crowd;
+  too_many.time_s = 3.0;
+  too_many.detections.resize(8001, too_many.detections[0]);
+  ASSERT_TRUE(stream.Send(ScanRequest(too_many, 2)));
+  crowd.time_s = 4.0;
+  crowd.detections.resize(10);
+  ASSERT_TRUE(stream.Send(ScanRequest(crowd, 3)));
+  ASSERT_TRUE(stream.Close().ok());
+  const std::vector<v1::TrackList> lists = Lists(stream);
+  ASSERT_EQ(lists.size(), 3u);
+  EXPECT_EQ(lists[0].initiated(), 8000u);
+  EXPECT_EQ(lists[1].truncated_gates(), 8000u);
+  EXPECT_GE(lists[1].greedy_clusters(), 1u);
+  EXPECT_LE(lists[1].tracks_size(), 10000);  // the server's default max_tracks
+  EXPECT_EQ(lists[2].sequence(), 3u);
+  int rejections = 0;
+  for (const auto& r : stream.responses()) {
+    if (!r.has_rejected()) continue;
+    ++rejections;
+    EXPECT_EQ(r.rejected().sequence(), 2u);
+    EXPECT_EQ(r.rejected().code(), "INVALID_ARGUMENT");
+    EXPECT_NE(r.rejected().message().find("max_plots_per_scan"), std::string::npos) << r.rejected().message();
+  }
+  EXPECT_EQ(rejections, 1);
+}
+
+TEST_F(DetectionServiceTest, MaxTracksAboveTheServersLimitIsRefusedNamingTheFlag) {
+  v1::TrackRequest open = OpenDetections();
+  open.mutable_open()->mutable_detections()->set_max_tracks(10001);
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(open));
+  const grpc::Status status = stream.Close();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("--max-tracks"), std::string::npos) << status.error_message();
+}
+
+TEST(ScanWire, MaxTrackListBytesBoundsEveryListAndTheServerRefusesALimitThatCannotBeSent) {
+  // Random tracks, with the widest values mixed in: the encoded response never exceeds the
+  // bound, and the bound is tight for the widest (within the per-message framing).
+  std::mt19937_64 engine(17);
+  std::uniform_real_distribution<double> value(-1e6, 1e6);
+  engine::ScanResult result;
+  result.scan_index = 123456;
+  result.time_s = 12.5;
+  for (int i = 0; i < 500; ++i) {
+    engine::tws::TrackReport t;
+    t.id = i % 7 == 0 ? UINT64_MAX : static_cast<uint64_t>(i + 1);
+    t.status = engine::tws::TrackStatus::kConfirmed;
+    t.position_m = Eigen::Vector3d(value(engine), value(engine), value(engine));
+    t.velocity_mps = Eigen::Vector3d(value(engine), value(engine), 0.0);
+    for (int k = 0; k < 36; ++k) t.covariance(k / 6, k % 6) = value(engine);
+    t.hits = i % 3 == 0 ? INT32_MAX : i;
+    result.tracks.push_back(t);
+  }
+  v1::TrackResponse response;
+  wire::TrackListToProto(result, UINT64_MAX, response.mutable_tracks());
+  response.mutable_tracks()->set_total_s(0.25);
+  const int64_t bound = wire::MaxTrackListBytes(500);
+  EXPECT_LE(static_cast<int64_t>(response.ByteSizeLong()), bound);
+  EXPECT_GT(static_cast<int64_t>(response.ByteSizeLong()), bound * 8 / 10);  // not a loose guess
+  ServerOptions options;
+  options.max_message_bytes = 1 << 20;  // 1 MiB holds ~2800 tracks, not 10000
+  const Status invalid = options.Validate();
+  EXPECT_EQ(invalid.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(invalid.message().find("max_tracks"), std::string::npos) << invalid.message();
+  options.max_tracks = 2000;
+  EXPECT_TRUE(options.Validate().ok());
 }
 
 TEST(ScanWire, DecodeValidatesEveryPlotAndRoundTrips) {

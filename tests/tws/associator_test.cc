@@ -1,6 +1,7 @@
 // The associator alone (associator.h): the gate's edge in Mahalanobis distance, global
 // nearest neighbour against brute force on random clusters, measurements taken once per
-// scan, and the cluster statistics.
+// scan, the cluster statistics, and the bounds on one scan's work (gate search budget,
+// greedy matching of clusters too large to solve optimally).
 #include "engine/tws/associator.h"
 
 #include <gtest/gtest.h>
@@ -191,6 +192,84 @@ TEST(Associator, AThreeDimensionalGateReadsTheThirdAxis) {
   associator.BeginScan(level);
   associator.Associate({track}, &assigned, &stats);
   EXPECT_EQ(assigned[0], 0);
+}
+
+TEST(Associator, AGateSearchSpendsAtMostItsBudget) {
+  // Ten measurements inside one track's gate, spread along x; a budget of 4 units (grid rows
+  // and measurements looked at) sees at most 3 of them: the track is counted as truncated
+  // and takes the best of those it saw, never one it did not.
+  const Eigen::Matrix2d r = 100.0 * Eigen::Matrix2d::Identity();
+  std::vector<Gaussian<2>> z;
+  for (int k = 0; k < 10; ++k) z.push_back({{-9.0 + 2.0 * k, 0.0}, r});
+  const Gaussian<2> track{{0.0, 0.0}, r};
+  std::vector<int> assigned;
+  AssociationStats full_stats, bounded_stats;
+  GnnAssociator<2> full(ChiSquareQuantile(2, 0.9995));
+  full.BeginScan(z);
+  full.Associate({track}, &assigned, &full_stats);
+  EXPECT_EQ(full_stats.truncated_gates, 0);
+  const int nearest = assigned[0];
+  EXPECT_TRUE(nearest == 4 || nearest == 5);  // x = -1 or +1
+  GnnAssociator<2> bounded(ChiSquareQuantile(2, 0.9995), AssociatorLimits{4, 65536});
+  bounded.BeginScan(z);
+  bounded.Associate({track}, &assigned, &bounded_stats);
+  EXPECT_EQ(bounded_stats.truncated_gates, 1);
+  ASSERT_GE(assigned[0], 0);
+  EXPECT_LE(std::count(bounded.taken().begin(), bounded.taken().end(), 1), 1);
+}
+
+TEST(Associator, AClusterTooLargeForTheOptimalSolverIsMatchedGreedilyByDistance) {
+  // A + R = I, so d2 is the squared distance. Tracks at x = 0 and 3, measurements at x = 1
+  // and -1.2: d2 (0,0) = 1, (0,1) = 1.44, (1,0) = 4, (1,1) = 17.64 > g = 15.2 (outside).
+  // Optimal: (0,1) + (1,0) = 5.44. Greedy takes the closest pair (0,0) first, which leaves
+  // track 1 nothing inside its gate: a miss (1 + g = 16.2). The 2 x 2 cluster has 4 cells:
+  // solved optimally with a limit of 4, greedily (and counted) with 3.
+  const Eigen::Matrix2d r = 0.5 * Eigen::Matrix2d::Identity();
+  const std::vector<Gaussian<2>> tracks = {{{0.0, 0.0}, r}, {{3.0, 0.0}, r}};
+  const std::vector<Gaussian<2>> z = {{{1.0, 0.0}, r}, {{-1.2, 0.0}, r}};
+  const double g = ChiSquareQuantile(2, 0.9995);
+  ASSERT_LT(g, 17.64);
+  std::vector<int> assigned;
+  AssociationStats optimal_stats, greedy_stats;
+  GnnAssociator<2> optimal(g, AssociatorLimits{256, 4});
+  optimal.BeginScan(z);
+  optimal.Associate(tracks, &assigned, &optimal_stats);
+  EXPECT_EQ(optimal_stats.greedy_clusters, 0);
+  EXPECT_EQ(assigned[0], 1);
+  EXPECT_EQ(assigned[1], 0);
+  GnnAssociator<2> greedy(g, AssociatorLimits{256, 3});
+  greedy.BeginScan(z);
+  greedy.Associate(tracks, &assigned, &greedy_stats);
+  EXPECT_EQ(greedy_stats.greedy_clusters, 1);
+  EXPECT_EQ(assigned[0], 0);
+  EXPECT_EQ(assigned[1], -1);
+}
+
+TEST(Associator, CoLocatedTracksAndMeasurementsCostTheBudgetNotTheSquare) {
+  // The adversarial scan of the security review: thousands of tracks and plots at one point.
+  // Unbounded, this is T x M gate tests and one T x M assignment (cubic); bounded, every
+  // gate is truncated, the one cluster is matched greedily, and still each track gets a
+  // distinct measurement of those its search saw.
+  constexpr int kCount = 4000;
+  const Eigen::Matrix2d r = 100.0 * Eigen::Matrix2d::Identity();
+  const std::vector<Gaussian<2>> tracks(kCount, Gaussian<2>{{0.0, 0.0}, r});
+  const std::vector<Gaussian<2>> z(kCount, Gaussian<2>{{0.0, 0.0}, r});
+  GnnAssociator<2> associator(ChiSquareQuantile(2, 0.9995));
+  std::vector<int> assigned;
+  AssociationStats stats;
+  associator.BeginScan(z);
+  associator.Associate(tracks, &assigned, &stats);
+  EXPECT_EQ(stats.truncated_gates, kCount);
+  EXPECT_EQ(stats.greedy_clusters, 1);
+  std::vector<int> uses(kCount, 0);
+  int matched = 0;
+  for (int a : assigned) {
+    if (a < 0) continue;
+    ++matched;
+    ++uses[a];
+  }
+  for (int u : uses) EXPECT_LE(u, 1);
+  EXPECT_GE(matched, 255);  // every search sees ~255 plots; at least that many get one
 }
 
 }  // namespace

@@ -198,6 +198,35 @@ TEST(TwsTracker, RejectsBadScansAndStaysUsable) {
   EXPECT_EQ(TwsTracker::Create(bad_options).status().code(), StatusCode::kInvalidArgument);
 }
 
+TEST(TwsTracker, AScanAboveMaxPlotsIsRefusedAndCoLocatedPlotsStayBounded) {
+  TwsOptions options;
+  options.max_plots_per_scan = 5000;
+  auto tracker = TwsTracker::Create(options);
+  ASSERT_TRUE(tracker.ok());
+  Scan too_many;
+  too_many.time_s = 1.0;
+  too_many.detections.assign(5001, {1000.0, 0.5, std::nullopt, std::nullopt});
+  const Status refused = (*tracker)->Process(too_many);
+  EXPECT_EQ(refused.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(refused.message().find("max_plots_per_scan"), std::string::npos) << refused.message();
+  EXPECT_EQ((*tracker)->track_count(), 0);
+  // Two scans of 5000 co-located plots (the review's crash: N^2 gate pairs and a cubic
+  // assignment): the second scan's gates are truncated and its one cluster matched
+  // greedily; every track is accounted for and tracks never exceed max_tracks.
+  Scan crowd;
+  crowd.time_s = 1.0;
+  crowd.detections.assign(5000, {1000.0, 0.5, std::nullopt, std::nullopt});
+  ScanSummary first, second;
+  ASSERT_TRUE((*tracker)->Process(crowd, &first).ok());
+  EXPECT_EQ(first.initiated, 5000);
+  crowd.time_s = 2.0;
+  ASSERT_TRUE((*tracker)->Process(crowd, &second).ok());
+  EXPECT_EQ(second.truncated_gates, 5000);
+  EXPECT_GE(second.greedy_clusters, 1);
+  EXPECT_GE(second.assigned, 255);
+  EXPECT_LE((*tracker)->track_count(), options.max_tracks);
+}
+
 TEST(TwsTracker, CoastsThroughMissesThenDeletes) {
   // One target, plots every scan, then none: confirmed -> coasting -> deleted after
   // max_coast_scans misses.
