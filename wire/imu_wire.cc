@@ -22,6 +22,10 @@ StatusOr<DecodedImu> DecodeImuBatch(const v1::ImuBatch& batch) {
   if (batch.samples_size() == 0 && !batch.has_origin_m()) {
     return InvalidArgument("imu batch has no samples and no origin_m");
   }
+  if (batch.samples_size() > kMaxImuSamplesPerBatch) {
+    return InvalidArgument("imu.samples has " + std::to_string(batch.samples_size()) + " samples; at most " +
+                           std::to_string(kMaxImuSamplesPerBatch) + " per batch");
+  }
   out.samples.reserve(static_cast<size_t>(batch.samples_size()));
   double previous_t_s = -std::numeric_limits<double>::infinity();
   for (int i = 0; i < batch.samples_size(); ++i) {

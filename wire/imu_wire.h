@@ -20,9 +20,13 @@ struct DecodedImu {
   std::optional<engine::Vec3> origin_m;  // set when the batch moves the platform origin
 };
 
+// Samples in one batch, at most (a second of a 64 kHz IMU): the attitude filter's work per
+// batch stays bounded.
+inline constexpr int kMaxImuSamplesPerBatch = 1 << 16;
+
 // INVALID_ARGUMENT naming the field ("imu.samples[3].gyro_rps", "imu.origin_m") for a
-// non-finite value, a time not after the previous sample's, or an empty batch without an
-// origin.
+// non-finite value, a time not after the previous sample's, an empty batch without an
+// origin, or more than kMaxImuSamplesPerBatch samples.
 StatusOr<DecodedImu> DecodeImuBatch(const v1::ImuBatch& batch);
 
 // The inverse, for clients: samples (and origin, when given) -> an ImuBatch.

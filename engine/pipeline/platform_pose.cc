@@ -41,6 +41,7 @@ Status PlatformPose::Add(const std::vector<ImuSample>& samples) {
     last_t_s_ = sample.t_s;
   }
   while (history_.size() > 2 && history_.back().t_s - history_[1].t_s > kHistory_s) history_.pop_front();
+  while (history_.size() > kMaxHistorySamples) history_.pop_front();
   return Status::Ok();
 }
 

@@ -5,7 +5,9 @@
 // engine/core/imu.h); at time t the world positions are
 //     m_world = R(t) m_body + origin_m,   R(t) = attitude body -> world at t.
 // IMU samples go through an attitude filter (engine/attitude/attitude_filter.h) as they
-// arrive; each filtered attitude is kept for a few seconds so that a frame whose centre lies
+// arrive; each filtered attitude is kept for a few seconds (kHistory_s, and at most
+// kMaxHistorySamples of them: memory stays bounded however fast a client stamps its
+// samples) so that a frame whose centre lies
 // between two samples gets their interpolation (slerp), whichever arrived first. A frame
 // after the newest sample holds the newest attitude (send each block's IMU samples before
 // the block); a frame before any sample has no pose (Pose returns nothing).
@@ -13,6 +15,7 @@
 // Not thread-safe: owned by one session.
 #pragma once
 
+#include <cstddef>
 #include <deque>
 #include <memory>
 #include <optional>
@@ -38,6 +41,9 @@ class PlatformPose {
   Status SetOrigin(const Vec3& origin_m);
   // The pose at t_s, or nothing before the first IMU sample.
   std::optional<PlatformAttitude> At(double t_s) const;
+  // Attitudes kept for interpolation: the last kHistory_s, at most kMaxHistorySamples.
+  size_t history_size() const { return history_.size(); }
+  static constexpr size_t kMaxHistorySamples = size_t{1} << 16;  // 5 s at 13 kHz; 4 MiB
 
  private:
   PlatformPose(std::unique_ptr<AttitudeFilter> filter, const Vec3& origin_m);

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "engine/pipeline/platform_pose.h"
 #include "engine/pipeline/session.h"
 #include "engine/sim/evaluation.h"
 #include "engine/sim/platform_motion.h"
@@ -143,6 +144,26 @@ TEST(MovingArraySession, BadImuSamplesAreRefusedWholeAndFixedArraysRefuseThem) {
   EXPECT_EQ(moving->SetPlatformOrigin(Vec3(std::nan(""), 0, 0)).code(), StatusCode::kInvalidArgument);
   config.attitude.gyro_noise_rps_rthz = -1.0;
   EXPECT_EQ(Session::Create(config).status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(PlatformPose, HistoryIsBoundedByCountHoweverDenseTheSamples) {
+  // The review's case: samples stamped a microsecond apart kept 5 s of them (811 MB). Three
+  // batches of 65536 samples 1 us apart (0.2 s in all): the history stops at its count limit,
+  // and the newest attitude is still answered.
+  auto pose = PlatformPose::Create(AttitudeFilterOptions{}, Vec3::Zero());
+  ASSERT_TRUE(pose.ok()) << pose.status().ToString();
+  std::vector<ImuSample> batch(65536);
+  double t_s = 0.0;
+  for (int b = 0; b < 3; ++b) {
+    for (ImuSample& sample : batch) {
+      t_s += 1e-6;
+      sample.t_s = t_s;
+      sample.accel_mps2 = Eigen::Vector3d(0.0, 0.0, 9.81);
+    }
+    ASSERT_TRUE((*pose)->Add(batch).ok());
+  }
+  EXPECT_EQ((*pose)->history_size(), PlatformPose::kMaxHistorySamples);
+  EXPECT_TRUE((*pose)->At(t_s).has_value());
 }
 
 }  // namespace
