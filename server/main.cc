@@ -50,13 +50,38 @@ int Main(int argc, char** argv) {
   flags.Int("max-sessions", &o.max_sessions, "N", "sessions", "open sessions before RESOURCE_EXHAUSTED");
   flags.Int("workers", &o.workers, "N", "threads", "engine worker threads (0: one per core)");
   flags.Double("session-ttl", &o.session_ttl_s, "S", "s", "how long a session whose stream broke waits for a resume");
+  flags.Double("session-idle-timeout", &o.session_idle_timeout_s, "S", "s",
+               "an attached session that sends no block, IMU batch or scan for this long is closed "
+               "(DEADLINE_EXCEEDED); 0: never");
   flags.Int("max-queue-blocks", &o.max_queued_requests, "N", "requests",
             "requests (blocks, IMU batches, scans, refusals) queued per session before reading pauses "
             "(backpressure)");
   flags.Int("max-block-samples", &max_block_samples, "N", "samples", "per channel per block");
   flags.Int("max-channels", &o.max_channels, "N", "sensors", "largest array accepted");
   flags.Int("max-particles", &o.max_particles, "N", "particles", "largest filter.particles accepted");
-  flags.Int("max-message-bytes", &o.max_message_bytes, "N", "bytes", "largest gRPC message accepted");
+  flags.Int("max-message-bytes", &o.max_message_bytes, "N", "bytes", "largest gRPC message accepted (and sent)");
+  flags.Int("max-tracks", &o.max_tracks, "N", "tracks",
+            "detection sessions: most tracks held at once (default and ceiling of detections.max_tracks); its "
+            "TrackList must fit in --max-message-bytes");
+  flags.Int("max-scan-plots", &o.max_scan_plots, "N", "plots",
+            "detection sessions: most plots in one scan (default and ceiling of detections.max_plots_per_scan); "
+            "a larger scan is refused in-band");
+  flags.Int("memory-budget-mib", &o.memory_budget_mib, "N", "MiB",
+            "engine memory promised to sessions and Locate calls; what does not fit is RESOURCE_EXHAUSTED "
+            "(0: 3/4 of the cgroup's or the machine's memory)");
+  flags.Int("max-concurrent-locate", &o.max_concurrent_locate, "N", "calls",
+            "Locate calls queued or running at once; more are RESOURCE_EXHAUSTED (0: one per worker)");
+  flags.Int("max-streams-per-connection", &o.transport.max_streams_per_connection, "N", "streams",
+            "concurrent RPCs on one HTTP/2 connection");
+  flags.Int("grpc-memory-mib", &o.transport.grpc_memory_mib, "N", "MiB",
+            "gRPC's own buffer memory (its resource quota; 0: unlimited)");
+  flags.Double("max-connection-idle", &o.transport.connection_idle_s, "S", "s",
+               "a connection without an RPC this long is sent GOAWAY (clients reconnect); 0: never");
+  flags.Double("max-connection-age", &o.transport.connection_age_s, "S", "s",
+               "connections are sent GOAWAY after this long, streams ending after a 30 s grace (resume continues "
+               "them); 0: never");
+  flags.Double("keepalive", &o.transport.keepalive_s, "S", "s",
+               "ping a quiet connection after this long, drop it 20 s after an unanswered ping; 0: off");
   flags.Double("drain-timeout", &o.drain_timeout_s, "S", "s", "on SIGTERM, time allowed to finish in-flight work");
   flags.Double("memory-trim", &o.memory_trim_s, "S", "s",
                "hand the allocator's free pages back to the system this often (RSS follows use); 0: never");

@@ -292,6 +292,16 @@ void TrackerToProto(const engine::TrackerOptions& t, v1::FilterConfig* f) {
   f->set_resample_threshold(t.particle.resample_threshold);
 }
 
+// A count the client may lower but not raise above the server's limit (0: the limit).
+Status BoundedCount(uint32_t requested, int limit, const char* field, const char* flag, int* out) {
+  if (requested > static_cast<uint32_t>(limit)) {
+    return InvalidArgument(std::string(field) + " is " + std::to_string(requested) + "; this server allows at most " +
+                           std::to_string(limit) + " (" + flag + ")");
+  }
+  *out = requested != 0 ? static_cast<int>(requested) : limit;
+  return Status::Ok();
+}
+
 // DetectionConfig -> the tracker's options; zero fields keep the defaults.
 StatusOr<engine::DetectionSessionConfig> DetectionConfigFromProto(const v1::SessionConfig& p,
                                                                   const ConfigPolicy& policy) {
@@ -313,14 +323,10 @@ StatusOr<engine::DetectionSessionConfig> DetectionConfigFromProto(const v1::Sess
   o.initiation = d.two_point_initiation() ? engine::tws::Initiation::kTwoPoint : engine::tws::Initiation::kOnePoint;
   if (d.initial_speed_sigma_mps() != 0.0) o.initial_speed_sigma_mps = d.initial_speed_sigma_mps();
   if (d.max_speed_mps() != 0.0) o.max_speed_mps = d.max_speed_mps();
-  o.max_tracks = policy.max_tracks;
-  if (d.max_tracks() != 0) {
-    if (d.max_tracks() > static_cast<uint32_t>(policy.max_tracks)) {
-      return InvalidArgument("detections.max_tracks is " + std::to_string(d.max_tracks()) +
-                             "; this server allows at most " + std::to_string(policy.max_tracks));
-    }
-    o.max_tracks = static_cast<int>(d.max_tracks());
-  }
+  LOCALIZER_RETURN_IF_ERROR(
+      BoundedCount(d.max_tracks(), policy.max_tracks, "detections.max_tracks", "--max-tracks", &o.max_tracks));
+  LOCALIZER_RETURN_IF_ERROR(BoundedCount(d.max_plots_per_scan(), policy.max_plots_per_scan,
+                                         "detections.max_plots_per_scan", "--max-scan-plots", &o.max_plots_per_scan));
   if (const Status s = c.Validate(); !s.ok()) return InvalidArgument("detections: " + s.message());
   return c;
 }
@@ -367,6 +373,11 @@ StatusOr<engine::AudioSessionConfig> AudioConfigFromProto(const v1::SessionConfi
   if (p.frame_samples() != 0) c.frame_samples = static_cast<int>(p.frame_samples());
   c.hop_samples = p.hop_samples() != 0 ? static_cast<int>(std::min<uint32_t>(p.hop_samples(), 1u << 21))
                                        : std::max(1, c.frame_samples / 2);
+  if (const int min_hop = std::max(1, c.frame_samples / policy.max_frame_overlap); c.hop_samples < min_hop) {
+    return InvalidArgument("hop_samples is " + std::to_string(c.hop_samples) + "; this server requires at least " +
+                           "frame_samples/" + std::to_string(policy.max_frame_overlap) + " = " +
+                           std::to_string(min_hop));
+  }
   c.weighting = WeightingFromProto(p.weighting());
   if (p.phat_beta() != 0.0) c.phat_beta = p.phat_beta();
   c.band_low_hz = p.band_low_hz();
@@ -428,6 +439,7 @@ v1::SessionConfig ConfigToProto(const engine::DetectionSessionConfig& c, const s
   d->set_initial_speed_sigma_mps(o.initial_speed_sigma_mps);
   d->set_max_speed_mps(o.max_speed_mps);
   d->set_max_tracks(static_cast<uint32_t>(o.max_tracks));
+  d->set_max_plots_per_scan(static_cast<uint32_t>(o.max_plots_per_scan));
   p.set_backend("cpu");  // detection sessions run on the CPU
   p.set_seed(c.seed);
   p.set_label(label);

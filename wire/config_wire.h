@@ -23,7 +23,11 @@ struct ConfigPolicy {
   int64_t max_block_samples = 1 << 22;   // per channel; also the default
   int max_channels = 64;
   int max_particles = 1 << 20;
-  int max_tracks = 1000000;  // detection sessions: tracks held at once; also the default
+  int max_tracks = 10000;          // detection sessions: tracks held at once; also the default
+  int max_plots_per_scan = 65536;  // detection sessions: plots in one scan; also the default
+  // hop_samples >= frame_samples / this: each sample is analysed in at most this many frames
+  // (hop 1 would make one block cost frame_samples times the work of hop = frame).
+  int max_frame_overlap = 64;
 };
 
 // INVALID_ARGUMENT naming the proto field ("array.sensors_m", "filter.particles",

@@ -1,6 +1,7 @@
 #include "server/service/localizer_service.h"
 
 #include "engine/pipeline/locate.h"
+#include "engine/pipeline/session_memory.h"
 #include "server/service/track_reactor.h"
 #include "wire/locate_wire.h"
 #include "wire/status_wire.h"
@@ -8,17 +9,25 @@
 namespace localizer::server {
 
 LocalizerService::LocalizerService(SessionRegistry* registry, WorkerPool* pool, ServiceMetrics* metrics,
-                                   wire::ConfigPolicy policy)
-    : registry_(registry), pool_(pool), metrics_(metrics), policy_(std::move(policy)) {}
+                                   wire::ConfigPolicy policy, LocateLimits locate_limits)
+    : registry_(registry), pool_(pool), metrics_(metrics), policy_(std::move(policy)), locate_limits_(locate_limits) {}
 
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LocalizerService::Track(
     grpc::CallbackServerContext* context) {
   return new TrackReactor(context, registry_, metrics_);
 }
 
-Status LocateOnce(const v1::LocateRequest& request, const wire::ConfigPolicy& policy, v1::LocateResponse* response) {
+Status LocateOnce(const v1::LocateRequest& request, const wire::ConfigPolicy& policy, v1::LocateResponse* response,
+                  MemoryBudget* budget) {
   wire::DecodedLocate decoded;
   LOCALIZER_RETURN_IF_ERROR(wire::DecodeLocateRequest(request, policy, &decoded));
+  MemoryBudget::Charge charge;  // held until the transforms are done
+  if (budget != nullptr) {
+    auto charged = budget->Reserve(engine::LocateMemoryBytes(decoded.config, decoded.block.view.samples_per_channel),
+                                   "a Locate of this block");
+    if (!charged.ok()) return charged.status();
+    charge = std::move(charged).value();
+  }
   auto result = engine::Locate(decoded.config, decoded.block.view);
   if (!result.ok()) return result.status();
   const auto array = engine::ArrayGeometry::Create(decoded.config.sensors_m, decoded.config.sound_speed_mps,
@@ -31,14 +40,24 @@ Status LocateOnce(const v1::LocateRequest& request, const wire::ConfigPolicy& po
 grpc::ServerUnaryReactor* LocalizerService::Locate(grpc::CallbackServerContext* context,
                                                    const grpc::ByteBuffer* request, grpc::ByteBuffer* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  auto finish = [this, reactor](const Status& status) {
+  auto answer = [this, reactor](const Status& status) {
     if (auto* c = metrics_->locate_requests(StatusCodeName(status.code()))) c->Increment();
     reactor->Finish(wire::ToGrpcStatus(status));
   };
   if (draining_) {
-    finish(Unavailable("server is draining"));
+    answer(Unavailable("server is draining"));
     return reactor;
   }
+  if (locate_in_flight_.fetch_add(1) >= locate_limits_.max_concurrent) {
+    locate_in_flight_.fetch_sub(1);
+    answer(ResourceExhausted(std::to_string(locate_limits_.max_concurrent) +
+                             " Locate calls are in flight, this server's limit (--max-concurrent-locate)"));
+    return reactor;
+  }
+  auto finish = [this, answer](const Status& status) {
+    locate_in_flight_.fetch_sub(1);
+    answer(status);
+  };
   // The request's bytes stay valid until Finish; decoding (up to the message limit) runs on
   // the worker pool with the rest of the work.
   const bool queued = pool_->Submit([this, request, response, finish] {
@@ -51,7 +70,7 @@ grpc::ServerUnaryReactor* LocalizerService::Locate(grpc::CallbackServerContext* 
       return;
     }
     v1::LocateResponse typed;
-    const Status status = LocateOnce(parsed, policy_, &typed);
+    const Status status = LocateOnce(parsed, policy_, &typed, locate_limits_.budget);
     if (status.ok()) {
       bool own_buffer = false;
       const grpc::Status serialized =

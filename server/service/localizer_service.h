@@ -6,6 +6,7 @@
 #include <atomic>
 
 #include "localizer/v1/localizer.grpc.pb.h"
+#include "server/service/memory_budget.h"
 #include "server/service/service_metrics.h"
 #include "server/service/session_registry.h"
 #include "server/service/worker_pool.h"
@@ -21,9 +22,18 @@ using LocalizerCallbackBase = v1::Localizer::WithRawCallbackMethod_Track<
     v1::Localizer::WithRawCallbackMethod_Locate<v1::Localizer::WithCallbackMethod_ListSessions<
         v1::Localizer::WithCallbackMethod_CloseSession<v1::Localizer::Service>>>>;
 
+// Bounds on Locate: calls queued or running at once (more are RESOURCE_EXHAUSTED at once,
+// before their request is parsed), and the memory budget each call is charged to while it
+// runs (engine/pipeline/session_memory.h LocateMemoryBytes; null: not charged).
+struct LocateLimits {
+  int max_concurrent = 16;
+  MemoryBudget* budget = nullptr;
+};
+
 class LocalizerService final : public LocalizerCallbackBase {
  public:
-  LocalizerService(SessionRegistry* registry, WorkerPool* pool, ServiceMetrics* metrics, wire::ConfigPolicy policy);
+  LocalizerService(SessionRegistry* registry, WorkerPool* pool, ServiceMetrics* metrics, wire::ConfigPolicy policy,
+                   LocateLimits locate_limits = {});
 
   grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Track(grpc::CallbackServerContext* context) override;
   grpc::ServerUnaryReactor* Locate(grpc::CallbackServerContext* context, const grpc::ByteBuffer* request,
@@ -41,10 +51,14 @@ class LocalizerService final : public LocalizerCallbackBase {
   WorkerPool* const pool_;
   ServiceMetrics* const metrics_;
   const wire::ConfigPolicy policy_;
+  const LocateLimits locate_limits_;
+  std::atomic<int> locate_in_flight_{0};
   std::atomic<bool> draining_{false};
 };
 
-// The body of Locate (exposed for tests): decode, GCC-PHAT, multilaterate.
-Status LocateOnce(const v1::LocateRequest& request, const wire::ConfigPolicy& policy, v1::LocateResponse* response);
+// The body of Locate (exposed for tests): decode, charge `budget` (when given) for the
+// transforms, GCC-PHAT, multilaterate.
+Status LocateOnce(const v1::LocateRequest& request, const wire::ConfigPolicy& policy, v1::LocateResponse* response,
+                  MemoryBudget* budget = nullptr);
 
 }  // namespace localizer::server

@@ -10,6 +10,7 @@
 #include "server/service/live_page.h"
 #include "server/service/log.h"
 #include "server/service/sessions_json.h"
+#include "server/service/transport_limits.h"
 #include "server/service/version.h"
 
 namespace localizer::server {
@@ -69,10 +70,14 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
                       : gpu_sessions      ? std::max(cores, std::min(1024, options.max_sessions))
                                           : cores;
   s->pool_ = std::make_unique<WorkerPool>(workers);
+  s->budget_ = std::make_unique<MemoryBudget>(options.memory_budget_mib > 0
+                                                  ? static_cast<int64_t>(options.memory_budget_mib) << 20
+                                                  : DefaultMemoryBudgetBytes());
 
   RegistryOptions registry_options;
   registry_options.max_sessions = options.max_sessions;
   registry_options.ttl_s = options.session_ttl_s;
+  registry_options.idle_s = options.session_idle_timeout_s;
   registry_options.memory_trim_s = options.memory_trim_s;
   registry_options.host.max_queued_requests = options.max_queued_requests;
   registry_options.host.ttl_s = options.session_ttl_s;
@@ -80,11 +85,21 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   registry_options.policy.max_block_samples = options.max_block_samples;
   registry_options.policy.max_channels = options.max_channels;
   registry_options.policy.max_particles = options.max_particles;
-  s->sessions_ = std::make_unique<SessionRegistry>(registry_options, s->pool_.get(), s->metrics_.get());
+  registry_options.policy.max_tracks = options.max_tracks;
+  registry_options.policy.max_plots_per_scan = options.max_scan_plots;
+  s->sessions_ =
+      std::make_unique<SessionRegistry>(registry_options, s->pool_.get(), s->metrics_.get(), s->budget_.get());
+  LocateLimits locate_limits{options.max_concurrent_locate > 0 ? options.max_concurrent_locate : workers,
+                             s->budget_.get()};
   s->service_ = std::make_unique<LocalizerService>(s->sessions_.get(), s->pool_.get(), s->metrics_.get(),
-                                                   registry_options.policy);
+                                                   registry_options.policy, locate_limits);
   SessionRegistry* sessions = s->sessions_.get();
   ServiceMetrics* m = s->metrics_.get();
+  MemoryBudget* budget = s->budget_.get();
+  s->registry_.AddCollector([budget, m] {
+    m->budget_used->Set(static_cast<double>(budget->used_bytes()));
+    m->budget_limit->Set(static_cast<double>(budget->budget_bytes()));
+  });
   s->registry_.AddCollector([sessions, m] {
     size_t attached = 0, total = 0;
     for (const auto& host : sessions->Snapshot()) {
@@ -106,6 +121,7 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &s->grpc_port_);
   builder.SetMaxReceiveMessageSize(options.max_message_bytes);
   builder.SetMaxSendMessageSize(options.max_message_bytes);
+  ApplyTransportLimits(options.transport, &builder);
   builder.RegisterService(s->service_.get());
   s->grpc_ = builder.BuildAndStart();
   if (!s->grpc_ || s->grpc_port_ == 0) {

@@ -20,6 +20,7 @@
 #include "server/metrics/http_exposer.h"
 #include "server/metrics/registry.h"
 #include "server/service/localizer_service.h"
+#include "server/service/memory_budget.h"
 #include "server/service/server_options.h"
 #include "server/service/service_metrics.h"
 #include "server/service/session_registry.h"
@@ -46,6 +47,7 @@ class Server final {
   const ServerOptions options_;
   metrics::Registry registry_;
   std::unique_ptr<ServiceMetrics> metrics_;
+  std::unique_ptr<MemoryBudget> budget_;  // outlives the sessions and calls charged to it
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<SessionRegistry> sessions_;
   std::unique_ptr<LocalizerService> service_;

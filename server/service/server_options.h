@@ -6,6 +6,7 @@
 #include <string>
 
 #include "engine/core/status.h"
+#include "server/service/transport_limits.h"
 
 namespace localizer::server {
 
@@ -18,6 +19,8 @@ struct ServerOptions {
                                                   // (with a GPU: one per session up
                                                   // to 1024, as they wait on batches)
   double session_ttl_s = 60.0;                    // a detached session waits this long
+  double session_idle_timeout_s = 300.0;          // an attached session that sends nothing
+                                                  // this long is closed; 0: never
   int max_queued_requests = 8;                    // requests (blocks, IMU batches, scans,
                                                   // refusals) queued per session before
                                                   // reading pauses (backpressure);
@@ -26,7 +29,17 @@ struct ServerOptions {
                                                   // size limit usually binds first)
   int max_channels = 64;                          // sensors per array
   int max_particles = 1 << 20;                    // filter.particles allowed
-  int max_message_bytes = 64 << 20;               // largest gRPC message accepted
+  int max_message_bytes = 64 << 20;               // largest gRPC message accepted (and sent)
+  int max_tracks = 10000;                         // detection sessions: tracks held at once
+                                                  // (a TrackList of them must fit in
+                                                  // max_message_bytes: ~370 B a track)
+  int max_scan_plots = 65536;                     // detection sessions: plots in one scan
+  int memory_budget_mib = 0;                      // engine memory promised to sessions and
+                                                  // Locate calls (memory_budget.h); 0: 3/4
+                                                  // of the cgroup's limit or the machine's
+  int max_concurrent_locate = 0;                  // Locate calls queued or running at once;
+                                                  // 0: one per worker
+  TransportLimits transport;                      // gRPC connections (transport_limits.h)
   double drain_timeout_s = 10.0;                  // SIGTERM: time to finish in-flight work
   double memory_trim_s = 30.0;                    // hand the allocator's free pages back
                                                   // to the system this often; 0: never

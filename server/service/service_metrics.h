@@ -10,7 +10,9 @@
 //   localizer_sequence_gaps_total            sequence jumps (blocks lost upstream)
 //   localizer_sessions{state}                sessions held now: attached | detached
 //   localizer_sessions_opened_total{how}     open | resume
-//   localizer_sessions_closed_total{reason}  finished | closed | expired | replaced | shutdown
+//   localizer_sessions_closed_total{reason}  finished | closed | expired | idle | replaced | shutdown
+//   localizer_memory_budget_bytes{state}     used | limit: engine memory charged to sessions
+//                                            and Locate calls, and the budget (memory_budget.h)
 //   localizer_queue_depth_blocks             blocks waiting for a worker, all sessions
 //   localizer_engine_cpu_seconds_total       worker-thread CPU inside Session::Process (the
 //                                            rest of the process CPU is the service's overhead)
@@ -58,6 +60,8 @@ class ServiceMetrics final {
   metrics::Counter* resumed = nullptr;
   metrics::Gauge* attached = nullptr;
   metrics::Gauge* detached = nullptr;
+  metrics::Gauge* budget_used = nullptr;
+  metrics::Gauge* budget_limit = nullptr;
   metrics::Gauge* queue_depth = nullptr;
   metrics::Counter* scans = nullptr;
   metrics::Counter* track_updates = nullptr;

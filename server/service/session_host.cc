@@ -8,16 +8,12 @@
 #include "wire/config_wire.h"
 
 namespace localizer::server {
-namespace {
-
-constexpr int kItemsPerTurn = 4;
-
-}  // namespace
 
 SessionHost::SessionHost(std::string id, std::string token, std::string label, std::unique_ptr<SessionRunner> runner,
                          HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics,
-                         std::function<void()> on_finished)
-    : id_(std::move(id)),
+                         std::function<void()> on_finished, MemoryBudget::Charge charge)
+    : charge_(std::move(charge)),
+      id_(std::move(id)),
       token_(std::move(token)),
       label_(std::move(label)),
       runner_(std::move(runner)),
@@ -27,7 +23,7 @@ SessionHost::SessionHost(std::string id, std::string token, std::string label, s
       on_finished_(std::move(on_finished)),
       created_(Clock::now()),
       inbox_(static_cast<size_t>(std::max(1, limits.max_queued_requests)), metrics->queue_depth, created_),
-      detached_since_(created_) {}
+      stream_changed_at_(created_) {}
 
 bool SessionHost::TokenMatches(const std::string& token) const { return ConstantTimeEquals(token, token_); }
 
@@ -55,6 +51,7 @@ bool SessionHost::Attach(StreamSink* sink, bool resumed, const ResumePoint& resu
     Bump(metrics_->sessions_closed("replaced"));
   }
   sink_ = sink;
+  stream_changed_at_ = Clock::now();  // the idle clock starts again
   stream_ended_ = input_done_ = draining_ = input_paused_ = false;
   auto opened = std::make_shared<v1::TrackResponse>();
   *opened->mutable_opened() = OpenedLocked(resumed);
@@ -114,7 +111,7 @@ bool SessionHost::Detach(StreamSink* sink) {
   if (sink_ == sink && sink != nullptr) {
     outbox_.Failed();  // a write never settled (none in practice: gRPC reports it first)
     sink_ = nullptr;
-    detached_since_ = Clock::now();
+    stream_changed_at_ = Clock::now();
   }
   return !closed_;
 }
@@ -221,9 +218,11 @@ bool SessionHost::attached() const {
   return sink_ != nullptr;
 }
 
-bool SessionHost::Expired(Clock::time_point now, double ttl_s) const {
+SessionHost::Expiry SessionHost::ExpiryAt(Clock::time_point now, double ttl_s, double idle_s) const {
   MutexLock lock(&mutex_);
-  return sink_ == nullptr && Seconds(now - detached_since_) > ttl_s;
+  if (sink_ == nullptr) return Seconds(now - stream_changed_at_) > ttl_s ? Expiry::kDetached : Expiry::kNone;
+  const double quiet_s = Seconds(now - std::max(stream_changed_at_, inbox_.last_accepted_at()));
+  return idle_s > 0.0 && IdleLocked() && quiet_s > idle_s ? Expiry::kIdle : Expiry::kNone;
 }
 
 v1::SessionInfo SessionHost::Info(Clock::time_point now, double ttl_s) const {
@@ -242,7 +241,7 @@ v1::SessionInfo SessionHost::Info(Clock::time_point now, double ttl_s) const {
   info.set_age_s(Seconds(now - created_));
   info.set_idle_s(Seconds(now - inbox_.last_accepted_at()));
   info.set_queued_blocks(static_cast<uint32_t>(inbox_.queued_blocks()));
-  if (sink_ == nullptr) info.set_expires_in_s(std::max(0.0, ttl_s - Seconds(now - detached_since_)));
+  if (sink_ == nullptr) info.set_expires_in_s(std::max(0.0, ttl_s - Seconds(now - stream_changed_at_)));
   return info;
 }
 

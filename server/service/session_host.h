@@ -45,6 +45,7 @@
 #include "engine/pipeline/session.h"
 #include "localizer/v1/localizer.pb.h"
 #include "server/service/inbox.h"
+#include "server/service/memory_budget.h"
 #include "server/service/outbox.h"
 #include "server/service/service_metrics.h"
 #include "server/service/session_runner.h"
@@ -67,9 +68,12 @@ struct HostLimits {
 class SessionHost final : public std::enable_shared_from_this<SessionHost> {
  public:
   // `on_finished` runs (with the host's lock held) when the session finishes cleanly,
-  // before the stream sees OK: the registry forgets the session there.
+  // before the stream sees OK: the registry forgets the session there. `charge` is the
+  // session's share of the server's memory budget, returned when the host is destroyed
+  // (with the runner whose memory it stands for).
   SessionHost(std::string id, std::string token, std::string label, std::unique_ptr<SessionRunner> runner,
-              HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics, std::function<void()> on_finished);
+              HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics, std::function<void()> on_finished,
+              MemoryBudget::Charge charge = {});
 
   const std::string& id() const { return id_; }
   const std::string& resume_token() const { return token_; }  // a secret: never log it
@@ -115,8 +119,11 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   // Nothing queued or running and nothing left to write (or no stream to write to).
   bool Drained() const EXCLUDES(mutex_);
   bool attached() const EXCLUDES(mutex_);
-  // Detached for longer than `ttl_s`.
-  bool Expired(Clock::time_point now, double ttl_s) const EXCLUDES(mutex_);
+  // kDetached: detached for longer than `ttl_s`. kIdle: attached, but nothing accepted,
+  // queued or running for longer than `idle_s` since the later of the attach and the last
+  // accepted request (0: never) -- a client that opens and sends nothing holds no slot forever.
+  enum class Expiry { kNone, kDetached, kIdle };
+  Expiry ExpiryAt(Clock::time_point now, double ttl_s, double idle_s) const EXCLUDES(mutex_);
   // For ListSessions, CloseSession and GET /sessions.
   v1::SessionInfo Info(Clock::time_point now, double ttl_s) const EXCLUDES(mutex_);
 
@@ -135,6 +142,9 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   bool IdleLocked() const REQUIRES(mutex_) { return inbox_.empty() && !running_; }
   v1::SessionOpened OpenedLocked(bool resumed) const REQUIRES(mutex_);
 
+  static constexpr int kItemsPerTurn = 4;  // per worker turn, so that sessions share the workers
+
+  const MemoryBudget::Charge charge_;  // destroyed after runner_ (declared before it)
   const std::string id_;
   const std::string token_;
   const std::string label_;
@@ -154,11 +164,11 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   bool closed_ GUARDED_BY(mutex_) = false;
   // The attached stream, and what the host knows of it.
   StreamSink* sink_ GUARDED_BY(mutex_) = nullptr;
-  bool stream_ended_ GUARDED_BY(mutex_) = false;  // End was called; it stays until it detaches
-  bool input_done_ GUARDED_BY(mutex_) = false;    // the client half-closed, or draining
-  bool draining_ GUARDED_BY(mutex_) = false;      // the server is shutting down
-  bool input_paused_ GUARDED_BY(mutex_) = false;  // Offer said "stop reading"; no ReadMore since
-  Clock::time_point detached_since_ GUARDED_BY(mutex_);
+  bool stream_ended_ GUARDED_BY(mutex_) = false;            // End was called; it stays until it detaches
+  bool input_done_ GUARDED_BY(mutex_) = false;              // the client half-closed, or draining
+  bool draining_ GUARDED_BY(mutex_) = false;                // the server is shutting down
+  bool input_paused_ GUARDED_BY(mutex_) = false;            // Offer said "stop reading"; no ReadMore since
+  Clock::time_point stream_changed_at_ GUARDED_BY(mutex_);  // the latest attach or detach
 };
 
 }  // namespace localizer::server

@@ -1,16 +1,26 @@
 #include "server/service/session_registry.h"
 
+#include <sstream>
+#include <utility>
+
 #include "wire/string_limits.h"
 
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
 
+#include "engine/pipeline/session_memory.h"
 #include "server/service/log.h"
 #include "server/service/secure_random.h"
 
 namespace localizer::server {
 namespace {
+
+std::string ShortSeconds(double s) {
+  std::ostringstream out;
+  out << s;
+  return out.str();
+}
 
 // A session reference from a client (Resume, CloseSession) within its documented lengths.
 Status CheckSessionRef(const std::string& id, const std::string& token) {
@@ -20,8 +30,9 @@ Status CheckSessionRef(const std::string& id, const std::string& token) {
 
 }  // namespace
 
-SessionRegistry::SessionRegistry(RegistryOptions options, WorkerPool* pool, ServiceMetrics* metrics)
-    : options_(std::move(options)), pool_(pool), metrics_(metrics) {
+SessionRegistry::SessionRegistry(RegistryOptions options, WorkerPool* pool, ServiceMetrics* metrics,
+                                 MemoryBudget* budget)
+    : options_(std::move(options)), pool_(pool), metrics_(metrics), budget_(budget) {
   sweeper_ = std::thread([this] { SweepLoop(); });
 }
 
@@ -47,6 +58,12 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   }
   auto engine_config = wire::ConfigFromProto(config, options_.policy);
   if (!engine_config.ok()) return engine_config.status();
+  MemoryBudget::Charge charge;
+  if (budget_ != nullptr) {
+    auto charged = budget_->Reserve(engine::SessionMemoryBytes(*engine_config), "a session of this config");
+    if (!charged.ok()) return charged.status();
+    charge = std::move(charged).value();
+  }
   // FFT plans, particles: outside the lock.
   auto runner = MakeSessionRunner(*engine_config, metrics_);
   if (!runner.ok()) return runner.status();
@@ -66,7 +83,7 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   // stream sees OK; the host calls this with its lock held (lock order: host -> registry).
   auto forget = [this, id] { Forget(id, "finished"); };
   auto host = std::make_shared<SessionHost>(id, *token, config.label(), std::move(runner).value(), options_.host, pool_,
-                                            metrics_, std::move(forget));
+                                            metrics_, std::move(forget), std::move(charge));
   sessions_[id] = host;
   return host;
 }
@@ -170,12 +187,20 @@ void SessionRegistry::SweepLoop() {
       last_trim = Clock::now();
     }
     const auto now = Clock::now();
-    std::vector<std::string> expired;
+    std::vector<std::pair<std::string, SessionHost::Expiry>> expired;
     for (const auto& host : Snapshot()) {
-      if (host->Expired(now, options_.ttl_s)) expired.push_back(host->id());
+      const SessionHost::Expiry expiry = host->ExpiryAt(now, options_.ttl_s, options_.idle_s);
+      if (expiry != SessionHost::Expiry::kNone) expired.emplace_back(host->id(), expiry);
     }
-    for (const std::string& id : expired) {
-      Remove(id, "expired", grpc::Status(grpc::StatusCode::NOT_FOUND, "session expired"));
+    for (const auto& [id, expiry] : expired) {
+      if (expiry == SessionHost::Expiry::kDetached) {
+        Remove(id, "expired", grpc::Status(grpc::StatusCode::NOT_FOUND, "session expired"));
+      } else {
+        Remove(id, "idle",
+               grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
+                            "no request for " + ShortSeconds(options_.idle_s) +
+                                " s: the session is closed (--session-idle-timeout)"));
+      }
     }
   }
 }

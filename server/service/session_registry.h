@@ -4,7 +4,8 @@
 // A session id is 16 hex digits (64 bits) and its resume token 32 (128 bits), drawn
 // independently from the operating system's CSPRNG (secure_random.h): seeing any number of
 // ids and tokens tells nothing of another session's. Tokens are compared in constant time. A detached session (its
-// stream gone) is kept for `ttl_s`, then closed by a sweep that runs every ~0.25 s on a thread of its own (which also
+// stream gone) is kept for `ttl_s`, an attached one that sends nothing for `idle_s` (its stream ends
+// DEADLINE_EXCEEDED), then closed by a sweep that runs every ~0.25 s on a thread of its own (which also
 // hands the allocator's free pages back to the system every memory_trim_s, so RSS follows the memory in use).
 // Thread-safe. Lock order: a session's lock may be held when calling Forget (a session that
 // finishes forgets itself); the registry never takes a session's lock while holding its own.
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "localizer/v1/localizer.pb.h"
+#include "server/service/memory_budget.h"
 #include "server/service/service_metrics.h"
 #include "server/service/session_host.h"
 #include "server/service/worker_pool.h"
@@ -30,6 +32,7 @@ namespace localizer::server {
 struct RegistryOptions {
   int max_sessions = 1024;
   double ttl_s = 60.0;
+  double idle_s = 300.0;        // an attached session with no request for this long is closed; 0: never
   double memory_trim_s = 30.0;  // the sweep returns free heap pages this often; 0: never
   HostLimits host;
   wire::ConfigPolicy policy;
@@ -37,13 +40,16 @@ struct RegistryOptions {
 
 class SessionRegistry final {
  public:
-  SessionRegistry(RegistryOptions options, WorkerPool* pool, ServiceMetrics* metrics);
+  // `budget` (may be null: nothing charged) is charged each session's engine memory
+  // (engine/pipeline/session_memory.h) for as long as the session lives.
+  SessionRegistry(RegistryOptions options, WorkerPool* pool, ServiceMetrics* metrics, MemoryBudget* budget = nullptr);
   ~SessionRegistry();  // stops the sweep; closes every session
   SessionRegistry(const SessionRegistry&) = delete;
   SessionRegistry& operator=(const SessionRegistry&) = delete;
 
   // INVALID_ARGUMENT naming the field; FAILED_PRECONDITION (backend gpu without one);
-  // RESOURCE_EXHAUSTED at max_sessions; UNAVAILABLE while draining.
+  // RESOURCE_EXHAUSTED at max_sessions or when its memory does not fit the budget (checked
+  // before the session is built); UNAVAILABLE while draining.
   StatusOr<std::shared_ptr<SessionHost>> Open(const v1::SessionConfig& config) EXCLUDES(mutex_);
   // NOT_FOUND unknown or expired; PERMISSION_DENIED wrong token; UNAVAILABLE draining.
   StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const EXCLUDES(mutex_);
@@ -66,6 +72,7 @@ class SessionRegistry final {
   const RegistryOptions options_;
   WorkerPool* const pool_;
   ServiceMetrics* const metrics_;
+  MemoryBudget* const budget_;
 
   mutable Mutex mutex_;
   std::map<std::string, std::shared_ptr<SessionHost>> sessions_ GUARDED_BY(mutex_);

@@ -180,6 +180,8 @@ TEST_F(ServiceTest, BadConfigsAreInvalidArgumentNamingTheField) {
       {[](v1::SessionConfig* c) { c->mutable_array()->set_sound_speed_mps(0.0); }, "sound_speed_mps"},
       {[](v1::SessionConfig* c) { c->set_frame_samples(16); }, "frame_samples"},
       {[](v1::SessionConfig* c) { c->set_hop_samples(8192); }, "hop_samples"},
+      // One sample per hop: a block would cost frame_samples times the work of hop = frame.
+      {[](v1::SessionConfig* c) { c->set_hop_samples(1); }, "frame_samples/64"},
       {[](v1::SessionConfig* c) { c->set_backend("tpu"); }, "backend"},
   };
   for (const Case& c : cases) {

@@ -328,6 +328,36 @@ TEST_F(ShortTtlTest, DetachedSessionExpires) {
   EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND) << status.error_message();
 }
 
+class ShortIdleTest : public ServiceTest {
+ protected:
+  void SetUp() override {
+    ServerOptions options;
+    options.session_idle_timeout_s = 0.5;
+    options.max_sessions = 1;
+    StartServer(options);
+  }
+};
+
+TEST_F(ShortIdleTest, AnAttachedSessionThatSendsNothingIsClosedAndFreesItsSlot) {
+  // The review's lock-out: attached sessions that never send a block never expired, and
+  // max_sessions of them refused every new client. A session that streams stays; one that
+  // goes quiet is ended DEADLINE_EXCEEDED and its slot is free again.
+  const Scenario s = MakeScenario("tetra-water", 1.0, 1, kBlock);
+  TestStream quiet(stub_.get());
+  ASSERT_TRUE(quiet.Send(s.OpenRequest()));
+  ASSERT_TRUE(quiet.WaitFor([](const auto& r) { return !r.empty(); }));
+  const grpc::Status ended = quiet.Finish();
+  EXPECT_EQ(ended.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << ended.error_message();
+  EXPECT_NE(ended.error_message().find("--session-idle-timeout"), std::string::npos) << ended.error_message();
+  TestStream busy(stub_.get());
+  ASSERT_TRUE(busy.Send(s.OpenRequest()));  // the slot is free again
+  for (int64_t k = 1; k <= 4; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));  // 1 s in all: twice the idle limit
+    ASSERT_TRUE(busy.Send(s.BlockRequest(k, kBlock)));
+  }
+  ASSERT_TRUE(busy.Close().ok());
+}
+
 TEST_F(ShortTtlTest, SessionLimitIsResourceExhausted) {
   const Scenario s = MakeScenario("tetra-water", 1.0, 1, kBlock);
   TestStream a(stub_.get()), b(stub_.get());

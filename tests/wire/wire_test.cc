@@ -12,6 +12,7 @@
 #include "wire/block_wire.h"
 #include "wire/config_wire.h"
 #include "wire/estimate_wire.h"
+#include "wire/imu_wire.h"
 #include "wire/locate_wire.h"
 #include "wire/status_wire.h"
 
@@ -443,6 +444,19 @@ TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
   EXPECT_FALSE(back.source_present);
   EXPECT_EQ(back.presence_statistic, 1.5);
   EXPECT_EQ(back.modes, 0);
+}
+
+TEST(ImuWire, ABatchAboveTheSampleLimitIsInvalidArgumentNamingIt) {
+  std::vector<engine::ImuSample> samples(kMaxImuSamplesPerBatch + 1);
+  for (size_t i = 0; i < samples.size(); ++i) samples[i].t_s = 1e-3 * static_cast<double>(i + 1);
+  v1::ImuBatch batch;
+  EncodeImuBatch(samples, nullptr, 1, &batch);
+  const auto refused = DecodeImuBatch(batch);
+  EXPECT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(refused.status().message().find("imu.samples"), std::string::npos) << refused.status().message();
+  samples.pop_back();
+  EncodeImuBatch(samples, nullptr, 1, &batch);
+  EXPECT_TRUE(DecodeImuBatch(batch).ok());
 }
 
 TEST(StatusWire, CodesMapByName) {

@@ -1,0 +1,53 @@
+#include "engine/pipeline/session_memory.h"
+
+#include <algorithm>
+
+namespace localizer::engine {
+namespace {
+
+// Measured on x86-64 (tests/pipeline/session_memory_test.cc, LOCALIZER_MEMORY_PROBE=1) and
+// rounded up: bytes per unit of what grows.
+constexpr int64_t kAudioBaseBytes = int64_t{4} << 20;  // plans, acquisition search, buffers
+constexpr int64_t kParticleBytes = 256;                // state, weights, resampling buffers
+constexpr int64_t kChannelSampleBytes = 64;            // per channel per frame sample: the
+                                                       // frame, spectrum, pair spectra, GCC
+constexpr int64_t kTrackBytes = 1024;                  // a track, its report, its history
+constexpr int64_t kEdgeBytes = 3 * 16;                 // a gate pair, sorted and greedy copies
+constexpr int64_t kPlotBytes = 256;                    // a converted plot and its grid cell
+
+int64_t ParticlesHeld(const AudioSessionConfig& config) {
+  switch (config.tracker.kind) {
+    case FilterKind::kPf:
+    case FilterKind::kMmpf:
+      return config.tracker.particle.particles;
+    default:
+      return 0;  // Kalman filters: a few 6 x 6 matrices
+  }
+}
+
+}  // namespace
+
+int64_t SessionMemoryBytes(const AudioSessionConfig& config) {
+  const int64_t channels = static_cast<int64_t>(config.sensors_m.size());
+  return kAudioBaseBytes + kParticleBytes * ParticlesHeld(config) +
+         kChannelSampleBytes * channels * std::max(config.frame_samples, 64);
+}
+
+int64_t SessionMemoryBytes(const DetectionSessionConfig& config) {
+  const tws::TwsOptions& o = config.tws;
+  const int64_t tracks = o.max_tracks;
+  return (int64_t{1} << 20) + tracks * (kTrackBytes + kEdgeBytes * o.gate_search_budget) +
+         kPlotBytes * o.max_plots_per_scan;
+}
+
+int64_t SessionMemoryBytes(const SessionConfig& config) {
+  return std::visit([](const auto& c) { return SessionMemoryBytes(c); }, config);
+}
+
+int64_t LocateMemoryBytes(const AudioSessionConfig& config, int64_t samples_per_channel) {
+  const int64_t channels = static_cast<int64_t>(config.sensors_m.size());
+  // The decoded block (float), and the frame's transforms: a frame as long as the block.
+  return kAudioBaseBytes + channels * samples_per_channel * (4 + kChannelSampleBytes);
+}
+
+}  // namespace localizer::engine

@@ -1,0 +1,104 @@
+// Admission by cost: each session is charged its engine memory (SessionMemoryBytes) against
+// --memory-budget-mib before it is built, and a config that does not fit is refused
+// RESOURCE_EXHAUSTED naming the flag, while smaller sessions still open and a closed
+// session's share comes back; Locate calls beyond --max-concurrent-locate are refused at
+// once instead of queueing their requests' memory.
+#include <future>
+#include <vector>
+
+#include "engine/pipeline/session_memory.h"
+#include "tests/server/service_fixture.h"
+
+namespace localizer::server::testing {
+namespace {
+
+constexpr int64_t kBlock = 2048;
+
+class AdmissionTest : public ServiceTest {
+ protected:
+  void SetUp() override {
+    ServerOptions options;
+    options.memory_budget_mib = 96;
+    options.max_concurrent_locate = 1;
+    StartServer(options);
+  }
+};
+
+TEST_F(AdmissionTest, ASessionThatDoesNotFitTheBudgetIsRefusedAndAClosedOneGivesItsShareBack) {
+  const Scenario s = MakeScenario("tetra-water", 1.0, 1, kBlock);
+  // 2^20 particles: ~256 MiB by the estimate, above the whole budget.
+  v1::TrackRequest huge = s.OpenRequest();
+  huge.mutable_open()->mutable_filter()->set_particles(1 << 20);
+  {
+    TestStream stream(stub_.get());
+    ASSERT_TRUE(stream.Send(huge));
+    const grpc::Status status = stream.Close();
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
+    EXPECT_NE(status.error_message().find("--memory-budget-mib"), std::string::npos) << status.error_message();
+  }
+  // Sessions of 2^17 particles (~36 MiB each by the estimate): two fit in 96 MiB, a third
+  // does not; once one closes, the third opens.
+  v1::TrackRequest medium = s.OpenRequest();
+  medium.mutable_open()->mutable_filter()->set_particles(1 << 17);
+  auto config = wire::AudioConfigFromProto(medium.open(), wire::ConfigPolicy{});
+  ASSERT_TRUE(config.ok());
+  const int64_t each = engine::SessionMemoryBytes(*config);
+  ASSERT_GT(3 * each, int64_t{96} << 20);
+  ASSERT_LE(2 * each, int64_t{96} << 20);
+  TestStream a(stub_.get()), b(stub_.get());
+  ASSERT_TRUE(a.Send(medium));
+  ASSERT_TRUE(a.WaitFor([](const auto& r) { return !r.empty(); }));
+  ASSERT_TRUE(b.Send(medium));
+  ASSERT_TRUE(b.WaitFor([](const auto& r) { return !r.empty(); }));
+  {
+    TestStream c(stub_.get());
+    ASSERT_TRUE(c.Send(medium));
+    EXPECT_EQ(c.Close().error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  }
+  ASSERT_TRUE(a.Close().ok());  // finished: forgotten and destroyed, its share returned
+  bool opened = false;
+  for (int attempt = 0; attempt < 50 && !opened; ++attempt) {  // the host is released just after OK
+    TestStream c(stub_.get());
+    ASSERT_TRUE(c.Send(medium));
+    ASSERT_TRUE(c.Send(s.BlockRequest(1, kBlock)));
+    opened = c.Close().ok();
+    if (!opened) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_TRUE(opened);
+  ASSERT_TRUE(b.Close().ok());
+}
+
+TEST_F(AdmissionTest, LocateCallsBeyondTheConcurrencyLimitAreRefusedAtOnce) {
+  const Scenario s = MakeScenario("tetra-water", 4.0, 1, kBlock);
+  v1::LocateRequest request;
+  *request.mutable_config() = wire::ConfigToProto(s.config, "");
+  request.mutable_config()->set_max_block_samples(0);
+  const std::vector<float> samples = s.Block(1, 1 << 17);
+  wire::EncodeBlock(
+      {1, s.sim.channel_count, static_cast<int64_t>(samples.size()) / s.sim.channel_count, samples.data()},
+      /*pcm16=*/false, request.mutable_block());
+  std::vector<std::future<grpc::Status>> calls;
+  for (int i = 0; i < 8; ++i) {
+    calls.push_back(std::async(std::launch::async, [&] {
+      auto stub = v1::Localizer::NewStub(channel_);
+      grpc::ClientContext context;
+      v1::LocateResponse response;
+      return stub->Locate(&context, request, &response);
+    }));
+  }
+  int ok = 0, refused = 0;
+  for (auto& call : calls) {
+    const grpc::Status status = call.get();
+    if (status.ok()) ++ok;
+    if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
+      ++refused;
+      EXPECT_NE(status.error_message().find("--max-concurrent-locate"), std::string::npos) << status.error_message();
+    }
+  }
+  EXPECT_GE(ok, 1);
+  EXPECT_EQ(ok + refused, 8);  // every call answered, none failed otherwise
+  EXPECT_GE(refused, 1);       // eight at once against a limit of one
+}
+
+}  // namespace
+}  // namespace localizer::server::testing
