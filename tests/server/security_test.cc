@@ -434,7 +434,9 @@ TEST(TokenAuthenticatorTest, RefusesBadFilesNamingTheLineButNotTheToken) {
   EXPECT_NE(e.find("1 field(s)"), std::string::npos) << e;
   e = error("# only comments\n\n");
   EXPECT_NE(e.find("holds no token"), std::string::npos) << e;
-  e = error(std::string("client ccccccccccccccc\x01" "ccccc\n"));
+  e =
+      error(std::string("client ccccccccccccccc\x01"
+                        "ccccc\n"));
   EXPECT_NE(e.find("printable ASCII"), std::string::npos) << e;
   auto missing = TokenAuthenticator::Load("/nonexistent/localizer-tokens");
   ASSERT_FALSE(missing.ok());
