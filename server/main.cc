@@ -93,6 +93,15 @@ int Main(int argc, char** argv) {
   flags.Int("gpu-max-batch", &o.gpu_max_batch, "N", "frames", "GPU: a batch launches as soon as this many wait");
   flags.Int("gpu-bank-mib", &o.gpu_bank_mib, "N", "MiB",
             "GPU: device memory for particles (0: 3/4 of free); a session beyond it gets RESOURCE_EXHAUSTED");
+  flags.String("tls-cert", &o.tls_cert, "FILE",
+               "PEM certificate chain: serve gRPC over TLS (with --tls-key; README \"Security\")");
+  flags.String("tls-key", &o.tls_key, "FILE", "PEM private key of --tls-cert (unencrypted)");
+  flags.String("tls-client-ca", &o.tls_client_ca, "FILE",
+               "PEM CA certificates: require and verify client certificates signed by them (mutual TLS)");
+  flags.String("auth-token-file", &o.auth_token_file, "FILE",
+               "'ROLE TOKEN' lines (ROLE client or operator, tokens >= 16 chars; '#' comments): every call "
+               "needs 'authorization: Bearer TOKEN'; ListSessions, CloseSession and HTTP /sessions, / need "
+               "operator");
   flags.Bool("version", &version, "print the version and exit");
   const Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
   if (flags.help_requested()) {

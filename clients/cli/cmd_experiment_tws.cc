@@ -40,8 +40,9 @@ struct TwsFlags {
   std::string initiation = "one-point";
   double ospa_cutoff_m = 1000.0;
   double ospa_order = 2.0;
-  std::string server;       // HOST:PORT: run the scans through a detection session there
-  std::string session_key;  // "" with --server: a random one
+  std::string server;              // HOST:PORT: run the scans through a detection session there
+  client::ConnectOptions connect;  // credentials for --server
+  std::string session_key;         // "" with --server: a random one
 };
 
 Status Check(const TwsFlags& f) {
@@ -94,7 +95,7 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   flags.String("initiation", &f.initiation, "one-point|two-point", "how unassociated plots start tentative tracks");
   flags.Double("ospa-cutoff-m", &f.ospa_cutoff_m, "C", "m", "OSPA / GOSPA cut-off c");
   flags.Double("ospa-order", &f.ospa_order, "P", "", "OSPA / GOSPA order p (GOSPA alpha = 2)");
-  RegisterServerFlag(flags, &f.server, /*required=*/false);
+  RegisterServerFlag(flags, &f.server, /*required=*/false, &f.connect);
   flags.String("session-key", &f.session_key, "KEY", "with --server: x-localizer-session-key (default: random)");
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   if (const Status st = Check(f); !st.ok()) return UsageError(kCommand, st.message());
@@ -132,7 +133,9 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   } else {
     engine::DetectionSessionConfig config;
     config.tws = options;
-    auto made = client::RemoteScanSession::Open(client::Connect(f.server), config, "experiment-tws",
+    auto channel = client::Connect(f.server, f.connect);
+    if (!channel.ok()) return RuntimeError(kCommand, channel.status());
+    auto made = client::RemoteScanSession::Open(*channel, config, "experiment-tws",
                                                 f.session_key.empty() ? client::RandomSessionKey() : f.session_key);
     if (!made.ok()) return RuntimeError(kCommand, made.status());
     remote = std::move(made).value();

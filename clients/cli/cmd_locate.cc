@@ -96,6 +96,7 @@ void PrintResponse(const v1::LocateResponse& r) {
 
 int RunLocate(const std::vector<std::string>& args) {
   std::string server;
+  client::ConnectOptions connect;
   std::string array_path;
   std::vector<std::string> wav_paths;
   double start_s = 0.0;
@@ -109,7 +110,7 @@ int RunLocate(const std::vector<std::string>& args) {
       "Locate: the whole block is one GCC frame. Prints each sensor pair (reference, k) as\n"
       "delay, quality (peak / strongest sidelobe) and peak SNR, then the multilateration\n"
       "fix with its standard deviations, or \"no fix\". Nothing is tracked or kept.");
-  RegisterServerFlag(flags, &server, /*required=*/true);
+  RegisterServerFlag(flags, &server, /*required=*/true, &connect);
   flags.String("array", &array_path, "FILE", "sensor array: array.json, or the XAV hydrophones_config CSV").Required();
   flags.Strings("wav", &wav_paths, "FILE", "one multichannel WAV, or one mono WAV per sensor in sensor order")
       .Required();
@@ -144,7 +145,9 @@ int RunLocate(const std::vector<std::string>& args) {
   view.samples = segment->samples.data();
   wire::EncodeBlock(view, /*pcm16=*/false, request.mutable_block());
 
-  auto stub = v1::Localizer::NewStub(client::Connect(server));
+  auto channel = client::Connect(server, connect);
+  if (!channel.ok()) return RuntimeError(kCommand, channel.status());
+  auto stub = v1::Localizer::NewStub(*channel);
   grpc::ClientContext context;
   context.set_deadline(
       std::chrono::system_clock::now() +

@@ -35,16 +35,19 @@ void PrintSession(const v1::SessionInfo& s) {
 int RunList(const std::vector<std::string>& args) {
   const std::string command = "list";
   std::string server;
+  client::ConnectOptions connect;
   double timeout_s = 10.0;
   FlagSet flags("localizer-cli list --server HOST:PORT",
                 "Lists the sessions the server holds, attached or detached, one line each:\n"
                 "id, label, backend, whether a stream is attached, blocks and frames processed,\n"
                 "rejections, queued blocks, age, idle time and (detached) time left to resume.");
-  RegisterServerFlag(flags, &server, /*required=*/true);
+  RegisterServerFlag(flags, &server, /*required=*/true, &connect);
   flags.Double("timeout", &timeout_s, "S", "s", "deadline of the call");
   if (auto exit_code = ParseFlagsOrExit(command, flags, args)) return *exit_code;
   if (!(timeout_s > 0.0)) return UsageError(command, "--timeout must be > 0");
-  auto stub = v1::Localizer::NewStub(client::Connect(server));
+  auto channel = client::Connect(server, connect);
+  if (!channel.ok()) return RuntimeError(command, channel.status());
+  auto stub = v1::Localizer::NewStub(*channel);
   grpc::ClientContext context;
   SetDeadline(&context, timeout_s);
   v1::ListSessionsResponse response;
@@ -58,6 +61,7 @@ int RunList(const std::vector<std::string>& args) {
 int RunClose(const std::vector<std::string>& args) {
   const std::string command = "close";
   std::string server;
+  client::ConnectOptions connect;
   std::string session_id;
   std::string token;
   std::string session_key;
@@ -66,7 +70,7 @@ int RunClose(const std::vector<std::string>& args) {
                 "Ends a session now, attached or not (its stream, if any, ends with CANCELLED).\n"
                 "The resume token is the one SessionOpened carried (printed by track/simulate\n"
                 "--server as the session line).");
-  RegisterServerFlag(flags, &server, /*required=*/true);
+  RegisterServerFlag(flags, &server, /*required=*/true, &connect);
   flags.String("session", &session_id, "ID", "session id").Required();
   flags.String("token", &token, "T", "the session's resume token").Required();
   flags.String("session-key", &session_key, "KEY",
@@ -75,7 +79,9 @@ int RunClose(const std::vector<std::string>& args) {
   flags.Double("timeout", &timeout_s, "S", "s", "deadline of the call");
   if (auto exit_code = ParseFlagsOrExit(command, flags, args)) return *exit_code;
   if (!(timeout_s > 0.0)) return UsageError(command, "--timeout must be > 0");
-  auto stub = v1::Localizer::NewStub(client::Connect(server));
+  auto channel = client::Connect(server, connect);
+  if (!channel.ok()) return RuntimeError(command, channel.status());
+  auto stub = v1::Localizer::NewStub(*channel);
   grpc::ClientContext context;
   SetDeadline(&context, timeout_s);
   client::SetSessionKey(&context, session_key);

@@ -140,8 +140,9 @@ int RunOnServer(const SimulateFlags& f, const io::SimulationRun& run) {
     writer = std::move(*opened);
   }
 
-  auto stream =
-      client::OpenTrackSession(client::Connect(f.stream.server), *config, options->label, options->session_key);
+  auto channel = client::Connect(f.stream.server, f.stream.connect);
+  if (!channel.ok()) return RuntimeError(kCommand, channel.status());
+  auto stream = client::OpenTrackSession(*channel, *config, options->label, options->session_key);
   if (!stream.ok()) return RuntimeError(kCommand, stream.status());
   PrintOpened((*stream)->opened());
 
@@ -206,7 +207,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   flags.Uint64("seed", &f.seed, "S", "random seed of the scenario: source signal, noise, jitter");
   flags.OptionalDouble("duration", &f.duration_s, "S", "the scenario's own", "seconds of recording to simulate");
   flags.Bool("list", &f.list, "print the scenario names and descriptions, then exit");
-  RegisterServerFlag(flags, &f.stream.server, /*required=*/false);
+  RegisterServerFlag(flags, &f.stream.server, /*required=*/false, &f.stream.connect);
   RegisterStreamFlags(flags, &f.stream, "realtime");
   flags.Int("print-every", &f.print_every, "N", "frames",
             "with --server: print every Nth estimate with its error (0: none)");

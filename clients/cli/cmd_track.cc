@@ -43,7 +43,7 @@ void RegisterFlags(FlagSet& flags, TrackFlags* f) {
   RegisterGccFlags(flags, &f->session);
   flags.Double("block", &f->block_s, "S", "s", "audio handed to the local session per call");
   flags.Int("print-every", &f->print_every, "N", "frames", "print every Nth estimate to stdout (0: none)");
-  RegisterServerFlag(flags, &f->stream.server, /*required=*/false);
+  RegisterServerFlag(flags, &f->stream.server, /*required=*/false, &f->stream.connect);
   RegisterStreamFlags(flags, &f->stream, "max");
 }
 
@@ -129,8 +129,10 @@ int RunLocal(const TrackFlags& f, const io::TrackJob& job) {
 int RunOnServer(const TrackFlags& f, const io::TrackJob& job, client::RemoteTrackOptions options) {
   options.on_opened = PrintOpened;
   ProgressReporter progress;
-  auto result = client::RunRemoteTrack(client::Connect(f.stream.server), job, options,
-                                       MakeCallbacks(f.print_every, &progress), RejectionWarnings());
+  auto channel = client::Connect(f.stream.server, f.stream.connect);
+  if (!channel.ok()) return RuntimeError(kCommand, channel.status());
+  auto result =
+      client::RunRemoteTrack(*channel, job, options, MakeCallbacks(f.print_every, &progress), RejectionWarnings());
   progress.Finish();
   if (!result.ok()) return RuntimeError(kCommand, result.status());
   PrintSummary(SummaryOf(*result, static_cast<int>(job.config.sensors_m.size())), f.out_path);

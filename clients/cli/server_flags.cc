@@ -6,12 +6,19 @@
 
 namespace localizer::cli {
 
-void RegisterServerFlag(FlagSet& flags, std::string* server, bool required) {
+void RegisterServerFlag(FlagSet& flags, std::string* server, bool required, client::ConnectOptions* connect) {
   auto& flag = flags.String("server", server, "HOST:PORT",
                             required ? "localizer-server address"
                                      : "run on a localizer-server at this address instead of "
                                        "locally");
   if (required) flag.Required();
+  flags.String("tls-ca", &connect->tls_ca, "FILE",
+               "with --server: connect over TLS, verifying the server against these PEM CA certificates");
+  flags.String("tls-cert", &connect->tls_cert, "FILE",
+               "with --server: PEM client certificate for mutual TLS (with --tls-key; implies TLS)");
+  flags.String("tls-key", &connect->tls_key, "FILE", "with --server: PEM private key of --tls-cert");
+  flags.String("auth-token-file", &connect->auth_token_file, "FILE",
+               "with --server: file holding the bearer token sent on every call (first non-'#' line)");
 }
 
 void RegisterStreamFlags(FlagSet& flags, StreamFlags* f, const std::string& default_rate) {
@@ -30,7 +37,8 @@ void RegisterStreamFlags(FlagSet& flags, StreamFlags* f, const std::string& defa
 }
 
 const std::vector<std::string>& StreamFlagNames() {
-  static const std::vector<std::string> names = {"rate", "block-samples", "encoding", "label", "session-key"};
+  static const std::vector<std::string> names = {"rate",   "block-samples", "encoding", "label",          "session-key",
+                                                 "tls-ca", "tls-cert",      "tls-key",  "auth-token-file"};
   return names;
 }
 

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "clients/grpc/connection.h"
 #include "clients/grpc/remote_track.h"
 #include "clients/grpc/streamer.h"
 #include "clients/io/presence_summary.h"
@@ -13,19 +14,22 @@
 namespace localizer::cli {
 
 struct StreamFlags {
-  std::string server;  // HOST:PORT; empty: run locally (track, simulate)
-  std::string rate;    // realtime | max
+  std::string server;              // HOST:PORT; empty: run locally (track, simulate)
+  client::ConnectOptions connect;  // --tls-ca, --tls-cert, --tls-key, --auth-token-file
+  std::string rate;                // realtime | max
   int block_samples = 4096;
   std::string encoding = "float";
   std::string label;
   std::string session_key;
 };
 
-// --server. `required`: for the commands that only talk to a server.
-void RegisterServerFlag(FlagSet& flags, std::string* server, bool required);
+// --server, and how to reach it: --tls-ca, --tls-cert, --tls-key, --auth-token-file (into
+// *connect). `required`: for the commands that only talk to a server.
+void RegisterServerFlag(FlagSet& flags, std::string* server, bool required, client::ConnectOptions* connect);
 // --rate (default `default_rate`), --block-samples, --encoding, --label, --session-key.
 void RegisterStreamFlags(FlagSet& flags, StreamFlags* f, const std::string& default_rate);
-// The names of the flags RegisterStreamFlags adds, for "only with --server" checks.
+// The names of the flags RegisterStreamFlags adds and the credential flags, for "only with
+// --server" checks.
 const std::vector<std::string>& StreamFlagNames();
 
 // The streaming options, or INVALID_ARGUMENT naming the flag.

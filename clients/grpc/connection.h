@@ -1,7 +1,8 @@
 // Channels to a localizer server, and the conventions every client call shares.
 //
-// Channels are plaintext (insecure credentials): the service runs inside a trusted network
-// or behind a TLS-terminating proxy (deploy/nginx). Messages up to 64 MiB pass either way,
+// Connect(target) makes a plaintext channel; Connect(target, ConnectOptions) adds TLS (the
+// server verified against a CA), a client certificate (mutual TLS) and a bearer token sent
+// on every call (README "Security"). Messages up to 64 MiB pass either way,
 // enough for a block of 2^20 samples on 16 float32 channels. A grpc::Channel is thread-safe
 // and cheap to share; a failed connection is retried by gRPC in the background.
 #pragma once
@@ -25,6 +26,28 @@ inline constexpr const char* kSessionKeyMetadata = "x-localizer-session-key";
 // A channel to "HOST:PORT" (any gRPC target: "dns:///host:port", "unix:/path", ...). Never
 // fails here: connection errors surface on the first call as UNAVAILABLE.
 std::shared_ptr<grpc::Channel> Connect(const std::string& target);
+
+// How to reach a server that wants credentials; the CLI flags of the same names
+// (--tls-ca, --tls-cert, --tls-key, --auth-token-file) fill it. All empty: plaintext.
+struct ConnectOptions {
+  std::string tls_ca;           // PEM CA file the server's certificate must chain to; set
+                                // (or tls_cert set): TLS. "" with TLS: the system's roots
+  std::string tls_cert;         // PEM client certificate chain (mutual TLS); with tls_key
+  std::string tls_key;          // PEM private key of tls_cert
+  std::string auth_token_file;  // file with the bearer token: its first line that is not
+                                // blank or '#'; "ROLE TOKEN" (a line of the server's file)
+                                // also works, the last field is the token
+  bool tls() const { return !tls_ca.empty() || !tls_cert.empty(); }
+};
+
+// A channel with `options`' credentials; the token goes out as "authorization: Bearer
+// TOKEN" on every call (also over plaintext, for a TLS-terminating proxy in front: keep such
+// a leg on a trusted network). INVALID_ARGUMENT naming the flag and path when a file cannot
+// be read, is not PEM or holds no token, or when only one of tls_cert / tls_key is given.
+StatusOr<std::shared_ptr<grpc::Channel>> Connect(const std::string& target, const ConnectOptions& options);
+
+// The token in an --auth-token-file (see ConnectOptions), or INVALID_ARGUMENT.
+StatusOr<std::string> ReadTokenFile(const std::string& path);
 
 // Blocks until the channel is READY. UNAVAILABLE ("UNAVAILABLE: not connected to ... after
 // 2 s (state TRANSIENT_FAILURE)") when `timeout_s` passes first; INVALID_ARGUMENT for a

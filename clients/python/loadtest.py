@@ -63,6 +63,7 @@ def parse_args(argv=None):
         description="Load-test a localizer server with concurrent Track sessions.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--target", required=True, help="server address HOST:PORT")
+    lc.add_connect_arguments(p)
     p.add_argument("--sessions", type=int, required=True, help="concurrent Track sessions")
     p.add_argument("--duration", type=float, required=True,
                    help="seconds each session streams (after its start in the ramp)")
@@ -209,8 +210,16 @@ class Worker:
         n_conn = self.args.connections or max(1, math.ceil(len(self.indices) / STREAMS_PER_CONNECTION))
         # A local subchannel pool per channel: otherwise identical channels share one connection.
         options = [("grpc.use_local_subchannel_pool", 1)]
-        channels = [grpc.aio.insecure_channel(self.args.target, options=options)
-                    for _ in range(n_conn)]
+        credentials = lc.tls_credentials(self.args.tls_ca, self.args.tls_cert, self.args.tls_key)
+        if credentials is not None:
+            channels = [grpc.aio.secure_channel(self.args.target, credentials, options=options)
+                        for _ in range(n_conn)]
+        else:
+            channels = [grpc.aio.insecure_channel(self.args.target, options=options)
+                        for _ in range(n_conn)]
+        # The bearer token rides on each call's metadata (aio channels take no sync interceptors).
+        self.auth = ((lc.auth_metadata(lc.read_token_file(self.args.auth_token_file)),)
+                     if self.args.auth_token_file else ())
         # Requests go out as ready bytes (no serializer); responses are parsed by protobuf.
         self.track = [ch.stream_stream(TRACK_METHOD, request_serializer=None,
                                        response_deserializer=pb.TrackResponse.FromString)
@@ -240,7 +249,7 @@ class Worker:
         if self.stop.is_set():
             return
         st.started += 1
-        call = self.track[n % len(self.track)](metadata=((lc.SESSION_KEY_METADATA, f"loadtest-{i}"),))
+        call = self.track[n % len(self.track)](metadata=((lc.SESSION_KEY_METADATA, f"loadtest-{i}"),) + self.auth)
         send_times = []  # send_times[seq - 1]: when block `seq` was handed to gRPC
         opened = cancelled = False
         try:

@@ -1,22 +1,27 @@
 #!/usr/bin/python3
 """Open a Track session, stream 3 s of a synthetic source in real time, print the estimates.
 
-    /usr/bin/python3 build/clients/python/track_example.py 127.0.0.1:50051
+    /usr/bin/python3 build/clients/python/track_example.py 127.0.0.1:50051 \
+        [--tls-ca ca.crt --tls-cert client.crt --tls-key client.key --auth-token-file token]
 """
-import sys
+import argparse
 import threading
 import time
 
 import localizer_client as lc
 from localizer_client import synth
 
-target = sys.argv[1] if len(sys.argv) > 1 else "127.0.0.1:50051"
+parser = argparse.ArgumentParser(description="stream 3 s of a synthetic source, print the estimates")
+parser.add_argument("target", nargs="?", default="127.0.0.1:50051", help="server address HOST:PORT")
+lc.add_connect_arguments(parser)
+args = parser.parse_args()
+target = args.target
 fs, block = 44100.0, 4096
 sensors = synth.tetrahedron(edge_m=1.5)                   # 4 hydrophones, 1.5 m apart
 source, tdoa = synth.source_with_integer_tdoas(sensors, (2.5, 1.5, -1.0), 1500.0, fs)
 audio = synth.broadband_at_sensors(tdoa, int(3 * fs), fs)  # (samples, 4) float32
 
-channel = lc.connect(target)
+channel = lc.connect(target, **lc.connect_kwargs(args))
 config = lc.session_config(sensors, fs, sound_speed_mps=1500.0, band_hz=(200, 8000),
                            seed=1, label="track-example")
 session = lc.TrackSession(channel, config)  # raises grpc.RpcError if refused

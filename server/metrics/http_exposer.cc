@@ -200,7 +200,7 @@ StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& lis
   return exposer;
 }
 
-Status HttpExposer::AddPage(const std::string& path, PageHandler handler, std::string content_type) {
+Status HttpExposer::AddPage(const std::string& path, PageHandler handler, std::string content_type, PageGuard guard) {
   if (!IsValidPagePath(path)) {
     return InvalidArgument("page path \"" + path + "\" must start with '/' and use only [A-Za-z0-9/._~-]");
   }
@@ -212,7 +212,7 @@ Status HttpExposer::AddPage(const std::string& path, PageHandler handler, std::s
     }
   }
   MutexLock lock(&pages_mutex_);
-  pages_[path] = Page{std::move(handler), std::move(content_type)};
+  pages_[path] = Page{std::move(handler), std::move(content_type), std::move(guard)};
   return Status::Ok();
 }
 
@@ -280,6 +280,26 @@ int HttpExposer::HandleRequest(mg_connection* connection) {
     if (method != "GET" && !head_only) {
       return SendResponse(connection, 405, "text/plain; charset=utf-8",
                           "405 method not allowed: " + method + " (use GET or HEAD)\n", false, "Allow: GET, HEAD\r\n");
+    }
+    if (page.guard) {
+      Credentials credentials;
+      if (const char* header = mg_get_header(connection, "Authorization")) credentials.authorization = header;
+      if (request->query_string != nullptr) {
+        char token[4200];
+        const int n =
+            mg_get_var(request->query_string, std::strlen(request->query_string), "token", token, sizeof token);
+        if (n > 0) credentials.query_token.assign(token, static_cast<size_t>(n));
+      }
+      const int refused = page.guard(credentials);
+      if (refused == 401) {
+        return SendResponse(connection, 401, "text/plain; charset=utf-8",
+                            "401 unauthorized: send 'Authorization: Bearer TOKEN' (an operator token)\n", head_only,
+                            "WWW-Authenticate: Bearer realm=\"localizer\"\r\n");
+      }
+      if (refused != 0) {
+        return SendResponse(connection, 403, "text/plain; charset=utf-8",
+                            "403 forbidden: this page needs an operator token\n", head_only);
+      }
     }
     std::pair<int, std::string> result;
     try {

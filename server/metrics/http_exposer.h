@@ -3,10 +3,11 @@
 //   GET/HEAD /metrics  200, Registry::Serialize() as
 //                      "text/plain; version=0.0.4; charset=utf-8"
 //   GET/HEAD /         200, a short HTML index linking /metrics and every added page
-//   GET/HEAD <page>    whatever a handler given to AddPage returns (e.g. /healthz)
+//   GET/HEAD <page>    whatever a handler given to AddPage returns (e.g. /healthz), or
+//                      401/403 when the page's guard refuses the request
 //   other paths        404
 //   other methods      405 with "Allow: GET, HEAD" (on a known path)
-// The query string is ignored. No files are ever served (civetweb runs without a document
+// The query string is ignored (except a guard's `token`). No files are ever served (civetweb runs without a document
 // root). Connections are closed after each response (no keep-alive); a request that does
 // not arrive within 2 s is dropped, and 8 workers by default serve at once, so a few idle
 // or slow connections cannot keep scrapes from being answered.
@@ -42,6 +43,17 @@ class HttpExposer final {
   // to its path; must be thread-safe and quick. An exception escaping it becomes a 500.
   using PageHandler = std::function<std::pair<int, std::string>()>;
 
+  // What a page's guard sees of a request: the Authorization header ("" when absent) and the
+  // query string's `token` parameter (URL-decoded; "" when absent).
+  struct Credentials {
+    std::string authorization;
+    std::string query_token;
+  };
+  // Decides whether a request may see a page: 0 to serve it, else 401 (answered with
+  // "WWW-Authenticate: Bearer") or 403; anything else is taken as 403. Runs on a worker
+  // thread before the handler; must be thread-safe and quick.
+  using PageGuard = std::function<int(const Credentials&)>;
+
   // Listens on `listen`, "host:port": host is an IPv4 literal ("127.0.0.1", "0.0.0.0" for
   // every interface), a bracketed IPv6 literal ("[::1]", if civetweb was built with IPv6)
   // or "localhost" (127.0.0.1); port is 0..65535, 0 picking a free ephemeral port (read
@@ -62,12 +74,16 @@ class HttpExposer final {
   // replacing any page already there, /metrics and / included. INVALID_ARGUMENT when path
   // does not start with '/' or holds characters other than [A-Za-z0-9/._~-], or when
   // content_type is empty or holds a control character; nothing changes then.
-  Status AddPage(const std::string& path, PageHandler handler, std::string content_type) EXCLUDES(pages_mutex_);
+  // A `guard` (optional) runs before the handler and may refuse the request (401/403, with
+  // a short plain-text body that never echoes the credentials).
+  Status AddPage(const std::string& path, PageHandler handler, std::string content_type, PageGuard guard = nullptr)
+      EXCLUDES(pages_mutex_);
 
  private:
   struct Page {
     PageHandler handler;
     std::string content_type;
+    PageGuard guard;  // empty: open
   };
 
   explicit HttpExposer(Registry* registry);

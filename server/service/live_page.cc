@@ -184,9 +184,14 @@ function render(doc) {
       `localizer ${doc.version}: ${shown}; updated ${new Date().toLocaleTimeString()}`;
 }
 
+// A server started with --auth-token-file serves this page at /?token=OPERATOR_TOKEN; the
+// token goes on to /sessions as an Authorization header (never into another URL).
+const pageToken = new URLSearchParams(location.search).get("token");
+const authHeaders = pageToken ? {Authorization: "Bearer " + pageToken} : {};
+
 async function poll() {
   try {
-    const response = await fetch("/sessions", {cache: "no-store"});
+    const response = await fetch("/sessions", {cache: "no-store", headers: authHeaders});
     if (!response.ok) throw new Error(`/sessions answered ${response.status}`);
     render(await response.json());
   } catch (e) {

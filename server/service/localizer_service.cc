@@ -2,18 +2,56 @@
 
 #include "engine/pipeline/locate.h"
 #include "engine/pipeline/session_memory.h"
+#include "server/service/log.h"
 #include "server/service/track_reactor.h"
 #include "wire/locate_wire.h"
 #include "wire/status_wire.h"
 
 namespace localizer::server {
 
+namespace {
+
+// A Track stream refused before it started (authentication): ends at once with `status`.
+class RefusedStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
+ public:
+  explicit RefusedStream(const grpc::Status& status) { Finish(status); }
+  void OnDone() override { delete this; }
+};
+
+}  // namespace
+
 LocalizerService::LocalizerService(SessionRegistry* registry, WorkerPool* pool, ServiceMetrics* metrics,
-                                   wire::ConfigPolicy policy, LocateLimits locate_limits)
-    : registry_(registry), pool_(pool), metrics_(metrics), policy_(std::move(policy)), locate_limits_(locate_limits) {}
+                                   wire::ConfigPolicy policy, const TokenAuthenticator* auth,
+                                   LocateLimits locate_limits)
+    : registry_(registry),
+      pool_(pool),
+      metrics_(metrics),
+      policy_(std::move(policy)),
+      auth_(auth),
+      locate_limits_(locate_limits) {}
+
+grpc::Status LocalizerService::Authorize(grpc::CallbackServerContext* context, Role role, const char* method) const {
+  if (auth_ == nullptr) return grpc::Status::OK;
+  std::string_view authorization;
+  const auto& metadata = context->client_metadata();
+  if (const auto it = metadata.find(kAuthorizationMetadata); it != metadata.end()) {
+    authorization = std::string_view(it->second.data(), it->second.size());
+  }
+  const AuthDecision decision = auth_->Check(authorization, role);
+  if (decision == AuthDecision::kAllowed) return grpc::Status::OK;
+  const grpc::Status status = ToGrpcStatus(decision, method);
+  LogEvent("warn", "auth_refused",
+           {{"method", method},
+            {"peer", context->peer()},
+            {"code", decision == AuthDecision::kUnauthenticated ? "UNAUTHENTICATED" : "PERMISSION_DENIED"}});
+  return status;
+}
 
 grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* LocalizerService::Track(
     grpc::CallbackServerContext* context) {
+  if (grpc::Status refused = Authorize(context, Role::kClient, "Track"); !refused.ok()) {
+    return new RefusedStream(refused);
+  }
   return new TrackReactor(context, registry_, metrics_);
 }
 
@@ -40,6 +78,10 @@ Status LocateOnce(const v1::LocateRequest& request, const wire::ConfigPolicy& po
 grpc::ServerUnaryReactor* LocalizerService::Locate(grpc::CallbackServerContext* context,
                                                    const grpc::ByteBuffer* request, grpc::ByteBuffer* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  if (grpc::Status refused = Authorize(context, Role::kClient, "Locate"); !refused.ok()) {
+    reactor->Finish(refused);
+    return reactor;
+  }
   auto answer = [this, reactor](const Status& status) {
     if (auto* c = metrics_->locate_requests(StatusCodeName(status.code()))) c->Increment();
     reactor->Finish(wire::ToGrpcStatus(status));
@@ -87,6 +129,11 @@ grpc::ServerUnaryReactor* LocalizerService::Locate(grpc::CallbackServerContext* 
 grpc::ServerUnaryReactor* LocalizerService::ListSessions(grpc::CallbackServerContext* context,
                                                          const v1::ListSessionsRequest* /*request*/,
                                                          v1::ListSessionsResponse* response) {
+  if (grpc::Status refused = Authorize(context, Role::kOperator, "ListSessions"); !refused.ok()) {
+    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+    reactor->Finish(refused);
+    return reactor;
+  }
   for (v1::SessionInfo& info : registry_->List()) *response->add_sessions() = std::move(info);
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
   reactor->Finish(grpc::Status::OK);
@@ -97,6 +144,10 @@ grpc::ServerUnaryReactor* LocalizerService::CloseSession(grpc::CallbackServerCon
                                                          const v1::CloseSessionRequest* request,
                                                          v1::CloseSessionResponse* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  if (grpc::Status refused = Authorize(context, Role::kOperator, "CloseSession"); !refused.ok()) {
+    reactor->Finish(refused);
+    return reactor;
+  }
   auto frames = registry_->Close(request->session_id(), request->resume_token());
   if (frames.ok()) response->set_frames_processed(*frames);
   reactor->Finish(wire::ToGrpcStatus(frames.status()));

@@ -6,6 +6,7 @@
 #include <atomic>
 
 #include "localizer/v1/localizer.grpc.pb.h"
+#include "server/service/auth.h"
 #include "server/service/memory_budget.h"
 #include "server/service/service_metrics.h"
 #include "server/service/session_registry.h"
@@ -32,8 +33,12 @@ struct LocateLimits {
 
 class LocalizerService final : public LocalizerCallbackBase {
  public:
+  // `auth` null: every call is allowed; else each call is checked first (auth.h: Track and
+  // Locate need a client or operator token, ListSessions and CloseSession an operator token)
+  // and a refused one ends with UNAUTHENTICATED or PERMISSION_DENIED before anything else
+  // runs. `auth` must outlive the service.
   LocalizerService(SessionRegistry* registry, WorkerPool* pool, ServiceMetrics* metrics, wire::ConfigPolicy policy,
-                   LocateLimits locate_limits = {});
+                   const TokenAuthenticator* auth = nullptr, LocateLimits locate_limits = {});
 
   grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Track(grpc::CallbackServerContext* context) override;
   grpc::ServerUnaryReactor* Locate(grpc::CallbackServerContext* context, const grpc::ByteBuffer* request,
@@ -51,6 +56,11 @@ class LocalizerService final : public LocalizerCallbackBase {
   WorkerPool* const pool_;
   ServiceMetrics* const metrics_;
   const wire::ConfigPolicy policy_;
+  // OK when `context`'s authorization metadata allows a call needing `role` (always without
+  // auth_); else the refusal, logged with the method and peer.
+  grpc::Status Authorize(grpc::CallbackServerContext* context, Role role, const char* method) const;
+
+  const TokenAuthenticator* const auth_;
   const LocateLimits locate_limits_;
   std::atomic<int> locate_in_flight_{0};
   std::atomic<bool> draining_{false};

@@ -7,9 +7,11 @@
 
 #include "engine/pipeline/backend.h"
 #include "gpu/backend/gpu_backend.h"
+#include "server/service/auth.h"
 #include "server/service/live_page.h"
 #include "server/service/log.h"
 #include "server/service/sessions_json.h"
+#include "server/service/tls_credentials.h"
 #include "server/service/transport_limits.h"
 #include "server/service/version.h"
 
@@ -45,6 +47,19 @@ Status AddGpuBatchMetrics(metrics::Registry* registry) {
   return Status::Ok();
 }
 
+// An HTTP guard's answer for a decision: 0 (serve), 401 or 403.
+int HttpRefusal(AuthDecision decision) {
+  switch (decision) {
+    case AuthDecision::kAllowed:
+      return 0;
+    case AuthDecision::kUnauthenticated:
+      return 401;
+    case AuthDecision::kPermissionDenied:
+      return 403;
+  }
+  return 403;
+}
+
 }  // namespace
 
 Server::Server(const ServerOptions& options) : options_(options) {}
@@ -52,7 +67,17 @@ Server::Server(const ServerOptions& options) : options_(options) {}
 StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   LOCALIZER_RETURN_IF_ERROR(options.Validate());
   SetLogLevel(options.log_level);
+  // The files first: a bad one stops the start before anything runs.
+  auto credentials = MakeServerCredentials(options);
+  if (!credentials.ok()) return credentials.status();
+  std::unique_ptr<TokenAuthenticator> auth;
+  if (!options.auth_token_file.empty()) {
+    auto loaded = TokenAuthenticator::Load(options.auth_token_file);
+    if (!loaded.ok()) return loaded.status();
+    auth = std::move(loaded).value();
+  }
   std::unique_ptr<Server> s(new Server(options));
+  s->auth_ = std::move(auth);
   auto metrics = ServiceMetrics::Create(&s->registry_, options.backend);
   if (!metrics.ok()) return metrics.status();
   s->metrics_ = std::move(metrics).value();
@@ -92,7 +117,7 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   LocateLimits locate_limits{options.max_concurrent_locate > 0 ? options.max_concurrent_locate : workers,
                              s->budget_.get()};
   s->service_ = std::make_unique<LocalizerService>(s->sessions_.get(), s->pool_.get(), s->metrics_.get(),
-                                                   registry_options.policy, locate_limits);
+                                                   registry_options.policy, s->auth_.get(), locate_limits);
   SessionRegistry* sessions = s->sessions_.get();
   ServiceMetrics* m = s->metrics_.get();
   MemoryBudget* budget = s->budget_.get();
@@ -118,7 +143,7 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &s->grpc_port_);
+  builder.AddListeningPort(options.listen, *credentials, &s->grpc_port_);
   builder.SetMaxReceiveMessageSize(options.max_message_bytes);
   builder.SetMaxSendMessageSize(options.max_message_bytes);
   ApplyTransportLimits(options.transport, &builder);
@@ -141,9 +166,28 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
       return std::pair<int, std::string>(200, SessionsJson(sessions->Snapshot(), Clock::now(), ttl_s));
     };
     auto live_page = [] { return std::pair<int, std::string>(200, std::string(LivePageHtml())); };
+    // With tokens, both need an operator token: /sessions in the Authorization header (the
+    // page's script sends it), / also as ?token= (a browser cannot set a header when it
+    // navigates). /metrics stays open: it holds aggregate counters, no session identity.
+    metrics::HttpExposer::PageGuard sessions_guard, page_guard;
+    if (const TokenAuthenticator* auth = s->auth_.get()) {
+      sessions_guard = [auth](const metrics::HttpExposer::Credentials& c) {
+        return HttpRefusal(auth->Check(c.authorization, Role::kOperator));
+      };
+      page_guard = [auth](const metrics::HttpExposer::Credentials& c) {
+        const std::string authorization =
+            c.authorization.empty() && !c.query_token.empty() ? "Bearer " + c.query_token : c.authorization;
+        return HttpRefusal(auth->Check(authorization, Role::kOperator));
+      };
+    }
+    LOCALIZER_RETURN_IF_ERROR(s->exposer_->AddPage("/sessions", std::move(sessions_page),
+                                                   "application/json; charset=utf-8", std::move(sessions_guard)));
     LOCALIZER_RETURN_IF_ERROR(
-        s->exposer_->AddPage("/sessions", std::move(sessions_page), "application/json; charset=utf-8"));
-    LOCALIZER_RETURN_IF_ERROR(s->exposer_->AddPage("/", std::move(live_page), "text/html; charset=utf-8"));
+        s->exposer_->AddPage("/", std::move(live_page), "text/html; charset=utf-8", std::move(page_guard)));
+  }
+  if (s->auth_ && options.tls_cert.empty()) {
+    LogEvent("warn", "auth_without_tls",
+             {{"detail", "bearer tokens travel in plaintext; use --tls-cert/--tls-key or a TLS proxy"}});
   }
   grpc::HealthCheckServiceInterface* health = s->grpc_->GetHealthCheckService();
   if (health != nullptr) {
@@ -156,6 +200,10 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
             {"metrics_port", std::to_string(s->metrics_port())},
             {"workers", std::to_string(workers)},
             {"backend", options.backend},
+            {"tls", options.tls_cert.empty()        ? "off"
+                    : options.tls_client_ca.empty() ? "on"
+                                                    : "mutual"},
+            {"auth", s->auth_ ? std::to_string(s->auth_->token_count()) + " tokens" : "off"},
             {"max_sessions", std::to_string(options.max_sessions)},
             {"gpu", gpu_reason.empty() ? gpu::DeviceName() : "none: " + gpu_reason}});
   return s;
@@ -167,6 +215,14 @@ void Server::Shutdown() {
   MutexLock lock(&shutdown_mutex_);
   if (shut_down_) return;
   shut_down_ = true;
+  if (!grpc_ || !sessions_ || !service_ || !pool_) {
+    // Start failed part-way: stop what was started, in the same order.
+    if (grpc_) grpc_->Shutdown();
+    exposer_.reset();
+    sessions_.reset();
+    if (pool_) pool_->Shutdown();
+    return;
+  }
   const auto start = Clock::now();
   if (grpc::HealthCheckServiceInterface* health = grpc_->GetHealthCheckService()) {
     health->SetServingStatus(false);

@@ -1,6 +1,7 @@
 // A running localizer server: the gRPC service (with the standard health and reflection
 // services), the worker pool, the session registry, and the HTTP endpoint (/metrics, the
-// live view at /, /sessions).
+// live view at /, /sessions), with TLS / mutual TLS and bearer tokens when the options name
+// their files (tls_credentials.h, auth.h; README "Security").
 //
 //   auto server = Server::Start(options);   // listening when this returns
 //   ... server->grpc_port(), server->metrics_port()
@@ -19,6 +20,7 @@
 
 #include "server/metrics/http_exposer.h"
 #include "server/metrics/registry.h"
+#include "server/service/auth.h"
 #include "server/service/localizer_service.h"
 #include "server/service/memory_budget.h"
 #include "server/service/server_options.h"
@@ -31,7 +33,8 @@ namespace localizer::server {
 
 class Server final {
  public:
-  // INVALID_ARGUMENT for bad options; UNAVAILABLE when an address cannot be bound.
+  // INVALID_ARGUMENT for bad options (including TLS or token files that cannot be read or
+  // parsed, naming the flag and path); UNAVAILABLE when an address cannot be bound.
   static StatusOr<std::unique_ptr<Server>> Start(const ServerOptions& options);
   ~Server();
   Server(const Server&) = delete;
@@ -50,6 +53,7 @@ class Server final {
   std::unique_ptr<MemoryBudget> budget_;  // outlives the sessions and calls charged to it
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<SessionRegistry> sessions_;
+  std::unique_ptr<TokenAuthenticator> auth_;  // null: no authentication
   std::unique_ptr<LocalizerService> service_;
   std::unique_ptr<grpc::Server> grpc_;
   std::unique_ptr<metrics::HttpExposer> exposer_;

@@ -56,6 +56,12 @@ Status ServerOptions::Validate() const {
   }
   if (gpu_max_batch < 1 || gpu_max_batch > 65536) return InvalidArgument("gpu_max_batch must be in [1, 65536]");
   if (gpu_bank_mib < 0) return InvalidArgument("gpu_bank_mib must be >= 0 (0: 3/4 of free device memory)");
+  if (tls_cert.empty() != tls_key.empty()) {
+    return InvalidArgument("tls_cert and tls_key go together (--tls-cert and --tls-key: both or neither)");
+  }
+  if (!tls_client_ca.empty() && tls_cert.empty()) {
+    return InvalidArgument("tls_client_ca needs tls_cert and tls_key (mutual TLS is TLS plus client certificates)");
+  }
   return Status::Ok();
 }
 

@@ -50,6 +50,18 @@ struct ServerOptions {
   int gpu_max_batch = 1024;          // frames (or filter steps) per launch
   int gpu_bank_mib = 0;              // particle memory; 0: 3/4 of free
 
+  // Transport security and authentication (README "Security"; server/service/auth.h).
+  // Files are read once, at Start; unreadable or malformed ones stop the start with an error
+  // naming the flag and the path.
+  std::string tls_cert;         // PEM certificate chain; with tls_key, gRPC is served over TLS
+  std::string tls_key;          // PEM private key of tls_cert
+  std::string tls_client_ca;    // PEM CA certificates; set: every client must present a
+                                // certificate they signed (mutual TLS); needs tls_cert
+  std::string auth_token_file;  // "ROLE TOKEN" lines; set: every Localizer call needs a
+                                // bearer token (Track/Locate: client or operator,
+                                // ListSessions/CloseSession and HTTP /sessions, /: operator);
+                                // "": no authentication
+
   Status Validate() const;  // INVALID_ARGUMENT naming the field
 };
 

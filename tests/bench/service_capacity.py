@@ -11,6 +11,13 @@ inside Session::Process, localizer_engine_cpu_seconds_total) and everything else
   tests/bench/service_capacity.py --build build --sessions 4 --rate max --particles 256
   tests/bench/service_capacity.py --bare --sessions 200    # gRPC alone: the overhead's floor
 
+  tests/bench/service_capacity.py --sessions 60 --security plain,tls,mtls-token   # TLS's cost
+
+--security runs every session count once per mode, side by side: plain (plaintext gRPC),
+tls (server certificate; the load generator verifies it), mtls-token (mutual TLS and a bearer
+token on every stream). The certificates and tokens come from deploy/tls/make_test_certs.sh in
+a temporary directory.
+
 --bare drives build/tests/bench/bare_stream_server instead: the same Track protocol with no
 engine, no worker pool and no sessions (two small estimates per block, written from the
 gRPC thread), so its CPU per block is what gRPC and the kernel cost by themselves.
@@ -62,8 +69,22 @@ def start_server(binary, bare, workers, extra):
     return proc, ports
 
 
-def run_row(args, sessions):
-    proc, ports = start_server(args.server, args.bare, args.workers, args.server_arg)
+def security_flags(mode, pki):
+    """(server flags, loadtest flags) of a --security mode."""
+    if mode == "plain":
+        return [], []
+    server = ["--tls-cert", f"{pki}/server.crt", "--tls-key", f"{pki}/server.key"]
+    client = ["--tls-ca", f"{pki}/ca.crt"]
+    if mode == "mtls-token":
+        server += ["--tls-client-ca", f"{pki}/ca.crt", "--auth-token-file", f"{pki}/tokens"]
+        client += ["--tls-cert", f"{pki}/client.crt", "--tls-key", f"{pki}/client.key",
+                   "--auth-token-file", f"{pki}/client.token"]
+    return server, client
+
+
+def run_row(args, sessions, mode="plain"):
+    server_flags, client_flags = security_flags(mode, args.pki)
+    proc, ports = start_server(args.server, args.bare, args.workers, args.server_arg + server_flags)
     no_metrics = {"engine_cpu_s": 0.0, "blocks": 0.0}
     try:
         before = scrape(ports["metrics_port"]) if not args.bare else no_metrics
@@ -71,7 +92,7 @@ def run_row(args, sessions):
         cmd = ["/usr/bin/python3", args.loadtest, "--target", f"127.0.0.1:{ports['grpc_port']}",
                "--sessions", str(sessions), "--duration", str(args.duration), "--rate", args.rate,
                "--particles", str(args.particles), "--ramp", str(args.ramp), "--encoding", args.encoding,
-               "--processes", str(args.processes)]
+               "--processes", str(args.processes)] + client_flags
         out = subprocess.run(cmd, capture_output=True, text=True)
         cpu1 = process_cpu_s(proc.pid)
         after = scrape(ports["metrics_port"]) if not args.bare else no_metrics
@@ -87,7 +108,7 @@ def run_row(args, sessions):
     server_cpu = cpu1 - cpu0
     engine_cpu = after["engine_cpu_s"] - before["engine_cpu_s"]
     return {
-        "sessions": sessions,
+        "sessions": sessions, "security": mode,
         "blocks_per_s": result["blocks_per_s"],
         "p50_ms": result["latency_ms"]["p50"], "p95_ms": result["latency_ms"]["p95"],
         "p99_ms": result["latency_ms"]["p99"],
@@ -113,19 +134,35 @@ def main():
     p.add_argument("--workers", type=int, default=0, help="server --workers (0: one per core)")
     p.add_argument("--server-arg", action="append", default=[], help="extra localizer-server flag (repeatable)")
     p.add_argument("--bare", action="store_true", help="drive bare_stream_server (gRPC alone) instead")
+    p.add_argument("--security", default="plain",
+                   help="comma-separated modes, each row run once per mode: plain, tls, mtls-token")
     args = p.parse_args()
+    modes = args.security.split(",")
+    for mode in modes:
+        if mode not in ("plain", "tls", "mtls-token"):
+            p.error(f"--security: unknown mode {mode!r} (plain, tls, mtls-token)")
+    if args.bare and modes != ["plain"]:
+        p.error("--security needs the real server (not --bare)")
+    args.pki = None
+    if modes != ["plain"]:
+        args.pki = tempfile.mkdtemp(prefix="localizer-bench-pki-")
+        subprocess.run(["bash", os.path.join(here, "..", "..", "deploy", "tls", "make_test_certs.sh"), args.pki],
+                       check=True, capture_output=True)
     args.server = (os.path.join(args.build, "tests", "bench", "bare_stream_server") if args.bare
                    else os.path.join(args.build, "server", "localizer-server"))
     args.loadtest = os.path.join(args.build, "clients", "python", "loadtest.py")
     print(f"# {args.rate}, {args.duration:g} s per row, {args.particles} particles, 4 ch 44.1 kHz, "
           f"4096-sample blocks and frames, hop 2048, {args.encoding}; {os.cpu_count()} CPUs (load generator included)")
-    print("sessions  blocks/s  p50_ms  p95_ms  p99_ms  errors  rejected  server_cores  us/block  engine_us  outside_us")
+    print("sessions  security    blocks/s  p50_ms  p95_ms  p99_ms  errors  rejected  server_cores  us/block  engine_us  "
+          "outside_us")
     for n in [int(s) for s in args.sessions.split(",")]:
-        r = run_row(args, n)
-        print(f"{r['sessions']:8d}  {r['blocks_per_s']:8.1f}  {r['p50_ms']:6.1f}  {r['p95_ms']:6.1f}  {r['p99_ms']:6.1f}  "
-              f"{r['errors']:6d}  {r['rejections']:8d}  {r['server_cpu_cores']:12.2f}  {r['server_us_per_block']:8.0f}  "
-              f"{r['engine_us_per_block']:9.0f}  {r['outside_engine_us_per_block']:10.0f}", flush=True)
-        print("RESULT " + json.dumps(r), file=sys.stderr)
+        for mode in modes:
+            r = run_row(args, n, mode)
+            print(f"{r['sessions']:8d}  {mode:10s}  {r['blocks_per_s']:8.1f}  {r['p50_ms']:6.1f}  {r['p95_ms']:6.1f}  "
+                  f"{r['p99_ms']:6.1f}  {r['errors']:6d}  {r['rejections']:8d}  {r['server_cpu_cores']:12.2f}  "
+                  f"{r['server_us_per_block']:8.0f}  {r['engine_us_per_block']:9.0f}  "
+                  f"{r['outside_engine_us_per_block']:10.0f}", flush=True)
+            print("RESULT " + json.dumps(r), file=sys.stderr)
 
 
 if __name__ == "__main__":

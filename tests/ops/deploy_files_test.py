@@ -140,6 +140,9 @@ class ContainerfileTest(unittest.TestCase):
             used = re.findall(r'"(--[a-z0-9-]+)"', runtime["ENTRYPOINT"] + runtime["CMD"])
             self.assertTrue(used)
             self.assertLessEqual(set(used), flags, name)
+            # Listening on every interface only with TLS and tokens.
+            if "0.0.0.0" in runtime["ENTRYPOINT"]:
+                self.assertLessEqual({"--tls-cert", "--tls-key", "--auth-token-file"}, set(used), name)
 
 
 class KubernetesTest(unittest.TestCase):
@@ -163,8 +166,20 @@ class KubernetesTest(unittest.TestCase):
             c = self.container(d)
             ports = {p["name"]: p["containerPort"] for p in c["ports"]}
             self.assertEqual(ports, {"grpc": 50051, "metrics": 9464})
+            # kubelet's gRPC probe cannot speak TLS: the image's health check does, with the
+            # mounted CA and probe certificate (mutual TLS: --tls-client-ca in the args).
+            mounts = {m["name"]: m["mountPath"] for m in c["volumeMounts"]}
+            self.assertEqual(mounts, {"tls": "/etc/localizer/tls", "auth": "/etc/localizer/auth"})
+            secrets = {v["name"]: v["secret"]["secretName"] for v in d["spec"]["template"]["spec"]["volumes"]}
+            self.assertEqual(secrets, {"tls": "localizer-tls", "auth": "localizer-auth"})
+            self.assertIn("--tls-client-ca", c["args"])
             for probe in ("readinessProbe", "livenessProbe"):
-                self.assertEqual(c[probe]["grpc"]["port"], 50051, f"{d['metadata']['name']} {probe}")
+                command = c[probe]["exec"]["command"]
+                self.assertIn("/usr/local/bin/grpc_health_check.py", command, f"{d['metadata']['name']} {probe}")
+                self.assertEqual(command[-1], "127.0.0.1:50051")
+                for flag in ("--tls-ca", "--tls-cert", "--tls-key"):
+                    path = command[command.index(flag) + 1]
+                    self.assertTrue(path.startswith("/etc/localizer/tls/"), path)
             for kind in ("requests", "limits"):
                 self.assertIn("cpu", c["resources"][kind])
                 self.assertIn("memory", c["resources"][kind])
@@ -221,6 +236,30 @@ class HealthCheckScriptTest(unittest.TestCase):
             shutil.rmtree(tmp, ignore_errors=True)
         down = self.run_check(f"127.0.0.1:{ops_util.free_port()}")
         self.assertEqual(down.returncode, 2, down.stdout + down.stderr)
+
+    @unittest.skipUnless(shutil.which("openssl"), "no openssl CLI (Debian: openssl) for test certificates")
+    def test_mutual_tls_server_passes_with_the_probe_certificate_only(self):
+        tmp = tempfile.mkdtemp(prefix="localizer-health-tls-")
+        pki = Path(tmp) / "pki"
+        subprocess.run(["bash", str(ROOT / "deploy" / "tls" / "make_test_certs.sh"), str(pki)], check=True,
+                       capture_output=True)
+        server = ops_util.Server(tmp, "tls", ["--tls-cert", str(pki / "server.crt"), "--tls-key",
+                                              str(pki / "server.key"), "--tls-client-ca", str(pki / "ca.crt"),
+                                              "--auth-token-file", str(pki / "tokens")])
+        tls = ["--tls-ca", str(pki / "ca.crt"), "--tls-server-name", "localhost"]
+        cert = ["--tls-cert", str(pki / "client.crt"), "--tls-key", str(pki / "client.key")]
+        try:
+            ok = subprocess.run([sys.executable, str(HEALTH_CHECK), *tls, *cert, server.grpc_target],
+                                capture_output=True, text=True, timeout=30)
+            self.assertEqual(ok.returncode, 0, ok.stdout + ok.stderr)
+            no_cert = subprocess.run([sys.executable, str(HEALTH_CHECK), *tls, server.grpc_target],
+                                     capture_output=True, text=True, timeout=30)
+            self.assertEqual(no_cert.returncode, 2, no_cert.stdout + no_cert.stderr)
+            plain = self.run_check(server.grpc_target)
+            self.assertEqual(plain.returncode, 2, plain.stdout + plain.stderr)
+        finally:
+            server.stop()
+            shutil.rmtree(tmp, ignore_errors=True)
 
 
 if __name__ == "__main__":
