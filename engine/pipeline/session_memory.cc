@@ -7,19 +7,27 @@ namespace {
 
 // Measured on x86-64 (tests/pipeline/session_memory_test.cc, LOCALIZER_MEMORY_PROBE=1) and
 // rounded up: bytes per unit of what grows.
-constexpr int64_t kAudioBaseBytes = int64_t{4} << 20;  // plans, acquisition search, buffers
-constexpr int64_t kParticleBytes = 256;                // state, weights, resampling buffers
-constexpr int64_t kChannelSampleBytes = 64;            // per channel per frame sample: the
-                                                       // frame, spectrum, pair spectra, GCC
-constexpr int64_t kTrackBytes = 1024;                  // a track, its report, its history
-constexpr int64_t kEdgeBytes = 3 * 16;                 // a gate pair, sorted and greedy copies
-constexpr int64_t kPlotBytes = 256;                    // a converted plot and its grid cell
+// Measured 2026-12-01 (x86-64, glibc; tests/pipeline/session_memory_test.cc with
+// LOCALIZER_MEMORY_PROBE=1) and given a margin of about 1.4: the particle filter held ~115
+// bytes a particle, the multiple-model one ~585 (a cloud per motion model), an audio
+// session ~42 bytes per channel per frame sample (frame, despiked copy, spectra, pair
+// cross-spectra and GCC, FFT plans), a detection session ~4.8 KB a track with every gate
+// saturated (64 gate pairs a track, with their sorted and greedy copies and the vectors'
+// growth).
+constexpr int64_t kAudioBaseBytes = int64_t{2} << 20;
+constexpr int64_t kParticleBytes = 160;
+constexpr int64_t kMultiModelParticleBytes = 896;
+constexpr int64_t kChannelSampleBytes = 56;
+constexpr int64_t kTrackBytes = 1024;   // a track, its report, its history
+constexpr int64_t kEdgeBytes = 16 * 6;  // a gate pair: edges, sorted and greedy copies, x2 growth
+constexpr int64_t kPlotBytes = 256;     // a converted plot and its grid cell
 
-int64_t ParticlesHeld(const AudioSessionConfig& config) {
+int64_t ParticleBytes(const AudioSessionConfig& config) {
   switch (config.tracker.kind) {
     case FilterKind::kPf:
+      return kParticleBytes * config.tracker.particle.particles;
     case FilterKind::kMmpf:
-      return config.tracker.particle.particles;
+      return kMultiModelParticleBytes * config.tracker.particle.particles;
     default:
       return 0;  // Kalman filters: a few 6 x 6 matrices
   }
@@ -29,8 +37,7 @@ int64_t ParticlesHeld(const AudioSessionConfig& config) {
 
 int64_t SessionMemoryBytes(const AudioSessionConfig& config) {
   const int64_t channels = static_cast<int64_t>(config.sensors_m.size());
-  return kAudioBaseBytes + kParticleBytes * ParticlesHeld(config) +
-         kChannelSampleBytes * channels * std::max(config.frame_samples, 64);
+  return kAudioBaseBytes + ParticleBytes(config) + kChannelSampleBytes * channels * std::max(config.frame_samples, 64);
 }
 
 int64_t SessionMemoryBytes(const DetectionSessionConfig& config) {

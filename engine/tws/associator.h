@@ -56,7 +56,7 @@ struct AssociationStats {
 
 // Bounds on one scan's association work (tws_options.h has the defaults and their reasons).
 struct AssociatorLimits {
-  int64_t gate_search_budget = 256;      // per track: grid rows + measurements looked at
+  int64_t gate_search_budget = 64;       // per track: grid rows + measurements looked at
   int64_t max_assignment_cells = 65536;  // tracks x measurements of a component solved optimally
 };
 

@@ -41,7 +41,7 @@ struct InitiatorOptions {
   double max_speed_mps = 400.0;            // two-point: fastest target to pair for, > 0
   int confirm_hits = 3;                    // M
   int confirm_window = 5;                  // N; 1 <= M <= N <= 32
-  int64_t search_budget = 256;             // two-point: work per pairing search (grid rows + candidates)
+  int64_t search_budget = 64;              // two-point: work per pairing search (grid rows + candidates)
 };
 
 template <int D>

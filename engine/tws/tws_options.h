@@ -26,7 +26,7 @@
 // Bounds on one scan's work, so that no scan (adversarial or cluttered) costs more than
 // O(plots + tracks x budget) time and memory (associator.h):
 //   max_plots_per_scan         65536      -      a larger scan is refused (INVALID_ARGUMENT)
-//   gate_search_budget         256        -      grid rows + plots one track's gate search
+//   gate_search_budget         64         -      grid rows + plots one track's gate search
 //                                                (and one two-point pairing) looks at; a gate
 //                                                holding more is cluttered beyond what GNN
 //                                                resolves, and keeps what it found
@@ -63,7 +63,7 @@ struct TwsOptions {
   double max_speed_mps = 400.0;
   int max_tracks = 10000;
   int max_plots_per_scan = 65536;
-  int64_t gate_search_budget = 256;
+  int64_t gate_search_budget = 64;
   int64_t max_assignment_cells = 65536;
 
   // INVALID_ARGUMENT naming the field and its value.

@@ -18,7 +18,7 @@ class AdmissionTest : public ServiceTest {
  protected:
   void SetUp() override {
     ServerOptions options;
-    options.memory_budget_mib = 96;
+    options.memory_budget_mib = 56;
     options.max_concurrent_locate = 1;
     StartServer(options);
   }
@@ -26,7 +26,7 @@ class AdmissionTest : public ServiceTest {
 
 TEST_F(AdmissionTest, ASessionThatDoesNotFitTheBudgetIsRefusedAndAClosedOneGivesItsShareBack) {
   const Scenario s = MakeScenario("tetra-water", 1.0, 1, kBlock);
-  // 2^20 particles: ~256 MiB by the estimate, above the whole budget.
+  // 2^20 particles: ~160 MiB by the estimate, above the whole budget.
   v1::TrackRequest huge = s.OpenRequest();
   huge.mutable_open()->mutable_filter()->set_particles(1 << 20);
   {
@@ -36,15 +36,15 @@ TEST_F(AdmissionTest, ASessionThatDoesNotFitTheBudgetIsRefusedAndAClosedOneGives
     EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
     EXPECT_NE(status.error_message().find("--memory-budget-mib"), std::string::npos) << status.error_message();
   }
-  // Sessions of 2^17 particles (~36 MiB each by the estimate): two fit in 96 MiB, a third
+  // Sessions of 2^17 particles (~23 MiB each by the estimate): two fit in 56 MiB, a third
   // does not; once one closes, the third opens.
   v1::TrackRequest medium = s.OpenRequest();
   medium.mutable_open()->mutable_filter()->set_particles(1 << 17);
   auto config = wire::AudioConfigFromProto(medium.open(), wire::ConfigPolicy{});
   ASSERT_TRUE(config.ok());
   const int64_t each = engine::SessionMemoryBytes(*config);
-  ASSERT_GT(3 * each, int64_t{96} << 20);
-  ASSERT_LE(2 * each, int64_t{96} << 20);
+  ASSERT_GT(3 * each, int64_t{56} << 20);
+  ASSERT_LE(2 * each, int64_t{56} << 20);
   TestStream a(stub_.get()), b(stub_.get());
   ASSERT_TRUE(a.Send(medium));
   ASSERT_TRUE(a.WaitFor([](const auto& r) { return !r.empty(); }));

@@ -223,7 +223,7 @@ TEST(TwsTracker, AScanAboveMaxPlotsIsRefusedAndCoLocatedPlotsStayBounded) {
   ASSERT_TRUE((*tracker)->Process(crowd, &second).ok());
   EXPECT_EQ(second.truncated_gates, 5000);
   EXPECT_GE(second.greedy_clusters, 1);
-  EXPECT_GE(second.assigned, 255);
+  EXPECT_GE(second.assigned, 63);
   EXPECT_LE((*tracker)->track_count(), options.max_tracks);
 }
 
