@@ -5,6 +5,7 @@
 // decode that does not round-trip), not only for memory errors and undefined behaviour.
 #pragma once
 
+#include <google/protobuf/stubs/logging.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -26,6 +27,13 @@
   } while (0)
 
 namespace localizer::fuzz {
+
+// protobuf logs every string field that is not UTF-8 as it parses; millions of such lines
+// would bury the fuzzer's own output. Dropped before main.
+inline const bool kProtobufQuiet = [] {
+  google::protobuf::SetLogHandler(nullptr);
+  return true;
+}();
 
 // The server's defaults (server_options.cc: --max-block-samples, --max-channels,
 // --max-particles), except the block limit: 4096 samples per channel keeps one execution
