@@ -131,6 +131,10 @@ void BoundsToProto(const engine::AudioSessionConfig& c, v1::SessionConfig* p) {
   if (std::isfinite(c.bounds_max_m.z())) b->set_max_z_m(c.bounds_max_m.z());
 }
 
+// A refusal from one of the engine's name parsers, which quote the name they refuse as the
+// client sent it: control and non-ASCII bytes escaped before the message leaves the server.
+Status NameRefusal(const Status& status) { return {status.code(), EscapeUnprintable(status.message())}; }
+
 // Client strings within their documented lengths (string_limits.h), before anything
 // reads them.
 Status CheckStrings(const v1::SessionConfig& p) {
@@ -240,22 +244,22 @@ Status TrackerFromProto(const v1::FilterConfig& f, const ConfigPolicy& policy, e
   t->kind = *kind;
   if (!f.motion_model().empty()) {
     auto model = engine::ParseMotionModelKind(f.motion_model(), "filter.motion_model");
-    if (!model.ok()) return model.status();
+    if (!model.ok()) return NameRefusal(model.status());
     t->kalman.motion_model = *model;
   }
   if (!f.imm_modes().empty()) {
     auto modes = engine::ParseImmModes(f.imm_modes(), "filter.imm_modes");
-    if (!modes.ok()) return modes.status();
+    if (!modes.ok()) return NameRefusal(modes.status());
     t->imm_modes = *std::move(modes);
   }
   if (!f.imm_variant().empty()) {
     auto variant = engine::ParseKalmanVariant(f.imm_variant(), "filter.imm_variant");
-    if (!variant.ok()) return variant.status();
+    if (!variant.ok()) return NameRefusal(variant.status());
     t->imm_variant = *variant;
   }
   if (!f.robust().empty()) {
     auto robust = engine::ParseRobustUpdate(f.robust(), "filter.robust");
-    if (!robust.ok()) return robust.status();
+    if (!robust.ok()) return NameRefusal(robust.status());
     t->kalman.robust = *robust;
   }
   engine::ParticleFilterOptions& particle = t->particle;
@@ -385,7 +389,7 @@ StatusOr<engine::AudioSessionConfig> AudioConfigFromProto(const v1::SessionConfi
 
   LOCALIZER_RETURN_IF_ERROR(TrackerFromProto(p.filter(), policy, &c.tracker));
   auto backend = engine::ParseBackendChoice(p.backend().empty() ? policy.default_backend : p.backend(), "backend");
-  if (!backend.ok()) return backend.status();
+  if (!backend.ok()) return NameRefusal(backend.status());
   c.backend = *backend;
   if (p.has_seed()) c.seed = p.seed();
   if (p.has_init_region()) LOCALIZER_RETURN_IF_ERROR(InitRegionFromProto(p.init_region(), &c));
@@ -406,7 +410,7 @@ StatusOr<engine::AudioSessionConfig> AudioConfigFromProto(const v1::SessionConfi
     c.array_in_body_frame = true;
     auto kind =
         engine::ParseAttitudeFilterKind(platform.attitude_filter().empty() ? "quaternion" : platform.attitude_filter());
-    if (!kind.ok()) return InvalidArgument("platform.attitude_filter: " + kind.status().message());
+    if (!kind.ok()) return NameRefusal(InvalidArgument("platform.attitude_filter: " + kind.status().message()));
     c.attitude.kind = *kind;
     c.attitude.use_mag = platform.use_magnetometer();
     c.attitude.mag_declination_rad = platform.mag_declination_rad();

@@ -39,6 +39,22 @@ std::string Escape(std::string_view value) {
   return out;
 }
 
+std::string EscapeUnprintable(std::string_view message) {
+  std::string out;
+  out.reserve(message.size());
+  for (const char ch : message) {
+    const auto u = static_cast<unsigned char>(ch);
+    if (u < 0x20 || u >= 0x7f) {
+      char buf[5];
+      std::snprintf(buf, sizeof buf, "\\x%02x", u);
+      out += buf;
+    } else {
+      out.push_back(ch);
+    }
+  }
+  return out;
+}
+
 std::string EscapedPrefix(std::string_view value, size_t max_bytes) {
   if (value.size() <= max_bytes) return Escape(value);
   return Escape(value.substr(0, max_bytes)) + "...";

@@ -25,6 +25,10 @@ inline constexpr size_t kMaxEnumStringBytes = 64;
 
 // `value` with every byte outside printable ASCII (and '\\', '"') escaped: \n \r \t, or \xHH.
 std::string Escape(std::string_view value);
+// `message` with every byte outside printable ASCII written as \xHH; quotes and backslashes
+// stay. For messages that quote a client's string as given (the engine's name parsers do:
+// "filter.robust 'x' is not one of: ..."), before they go back to the client or into a log.
+std::string EscapeUnprintable(std::string_view message);
 // The first `max_bytes` of `value`, escaped, with "..." when cut.
 std::string EscapedPrefix(std::string_view value, size_t max_bytes = 16);
 

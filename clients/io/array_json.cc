@@ -1,5 +1,6 @@
 #include "clients/io/array_json.h"
 
+#include <climits>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -63,6 +64,10 @@ StatusOr<int> ParseReference(const json& value, const std::string& source) {
   if (!value.is_number_integer()) {
     return InvalidArgument(source + ": reference_sensor is " + value.dump() + ", not an integer");
   }
+  // Range-checked before the cast: 4294967297 must not become sensor 1.
+  const bool in_range = value.is_number_unsigned() ? value.get<uint64_t>() <= uint64_t{INT_MAX}
+                                                   : value.get<int64_t>() >= 0 && value.get<int64_t>() <= INT_MAX;
+  if (!in_range) return InvalidArgument(source + ": reference_sensor is " + value.dump() + ", not a sensor index");
   return static_cast<int>(value.get<int64_t>());
 }
 

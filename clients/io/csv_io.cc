@@ -122,6 +122,11 @@ StatusOr<std::vector<EstimateRow>> ReadEstimatesCsv(const std::string& path) {
       row.presence_statistic = presence[1];
       row.presence_threshold = presence[2];
       row.ambiguous = presence[3] != 0.0;
+      // A count: a whole number that fits an int (a cast of NaN or 1e300 is undefined).
+      if (!(presence[4] >= 0.0 && presence[4] <= 1e9 && presence[4] == std::floor(presence[4]))) {
+        return InvalidArgument(table->path() + ": data row " + std::to_string(r + 1) + ", column modes: value " +
+                               table->Text(r, presence_columns[4]) + " is not a whole number in [0, 1e9]");
+      }
       row.modes = static_cast<int>(presence[4]);
     }
     estimates.push_back(row);

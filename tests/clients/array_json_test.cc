@@ -90,6 +90,18 @@ TEST(ArrayJson, ErrorsNameTheField) {
   EXPECT_NE(ErrorOf("{not json").find("not valid JSON"), std::string::npos);
 }
 
+// Found with fuzz_array_json's invariant (the index kept is the integer written): an index
+// beyond int was truncated, so 4294967297 was read as sensor 1 and accepted.
+TEST(ArrayJson, ReferenceSensorBeyondIntIsRefusedNotTruncated) {
+  const std::string head = R"({"sound_speed_mps": 1500, "sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]], )";
+  for (const char* reference : {"4294967297", "4294967296", "18446744073709551615", "-4294967295", "2147483648"}) {
+    const std::string error = ErrorOf(head + "\"reference_sensor\": " + reference + "}");
+    EXPECT_NE(error.find("reference_sensor is " + std::string(reference)), std::string::npos)
+        << reference << ": " << error;
+  }
+  EXPECT_EQ(ErrorOf(head + R"("reference_sensor": 3})"), "");
+}
+
 TEST(ArrayJson, BoundsAndWaterColumn) {
   const std::string head = R"({"sound_speed_mps": 1500, "sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]], )";
   constexpr double kInf = std::numeric_limits<double>::infinity();

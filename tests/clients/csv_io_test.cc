@@ -154,6 +154,26 @@ TEST(PresenceSummary, NoSourceLineWhenNoFrameHeldASource) {
   EXPECT_FALSE(untested.NoSourceLine().has_value());
 }
 
+// Found with fuzz_csv_readers (UBSan: "nan is outside the range of representable values of
+// type 'int'"): the modes column was cast to int unchecked. A value that is not a whole count
+// is refused, naming the file, row and column.
+TEST(CsvIo, ModesThatAreNotACountAreRefused) {
+  TempDir dir;
+  for (const char* modes : {"nan", "1e300", "-1", "2.5", "inf"}) {
+    {
+      std::ofstream out(dir.File("est.csv"));
+      out << "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,initialised,source_present,presence_statistic,"
+             "presence_threshold,ambiguous,modes\n0,0,0,0,0,0,0,1,1,0,0,0,1\n0.1,0,0,0,0,0,0,1,1,0,0,0,"
+          << modes << "\n";
+    }
+    auto rows = ReadEstimatesCsv(dir.File("est.csv"));
+    ASSERT_FALSE(rows.ok()) << modes;
+    EXPECT_EQ(rows.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(rows.status().message().find("data row 2, column modes: value " + std::string(modes)), std::string::npos)
+        << rows.status().message();
+  }
+}
+
 TEST(CsvIo, ReadErrorsNameFileLineAndColumn) {
   TempDir dir;
   {

@@ -15,6 +15,7 @@
 #include "wire/imu_wire.h"
 #include "wire/locate_wire.h"
 #include "wire/status_wire.h"
+#include "wire/string_limits.h"
 
 namespace localizer::wire {
 namespace {
@@ -260,6 +261,44 @@ TEST(ConfigWire, MultipleModelFiltersAndTheirFieldsRoundTrip) {
   p.mutable_filter()->set_imm_modes("");
   p.mutable_filter()->set_robust("tukey");
   EXPECT_NE(AudioFromProto(p, {}).status().message().find("filter.robust"), std::string::npos);
+}
+
+// Found by fuzz_session_config: the engine's name parsers quote the refused name as sent, so
+// a NUL, newline or DEL in filter.robust (or any name field) went back to the client and into
+// the log unescaped. Every such refusal is printable ASCII and still names the field.
+TEST(ConfigWire, RefusedNamesAreQuotedEscaped) {
+  const std::string bad("h\0\n\x7f\xff", 5);
+  const auto check = [&](const v1::SessionConfig& p, const std::string& field) {
+    const Status status = ConfigFromProto(p, {}).status();
+    ASSERT_FALSE(status.ok()) << field;
+    EXPECT_EQ(status.code(), StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(status.message().find(field), std::string::npos) << status.message();
+    for (const char ch : status.message()) {
+      const auto u = static_cast<unsigned char>(ch);
+      EXPECT_TRUE(u >= 0x20 && u < 0x7f) << field << ": raw byte " << int{u} << " in " << status.message();
+    }
+    EXPECT_NE(status.message().find("h\\x00\\x0a\\x7f\\xff"), std::string::npos) << status.message();
+  };
+  v1::SessionConfig p = MinimalConfig();
+  p.mutable_filter()->set_robust(bad);
+  check(p, "filter.robust");
+  p = MinimalConfig();
+  p.mutable_filter()->set_type(v1::FILTER_TYPE_EKF);
+  p.mutable_filter()->set_motion_model(bad);
+  check(p, "filter.motion_model");
+  p = MinimalConfig();
+  p.mutable_filter()->set_imm_modes("cv," + bad);
+  check(p, "filter.imm_modes");
+  p = MinimalConfig();
+  p.mutable_filter()->set_imm_variant(bad);
+  check(p, "filter.imm_variant");
+  p = MinimalConfig();
+  p.set_backend(bad);
+  check(p, "backend");
+  p = MinimalConfig();
+  p.mutable_platform()->set_attitude_filter(bad);
+  check(p, "platform.attitude_filter");
+  EXPECT_EQ(EscapeUnprintable("a 'b\"c\\' \x01\xc3\xa9"), "a 'b\"c\\' \\x01\\xc3\\xa9");
 }
 
 TEST(EstimateWire, ModelProbabilitiesRoundTrip) {
