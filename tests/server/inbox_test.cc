@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 namespace localizer::server {
 namespace {
 
@@ -15,7 +17,8 @@ WorkItem Block(uint64_t sequence, int64_t samples_per_channel = 100, int channel
   work.sequence = sequence;
   work.samples_per_channel = samples_per_channel;
   work.samples.assign(static_cast<size_t>(samples_per_channel * channels), 0.5f);
-  return {std::move(work), kT0 + std::chrono::milliseconds(sequence)};
+  // Received 1 ms apart (capped: a test's far sequence numbers must not overflow the clock).
+  return {std::move(work), kT0 + std::chrono::milliseconds(std::min<uint64_t>(sequence, 1000000))};
 }
 
 WorkItem Refused(RequestKind request, uint64_t sequence, const std::string& reason) {
