@@ -13,6 +13,7 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <system_error>
 #include <vector>
 
 namespace localizer::client {
@@ -37,7 +38,8 @@ const char* StateName(grpc_connectivity_state state) {
 
 StatusOr<std::string> ReadFile(const std::string& flag, const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) return InvalidArgument("cannot read " + flag + " file \"" + path + "\": " + std::strerror(errno));
+  if (!in)
+    return InvalidArgument("cannot read " + flag + " file \"" + path + "\": " + std::generic_category().message(errno));
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) return InvalidArgument("cannot read " + flag + " file \"" + path + "\": read error");

@@ -44,7 +44,7 @@ class ScanSession {
 
  private:
   ScanSession(DetectionSessionConfig config, std::unique_ptr<tws::TwsTracker> tracker)
-      : config_(std::move(config)), tracker_(std::move(tracker)) {}
+      : config_(config), tracker_(std::move(tracker)) {}
 
   DetectionSessionConfig config_;
   std::unique_ptr<tws::TwsTracker> tracker_;

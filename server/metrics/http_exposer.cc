@@ -156,12 +156,10 @@ StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& lis
                            "enable_keep_alive",  "no",
                            nullptr};
   // clang-format on
-  mg_callbacks callbacks;
-  std::memset(&callbacks, 0, sizeof callbacks);
+  mg_callbacks callbacks{};
   callbacks.begin_request = &HttpExposer::HandleRequest;
   callbacks.log_message = &HttpExposer::LogMessage;
-  mg_init_data init;
-  std::memset(&init, 0, sizeof init);
+  mg_init_data init{};
   init.callbacks = &callbacks;
   init.user_data = exposer.get();
   init.configuration_options = options;

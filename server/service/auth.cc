@@ -8,6 +8,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <system_error>
 
 namespace localizer::server {
 namespace {
@@ -62,7 +63,7 @@ TokenAuthenticator::Digest TokenAuthenticator::Hash(std::string_view token) {
 StatusOr<std::unique_ptr<TokenAuthenticator>> TokenAuthenticator::Load(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    return InvalidArgument("cannot read --auth-token-file \"" + path + "\": " + std::strerror(errno));
+    return InvalidArgument("cannot read --auth-token-file \"" + path + "\": " + std::generic_category().message(errno));
   }
   std::ostringstream text;
   text << in.rdbuf();

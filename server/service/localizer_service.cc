@@ -39,7 +39,7 @@ grpc::Status LocalizerService::Authorize(grpc::CallbackServerContext* context, R
   }
   const AuthDecision decision = auth_->Check(authorization, role);
   if (decision == AuthDecision::kAllowed) return grpc::Status::OK;
-  const grpc::Status status = ToGrpcStatus(decision, method);
+  grpc::Status status = ToGrpcStatus(decision, method);
   LogEvent("warn", "auth_refused",
            {{"method", method},
             {"peer", context->peer()},

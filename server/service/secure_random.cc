@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
+#include <system_error>
 #include <vector>
 
 namespace localizer::server {
@@ -17,7 +18,7 @@ StatusOr<std::string> SecureRandomHex(int digits) {
     const ssize_t got = getrandom(bytes.data() + filled, bytes.size() - filled, 0);
     if (got < 0) {
       if (errno == EINTR) continue;
-      return Internal(std::string("getrandom failed: ") + std::strerror(errno));
+      return Internal(std::string("getrandom failed: ") + std::generic_category().message(errno));
     }
     filled += static_cast<size_t>(got);
   }

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <system_error>
 
 namespace localizer::server {
 namespace {
@@ -40,7 +41,8 @@ EVP_PKEY* PrivateKey(const std::string& pem) {
 
 StatusOr<std::string> ReadPemFile(const std::string& flag, const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) return InvalidArgument("cannot read " + Describe(flag, path) + ": " + std::strerror(errno));
+  if (!in)
+    return InvalidArgument("cannot read " + Describe(flag, path) + ": " + std::generic_category().message(errno));
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) return InvalidArgument("cannot read " + Describe(flag, path) + ": read error");
