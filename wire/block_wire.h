@@ -33,8 +33,8 @@ struct DecodedBlock {
 // length not a multiple of channel_count), "non_finite". `out` keeps its capacity.
 Status DecodeBlock(const v1::SampleBlock& block, const BlockLimits& limits, DecodedBlock* out, std::string* reason);
 
-// Channel-major samples -> a SampleBlock; `pcm16` quantises to pcm_s16le (clipping at
+// Channel-major samples (`block`) -> a SampleBlock; `pcm16` quantises to pcm_s16le (clipping at
 // +-1), else fills `samples`.
-void EncodeBlock(const engine::BlockView& channel_major, bool pcm16, v1::SampleBlock* out);
+void EncodeBlock(const engine::BlockView& block, bool pcm16, v1::SampleBlock* out);
 
 }  // namespace localizer::wire

@@ -165,8 +165,7 @@ StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& lis
   init.configuration_options = options;
   char error_text[256] = "";
   unsigned error_code = 0;
-  mg_error_data error;
-  std::memset(&error, 0, sizeof error);
+  mg_error_data error{};
   error.code = &error_code;
   error.text = error_text;
   error.text_buffer_size = sizeof error_text;

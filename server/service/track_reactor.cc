@@ -138,7 +138,7 @@ grpc::Status TrackReactor::Write(const v1::TrackResponse& response, bool more_wa
   // after it ended the stream (every end after attaching goes through the session).
   bool own_buffer = false;
   write_buffer_.Clear();  // the previous write's bytes (gRPC holds its own reference)
-  const grpc::Status serialized =
+  grpc::Status serialized =
       grpc::SerializationTraits<v1::TrackResponse>::Serialize(response, &write_buffer_, &own_buffer);
   if (!serialized.ok()) return serialized;
   // More already waiting: let gRPC hold this one and send them in one flush.
