@@ -39,16 +39,16 @@ engine::tws::TrackStatus StatusFromProto(v1::TrackStatus s) {
 
 }  // namespace
 
-StatusOr<engine::Scan> DecodeScan(const v1::Scan& p) {
+StatusOr<engine::Scan> DecodeScan(const v1::Scan& proto) {
   engine::Scan scan;
-  scan.time_s = p.time_s();
+  scan.time_s = proto.time_s();
   if (!std::isfinite(scan.time_s)) return InvalidArgument("scan.time_s is not finite");
   scan.sensor_position_m =
-      Eigen::Vector3d(p.sensor_position_m().x(), p.sensor_position_m().y(), p.sensor_position_m().z());
+      Eigen::Vector3d(proto.sensor_position_m().x(), proto.sensor_position_m().y(), proto.sensor_position_m().z());
   if (!scan.sensor_position_m.allFinite()) return InvalidArgument("scan.sensor_position_m is not finite");
-  scan.detections.reserve(static_cast<size_t>(p.detections_size()));
-  for (int i = 0; i < p.detections_size(); ++i) {
-    const v1::Detection& d = p.detections(i);
+  scan.detections.reserve(static_cast<size_t>(proto.detections_size()));
+  for (int i = 0; i < proto.detections_size(); ++i) {
+    const v1::Detection& d = proto.detections(i);
     const std::string field = "scan.detections[" + std::to_string(i) + "].";
     if (!(std::isfinite(d.range_m()) && d.range_m() > 0.0)) {
       return InvalidArgument(field + "range_m is " + std::to_string(d.range_m()) + "; must be finite and > 0");
@@ -142,18 +142,18 @@ int64_t MaxTrackListBytes(int tracks) {
   return header + 6 + per_track * static_cast<int64_t>(tracks);
 }
 
-engine::ScanResult TrackListFromProto(const v1::TrackList& p) {
+engine::ScanResult TrackListFromProto(const v1::TrackList& proto) {
   engine::ScanResult result;
-  result.scan_index = p.scan_index();
-  result.time_s = p.time_s();
-  result.process_s = p.process_s();
-  result.summary.plots = static_cast<int>(p.plots());
-  result.summary.assigned = static_cast<int>(p.assigned());
-  result.summary.initiated = static_cast<int>(p.initiated());
-  result.summary.deleted = static_cast<int>(p.deleted());
-  result.summary.truncated_gates = static_cast<int>(p.truncated_gates());
-  result.summary.greedy_clusters = static_cast<int>(p.greedy_clusters());
-  for (const v1::TargetTrack& t : p.tracks()) {
+  result.scan_index = proto.scan_index();
+  result.time_s = proto.time_s();
+  result.process_s = proto.process_s();
+  result.summary.plots = static_cast<int>(proto.plots());
+  result.summary.assigned = static_cast<int>(proto.assigned());
+  result.summary.initiated = static_cast<int>(proto.initiated());
+  result.summary.deleted = static_cast<int>(proto.deleted());
+  result.summary.truncated_gates = static_cast<int>(proto.truncated_gates());
+  result.summary.greedy_clusters = static_cast<int>(proto.greedy_clusters());
+  for (const v1::TargetTrack& t : proto.tracks()) {
     engine::tws::TrackReport r;
     r.id = t.id();
     r.status = StatusFromProto(t.status());
@@ -164,7 +164,7 @@ engine::ScanResult TrackListFromProto(const v1::TrackList& p) {
     }
     r.hits = static_cast<int>(t.hits());
     r.consecutive_misses = static_cast<int>(t.consecutive_misses());
-    r.time_s = p.time_s();
+    r.time_s = proto.time_s();
     if (r.status == engine::tws::TrackStatus::kConfirmed || r.status == engine::tws::TrackStatus::kCoasting) {
       ++result.summary.confirmed;
     } else {

@@ -15,7 +15,7 @@
 namespace localizer::wire {
 
 // INVALID_ARGUMENT naming the field ("scan.detections[4].range_m is -3").
-StatusOr<engine::Scan> DecodeScan(const v1::Scan& scan);
+StatusOr<engine::Scan> DecodeScan(const v1::Scan& proto);
 // The inverse, for clients.
 void EncodeScan(const engine::Scan& scan, uint64_t sequence, v1::Scan* out);
 
@@ -26,6 +26,6 @@ void TrackListToProto(const engine::ScanResult& result, uint64_t sequence, v1::T
 int64_t MaxTrackListBytes(int tracks);
 // The inverse, for clients (summary fields the wire does not carry stay 0; tracks'
 // time_s is the list's).
-engine::ScanResult TrackListFromProto(const v1::TrackList& list);
+engine::ScanResult TrackListFromProto(const v1::TrackList& proto);
 
 }  // namespace localizer::wire
