@@ -332,7 +332,7 @@ class ShortIdleTest : public ServiceTest {
  protected:
   void SetUp() override {
     ServerOptions options;
-    options.session_idle_timeout_s = 0.5;
+    options.session_idle_timeout_s = 1.0;
     options.max_sessions = 1;
     StartServer(options);
   }
@@ -342,7 +342,7 @@ TEST_F(ShortIdleTest, AnAttachedSessionThatSendsNothingIsClosedAndFreesItsSlot) 
   // The review's lock-out: attached sessions that never send a block never expired, and
   // max_sessions of them refused every new client. A session that streams stays; one that
   // goes quiet is ended DEADLINE_EXCEEDED and its slot is free again.
-  const Scenario s = MakeScenario("tetra-water", 1.0, 1, kBlock);
+  const Scenario s = MakeScenario("tetra-water", 3.0, 1, kBlock);  // 8 blocks
   TestStream quiet(stub_.get());
   ASSERT_TRUE(quiet.Send(s.OpenRequest()));
   ASSERT_TRUE(quiet.WaitFor([](const auto& r) { return !r.empty(); }));
@@ -351,8 +351,8 @@ TEST_F(ShortIdleTest, AnAttachedSessionThatSendsNothingIsClosedAndFreesItsSlot) 
   EXPECT_NE(ended.error_message().find("--session-idle-timeout"), std::string::npos) << ended.error_message();
   TestStream busy(stub_.get());
   ASSERT_TRUE(busy.Send(s.OpenRequest()));  // the slot is free again
-  for (int64_t k = 1; k <= 4; ++k) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(250));  // 1 s in all: twice the idle limit
+  for (int64_t k = 1; k <= 8; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));  // 2 s in all: twice the idle limit
     ASSERT_TRUE(busy.Send(s.BlockRequest(k, kBlock)));
   }
   ASSERT_TRUE(busy.Close().ok());
