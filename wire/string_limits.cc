@@ -3,6 +3,20 @@
 #include <cstdio>
 
 namespace localizer::wire {
+namespace {
+
+// A printable ASCII byte as itself, any other as \xHH.
+void AppendPrintable(unsigned char u, std::string* out) {
+  if (u < 0x20 || u >= 0x7f) {
+    char buf[5];
+    std::snprintf(buf, sizeof buf, "\\x%02x", u);
+    *out += buf;
+  } else {
+    out->push_back(static_cast<char>(u));
+  }
+}
+
+}  // namespace
 
 std::string Escape(std::string_view value) {
   std::string out;
@@ -28,13 +42,7 @@ std::string Escape(std::string_view value) {
       default:
         break;
     }
-    if (u < 0x20 || u >= 0x7f) {
-      char buf[5];
-      std::snprintf(buf, sizeof buf, "\\x%02x", u);
-      out += buf;
-    } else {
-      out.push_back(ch);
-    }
+    AppendPrintable(u, &out);
   }
   return out;
 }
@@ -44,13 +52,7 @@ std::string EscapeUnprintable(std::string_view message) {
   out.reserve(message.size());
   for (const char ch : message) {
     const auto u = static_cast<unsigned char>(ch);
-    if (u < 0x20 || u >= 0x7f) {
-      char buf[5];
-      std::snprintf(buf, sizeof buf, "\\x%02x", u);
-      out += buf;
-    } else {
-      out.push_back(ch);
-    }
+    AppendPrintable(u, &out);
   }
   return out;
 }
