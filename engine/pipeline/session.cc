@@ -93,7 +93,7 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
     monitor.Reset();
     if (live && measured) {
       e.source_present = true;  // the user says so; the presence test runs once tracking
-      UpdateAndWatch(&e);
+      UpdateAndWatch(tracker.Hypotheses().front().belief, &e);
     }
   } else {
     AcquireFrame(measured, &e);  // the modes already hold this frame's TDOAs

@@ -51,8 +51,9 @@ struct Session::Impl {
   // itself. Catches a track that locked on a wrong position while every test near it passes.
   void Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e);
   // Conditions the tracker on this frame, fills e's filter fields, and restarts the tracker
-  // through acquisition when the divergence test fires.
-  void UpdateAndWatch(Estimate* e);
+  // through acquisition when the divergence test fires: from the frame's modes and the
+  // track's own prediction (`predicted`), equally weighted.
+  void UpdateAndWatch(const TrackState& predicted, Estimate* e);
   // The estimate's state: the strongest hypothesis, with a covariance that covers all of them.
   void Report(Estimate* e) const;
   // Multipath: a pair whose main peak is far from where the track predicts it, while its GCC

@@ -22,6 +22,9 @@ bool NearTrack(const TrackState& predicted, const PositionMode& mode) {
   return delta.dot(spread.ldlt().solve(delta)) < 16.0;
 }
 
+// The modes plus the track's own predicted position as one more (equal weight).
+std::vector<PositionMode> WithOwnTrack(std::vector<PositionMode> modes, const TrackState& predicted);
+
 void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e) {
   ++frames_since_audit;
   const double pairs = std::max(1, acquisition.field().usable_pairs());
@@ -44,12 +47,15 @@ void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& nea
   if (++outscored < kOutscoredAudits) return;
   outscored = 0;
   // Restart from every mode and the track's own position: the data decide.
-  std::vector<PositionMode> modes = found.modes;
+  e->reinitialised = StartFromModes(WithOwnTrack(found.modes, predicted));
+}
+
+std::vector<PositionMode> WithOwnTrack(std::vector<PositionMode> modes, const TrackState& predicted) {
   PositionMode own;
   own.position_m = predicted.mean.head<3>();
   own.covariance_m2 = predicted.covariance.topLeftCorner<3, 3>();
   modes.push_back(own);
-  e->reinitialised = StartFromModes(modes);
+  return modes;
 }
 constexpr double kCandidateShare = 0.3;
 
@@ -115,7 +121,7 @@ bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
   return true;
 }
 
-void Session::Impl::UpdateAndWatch(Estimate* e) {
+void Session::Impl::UpdateAndWatch(const TrackState& predicted, Estimate* e) {
   Tracker& tracker = *components.tracker;
   auto report = tracker.Update(measurement);
   if (!report.ok()) return;
@@ -124,9 +130,11 @@ void Session::Impl::UpdateAndWatch(Estimate* e) {
   e->tdoa_sigma_s = report->tdoa_sigma_s;
   e->pairs_used = report->pair_count;
   if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count, report->anchored_z)) return;
-  // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too).
+  // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too),
+  // and the track's own: the frame that tripped the test may itself hold the bad pair (a
+  // 4-sensor array's three pairs always have an exact, wrong, solution with one pair off).
   const AcquisitionResult found = acquisition.Search(measurement);
-  if (found.presence.present) e->reinitialised = StartFromModes(found.modes);
+  if (found.presence.present) e->reinitialised = StartFromModes(WithOwnTrack(found.modes, predicted));
 }
 
 void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
@@ -143,7 +151,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     silent_s = 0.0;
     heard_elsewhere = 0;
     AssociateCandidates(predicted);
-    UpdateAndWatch(e);
+    UpdateAndWatch(predicted, e);
     if (!e->reinitialised) Audit(predicted, near, e);
     return;
   }
@@ -160,7 +168,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
       if (NearTrack(predicted, mode)) {
         heard_elsewhere = 0;
         AssociateCandidates(predicted);
-        UpdateAndWatch(e);
+        UpdateAndWatch(predicted, e);
         return;
       }
     }
