@@ -57,10 +57,10 @@ void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& arr
     pose->mutable_body_to_world()->set_x(q.x());
     pose->mutable_body_to_world()->set_y(q.y());
     pose->mutable_body_to_world()->set_z(q.z());
-    const auto set = [](const engine::Vec3& v, v1::Vector3* to) {
-      to->set_x(v.x());
-      to->set_y(v.y());
-      to->set_z(v.z());
+    const auto set = [](const engine::Vec3& from, v1::Vector3* to) {
+      to->set_x(from.x());
+      to->set_y(from.y());
+      to->set_z(from.z());
     };
     set(e.platform->euler_rad, pose->mutable_euler_rad());
     set(e.platform->euler_sd_rad, pose->mutable_euler_sd_rad());
