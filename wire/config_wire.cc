@@ -64,6 +64,8 @@ Status Rename(Status status) {
       {"tdoa_sigma_s", "filter.tdoa_sigma_s"},
       {"resample_threshold", "filter.resample_threshold"},
       {"min_peak_snr", "filter.min_peak_snr"},
+      {"manoeuvre_share", "filter.manoeuvre_share"},
+      {"manoeuvre_scale", "filter.manoeuvre_scale"},
   };
   for (const auto& [from, to] : renames) {
     const size_t at = m.find(from);
@@ -269,6 +271,8 @@ Status TrackerFromProto(const v1::FilterConfig& f, const ConfigPolicy& policy, e
   if (f.likelihood() == v1::LIKELIHOOD_GCC) particle.likelihood = engine::Likelihood::kGcc;
   if (f.likelihood() == v1::LIKELIHOOD_MIXTURE) particle.likelihood = engine::Likelihood::kMixture;
   if (f.outlier_probability() != 0.0) particle.outlier_probability = f.outlier_probability();
+  if (f.has_manoeuvre_share()) particle.manoeuvre_share = f.manoeuvre_share();
+  if (f.manoeuvre_scale() != 0.0) particle.manoeuvre_scale = f.manoeuvre_scale();
   if (f.min_peak_snr() != 0.0) particle.min_peak_snr = f.min_peak_snr();
   if (f.resample_threshold() != 0.0) particle.resample_threshold = f.resample_threshold();
   t->kalman.motion.accel_noise_mps2 = particle.accel_noise_mps2;
@@ -292,6 +296,8 @@ void TrackerToProto(const engine::TrackerOptions& t, v1::FilterConfig* f) {
                     : t.particle.likelihood == engine::Likelihood::kMixture ? v1::LIKELIHOOD_MIXTURE
                                                                             : v1::LIKELIHOOD_PEAK);
   f->set_outlier_probability(t.particle.outlier_probability);
+  f->set_manoeuvre_share(t.particle.manoeuvre_share);
+  f->set_manoeuvre_scale(t.particle.manoeuvre_scale);
   f->set_min_peak_snr(kalman ? t.kalman.min_peak_snr : t.particle.min_peak_snr);
   f->set_resample_threshold(t.particle.resample_threshold);
 }

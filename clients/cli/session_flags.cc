@@ -46,6 +46,12 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "TDOA noise std of the peak likelihood (0: estimated online from the innovations)");
   flags.Double("accel-noise", &c.tracker.particle.accel_noise_mps2, "MPS2", "m/s^2",
                "std of the white acceleration driving the motion model, per axis");
+  flags.Double("manoeuvre-share", &c.tracker.particle.manoeuvre_share, "P", "",
+               "particle filter: share of the particles that manoeuvre each step, in [0, 1) (0: plain "
+               "white acceleration)");
+  flags.Double("manoeuvre-scale", &c.tracker.particle.manoeuvre_scale, "K", "",
+               "particle filter: manoeuvring particles' acceleration std over the quiet ones', >= 1 (the "
+               "mixture keeps --accel-noise as its RMS)");
   flags.String("backend", &f->backend, "NAME", "compute backend: cpu|gpu|auto (with --server: on the server)");
   flags.String("bounds-min", &f->bounds_min, "X,Y,Z",
                "lower corner of the box that can hold the source, m; per axis a number or -inf "

@@ -29,6 +29,12 @@ Status ParticleFilterOptions::Validate() const {
   if (!(accel_noise_mps2 >= 0.0) || !std::isfinite(accel_noise_mps2)) {
     return InvalidArgument("accel_noise_mps2 must be finite and >= 0, got " + std::to_string(accel_noise_mps2));
   }
+  if (!(manoeuvre_share >= 0.0 && manoeuvre_share < 1.0)) {
+    return InvalidArgument("manoeuvre_share must be in [0, 1), got " + std::to_string(manoeuvre_share));
+  }
+  if (!(manoeuvre_scale >= 1.0) || !std::isfinite(manoeuvre_scale)) {
+    return InvalidArgument("manoeuvre_scale must be finite and >= 1, got " + std::to_string(manoeuvre_scale));
+  }
   if (!(tdoa_sigma_s >= 0.0) || !std::isfinite(tdoa_sigma_s)) {
     return InvalidArgument("tdoa_sigma_s must be finite and >= 0 (0: adaptive), got " + std::to_string(tdoa_sigma_s));
   }
@@ -62,7 +68,9 @@ Status ParticleFilterOptions::Validate() const {
 
 struct ParticleFilter::Impl {
   Impl(const ArrayGeometry& a, const ParticleFilterOptions& o)
-      : array(a), options(o), set(a, o), noise(o.tdoa_sigma_s) {}
+      : array(a), options(o), set(a, o), noise(o.tdoa_sigma_s) {
+    set.SetManoeuvre(o.manoeuvre_share, o.manoeuvre_scale);
+  }
   ArrayGeometry array;
   ParticleFilterOptions options;
   ParticleSet set;

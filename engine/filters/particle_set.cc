@@ -149,6 +149,31 @@ void ParticleSet::DrawAccelNormals(uint32_t key) {
     const uint32_t c = 2u * static_cast<uint32_t>(j);
     NormalPairFromUniforms(UniformFromCounter(key, c), UniformFromCounter(key, c + 1), &first[j], &second[j]);
   }
+  if (manoeuvre_share_ <= 0.0f) return;
+  // Particle i manoeuvres this step when its uniform (counters past the normals') is below
+  // the share: its three axes' normals take the manoeuvre gain, the others the quiet gain.
+  const int n = n_;
+  const uint32_t base = static_cast<uint32_t>(accel_.size());
+  const float share = manoeuvre_share_, quiet = quiet_gain_, loud = manoeuvre_gain_;
+  float* __restrict a = accel_.data();
+  for (int i = 0; i < n; ++i) {
+    const float g = UniformFromCounter(key, base + static_cast<uint32_t>(i)) < share ? loud : quiet;
+    a[i] *= g;
+    a[n + i] *= g;
+    a[2 * n + i] *= g;
+  }
+}
+
+void ParticleSet::SetManoeuvre(double share, double scale) {
+  const ManoeuvreGains gains = ManoeuvreGainsFor(share, scale);
+  manoeuvre_share_ = static_cast<float>(share);
+  quiet_gain_ = static_cast<float>(gains.quiet);
+  manoeuvre_gain_ = static_cast<float>(gains.manoeuvre);
+}
+
+ManoeuvreGains ManoeuvreGainsFor(double share, double scale) {
+  const double quiet = 1.0 / std::sqrt(1.0 - share + share * scale * scale);
+  return {quiet, scale * quiet};
 }
 
 void ParticleSet::PredictTurn(double dt_s, double turn_rate_radps, double accel_sigma_mps2, uint32_t key) {

@@ -30,6 +30,14 @@ double GccGain(const std::vector<float>& gcc, double sigma_samples, double sharp
 // Its bandwidth and shrinkage, and the other per-particle formulas: particle_math.h.
 Mat6 CovarianceRoot(const Mat6& covariance);
 
+// The gains on a unit normal acceleration draw for quiet and manoeuvring particles:
+// quiet = 1 / sqrt(1 - share + share scale^2), manoeuvre = scale x quiet, so that the
+// mixture's variance is 1 (the accel_sigma given stays the acceleration's RMS).
+struct ManoeuvreGains {
+  double quiet = 1.0, manoeuvre = 1.0;
+};
+ManoeuvreGains ManoeuvreGainsFor(double share, double scale);
+
 // The GCC likelihood reads each pair's GCC upsampled this many times (gcc_upsampling.h).
 inline constexpr int kGccUpsampling = 8;
 
@@ -56,6 +64,12 @@ class ParticleSet {
   //   x += a vx - b vy,  y += b vx + a vy,  z += vz dt,  vx' = c vx - s vy,  vy' = s vx + c vy;
   //   then p += acc dt^2/2, v += acc dt.
   void PredictTurn(double dt_s, double turn_rate_radps, double accel_sigma_mps2, uint32_t key);
+  // Heavy-tailed acceleration for Predict and PredictTurn (ParticleFilterOptions::
+  // manoeuvre_share): each step a share of the particles, drawn afresh, manoeuvre, their
+  // acceleration std `scale` times the others'; both are set so that the mixture's variance
+  // stays accel_sigma^2 (ManoeuvreGainsFor). share 0 (the default) is plain white
+  // acceleration. share in [0, 1), scale >= 1.
+  void SetManoeuvre(double share, double scale);
   // A fresh random-stream key per use: hash of (seed, use count).
   uint32_t NextKey();
   // Copies `other`'s particles and weights (same array and particle count; the random
@@ -70,6 +84,11 @@ class ParticleSet {
   const std::vector<float>& log_weights() const { return logw_; }
   // Normalised linear weights as of the last NormaliseWeights (or sampling, resampling).
   const std::vector<float>& weights() const { return w_; }
+  // The particles' state, one column per component (x, y, z relative to the set's origin,
+  // then vx, vy, vz), n values each: for diagnostics and tests.
+  std::array<const float*, 6> columns() const {
+    return {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()};
+  }
   // After ResampleSystematic: slot m now holds a copy of particle resample_index()[m].
   const std::vector<int>& resample_index() const { return index_; }
   // Adds each particle's log-likelihood of `m` to its log-weight (see particle_filter.h) and
@@ -121,7 +140,7 @@ class ParticleSet {
     // The six columns in state order (x, y, z, vx, vy, vz).
     std::array<float*, 6> Pointers() { return {x.data(), y.data(), z.data(), vx.data(), vy.data(), vz.data()}; }
   };
-  void DrawAccelNormals(uint32_t key);  // fills accel_ with 3N standard normals
+  void DrawAccelNormals(uint32_t key);  // fills accel_ with 3N standard normals (see SetManoeuvre)
   // Particles [first, end) ~ N(mean, root root^T), normals keyed by (key, 6 i + k).
   void SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32_t key, int first, int end);
   void SetEqualWeights();
@@ -147,6 +166,8 @@ class ParticleSet {
   std::vector<float> accel_;                            // scratch: 3N process-noise normals
   std::vector<float> fine_gcc_;                         // scratch: a pair's GCC upsampled
   std::vector<int> index_, first_slot_;                 // scratch for ResampleSystematic
+  // SetManoeuvre: the share of particles that manoeuvre each step, and both gains.
+  float manoeuvre_share_ = 0.0f, quiet_gain_ = 1.0f, manoeuvre_gain_ = 1.0f;
   // Weighted mean and covariance of the current particles, computed on demand and kept
   // until the particles or weights change (State() and the regulariser share them).
   mutable TrackState moments_;

@@ -6,7 +6,8 @@
 // (gpu/filters/pf_kernels.h lists the kernels): per session it does what
 // engine::ParticleFilter does per Predict + Update (engine/filters/particle_filter.h holds the
 // equations), i.e.
-//   predict  p <- p + v dt + a dt^2/2, v <- v + a dt, a ~ N(0, accel_noise^2 I3)
+//   predict  p <- p + v dt + a dt^2/2, v <- v + a dt, a ~ N(0, accel_noise^2 I3), scaled by
+//            manoeuvre_scale for a manoeuvre_share of the particles (drawn each step)
 //   weigh    log w += sum over used pairs of the Student-t (peak) or gain * Catmull-Rom(GCC
 //            upsampled 8x) log-likelihood of the predicted delay
 //            h' = (r_k - r_ref)/c - (d/2)(vr_k - vr_ref)/c;

@@ -112,7 +112,8 @@ __global__ void __launch_bounds__(kBlockThreads)
   }
   if (s.do_predict && valid) {
     const float4 a = Normals4(s.seed, static_cast<unsigned long long>(i), s.draw * kDrawWindow);
-    PredictParticle(x, s.dt, s.a_to_p, s.a_to_v, a.x, a.y, a.z);
+    const float g = a.w < s.manoeuvre_z ? s.manoeuvre_gain : s.quiet_gain;  // ParticleFilterOptions::manoeuvre_share
+    PredictParticle(x, s.dt, s.a_to_p, s.a_to_v, g * a.x, g * a.y, g * a.z);
 #pragma unroll
     for (int c = 0; c < 6; ++c) s.slot.state[c][i] = x[c];
   }

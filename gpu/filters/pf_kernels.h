@@ -88,14 +88,16 @@ struct SessionStep {
   int pairs = 0;        // pair count of the array (<= kMaxPairs)
   int do_predict = 0;
   int do_update = 0;
-  float dt = 0, a_to_p = 0, a_to_v = 0;    // predict (pf_math.cuh PredictParticle)
-  float reference[3] = {};                 // reference sensor relative to the centroid
-  float inv_c = 0;                         // 1 / sound speed (s/m)
-  float inv_dof = 0, half_dof_plus_1 = 0;  // Student-t
-  double resample_below = 0;               // resample when ESS < this (threshold * N)
-  int kernel = 0;                          // 1: Liu-West move after resampling
-  double kernel_h = 0, kernel_a = 0;       // bandwidth h and shrinkage a = sqrt(1 - h^2)
-  double prior_ess = 0;                    // reported unchanged when there is no update
+  float dt = 0, a_to_p = 0, a_to_v = 0;      // predict (pf_math.cuh PredictParticle)
+  float manoeuvre_z = -1e30f;                // a particle manoeuvres when its 4th normal < this;
+  float quiet_gain = 1, manoeuvre_gain = 1;  // its acceleration normals' gain (ManoeuvreGainsFor)
+  float reference[3] = {};                   // reference sensor relative to the centroid
+  float inv_c = 0;                           // 1 / sound speed (s/m)
+  float inv_dof = 0, half_dof_plus_1 = 0;    // Student-t
+  double resample_below = 0;                 // resample when ESS < this (threshold * N)
+  int kernel = 0;                            // 1: Liu-West move after resampling
+  double kernel_h = 0, kernel_a = 0;         // bandwidth h and shrinkage a = sqrt(1 - h^2)
+  double prior_ess = 0;                      // reported unchanged when there is no update
   unsigned long long seed = 0;
   unsigned long long draw = 0;  // the Philox window of this step
   PairParams pair[kMaxPairs] = {};

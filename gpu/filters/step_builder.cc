@@ -1,8 +1,10 @@
 #include "gpu/filters/step_builder.h"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
+#include "engine/core/normal_quantile.h"
 #include "engine/filters/gcc_upsampling.h"
 #include "engine/filters/particle_set.h"
 #include "gpu/filters/pf_math.cuh"
@@ -45,6 +47,12 @@ Status FillSessionStep(const SessionConfig& config, const StepInputs& in, std::v
   step->dt = static_cast<float>(in.dt_s);
   step->a_to_v = static_cast<float>(o.accel_noise_mps2 * in.dt_s);
   step->a_to_p = static_cast<float>(0.5 * o.accel_noise_mps2 * in.dt_s * in.dt_s);
+  // A particle manoeuvres when its fourth normal is below Phi^-1(share): probability share.
+  step->manoeuvre_z = o.manoeuvre_share > 0.0 ? static_cast<float>(engine::NormalQuantile(o.manoeuvre_share))
+                                              : -std::numeric_limits<float>::infinity();
+  const engine::ManoeuvreGains gains = engine::ManoeuvreGainsFor(o.manoeuvre_share, o.manoeuvre_scale);
+  step->quiet_gain = static_cast<float>(gains.quiet);
+  step->manoeuvre_gain = static_cast<float>(gains.manoeuvre);
   for (int a = 0; a < 3; ++a) step->reference[a] = config.reference[a];
   step->inv_c = config.inv_c;
   step->inv_dof = static_cast<float>(1.0 / o.peak_dof);

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "engine/array/multilateration.h"
+#include "engine/filters/particle_set.h"
 
 namespace localizer::engine {
 namespace {
@@ -300,6 +301,54 @@ TEST(ParticleFilter, MeanRevertingVelocityDecaysByTheTimeConstant) {
   ParticleFilterOptions bad = Options();
   bad.velocity_time_constant_s = -1.0;
   EXPECT_EQ(ParticleFilter::Create(array, bad).status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(ParticleFilter, ManoeuvresKeepTheAccelerationVarianceAndFattenItsTails) {
+  // From a point, one step of dt gives velocity changes a dt per axis. White acceleration:
+  // variance (sigma dt)^2, kurtosis 3. Manoeuvres (share p, scale k): the same variance,
+  // kurtosis 3 (1 - p + p k^4) / (1 - p + p k^2)^2 = 25.0 at p = 0.1, k = 10 (a scale
+  // mixture of normals), so the quiet particles' spread is 1 / sqrt(10.9) of the RMS.
+  const ArrayGeometry array = Tetrahedron(2.0, Vec3::Zero(), 343.0);
+  const double sigma = 2.0, dt_s = 0.25, scale = 10.0;
+  for (double share : {0.0, 0.1}) {
+    ParticleFilterOptions o = Options();
+    o.particles = 1 << 18;
+    ParticleSet set(array, o);
+    set.SetManoeuvre(share, scale);
+    set.SampleGaussian(Vec6::Zero(), Mat6::Zero());
+    set.Predict(dt_s, sigma);
+    const double expected_var = sigma * sigma * dt_s * dt_s;
+    const double expected_kurtosis =
+        3.0 * (1.0 - share + share * std::pow(scale, 4)) / std::pow(1.0 - share + share * scale * scale, 2);
+    const double quiet_sd = std::sqrt(expected_var) * ManoeuvreGainsFor(share, scale).quiet;
+    for (int k = 3; k < 6; ++k) {
+      const float* v = set.columns()[static_cast<size_t>(k)];
+      double m2 = 0.0, m4 = 0.0;
+      int beyond = 0;  // beyond 4 quiet sds: ~6e-5 of the quiet ones, most of the manoeuvring
+      for (int i = 0; i < o.particles; ++i) {
+        const double x = v[i];
+        m2 += x * x;
+        m4 += x * x * x * x;
+        beyond += std::abs(x) > 4.0 * quiet_sd;
+      }
+      m2 /= o.particles;
+      m4 /= o.particles;
+      EXPECT_NEAR(m2, expected_var, 0.03 * expected_var) << "share " << share << " axis " << k;
+      EXPECT_NEAR(m4 / (m2 * m2), expected_kurtosis, 0.15 * expected_kurtosis) << "share " << share << " axis " << k;
+      // Manoeuvring draws beyond 4 quiet sds (0.4 of their own sds): 69 % of them.
+      const double expected_beyond = share * 0.689;
+      EXPECT_NEAR(static_cast<double>(beyond) / o.particles, expected_beyond, 0.1 * expected_beyond + 2e-4)
+          << "share " << share << " axis " << k;
+    }
+  }
+  EXPECT_NEAR(ManoeuvreGainsFor(0.1, 10.0).quiet, 1.0 / std::sqrt(10.9), 1e-12);
+  EXPECT_NEAR(ManoeuvreGainsFor(0.1, 10.0).manoeuvre, 10.0 / std::sqrt(10.9), 1e-12);
+  ParticleFilterOptions bad = Options();
+  bad.manoeuvre_share = 1.0;
+  EXPECT_NE(ParticleFilter::Create(array, bad).status().message().find("manoeuvre_share"), std::string::npos);
+  bad = Options();
+  bad.manoeuvre_scale = 0.5;
+  EXPECT_NE(ParticleFilter::Create(array, bad).status().message().find("manoeuvre_scale"), std::string::npos);
 }
 
 }  // namespace

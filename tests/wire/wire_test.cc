@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <variant>
 #include <vector>
 
@@ -196,6 +197,33 @@ TEST(ConfigWire, MixtureLikelihoodAndItsOutlierProbabilityRoundTrip) {
   const Status status = bad.ok() ? (*bad).Validate() : bad.status();
   EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(status.message().find("outlier_probability"), std::string::npos) << status.message();
+}
+
+TEST(ConfigWire, ManoeuvreShareZeroIsHonouredAndBadValuesAreNamed) {
+  v1::SessionConfig p = MinimalConfig();
+  auto defaulted = AudioFromProto(p, {});
+  ASSERT_TRUE(defaulted.ok()) << defaulted.status().ToString();
+  EXPECT_EQ(defaulted->tracker.particle.manoeuvre_share, engine::ParticleFilterOptions{}.manoeuvre_share);
+  EXPECT_EQ(defaulted->tracker.particle.manoeuvre_scale, engine::ParticleFilterOptions{}.manoeuvre_scale);
+  p.mutable_filter()->set_manoeuvre_share(0.0);  // set, and zero: plain white acceleration
+  p.mutable_filter()->set_manoeuvre_scale(7.0);
+  auto config = AudioFromProto(p, {});
+  ASSERT_TRUE(config.ok());
+  EXPECT_EQ(config->tracker.particle.manoeuvre_share, 0.0);
+  EXPECT_EQ(config->tracker.particle.manoeuvre_scale, 7.0);
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  EXPECT_TRUE(effective.filter().has_manoeuvre_share());
+  EXPECT_EQ(effective.filter().manoeuvre_share(), 0.0);
+  EXPECT_EQ(effective.filter().manoeuvre_scale(), 7.0);
+  for (const auto& [share, scale, field] :
+       {std::tuple{1.0, 4.0, "filter.manoeuvre_share"}, std::tuple{0.1, 0.5, "filter.manoeuvre_scale"}}) {
+    p.mutable_filter()->set_manoeuvre_share(share);
+    p.mutable_filter()->set_manoeuvre_scale(scale);
+    auto bad = AudioFromProto(p, {});
+    const Status status = bad.ok() ? (*bad).Validate() : bad.status();
+    EXPECT_EQ(status.code(), StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(status.message().find(field), std::string::npos) << status.message();
+  }
 }
 
 TEST(ConfigWire, FilterTypeAndMotionModelRoundTrip) {
