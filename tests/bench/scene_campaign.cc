@@ -37,6 +37,9 @@ struct Args {
   std::optional<uint64_t> trace_seed;  // one scene, frame by frame
   std::optional<FilterKind> filter;    // unset: the session default
   int particles = 0;                   // 0: the session default
+  double accel_noise_mps2 = -1.0;      // < 0: the session default
+  double manoeuvre_share = -1.0;       // < 0: the session default
+  double manoeuvre_scale = 0.0;        // < 1: the session default
 };
 
 // The flags' changes to the campaign's default session config.
@@ -44,6 +47,12 @@ void Adjust(const Args& a, AudioSessionConfig* c) {
   if (a.weighting) c->weighting = *a.weighting;
   if (a.filter) c->tracker.kind = *a.filter;
   if (a.particles > 0) c->tracker.particle.particles = a.particles;
+  if (a.manoeuvre_share >= 0.0) c->tracker.particle.manoeuvre_share = a.manoeuvre_share;
+  if (a.manoeuvre_scale >= 1.0) c->tracker.particle.manoeuvre_scale = a.manoeuvre_scale;
+  if (a.accel_noise_mps2 >= 0.0) {
+    c->tracker.particle.accel_noise_mps2 = a.accel_noise_mps2;
+    c->tracker.kalman.motion.accel_noise_mps2 = a.accel_noise_mps2;
+  }
 }
 
 void Usage(FILE* out) {
@@ -51,13 +60,17 @@ void Usage(FILE* out) {
       out,
       "usage: scene_campaign [--scenes N] [--seed S] [--json FILE] [--class all|gaussian|multipath|impulsive]\n"
       "                      [--duration SECONDS] [--jobs J] [--weighting phat|phat-coherence|...]\n"
-      "                      [--filter pf|ekf|ukf|mmpf|imm] [--particles N] [--trace SEED]\n"
+      "                      [--filter pf|ekf|ukf|mmpf|imm] [--particles N] [--accel-noise MPS2]\n"
+      "                      [--manoeuvre-share P] [--manoeuvre-scale K]\n"
+      "                      [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
       "within 3 x CRLB to the end), RMSE/CRLB and median NEES/dim after acquisition, lost frames\n"
       "(> 10 x CRLB after a first good frame), silent failures (> 1 s of error > 10 x CRLB with\n"
       "position NEES > 50 while initialised, present, not ambiguous).\n"
-      "--weighting, --filter and --particles override the session's defaults.\n"
+      "--weighting, --filter, --particles, --accel-noise (the motion model's white acceleration\n"
+      "std, m/s^2) and --manoeuvre-share/--manoeuvre-scale (particle filter: the share of particles\n"
+      "whose acceleration std is scaled each step) override the session's defaults.\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
       "initialised, present, ambiguous, error, CRLB, error/CRLB, reported sd, position NEES.\n"
       "Defaults: --scenes 200 --seed 1 --class all --duration 12 --jobs 1.\n");
@@ -90,6 +103,18 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->particles = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->particles < 1)
         return std::fprintf(stderr, "scene_campaign: --particles must be >= 1\n"), false;
+    } else if (flag == "--accel-noise") {
+      a->accel_noise_mps2 = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(a->accel_noise_mps2 >= 0.0))
+        return std::fprintf(stderr, "scene_campaign: --accel-noise must be >= 0\n"), false;
+    } else if (flag == "--manoeuvre-share") {
+      a->manoeuvre_share = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(a->manoeuvre_share >= 0.0 && a->manoeuvre_share < 1.0))
+        return std::fprintf(stderr, "scene_campaign: --manoeuvre-share must be in [0, 1)\n"), false;
+    } else if (flag == "--manoeuvre-scale") {
+      a->manoeuvre_scale = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(a->manoeuvre_scale >= 1.0))
+        return std::fprintf(stderr, "scene_campaign: --manoeuvre-scale must be >= 1\n"), false;
     } else if (flag == "--trace") {
       a->trace_seed = std::strtoull(value.c_str(), &end, 10);
       if (*end != '\0') return std::fprintf(stderr, "scene_campaign: --trace must be a scene seed\n"), false;
