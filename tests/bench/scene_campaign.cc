@@ -39,6 +39,7 @@ struct Args {
   int particles = 0;                   // 0: the session default
   double accel_noise_mps2 = -1.0;      // < 0: the session default
   double manoeuvre_share = -1.0;       // < 0: the session default
+  int tempered_updates = -1;           // < 0: the session default
   double manoeuvre_scale = 0.0;        // < 1: the session default
 };
 
@@ -49,6 +50,7 @@ void Adjust(const Args& a, AudioSessionConfig* c) {
   if (a.particles > 0) c->tracker.particle.particles = a.particles;
   if (a.manoeuvre_share >= 0.0) c->tracker.particle.manoeuvre_share = a.manoeuvre_share;
   if (a.manoeuvre_scale >= 1.0) c->tracker.particle.manoeuvre_scale = a.manoeuvre_scale;
+  if (a.tempered_updates >= 0) c->tracker.particle.tempered_updates = a.tempered_updates;
   if (a.accel_noise_mps2 >= 0.0) {
     c->tracker.particle.accel_noise_mps2 = a.accel_noise_mps2;
     c->tracker.kalman.motion.accel_noise_mps2 = a.accel_noise_mps2;
@@ -61,7 +63,7 @@ void Usage(FILE* out) {
       "usage: scene_campaign [--scenes N] [--seed S] [--json FILE] [--class all|gaussian|multipath|impulsive]\n"
       "                      [--duration SECONDS] [--jobs J] [--weighting phat|phat-coherence|...]\n"
       "                      [--filter pf|ekf|ukf|mmpf|imm] [--particles N] [--accel-noise MPS2]\n"
-      "                      [--manoeuvre-share P] [--manoeuvre-scale K]\n"
+      "                      [--manoeuvre-share P] [--manoeuvre-scale K] [--tempered-updates N]\n"
       "                      [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
@@ -70,7 +72,8 @@ void Usage(FILE* out) {
       "position NEES > 50 while initialised, present, not ambiguous).\n"
       "--weighting, --filter, --particles, --accel-noise (the motion model's white acceleration\n"
       "std, m/s^2) and --manoeuvre-share/--manoeuvre-scale (particle filter: the share of particles\n"
-      "whose acceleration std is scaled each step) override the session's defaults.\n"
+      "whose acceleration std is scaled each step) and --tempered-updates (particle filter: updates\n"
+      "after each (re)start tempered in stages) override the session's defaults.\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
       "initialised, present, ambiguous, error, CRLB, error/CRLB, reported sd, position NEES.\n"
       "Defaults: --scenes 200 --seed 1 --class all --duration 12 --jobs 1.\n");
@@ -115,6 +118,10 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->manoeuvre_scale = std::strtod(value.c_str(), &end);
       if (*end != '\0' || !(a->manoeuvre_scale >= 1.0))
         return std::fprintf(stderr, "scene_campaign: --manoeuvre-scale must be >= 1\n"), false;
+    } else if (flag == "--tempered-updates") {
+      a->tempered_updates = static_cast<int>(std::strtol(value.c_str(), &end, 10));
+      if (*end != '\0' || a->tempered_updates < 0 || a->tempered_updates > 100)
+        return std::fprintf(stderr, "scene_campaign: --tempered-updates must be in [0, 100]\n"), false;
     } else if (flag == "--trace") {
       a->trace_seed = std::strtoull(value.c_str(), &end, 10);
       if (*end != '\0') return std::fprintf(stderr, "scene_campaign: --trace must be a scene seed\n"), false;
