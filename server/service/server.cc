@@ -159,6 +159,7 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
       return exposer.status();
     }
     s->exposer_ = std::move(exposer).value();
+    s->metrics_port_ = s->exposer_->port();
     // The live view: GET / draws what GET /sessions lists. The exposer is stopped before
     // the registry is destroyed (Shutdown), so `sessions` outlives every request.
     const double ttl_s = options.session_ttl_s;

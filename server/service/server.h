@@ -41,7 +41,7 @@ class Server final {
   Server& operator=(const Server&) = delete;
 
   int grpc_port() const { return grpc_port_; }
-  int metrics_port() const { return exposer_ ? exposer_->port() : 0; }
+  int metrics_port() const { return metrics_port_; }  // 0: no HTTP endpoint
   void Shutdown() EXCLUDES(shutdown_mutex_);
 
  private:
@@ -58,6 +58,9 @@ class Server final {
   std::unique_ptr<grpc::Server> grpc_;
   std::unique_ptr<metrics::HttpExposer> exposer_;
   int grpc_port_ = 0;
+  // Set once by Start, read by metrics_port() from any thread (exposer_ itself is reset by
+  // Shutdown, which may run concurrently).
+  int metrics_port_ = 0;
   Mutex shutdown_mutex_;
   bool shut_down_ GUARDED_BY(shutdown_mutex_) = false;
 };

@@ -62,7 +62,8 @@ TEST_F(AdmissionTest, ASessionThatDoesNotFitTheBudgetIsRefusedAndAClosedOneGives
   for (int attempt = 0; attempt < 250 && !opened; ++attempt) {
     TestStream c(stub_.get());
     ASSERT_TRUE(c.Send(medium));
-    ASSERT_TRUE(c.Send(s.BlockRequest(1, kBlock)));
+    // Fails when the server already refused the open and ended the stream; Close says so.
+    (void)c.Send(s.BlockRequest(1, kBlock));
     opened = c.Close().ok();
     if (!opened) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
