@@ -58,6 +58,9 @@ void PokeListener(const std::string& host, int port) {
 }
 
 // "host:port" -> civetweb's listening_ports syntax ("127.0.0.1:8080", "[::1]:8080").
+// The port is digits only: civetweb's "s" (TLS) and "r" (redirect) suffixes are refused. Its
+// TLS cannot work against Debian 12's OpenSSL 3 (a handshake, then a crash on the first
+// request; README "Security", "HTTP and TLS").
 StatusOr<std::string> ToCivetwebListeningPort(const std::string& listen) {
   const auto bad = [&listen](const std::string& why) {
     return InvalidArgument("listen address \"" + listen + "\" " + why +

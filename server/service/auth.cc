@@ -54,6 +54,18 @@ grpc::Status ToGrpcStatus(AuthDecision decision, const std::string& what) {
   return grpc::Status(grpc::StatusCode::INTERNAL, "unknown auth decision");
 }
 
+const char* RefusalReason(AuthDecision decision, std::string_view authorization) {
+  switch (decision) {
+    case AuthDecision::kAllowed:
+      return "";
+    case AuthDecision::kUnauthenticated:
+      return authorization.empty() ? "missing" : "invalid";
+    case AuthDecision::kPermissionDenied:
+      return "forbidden";
+  }
+  return "invalid";
+}
+
 TokenAuthenticator::Digest TokenAuthenticator::Hash(std::string_view token) {
   Digest digest{};
   SHA256(reinterpret_cast<const unsigned char*>(token.data()), token.size(), digest.data());

@@ -60,6 +60,12 @@ enum class AuthDecision { kAllowed, kUnauthenticated, kPermissionDenied };
 // role (client) may not call <what>; an operator token is needed"), for gRPC.
 grpc::Status ToGrpcStatus(AuthDecision decision, const std::string& what);
 
+// Why a request was refused, the `reason` of localizer_auth_refusals_total: "missing" (no
+// credentials: `authorization` is empty), "invalid" (credentials sent, but not "Bearer TOKEN"
+// or a token that is not in the file), "forbidden" (a known token whose role may not make the
+// call). "" for kAllowed.
+const char* RefusalReason(AuthDecision decision, std::string_view authorization);
+
 class TokenAuthenticator final {
  public:
   static constexpr size_t kMinTokenChars = 16;

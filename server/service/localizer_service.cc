@@ -50,10 +50,15 @@ grpc::Status LocalizerService::Authorize(grpc::CallbackServerContext* context, R
   const AuthDecision decision = auth_->Check(authorization, role);
   if (decision == AuthDecision::kAllowed) return grpc::Status::OK;
   grpc::Status status = ToGrpcStatus(decision, method);
+  const char* reason = RefusalReason(decision, authorization);
+  if (metrics_ != nullptr) {
+    if (auto* c = metrics_->auth_refusals(reason)) c->Increment();
+  }
   LogEvent("warn", "auth_refused",
            {{"method", method},
             {"peer", context->peer()},
-            {"code", decision == AuthDecision::kUnauthenticated ? "UNAUTHENTICATED" : "PERMISSION_DENIED"}});
+            {"code", decision == AuthDecision::kUnauthenticated ? "UNAUTHENTICATED" : "PERMISSION_DENIED"},
+            {"reason", reason}});
   return status;
 }
 

@@ -57,7 +57,8 @@ class LocalizerService final : public LocalizerCallbackBase {
   ServiceMetrics* const metrics_;
   const wire::ConfigPolicy policy_;
   // OK when `context`'s authorization metadata allows a call needing `role` (always without
-  // auth_); else the refusal, logged with the method and peer.
+  // auth_); else the refusal, logged with the method, peer and reason and counted in
+  // localizer_auth_refusals_total{reason}.
   grpc::Status Authorize(grpc::CallbackServerContext* context, Role role, const char* method) const;
 
   const TokenAuthenticator* const auth_;

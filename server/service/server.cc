@@ -60,6 +60,16 @@ int HttpRefusal(AuthDecision decision) {
   return 403;
 }
 
+// An operator page's guard: 0 to serve, else 401 or 403, counting the refusal in
+// localizer_auth_refusals_total{reason} as the gRPC check does.
+int OperatorPageGuard(const TokenAuthenticator& auth, ServiceMetrics* metrics, const std::string& authorization) {
+  const AuthDecision decision = auth.Check(authorization, Role::kOperator);
+  if (decision != AuthDecision::kAllowed) {
+    if (auto* c = metrics->auth_refusals(RefusalReason(decision, authorization))) c->Increment();
+  }
+  return HttpRefusal(decision);
+}
+
 }  // namespace
 
 Server::Server(const ServerOptions& options) : options_(options) {}
@@ -172,13 +182,13 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
     // navigates). /metrics stays open: it holds aggregate counters, no session identity.
     metrics::HttpExposer::PageGuard sessions_guard, page_guard;
     if (const TokenAuthenticator* auth = s->auth_.get()) {
-      sessions_guard = [auth](const metrics::HttpExposer::Credentials& c) {
-        return HttpRefusal(auth->Check(c.authorization, Role::kOperator));
+      sessions_guard = [auth, m](const metrics::HttpExposer::Credentials& c) {
+        return OperatorPageGuard(*auth, m, c.authorization);
       };
-      page_guard = [auth](const metrics::HttpExposer::Credentials& c) {
+      page_guard = [auth, m](const metrics::HttpExposer::Credentials& c) {
         const std::string authorization =
             c.authorization.empty() && !c.query_token.empty() ? "Bearer " + c.query_token : c.authorization;
-        return HttpRefusal(auth->Check(authorization, Role::kOperator));
+        return OperatorPageGuard(*auth, m, authorization);
       };
     }
     LOCALIZER_RETURN_IF_ERROR(s->exposer_->AddPage("/sessions", std::move(sessions_page),

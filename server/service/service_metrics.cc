@@ -68,9 +68,9 @@ StatusOr<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(metrics::Regist
   if (!sessions.ok()) return sessions.status();
   m->attached = Series(*sessions, {"attached"});
   m->detached = Series(*sessions, {"detached"});
-  auto budget = r->AddGauge("localizer_memory_budget_bytes",
-                            "Engine memory charged to sessions and Locate calls (used), and the budget (limit).",
-                            {"state"});
+  auto budget =
+      r->AddGauge("localizer_memory_budget_bytes",
+                  "Engine memory charged to sessions and Locate calls (used), and the budget (limit).", {"state"});
   if (!budget.ok()) return budget.status();
   m->budget_used = Series(*budget, {"used"});
   m->budget_limit = Series(*budget, {"limit"});
@@ -80,6 +80,13 @@ StatusOr<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(metrics::Regist
   auto locate = r->AddCounter("localizer_locate_requests_total", "One-shot Locate calls, by status code.", {"code"});
   if (!locate.ok()) return locate.status();
   m->locate_ = *locate;
+  auto refusals = r->AddCounter("localizer_auth_refusals_total",
+                                "gRPC calls and HTTP requests refused by the bearer-token check, by reason "
+                                "(missing, invalid, forbidden).",
+                                {"reason"});
+  if (!refusals.ok()) return refusals.status();
+  m->auth_refusals_ = *refusals;
+  for (const char* reason : {"missing", "invalid", "forbidden"}) (void)m->auth_refusals(reason);
   auto info = r->AddGauge("localizer_build_info", "Build and runtime facts; the value is always 1.",
                           {"version", "grpc_version", "default_backend"});
   if (!info.ok()) return info.status();
@@ -98,5 +105,6 @@ const StageHistograms& ServiceMetrics::stages(const std::string& backend) const 
 metrics::Counter* ServiceMetrics::rejections(const std::string& reason) { return Series(rejections_, {reason}); }
 metrics::Counter* ServiceMetrics::sessions_closed(const std::string& reason) { return Series(closed_, {reason}); }
 metrics::Counter* ServiceMetrics::locate_requests(const std::string& code) { return Series(locate_, {code}); }
+metrics::Counter* ServiceMetrics::auth_refusals(const std::string& reason) { return Series(auth_refusals_, {reason}); }
 
 }  // namespace localizer::server

@@ -22,6 +22,8 @@
 //                                            of one scan), total (scan received -> tracks ready)
 //   localizer_track_updates_total            tracks taken through a scan cycle (predict,
 //                                            gate, update or coast), all detection sessions
+//   localizer_auth_refusals_total{reason}   calls and HTTP requests refused by the bearer-token
+//                                            check: missing | invalid | forbidden (auth.h)
 //   localizer_build_info{version,grpc_version,default_backend}  always 1
 // Thread-safe: every pointer here is updated lock-free.
 #pragma once
@@ -51,6 +53,8 @@ class ServiceMetrics final {
   metrics::Counter* rejections(const std::string& reason);  // looked up (mutex) per call
   metrics::Counter* sessions_closed(const std::string& reason);
   metrics::Counter* locate_requests(const std::string& code);
+  // RefusalReason's "missing", "invalid" or "forbidden" (auth.h); exported at 0 from the start.
+  metrics::Counter* auth_refusals(const std::string& reason);
 
   metrics::Counter* blocks = nullptr;
   metrics::Counter* samples = nullptr;
@@ -74,6 +78,7 @@ class ServiceMetrics final {
   metrics::Family<metrics::Counter>* rejections_ = nullptr;
   metrics::Family<metrics::Counter>* closed_ = nullptr;
   metrics::Family<metrics::Counter>* locate_ = nullptr;
+  metrics::Family<metrics::Counter>* auth_refusals_ = nullptr;
 };
 
 }  // namespace localizer::server

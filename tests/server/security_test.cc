@@ -11,6 +11,7 @@
 #include <fstream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "clients/grpc/connection.h"
 #include "server/service/auth.h"
@@ -350,6 +351,71 @@ TEST_F(TokenTest, HttpSessionsAndLivePageNeedTheOperatorToken) {
   EXPECT_EQ(get("/metrics", "").status, 200);  // aggregate counters stay open
 }
 
+// localizer_auth_refusals_total{reason} from a /metrics scrape (-1 when the series is absent).
+double AuthRefusals(int metrics_port, const std::string& reason) {
+  const std::string series = "\nlocalizer_auth_refusals_total{reason=\"" + reason + "\"} ";
+  const auto response = localizer::testing::Request(metrics_port, "GET", "/metrics");
+  const size_t at = response.body.find(series);
+  return at == std::string::npos ? -1.0 : std::stod(response.body.substr(at + series.size()));
+}
+
+TEST_F(TokenTest, RefusalsAreCountedByReasonOnGrpcAndHttp) {
+  const int port = server_->metrics_port();
+  const auto count = [port] {
+    return std::vector<double>{AuthRefusals(port, "missing"), AuthRefusals(port, "invalid"),
+                               AuthRefusals(port, "forbidden")};
+  };
+  EXPECT_EQ(count(), (std::vector<double>{0, 0, 0}));  // exported at 0 before any refusal
+
+  // gRPC: no token, an unknown token, a token under another scheme, a client token on an
+  // operator call; an allowed call counts nothing.
+  EXPECT_EQ(ListSessions(StubWithToken("").get()).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(count(), (std::vector<double>{1, 0, 0}));
+  EXPECT_EQ(ListSessions(StubWithToken("wrong.token").get()).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  auto plain = StubWithToken("");
+  grpc::ClientContext context;
+  context.AddMetadata("authorization", std::string("Basic ") + kOperatorToken);
+  v1::ListSessionsResponse listed;
+  EXPECT_EQ(plain->ListSessions(&context, v1::ListSessionsRequest(), &listed).error_code(),
+            grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(count(), (std::vector<double>{1, 2, 0}));
+  EXPECT_EQ(ListSessions(StubWithToken("client.token").get()).error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(count(), (std::vector<double>{1, 2, 1}));
+  EXPECT_TRUE(ListSessions(StubWithToken("operator.token").get()).ok());
+  size_t estimates = 0;
+  EXPECT_EQ(Stream(StubWithToken("").get(), &estimates).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(count(), (std::vector<double>{2, 2, 1}));
+
+  // HTTP: the operator pages count alike; /metrics is open and counts nothing.
+  using localizer::testing::RawRequest;
+  const auto get = [port](const std::string& path, const std::string& token) {
+    std::string request = "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n";
+    if (!token.empty()) request += "Authorization: Bearer " + token + "\r\n";
+    return RawRequest(port, request + "\r\n").status;
+  };
+  EXPECT_EQ(get("/sessions", ""), 401);
+  EXPECT_EQ(get("/", ""), 401);
+  EXPECT_EQ(count(), (std::vector<double>{4, 2, 1}));
+  EXPECT_EQ(get("/sessions", "not-a-known-token-000000000000"), 401);
+  EXPECT_EQ(get("/?token=not-a-known-token-000000000000", ""), 401);
+  EXPECT_EQ(count(), (std::vector<double>{4, 4, 1}));
+  EXPECT_EQ(get("/sessions", kClientToken), 403);
+  EXPECT_EQ(get("/?token=" + std::string(kClientToken), ""), 403);
+  EXPECT_EQ(count(), (std::vector<double>{4, 4, 3}));
+  EXPECT_EQ(get("/sessions", kOperatorToken), 200);
+  EXPECT_EQ(get("/?token=" + std::string(kOperatorToken), ""), 200);
+  EXPECT_EQ(count(), (std::vector<double>{4, 4, 3}));
+}
+
+TEST_F(SecurityTest, AuthRefusalsAreZeroWithoutTokens) {
+  StartServer(ServerOptions());
+  size_t estimates = 0;
+  EXPECT_TRUE(Stream(Stub(client::ConnectOptions()).get(), &estimates).ok());
+  for (const char* reason : {"missing", "invalid", "forbidden"}) {
+    EXPECT_EQ(AuthRefusals(server_->metrics_port(), reason), 0.0) << reason;
+  }
+}
+
 TEST_F(SecurityTest, TokensOverTlsWithClientCertificates) {
   SKIP_WITHOUT_OPENSSL();
   ServerOptions options;
@@ -412,6 +478,14 @@ TEST(TokenAuthenticatorTest, ParsesRolesSkipsCommentsAndChecksRoles) {
   EXPECT_EQ(a.Check("Basic aaaaaaaaaaaaaaaa", Role::kClient), AuthDecision::kUnauthenticated);
   EXPECT_EQ(a.Check("Bearer aaaaaaaaaaaaaaa", Role::kClient), AuthDecision::kUnauthenticated);    // prefix
   EXPECT_EQ(a.Check("Bearer aaaaaaaaaaaaaaaaa", Role::kClient), AuthDecision::kUnauthenticated);  // longer
+}
+
+TEST(TokenAuthenticatorTest, RefusalReasonTellsMissingFromInvalidAndForbidden) {
+  EXPECT_STREQ(RefusalReason(AuthDecision::kAllowed, "Bearer x"), "");
+  EXPECT_STREQ(RefusalReason(AuthDecision::kUnauthenticated, ""), "missing");
+  EXPECT_STREQ(RefusalReason(AuthDecision::kUnauthenticated, "Bearer "), "invalid");
+  EXPECT_STREQ(RefusalReason(AuthDecision::kUnauthenticated, "Basic abc"), "invalid");
+  EXPECT_STREQ(RefusalReason(AuthDecision::kPermissionDenied, "Bearer aaaaaaaaaaaaaaaa"), "forbidden");
 }
 
 TEST(TokenAuthenticatorTest, RefusesBadFilesNamingTheLineButNotTheToken) {
