@@ -181,14 +181,14 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
     // page's script sends it), / also as ?token= (a browser cannot set a header when it
     // navigates). /metrics stays open: it holds aggregate counters, no session identity.
     metrics::HttpExposer::PageGuard sessions_guard, page_guard;
-    if (const TokenAuthenticator* auth = s->auth_.get()) {
-      sessions_guard = [auth, m](const metrics::HttpExposer::Credentials& c) {
-        return OperatorPageGuard(*auth, m, c.authorization);
+    if (const TokenAuthenticator* tokens = s->auth_.get()) {
+      sessions_guard = [tokens, m](const metrics::HttpExposer::Credentials& c) {
+        return OperatorPageGuard(*tokens, m, c.authorization);
       };
-      page_guard = [auth, m](const metrics::HttpExposer::Credentials& c) {
+      page_guard = [tokens, m](const metrics::HttpExposer::Credentials& c) {
         const std::string authorization =
             c.authorization.empty() && !c.query_token.empty() ? "Bearer " + c.query_token : c.authorization;
-        return OperatorPageGuard(*auth, m, authorization);
+        return OperatorPageGuard(*tokens, m, authorization);
       };
     }
     LOCALIZER_RETURN_IF_ERROR(s->exposer_->AddPage("/sessions", std::move(sessions_page),
