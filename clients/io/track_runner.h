@@ -83,13 +83,13 @@ struct ArrayOverrides {
   std::optional<double> surface_z_m;
 };
 
-// The session config `localizer-cli track` runs with, locally or on a server: `base` (the
+// The session config `localizer-cli track` runs with, locally or on a server: `config` (the
 // user's choices) with the array file's sensors, sound speed and reference sensor unless
-// overridden, `sample_rate_hz` (the WAV header's), and, when `base` leaves both band edges
+// overridden, `sample_rate_hz` (the WAV header's), and, when `config` leaves both band edges
 // at 0, the array file's band_hz as the GCC band (its high edge capped at Nyquist); when
-// `base` is unbounded, the array file's bounds; then the overrides' bounds. Not validated:
+// `config` is unbounded, the array file's bounds; then the overrides' bounds. Not validated:
 // Session::Create (or the server) does that.
-engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig base, const ArrayFile& array,
+engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig config, const ArrayFile& array,
                                           const ArrayOverrides& overrides, double sample_rate_hz);
 
 // The first half of RunTrack, shared with the remote track (clients/grpc/remote_track.h) so

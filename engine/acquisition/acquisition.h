@@ -102,9 +102,9 @@ class Acquisition {
  private:
   Acquisition(const ArrayGeometry& array, const AcquisitionOptions& options);
   struct Direction {
-    Vec3 unit;
-    double angular_radius_rad;
-    double chord_per_range;  // 2 sin(angular radius / 2): the cell's half-width per metre of range
+    Vec3 unit = Vec3::Zero();
+    double angular_radius_rad = 0.0;
+    double chord_per_range = 0.0;  // 2 sin(angular radius / 2): the cell's half-width per metre of range
   };
   bool Refine(const Vec3& start_m, const std::vector<double>& lo, const std::vector<double>& hi,
               PositionMode* mode) const;

@@ -87,7 +87,7 @@ bool LagField::ArgMax(int p, double lo_samples, double hi_samples, double* lag_s
   double offset = 0.0;
   if (best > 0 && best < n - 1) {
     const double a = g[static_cast<size_t>(best - 1)], b = g[static_cast<size_t>(best)],
-                 c = g[static_cast<size_t>(best + 1)];
+                 c = g[static_cast<size_t>(best) + 1];
     const double denom = a - 2.0 * b + c;
     if (denom < 0.0) offset = std::clamp(0.5 * (a - c) / denom, -0.5, 0.5);
   }

@@ -54,7 +54,8 @@ Fix Refine(const ArrayGeometry& array, Vec3 s, const Eigen::VectorXd& d, const M
 
 }  // namespace
 
-std::vector<Vec3> ClosedFormCandidates(const ArrayGeometry& array, const Eigen::VectorXd& d) {
+std::vector<Vec3> ClosedFormCandidates(const ArrayGeometry& array, const Eigen::VectorXd& tdoa_s) {
+  const Eigen::VectorXd& d = tdoa_s;
   const int pairs = array.pair_count();
   const Vec3& ref = array.sensor_m(array.reference_sensor());
   Eigen::MatrixXd ax(pairs, 3);

@@ -22,22 +22,22 @@ void UpsampleGcc(const std::vector<float>& gcc, int factor, std::vector<float>* 
     return;
   }
   constexpr int kSpan = 2 * kGccUpsampleTaps;
-  out->resize(static_cast<size_t>((size - 1) * factor + 1));
+  out->resize(static_cast<size_t>(size - 1) * static_cast<size_t>(factor) + 1);
   // Kernel weights depend only on the phase j % factor; the input is zero padded by
   // kGccUpsampleTaps on both sides so the inner loop has no bounds checks.
   thread_local std::vector<float> weights, padded;
   thread_local int weights_factor = 0;
   if (weights_factor != factor) {  // the kernel table depends only on the factor
     weights_factor = factor;
-    weights.resize(static_cast<size_t>(factor * kSpan));
+    weights.resize(static_cast<size_t>(factor) * kSpan);
     for (int phase = 0; phase < factor; ++phase) {
       for (int t = 0; t < kSpan; ++t) {
         const double x = static_cast<double>(phase) / factor - (t - kGccUpsampleTaps + 1);
-        weights[static_cast<size_t>(phase * kSpan + t)] = static_cast<float>(Kernel(x));
+        weights[static_cast<size_t>(phase) * kSpan + static_cast<size_t>(t)] = static_cast<float>(Kernel(x));
       }
     }
   }
-  padded.assign(static_cast<size_t>(size + 2 * kGccUpsampleTaps), 0.0f);
+  padded.assign(static_cast<size_t>(size) + 2 * static_cast<size_t>(kGccUpsampleTaps), 0.0f);
   std::copy(gcc.begin(), gcc.end(), padded.begin() + kGccUpsampleTaps);
   // One phase at a time, as a short convolution vectorised across output positions, then
   // interleaved into the fine grid.
@@ -50,12 +50,13 @@ void UpsampleGcc(const std::vector<float>& gcc, int factor, std::vector<float>* 
     float* __restrict acc = phase_out.data();
     std::fill(acc, acc + outputs, 0.0f);
     for (int t = 0; t < kSpan; ++t) {
-      const float w = weights[static_cast<size_t>(phase * kSpan + t)];
+      const float w = weights[static_cast<size_t>(phase) * kSpan + static_cast<size_t>(t)];
       const float* __restrict x = padded.data() + 1 + t;  // output b reads x[b]
 #pragma omp simd
       for (int b = 0; b < outputs; ++b) acc[b] += w * x[b];
     }
-    for (int b = 0; b < outputs; ++b) (*out)[static_cast<size_t>(b * factor + phase)] = acc[b];
+    for (int b = 0; b < outputs; ++b)
+      (*out)[static_cast<size_t>(b) * static_cast<size_t>(factor) + static_cast<size_t>(phase)] = acc[b];
   }
 }
 

@@ -169,7 +169,7 @@ void ParticleSet::ApplyBounds() {
   const std::array<float*, 6> cols = cur_.Pointers();
   for (int axis = 0; axis < 3; ++axis) {
     float* __restrict p = cols[static_cast<size_t>(axis)];
-    float* __restrict v = cols[static_cast<size_t>(axis + 3)];
+    float* __restrict v = cols[static_cast<size_t>(axis) + 3];
     const float lo = bound_lo_(axis), hi = bound_hi_(axis);
     if (!std::isfinite(lo) && !std::isfinite(hi)) continue;
 #pragma omp simd

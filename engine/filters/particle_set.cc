@@ -41,7 +41,7 @@ ParticleSet::ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions
   for (auto* v : {&logw_, &w_, &r_ref_, &vr_ref_, &loglik_, &delay_}) v->assign(n_, 0.0f);
   for (auto& column : noise_) column.assign(n_, 0.0f);
   index_.assign(n_, 0);
-  accel_.assign(static_cast<size_t>(2 * ((3 * n_ + 1) / 2)), 0.0f);
+  accel_.assign(2 * ((3 * static_cast<size_t>(n_) + 1) / 2), 0.0f);
   first_slot_.assign(n_, 0);
   SetEqualWeights();
 }

@@ -10,7 +10,7 @@ namespace {
 // The turn's coefficients and their derivatives in omega:
 //   a = sin(w T) / w,  b = (1 - cos(w T)) / w,  da = d a / d w,  db = d b / d w.
 struct TurnTerms {
-  double s, c, a, b, da, db;
+  double s = 0, c = 0, a = 0, b = 0, da = 0, db = 0;
 };
 
 TurnTerms Terms(double w, double t) {
@@ -34,7 +34,8 @@ TurnTerms Terms(double w, double t) {
 
 }  // namespace
 
-Eigen::VectorXd CoordinatedTurnModel::Propagate(const Eigen::VectorXd& x, double t) const {
+Eigen::VectorXd CoordinatedTurnModel::Propagate(const Eigen::VectorXd& x, double dt_s) const {
+  const double t = dt_s;
   const double vx = x(3), vy = x(4), w = x(6);
   const TurnTerms k = Terms(w, t);
   Eigen::VectorXd y = x;
@@ -46,7 +47,8 @@ Eigen::VectorXd CoordinatedTurnModel::Propagate(const Eigen::VectorXd& x, double
   return y;
 }
 
-Eigen::MatrixXd CoordinatedTurnModel::Jacobian(const Eigen::VectorXd& x, double t) const {
+Eigen::MatrixXd CoordinatedTurnModel::Jacobian(const Eigen::VectorXd& x, double dt_s) const {
+  const double t = dt_s;
   const double vx = x(3), vy = x(4), w = x(6);
   const TurnTerms k = Terms(w, t);
   Eigen::MatrixXd f = Eigen::MatrixXd::Identity(7, 7);
@@ -66,7 +68,8 @@ Eigen::MatrixXd CoordinatedTurnModel::Jacobian(const Eigen::VectorXd& x, double 
   return f;
 }
 
-Eigen::MatrixXd CoordinatedTurnModel::ProcessNoise(const Eigen::VectorXd&, double t) const {
+Eigen::MatrixXd CoordinatedTurnModel::ProcessNoise(const Eigen::VectorXd& /*x*/, double dt_s) const {
+  const double t = dt_s;
   Eigen::MatrixXd q = Eigen::MatrixXd::Zero(7, 7);
   q.topLeftCorner<6, 6>() = ConstantVelocity{accel_noise_}.ProcessNoise(t);
   q(6, 6) = turn_noise_ * turn_noise_ * t;

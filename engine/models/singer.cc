@@ -41,7 +41,8 @@ Eigen::Matrix3d SeriesNoise(double a, double t) {
 
 }  // namespace
 
-Eigen::Matrix3d SingerModel::AxisTransition(double t) const {
+Eigen::Matrix3d SingerModel::AxisTransition(double dt_s) const {
+  const double t = dt_s;
   const double a = alpha_, e = std::exp(-a * t);
   Eigen::Matrix3d f;
   // (alpha T - 1 + e) / alpha^2 and (1 - e) / alpha lose digits for small alpha T: expm1.
@@ -50,7 +51,8 @@ Eigen::Matrix3d SingerModel::AxisTransition(double t) const {
   return f;
 }
 
-Eigen::Matrix3d SingerModel::AxisNoise(double t) const {
+Eigen::Matrix3d SingerModel::AxisNoise(double dt_s) const {
+  const double t = dt_s;
   const double a = alpha_, at = a * t;
   if (at < 0.5) {  // the closed forms cancel here: integrate the power series instead
     return 2.0 * a * sigma_m_ * sigma_m_ * SeriesNoise(a, t);

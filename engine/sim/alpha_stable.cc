@@ -14,7 +14,6 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 
 using sim_detail::Invalid;
-using sim_detail::Num;
 
 // (k + 1/2) 2^-52 for the top 52 bits k of one engine output: in [2^-53, 1 - 2^-53], never
 // 0 or 1, and exact (k + 1/2 fits a double's 53-bit mantissa).

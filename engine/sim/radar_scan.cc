@@ -131,7 +131,7 @@ std::vector<RadarTarget> RingTargets(int n, double radius_m, double speed_mps, c
   for (int i = 0; i < n; ++i) {
     const double a = 2.0 * kPi * i / n;
     RadarTarget t;
-    t.id = static_cast<uint64_t>(i + 1);
+    t.id = static_cast<uint64_t>(i) + 1;
     t.trajectory.position_m = {centre_m.x() + radius_m * std::cos(a), centre_m.y() + radius_m * std::sin(a), 0.0};
     t.trajectory.velocity_mps = {-speed_mps * std::sin(a), speed_mps * std::cos(a), 0.0};
     out.push_back(t);
@@ -146,7 +146,7 @@ std::vector<RadarTarget> CrossingTargets(int n, double radius_m, double speed_mp
     const double a = kPi + (n > 1 ? arc_rad * (static_cast<double>(i) / (n - 1) - 0.5) : 0.0);
     const Eigen::Vector2d dir(std::cos(a), std::sin(a));
     RadarTarget t;
-    t.id = static_cast<uint64_t>(i + 1);
+    t.id = static_cast<uint64_t>(i) + 1;
     t.trajectory.position_m << crossing_m + radius_m * dir, 0.0;
     t.trajectory.velocity_mps << -speed_mps * dir, 0.0;
     out.push_back(t);

@@ -115,8 +115,8 @@ std::vector<Vec3> SpreadArray(Draw& draw, int count, double aperture_m) {
 
 // Whether the track stays in the array's reach over the run.
 bool TrackFits(const Trajectory& track, const std::vector<Vec3>& sensors, double aperture_m, double duration_s) {
-  for (double t = 0.0; t <= duration_s + 1e-9; t += kTrackCheckStepS) {
-    const Vec3 p = track.PositionAt(t);
+  for (int k = 0; k * kTrackCheckStepS <= duration_s + 1e-9; ++k) {
+    const Vec3 p = track.PositionAt(k * kTrackCheckStepS);
     if (p.norm() > kFarthestApertures * aperture_m) return false;
     for (const Vec3& s : sensors) {
       if ((p - s).norm() < kNearestSensorApertures * aperture_m) return false;
@@ -129,8 +129,8 @@ bool TrackFits(const Trajectory& track, const std::vector<Vec3>& sensors, double
 std::pair<double, double> VerticalExtent(const Trajectory& track, const std::vector<Vec3>& sensors, double duration_s) {
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (const Vec3& s : sensors) lo = std::min(lo, s.z()), hi = std::max(hi, s.z());
-  for (double t = 0.0; t <= duration_s + 1e-9; t += kTrackCheckStepS) {
-    const double z = track.PositionAt(t).z();
+  for (int k = 0; k * kTrackCheckStepS <= duration_s + 1e-9; ++k) {
+    const double z = track.PositionAt(k * kTrackCheckStepS).z();
     lo = std::min(lo, z), hi = std::max(hi, z);
   }
   return {lo, hi};

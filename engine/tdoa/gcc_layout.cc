@@ -58,7 +58,8 @@ StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOption
   layout.noise_floor_inverse = static_cast<float>(std::sqrt(2.0 * (layout.band_end_bin - layout.band_first_bin)));
 
   // Keep each window and the interpolator's reach inside half the transform.
-  const double lag_limit = layout.fft_size / 2 - 1.0 - kPeakHalfWidth;
+  const int half_fft = layout.fft_size / 2;  // an integer: the transform's half length
+  const double lag_limit = half_fft - 1.0 - kPeakHalfWidth;
   for (int p = 0; p < array.pair_count(); ++p) {
     layout.max_lag_samples.push_back(static_cast<int>(std::min(wanted_lag(p), lag_limit)));
   }

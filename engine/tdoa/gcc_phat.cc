@@ -498,7 +498,7 @@ void GccPhatEstimator::Impl::PickCandidates(std::span<const float> searched, int
     for (int t = 0; t < taken_count; ++t) clear = clear && std::abs(e.index - taken[t]) >= radius;
     if (!clear) continue;
     taken[taken_count++] = e.index;
-    std::array<float, kPeakSamples> around;
+    std::array<float, kPeakSamples> around{};
     const float sign = w[e.index] < 0.0f ? -1.0f : 1.0f;
     for (int m = 0; m < kPeakSamples; ++m) around[m] = sign * w[e.index - kPeakHalfWidth + m];
     const double offset = InterpolatePeak(options.interpolation, around);

@@ -22,9 +22,9 @@ double ChiSquareCdf(int dof, double x) {
     a = 1.0;
     term = h * std::exp(-h);  // Gamma(2) = 1
   }
-  for (double k = a; k < 0.5 * dof - 1e-9; k += 1.0) {
+  for (int i = 0; a + i < 0.5 * dof - 1e-9; ++i) {  // k = a, a + 1, ... (exact: a is 1/2 or 1)
     p -= term;
-    term *= h / (k + 1.0);
+    term *= h / (a + i + 1.0);
   }
   return p;
 }

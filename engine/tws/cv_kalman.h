@@ -53,7 +53,7 @@ struct Cv {
     const PosCov s = p.template topLeftCorner<D, D>() + r;
     const PosCov s_inv = s.inverse();  // closed form for D <= 3
     const Gain ph = p.template leftCols<D>();
-    const Gain k = ph * s_inv;
+    Gain k = ph * s_inv;  // not const: returned by move
     x += k * (z - x.template head<D>());
     p -= k * ph.transpose();
     p = 0.5 * (p + p.transpose()).eval();

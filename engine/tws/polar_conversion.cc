@@ -4,7 +4,9 @@
 
 namespace localizer::engine::tws {
 
-Converted3 ConvertSpherical(double r, double theta, double phi, const PolarNoise& noise, Conversion method) {
+Converted3 ConvertSpherical(double range_m, double bearing_rad, double elevation_rad, const PolarNoise& noise,
+                            Conversion method) {
+  const double r = range_m, theta = bearing_rad, phi = elevation_rad;
   const double ct = std::cos(theta), st = std::sin(theta);
   const double cp = std::cos(phi), sp = std::sin(phi);
   const double sr2 = noise.range_sigma_m * noise.range_sigma_m;
@@ -41,7 +43,8 @@ Converted3 ConvertSpherical(double r, double theta, double phi, const PolarNoise
   return out;
 }
 
-Converted2 ConvertPolar(double r, double theta, const PolarNoise& noise, Conversion method) {
+Converted2 ConvertPolar(double range_m, double bearing_rad, const PolarNoise& noise, Conversion method) {
+  const double r = range_m, theta = bearing_rad;
   const double ct = std::cos(theta), st = std::sin(theta);
   const double sr2 = noise.range_sigma_m * noise.range_sigma_m;
   const double stt = noise.bearing_sigma_rad * noise.bearing_sigma_rad;
