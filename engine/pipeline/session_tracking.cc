@@ -23,7 +23,13 @@ bool NearTrack(const TrackState& predicted, const PositionMode& mode) {
 }
 
 // The modes plus the track's own predicted position as one more (equal weight).
-std::vector<PositionMode> WithOwnTrack(std::vector<PositionMode> modes, const TrackState& predicted);
+std::vector<PositionMode> WithOwnTrack(std::vector<PositionMode> modes, const TrackState& predicted) {
+  PositionMode own;
+  own.position_m = predicted.mean.head<3>();
+  own.covariance_m2 = predicted.covariance.topLeftCorner<3, 3>();
+  modes.push_back(own);
+  return modes;
+}
 
 void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e) {
   ++frames_since_audit;
@@ -50,13 +56,6 @@ void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& nea
   e->reinitialised = StartFromModes(WithOwnTrack(found.modes, predicted));
 }
 
-std::vector<PositionMode> WithOwnTrack(std::vector<PositionMode> modes, const TrackState& predicted) {
-  PositionMode own;
-  own.position_m = predicted.mean.head<3>();
-  own.covariance_m2 = predicted.covariance.topLeftCorner<3, 3>();
-  modes.push_back(own);
-  return modes;
-}
 constexpr double kCandidateShare = 0.3;
 
 int Session::Impl::AssociateCandidates(const TrackState& predicted) {

@@ -89,7 +89,7 @@ struct SessionStep {
   int do_predict = 0;
   int do_update = 0;
   float dt = 0, a_to_p = 0, a_to_v = 0;      // predict (pf_math.cuh PredictParticle)
-  float manoeuvre_z = -1e30f;                // a particle manoeuvres when its 4th normal < this;
+  float manoeuvre_z = -1e30f;                // a particle manoeuvres when its 4th normal < this
   float quiet_gain = 1, manoeuvre_gain = 1;  // its acceleration normals' gain (ManoeuvreGainsFor)
   float reference[3] = {};                   // reference sensor relative to the centroid
   float inv_c = 0;                           // 1 / sound speed (s/m)

@@ -34,6 +34,14 @@ StatusOr<SessionConfig> MakeSessionConfig(const engine::ArrayGeometry& array,
     config.kernel_h = engine::KernelBandwidth(options.kernel_scale, options.particles);
     config.kernel_a = engine::KernelShrinkage(config.kernel_h);
   }
+  if (options.manoeuvre_share > 0.0) {
+    config.manoeuvre_z = static_cast<float>(engine::NormalQuantile(options.manoeuvre_share));
+  } else {
+    config.manoeuvre_z = -std::numeric_limits<float>::infinity();
+  }
+  const engine::ManoeuvreGains gains = engine::ManoeuvreGainsFor(options.manoeuvre_share, options.manoeuvre_scale);
+  config.quiet_gain = static_cast<float>(gains.quiet);
+  config.manoeuvre_gain = static_cast<float>(gains.manoeuvre);
   return config;
 }
 
@@ -47,12 +55,9 @@ Status FillSessionStep(const SessionConfig& config, const StepInputs& in, std::v
   step->dt = static_cast<float>(in.dt_s);
   step->a_to_v = static_cast<float>(o.accel_noise_mps2 * in.dt_s);
   step->a_to_p = static_cast<float>(0.5 * o.accel_noise_mps2 * in.dt_s * in.dt_s);
-  // A particle manoeuvres when its fourth normal is below Phi^-1(share): probability share.
-  step->manoeuvre_z = o.manoeuvre_share > 0.0 ? static_cast<float>(engine::NormalQuantile(o.manoeuvre_share))
-                                              : -std::numeric_limits<float>::infinity();
-  const engine::ManoeuvreGains gains = engine::ManoeuvreGainsFor(o.manoeuvre_share, o.manoeuvre_scale);
-  step->quiet_gain = static_cast<float>(gains.quiet);
-  step->manoeuvre_gain = static_cast<float>(gains.manoeuvre);
+  step->manoeuvre_z = config.manoeuvre_z;
+  step->quiet_gain = config.quiet_gain;
+  step->manoeuvre_gain = config.manoeuvre_gain;
   for (int a = 0; a < 3; ++a) step->reference[a] = config.reference[a];
   step->inv_c = config.inv_c;
   step->inv_dof = static_cast<float>(1.0 / o.peak_dof);

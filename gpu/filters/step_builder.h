@@ -24,6 +24,9 @@ struct SessionConfig {
   float pair_sensor[kMaxPairs][3] = {};   // each pair's sensor - centroid
   float inv_c = 0.0f;                     // 1 / sound speed
   double kernel_h = 0.0, kernel_a = 1.0;  // Liu-West bandwidth and shrinkage (kernel_scale > 0)
+  // Manoeuvres (options.manoeuvre_share): a particle manoeuvres when its fourth normal is
+  // below manoeuvre_z = Phi^-1(share) (-inf: never); its acceleration normals' gains.
+  float manoeuvre_z = -1e30f, quiet_gain = 1.0f, manoeuvre_gain = 1.0f;
 };
 
 // INVALID_ARGUMENT for options that fail Validate() or an array with more than kMaxPairs
