@@ -1,0 +1,211 @@
+// SrpPhat's per-frame work (srp_phat.h): the branch-and-bound search, the refinement on the
+// exact spectrum, the removal of each source found and the description of a peak.
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <queue>
+
+#include "engine/doa/srp_phat.h"
+
+namespace localizer::engine {
+namespace {
+constexpr int kRefineIterations = 8;  // Newton takes 3-4 on a peak
+constexpr int kHalvings = 3;
+constexpr double kConverged_rad = 1e-5;  // far below any array's direction bound
+}  // namespace
+
+bool SrpPhat::Search(Cell* best) const {
+  const std::vector<Cell>& roots = roots_;
+  if (!roots.empty() && Leaf(roots.front())) {  // a plain grid: every root is a leaf
+    double best_value = -std::numeric_limits<double>::infinity();
+    for (const Cell& c : roots) {
+      const double value = Centre(c);
+      if (value > best_value) {
+        best_value = value;
+        *best = c;
+      }
+    }
+    return !roots.empty();
+  }
+  auto lower = [](const Cell& a, const Cell& b) { return a.bound < b.bound; };
+  std::priority_queue<Cell, std::vector<Cell>, decltype(lower)> open(lower);
+  for (Cell c : roots) {  // a copy: the bound is this frame's
+    c.bound = Bound(c);
+    open.push(c);
+  }
+  double best_value = -std::numeric_limits<double>::infinity();
+  bool found = false;
+  int bounded = static_cast<int>(open.size());
+  std::vector<Cell> children;
+  while (!open.empty() && bounded < options_.cell_budget) {
+    const Cell top = open.top();
+    if (top.bound <= best_value) break;  // no open cell can beat the best leaf
+    open.pop();
+    if (Leaf(top)) {
+      const double value = Centre(top);
+      if (value > best_value) {
+        best_value = value;
+        *best = top;
+        found = true;
+      }
+      continue;
+    }
+    Split(top, &children);
+    for (Cell& c : children) {
+      c.bound = Bound(c);
+      open.push(c);
+      ++bounded;
+    }
+  }
+  if (!found && !open.empty()) {  // out of budget before any leaf: the most promising cell
+    *best = open.top();
+    found = true;
+  }
+  return found;
+}
+
+double SrpPhat::Exact(const Cell& cell) const {
+  double sum = 0.0;
+  for (int p = 0; p < pair_count(); ++p) sum += spectra_.At(p, Lag(p, cell)).r;
+  return sum / spectra_.noise_sigma() / std::sqrt(static_cast<double>(pair_count()));
+}
+
+// The spectrum's sum over pairs at a cell's centre with its gradient and Hessian in the
+// refinement's coordinates (one pass over the bins). Arcs: theta (the 1 x 1 corner).
+// Sphere: the tangent plane at u. Planar arrays: the array plane, on the direction's
+// in-plane part w (lags are linear in w, u = w + sqrt(1 - |w|^2) n); on the sphere, the
+// plane's mirror symmetry makes every in-plane direction a stationary point in elevation,
+// where Newton would stop.
+SrpPhat::Probe SrpPhat::ProbeAt(const Cell& cell) const {
+  Probe out;
+  if (linear()) {
+    const double c = std::cos(cell.theta_rad), s = std::sin(cell.theta_rad);
+    for (int p = 0; p < pair_count(); ++p) {
+      const double a = lag_per_direction_[static_cast<size_t>(p)].dot(shape_.axis);
+      const PairSpectra::Value v = spectra_.At(p, a * c);
+      out.value += v.r;
+      out.gradient(0) += v.dr * (-a * s);
+      out.hessian(0, 0) += v.d2r * a * a * s * s + v.dr * (-a * c);
+    }
+    out.hessian(1, 1) = -1.0;  // unused direction: keeps the matrix definite
+    return out;
+  }
+  const bool planar = shape_.shape == ArrayShape::kPlanar;
+  const Vec3 normal = planar ? shape_.axis : cell.u;
+  const Vec3 other = std::abs(normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  out.basis.col(0) = normal.cross(other).normalized();
+  out.basis.col(1) = normal.cross(out.basis.col(0));
+  double radial = 0.0;  // the sphere's curvature: u(v) = (u + E v) / |u + E v|
+  for (int p = 0; p < pair_count(); ++p) {
+    const Vec3& d = lag_per_direction_[static_cast<size_t>(p)];
+    const PairSpectra::Value v = spectra_.At(p, d.dot(cell.u));
+    const Eigen::Vector2d a = out.basis.transpose() * d;
+    out.value += v.r;
+    out.gradient += v.dr * a;
+    out.hessian += v.d2r * a * a.transpose();
+    radial += v.dr * d.dot(cell.u);
+  }
+  if (!planar) out.hessian -= radial * Eigen::Matrix2d::Identity();
+  return out;
+}
+
+SrpPhat::Cell SrpPhat::Moved(const Cell& cell, const Probe& probe, const Eigen::Vector2d& step) const {
+  Cell next = cell;
+  if (linear()) {
+    next.theta_rad = std::clamp(cell.theta_rad + step(0), 0.0, std::numbers::pi);
+  } else if (shape_.shape == ArrayShape::kPlanar) {
+    const Vec3& n = shape_.axis;
+    Vec3 w = cell.u - cell.u.dot(n) * n + probe.basis * step;
+    if (w.norm() > 1.0) w.normalize();
+    next.u = w + std::sqrt(std::max(0.0, 1.0 - w.squaredNorm())) * n;
+  } else {
+    next.u = (cell.u + probe.basis * step).normalized();
+  }
+  return next;
+}
+
+SrpPhat::Cell SrpPhat::Refine(Cell cell) const {
+  const double max_step = 2.0 * leaf_radius_rad_;
+  Probe probe = ProbeAt(cell);
+  for (int iteration = 0; iteration < kRefineIterations; ++iteration) {
+    Eigen::Vector2d step;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(probe.hessian);
+    if (eig.eigenvalues().maxCoeff() < 0.0) {
+      step = -probe.hessian.ldlt().solve(probe.gradient);
+    } else {
+      const double g = probe.gradient.norm();
+      step = g > 0.0 ? Eigen::Vector2d(0.25 * max_step * probe.gradient / g) : Eigen::Vector2d::Zero();
+    }
+    if (step.norm() > max_step) step *= max_step / step.norm();
+    bool improved = false;
+    for (int h = 0; h < kHalvings && !improved; ++h, step *= 0.5) {
+      const Cell next = Moved(cell, probe, step);
+      const Probe there = ProbeAt(next);
+      if (there.value > probe.value) {
+        cell = next;
+        probe = there;
+        improved = true;
+      }
+    }
+    if (!improved || step.norm() < kConverged_rad) break;
+  }
+  return cell;
+}
+
+DirectionPeak SrpPhat::Describe(const Cell& cell, double statistic) const {
+  DirectionPeak peak;
+  peak.statistic = statistic;
+  peak.threshold = threshold_;
+  peak.power_db = 20.0 * std::log10(std::max(statistic, 1e-9) / std::sqrt(static_cast<double>(pair_count())));
+  if (linear()) {
+    peak.cone_angle_rad = cell.theta_rad;
+    return peak;
+  }
+  Vec3 u = cell.u;
+  if (shape_.shape == ArrayShape::kPlanar) {
+    const Vec3& n = shape_.axis;
+    Vec3 mirror = u - 2.0 * u.dot(n) * n;
+    const Vec3& side = options_.source_side;
+    if (side.norm() > 0.0) {
+      if (u.dot(side) < mirror.dot(side)) std::swap(u, mirror);
+    } else {
+      if (u.dot(n) < 0.0) std::swap(u, mirror);
+      peak.mirror_ambiguous = (u - mirror).norm() > 1e-9;
+      if (peak.mirror_ambiguous) peak.mirror_direction = mirror;
+    }
+  }
+  peak.direction = u;
+  peak.azimuth_rad = std::atan2(u.y(), u.x());
+  peak.elevation_rad = std::asin(std::clamp(u.z(), -1.0, 1.0));
+  return peak;
+}
+
+StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
+  LOCALIZER_RETURN_IF_ERROR(spectra_.Analyse(frame, &field_input_));
+  std::vector<DirectionPeak> peaks;
+  for (int k = 0; k < options_.max_sources; ++k) {
+    field_.Build(field_input_);
+    Cell best;
+    if (!Search(&best)) break;
+    best = Refine(best);
+    const double statistic = Exact(best);
+    if (!(statistic >= threshold_)) break;
+    peaks.push_back(Describe(best, statistic));
+    if (k + 1 == options_.max_sources) break;
+    for (int p = 0; p < pair_count(); ++p) spectra_.RemoveDelay(p, Lag(p, best), &field_input_);
+  }
+  return peaks;
+}
+
+double SrpPhat::Statistic(const Vec3& direction) const {
+  Cell cell;
+  if (linear()) {
+    cell.theta_rad = std::acos(std::clamp(direction.normalized().dot(shape_.axis), -1.0, 1.0));
+  } else {
+    cell.u = direction.normalized();
+  }
+  return Exact(cell);
+}
+
+}  // namespace localizer::engine

@@ -1,0 +1,87 @@
+// One frame's PHAT cross-spectra for every pair of sensors, the GCC of each as a detection
+// field over lags, and the exact GCC at any fractional lag (for refining a direction).
+//
+// For sensors i < j (pair p, in the order (0,1), (0,2), ..., (1,2), ...), channels zero padded
+// to M = NextFastFftSize(N + max lag + 1) samples (no window; N = frame samples):
+//     G_p(k) = X_i(k) conj(X_j(k)) / |X_i(k) conj(X_j(k))|        for the B in-band bins k
+//     R_p(l) = (1 / B) sum_k Re(G_p(k) exp(2 pi i k l / M))       (l in samples, fractional)
+// A source whose sound reaches sensor i at t_i and j at t_j (samples) gives R_p a peak of up
+// to 1 at l = t_i - t_j. With independent noise on the channels, R_p(l) at any one lag is
+// ~N(0, sigma^2), sigma^2 = (M / N) / (2B): 1 / (2B) for B independent phases, times M / N
+// because the zero-padded spectrum has only N degrees of freedom over its M bins (measured:
+// without the factor, noise frames passed a 1e-3 threshold 7x too often). The pair's field
+// n_p(l) = R_p(l) / sigma is N(0, 1) without a source (lag_field.h). Different pairs are
+// uncorrelated under noise (PHAT keeps only phases, independent per channel).
+//
+// Removing a source (RemoveDelay): the least-squares pure-delay component at lag l,
+// c = (1 / B) sum_k G_p(k) exp(2 pi i k l / M), is subtracted from G_p, which takes the
+// source's peak and its sidelobes out of R_p (CLEAN-style) and leaves the other sources.
+// A bin where either channel is silent (|X_i conj(X_j)| below 1e-12 of the frame's mean
+// power) contributes 0.
+//
+// Cost per frame: `sensors` real FFTs of M, P = sensors (sensors - 1) / 2 products over the
+// band and P inverse FFTs of M (BENCHMARKS.md, doa_bench). Not thread-safe; one per analyser.
+#pragma once
+
+#include <complex>
+#include <vector>
+
+#include "engine/core/measurement.h"
+#include "engine/core/status.h"
+#include "engine/core/types.h"
+#include "engine/tdoa/fftw_util.h"
+
+namespace localizer::engine {
+
+struct PairSpectraOptions {
+  int sensors = 0;
+  int frame_samples = 0;
+  double sample_rate_hz = 0.0;
+  double band_low_hz = 0.0;   // in-band: low <= f <= high, DC and Nyquist excluded
+  double band_high_hz = 0.0;  // 0: up to the Nyquist frequency
+  int max_lag_samples = 0;    // the field covers lags [-max_lag, max_lag]
+};
+
+class PairSpectra {
+ public:
+  // INVALID_ARGUMENT naming the option (sensors < 2, no bin in the band, a lag window that
+  // does not fit in half the transform, ...).
+  static StatusOr<PairSpectra> Create(const PairSpectraOptions& options);
+
+  int pair_count() const { return static_cast<int>(pairs_.size()); }
+  // The sensors of pair p: first < second.
+  std::pair<int, int> sensors_of(int p) const { return pairs_[static_cast<size_t>(p)]; }
+  int fft_size() const { return fft_size_; }
+  int band_bins() const { return static_cast<int>(bins_.size()); }
+
+  // The frame: sensors x frame_samples floats, channel-major. INVALID_ARGUMENT on a
+  // non-finite sample (naming the sensor). Fills `field` with one PairMeasurement per pair:
+  // gcc = R_p at integer lags -max_lag..max_lag, peak_value = sigma (the noise-only
+  // deviation) and peak_snr = 1, so that LagField's normalisation gives n_p; sample_rate_hz.
+  Status Analyse(const float* frame, Measurement* field);
+  // Subtracts pair p's pure-delay component at `lag_samples` from its spectrum and rewrites
+  // its entry of `field` (as Analyse filled it).
+  void RemoveDelay(int p, double lag_samples, Measurement* field);
+  // The noise-only deviation of R_p at one lag.
+  double noise_sigma() const { return noise_sigma_; }
+
+  // R_p at a fractional lag and its first two derivatives per sample, from the spectrum.
+  struct Value {
+    double r = 0.0, dr = 0.0, d2r = 0.0;
+  };
+  Value At(int p, double lag_samples) const;
+
+ private:
+  PairSpectra() = default;
+  void FillField(int p, PairMeasurement* out);
+  PairSpectraOptions options_;
+  int fft_size_ = 0;
+  double noise_sigma_ = 0.0;
+  std::vector<std::pair<int, int>> pairs_;
+  std::vector<int> bins_;                             // in-band bin indices
+  std::vector<std::vector<std::complex<double>>> g_;  // per pair, per in-band bin
+  FftwFloats time_, spectra_, cross_, gcc_;
+  FftwPlan forward_, inverse_;
+};
+
+}  // namespace localizer::engine

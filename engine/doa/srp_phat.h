@@ -1,0 +1,167 @@
+// Direction of arrival by steered response power with the phase transform (SRP-PHAT): the
+// GCC-PHAT of every pair of sensors (pair_spectra.h), summed at the lags a far-field source
+// in each direction would give, searched coarse to fine; several sources per frame.
+//
+// Model. A plane wave from unit direction u (pointing from the array to the source) reaches
+// sensor m at t(m) = -m.u / c, so pair (i, j) peaks at lag_p(u) = D_p.u samples with
+// D_p = -(m_i - m_j) fs / c. The spectrum
+//     z(u) = sum_p n_p(lag_p(u)) / sqrt(P)          (n_p: pair p's normalised GCC)
+// is ~N(0, 1) at any one direction when the frame holds only noise, and ~sqrt(P) times the
+// pairs' mean peak height over their noise for a source (tens to hundreds).
+//
+// What is searched is what the array observes (array_shape.h):
+//   volumetric  the sphere of directions;
+//   planar      the hemisphere on the array normal's side: the other hemisphere gives the
+//               same lags. With `source_side` (sources lie where u.side > 0, side not in
+//               the array plane) the direction on that side is reported; without it the peak
+//               is flagged mirror_ambiguous and both candidates are given;
+//   linear      the cone angle theta in [0, pi] between u and the array axis (u.axis =
+//               cos theta); the direction itself is not observable (NaN).
+//
+// Search, per source. A leaf is a cell that spans at most half a sample of lag on every
+// pair (radius 0.5 / max_p g_p). When at most 8192 leaves cover the domain (a sphere needs
+// (6 g)^2 of them, g = max_p g_p: arrays whose longest pair spans at most 15 samples, 32 cm
+// at 16 kHz in air), the roots are the leaves: a plain grid, each scored by z at its centre. Otherwise, branch and
+// bound (as acquisition.h does over positions) from 8192 roots. Roots are Fibonacci-lattice caps on the sphere (those
+// reaching the searched hemisphere when planar), or arcs of theta. A cell of angular radius r
+// centred on c cannot hold a lag further than g_p r from lag_p(c), g_p = |D_p| (|D_p.axis|
+// for arcs), so
+//     U(cell) = sum_p max{ n_p(l) : |l - lag_p(c)| <= g_p r + 0.5 } / sqrt(P)
+// bounds z over it. Cells are split in decreasing U (4 caps of radius r / sqrt(2), or 2
+// arcs) down to leaves (scored by z at their centre from the field), stopping when the best
+// leaf beats every open bound, or after cell_budget cells. The best leaf is refined by Newton's method on the exact
+// spectrum (PairSpectra::At, no lag quantisation).
+//
+// Several sources: after each one, its pure-delay component is removed from every pair's
+// spectrum (PairSpectra::RemoveDelay: the peak and its sidelobes go, other sources stay)
+// and the search runs again on the residual, until max_sources are found or the best peak
+// falls below the threshold
+//     t = Q^-1(false_alarm / M),  M = the leaf cells that tile the domain,
+// a union bound over the directions the search chooses from (presence.h), so a frame of
+// noise reports a source with probability <= false_alarm per search.
+// Limits, measured in tests/doa/srp_phat_test.cc: PHAT's cross-spectrum is quadratic in the
+// signals, so a source 10 dB below another holds about a tenth of it (z ~ 0.1 x the loud
+// one's); and two equal sources leave a weaker spurious peak (z up to ~0.4 of the weaker
+// one's, at a direction that repeats from frame to frame) once both are removed. Its origin is not
+// understood yet: it is not the square-wave phantom of PHAT at tau_j + (tau_j - tau_i).
+// A tracker must not confirm it.
+//
+// Cost per frame: PairSpectra's transforms, plus per source a search of typically tens to a
+// few hundred cells of P lookups each and one refinement of about 10 x P x B complex
+// multiplies (B in-band bins). Measured in BENCHMARKS.md (doa_bench). Not thread-safe.
+#pragma once
+
+#include <limits>
+#include <vector>
+
+#include "engine/acquisition/lag_field.h"
+#include "engine/core/measurement.h"
+#include "engine/core/status.h"
+#include "engine/core/types.h"
+#include "engine/doa/array_shape.h"
+#include "engine/doa/pair_spectra.h"
+
+namespace localizer::engine {
+
+struct SrpOptions {
+  double sample_rate_hz = 16000.0;
+  double sound_speed_mps = 343.0;
+  int frame_samples = 512;
+  double band_low_hz = 0.0;
+  double band_high_hz = 0.0;  // 0: the Nyquist frequency
+  int max_sources = 4;        // in [1, 16]
+  double false_alarm = 1e-3;  // per frame and source search, in (0, 0.1]
+  // Planar arrays: sources lie where u.source_side > 0 (zero: not stated). Must not lie in
+  // the array plane. Ignored for other shapes.
+  Vec3 source_side = Vec3::Zero();
+  int cell_budget = 4096;  // cells bounded per source search, in [64, 2^20]
+
+  Status Validate() const;
+};
+
+// One source heard in a frame.
+struct DirectionPeak {
+  static constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+  // Unit vector from the array towards the source, in the sensors' frame; NaN for linear
+  // arrays. azimuth = atan2(y, x), elevation = asin(z) (from the x-y plane towards +z).
+  Vec3 direction = Vec3::Constant(kNan);
+  double azimuth_rad = kNan;
+  double elevation_rad = kNan;
+  // Angle between the direction and the array axis, [0, pi]; linear arrays only.
+  double cone_angle_rad = kNan;
+  // Planar arrays without source_side: the mirror image across the array plane fits the
+  // lags equally (NaN direction when not ambiguous).
+  bool mirror_ambiguous = false;
+  Vec3 mirror_direction = Vec3::Constant(kNan);
+  double statistic = 0.0;  // z at the peak (after the removal of stronger sources)
+  double threshold = 0.0;  // t
+  // The pairs' mean peak height over their noise-only deviation, 20 log10(z / sqrt(P)):
+  // 0 dB is the noise level.
+  double power_db = 0.0;
+};
+
+class SrpPhat {
+ public:
+  // INVALID_ARGUMENT naming the option or the sensors (array_shape.h, pair_spectra.h).
+  static StatusOr<SrpPhat> Create(const std::vector<Vec3>& sensors_m, const SrpOptions& options);
+
+  const ArrayShapeInfo& shape() const { return shape_; }
+  const SrpOptions& options() const { return options_; }
+  int pair_count() const { return spectra_.pair_count(); }
+
+  // Sources in the frame (sensors x frame_samples floats, channel-major), strongest first,
+  // at most max_sources; empty when none passes the threshold. INVALID_ARGUMENT for a
+  // non-finite sample.
+  StatusOr<std::vector<DirectionPeak>> Analyse(const float* frame);
+
+  // z at a direction (far-field lags; linear arrays read only u.axis) from the last
+  // analysed frame's exact spectrum, less the sources removed before its last search (none
+  // when max_sources is 1).
+  double Statistic(const Vec3& direction) const;
+
+ private:
+  SrpPhat(const ArrayShapeInfo& shape, const SrpOptions& options, PairSpectra spectra);
+  struct Cell {
+    double bound = 0.0;
+    Vec3 u = Vec3::Zero();   // sphere cells: the centre
+    double theta_rad = 0.0;  // arcs: the centre
+    double radius_rad = 0.0;
+  };
+  bool linear() const { return shape_.shape == ArrayShape::kLinear; }
+  Vec3 ArcDirection(double theta_rad) const;
+  double Lag(int p, const Cell& cell) const;
+  double Spread(int p, double radius_rad) const;  // g_p r
+  double Bound(const Cell& cell) const;
+  double Centre(const Cell& cell) const;  // z at the centre, from the field
+  std::vector<Cell> Roots() const;        // computed once, into roots_
+  void Split(const Cell& cell, std::vector<Cell>* children) const;
+  bool Leaf(const Cell& cell) const;
+  bool Search(Cell* best) const;
+  struct Probe {
+    double value = 0.0;  // sum_p R_p at the centre
+    Eigen::Vector2d gradient = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d hessian = Eigen::Matrix2d::Zero();
+    Eigen::Matrix<double, 3, 2> basis = Eigen::Matrix<double, 3, 2>::Zero();  // the step's axes
+  };
+  Probe ProbeAt(const Cell& cell) const;
+  Cell Moved(const Cell& cell, const Probe& probe, const Eigen::Vector2d& step) const;
+  Cell Refine(Cell cell) const;
+  double Exact(const Cell& cell) const;  // z from the exact (residual) spectrum
+  DirectionPeak Describe(const Cell& cell, double statistic) const;
+
+  ArrayShapeInfo shape_;
+  SrpOptions options_;
+  PairSpectra spectra_;
+  std::vector<Vec3> lag_per_direction_;  // D_p, samples per unit of direction
+  double max_spread_ = 0.0;              // max_p g_p
+  double leaf_radius_rad_ = 0.0;
+  int root_count_ = 0;
+  std::vector<Cell> roots_;
+  double root_radius_rad_ = 0.0;
+  double threshold_ = 0.0;
+  Vec3 tangent_ = Vec3::Zero();  // linear arrays: a unit vector across the axis
+  Measurement field_input_;
+  LagField field_;
+};
+
+}  // namespace localizer::engine
