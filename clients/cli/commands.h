@@ -22,6 +22,7 @@ enum ExitCode : int { kExitOk = 0, kExitRuntimeError = 1, kExitUsage = 2 };
 // Each takes the arguments after the command name and returns the exit code.
 int RunSimulate(const std::vector<std::string>& args);
 int RunTrack(const std::vector<std::string>& args);
+int RunDoa(const std::vector<std::string>& args);  // cmd_doa.cc
 int RunScore(const std::vector<std::string>& args);
 int RunLocate(const std::vector<std::string>& args);
 int RunList(const std::vector<std::string>& args);

@@ -27,6 +27,10 @@ constexpr Command kCommands[] = {
      "track a source in a multichannel WAV (or one mono WAV per sensor) to a CSV\n"
      "            (--server: on a server session, same CSV, plus latency percentiles)",
      RunTrack},
+    {"doa",
+     "directions of the sources in each frame of a recording, for arrays of any shape\n"
+     "            (linear, planar, volumetric; SRP-PHAT) to a CSV",
+     RunDoa},
     {"score", "compare an estimates CSV with a truth CSV (rmse, median, p95, max error)", RunScore},
     {"locate", "one block of a recording through the server's one-shot Locate: pairs and fix", RunLocate},
     {"list", "the sessions a server holds, one line each", RunList},
@@ -60,6 +64,7 @@ std::string GlobalUsage() {
       "  localizer-cli simulate --scenario tetra-water --out run --duration 6\n"
       "  localizer-cli track --array run/array.json --wav run/signals.wav --out run/est.csv\n"
       "  localizer-cli score --truth run/truth.csv --estimates run/est.csv\n"
+      "  localizer-cli doa --array board.json --wav talk.wav --out directions.csv\n"
       "  localizer-cli experiment pf-vs-ekf-2d --runs 100 --seed 1\n"
       "  localizer-cli attitude --imu trial.csv --out orientation.csv --mag\n"
       "  localizer-cli attitude-score --imu trial.csv --estimates orientation.csv\n"

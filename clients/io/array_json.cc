@@ -10,6 +10,7 @@
 
 #include "clients/io/xav_array.h"
 #include "engine/array/array_geometry.h"
+#include "engine/doa/array_shape.h"
 
 namespace localizer::io {
 
@@ -185,7 +186,7 @@ StatusOr<ArrayFile> FromJson(const json& root, const std::string& source) {
 
 }  // namespace
 
-StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& source) {
+StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& source, ArrayUse use) {
   json root;
   try {
     root = json::parse(text);
@@ -195,17 +196,24 @@ StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& s
   auto array = FromJson(root, source);
   if (!array.ok()) return array;
   // Validate the geometry now so that a bad array fails where the file is named.
+  if (use == ArrayUse::kDirection) {
+    auto shape = engine::ClassifyArray(array->sensors_m);
+    if (!shape.ok()) return InvalidArgument(source + ": " + shape.status().message());
+    if (array->reference_sensor >= static_cast<int>(array->sensors_m.size()))
+      return InvalidArgument(source + ": reference_sensor is not one of the sensors");
+    return array;
+  }
   auto geometry = engine::ArrayGeometry::Create(array->sensors_m, array->sound_speed_mps, array->reference_sensor);
   if (!geometry.ok()) return InvalidArgument(source + ": " + geometry.status().message());
   return array;
 }
 
-StatusOr<ArrayFile> ReadArrayJson(const std::string& path) {
+StatusOr<ArrayFile> ReadArrayJson(const std::string& path, ArrayUse use) {
   std::ifstream in(path);
   if (!in) return NotFound(path + ": cannot open");
   std::ostringstream text;
   text << in.rdbuf();
-  return ParseArrayJson(text.str(), path);
+  return ParseArrayJson(text.str(), path, use);
 }
 
 Status WriteArrayJson(const std::string& path, const ArrayFile& array) {
@@ -234,13 +242,13 @@ Status WriteArrayJson(const std::string& path, const ArrayFile& array) {
   return Status::Ok();
 }
 
-StatusOr<ArrayFile> ReadArrayFile(const std::string& path) {
+StatusOr<ArrayFile> ReadArrayFile(const std::string& path, ArrayUse use) {
   if (path.size() >= 4 && path.compare(path.size() - 4, 4, ".csv") == 0) {
     auto xav = ReadXavHydrophoneCsv(path);
     if (!xav.ok()) return xav.status();
-    return xav->array;
+    return xav->array;  // six hydrophones in 3-D: good for either use
   }
-  return ReadArrayJson(path);
+  return ReadArrayJson(path, use);
 }
 
 }  // namespace localizer::io

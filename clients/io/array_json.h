@@ -17,9 +17,10 @@
 //                                              bounds_max_m / bounds_min_m)
 //   }
 //
-// Reading also builds an engine::ArrayGeometry from the file, so a geometry the engine
-// cannot localise with (fewer than 4 sensors, coplanar, coincident) fails at load time with
-// the engine's message. Unknown fields are rejected so that a misspelt optional field
+// Reading also checks the geometry against its use (ArrayUse), so a bad array fails at load
+// time with the engine's message, naming the file: for positions it builds an
+// engine::ArrayGeometry (fewer than 4 sensors, coplanar or coincident sensors fail); for
+// directions any array of 2 or more distinct sensors is accepted (engine/doa/array_shape.h). Unknown fields are rejected so that a misspelt optional field
 // ("reference_sensr") cannot be silently ignored. Every error names the source and field.
 #pragma once
 
@@ -47,13 +48,20 @@ struct ArrayFile {
   bool has_bounds() const { return bounds_min_m.array().isFinite().any() || bounds_max_m.array().isFinite().any(); }
 };
 
+// What the array will be used for, which decides the geometry it needs.
+enum class ArrayUse {
+  kPosition,   // 3-D localisation (track, locate, simulate): 4 or more sensors, not coplanar
+  kDirection,  // direction of arrival (doa): 2 or more distinct sensors, any shape
+};
+
 // `source` names the text in messages (usually its path).
-StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& source);
-StatusOr<ArrayFile> ReadArrayJson(const std::string& path);
+StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& source,
+                                   ArrayUse use = ArrayUse::kPosition);
+StatusOr<ArrayFile> ReadArrayJson(const std::string& path, ArrayUse use = ArrayUse::kPosition);
 Status WriteArrayJson(const std::string& path, const ArrayFile& array);
 
 // Reads an array description by file type: `.csv` is the XAV hydrophone configuration
 // (see xav_array.h), anything else array.json.
-StatusOr<ArrayFile> ReadArrayFile(const std::string& path);
+StatusOr<ArrayFile> ReadArrayFile(const std::string& path, ArrayUse use = ArrayUse::kPosition);
 
 }  // namespace localizer::io

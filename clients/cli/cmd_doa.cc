@@ -1,0 +1,91 @@
+// localizer-cli doa: directions of arrival of the sources in a recording, per frame, for
+// an array of any shape (clients/io/doa_runner.h).
+#include <cstdio>
+#include <sstream>
+
+#include "clients/cli/commands.h"
+#include "clients/io/array_json.h"
+#include "clients/io/doa_runner.h"
+
+namespace localizer::cli {
+namespace {
+
+const char* const kCommand = "doa";
+
+// "x,y,z" -> a vector.
+StatusOr<engine::Vec3> ParseVector(const std::string& text) {
+  engine::Vec3 v;
+  std::stringstream in(text);
+  std::string part;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!std::getline(in, part, ',')) return InvalidArgument("--source-side needs x,y,z, got '" + text + "'");
+    auto value = ParseFiniteDouble(part);
+    if (!value.ok()) return InvalidArgument("--source-side: " + value.status().message());
+    v(axis) = *value;
+  }
+  if (std::getline(in, part, ',')) return InvalidArgument("--source-side needs x,y,z, got '" + text + "'");
+  return v;
+}
+
+}  // namespace
+
+int RunDoa(const std::vector<std::string>& args) {
+  std::string array_path, out_path, side_text;
+  std::vector<std::string> wav_paths;
+  engine::SrpOptions srp;
+  int hop_samples = 256;
+  std::optional<double> band_low_hz, band_high_hz;
+  FlagSet flags("localizer-cli doa --array FILE --wav FILE [--wav FILE ...] --out FILE [flags]",
+                "Finds the directions of the sources heard in each frame of a recording (SRP-PHAT over\n"
+                "every sensor pair, engine/doa) and writes one CSV row per (frame, source):\n"
+                "t_s,peak,source_present,azimuth_rad,elevation_rad,cone_angle_rad,mirror_azimuth_rad,\n"
+                "mirror_elevation_rad,statistic,threshold,power_db. Any array of 2 or more sensors:\n"
+                "a volumetric array gives directions on the sphere, a planar one directions with their\n"
+                "mirror image across its plane (unless --source-side picks the side), a linear one the\n"
+                "cone angle to its axis. Far field; no tracking (a peak's rank is not an identity).\n"
+                "Prints the array's shape and a summary (frames, frames with a source, peaks, wall time).");
+  flags.String("array", &array_path, "FILE", "array.json (or the XAV hydrophone CSV): sensors and sound speed")
+      .Required();
+  flags.Strings("wav", &wav_paths, "FILE", "one multichannel WAV, or one mono WAV per sensor in order").Required();
+  flags.String("out", &out_path, "FILE", "the CSV to write").Required();
+  flags.Int("frame", &srp.frame_samples, "N", "samples", "frame length");
+  flags.Int("hop", &hop_samples, "N", "samples", "frame step, in [1, frame]");
+  flags.OptionalDouble("band-low", &band_low_hz, "HZ", "array.json band_hz, else 0", "lowest frequency used");
+  flags.OptionalDouble("band-high", &band_high_hz, "HZ", "array.json band_hz, else Nyquist", "highest frequency used");
+  flags.Int("max-sources", &srp.max_sources, "K", "sources", "most sources reported per frame, in [1, 16]");
+  flags.Double("false-alarm", &srp.false_alarm, "P", "per frame",
+               "probability that noise alone reports a source, per search, in (0, 0.1]");
+  flags.String("source-side", &side_text, "X,Y,Z",
+               "planar arrays: sources lie where (direction . (X,Y,Z)) > 0 (not in the array's plane)");
+  if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
+  if (!side_text.empty()) {
+    auto side = ParseVector(side_text);
+    if (!side.ok()) return UsageError(kCommand, side.status().message());
+    srp.source_side = *side;
+  }
+
+  auto array = io::ReadArrayFile(array_path, io::ArrayUse::kDirection);
+  if (!array.ok()) return RuntimeError(kCommand, array.status());
+  srp.band_low_hz = band_low_hz.value_or(array->band_hz ? array->band_hz->first : 0.0);
+  srp.band_high_hz = band_high_hz.value_or(array->band_hz ? array->band_hz->second : 0.0);
+
+  io::DoaJob job;
+  job.wav_paths = wav_paths;
+  job.array_source = array_path;
+  job.sensors_m = array->sensors_m;
+  job.sound_speed_mps = array->sound_speed_mps;
+  job.array_sample_rate_hz = array->sample_rate_hz;
+  job.srp = srp;
+  job.hop_samples = hop_samples;
+  job.csv_path = out_path;
+  auto summary = io::RunDoa(job, [](const std::string& warning) { Warning(kCommand, warning); });
+  if (!summary.ok()) return RuntimeError(kCommand, summary.status());
+  std::printf("array: %s, %zu sensors\n", engine::ArrayShapeName(summary->shape), array->sensors_m.size());
+  std::printf("frames=%lld with_source=%lld peaks=%lld wall_s=%.3f audio_s=%.3f\n",
+              static_cast<long long>(summary->frames), static_cast<long long>(summary->frames_with_source),
+              static_cast<long long>(summary->peaks), summary->wall_s,
+              static_cast<double>(summary->frames) * hop_samples / summary->sample_rate_hz);
+  return kExitOk;
+}
+
+}  // namespace localizer::cli
