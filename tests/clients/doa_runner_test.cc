@@ -24,7 +24,7 @@ std::string WriteRecording(const testing::TempDir& dir, const std::vector<Vec3>&
   scene.sensors_m = sensors;
   scene.frame_samples = 16000;
   const std::vector<float> samples = engine::testing::PlaneWaveFrame(scene, {{direction, 1.0}}, 7);
-  const std::string path = dir.File("signals.wav");
+  std::string path = dir.File("signals.wav");
   EXPECT_TRUE(WriteWavFloat(path, 16000.0, static_cast<int>(sensors.size()), 16000, samples.data()).ok());
   return path;
 }
