@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <complex>
 #include <queue>
 
 #include "engine/doa/srp_phat.h"
@@ -13,6 +14,8 @@ namespace {
 constexpr int kRefineIterations = 8;  // Newton takes 3-4 on a peak
 constexpr int kHalvings = 3;
 constexpr double kConverged_rad = 1e-5;  // far below any array's direction bound
+constexpr int kReestimations = 2;
+
 }  // namespace
 
 bool SrpPhat::Search(Cell* best) const {
@@ -184,17 +187,42 @@ DirectionPeak SrpPhat::Describe(const Cell& cell, double statistic) const {
 StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   LOCALIZER_RETURN_IF_ERROR(spectra_.Analyse(frame, &field_input_));
   std::vector<DirectionPeak> peaks;
-  for (int k = 0; k < options_.max_sources; ++k) {
+  struct Found {
+    Cell cell;
+    std::vector<std::complex<double>> amplitudes;  // per pair, what RemoveDelay took
+    double statistic = 0.0;
+  };
+  std::vector<Found> found;
+  auto remove = [&](Found* f) {
+    f->amplitudes.resize(static_cast<size_t>(pair_count()));
+    for (int p = 0; p < pair_count(); ++p)
+      f->amplitudes[static_cast<size_t>(p)] = spectra_.RemoveDelay(p, Lag(p, f->cell), &field_input_);
+  };
+  while (static_cast<int>(found.size()) < options_.max_sources) {
     field_.Build(field_input_);
     Cell best;
     if (!Search(&best)) break;
     best = Refine(best);
     const double statistic = Exact(best);
     if (!(statistic >= threshold_)) break;
-    peaks.push_back(Describe(best, statistic));
-    if (k + 1 == options_.max_sources) break;
-    for (int p = 0; p < pair_count(); ++p) spectra_.RemoveDelay(p, Lag(p, best), &field_input_);
+    found.push_back({best, {}, statistic});
+    if (static_cast<int>(found.size()) == options_.max_sources) break;
+    remove(&found.back());
+    // Each earlier source was refined with this one in its spectrum, which biased it: put it
+    // back, refine it among the others' residual, and take it out again (kReestimations
+    // passes). A removal at a biased lag leaves structured residue the next search finds.
+    for (int pass = 0; pass < kReestimations && found.size() > 1; ++pass) {
+      for (Found& f : found) {
+        for (int p = 0; p < pair_count(); ++p)
+          spectra_.RestoreDelay(p, Lag(p, f.cell), f.amplitudes[static_cast<size_t>(p)], &field_input_);
+        f.cell = Refine(f.cell);
+        f.statistic = Exact(f.cell);
+        remove(&f);
+      }
+    }
   }
+  std::stable_sort(found.begin(), found.end(), [](const Found& a, const Found& b) { return a.statistic > b.statistic; });
+  for (const Found& f : found) peaks.push_back(Describe(f.cell, f.statistic));
   return peaks;
 }
 

@@ -111,16 +111,24 @@ void PairSpectra::FillField(int p, PairMeasurement* out) {
   out->peak_snr = 1.0;
 }
 
-void PairSpectra::RemoveDelay(int p, double lag_samples, Measurement* field) {
-  std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
+std::complex<double> PairSpectra::RemoveDelay(int p, double lag_samples, Measurement* field) {
+  const std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
   const double step = 2.0 * std::numbers::pi / fft_size_;
   const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
   std::complex<double> phasor = std::polar(1.0, step * lag_samples * bins_.front());
   std::complex<double> amplitude = 0.0;
   for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) amplitude += g[b] * phasor;
   amplitude /= static_cast<double>(g.size());
-  phasor = std::polar(1.0, step * lag_samples * bins_.front());
-  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) g[b] -= amplitude * std::conj(phasor);
+  RestoreDelay(p, lag_samples, -amplitude, field);
+  return amplitude;
+}
+
+void PairSpectra::RestoreDelay(int p, double lag_samples, std::complex<double> amplitude, Measurement* field) {
+  std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
+  const double step = 2.0 * std::numbers::pi / fft_size_;
+  const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
+  std::complex<double> phasor = std::polar(1.0, step * lag_samples * bins_.front());
+  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) g[b] += amplitude * std::conj(phasor);
   FillField(p, &field->pairs[static_cast<size_t>(p)]);
 }
 

@@ -60,8 +60,10 @@ class PairSpectra {
   // deviation) and peak_snr = 1, so that LagField's normalisation gives n_p; sample_rate_hz.
   Status Analyse(const float* frame, Measurement* field);
   // Subtracts pair p's pure-delay component at `lag_samples` from its spectrum and rewrites
-  // its entry of `field` (as Analyse filled it).
-  void RemoveDelay(int p, double lag_samples, Measurement* field);
+  // its entry of `field` (as Analyse filled it); returns the component's amplitude c.
+  std::complex<double> RemoveDelay(int p, double lag_samples, Measurement* field);
+  // Adds back a component RemoveDelay took (the same lag and amplitude).
+  void RestoreDelay(int p, double lag_samples, std::complex<double> amplitude, Measurement* field);
   // The noise-only deviation of R_p at one lag.
   double noise_sigma() const { return noise_sigma_; }
 
