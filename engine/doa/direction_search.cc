@@ -3,8 +3,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <complex>
+#include <numbers>
 #include <queue>
 
 #include "engine/doa/srp_phat.h"
@@ -196,9 +196,10 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   auto remove = [&](Found* f) {
     f->amplitudes.resize(static_cast<size_t>(pair_count()));
     for (int p = 0; p < pair_count(); ++p)
-      f->amplitudes[static_cast<size_t>(p)] = spectra_.RemoveDelay(p, Lag(p, f->cell), &field_input_);
+      f->amplitudes[static_cast<size_t>(p)] = spectra_.RemoveDelay(p, Lag(p, f->cell));
   };
   while (static_cast<int>(found.size()) < options_.max_sources) {
+    if (!found.empty()) spectra_.FillFields(&field_input_);  // the residual, for the search
     field_.Build(field_input_);
     Cell best;
     if (!Search(&best)) break;
@@ -214,14 +215,15 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
     for (int pass = 0; pass < kReestimations && found.size() > 1; ++pass) {
       for (Found& f : found) {
         for (int p = 0; p < pair_count(); ++p)
-          spectra_.RestoreDelay(p, Lag(p, f.cell), f.amplitudes[static_cast<size_t>(p)], &field_input_);
+          spectra_.RestoreDelay(p, Lag(p, f.cell), f.amplitudes[static_cast<size_t>(p)]);
         f.cell = Refine(f.cell);
         f.statistic = Exact(f.cell);
         remove(&f);
       }
     }
   }
-  std::stable_sort(found.begin(), found.end(), [](const Found& a, const Found& b) { return a.statistic > b.statistic; });
+  std::stable_sort(found.begin(), found.end(),
+                   [](const Found& a, const Found& b) { return a.statistic > b.statistic; });
   for (const Found& f : found) peaks.push_back(Describe(f.cell, f.statistic));
   return peaks;
 }

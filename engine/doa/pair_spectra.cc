@@ -37,7 +37,8 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
     if (f_hz >= o.band_low_hz && f_hz <= high_hz) s.bins_.push_back(k);
   }
   if (s.bins_.empty()) return InvalidArgument("the band holds no FFT bin");
-  s.noise_sigma_ = std::sqrt(static_cast<double>(s.fft_size_) / o.frame_samples / (2.0 * static_cast<double>(s.bins_.size())));
+  s.noise_sigma_ =
+      std::sqrt(static_cast<double>(s.fft_size_) / o.frame_samples / (2.0 * static_cast<double>(s.bins_.size())));
   for (int i = 0; i < o.sensors; ++i)
     for (int j = i + 1; j < o.sensors; ++j) s.pairs_.emplace_back(i, j);
   s.g_.assign(s.pairs_.size(), std::vector<std::complex<double>>(s.bins_.size()));
@@ -111,7 +112,7 @@ void PairSpectra::FillField(int p, PairMeasurement* out) {
   out->peak_snr = 1.0;
 }
 
-std::complex<double> PairSpectra::RemoveDelay(int p, double lag_samples, Measurement* field) {
+std::complex<double> PairSpectra::RemoveDelay(int p, double lag_samples) {
   const std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
   const double step = 2.0 * std::numbers::pi / fft_size_;
   const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
@@ -119,17 +120,20 @@ std::complex<double> PairSpectra::RemoveDelay(int p, double lag_samples, Measure
   std::complex<double> amplitude = 0.0;
   for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) amplitude += g[b] * phasor;
   amplitude /= static_cast<double>(g.size());
-  RestoreDelay(p, lag_samples, -amplitude, field);
+  RestoreDelay(p, lag_samples, -amplitude);
   return amplitude;
 }
 
-void PairSpectra::RestoreDelay(int p, double lag_samples, std::complex<double> amplitude, Measurement* field) {
+void PairSpectra::FillFields(Measurement* field) {
+  for (size_t p = 0; p < pairs_.size(); ++p) FillField(static_cast<int>(p), &field->pairs[p]);
+}
+
+void PairSpectra::RestoreDelay(int p, double lag_samples, std::complex<double> amplitude) {
   std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
   const double step = 2.0 * std::numbers::pi / fft_size_;
   const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
   std::complex<double> phasor = std::polar(1.0, step * lag_samples * bins_.front());
   for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) g[b] += amplitude * std::conj(phasor);
-  FillField(p, &field->pairs[static_cast<size_t>(p)]);
 }
 
 PairSpectra::Value PairSpectra::At(int p, double lag_samples) const {

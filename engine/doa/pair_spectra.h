@@ -59,11 +59,13 @@ class PairSpectra {
   // gcc = R_p at integer lags -max_lag..max_lag, peak_value = sigma (the noise-only
   // deviation) and peak_snr = 1, so that LagField's normalisation gives n_p; sample_rate_hz.
   Status Analyse(const float* frame, Measurement* field);
-  // Subtracts pair p's pure-delay component at `lag_samples` from its spectrum and rewrites
-  // its entry of `field` (as Analyse filled it); returns the component's amplitude c.
-  std::complex<double> RemoveDelay(int p, double lag_samples, Measurement* field);
+  // Subtracts pair p's pure-delay component at `lag_samples` from its spectrum and returns
+  // the component's amplitude c. At() sees the change at once; the field does after FillFields.
+  std::complex<double> RemoveDelay(int p, double lag_samples);
   // Adds back a component RemoveDelay took (the same lag and amplitude).
-  void RestoreDelay(int p, double lag_samples, std::complex<double> amplitude, Measurement* field);
+  void RestoreDelay(int p, double lag_samples, std::complex<double> amplitude);
+  // Rewrites `field` (as Analyse filled it) from the current spectra: one inverse FFT per pair.
+  void FillFields(Measurement* field);
   // The noise-only deviation of R_p at one lag.
   double noise_sigma() const { return noise_sigma_; }
 

@@ -48,8 +48,11 @@
 // the weaker one's z) in every frame; with it, none in 20 frames.
 //
 // Cost per frame: PairSpectra's transforms, plus per source a search of typically tens to a
-// few hundred cells of P lookups each and one refinement of about 10 x P x B complex
-// multiplies (B in-band bins). Measured in BENCHMARKS.md (doa_bench). Not thread-safe.
+// few hundred cells of P lookups each and one refinement of a few probes of P x B complex
+// multiplies (B in-band bins), plus the re-estimations when a frame holds several sources
+// (2 passes over the sources found) and P inverse FFTs per search after the first. Measured
+// in BENCHMARKS.md (doa_bench): 144 us for one source on a 4-microphone board. Not
+// thread-safe.
 #pragma once
 
 #include <limits>
