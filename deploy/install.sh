@@ -13,8 +13,10 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler  # service (server/, proto/)
   libcivetweb-dev        # /metrics HTTP endpoint (server/)
-  libssl-dev             # SHA-256 and constant-time compare of tokens, TLS file checks (server/service)
-  openssl                # test certificates (deploy/tls/make_test_certs.sh, tests/server/security_test)
+  libssl-dev             # SHA-256 and constant-time compare of tokens, TLS file checks (server/service),
+                         # HTTPS on the HTTP side (server/metrics/tls_front)
+  openssl                # test certificates (deploy/tls/make_test_certs.sh, tests/server/security_test,
+                         # tls_front_test, metrics_https_test)
   python3-grpcio python3-grpc-tools python3-numpy  # Python client and load test (clients/)
   python3-scipy          # Nolan's alpha-stable quantile table (tests/sim/alpha_stable_test)
   prometheus             # promtool, and a real Prometheus server in the ops tests (deploy/prometheus)

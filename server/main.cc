@@ -23,7 +23,8 @@ constexpr const char* kSummary =
     "Serves localizer.v1.Localizer over gRPC: sensor arrays stream sample blocks, the server\n"
     "measures TDOAs (GCC-PHAT), tracks each session's source and streams estimates back.\n"
     "Also serves grpc.health.v1 (NOT_SERVING while draining) and server reflection, and\n"
-    "Prometheus metrics at http://METRICS-LISTEN/metrics. SIGTERM or SIGINT drains and exits.";
+    "Prometheus metrics at http://METRICS-LISTEN/metrics (https:// with --metrics-tls-cert).\n"
+    "SIGTERM or SIGINT drains and exits.";
 
 Status WriteReadyFile(const std::string& path, const Server& server) {
   const std::string tmp = path + ".tmp";
@@ -44,7 +45,8 @@ int Main(int argc, char** argv) {
   FlagSet flags("localizer-server [flags]", kSummary);
   flags.String("listen", &o.listen, "HOST:PORT", "gRPC address (port 0: any free port; see --ready-file)");
   flags.String("metrics-listen", &o.metrics_listen, "HOST:PORT",
-               "HTTP address of /metrics (Prometheus), / (live view) and /sessions (JSON) (\"\": off)");
+               "HTTP address of /metrics (Prometheus), / (live view) and /sessions (JSON); HTTPS with "
+               "--metrics-tls-cert (\"\": off)");
   flags.String("backend", &o.backend, "auto|cpu|gpu",
                "compute backend for sessions that do not choose; gpu without a device refuses sessions");
   flags.Int("max-sessions", &o.max_sessions, "N", "sessions", "open sessions before RESOURCE_EXHAUSTED");
@@ -98,6 +100,12 @@ int Main(int argc, char** argv) {
   flags.String("tls-key", &o.tls_key, "FILE", "PEM private key of --tls-cert (unencrypted)");
   flags.String("tls-client-ca", &o.tls_client_ca, "FILE",
                "PEM CA certificates: require and verify client certificates signed by them (mutual TLS)");
+  flags.String("metrics-tls-cert", &o.metrics_tls_cert, "FILE",
+               "PEM certificate chain: serve --metrics-listen over HTTPS (with --metrics-tls-key; may be the "
+               "--tls-cert file)");
+  flags.String("metrics-tls-key", &o.metrics_tls_key, "FILE", "PEM private key of --metrics-tls-cert (unencrypted)");
+  flags.String("metrics-tls-client-ca", &o.metrics_tls_client_ca, "FILE",
+               "PEM CA certificates: HTTPS clients must present a certificate signed by them (mutual TLS)");
   flags.String("auth-token-file", &o.auth_token_file, "FILE",
                "'ROLE TOKEN' lines (ROLE client or operator, tokens >= 16 chars; '#' comments): every call "
                "needs 'authorization: Bearer TOKEN'; ListSessions, CloseSession and HTTP /sessions, / need "

@@ -1,8 +1,6 @@
 #include "server/metrics/http_exposer.h"
 
-#include <arpa/inet.h>
 #include <civetweb.h>
-#include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -14,6 +12,7 @@
 #include <system_error>
 #include <thread>
 
+#include "server/metrics/listen_address.h"
 #include "server/metrics/text_format.h"
 
 namespace localizer::server::metrics {
@@ -31,61 +30,32 @@ void InitCivetwebOnce() {
   std::call_once(once, [] { mg_init_library(0); });
 }
 
-// Opens a TCP connection to host:port (an IPv4 or bracketed IPv6 literal) without waiting
-// for it to complete, and closes it: enough to make a poll() on the listener return.
-void PokeListener(const std::string& host, int port) {
-  sockaddr_in v4{};
-  sockaddr_in6 v6{};
-  const sockaddr* address = nullptr;
-  socklen_t length = 0;
-  if (host.size() > 2 && host.front() == '[') {
-    v6.sin6_family = AF_INET6;
-    v6.sin6_port = htons(static_cast<uint16_t>(port));
-    if (inet_pton(AF_INET6, host.substr(1, host.size() - 2).c_str(), &v6.sin6_addr) != 1) return;
-    address = reinterpret_cast<const sockaddr*>(&v6);
-    length = sizeof v6;
-  } else {
-    v4.sin_family = AF_INET;
-    v4.sin_port = htons(static_cast<uint16_t>(port));
-    if (inet_pton(AF_INET, host.c_str(), &v4.sin_addr) != 1) return;
-    address = reinterpret_cast<const sockaddr*>(&v4);
-    length = sizeof v4;
-  }
-  const int fd = socket(address->sa_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+// Opens a TCP connection to `address` without waiting for it to complete, and closes it:
+// enough to make a poll() on the listener return.
+void PokeListener(const ListenAddress& address) {
+  sockaddr_storage storage{};
+  const socklen_t length = ToSockaddr(address, &storage);
+  if (length == 0) return;
+  const int fd = socket(storage.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   if (fd < 0) return;
-  (void)connect(fd, address, length);  // EINPROGRESS is fine: the SYN is what wakes it
+  (void)connect(fd, reinterpret_cast<const sockaddr*>(&storage), length);  // EINPROGRESS is fine: the SYN wakes it
   close(fd);
 }
 
-// "host:port" -> civetweb's listening_ports syntax ("127.0.0.1:8080", "[::1]:8080").
-// The port is digits only: civetweb's "s" (TLS) and "r" (redirect) suffixes are refused. Its
-// TLS cannot work against Debian 12's OpenSSL 3 (a handshake, then a crash on the first
-// request; README "Security", "HTTP and TLS").
-StatusOr<std::string> ToCivetwebListeningPort(const std::string& listen) {
-  const auto bad = [&listen](const std::string& why) {
-    return InvalidArgument("listen address \"" + listen + "\" " + why +
-                           " (expected host:port, e.g. 127.0.0.1:9100 or [::1]:0)");
-  };
-  const size_t colon = listen.rfind(':');
-  if (colon == std::string::npos) return bad("has no port");
-  std::string host = listen.substr(0, colon);
-  const std::string port = listen.substr(colon + 1);
-  if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
-      std::stoi(port) > 65535) {
-    return bad("has no port number in 0..65535");
+// "host:port" -> the address, whose ToString() is civetweb's listening_ports syntax
+// ("127.0.0.1:8080", "[::1]:8080"). The port is digits only: civetweb's "s" (TLS) and "r"
+// (redirect) suffixes are refused. Its TLS cannot work against Debian 12's OpenSSL 3 (a
+// handshake, then a crash on the first request; README "Security", "HTTP and TLS"): HTTPS is
+// served by TlsFront (tls_front.h) in front of a loopback exposer instead.
+StatusOr<ListenAddress> ToCivetwebListeningPort(const std::string& listen) {
+  StatusOr<ListenAddress> address = ParseListenAddress(listen);
+  if (!address.ok()) return address.status();
+  if (address->ipv6() && mg_check_feature(MG_FEATURES_IPV6) == 0) {
+    return InvalidArgument("listen address \"" + listen +
+                           "\" is IPv6, which this civetweb build does not support (expected host:port, e.g. "
+                           "127.0.0.1:9100 or [::1]:0)");
   }
-  if (host == "localhost") host = "127.0.0.1";
-  unsigned char address[16];
-  if (host.size() > 2 && host.front() == '[' && host.back() == ']') {
-    const std::string inner = host.substr(1, host.size() - 2);
-    if (inet_pton(AF_INET6, inner.c_str(), address) != 1) return bad("has a bad IPv6 host");
-    if (mg_check_feature(MG_FEATURES_IPV6) == 0) {
-      return bad("is IPv6, which this civetweb build does not support");
-    }
-  } else if (inet_pton(AF_INET, host.c_str(), address) != 1) {
-    return bad("has a host that is not an IPv4 literal, [IPv6] literal or localhost");
-  }
-  return host + ":" + port;
+  return address;
 }
 
 bool IsValidPagePath(const std::string& path) {
@@ -127,7 +97,7 @@ HttpExposer::~HttpExposer() {
   try {
     waker = std::thread([this, &stopped] {
       while (!stopped.load()) {
-        PokeListener(wake_host_, port_);
+        PokeListener(wake_address_);
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
       }
     });
@@ -145,15 +115,16 @@ StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& lis
     return InvalidArgument("HttpExposer threads is " + std::to_string(threads) + ", must be in 1.." +
                            std::to_string(kMaxThreads));
   }
-  StatusOr<std::string> listening_ports = ToCivetwebListeningPort(listen);
-  if (!listening_ports.ok()) return listening_ports.status();
+  StatusOr<ListenAddress> address = ToCivetwebListeningPort(listen);
+  if (!address.ok()) return address.status();
+  const std::string listening_ports = address->ToString();
   InitCivetwebOnce();
 
   std::unique_ptr<HttpExposer> exposer(new HttpExposer(registry));
   const std::string num_threads = std::to_string(threads);
   // No document_root: civetweb serves no files; every request goes to HandleRequest.
   // clang-format off
-  const char* options[] = {"listening_ports",    listening_ports->c_str(),
+  const char* options[] = {"listening_ports",    listening_ports.c_str(),
                            "num_threads",        num_threads.c_str(),
                            "request_timeout_ms", kRequestTimeoutMs,
                            "enable_keep_alive",  "no",
@@ -188,8 +159,8 @@ StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& lis
                                                        : "civetweb failed to start";
     return Status(StatusCode::kUnavailable, "cannot serve metrics on \"" + listen + "\": " + reason);
   }
-  const std::string host = listening_ports->substr(0, listening_ports->rfind(':'));
-  exposer->wake_host_ = host == "0.0.0.0" ? "127.0.0.1" : host == "[::]" ? "[::1]" : host;
+  const std::string& host = address->host;
+  exposer->wake_address_.host = host == "0.0.0.0" ? "127.0.0.1" : host == "[::]" ? "[::1]" : host;
   mg_server_port ports[4];
   std::memset(ports, 0, sizeof ports);
   const int port_count = mg_get_server_ports(exposer->context_, 4, ports);
@@ -197,6 +168,7 @@ StatusOr<std::unique_ptr<HttpExposer>> HttpExposer::Start(const std::string& lis
     return Internal("civetweb started on \"" + listen + "\" but reports no listening port");
   }
   exposer->port_ = ports[0].port;
+  exposer->wake_address_.port = exposer->port_;
   return exposer;
 }
 

@@ -1,4 +1,6 @@
 // HttpExposer: a small HTTP server (civetweb) that serves a Registry to Prometheus.
+// Plaintext only; for HTTPS, start it on 127.0.0.1:0 and put a TlsFront (tls_front.h) on the
+// public address.
 //
 //   GET/HEAD /metrics  200, Registry::Serialize() as
 //                      "text/plain; version=0.0.4; charset=utf-8"
@@ -29,6 +31,7 @@
 #include <utility>
 
 #include "engine/core/status.h"
+#include "server/metrics/listen_address.h"
 #include "server/metrics/registry.h"
 #include "server/sync/mutex.h"
 
@@ -102,7 +105,7 @@ class HttpExposer final {
   int port_ = 0;
   // An address of the listening socket that this process can connect to (loopback for a
   // wildcard listen address); the destructor connects there to wake civetweb's listener.
-  std::string wake_host_;
+  ListenAddress wake_address_;
 
   Mutex log_mutex_;
   bool starting_ GUARDED_BY(log_mutex_) = true;

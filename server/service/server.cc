@@ -70,6 +70,29 @@ int OperatorPageGuard(const TokenAuthenticator& auth, ServiceMetrics* metrics, c
   return HttpRefusal(decision);
 }
 
+// The HTTPS front of the HTTP side: its handshake failures counted in
+// localizer_http_tls_handshake_failures_total{reason} and logged at most once a minute
+// (event=http_tls_handshake_failures, with how many since the last line), so that a flood of
+// bad connections cannot flood the log.
+StatusOr<std::unique_ptr<metrics::TlsFront>> StartTlsFront(const std::string& listen, int backend_port, TlsPem pem,
+                                                           ServiceMetrics* m) {
+  metrics::TlsFrontOptions front;
+  front.cert_chain_pem = std::move(pem.cert);
+  front.key_pem = std::move(pem.key);
+  front.client_ca_pem = std::move(pem.client_ca);
+  front.handshake_failures = m->http_tls_handshake_failures;
+  front.report_interval_s = 60.0;
+  front.report_failures = [interval_s = front.report_interval_s](const metrics::HandshakeFailureReport& report) {
+    LogEvent("warn", "http_tls_handshake_failures",
+             {{"failures", std::to_string(report.failures)},
+              {"interval_s", std::to_string(static_cast<int>(interval_s))},
+              {"last_reason", report.last_reason},
+              {"last_detail", report.last_detail},
+              {"last_peer", report.last_peer}});
+  };
+  return metrics::TlsFront::Start(listen, backend_port, std::move(front));
+}
+
 }  // namespace
 
 Server::Server(const ServerOptions& options) : options_(options) {}
@@ -80,6 +103,13 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   // The files first: a bad one stops the start before anything runs.
   auto credentials = MakeServerCredentials(options);
   if (!credentials.ok()) return credentials.status();
+  TlsPem metrics_tls;
+  if (!options.metrics_tls_cert.empty()) {
+    auto pem =
+        ReadTlsFiles("--metrics-tls", options.metrics_tls_cert, options.metrics_tls_key, options.metrics_tls_client_ca);
+    if (!pem.ok()) return pem.status();
+    metrics_tls = std::move(pem).value();
+  }
   std::unique_ptr<TokenAuthenticator> auth;
   if (!options.auth_token_file.empty()) {
     auto loaded = TokenAuthenticator::Load(options.auth_token_file);
@@ -163,13 +193,24 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
     return Unavailable("cannot listen for gRPC on " + options.listen + " (address in use or not local?)");
   }
   if (!options.metrics_listen.empty()) {
-    auto exposer = metrics::HttpExposer::Start(options.metrics_listen, &s->registry_);
+    const bool https = !options.metrics_tls_cert.empty();
+    // With HTTPS, civetweb serves plaintext on loopback only, behind the TLS front.
+    auto exposer = metrics::HttpExposer::Start(https ? "127.0.0.1:0" : options.metrics_listen, &s->registry_);
     if (!exposer.ok()) {
       s->grpc_->Shutdown();
       return exposer.status();
     }
     s->exposer_ = std::move(exposer).value();
-    s->metrics_port_ = s->exposer_->port();
+    if (https) {
+      auto front = StartTlsFront(options.metrics_listen, s->exposer_->port(), std::move(metrics_tls), m);
+      if (!front.ok()) {
+        s->grpc_->Shutdown();
+        return front.status();
+      }
+      s->tls_front_ = std::move(front).value();
+    }
+    // The public port: the front's with HTTPS (civetweb's loopback port is not announced).
+    s->metrics_port_ = s->tls_front_ ? s->tls_front_->port() : s->exposer_->port();
     // The live view: GET / draws what GET /sessions lists. The exposer is stopped before
     // the registry is destroyed (Shutdown), so `sessions` outlives every request.
     const double ttl_s = options.session_ttl_s;
@@ -200,6 +241,15 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
     LogEvent("warn", "auth_without_tls",
              {{"detail", "bearer tokens travel in plaintext; use --tls-cert/--tls-key or a TLS proxy"}});
   }
+  const std::string& http = options.metrics_listen;
+  const bool http_loopback =
+      http.rfind("127.", 0) == 0 || http.rfind("localhost:", 0) == 0 || http.rfind("[::1]:", 0) == 0;
+  if (s->auth_ && !http.empty() && !http_loopback && options.metrics_tls_cert.empty()) {
+    LogEvent("warn", "auth_without_https",
+             {{"detail",
+               "operator tokens for /sessions and / travel in plaintext HTTP; use "
+               "--metrics-tls-cert/--metrics-tls-key"}});
+  }
   grpc::HealthCheckServiceInterface* health = s->grpc_->GetHealthCheckService();
   if (health != nullptr) {
     health->SetServingStatus(true);
@@ -214,6 +264,9 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
             {"tls", options.tls_cert.empty()        ? "off"
                     : options.tls_client_ca.empty() ? "on"
                                                     : "mutual"},
+            {"metrics_tls", options.metrics_listen.empty() || options.metrics_tls_cert.empty() ? "off"
+                            : options.metrics_tls_client_ca.empty()                            ? "on"
+                                                                                               : "mutual"},
             {"auth", s->auth_ ? std::to_string(s->auth_->token_count()) + " tokens" : "off"},
             {"max_sessions", std::to_string(options.max_sessions)},
             {"gpu", gpu_reason.empty() ? gpu::DeviceName() : "none: " + gpu_reason}});
@@ -229,6 +282,7 @@ void Server::Shutdown() {
   if (!grpc_ || !sessions_ || !service_ || !pool_) {
     // Start failed part-way: stop what was started, in the same order.
     if (grpc_) grpc_->Shutdown();
+    tls_front_.reset();
     exposer_.reset();
     sessions_.reset();
     if (pool_) pool_->Shutdown();
@@ -255,7 +309,8 @@ void Server::Shutdown() {
   // Streams still open get cancelled after a short grace for their final writes.
   grpc_->Shutdown(std::chrono::system_clock::now() + std::chrono::milliseconds(500));
   // The HTTP server goes first: its collectors and /sessions read the session registry
-  // (its destructor waits for requests in flight).
+  // (its destructor waits for requests in flight). The TLS front relays to it: it goes before.
+  tls_front_.reset();
   exposer_.reset();
   sessions_.reset();  // closes what is left
   pool_->Shutdown();

@@ -1,7 +1,9 @@
 // A running localizer server: the gRPC service (with the standard health and reflection
 // services), the worker pool, the session registry, and the HTTP endpoint (/metrics, the
 // live view at /, /sessions), with TLS / mutual TLS and bearer tokens when the options name
-// their files (tls_credentials.h, auth.h; README "Security").
+// their files (tls_credentials.h, auth.h; README "Security"). With metrics_tls_cert the HTTP
+// side is HTTPS: civetweb listens on an ephemeral loopback port and a TlsFront
+// (server/metrics/tls_front.h) on metrics_listen; metrics_port() is the front's.
 //
 //   auto server = Server::Start(options);   // listening when this returns
 //   ... server->grpc_port(), server->metrics_port()
@@ -20,6 +22,7 @@
 
 #include "server/metrics/http_exposer.h"
 #include "server/metrics/registry.h"
+#include "server/metrics/tls_front.h"
 #include "server/service/auth.h"
 #include "server/service/localizer_service.h"
 #include "server/service/memory_budget.h"
@@ -41,7 +44,7 @@ class Server final {
   Server& operator=(const Server&) = delete;
 
   int grpc_port() const { return grpc_port_; }
-  int metrics_port() const { return metrics_port_; }  // 0: no HTTP endpoint
+  int metrics_port() const { return metrics_port_; }  // 0: no HTTP endpoint; HTTPS: the public port
   void Shutdown() EXCLUDES(shutdown_mutex_);
 
  private:
@@ -57,6 +60,9 @@ class Server final {
   std::unique_ptr<LocalizerService> service_;
   std::unique_ptr<grpc::Server> grpc_;
   std::unique_ptr<metrics::HttpExposer> exposer_;
+  // With --metrics-tls-cert: HTTPS on metrics_listen, relaying to exposer_ on loopback;
+  // stopped before exposer_.
+  std::unique_ptr<metrics::TlsFront> tls_front_;
   int grpc_port_ = 0;
   // Set once by Start, read by metrics_port() from any thread (exposer_ itself is reset by
   // Shutdown, which may run concurrently).

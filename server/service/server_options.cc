@@ -62,6 +62,19 @@ Status ServerOptions::Validate() const {
   if (!tls_client_ca.empty() && tls_cert.empty()) {
     return InvalidArgument("tls_client_ca needs tls_cert and tls_key (mutual TLS is TLS plus client certificates)");
   }
+  if (metrics_tls_cert.empty() != metrics_tls_key.empty()) {
+    return InvalidArgument(
+        "metrics_tls_cert and metrics_tls_key go together (--metrics-tls-cert and --metrics-tls-key: both or "
+        "neither)");
+  }
+  if (!metrics_tls_client_ca.empty() && metrics_tls_cert.empty()) {
+    return InvalidArgument(
+        "metrics_tls_client_ca needs metrics_tls_cert and metrics_tls_key (mutual TLS is TLS plus client "
+        "certificates)");
+  }
+  if (!metrics_tls_cert.empty() && metrics_listen.empty()) {
+    return InvalidArgument("metrics_tls_cert needs metrics_listen (--metrics-listen \"\" turns the HTTP side off)");
+  }
   return Status::Ok();
 }
 

@@ -61,6 +61,13 @@ struct ServerOptions {
                                 // bearer token (Track/Locate: client or operator,
                                 // ListSessions/CloseSession and HTTP /sessions, /: operator);
                                 // "": no authentication
+  // HTTPS for the HTTP side (metrics_listen), with its own files (they may name the same
+  // ones as tls_*): set, civetweb moves to an ephemeral loopback port and a TLS front
+  // (server/metrics/tls_front.h) listens on metrics_listen; needs metrics_listen.
+  std::string metrics_tls_cert;       // PEM certificate chain; with metrics_tls_key: HTTPS
+  std::string metrics_tls_key;        // PEM private key of metrics_tls_cert
+  std::string metrics_tls_client_ca;  // PEM CA certificates; set: every HTTPS client must
+                                      // present a certificate they signed (mutual TLS)
 
   Status Validate() const;  // INVALID_ARGUMENT naming the field
 };

@@ -2,6 +2,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "server/metrics/tls_front.h"
 #include "server/service/version.h"
 
 namespace localizer::server {
@@ -87,6 +88,14 @@ StatusOr<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(metrics::Regist
   if (!refusals.ok()) return refusals.status();
   m->auth_refusals_ = *refusals;
   for (const char* reason : {"missing", "invalid", "forbidden"}) (void)m->auth_refusals(reason);
+  auto handshakes =
+      r->AddCounter("localizer_http_tls_handshake_failures_total",
+                    "HTTPS connections to the HTTP side closed in the TLS handshake, by reason (timeout, closed, "
+                    "certificate, protocol).",
+                    {"reason"});
+  if (!handshakes.ok()) return handshakes.status();
+  m->http_tls_handshake_failures = *handshakes;
+  for (const char* reason : metrics::kHandshakeFailureReasons) (void)Series(*handshakes, {reason});
   auto info = r->AddGauge("localizer_build_info", "Build and runtime facts; the value is always 1.",
                           {"version", "grpc_version", "default_backend"});
   if (!info.ok()) return info.status();

@@ -24,6 +24,9 @@
 //                                            gate, update or coast), all detection sessions
 //   localizer_auth_refusals_total{reason}   calls and HTTP requests refused by the bearer-token
 //                                            check: missing | invalid | forbidden (auth.h)
+//   localizer_http_tls_handshake_failures_total{reason}  HTTPS (--metrics-tls-cert) connections
+//                                            closed in the handshake: timeout | closed |
+//                                            certificate | protocol (tls_front.h); 0 without HTTPS
 //   localizer_build_info{version,grpc_version,default_backend}  always 1
 // Thread-safe: every pointer here is updated lock-free.
 #pragma once
@@ -71,6 +74,8 @@ class ServiceMetrics final {
   metrics::Counter* track_updates = nullptr;
   metrics::Histogram* scan_tracker = nullptr;
   metrics::Histogram* scan_total = nullptr;
+  // Handed to the TLS front, which increments it per failure (label "reason").
+  metrics::Family<metrics::Counter>* http_tls_handshake_failures = nullptr;
 
  private:
   ServiceMetrics() = default;

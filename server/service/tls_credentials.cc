@@ -53,23 +53,29 @@ StatusOr<std::string> ReadPemFile(const std::string& flag, const std::string& pa
   return pem;
 }
 
-StatusOr<std::shared_ptr<grpc::ServerCredentials>> MakeServerCredentials(const ServerOptions& options) {
-  if (options.tls_cert.empty()) return grpc::InsecureServerCredentials();
-  auto cert = ReadPemFile("--tls-cert", options.tls_cert);
+StatusOr<TlsPem> ReadTlsFiles(const std::string& flag_prefix, const std::string& cert_path, const std::string& key_path,
+                              const std::string& client_ca_path) {
+  const std::string cert_flag = flag_prefix + "-cert";
+  const std::string key_flag = flag_prefix + "-key";
+  const std::string ca_flag = flag_prefix + "-client-ca";
+  TlsPem pem;
+  auto cert = ReadPemFile(cert_flag, cert_path);
   if (!cert.ok()) return cert.status();
-  auto key = ReadPemFile("--tls-key", options.tls_key);
+  pem.cert = std::move(cert).value();
+  auto key = ReadPemFile(key_flag, key_path);
   if (!key.ok()) return key.status();
+  pem.key = std::move(key).value();
 
-  X509* x509 = FirstCertificate(*cert);
+  X509* x509 = FirstCertificate(pem.cert);
   if (x509 == nullptr) {
     ERR_clear_error();
-    return InvalidArgument(Describe("--tls-cert", options.tls_cert) + " holds no PEM certificate");
+    return InvalidArgument(Describe(cert_flag, cert_path) + " holds no PEM certificate");
   }
-  EVP_PKEY* pkey = PrivateKey(*key);
+  EVP_PKEY* pkey = PrivateKey(pem.key);
   if (pkey == nullptr) {
     X509_free(x509);
     ERR_clear_error();
-    return InvalidArgument(Describe("--tls-key", options.tls_key) +
+    return InvalidArgument(Describe(key_flag, key_path) +
                            " holds no unencrypted PEM private key (encrypted keys are not supported)");
   }
   const bool matches = X509_check_private_key(x509, pkey) == 1;
@@ -77,22 +83,29 @@ StatusOr<std::shared_ptr<grpc::ServerCredentials>> MakeServerCredentials(const S
   X509_free(x509);
   ERR_clear_error();
   if (!matches) {
-    return InvalidArgument(Describe("--tls-key", options.tls_key) + " is not the key of the certificate in " +
-                           Describe("--tls-cert", options.tls_cert));
+    return InvalidArgument(Describe(key_flag, key_path) + " is not the key of the certificate in " +
+                           Describe(cert_flag, cert_path));
   }
-
-  grpc::SslServerCredentialsOptions ssl(GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE);
-  ssl.pem_key_cert_pairs.push_back({*key, *cert});
-  if (!options.tls_client_ca.empty()) {
-    auto ca = ReadPemFile("--tls-client-ca", options.tls_client_ca);
+  if (!client_ca_path.empty()) {
+    auto ca = ReadPemFile(ca_flag, client_ca_path);
     if (!ca.ok()) return ca.status();
     X509* first = FirstCertificate(*ca);
     ERR_clear_error();
-    if (first == nullptr) {
-      return InvalidArgument(Describe("--tls-client-ca", options.tls_client_ca) + " holds no PEM certificate");
-    }
+    if (first == nullptr) return InvalidArgument(Describe(ca_flag, client_ca_path) + " holds no PEM certificate");
     X509_free(first);
-    ssl.pem_root_certs = *ca;
+    pem.client_ca = std::move(ca).value();
+  }
+  return pem;
+}
+
+StatusOr<std::shared_ptr<grpc::ServerCredentials>> MakeServerCredentials(const ServerOptions& options) {
+  if (options.tls_cert.empty()) return grpc::InsecureServerCredentials();
+  auto pem = ReadTlsFiles("--tls", options.tls_cert, options.tls_key, options.tls_client_ca);
+  if (!pem.ok()) return pem.status();
+  grpc::SslServerCredentialsOptions ssl(GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE);
+  ssl.pem_key_cert_pairs.push_back({pem->key, pem->cert});
+  if (!pem->client_ca.empty()) {
+    ssl.pem_root_certs = pem->client_ca;
     ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(ssl);

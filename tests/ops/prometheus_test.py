@@ -1,7 +1,8 @@
 """The shipped Prometheus files (deploy/prometheus) checked by promtool, their alert rules
 unit-tested on synthetic series (alerts_test.yml), and a real Prometheus server started with
 the shipped config, scraping two live localizer-server instances: its HTTP API must return
-the stage-latency histograms of every instance.
+the stage-latency histograms of every instance; and one instance scraped over HTTPS with a
+client certificate (--metrics-tls-*).
 """
 import json
 import shutil
@@ -111,6 +112,45 @@ class RealPrometheusTest(unittest.TestCase):
         self.assertEqual({r["metric"]["instance"] for r in estimates}, set(targets))
         for r in estimates:
             self.assertGreater(float(r["value"][1]), 10.0, r)
+
+    @unittest.skipUnless(shutil.which("openssl"), "the openssl CLI is not installed (Debian: openssl): no test PKI")
+    def test_prometheus_scrapes_an_instance_over_mutual_tls(self):
+        """An instance serving its HTTP side over HTTPS with client certificates
+        (--metrics-tls-*): Prometheus scrapes it with scheme https and a tls_config, as
+        deploy/prometheus/prometheus.yml's header describes."""
+        pki = self.tmp / "pki"
+        subprocess.run(["bash", str(HERE.parents[1] / "deploy" / "tls" / "make_test_certs.sh"), str(pki)],
+                       check=True, capture_output=True, timeout=60)
+        https = ops_util.Server(self.tmp, "https", ["--metrics-tls-cert", str(pki / "server.crt"),
+                                                    "--metrics-tls-key", str(pki / "server.key"),
+                                                    "--metrics-tls-client-ca", str(pki / "ca.crt")])
+        self.servers.append(https)
+        path = self.shipped_config_for([https.metrics_target])
+        config = yaml.safe_load(path.read_text())
+        config["scrape_configs"][0]["scheme"] = "https"
+        config["scrape_configs"][0]["tls_config"] = {
+            "ca_file": str(pki / "ca.crt"), "cert_file": str(pki / "client.crt"), "key_file": str(pki / "client.key")}
+        path.write_text(yaml.safe_dump(config))
+        port = ops_util.free_port()
+        self.log = open(self.tmp / "prometheus.log", "wb")
+        self.prometheus = subprocess.Popen(
+            [PROMETHEUS, f"--config.file={path}", f"--storage.tsdb.path={self.tmp / 'data'}",
+             f"--web.listen-address=127.0.0.1:{port}"], stdout=self.log, stderr=subprocess.STDOUT)
+        deadline = time.monotonic() + 60.0
+        result = []
+        while time.monotonic() < deadline and not result:
+            self.assertIsNone(self.prometheus.poll(), (self.tmp / "prometheus.log").read_text()[-3000:])
+            try:
+                result = self.query(port, 'localizer_build_info{job="localizer"}')
+            except OSError:
+                result = []  # not listening yet
+            time.sleep(0.5)
+        self.assertEqual([r["metric"]["instance"] for r in result], [https.metrics_target], result)
+        up = self.query(port, 'up{job="localizer"}')
+        self.assertEqual([r["value"][1] for r in up], ["1"])
+        # Nothing refused: Prometheus presented its certificate on every scrape.
+        refused = self.query(port, 'sum(localizer_http_tls_handshake_failures_total{job="localizer"})')
+        self.assertEqual([r["value"][1] for r in refused], ["0"])
 
 
 if __name__ == "__main__":

@@ -22,6 +22,34 @@ struct HttpResponse {
   std::string body;
 };
 
+// Parses a complete HTTP/1.1 response (status line, headers, body up to the end of `raw`);
+// ok is false when there is no complete head.
+inline HttpResponse ParseHttpResponse(const std::string& raw) {
+  HttpResponse response;
+  const size_t head_end = raw.find("\r\n\r\n");
+  if (head_end == std::string::npos) return response;
+  const std::string head = raw.substr(0, head_end);
+  response.body = raw.substr(head_end + 4);
+  size_t line_end = head.find("\r\n");
+  response.status_line = head.substr(0, line_end);
+  if (response.status_line.size() < 12) return response;
+  response.status = std::stoi(response.status_line.substr(9, 3));
+  while (line_end != std::string::npos) {
+    const size_t start = line_end + 2;
+    line_end = head.find("\r\n", start);
+    const std::string line = head.substr(start, line_end == std::string::npos ? std::string::npos : line_end - start);
+    const size_t colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::string name = line.substr(0, colon);
+    std::transform(name.begin(), name.end(), name.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const size_t value_start = line.find_first_not_of(' ', colon + 1);
+    response.headers[name] = value_start == std::string::npos ? "" : line.substr(value_start);
+  }
+  response.ok = true;
+  return response;
+}
+
 // Sends `request` verbatim to 127.0.0.1:port and reads until the server closes.
 inline HttpResponse RawRequest(int port, const std::string& request) {
   HttpResponse response;
@@ -52,29 +80,7 @@ inline HttpResponse RawRequest(int port, const std::string& request) {
     raw.append(buffer, static_cast<size_t>(n));
   }
   close(fd);
-
-  const size_t head_end = raw.find("\r\n\r\n");
-  if (head_end == std::string::npos) return response;
-  const std::string head = raw.substr(0, head_end);
-  response.body = raw.substr(head_end + 4);
-  size_t line_end = head.find("\r\n");
-  response.status_line = head.substr(0, line_end);
-  if (response.status_line.size() < 12) return response;
-  response.status = std::stoi(response.status_line.substr(9, 3));
-  while (line_end != std::string::npos) {
-    const size_t start = line_end + 2;
-    line_end = head.find("\r\n", start);
-    const std::string line = head.substr(start, line_end == std::string::npos ? std::string::npos : line_end - start);
-    const size_t colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    std::string name = line.substr(0, colon);
-    std::transform(name.begin(), name.end(), name.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    const size_t value_start = line.find_first_not_of(' ', colon + 1);
-    response.headers[name] = value_start == std::string::npos ? "" : line.substr(value_start);
-  }
-  response.ok = true;
-  return response;
+  return ParseHttpResponse(raw);
 }
 
 inline HttpResponse Request(int port, const std::string& method, const std::string& path) {
