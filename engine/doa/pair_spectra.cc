@@ -137,23 +137,51 @@ void PairSpectra::RestoreDelay(int p, double lag_samples, std::complex<double> a
 }
 
 PairSpectra::Value PairSpectra::At(int p, double lag_samples) const {
-  Value v;
+  // sum_b G(b) exp(i w_b l), w_b = step (first + b), in real arithmetic over kLanes
+  // interleaved phasor chains (each advanced by rotate^kLanes): one chain is a serial
+  // dependency of complex products, and std::complex's product checks for infinities.
+  constexpr int kLanes = 4;
   const std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
   const double step = 2.0 * std::numbers::pi / fft_size_;  // radians per bin per sample of lag
-  const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
-  std::complex<double> phasor = std::polar(1.0, step * lag_samples * bins_.front());
-  for (size_t b = 0; b < g.size(); ++b) {
-    if (b > 0) phasor *= rotate;  // the in-band bins are consecutive
-    const std::complex<double> term = g[b] * phasor;
-    const double w = step * bins_[b];
-    v.r += term.real();
-    v.dr -= w * term.imag();
-    v.d2r -= w * w * term.real();
+  const auto n = static_cast<int>(g.size());
+  const int first = bins_.front();  // the in-band bins are consecutive
+  const double stride = step * lag_samples * kLanes;
+  const double cr = std::cos(stride), ci = std::sin(stride);
+  double pr[kLanes], pi[kLanes], r[kLanes] = {}, dr[kLanes] = {}, d2r[kLanes] = {};
+  for (int j = 0; j < kLanes; ++j) {
+    pr[j] = std::cos(step * lag_samples * (first + j));
+    pi[j] = std::sin(step * lag_samples * (first + j));
   }
-  const double inv_b = 1.0 / static_cast<double>(g.size());
-  v.r *= inv_b;
-  v.dr *= inv_b;
-  v.d2r *= inv_b;
+  const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
+  int b = 0;
+  for (; b + kLanes <= n; b += kLanes) {
+    for (int j = 0; j < kLanes; ++j) {
+      const double gr = gv[2 * (b + j)], gi = gv[2 * (b + j) + 1];
+      const double tr = gr * pr[j] - gi * pi[j], ti = gr * pi[j] + gi * pr[j];
+      const double w = step * (first + b + j);
+      r[j] += tr;
+      dr[j] -= w * ti;
+      d2r[j] -= w * w * tr;
+      const double next_r = pr[j] * cr - pi[j] * ci;
+      pi[j] = pr[j] * ci + pi[j] * cr;
+      pr[j] = next_r;
+    }
+  }
+  for (int j = 0; b < n; ++b, ++j) {  // the last < kLanes bins: lane j holds bin b's phasor
+    const double gr = gv[2 * b], gi = gv[2 * b + 1];
+    const double tr = gr * pr[j] - gi * pi[j], ti = gr * pi[j] + gi * pr[j];
+    const double w = step * (first + b);
+    r[j] += tr;
+    dr[j] -= w * ti;
+    d2r[j] -= w * w * tr;
+  }
+  Value v;
+  const double inv_b = 1.0 / static_cast<double>(n);
+  for (int j = 0; j < kLanes; ++j) {
+    v.r += r[j] * inv_b;
+    v.dr += dr[j] * inv_b;
+    v.d2r += d2r[j] * inv_b;
+  }
   return v;
 }
 
