@@ -10,6 +10,7 @@
 #include "server/service/auth.h"
 #include "server/service/live_page.h"
 #include "server/service/log.h"
+#include "server/service/refusal_log.h"
 #include "server/service/sessions_json.h"
 #include "server/service/tls_credentials.h"
 #include "server/service/transport_limits.h"
@@ -61,13 +62,16 @@ int HttpRefusal(AuthDecision decision) {
 }
 
 // An operator page's guard: 0 to serve, else 401 or 403, counting the refusal in
-// localizer_auth_refusals_total{reason} as the gRPC check does.
-int OperatorPageGuard(const TokenAuthenticator& auth, ServiceMetrics* metrics, const std::string& authorization) {
+// localizer_auth_refusals_total{reason} as the gRPC check does, and logging it (rate-limited).
+int OperatorPageGuard(const TokenAuthenticator& auth, ServiceMetrics* metrics, HttpRefusalLog* log,
+                      const std::string& page, const std::string& authorization) {
   const AuthDecision decision = auth.Check(authorization, Role::kOperator);
-  if (decision != AuthDecision::kAllowed) {
-    if (auto* c = metrics->auth_refusals(RefusalReason(decision, authorization))) c->Increment();
-  }
-  return HttpRefusal(decision);
+  if (decision == AuthDecision::kAllowed) return 0;
+  const char* reason = RefusalReason(decision, authorization);
+  if (auto* c = metrics->auth_refusals(reason)) c->Increment();
+  const int code = HttpRefusal(decision);
+  log->Note(HttpRefusalLog::Clock::now(), page, code, reason);
+  return code;
 }
 
 // The HTTPS front of the HTTP side: its handshake failures counted in
@@ -223,13 +227,14 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
     // navigates). /metrics stays open: it holds aggregate counters, no session identity.
     metrics::HttpExposer::PageGuard sessions_guard, page_guard;
     if (const TokenAuthenticator* tokens = s->auth_.get()) {
-      sessions_guard = [tokens, m](const metrics::HttpExposer::Credentials& c) {
-        return OperatorPageGuard(*tokens, m, c.authorization);
+      auto refusals = std::make_shared<HttpRefusalLog>();  // one rate limit for both pages
+      sessions_guard = [tokens, m, refusals](const metrics::HttpExposer::Credentials& c) {
+        return OperatorPageGuard(*tokens, m, refusals.get(), "/sessions", c.authorization);
       };
-      page_guard = [tokens, m](const metrics::HttpExposer::Credentials& c) {
+      page_guard = [tokens, m, refusals](const metrics::HttpExposer::Credentials& c) {
         const std::string authorization =
             c.authorization.empty() && !c.query_token.empty() ? "Bearer " + c.query_token : c.authorization;
-        return OperatorPageGuard(*tokens, m, authorization);
+        return OperatorPageGuard(*tokens, m, refusals.get(), "/", authorization);
       };
     }
     LOCALIZER_RETURN_IF_ERROR(s->exposer_->AddPage("/sessions", std::move(sessions_page),
