@@ -52,11 +52,13 @@ int RunDoa(const std::vector<std::string>& args) {
   flags.Int("hop", &hop_samples, "N", "samples", "frame step, in [1, frame]");
   flags.OptionalDouble("band-low", &band_low_hz, "HZ", "array.json band_hz, else 0", "lowest frequency used");
   flags.OptionalDouble("band-high", &band_high_hz, "HZ", "array.json band_hz, else Nyquist", "highest frequency used");
-  flags.Int("max-sources", &srp.max_sources, "K", "sources", "most sources reported per frame, in [1, 16]");
+  flags.Int("max-sources", &srp.max_sources, "K", "sources",
+            "most sources reported per frame, in [1, 16] (else the array file's max_sources)");
   flags.Double("false-alarm", &srp.false_alarm, "P", "per frame",
                "probability that noise alone reports a source, per search, in (0, 0.1]");
   flags.String("source-side", &side_text, "X,Y,Z",
-               "planar arrays: sources lie where (direction . (X,Y,Z)) > 0 (not in the array's plane)");
+               "planar arrays: sources lie where (direction . (X,Y,Z)) > 0, not in the array's plane (default: "
+               "the array file's source_side)");
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   if (!side_text.empty()) {
     auto side = ParseVector(side_text);
@@ -66,6 +68,9 @@ int RunDoa(const std::vector<std::string>& args) {
 
   auto array = io::ReadArrayFile(array_path, io::ArrayUse::kDirection);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
+  // The array file's source_side and max_sources, unless the flags say otherwise.
+  if (side_text.empty() && array->source_side_normal) srp.source_side = *array->source_side_normal;
+  if (!flags.seen("max-sources") && array->max_sources) srp.max_sources = *array->max_sources;
   srp.band_low_hz = band_low_hz.value_or(array->band_hz ? array->band_hz->first : 0.0);
   srp.band_high_hz = band_high_hz.value_or(array->band_hz ? array->band_hz->second : 0.0);
 

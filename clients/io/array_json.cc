@@ -18,9 +18,10 @@ namespace {
 
 using nlohmann::json;
 
-const std::set<std::string> kKnownFields = {"sound_speed_mps",  "sample_rate_hz", "sensors_m",
-                                            "reference_sensor", "band_hz",        "bounds_min_m",
-                                            "bounds_max_m",     "surface_z_m",    "bottom_z_m"};
+const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz", "sensors_m",    "reference_sensor",
+                                            "band_hz",         "bounds_min_m",   "bounds_max_m", "surface_z_m",
+                                            "bottom_z_m",      "localization",   "source_side",  "max_sources"};
+const char* const kLocalizationNames[] = {"auto", "position", "direction"};  // ArrayFile::Localization order
 
 // A finite number at `value`, or an error naming `field`.
 StatusOr<double> FiniteNumber(const json& value, const std::string& source, const std::string& field) {
@@ -142,13 +143,53 @@ Status CheckFields(const json& root, const std::string& source) {
       return InvalidArgument(source + ": unknown field \"" + item.key() +
                              "\" (known: sound_speed_mps, sample_rate_hz, sensors_m, "
                              "reference_sensor, band_hz, bounds_min_m, bounds_max_m, surface_z_m, "
-                             "bottom_z_m)");
+                             "bottom_z_m, localization, source_side, max_sources)");
     }
   }
   for (const char* required : {"sound_speed_mps", "sensors_m"}) {
     if (!root.contains(required)) {
       return InvalidArgument(source + ": missing required field " + required);
     }
+  }
+  return Status::Ok();
+}
+
+Status ParseDirectionFields(const json& root, const std::string& source, ArrayFile* array) {
+  if (root.contains("localization")) {
+    const json& v = root["localization"];
+    bool known = false;
+    for (int i = 0; i < 3 && v.is_string(); ++i) {
+      if (v.get<std::string>() == kLocalizationNames[i]) {
+        array->localization = static_cast<ArrayFile::Localization>(i);
+        known = true;
+      }
+    }
+    if (!known) {
+      return InvalidArgument(source + ": localization must be \"auto\", \"position\" or \"direction\", got " +
+                             v.dump());
+    }
+  }
+  if (root.contains("source_side")) {
+    const json& side = root["source_side"];
+    if (!side.is_object() || side.size() != 1 || !side.contains("normal") || !side["normal"].is_array() ||
+        side["normal"].size() != 3) {
+      return InvalidArgument(source + ": source_side must be {\"normal\": [x, y, z]}");
+    }
+    engine::Vec3 normal;
+    for (int axis = 0; axis < 3; ++axis) {
+      auto x = FiniteNumber(side["normal"][static_cast<size_t>(axis)], source, "source_side.normal");
+      if (!x.ok()) return x.status();
+      normal[axis] = *x;
+    }
+    if (!(normal.norm() > 0.0)) return InvalidArgument(source + ": source_side.normal must not be zero");
+    array->source_side_normal = normal;
+  }
+  if (root.contains("max_sources")) {
+    const json& v = root["max_sources"];
+    if (!v.is_number_integer() || v.get<int64_t>() < 1 || v.get<int64_t>() > 16) {
+      return InvalidArgument(source + ": max_sources must be an integer in [1, 16], got " + v.dump());
+    }
+    array->max_sources = static_cast<int>(v.get<int64_t>());
   }
   return Status::Ok();
 }
@@ -181,6 +222,7 @@ StatusOr<ArrayFile> FromJson(const json& root, const std::string& source) {
     array.band_hz = std::make_pair(band[0].get<double>(), band[1].get<double>());
   }
   LOCALIZER_RETURN_IF_ERROR(ParseBounds(root, source, &array));
+  LOCALIZER_RETURN_IF_ERROR(ParseDirectionFields(root, source, &array));
   return array;
 }
 
@@ -195,6 +237,12 @@ StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& s
   }
   auto array = FromJson(root, source);
   if (!array.ok()) return array;
+  const bool wants_direction = array->localization == ArrayFile::Localization::kDirection;
+  if (wants_direction != (use == ArrayUse::kDirection) && array->localization != ArrayFile::Localization::kAuto) {
+    return InvalidArgument(source + (wants_direction
+                                         ? ": localization is \"direction\": use localizer-cli doa (or \"auto\")"
+                                         : ": localization is \"position\": localizer-cli doa reports directions"));
+  }
   // Validate the geometry now so that a bad array fails where the file is named.
   if (use == ArrayUse::kDirection) {
     auto shape = engine::ClassifyArray(array->sensors_m);
@@ -231,6 +279,10 @@ Status WriteArrayJson(const std::string& path, const ArrayFile& array) {
     root["bounds_min_m"] = side(array.bounds_min_m);
     root["bounds_max_m"] = side(array.bounds_max_m);
   }
+  if (array.localization != ArrayFile::Localization::kAuto)
+    root["localization"] = kLocalizationNames[static_cast<int>(array.localization)];
+  if (const auto& n = array.source_side_normal) root["source_side"] = {{"normal", {n->x(), n->y(), n->z()}}};
+  if (array.max_sources) root["max_sources"] = *array.max_sources;
   json rows = json::array();
   for (const engine::Vec3& m : array.sensors_m) rows.push_back({m.x(), m.y(), m.z()});
   root["sensors_m"] = std::move(rows);

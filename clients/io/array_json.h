@@ -12,15 +12,23 @@
 //                                              min, "inf" for a max) for an open side;
 //                                              default open everywhere; min < max per axis
 //     "surface_z_m": 7.03,                     optional, a water column with z up: the
-//     "bottom_z_m": -0.97                      surface is the upper z bound, the bottom the
+//     "bottom_z_m": -0.97,                     surface is the upper z bound, the bottom the
 //                                              lower (each excludes the same side of
 //                                              bounds_max_m / bounds_min_m)
+//     "localization": "auto",                  optional: "auto" (default), "position" (3-D
+//                                              position: track, locate) or "direction"
+//                                              (localizer-cli doa); a file that says one is
+//                                              refused by the other
+//     "source_side": {"normal": [0, 0, 1]},    optional, directions: the sources lie where
+//                                              (direction . normal) > 0 (a planar array's side)
+//     "max_sources": 4                         optional, directions: sources per frame, 1..16
 //   }
 //
 // Reading also checks the geometry against its use (ArrayUse), so a bad array fails at load
 // time with the engine's message, naming the file: for positions it builds an
 // engine::ArrayGeometry (fewer than 4 sensors, coplanar or coincident sensors fail); for
-// directions any array of 2 or more distinct sensors is accepted (engine/doa/array_shape.h). Unknown fields are rejected so that a misspelt optional field
+// directions any array of 2 or more distinct sensors is accepted (engine/doa/array_shape.h). Unknown fields are
+// rejected so that a misspelt optional field
 // ("reference_sensr") cannot be silently ignored. Every error names the source and field.
 #pragma once
 
@@ -46,6 +54,11 @@ struct ArrayFile {
   engine::Vec3 bounds_min_m = engine::Vec3::Constant(-std::numeric_limits<double>::infinity());
   engine::Vec3 bounds_max_m = engine::Vec3::Constant(std::numeric_limits<double>::infinity());
   bool has_bounds() const { return bounds_min_m.array().isFinite().any() || bounds_max_m.array().isFinite().any(); }
+  // Direction finding (above).
+  enum class Localization { kAuto, kPosition, kDirection };
+  Localization localization = Localization::kAuto;
+  std::optional<engine::Vec3> source_side_normal;  // finite, not zero
+  std::optional<int> max_sources;                  // 1..16
 };
 
 // What the array will be used for, which decides the geometry it needs.

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "clients/io/xav_array.h"
 #include "tests/clients/test_util.h"
@@ -169,6 +171,54 @@ TEST(ArrayJson, ReadArrayFileTakesTheXavCsv) {
   EXPECT_EQ(array->bounds_min_m.z(), kXavBottomZM);
   EXPECT_FALSE(std::isfinite(array->bounds_min_m.x()));
   EXPECT_FALSE(std::isfinite(array->bounds_max_m.y()));
+}
+
+}  // namespace
+}  // namespace localizer::io
+
+namespace localizer::io {
+namespace {
+
+TEST(ArrayJson, DirectionFieldsAreReadWrittenAndCheckedAgainstTheUse) {
+  const std::string board = R"({"sound_speed_mps": 343, "sensors_m": [[0.04,0,0],[0,0.04,0],[-0.04,0,0],[0,-0.04,0]],
+      "localization": "direction", "source_side": {"normal": [0, 0, 2]}, "max_sources": 3})";
+  auto array = ParseArrayJson(board, "board.json", ArrayUse::kDirection);
+  ASSERT_TRUE(array.ok()) << array.status().ToString();
+  EXPECT_EQ(array->localization, ArrayFile::Localization::kDirection);
+  ASSERT_TRUE(array->source_side_normal.has_value());
+  EXPECT_EQ(*array->source_side_normal, engine::Vec3(0, 0, 2));
+  EXPECT_EQ(array->max_sources, 3);
+  // A file that says "direction" is not for positions, and one that says "position" not for doa.
+  const Status for_positions = ParseArrayJson(board, "board.json").status();
+  EXPECT_NE(for_positions.message().find("localization is \"direction\""), std::string::npos)
+      << for_positions.message();
+  const std::string tetra_position =
+      R"({"sound_speed_mps": 343, "sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]], "localization": "position"})";
+  EXPECT_TRUE(ParseArrayJson(tetra_position, "t").ok());
+  EXPECT_EQ(ParseArrayJson(tetra_position, "t", ArrayUse::kDirection).status().code(), StatusCode::kInvalidArgument);
+
+  TempDir dir;
+  ASSERT_TRUE(WriteArrayJson(dir.File("a.json"), *array).ok());
+  auto again = ReadArrayJson(dir.File("a.json"), ArrayUse::kDirection);
+  ASSERT_TRUE(again.ok()) << again.status().ToString();
+  EXPECT_EQ(again->localization, array->localization);
+  EXPECT_EQ(again->source_side_normal, array->source_side_normal);
+  EXPECT_EQ(again->max_sources, array->max_sources);
+}
+
+TEST(ArrayJson, BadDirectionFieldsAreNamed) {
+  const std::string head = R"({"sound_speed_mps": 343, "sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]], )";
+  for (const auto& [field, expected] : std::vector<std::pair<std::string, std::string>>{
+           {R"("localization": "sideways"})", "localization must be"},
+           {R"("source_side": [0, 0, 1]})", "source_side must be"},
+           {R"("source_side": {"normal": [0, 0, 0]}})", "must not be zero"},
+           {R"("source_side": {"normal": [0, "a", 1]}})", "source_side.normal"},
+           {R"("max_sources": 17})", "max_sources must be"},
+           {R"("max_sources": 2.5})", "max_sources must be"}}) {
+    const Status s = ParseArrayJson(head + field, "t.json", ArrayUse::kDirection).status();
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(s.message().find(expected), std::string::npos) << field << ": " << s.message();
+  }
 }
 
 }  // namespace

@@ -49,7 +49,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   FUZZ_CHECK(again->sensors_m == array->sensors_m && again->sound_speed_mps == array->sound_speed_mps &&
                  again->sample_rate_hz == array->sample_rate_hz && again->reference_sensor == array->reference_sensor &&
                  again->band_hz == array->band_hz && again->bounds_min_m == array->bounds_min_m &&
-                 again->bounds_max_m == array->bounds_max_m,
+                 again->bounds_max_m == array->bounds_max_m && again->localization == array->localization &&
+                 again->source_side_normal == array->source_side_normal && again->max_sources == array->max_sources,
              "array changes on a write and read");
   return 0;
 }
