@@ -166,6 +166,7 @@ void ReadResponses(TrackStream& stream, const StreamCallbacks& callbacks, SendLo
         result->gaps.push_back(response.gap());
         break;
       case v1::TrackResponse::kOpened:  // only first, and Open consumed it
+      case v1::TrackResponse::kTracks:  // detection sessions only; a sample stream gets none
       case v1::TrackResponse::KIND_NOT_SET:
         break;
     }

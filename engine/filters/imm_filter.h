@@ -49,7 +49,7 @@ namespace localizer::engine {
 
 struct ImmMode {
   std::string name;  // reported in ModelProbabilities; "" -> the motion model's name
-  MotionModelKind motion_model;
+  MotionModelKind motion_model = MotionModelKind::kCv;
   MotionModelOptions motion;
 };
 

@@ -60,8 +60,9 @@ TEST(ArrayGeometry, JacobianMatchesFiniteDifferences) {
 TEST(ArrayGeometry, DelaysNeverExceedTheirPhysicalMaximum) {
   auto g = ArrayGeometry::Create(Tetrahedron(), 1500.0);
   ASSERT_TRUE(g.ok());
-  for (double x = -10; x <= 10; x += 2.5)
-    for (double y = -10; y <= 10; y += 2.5) {
+  for (int i = 0; i <= 8; ++i)  // x, y = -10, -7.5, ..., 10
+    for (int j = 0; j <= 8; ++j) {
+      const double x = -10.0 + 2.5 * i, y = -10.0 + 2.5 * j;
       const Eigen::VectorXd h = g->Tdoa(Vec3(x, y, -3.0));
       for (int p = 0; p < g->pair_count(); ++p) EXPECT_LE(std::abs(h(p)), g->max_delay_s(p) + 1e-15);
     }

@@ -25,7 +25,8 @@ TEST(PlatformMotionTest, BodyRateIsTheDerivativeOfTheAttitude) {
   options.phase_rad = {0.3, 0.0, 1.0};
   options.constant_rate_rps = {0.05, 0.1, -0.2};
   const AttitudeTrajectory trajectory(options);
-  for (double t = 0.0; t < 20.0; t += 0.37) {
+  for (int k = 0; k * 0.37 < 20.0; ++k) {  // 0, 0.37, ..., 19.98 s
+    const double t = k * 0.37;
     EXPECT_LT((trajectory.BodyRate(t) - NumericalBodyRate(trajectory, t)).norm(), 1e-6) << t;
   }
 }

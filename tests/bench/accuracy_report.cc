@@ -23,7 +23,16 @@ double Median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   using namespace localizer::engine;
-  const int seeds = argc > 1 ? std::atoi(argv[1]) : 5;
+  int seeds = 5;
+  if (argc > 1) {
+    char* end = nullptr;
+    const long n = std::strtol(argv[1], &end, 10);
+    if (end == argv[1] || *end != '\0' || n < 1 || n > 1000000) {
+      std::fprintf(stderr, "accuracy_report: N must be an integer in [1, 1000000], got \"%s\"\n", argv[1]);
+      return 2;
+    }
+    seeds = static_cast<int>(n);
+  }
   std::printf("%-16s %-5s %5s %8s %8s %8s %8s %7s %6s\n", "scenario", "lik", "seed", "rmse_m", "p95_m", "crlb_m",
               "ratio", "p95/rmse", "reinit");
   for (const std::string& name : ScenarioNames()) {

@@ -43,7 +43,16 @@ StatusOr<std::vector<FilterChoice>> Choices(const std::string& list) {
 }
 
 int Main(int argc, char** argv) {
-  const int seeds = argc > 1 ? std::atoi(argv[1]) : 3;
+  int seeds = 3;
+  if (argc > 1) {
+    char* end = nullptr;
+    const long n = std::strtol(argv[1], &end, 10);
+    if (end == argv[1] || *end != '\0' || n < 1 || n > 1000000) {
+      std::fprintf(stderr, "filter_report: N must be an integer in [1, 1000000], got \"%s\"\n", argv[1]);
+      return 2;
+    }
+    seeds = static_cast<int>(n);
+  }
   const std::string list = argc > 2 ? argv[2] : "pf,ekf,ukf,ekf-ct,ukf-ct,mmpf,imm";
   std::printf("%-15s %-7s %4s %8s %9s %9s %8s %6s\n", "scenario", "filter", "seed", "rmse_m", "rmse/crlb", "rmse/pcrlb",
               "nees/dim", "reinit");

@@ -85,7 +85,7 @@ bool Run(int sessions, int particles, bool resample, int steps, Result* out) {
   if (resample) o.resample_threshold = 1.0;
   std::vector<int> slots;
   for (int k = 0; k < sessions; ++k) {
-    o.seed = static_cast<uint64_t>(k + 1);
+    o.seed = static_cast<uint64_t>(k) + 1;
     auto slot = (*bank)->Open(s.array, o);
     if (!slot.ok()) {
       std::printf("open: %s\n", slot.status().ToString().c_str());
@@ -124,7 +124,15 @@ bool Run(int sessions, int particles, bool resample, int steps, Result* out) {
 int Main(int argc, char** argv) {
   int steps = 50;
   for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], "--steps") == 0) steps = std::max(1, std::atoi(argv[i + 1]));
+    if (std::strcmp(argv[i], "--steps") == 0) {
+      char* end = nullptr;
+      const long n = std::strtol(argv[i + 1], &end, 10);
+      if (end == argv[i + 1] || *end != '\0' || n > 1000000) {
+        std::fprintf(stderr, "gpu_pf_bench: --steps must be an integer <= 1000000, got \"%s\"\n", argv[i + 1]);
+        return 2;
+      }
+      steps = static_cast<int>(std::max(1L, n));  // 0 and below: 1, as before
+    }
   }
   const std::string& reason = DeviceUnavailableReason();
   if (!reason.empty()) {

@@ -15,10 +15,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -41,6 +41,7 @@ struct Args {
   double manoeuvre_share = -1.0;       // < 0: the session default
   int tempered_updates = -1;           // < 0: the session default
   double manoeuvre_scale = 0.0;        // < 1: the session default
+  bool help = false;                   // --help: print the usage and exit 0
 };
 
 // The flags' changes to the campaign's default session config.
@@ -83,8 +84,8 @@ bool ParseArgs(int argc, char** argv, Args* a) {
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     if (flag == "--help" || flag == "-h") {
-      Usage(stdout);
-      std::exit(0);
+      a->help = true;
+      return true;
     }
     if (i + 1 >= argc) {
       std::fprintf(stderr, "scene_campaign: %s needs a value\n", flag.c_str());
@@ -197,7 +198,8 @@ void PrintRow(FILE* out, const SceneRow& r) {
 void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s) {
   FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) {
-    std::fprintf(stderr, "scene_campaign: cannot write %s: %s\n", path.c_str(), std::strerror(errno));
+    const std::string reason = std::generic_category().message(errno);
+    std::fprintf(stderr, "scene_campaign: cannot write %s: %s\n", path.c_str(), reason.c_str());
     return;
   }
   std::fprintf(f, "{\n  \"command\": {\"scenes\": %d, \"seed\": %" PRIu64 ", \"class\": %s, \"duration_s\": %s},\n",
@@ -276,6 +278,10 @@ int main(int argc, char** argv) {
   if (!ParseArgs(argc, argv, &a)) {
     Usage(stderr);
     return 2;
+  }
+  if (a.help) {
+    Usage(stdout);
+    return 0;
   }
   RandomSceneOptions scene_options;
   scene_options.duration_s = a.duration_s;

@@ -12,7 +12,9 @@ namespace {
 
 TEST(FastMath, ExpRelativeErrorBelowThreeTenMillionths) {
   double worst = 0.0;
-  for (double x = -87.0; x <= 88.0; x += 0.001) {
+  // x = -87, -86.999, ..., 87.999: the points the former accumulating loop (x <= 88) reached.
+  for (int i = -87000; i < 88000; ++i) {
+    const double x = i / 1000.0;
     const double exact = std::exp(static_cast<double>(static_cast<float>(x)));
     const double got = FastExp(static_cast<float>(x));
     worst = std::max(worst, std::abs(got - exact) / exact);
@@ -24,8 +26,8 @@ TEST(FastMath, ExpRelativeErrorBelowThreeTenMillionths) {
 
 TEST(FastMath, LogErrorBelowThreeTenMillionthsScaledByTheResult) {
   double worst = 0.0;
-  for (double x = 1e-30; x < 1e30; x *= 1.0007) {
-    const float xf = static_cast<float>(x);
+  for (int i = 0; 1e-30 * std::pow(1.0007, i) < 1e30; ++i) {  // x = 1e-30 * 1.0007^i below 1e30
+    const float xf = static_cast<float>(1e-30 * std::pow(1.0007, i));
     const double exact = std::log(static_cast<double>(xf));
     worst = std::max(worst, std::abs(FastLog(xf) - exact) / std::max(1.0, std::abs(exact)));
   }
@@ -43,7 +45,10 @@ TEST(FastMath, NormalQuantileMatchesTheInverseErf) {
     return 0.5 * (lo + hi);
   };
   double worst_centre = 0.0, worst_tail = 0.0;
-  for (double u = 1e-7; u < 1.0; u += (u < 0.01 || u > 0.99) ? 1e-6 : 1e-4) {
+  // u from 1e-7 below 1 in steps of 1e-6 in the tails (u < 0.01, u > 0.99) and 1e-4 between,
+  // counted in units of 1e-7: k = 1, 11, ..., 99991, 100001, 101001, ...
+  for (int k = 1; k < 10000000; k += (k < 100000 || k > 9900000) ? 10 : 1000) {
+    const double u = k / 1e7;
     const float uf = static_cast<float>(u);
     const double error = std::abs(NormalFromUniform(uf) - quantile(static_cast<double>(uf)));
     double& worst = (u >= 1e-3 && u <= 1.0 - 1e-3) ? worst_centre : worst_tail;
@@ -94,8 +99,10 @@ namespace {
 
 TEST(FastMath, BoxMullerPairMatchesDoublePrecision) {
   double worst = 0.0;
-  for (float u1 = 1e-4f; u1 < 1.0f; u1 += 0.0137f) {
-    for (float u2 = 0.0f; u2 < 1.0f; u2 += 0.0011f) {
+  for (int i = 0; i < 73; ++i) {  // u1 = 1e-4, 0.0138, ..., 0.9865
+    const float u1 = 1e-4f + 0.0137f * static_cast<float>(i);
+    for (int j = 0; j < 910; ++j) {  // u2 = 0, 0.0011, ..., 0.9999
+      const float u2 = 0.0011f * static_cast<float>(j);
       float z1, z2;
       NormalPairFromUniforms(u1, u2, &z1, &z2);
       const double r = std::sqrt(-2.0 * std::log(static_cast<double>(u1)));

@@ -125,7 +125,7 @@ TEST(MixtureDensity, IsTheWeightedSumOfItsComponentsAndIntegratesToOne) {
   // part's scale is 10 m). Beyond 20 km the right tail holds 0.5 * 2 C 2000^-1.7 ~ 3e-7.
   const auto mass_over = [&](double lo, double hi, double h) {
     double sum = 0.0;
-    for (double n = lo + 0.5 * h; n < hi; n += h) sum += std::exp(density->LogDensity(n)) * h;
+    for (int k = 0; lo + (k + 0.5) * h < hi; ++k) sum += std::exp(density->LogDensity(lo + (k + 0.5) * h)) * h;
     return sum;
   };
   const double mass =

@@ -60,9 +60,11 @@ std::vector<FilterCase> Filters(double sigma_s) {
   for (const auto& [variant, vname] :
        {std::pair{KalmanVariant::kExtended, "ekf"}, {KalmanVariant::kUnscented, "ukf"}}) {
     for (const char* model : {"cv", "ca", "ct"}) {
-      cases.push_back({std::string(vname) + "-" + model, model, [=](const ArrayGeometry& a, uint64_t) {
+      // Copied: clang 14 cannot capture a structured binding (C++20 allows it; GCC does).
+      cases.push_back({std::string(vname) + "-" + model, model,
+                       [kalman_variant = variant, model, sigma_s](const ArrayGeometry& a, uint64_t) {
                          return std::unique_ptr<Tracker>(
-                             std::move(*KalmanFilter::Create(a, Kalman(variant, model, sigma_s))));
+                             std::move(*KalmanFilter::Create(a, Kalman(kalman_variant, model, sigma_s))));
                        }});
     }
   }

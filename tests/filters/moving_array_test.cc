@@ -75,7 +75,9 @@ Outcome Track(const std::string& kind, bool follow) {
   for (int k = 1; k <= 160; ++k) {
     const double t = k * dt;
     const ArrayGeometry now = body.Moved(Attitude(t), Vec3::Zero());
-    if (follow) EXPECT_TRUE(tracker->SetArray(now).ok());
+    if (follow) {
+      EXPECT_TRUE(tracker->SetArray(now).ok());
+    }
     tracker->Predict(dt);
     auto report = tracker->Update(testing::TdoaFrame(now, source, Vec3::Zero(), t, noise, rng));
     EXPECT_TRUE(report.ok());

@@ -97,10 +97,8 @@ struct Item {
 };
 
 Item MakeItem(Session& session, int64_t start) {
-  Item item{&session,
-            session.Frame(start),
-            static_cast<double>(start + kFrameSamples / 2) / session.options.sample_rate_hz,
-            {}};
+  const int64_t centre = start + kFrameSamples / 2;  // the frame's centre sample (kFrameSamples is even)
+  Item item{&session, session.Frame(start), static_cast<double>(centre) / session.options.sample_rate_hz, {}};
   EXPECT_TRUE(session.cpu->Estimate(item.frame.data(), kFrameSamples, item.t_s, &item.cpu).ok());
   return item;
 }

@@ -168,7 +168,7 @@ class HostBankModel {
   }
   // Fills normals_[0, count) with standard normals from a fresh key.
   void Normals(int count) {
-    normals_.resize(static_cast<size_t>(count + 1));
+    normals_.resize(static_cast<size_t>(count) + 1);
     const uint32_t key = NextKey();
     for (int j = 0; j + 1 < count + 1; j += 2) {
       const uint32_t c = static_cast<uint32_t>(j);

@@ -29,7 +29,7 @@ double ModelCvRmse(const CvScenario& s, const engine::ParticleFilterOptions& opt
   std::vector<int> used(static_cast<size_t>(s.array.pair_count()), 1);
   std::vector<double> sigmas(used.size(), options.tdoa_sigma_s);
   return CvRmse(s, noise_seed, [&](double dt_s, const engine::Measurement& m) {
-    pf::StepOutput out;
+    pf::StepOutput out{};
     EXPECT_TRUE(model.Step(dt_s, &m, used.data(), sigmas.data(), &out).ok());
     if (fallbacks != nullptr) *fallbacks += out.cholesky_fallback;
     return model.State(out).mean;
@@ -81,7 +81,7 @@ TEST(PfHostModel, StationarySourceWithExactTdoasConverges) {
   std::vector<int> used(3, 1);
   std::vector<double> sigmas(3, 8e-6);
   std::mt19937_64 rng(1);
-  pf::StepOutput out;
+  pf::StepOutput out{};
   for (int f = 0; f < 40; ++f) {
     const engine::Measurement m = MakeMeasurement(s.array, s.p0, s.v, f * s.hop_s, 0.0, s.fs, rng);
     ASSERT_TRUE(model.Step(f > 0 ? s.hop_s : 0.0, &m, used.data(), sigmas.data(), &out).ok());
@@ -128,7 +128,7 @@ TEST(PfHostModel, GccLikelihoodIgnoresAStrongerFalsePeak) {
   }
   std::vector<int> used(3, 1);
   std::vector<double> sigmas(3, o.tdoa_sigma_s);
-  pf::StepOutput out;
+  pf::StepOutput out{};
   for (int f = 0; f < 20; ++f) ASSERT_TRUE(model.Step(0.1, &m, used.data(), sigmas.data(), &out).ok());
   const Eigen::VectorXd lag_error = (array.Tdoa(model.State(out).mean.head<3>()) - h) * fs;
   EXPECT_LT(lag_error.cwiseAbs().maxCoeff(), 0.5) << lag_error.transpose();
@@ -151,7 +151,7 @@ TEST(PfHostModel, InnovationsMatchTheCpuFilterOnAPointCloud) {
   ASSERT_TRUE(report.ok());
   std::vector<int> used(3, 1);
   std::vector<double> sigmas(3, o.tdoa_sigma_s);
-  pf::StepOutput out;
+  pf::StepOutput out{};
   ASSERT_TRUE(model.Step(0.0, &m, used.data(), sigmas.data(), &out).ok());
   double nis = 0.0;
   for (int p = 0; p < 3; ++p) {

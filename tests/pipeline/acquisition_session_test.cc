@@ -161,7 +161,7 @@ TEST(AcquisitionSession, ASourceSwitchedOffAndOnIsFlaggedDroppedAndReacquired) {
   for (int c = 0; c < sim.channel_count; ++c) {
     for (int64_t i = 0; i < sim.samples_per_channel; ++i) {
       float& v = sim.samples[static_cast<size_t>(c * sim.samples_per_channel + i)];
-      const double t = i / fs;
+      const double t = static_cast<double>(i) / fs;
       if (t >= 5.0 && t < 11.0) v = 0.0f;
       v += static_cast<float>(gauss(rng));
     }

@@ -62,7 +62,9 @@ MovingRun TrackBuoy(bool compensate, uint64_t seed, bool noisy_imu = true) {
     const double end_s = static_cast<double>(start + kBlock) / sim.sample_rate_hz;
     std::vector<ImuSample> batch;
     while (next_imu < imu.size() && imu[next_imu].t_s <= end_s) batch.push_back(imu[next_imu++]);
-    if (compensate) EXPECT_TRUE(session->AddImu(batch).ok());
+    if (compensate) {
+      EXPECT_TRUE(session->AddImu(batch).ok());
+    }
     for (int c = 0; c < sim.channel_count; ++c) {
       const float* from = sim.samples.data() + static_cast<size_t>(c) * static_cast<size_t>(sim.samples_per_channel);
       std::copy(from + start, from + start + kBlock, block.begin() + static_cast<long>(c) * kBlock);

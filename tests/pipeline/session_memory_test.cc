@@ -30,7 +30,11 @@ int64_t HeapInUse() {
   return static_cast<int64_t>(m.uordblks + m.hblkhd);
 }
 
-bool Probe() { return std::getenv("LOCALIZER_MEMORY_PROBE") != nullptr; }
+bool Probe() {
+  // There is no thread-safe getenv; it races only with setenv/putenv, which nothing here calls.
+  // NOLINTNEXTLINE(concurrency-mt-unsafe): read-only, nothing in this process sets the environment
+  return std::getenv("LOCALIZER_MEMORY_PROBE") != nullptr;
+}
 
 // Sensors on a sphere of radius 1 m (never coplanar for >= 4).
 std::vector<Vec3> Sphere(int n) {
@@ -72,11 +76,14 @@ Measured MeasureAudio(const AudioSessionConfig& config) {
 
 void Check(const char* what, const Measured& m) {
   if (Probe()) {
-    std::printf("%-44s held %9.2f MiB  estimate %9.2f MiB  ratio %.2f\n", what, m.held / 1048576.0,
-                m.estimate / 1048576.0, static_cast<double>(m.estimate) / std::max<int64_t>(m.held, 1));
+    const double held = static_cast<double>(m.held), estimate = static_cast<double>(m.estimate);
+    std::printf("%-44s held %9.2f MiB  estimate %9.2f MiB  ratio %.2f\n", what, held / 1048576.0, estimate / 1048576.0,
+                estimate / static_cast<double>(std::max<int64_t>(m.held, 1)));
   }
   EXPECT_GE(m.estimate, m.held) << what;
-  if (m.held > kSmall) EXPECT_LE(static_cast<double>(m.estimate), kLooseness * static_cast<double>(m.held)) << what;
+  if (m.held > kSmall) {
+    EXPECT_LE(static_cast<double>(m.estimate), kLooseness * static_cast<double>(m.held)) << what;
+  }
 }
 
 TEST(SessionMemory, TheEstimateBoundsWhatAnAudioSessionHolds) {

@@ -48,6 +48,7 @@
 #include "server/service/server.h"
 #include "tests/clients/test_util.h"
 #include "tests/pipeline/scenario_run.h"
+#include "tests/server/run_shell.h"
 #include "wire/block_wire.h"
 #include "wire/config_wire.h"
 #include "wire/status_wire.h"
@@ -277,7 +278,7 @@ std::pair<int, std::string> RunCli(const std::string& args, const TempDir& dir) 
   const std::string err = dir.File("stderr.txt");
   const std::string command =
       std::string(LOCALIZER_CLI_BIN) + " " + args + " > " + dir.File("stdout.txt") + " 2> " + err;
-  const int status = std::system(command.c_str());
+  const int status = localizer::testing::RunShell(command);
   std::ifstream in(err);
   std::stringstream text;
   text << in.rdbuf();

@@ -156,7 +156,8 @@ TEST_F(ServiceTest, UnparseableLocateIsInvalidArgumentWithAMessage) {
     return status;
   };
   grpc::ByteBuffer reply;
-  const grpc::Status garbage = call(std::string("\xff\xff\xff\xff\x0f garbage", 14), &reply);
+  // 14 bytes: the garbage and a trailing NUL.
+  const grpc::Status garbage = call(std::string("\xff\xff\xff\xff\x0f garbage\0", 14), &reply);
   EXPECT_EQ(garbage.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(garbage.error_message().find("could not be parsed"), std::string::npos) << garbage.error_message();
   // A well-formed request through the raw path: the same answer as the typed client gets.

@@ -17,6 +17,7 @@
 #include "server/service/auth.h"
 #include "server/service/tls_credentials.h"
 #include "tests/server/http_client.h"
+#include "tests/server/run_shell.h"
 #include "tests/server/service_fixture.h"
 
 namespace localizer::server::testing {
@@ -32,7 +33,7 @@ void WriteFile(const fs::path& path, const std::string& text) {
   out << text;
 }
 
-bool HaveOpenssl() { return std::system("openssl version >/dev/null 2>&1") == 0; }
+bool HaveOpenssl() { return localizer::testing::RunShell("openssl version >/dev/null 2>&1") == 0; }
 
 // A temporary directory with the test PKI and token files; removed at the end.
 class Pki {
@@ -54,7 +55,7 @@ class Pki {
   bool MakeCertificates(const std::string& name = "pki") {
     const std::string command = "bash '" LOCALIZER_SOURCE_DIR "/deploy/tls/make_test_certs.sh' '" +
                                 (dir_ / name).string() + "' >/dev/null 2>&1";
-    return std::system(command.c_str()) == 0;
+    return localizer::testing::RunShell(command) == 0;
   }
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   std::string Cert(const std::string& file, const std::string& pki = "pki") const { return Path(pki + "/" + file); }
@@ -97,7 +98,7 @@ class SecurityTest : public ::testing::Test {
     stream.Send(scenario_->OpenRequest());
     const int64_t blocks = std::min<int64_t>(4, scenario_->BlockCount(kBlock));
     for (int64_t k = 1; k <= blocks; ++k) stream.Send(scenario_->BlockRequest(k, kBlock));
-    const grpc::Status status = stream.Close();
+    grpc::Status status = stream.Close();  // not const: returned by move
     *estimates = stream.estimates().size();
     return status;
   }
@@ -228,7 +229,7 @@ TEST_F(SecurityTest, ServerBinaryExitsOneOnAnUnreadableFile) {
   const std::string command = std::string("'") + LOCALIZER_SERVER_BIN +
                               "' --listen 127.0.0.1:0 --metrics-listen '' --auth-token-file '" + pki_.Path("absent") +
                               "' 2>" + pki_.Path("stderr");
-  const int status = std::system(command.c_str());
+  const int status = localizer::testing::RunShell(command);
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 1);
   std::ifstream in(pki_.Path("stderr"));
@@ -447,7 +448,7 @@ TEST_F(SecurityTest, CliTakesTheCredentialFlags) {
   const auto run = [&](const std::string& flags) {
     const std::string command = std::string("'") + LOCALIZER_CLI_BIN + "' list --server " + Target() + " " + flags +
                                 " >" + pki_.Path("out") + " 2>&1";
-    const int status = std::system(command.c_str());
+    const int status = localizer::testing::RunShell(command);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   };
   EXPECT_EQ(run("--tls-ca " + pki_.Cert("ca.crt") + " --auth-token-file " + pki_.Cert("operator.token")), 0);

@@ -10,6 +10,7 @@
 
 #include "server/sync/tsan_annotations.h"
 #include "tests/server/http_client.h"
+#include "tests/server/run_shell.h"
 #include "tests/server/service_fixture.h"
 
 namespace localizer::server::testing {
@@ -37,7 +38,7 @@ int HealthStatus(const std::shared_ptr<grpc::Channel>& channel, grpc::Status* rp
   // orders it after this thread's writes, and TSan learns so here (tsan_annotations.h).
   TsanRelease(&done);
   stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
-                 [&done](grpc::Status s) {
+                 [&done](const grpc::Status& s) {
                    TsanAcquire(&done);
                    done.set_value(s);
                  });
@@ -83,7 +84,7 @@ TEST_F(ServiceTest, MetricsCountWhatWasProcessedAndPassPromtool) {
   EXPECT_EQ(SeriesValue(text, "localizer_queue_depth_blocks"), 0.0);
   EXPECT_NE(text.find("localizer_build_info{version=\""), std::string::npos);
 
-  if (std::system("command -v promtool > /dev/null 2>&1") != 0) {
+  if (localizer::testing::RunShell("command -v promtool > /dev/null 2>&1") != 0) {
     GTEST_SKIP() << "promtool not installed (Debian package prometheus); text checks above passed";
   }
   const std::string path = ::testing::TempDir() + "/service_metrics.txt";

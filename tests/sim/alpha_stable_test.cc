@@ -207,7 +207,7 @@ TEST(AlphaStable, ValidateRejectsOutOfRangeNamingTheField) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const struct {
     AlphaStable params;
-    const char* field;
+    const char* field = nullptr;
   } cases[] = {
       {{0.0, 0.0}, "alpha"},
       {{-1.0, 0.0}, "alpha"},

@@ -93,7 +93,8 @@ TEST(FractionalDelay, ShiftsAPulseByAFractionOfASample) {
   std::vector<double> samples(100);
   for (int n = 0; n < 100; ++n) samples[n] = pulse(n);
   const FractionalDelayInterpolator interpolator;
-  for (double x = 40.0; x <= 60.0; x += 0.13) {
+  for (int k = 0; 40.0 + 0.13 * k <= 60.0; ++k) {  // x = 40, 40.13, ..., 59.89
+    const double x = 40.0 + 0.13 * k;
     EXPECT_NEAR(interpolator.Evaluate(samples.data(), 100, x), pulse(x), 1e-5) << x;
   }
 }

@@ -49,7 +49,7 @@ TEST(RandomScene, DrawsStayInTheirStatedRanges) {
       EXPECT_EQ(s.scenario.sound_speed_mps, 1500.0);
       EXPECT_TRUE(o.sample_rate_hz == 11025.0 || o.sample_rate_hz == 16000.0);
       for (const Vec3& p : m) EXPECT_LT(p.z(), 0.0) << seed;  // below the surface
-      for (double t = 0.0; t <= kDurationS; t += 0.5) EXPECT_LT(o.trajectory.PositionAt(t).z(), 0.0) << seed;
+      for (int k = 0; k * 0.5 <= kDurationS; ++k) EXPECT_LT(o.trajectory.PositionAt(k * 0.5).z(), 0.0) << seed;
     } else {
       EXPECT_EQ(s.scenario.sound_speed_mps, 343.0);
       EXPECT_TRUE(o.sample_rate_hz == 16000.0 || o.sample_rate_hz == 48000.0);

@@ -27,7 +27,10 @@ std::pair<double, double> RangeSpan(const Scenario& s) {
   const Vec3 centre = Centroid(s.sensors_m);
   double lo = 1e300;
   double hi = 0.0;
-  for (double t = 0.0; t <= s.sim.duration_s; t += 0.05) {
+  // t = 0, 0.05, ... below duration_s: the points the former accumulating loop visited (for the
+  // whole-second durations here its `t <= duration_s` missed the end by a rounding error).
+  for (int k = 0; k * 0.05 < s.sim.duration_s; ++k) {
+    const double t = k * 0.05;
     const double r = (s.sim.trajectory.PositionAt(t) - centre).norm();
     lo = std::min(lo, r);
     hi = std::max(hi, r);
@@ -78,7 +81,8 @@ TEST(Scenarios, UnderwaterScenesAreBelowTheSurface) {
     EXPECT_EQ(s.sound_speed_mps, 1500.0);
     EXPECT_EQ(s.sim.sample_rate_hz, 11025.0);
     for (const Vec3& m : s.sensors_m) EXPECT_LT(m.z(), 0.0) << name;
-    for (double t = 0.0; t <= s.sim.duration_s; t += 0.5) {
+    for (int k = 0; k * 0.5 <= s.sim.duration_s; ++k) {
+      const double t = k * 0.5;
       EXPECT_LT(s.sim.trajectory.PositionAt(t).z(), 0.0) << name << " at " << t;
     }
   }

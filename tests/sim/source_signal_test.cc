@@ -64,13 +64,18 @@ TEST(BandPassFir, PassesTheBandAndStopsTheRest) {
   const double fs = 11025.0;
   const BandPassFir fir = DesignBandPassFir(300.0, 3000.0, fs);
   const double half_transition = 0.5 * fir.transition_hz;
-  for (double f = 300.0 + half_transition; f <= 3000.0 - half_transition; f += 7.0) {
+  const double pass_low = 300.0 + half_transition, pass_high = 3000.0 - half_transition;
+  for (int k = 0; pass_low + 7.0 * k <= pass_high; ++k) {
+    const double f = pass_low + 7.0 * k;
     EXPECT_NEAR(20.0 * std::log10(Gain(fir.taps, f, fs)), 0.0, 0.01) << f << " Hz";
   }
-  for (double f = 0.0; f <= 300.0 - half_transition; f += 3.0) {
+  for (int k = 0; 3.0 * k <= 300.0 - half_transition; ++k) {
+    const double f = 3.0 * k;
     EXPECT_LT(20.0 * std::log10(Gain(fir.taps, f, fs)), -59.0) << f << " Hz";
   }
-  for (double f = 3000.0 + half_transition; f <= fs / 2; f += 7.0) {
+  const double stop_low = 3000.0 + half_transition;
+  for (int k = 0; stop_low + 7.0 * k <= fs / 2; ++k) {
+    const double f = stop_low + 7.0 * k;
     EXPECT_LT(20.0 * std::log10(Gain(fir.taps, f, fs)), -59.0) << f << " Hz";
   }
   // The -6 dB points are the band edges.
@@ -140,10 +145,12 @@ TEST(SourceSignal, ClickPulseIsBandLimitedWithUnitPeak) {
     return std::abs(sum);
   };
   const double peak = spectrum(g.centre_hz());
-  for (double f_hz = 0.0; f_hz <= 30.0; f_hz += 10.0) {
+  for (int k = 0; k <= 3; ++k) {  // 0, 10, 20, 30 Hz
+    const double f_hz = 10.0 * k;
     EXPECT_LT(20.0 * std::log10(spectrum(f_hz) / peak), -50.0) << f_hz;
   }
-  for (double f_hz = 3270.0; f_hz <= 5512.0; f_hz += 50.0) {
+  for (int k = 0; 3270.0 + 50.0 * k <= 5512.0; ++k) {  // 3270, 3320, ..., 5470 Hz
+    const double f_hz = 3270.0 + 50.0 * k;
     EXPECT_LT(20.0 * std::log10(spectrum(f_hz) / peak), -50.0) << f_hz;
   }
 }

@@ -59,7 +59,8 @@ TEST(Trajectory, TurnFollowsACircleOfRadiusSpeedOverRate) {
   const double horizontal_speed = std::hypot(v0.x(), v0.y());
   // Counter-clockwise: the centre is to the left of the velocity.
   const Eigen::Vector2d centre = t.position_m.head<2>() + Eigen::Vector2d(-v0.y(), v0.x()) / w;
-  for (double time_s = 0.0; time_s < 20.0; time_s += 0.7) {
+  for (int k = 0; k * 0.7 < 20.0; ++k) {  // 0, 0.7, ..., 19.6 s
+    const double time_s = k * 0.7;
     EXPECT_NEAR((t.PositionAt(time_s).head<2>() - centre).norm(), horizontal_speed / w, 1e-12);
     EXPECT_NEAR(t.PositionAt(time_s).z(), t.position_m.z() + 0.1 * time_s, 1e-12);
   }

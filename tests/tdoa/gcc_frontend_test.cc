@@ -69,10 +69,10 @@ Spread MeasureSpread(GccPhatEstimator& gcc, const SignalSpec& spec, double snr_d
 // with and without the band set, and 48 kHz 300-3000 Hz with it, plus kParabolic; SNR -5 to
 // 20 dB. Measured ratios 0.86-1.22 (the 20 dB end is the sinc floor, 0.002 sample).
 struct SigmaCase {
-  const char* name;
+  const char* name = nullptr;
   SignalSpec spec;
-  bool band;
-  PeakInterpolation interpolation;
+  bool band = false;
+  PeakInterpolation interpolation = PeakInterpolation::kParabolic;
 };
 
 TEST(DelaySigma, AgreesWithTheMeasuredSpread) {

@@ -39,7 +39,9 @@ TEST(RadarScan, DetectionProbabilityClutterCountAndNoise) {
     const RadarScanFrame f = sim->Frame(k);
     covered += static_cast<double>(f.truth.size());  // targets leave the 30 km annulus
     for (size_t j = 0; j < f.source.size(); ++j) {
-      if (j > 0) EXPECT_LE(f.scan.detections[j - 1].bearing_rad, f.scan.detections[j].bearing_rad);
+      if (j > 0) {
+        EXPECT_LE(f.scan.detections[j - 1].bearing_rad, f.scan.detections[j].bearing_rad);
+      }
       const Detection& d = f.scan.detections[j];
       EXPECT_GE(d.range_m, o.min_range_m - 100.0);
       EXPECT_LE(d.range_m, o.max_range_m + 100.0);

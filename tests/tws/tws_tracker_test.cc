@@ -48,8 +48,8 @@ TEST(TwsTracker, EightTargetsInClutterConfirmWithinFiveScansWithoutSwitches) {
     EXPECT_GT(score.purity, 0.999);
     // After the start-up, OSPA (c = 1 km, p = 2) stays near the converted-plot accuracy
     // (cross-range 200 m per plot, ~100 m filtered) plus rare false or lost tracks.
-    const double mean_ospa =
-        std::accumulate(score.ospa_m.begin() + 5, score.ospa_m.end(), 0.0) / (score.ospa_m.size() - 5);
+    const double mean_ospa = std::accumulate(score.ospa_m.begin() + 5, score.ospa_m.end(), 0.0) /
+                             static_cast<double>(score.ospa_m.size() - 5);
     std::printf("seed %llu: mean OSPA %.1f m, max tracks %d\n", static_cast<unsigned long long>(seed), mean_ospa,
                 score.max_tracks);
     EXPECT_LT(mean_ospa, 250.0) << "seed " << seed;
@@ -162,7 +162,9 @@ TEST(TwsTracker, IdentitiesAreNeverReused) {
     for (const TrackReport& r : (*tracker)->Tracks()) {
       alive.insert(r.id);
       // A new id is larger than every id seen before: none comes back after deletion.
-      if (!seen_ever.count(r.id)) EXPECT_GT(r.id, last_max);
+      if (!seen_ever.count(r.id)) {
+        EXPECT_GT(r.id, last_max);
+      }
     }
     for (uint64_t id : alive) seen_ever.insert(id);
     if (!seen_ever.empty()) last_max = *seen_ever.rbegin();
