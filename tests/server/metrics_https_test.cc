@@ -21,6 +21,7 @@
 #include "server/service/server.h"
 #include "tests/server/http_client.h"
 #include "tests/server/https_client.h"
+#include "tests/server/run_shell.h"
 #include "tests/server/test_pki.h"
 
 extern char** environ;
@@ -252,7 +253,7 @@ TEST_F(HttpsServerTest, BinaryExitsOneOnABadMetricsTlsFile) {
                               "' --listen 127.0.0.1:0 --metrics-listen 127.0.0.1:0 --metrics-tls-cert '" +
                               pki_.Cert("server.crt") + "' --metrics-tls-key '" + pki_.Cert("server.key", "other") +
                               "' 2>'" + pki_.Path("stderr") + "'";
-  const int status = std::system(command.c_str());
+  const int status = localizer::testing::RunShell(command);
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 1);
   const std::string err = ReadText(pki_.Path("stderr"));
@@ -261,7 +262,7 @@ TEST_F(HttpsServerTest, BinaryExitsOneOnABadMetricsTlsFile) {
   // A usage error (a cert without its key) is exit 2, as for --tls-cert.
   const std::string half = std::string("'") + LOCALIZER_SERVER_BIN + "' --listen 127.0.0.1:0 --metrics-tls-cert '" +
                            pki_.Cert("server.crt") + "' 2>/dev/null";
-  const int half_status = std::system(half.c_str());
+  const int half_status = localizer::testing::RunShell(half);
   ASSERT_TRUE(WIFEXITED(half_status));
   EXPECT_EQ(WEXITSTATUS(half_status), 2);
 }

@@ -11,6 +11,8 @@
 #include <iterator>
 #include <string>
 
+#include "tests/server/run_shell.h"
+
 namespace localizer::testing {
 
 inline std::string ReadText(const std::filesystem::path& path) {
@@ -29,12 +31,12 @@ class Pki {
     std::error_code ignored;
     std::filesystem::remove_all(dir_, ignored);
   }
-  static bool HaveOpenssl() { return std::system("openssl version >/dev/null 2>&1") == 0; }
+  static bool HaveOpenssl() { return localizer::testing::RunShell("openssl version >/dev/null 2>&1") == 0; }
   // Makes a CA with server and client certificates in dir()/name; false when it failed.
   bool Make(const std::string& name) {
     const std::string command = "bash '" LOCALIZER_SOURCE_DIR "/deploy/tls/make_test_certs.sh' '" +
                                 (dir_ / name).string() + "' >/dev/null 2>&1";
-    return std::system(command.c_str()) == 0;
+    return localizer::testing::RunShell(command) == 0;
   }
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   std::string Cert(const std::string& file, const std::string& pki = "pki") const { return Path(pki + "/" + file); }
