@@ -1,0 +1,181 @@
+// The issue-18 goal scene, measured: two talkers with pauses around a ReSpeaker-style board
+// (4 microphones at +-4.05 cm) on a desk in a reverberant room, frame by frame through
+// SrpPhat and DirectionTracker. Not a test (no pass/fail); numbers for ACCURACY.md.
+//
+// Scene: a 6 x 5 x 3 m room, RT60 0.2 / 0.4 / 0.6 s (engine/sim/room.h); the board at
+// (2.2, 1.9, 1.0); talkers 1.5-2.5 m away, 0.3-0.5 m above the board, at azimuths 90 degrees
+// apart; each talks in bursts (white noise 100-7000 Hz, on 0.4-1.5 s, off 0.2-1.0 s, seeded)
+// at equal level; sensor noise 15 dB below a talker's direct sound. 16 kHz, frames of 512,
+// hop 256, max_sources 4 (--max-sources), source_side +z. A talker "sounds" in a frame when it is on over the
+// whole frame.
+// Per RT60 it prints: median and p90 azimuth error of the peaks within 20 degrees of a
+// sounding talker; the share of sounding talker-frames with such a peak (detected); seconds
+// of confirmed or coasting track per minute further than 20 degrees from both talkers (false;
+// two such tracks at once count twice); identity switches (the track nearest a sounding
+// talker changes id).
+//
+//   build/tests/bench/doa_room_report [--seconds 20] [--seed 1] [--max-sources 4]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "engine/doa/direction_tracker.h"
+#include "engine/doa/srp_phat.h"
+#include "engine/sim/band_pass_fir.h"
+#include "engine/sim/room.h"
+
+namespace localizer::engine {
+namespace {
+
+constexpr double kFs = 16000.0;
+constexpr int kFrame = 512, kHop = 256;
+
+double Wrap(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
+
+int Run(double seconds, uint64_t seed, int max_sources) {
+  const Vec3 centre(2.2, 1.9, 1.0);
+  const double a = 0.0405;
+  std::vector<Vec3> board, relative{Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
+  for (const Vec3& m : relative) board.push_back(centre + m);
+  const auto samples = static_cast<int64_t>(seconds * kFs);
+  std::printf("RT60 | talker azimuth error median / p90 (deg) | detected | false track s/min | id switches\n");
+  for (const double rt60_s : {0.2, 0.4, 0.6}) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> normal;
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    ShoeboxRoom room;
+    room.rt60_s = rt60_s;
+    struct Talker {
+      double azimuth_rad = 0.0;
+      RoomSource source;
+      std::vector<bool> on;  // per sample
+    };
+    std::vector<Talker> talkers(2);
+    std::vector<double> fir = DesignBandPassFir(100.0, 7000.0, kFs).taps;
+    double energy = 0.0;
+    for (double h : fir) energy += h * h;
+    for (double& h : fir) h /= std::sqrt(energy);  // unit power out of unit-power noise
+    for (int k = 0; k < 2; ++k) {
+      Talker& t = talkers[static_cast<size_t>(k)];
+      t.azimuth_rad = Wrap(0.4 + k * std::numbers::pi / 2);
+      const double range = 1.5 + uniform(rng), height = 0.3 + 0.2 * uniform(rng);
+      t.source.position_m = centre + Vec3(range * std::cos(t.azimuth_rad), range * std::sin(t.azimuth_rad), height);
+      t.on.assign(static_cast<size_t>(samples), false);
+      for (int64_t i = 0; i < samples;) {
+        const auto on = static_cast<int64_t>((0.4 + 1.1 * uniform(rng)) * kFs);
+        const auto off = static_cast<int64_t>((0.2 + 0.8 * uniform(rng)) * kFs);
+        for (int64_t j = i; j < std::min(samples, i + on); ++j) t.on[static_cast<size_t>(j)] = true;
+        i += on + off;
+      }
+      std::vector<double> white(static_cast<size_t>(samples) + fir.size());
+      for (double& v : white) v = normal(rng);
+      t.source.signal.assign(static_cast<size_t>(samples), 0.0);
+      for (int64_t i = 0; i < samples; ++i) {
+        double acc = 0.0;
+        for (size_t j = 0; j < fir.size(); ++j) acc += fir[j] * white[static_cast<size_t>(i) + j];
+        t.source.signal[static_cast<size_t>(i)] = t.on[static_cast<size_t>(i)] ? acc : 0.0;
+      }
+    }
+    std::vector<RoomSource> sources{talkers[0].source, talkers[1].source};
+    auto signals = RenderInRoom(room, sources, board, kFs, samples);
+    if (!signals.ok()) return std::fprintf(stderr, "%s\n", signals.status().ToString().c_str()), 1;
+    const double direct = 1.0 / (4.0 * std::numbers::pi * 2.0);  // a talker at 2 m, unit power
+    for (float& v : *signals) v += static_cast<float>(direct * std::pow(10.0, -15.0 / 20.0) * normal(rng));
+
+    SrpOptions options;
+    options.band_low_hz = 100.0;
+    options.band_high_hz = 7000.0;
+    options.source_side = Vec3::UnitZ();
+    options.max_sources = max_sources;
+    auto srp = SrpPhat::Create(relative, options);
+    DirectionTrackerOptions tracking;
+    tracking.frame_period_s = kHop / kFs;
+    auto tracker = DirectionTracker::Create(ArrayShape::kPlanar, tracking);
+    if (!srp.ok() || !tracker.ok()) return std::fprintf(stderr, "setup failed\n"), 1;
+    std::vector<double> errors_deg;
+    int sounding = 0, detected = 0, false_frames = 0, frames = 0, switches = 0;
+    std::map<int, uint64_t> last_id;
+    std::vector<float> frame(4 * kFrame);
+    std::vector<SourceTrack> tracks;
+    for (int64_t start = 0; start + kFrame <= samples; start += kHop, ++frames) {
+      for (int m = 0; m < 4; ++m)
+        std::copy_n(signals->begin() + m * samples + start, kFrame, frame.begin() + m * kFrame);
+      auto peaks = srp->Analyse(frame.data());
+      if (!peaks.ok() || !tracker->Update(static_cast<double>(start) / kFs, *peaks, &tracks).ok()) return 1;
+      std::vector<bool> on(2);
+      for (int k = 0; k < 2; ++k) {
+        const Talker& t = talkers[static_cast<size_t>(k)];
+        on[static_cast<size_t>(k)] = t.on[static_cast<size_t>(start)] && t.on[static_cast<size_t>(start + kFrame - 1)];
+        if (!on[static_cast<size_t>(k)]) continue;
+        ++sounding;
+        double best = 1e9;
+        for (const DirectionPeak& p : *peaks) best = std::min(best, std::abs(Wrap(p.azimuth_rad - t.azimuth_rad)));
+        if (best < 20.0 * std::numbers::pi / 180) {
+          ++detected;
+          errors_deg.push_back(best * 180 / std::numbers::pi);
+        }
+        for (const SourceTrack& tr : tracks) {
+          if (std::abs(Wrap(tr.azimuth_rad - t.azimuth_rad)) < 20.0 * std::numbers::pi / 180) {
+            if (last_id.count(k) && last_id[k] != tr.id) ++switches;
+            last_id[k] = tr.id;
+            break;
+          }
+        }
+      }
+      for (const SourceTrack& tr : tracks) {
+        bool near = false;
+        for (int k = 0; k < 2; ++k)  // near a talker, sounding or in a pause (a track coasts through one)
+          near |= std::abs(Wrap(tr.azimuth_rad - talkers[static_cast<size_t>(k)].azimuth_rad)) <
+                  20.0 * std::numbers::pi / 180;
+        false_frames += !near;
+      }
+    }
+    std::sort(errors_deg.begin(), errors_deg.end());
+    const double median = errors_deg.empty() ? NAN : errors_deg[errors_deg.size() / 2];
+    const double p90 = errors_deg.empty() ? NAN : errors_deg[errors_deg.size() * 9 / 10];
+    const double minutes = static_cast<double>(frames) * kHop / kFs / 60.0;
+    std::printf("%.1f s | %.1f / %.1f | %.1f %% of %d | %.1f | %d\n", rt60_s, median, p90,
+                100.0 * detected / std::max(1, sounding), sounding, false_frames * kHop / kFs / minutes, switches);
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace localizer::engine
+
+int main(int argc, char** argv) {
+  double seconds = 20.0;
+  uint64_t seed = 1;
+  int max_sources = 4;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      std::printf("usage: doa_room_report [--seconds S (20)] [--seed N (1)] [--max-sources K (4)]\n");
+      return 0;
+    }
+    if (i + 1 >= argc) return std::fprintf(stderr, "doa_room_report: %s needs a value\n", arg.c_str()), 2;
+    char* end = nullptr;
+    if (arg == "--seconds") {
+      seconds = std::strtod(argv[++i], &end);
+      if (*end != '\0' || !(seconds >= 1.0 && seconds <= 600.0))
+        return std::fprintf(stderr, "doa_room_report: --seconds must be in [1, 600]\n"), 2;
+    } else if (arg == "--max-sources") {
+      max_sources = static_cast<int>(std::strtol(argv[++i], &end, 10));
+      if (*end != '\0' || max_sources < 1 || max_sources > 16)
+        return std::fprintf(stderr, "doa_room_report: --max-sources must be in [1, 16]\n"), 2;
+    } else if (arg == "--seed") {
+      seed = std::strtoull(argv[++i], &end, 10);
+      if (*end != '\0') return std::fprintf(stderr, "doa_room_report: --seed must be an integer\n"), 2;
+    } else {
+      return std::fprintf(stderr, "doa_room_report: unknown flag %s\n", arg.c_str()), 2;
+    }
+  }
+  return localizer::engine::Run(seconds, seed, max_sources);
+}
