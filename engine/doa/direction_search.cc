@@ -206,6 +206,7 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
     best = Refine(best);
     const double statistic = Exact(best);
     if (!(statistic >= threshold_)) break;
+    if (!found.empty() && statistic < options_.min_relative_statistic * found.front().statistic) break;
     found.push_back({best, {}, statistic});
     if (static_cast<int>(found.size()) == options_.max_sources) break;
     remove(&found.back());

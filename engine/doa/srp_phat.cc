@@ -30,6 +30,8 @@ Status SrpOptions::Validate() const {
   if (!(false_alarm > 0.0) || false_alarm > 0.1) return InvalidArgument("false_alarm must be in (0, 0.1]");
   if (!source_side.allFinite()) return InvalidArgument("source_side must be finite");
   if (cell_budget < 64 || cell_budget > (1 << 20)) return InvalidArgument("cell_budget must be in [64, 2^20]");
+  if (!(min_relative_statistic >= 0.0) || !(min_relative_statistic < 1.0))
+    return InvalidArgument("min_relative_statistic must be in [0, 1)");
   return Status::Ok();
 }
 

@@ -79,6 +79,11 @@ struct SrpOptions {
   // the array plane. Ignored for other shapes.
   Vec3 source_side = Vec3::Zero();
   int cell_budget = 4096;  // cells bounded per source search, in [64, 2^20]
+  // A later source is reported only when its statistic is at least this share of the
+  // frame's strongest (0: off, in [0, 1)). In a room, reflections are coherent sources in
+  // other directions that pass the noise threshold; a source 10 dB below another has ~0.1
+  // of its statistic (srp_phat.h, "Limits"), so a share above that loses such sources.
+  double min_relative_statistic = 0.0;
 
   Status Validate() const;
 };

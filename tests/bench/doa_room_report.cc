@@ -14,7 +14,7 @@
 // two such tracks at once count twice); identity switches (the track nearest a sounding
 // talker changes id).
 //
-//   build/tests/bench/doa_room_report [--seconds 20] [--seed 1] [--max-sources 4]
+//   build/tests/bench/doa_room_report [--seconds 20] [--seed 1] [--max-sources 4] [--relative 0]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -39,7 +39,7 @@ constexpr int kFrame = 512, kHop = 256;
 
 double Wrap(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 
-int Run(double seconds, uint64_t seed, int max_sources) {
+int Run(double seconds, uint64_t seed, int max_sources, double relative_floor) {
   const Vec3 centre(2.2, 1.9, 1.0);
   const double a = 0.0405;
   std::vector<Vec3> board, relative{Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
@@ -94,6 +94,7 @@ int Run(double seconds, uint64_t seed, int max_sources) {
     options.band_high_hz = 7000.0;
     options.source_side = Vec3::UnitZ();
     options.max_sources = max_sources;
+    options.min_relative_statistic = relative_floor;
     auto srp = SrpPhat::Create(relative, options);
     DirectionTrackerOptions tracking;
     tracking.frame_period_s = kHop / kFs;
@@ -154,10 +155,13 @@ int main(int argc, char** argv) {
   double seconds = 20.0;
   uint64_t seed = 1;
   int max_sources = 4;
+  double relative = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
-      std::printf("usage: doa_room_report [--seconds S (20)] [--seed N (1)] [--max-sources K (4)]\n");
+      std::printf(
+          "usage: doa_room_report [--seconds S (20)] [--seed N (1)] [--max-sources K (4)] [--relative R (0: "
+          "SrpOptions::min_relative_statistic)]\n");
       return 0;
     }
     if (i + 1 >= argc) return std::fprintf(stderr, "doa_room_report: %s needs a value\n", arg.c_str()), 2;
@@ -170,6 +174,10 @@ int main(int argc, char** argv) {
       max_sources = static_cast<int>(std::strtol(argv[++i], &end, 10));
       if (*end != '\0' || max_sources < 1 || max_sources > 16)
         return std::fprintf(stderr, "doa_room_report: --max-sources must be in [1, 16]\n"), 2;
+    } else if (arg == "--relative") {
+      relative = std::strtod(argv[++i], &end);
+      if (*end != '\0' || !(relative >= 0.0 && relative < 1.0))
+        return std::fprintf(stderr, "doa_room_report: --relative must be in [0, 1)\n"), 2;
     } else if (arg == "--seed") {
       seed = std::strtoull(argv[++i], &end, 10);
       if (*end != '\0') return std::fprintf(stderr, "doa_room_report: --seed must be an integer\n"), 2;
@@ -177,5 +185,5 @@ int main(int argc, char** argv) {
       return std::fprintf(stderr, "doa_room_report: unknown flag %s\n", arg.c_str()), 2;
     }
   }
-  return localizer::engine::Run(seconds, seed, max_sources);
+  return localizer::engine::Run(seconds, seed, max_sources, relative);
 }

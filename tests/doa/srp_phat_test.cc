@@ -273,3 +273,33 @@ TEST(SrpPhat, BadFramesAndOptionsAreNamed) {
 
 }  // namespace
 }  // namespace localizer::engine
+
+namespace localizer::engine {
+namespace {
+
+TEST(SrpPhat, ARelativeFloorDropsPeaksWeakerThanItsShareOfTheStrongest) {
+  // The 10 dB quieter talker of TwoSourcesAreBothFound... has ~0.1-0.3 of the loud one's
+  // statistic: a floor of 0.5 drops it, the default (0) keeps it.
+  PlaneWaveScene scene = SceneOn(Circle7());
+  scene.frame_samples = 2048;
+  const Vec3 loud = FromAzimuthElevation(0.2, 0.3), quiet = FromAzimuthElevation(0.9, 0.3);
+  const std::vector<float> frame = PlaneWaveFrame(scene, {PlaneSource{loud, 1.0}, PlaneSource{quiet, 0.1}}, 4242);
+  SrpOptions options = OptionsFor(scene);
+  options.source_side = Vec3::UnitZ();
+  auto keep = SrpPhat::Create(scene.sensors_m, options);
+  options.min_relative_statistic = 0.5;
+  auto drop = SrpPhat::Create(scene.sensors_m, options);
+  ASSERT_TRUE(keep.ok() && drop.ok());
+  auto all = keep->Analyse(frame.data());
+  auto strong = drop->Analyse(frame.data());
+  ASSERT_TRUE(all.ok() && strong.ok());
+  ASSERT_GE(all->size(), 2u);
+  EXPECT_LT((*all)[1].statistic, 0.5 * (*all)[0].statistic);
+  ASSERT_EQ(strong->size(), 1u);
+  EXPECT_LT(AngleBetween(strong->front().direction, loud), 0.05);
+  options.min_relative_statistic = 1.0;
+  EXPECT_EQ(SrpPhat::Create(scene.sensors_m, options).status().code(), StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace localizer::engine
