@@ -86,15 +86,7 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
     srp.root_radius_rad_ = kRootCoverage * 2.0 / std::sqrt(static_cast<double>(srp.root_count_));
   }
   srp.roots_ = srp.Roots();
-  if (linear) {
-    const Vec3 other = std::abs(axis.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
-    srp.tangent_ = axis.cross(other).normalized();
-  }
   return srp;
-}
-
-Vec3 SrpPhat::ArcDirection(double theta_rad) const {
-  return std::cos(theta_rad) * shape_.axis + std::sin(theta_rad) * tangent_;
 }
 
 double SrpPhat::Lag(int p, const Cell& cell) const {

@@ -137,7 +137,6 @@ class SrpPhat {
     double radius_rad = 0.0;
   };
   bool linear() const { return shape_.shape == ArrayShape::kLinear; }
-  Vec3 ArcDirection(double theta_rad) const;
   double Lag(int p, const Cell& cell) const;
   double Spread(int p, double radius_rad) const;  // g_p r
   double Bound(const Cell& cell) const;
@@ -168,7 +167,6 @@ class SrpPhat {
   std::vector<Cell> roots_;
   double root_radius_rad_ = 0.0;
   double threshold_ = 0.0;
-  Vec3 tangent_ = Vec3::Zero();  // linear arrays: a unit vector across the axis
   Measurement field_input_;
   LagField field_;
 };

@@ -29,7 +29,8 @@ const std::vector<double>& KernelTable() {
       for (int j = 0; j < 2 * kHalfTaps; ++j) {
         const double u = (j - kHalfTaps + 1) - static_cast<double>(f) / kPhases;  // tap - impulse
         const double sinc = std::abs(u) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * u) / (std::numbers::pi * u);
-        t[static_cast<size_t>(f) * 2 * kHalfTaps + static_cast<size_t>(j)] = sinc * KaiserWindow(u / kHalfTaps, kKaiserBeta);
+        t[static_cast<size_t>(f) * 2 * kHalfTaps + static_cast<size_t>(j)] =
+            sinc * KaiserWindow(u / kHalfTaps, kKaiserBeta);
       }
     }
     return t;
@@ -148,10 +149,13 @@ double ShoeboxRoom::WallAbsorption() const {
   return 0.5 * (lo + hi);
 }
 
-StatusOr<std::vector<std::vector<double>>> RoomImpulseResponses(const ShoeboxRoom& room, const Vec3& source_m,
-                                                                const std::vector<Vec3>& sensors_m,
-                                                                double sample_rate_hz, double max_delay_s) {
-  LOCALIZER_RETURN_IF_ERROR(room.Validate());
+namespace {
+
+// RoomImpulseResponses with the walls' pressure reflection coefficient given (the absorption's
+// calibration costs milliseconds: RenderInRoom makes it once for all its sources).
+StatusOr<std::vector<std::vector<double>>> ImpulseResponses(const ShoeboxRoom& room, double beta, const Vec3& source_m,
+                                                            const std::vector<Vec3>& sensors_m, double sample_rate_hz,
+                                                            double max_delay_s) {
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz))
     return InvalidArgument("sample_rate_hz must be positive");
   if (!Inside(source_m, room.size_m)) return InvalidArgument("the source is not inside the room");
@@ -166,7 +170,6 @@ StatusOr<std::vector<std::vector<double>>> RoomImpulseResponses(const ShoeboxRoo
   const auto length = static_cast<size_t>(std::ceil(max_delay_s * sample_rate_hz)) + 2 * kHalfTaps;
   if (length > (size_t{1} << 26)) return InvalidArgument("the impulse responses would exceed 2^26 samples");
   std::vector<std::vector<double>> h(sensors_m.size(), std::vector<double>(length, 0.0));
-  const double beta = anechoic ? 0.0 : std::sqrt(1.0 - room.WallAbsorption());
   const double reach_m = c * max_delay_s + room.size_m.norm();
   const Eigen::Array3i orders = (reach_m / (2.0 * room.size_m.array())).ceil().cast<int>();
   for (int nx = -orders.x(); nx <= orders.x(); ++nx)
@@ -190,12 +193,25 @@ StatusOr<std::vector<std::vector<double>>> RoomImpulseResponses(const ShoeboxRoo
   return h;
 }
 
+double ReflectionCoefficient(const ShoeboxRoom& room) { return std::sqrt(1.0 - room.WallAbsorption()); }
+
+}  // namespace
+
+StatusOr<std::vector<std::vector<double>>> RoomImpulseResponses(const ShoeboxRoom& room, const Vec3& source_m,
+                                                                const std::vector<Vec3>& sensors_m,
+                                                                double sample_rate_hz, double max_delay_s) {
+  LOCALIZER_RETURN_IF_ERROR(room.Validate());
+  return ImpulseResponses(room, ReflectionCoefficient(room), source_m, sensors_m, sample_rate_hz, max_delay_s);
+}
+
 StatusOr<std::vector<float>> RenderInRoom(const ShoeboxRoom& room, const std::vector<RoomSource>& sources,
                                           const std::vector<Vec3>& sensors_m, double sample_rate_hz, int64_t samples) {
+  LOCALIZER_RETURN_IF_ERROR(room.Validate());
   if (samples < 1 || samples > (int64_t{1} << 28)) return InvalidArgument("samples must be in [1, 2^28]");
+  const double beta = ReflectionCoefficient(room);
   std::vector<double> out(sensors_m.size() * static_cast<size_t>(samples), 0.0);
   for (const RoomSource& source : sources) {
-    auto h = RoomImpulseResponses(room, source.position_m, sensors_m, sample_rate_hz);
+    auto h = ImpulseResponses(room, beta, source.position_m, sensors_m, sample_rate_hz, 0.0);
     if (!h.ok()) return h.status();
     const size_t taps = h->front().size();
     const size_t used = std::min(source.signal.size(), static_cast<size_t>(samples));

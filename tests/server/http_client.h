@@ -3,6 +3,7 @@
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <signal.h>
 #include <sys/socket.h>
 #include <sys/time.h>
 #include <unistd.h>
@@ -50,12 +51,14 @@ inline HttpResponse ParseHttpResponse(const std::string& raw) {
   return response;
 }
 
-// Sends `request` verbatim to 127.0.0.1:port and reads until the server closes.
-inline HttpResponse RawRequest(int port, const std::string& request) {
-  HttpResponse response;
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) return response;
-  timeval timeout{5, 0};
+// A blocking TCP connection to 127.0.0.1:port with read and write timeouts; -1 on failure.
+inline int ConnectLoopback(int port, double timeout_s) {
+  // A server that closes while the client writes must not end the test process.
+  static const bool ignored = [] { return signal(SIGPIPE, SIG_IGN) != SIG_ERR; }();
+  (void)ignored;
+  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return -1;
+  timeval timeout{static_cast<time_t>(timeout_s), static_cast<suseconds_t>((timeout_s - int(timeout_s)) * 1e6)};
   setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
   setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &timeout, sizeof timeout);
   sockaddr_in address{};
@@ -64,8 +67,16 @@ inline HttpResponse RawRequest(int port, const std::string& request) {
   address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
     close(fd);
-    return response;
+    return -1;
   }
+  return fd;
+}
+
+// Sends `request` verbatim to 127.0.0.1:port and reads until the server closes.
+inline HttpResponse RawRequest(int port, const std::string& request) {
+  HttpResponse response;
+  const int fd = ConnectLoopback(port, 5.0);
+  if (fd < 0) return response;
   size_t sent = 0;
   while (sent < request.size()) {
     const ssize_t n = send(fd, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);

@@ -16,9 +16,12 @@
 #include <memory>
 #include <string>
 
+#include "server/metrics/tls_openssl.h"
 #include "tests/server/http_client.h"
 
 namespace localizer::testing {
+
+namespace metrics = ::localizer::server::metrics;
 
 struct TlsClientOptions {
   std::string ca_file;                    // PEM CAs the server must chain to
@@ -33,50 +36,6 @@ struct HttpsResponse : HttpResponse {
   std::string error;          // why not (OpenSSL's reason), or "" when a response came
 };
 
-namespace internal {
-
-struct SslCtxFree {
-  void operator()(SSL_CTX* ctx) const { SSL_CTX_free(ctx); }
-};
-struct SslFree {
-  void operator()(SSL* ssl) const { SSL_free(ssl); }
-};
-
-inline std::string LastSslError(const std::string& fallback) {
-  const unsigned long code = ERR_peek_error();
-  std::string text = fallback;
-  if (code != 0) {
-    char buffer[256];
-    ERR_error_string_n(code, buffer, sizeof buffer);
-    text = buffer;
-  }
-  ERR_clear_error();
-  return text;
-}
-
-// A blocking TCP connection to 127.0.0.1:port with read and write timeouts; -1 on failure.
-inline int ConnectLoopback(int port, double timeout_s) {
-  // A server that closes while the client writes must not end the test process.
-  static const bool ignored = [] { return signal(SIGPIPE, SIG_IGN) != SIG_ERR; }();
-  (void)ignored;
-  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) return -1;
-  timeval timeout{static_cast<time_t>(timeout_s), static_cast<suseconds_t>((timeout_s - int(timeout_s)) * 1e6)};
-  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &timeout, sizeof timeout);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(static_cast<uint16_t>(port));
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
-    close(fd);
-    return -1;
-  }
-  return fd;
-}
-
-}  // namespace internal
-
 // A TLS connection to 127.0.0.1:port, handshaken (or not: ok() false, error() says why).
 class TlsConnection {
  public:
@@ -88,17 +47,17 @@ class TlsConnection {
     }
     SSL_CTX_set_min_proto_version(ctx_.get(), TLS1_2_VERSION);
     if (!options.ca_file.empty() && SSL_CTX_load_verify_locations(ctx_.get(), options.ca_file.c_str(), nullptr) != 1) {
-      error_ = internal::LastSslError("cannot load " + options.ca_file);
+      error_ = metrics::OpensslError("cannot load " + options.ca_file);
       return;
     }
     SSL_CTX_set_verify(ctx_.get(), SSL_VERIFY_PEER, nullptr);
     if (!options.cert_file.empty() &&
         (SSL_CTX_use_certificate_chain_file(ctx_.get(), options.cert_file.c_str()) != 1 ||
          SSL_CTX_use_PrivateKey_file(ctx_.get(), options.key_file.c_str(), SSL_FILETYPE_PEM) != 1)) {
-      error_ = internal::LastSslError("cannot load " + options.cert_file);
+      error_ = metrics::OpensslError("cannot load " + options.cert_file);
       return;
     }
-    fd_ = internal::ConnectLoopback(port, options.timeout_s);
+    fd_ = ConnectLoopback(port, options.timeout_s);
     if (fd_ < 0) {
       error_ = "cannot connect";
       return;
@@ -114,7 +73,7 @@ class TlsConnection {
     }
     ERR_clear_error();
     if (SSL_connect(ssl_.get()) != 1) {
-      error_ = internal::LastSslError("handshake failed");
+      error_ = metrics::OpensslError("handshake failed");
       return;
     }
     handshaken_ = true;
@@ -138,7 +97,7 @@ class TlsConnection {
       ERR_clear_error();
       const int n = SSL_write(ssl_.get(), request.data() + sent, static_cast<int>(request.size() - sent));
       if (n <= 0) {
-        error_ = internal::LastSslError("write failed");
+        error_ = metrics::OpensslError("write failed");
         return false;
       }
       sent += static_cast<size_t>(n);
@@ -156,7 +115,7 @@ class TlsConnection {
       ERR_clear_error();
       const int n = SSL_read(ssl_.get(), buffer, sizeof buffer);
       if (n <= 0) {
-        if (raw.empty()) response.error = internal::LastSslError("no response");
+        if (raw.empty()) response.error = metrics::OpensslError("no response");
         ERR_clear_error();
         break;
       }
@@ -180,8 +139,8 @@ class TlsConnection {
   }
 
  private:
-  std::unique_ptr<SSL_CTX, internal::SslCtxFree> ctx_;
-  std::unique_ptr<SSL, internal::SslFree> ssl_;
+  std::unique_ptr<SSL_CTX, metrics::SslCtxFree> ctx_;
+  std::unique_ptr<SSL, metrics::SslFree> ssl_;
   int fd_ = -1;
   bool handshaken_ = false;
   std::string error_;
