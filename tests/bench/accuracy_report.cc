@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "engine/core/flags.h"
 #include "engine/pipeline/session.h"
 #include "engine/sim/evaluation.h"
 #include "tests/pipeline/scenario_run.h"
@@ -25,13 +26,12 @@ int main(int argc, char** argv) {
   using namespace localizer::engine;
   int seeds = 5;
   if (argc > 1) {
-    char* end = nullptr;
-    const long n = std::strtol(argv[1], &end, 10);
-    if (end == argv[1] || *end != '\0' || n < 1 || n > 1000000) {
+    const auto n = localizer::ParseInteger(argv[1]);
+    if (!n.ok() || *n < 1 || *n > 1000000) {
       std::fprintf(stderr, "accuracy_report: N must be an integer in [1, 1000000], got \"%s\"\n", argv[1]);
       return 2;
     }
-    seeds = static_cast<int>(n);
+    seeds = static_cast<int>(*n);
   }
   std::printf("%-16s %-5s %5s %8s %8s %8s %8s %7s %6s\n", "scenario", "lik", "seed", "rmse_m", "p95_m", "crlb_m",
               "ratio", "p95/rmse", "reinit");

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/core/flags.h"
 #include "tests/pipeline/scenario_bound.h"
 #include "tests/pipeline/scenario_run.h"
 
@@ -45,13 +46,12 @@ StatusOr<std::vector<FilterChoice>> Choices(const std::string& list) {
 int Main(int argc, char** argv) {
   int seeds = 3;
   if (argc > 1) {
-    char* end = nullptr;
-    const long n = std::strtol(argv[1], &end, 10);
-    if (end == argv[1] || *end != '\0' || n < 1 || n > 1000000) {
+    const auto n = localizer::ParseInteger(argv[1]);
+    if (!n.ok() || *n < 1 || *n > 1000000) {
       std::fprintf(stderr, "filter_report: N must be an integer in [1, 1000000], got \"%s\"\n", argv[1]);
       return 2;
     }
-    seeds = static_cast<int>(n);
+    seeds = static_cast<int>(*n);
   }
   const std::string list = argc > 2 ? argv[2] : "pf,ekf,ukf,ekf-ct,ukf-ct,mmpf,imm";
   std::printf("%-15s %-7s %4s %8s %9s %9s %8s %6s\n", "scenario", "filter", "seed", "rmse_m", "rmse/crlb", "rmse/pcrlb",

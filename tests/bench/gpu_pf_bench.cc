@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/core/flags.h"
 #include "gpu/core/device.h"
 #include "gpu/filters/particle_bank.h"
 #include "tests/gpu/pf_test_scenarios.h"
@@ -125,13 +126,12 @@ int Main(int argc, char** argv) {
   int steps = 50;
   for (int i = 1; i + 1 < argc; ++i) {
     if (std::strcmp(argv[i], "--steps") == 0) {
-      char* end = nullptr;
-      const long n = std::strtol(argv[i + 1], &end, 10);
-      if (end == argv[i + 1] || *end != '\0' || n > 1000000) {
+      const auto n = localizer::ParseInteger(argv[i + 1]);
+      if (!n.ok() || *n > 1000000) {
         std::fprintf(stderr, "gpu_pf_bench: --steps must be an integer <= 1000000, got \"%s\"\n", argv[i + 1]);
         return 2;
       }
-      steps = static_cast<int>(std::max(1L, n));  // 0 and below: 1, as before
+      steps = static_cast<int>(std::max<int64_t>(1, *n));  // 0 and below: 1, as before
     }
   }
   const std::string& reason = DeviceUnavailableReason();
