@@ -55,6 +55,21 @@ double Crlb(const ArrayGeometry& array, const Vec3& at_m, const std::vector<doub
   return std::sqrt(TdoaPositionCrlb(array, at_m, sigma).trace());
 }
 
+// The bearing's bound: the position bound's covariance across the line of sight from the
+// centroid, over the range.
+double BearingCrlb(const ArrayGeometry& array, const Vec3& at_m, const std::vector<double>& sigma_s) {
+  if (static_cast<int>(sigma_s.size()) != array.pair_count()) return kNan;
+  const Vec3 line_m = at_m - array.centroid_m();
+  const double range_m = line_m.norm();
+  if (!(range_m > 0.0)) return kNan;
+  const Eigen::VectorXd sigma = Eigen::Map<const Eigen::VectorXd>(sigma_s.data(), array.pair_count());
+  const Vec3 u = line_m / range_m;
+  const Mat3 across = Mat3::Identity() - u * u.transpose();
+  return std::sqrt((across * TdoaPositionCrlb(array, at_m, sigma) * across).trace()) / range_m;
+}
+
+double AngleBetween(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+
 // Median spacing of the frames: the time one frame stands for.
 double HopSeconds(const std::vector<Estimate>& estimates) {
   std::vector<double> steps;
@@ -64,12 +79,13 @@ double HopSeconds(const std::vector<Estimate>& estimates) {
 
 // The first frame from which every counted, initialised frame with a finite `bound` has
 // error <= multiple x bound to the end; -1 when there is none.
-int AcquiredFrom(const std::vector<FrameScore>& frames, double FrameScore::*bound, double multiple) {
+int AcquiredFrom(const std::vector<FrameScore>& frames, double FrameScore::*bound, double multiple,
+                 double FrameScore::*error = &FrameScore::error_m) {
   auto judged = [&](const FrameScore& f) { return f.counted && f.initialised && std::isfinite(f.*bound); };
   const auto n = static_cast<int>(frames.size());
   int last_bad = -1;
   for (int i = 0; i < n; ++i) {
-    if (judged(frames[i]) && !(frames[i].error_m <= multiple * (frames[i].*bound))) last_bad = i;
+    if (judged(frames[i]) && !(frames[i].*error <= multiple * (frames[i].*bound))) last_bad = i;
   }
   for (int i = last_bad + 1; i < n; ++i) {
     if (judged(frames[i])) return i;
@@ -96,7 +112,7 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
   score.tdoa_sigma_robust_s = RobustTdoaSigma(array, sim, estimates, t_end_s);
   score.tdoa_sigma_theory_s = theory_sigma_s;
 
-  std::vector<double> crlbs, theory_crlbs;
+  std::vector<double> crlbs, theory_crlbs, ranges;
   for (const Estimate& e : estimates) {
     FrameScore f;
     f.t_s = e.t_s;
@@ -114,14 +130,18 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
     const Vec3 truth_m = sim.TruthAt(e.t_s).position_m;
     f.crlb_m = Crlb(array, truth_m, score.tdoa_sigma_robust_s);
     f.crlb_theory_m = Crlb(array, truth_m, theory_sigma_s);
+    f.bearing_crlb_rad = BearingCrlb(array, truth_m, score.tdoa_sigma_robust_s);
+    f.range_apertures = (truth_m - array.centroid_m()).norm() / array.aperture_m();
     if (f.counted) {
       crlbs.push_back(f.crlb_m);
       theory_crlbs.push_back(f.crlb_theory_m);
+      ranges.push_back(f.range_apertures);
     }
     if (e.initialised) {
       ++score.initialised_frames;
       const Vec3 error = e.state.head<3>() - truth_m;
       f.error_m = error.norm();
+      f.bearing_error_rad = AngleBetween(e.state.head<3>() - array.centroid_m(), truth_m - array.centroid_m());
       f.nees_position = PositionNees(e, error);
       f.sd_m = std::sqrt(e.covariance.topLeftCorner<3, 3>().trace());
     }
@@ -129,6 +149,7 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
   }
   score.crlb_median_m = Median(crlbs);
   score.crlb_theory_median_m = Median(theory_crlbs);
+  score.range_apertures_median = Median(ranges);
 
   // Frames whose error is compared (counted, initialised, with a bound).
   auto judged = [](const FrameScore& f) { return f.counted && f.initialised && std::isfinite(f.crlb_m); };
@@ -136,6 +157,12 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
   const int acquired_at = AcquiredFrom(score.per_frame, &FrameScore::crlb_m, options.acquire_crlb_multiple);
   const int acquired_theory_at =
       AcquiredFrom(score.per_frame, &FrameScore::crlb_theory_m, options.acquire_crlb_multiple);
+  const int acquired_bearing_at = AcquiredFrom(score.per_frame, &FrameScore::bearing_crlb_rad,
+                                               options.acquire_crlb_multiple, &FrameScore::bearing_error_rad);
+  if (acquired_bearing_at >= 0) {
+    score.acquired_bearing = true;
+    score.time_to_acquire_bearing_s = score.per_frame[acquired_bearing_at].t_s;
+  }
   if (acquired_theory_at >= 0) {
     score.acquired_theory = true;
     score.time_to_acquire_theory_s = score.per_frame[acquired_theory_at].t_s;
@@ -272,6 +299,13 @@ CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
     times_all.push_back(score.time_to_acquire_s);
     times_theory.push_back(score.time_to_acquire_theory_s);
     if (score.acquired_theory) ++s.acquired_theory;
+    if (score.acquired_bearing) {
+      ++s.acquired_bearing;
+      if (!score.acquired) {
+        ++s.acquired_bearing_not_position;
+        if (score.range_apertures_median > 3.0) ++s.acquired_bearing_not_position_far;
+      }
+    }
     if (score.lost_frames > 0) ++s.lost;
     if (score.silent_failure) ++s.silent_failures;
     if (!score.acquired) continue;

@@ -20,6 +20,10 @@
 //   - after acquisition: RMSE / CRLB = sqrt(mean((error / CRLB)^2)), median position NEES / 3;
 //   - lost frames: after the first counted initialised frame within acquire_crlb_multiple x
 //     CRLB, those whose error exceeds lost_crlb_multiple x CRLB;
+//   - bearing (what an array gives when it cannot see range, issue 18): the angle between
+//     estimate - centroid and truth - centroid, against the bearing CRLB, the CRLB's position
+//     covariance projected across the line of sight and divided by the range; acquired in
+//     bearing like acquired in position, with the same multiple;
 //   - silent failure: counted frames that are initialised, not ambiguous, with error >
 //     lost_crlb_multiple x CRLB and position NEES > silent_nees add one hop each; more than
 //     silent_min_s of them in total is a silent failure (the tracker was badly wrong and said
@@ -55,6 +59,9 @@ struct FrameScore {
   double crlb_m = std::numeric_limits<double>::quiet_NaN();
   double crlb_theory_m = std::numeric_limits<double>::quiet_NaN();
   double nees_position = std::numeric_limits<double>::quiet_NaN();
+  double bearing_error_rad = std::numeric_limits<double>::quiet_NaN();
+  double bearing_crlb_rad = std::numeric_limits<double>::quiet_NaN();
+  double range_apertures = std::numeric_limits<double>::quiet_NaN();  // the truth's, from the centroid
   // What the estimate said of itself, for traces: sqrt(trace) of its position covariance,
   // and its presence and ambiguity flags.
   double sd_m = std::numeric_limits<double>::quiet_NaN();
@@ -80,6 +87,10 @@ struct SceneScore {
   // itself poor (mostly outliers inflate even the robust sigma, and with it the bound).
   bool acquired_theory = false;
   double time_to_acquire_theory_s = std::numeric_limits<double>::infinity();
+  // The same for the bearing from the array's centroid (see above).
+  bool acquired_bearing = false;
+  double time_to_acquire_bearing_s = std::numeric_limits<double>::infinity();
+  double range_apertures_median = std::numeric_limits<double>::quiet_NaN();  // the truth's, counted frames
   double rmse_over_crlb = std::numeric_limits<double>::quiet_NaN();  // after acquisition
   // The same against the theoretical per-frame CRLB (NaN without theory sigmas): shows how
   // far the measured TDOA spread itself is from what the scene's SNR and band allow.
@@ -141,6 +152,9 @@ struct CampaignSummary {
   int lost = 0;  // scenes with lost frames
   int silent_failures = 0;
   int acquired_theory = 0;                                                           // against 3 x the theoretical CRLB
+  int acquired_bearing = 0;                   // in bearing from the centroid (against its CRLB)
+  int acquired_bearing_not_position = 0;      // of those, not acquired in position
+  int acquired_bearing_not_position_far = 0;  // of those, the truth beyond 3 apertures (median)
   double median_time_to_acquire_theory_s = std::numeric_limits<double>::infinity();  // all scenes
   // Over every scene run, a scene never acquired counting as +inf.
   double median_time_to_acquire_s = std::numeric_limits<double>::infinity();

@@ -132,6 +132,33 @@ TEST(SceneScore, AConstantWrongPositionIsNeverAcquiredAndASilentFailure) {
   EXPECT_FALSE(ScoreScene(array, sim, ambiguous).silent_failure);
 }
 
+// A range overshoot along the true line of sight (what a small array gives for a far source):
+// never acquired in position, acquired in bearing; a sideways error (45 degrees off) is
+// wrong in both.
+TEST(SceneScore, BearingIsScoredApartFromRange) {
+  const ArrayGeometry array = Array();
+  const SimResult sim = Truth();
+  const Vec3 centre = array.centroid_m();
+  const auto along = Estimates(
+      array, sim, [&](double, const Vec3& truth) -> Vec3 { return centre + 3.0 * (truth - centre); }, 0.01);
+  const SceneScore s = ScoreScene(array, sim, along);
+  EXPECT_FALSE(s.acquired);
+  EXPECT_TRUE(s.acquired_bearing);
+  EXPECT_DOUBLE_EQ(s.time_to_acquire_bearing_s, along.front().t_s);
+  for (const FrameScore& f : s.per_frame) {
+    EXPECT_LT(f.bearing_error_rad, 1e-9);
+    EXPECT_GT(f.bearing_crlb_rad, 0.0);
+  }
+  // The truth from the array's centre, in apertures (2 m): 2.7 to 3.1 over the track.
+  EXPECT_GT(s.range_apertures_median, 2.6);
+  EXPECT_LT(s.range_apertures_median, 3.2);
+  const auto sideways = Estimates(
+      array, sim, [&](double, const Vec3& truth) -> Vec3 { return truth + (truth - centre).cross(Vec3::UnitZ()); }, 0.01);
+  const SceneScore w = ScoreScene(array, sim, sideways);
+  EXPECT_FALSE(w.acquired);
+  EXPECT_FALSE(w.acquired_bearing);
+}
+
 TEST(SceneScore, LateAcquisitionAndLaterLoss) {
   const ArrayGeometry array = Array();
   const SimResult sim = Truth();
