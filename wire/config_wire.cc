@@ -142,6 +142,7 @@ Status NameRefusal(const Status& status) { return {status.code(), EscapeUnprinta
 Status CheckStrings(const v1::SessionConfig& p) {
   LOCALIZER_RETURN_IF_ERROR(CheckLength("label", p.label(), kMaxLabelBytes));
   LOCALIZER_RETURN_IF_ERROR(CheckLength("backend", p.backend(), kMaxEnumStringBytes));
+  LOCALIZER_RETURN_IF_ERROR(CheckLength("localization", p.localization(), kMaxEnumStringBytes));
   const v1::FilterConfig& f = p.filter();
   LOCALIZER_RETURN_IF_ERROR(CheckLength("filter.motion_model", f.motion_model(), kMaxEnumStringBytes));
   LOCALIZER_RETURN_IF_ERROR(CheckLength("filter.imm_modes", f.imm_modes(), kMaxEnumStringBytes));
@@ -411,6 +412,16 @@ StatusOr<engine::AudioSessionConfig> AudioConfigFromProto(const v1::SessionConfi
   if (p.presence_false_alarm() != 0.0) c.presence_false_alarm = p.presence_false_alarm();
   if (p.source_timeout_s() != 0.0) c.source_timeout_s = p.source_timeout_s();
   if (p.has_despike_k()) c.despike_k = p.despike_k();
+  auto localization = engine::ParseLocalization(p.localization().empty() ? "auto" : p.localization(), "localization");
+  if (!localization.ok()) return NameRefusal(localization.status());
+  c.localization = *localization;
+  if (p.has_max_sources()) {
+    if (p.max_sources() < 1 || p.max_sources() > 16) {
+      return InvalidArgument("max_sources is " + std::to_string(p.max_sources()) + "; must be in [1, 16]");
+    }
+    c.max_sources = static_cast<int>(p.max_sources());
+  }
+  if (p.has_source_side()) c.source_side = FromProto(p.source_side());
   if (p.has_platform()) {
     const v1::PlatformConfig& platform = p.platform();
     c.array_in_body_frame = true;
@@ -484,6 +495,9 @@ v1::SessionConfig ConfigToProto(const engine::AudioSessionConfig& c, const std::
   p.set_presence_false_alarm(c.presence_false_alarm);
   p.set_source_timeout_s(c.source_timeout_s);
   p.set_despike_k(c.despike_k);
+  p.set_localization(engine::LocalizationName(c.localization));
+  p.set_max_sources(static_cast<uint32_t>(c.max_sources));
+  if (c.source_side != Vec3::Zero()) ToProto(c.source_side, p.mutable_source_side());
   if (c.array_in_body_frame) {
     v1::PlatformConfig* platform = p.mutable_platform();
     platform->set_attitude_filter(engine::AttitudeFilterKindName(c.attitude.kind));

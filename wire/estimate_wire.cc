@@ -4,8 +4,37 @@
 
 namespace localizer::wire {
 
-void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& array, const std::string& backend,
-                     v1::Estimate* out) {
+namespace {
+
+v1::TrackStatus StatusToProto(engine::SourceStatus s) {
+  switch (s) {
+    case engine::SourceStatus::kTentative:
+      return v1::TRACK_STATUS_TENTATIVE;
+    case engine::SourceStatus::kConfirmed:
+      return v1::TRACK_STATUS_CONFIRMED;
+    case engine::SourceStatus::kCoasting:
+      return v1::TRACK_STATUS_COASTING;
+  }
+  return v1::TRACK_STATUS_UNSPECIFIED;
+}
+
+engine::SourceStatus StatusFromProto(v1::TrackStatus s) {
+  return s == v1::TRACK_STATUS_CONFIRMED  ? engine::SourceStatus::kConfirmed
+         : s == v1::TRACK_STATUS_COASTING ? engine::SourceStatus::kCoasting
+                                          : engine::SourceStatus::kTentative;
+}
+
+void SetVector(const engine::Vec3& from, v1::Vector3* to) {
+  to->set_x(from.x());
+  to->set_y(from.y());
+  to->set_z(from.z());
+}
+
+engine::Vec3 GetVector(const v1::Vector3& v) { return {v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+void EstimateToProto(const engine::Estimate& e, int reference_sensor, const std::string& backend, v1::Estimate* out) {
   out->set_sequence(e.sequence);
   out->set_t_s(e.t_s);
   v1::Vector3* p = out->mutable_position_m();
@@ -36,7 +65,8 @@ void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& arr
   out->clear_pairs();
   for (size_t k = 0; k < e.delay_s.size(); ++k) {
     v1::PairTdoa* pair = out->add_pairs();
-    pair->set_sensor(static_cast<uint32_t>(array.sensor_of_pair(static_cast<int>(k))));
+    const auto pair_index = static_cast<int>(k);
+    pair->set_sensor(static_cast<uint32_t>(pair_index < reference_sensor ? pair_index : pair_index + 1));
     pair->set_delay_s(e.delay_s[k]);
     if (k < e.quality.size()) pair->set_quality(e.quality[k]);
   }
@@ -57,14 +87,22 @@ void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& arr
     pose->mutable_body_to_world()->set_x(q.x());
     pose->mutable_body_to_world()->set_y(q.y());
     pose->mutable_body_to_world()->set_z(q.z());
-    const auto set = [](const engine::Vec3& from, v1::Vector3* to) {
-      to->set_x(from.x());
-      to->set_y(from.y());
-      to->set_z(from.z());
-    };
-    set(e.platform->euler_rad, pose->mutable_euler_rad());
-    set(e.platform->euler_sd_rad, pose->mutable_euler_sd_rad());
-    set(e.platform->origin_m, pose->mutable_origin_m());
+    SetVector(e.platform->euler_rad, pose->mutable_euler_rad());
+    SetVector(e.platform->euler_sd_rad, pose->mutable_euler_sd_rad());
+    SetVector(e.platform->origin_m, pose->mutable_origin_m());
+  }
+  out->clear_sources();
+  for (const engine::SourceEstimate& s : e.sources) {
+    v1::SourceDirection* source = out->add_sources();
+    source->set_source_id(s.source_id);
+    source->set_status(StatusToProto(s.status));
+    SetVector(s.direction, source->mutable_direction());
+    source->set_azimuth_rad(s.azimuth_rad);
+    source->set_elevation_rad(s.elevation_rad);
+    source->set_cone_angle_rad(s.cone_angle_rad);
+    source->set_sigma_rad(s.sigma_rad);
+    source->set_source_present(s.source_present);
+    source->set_power_db(s.power_db);
   }
 }
 
@@ -101,14 +139,26 @@ engine::Estimate EstimateFromProto(const v1::Estimate& p) {
     e.model_probabilities.push_back({m.model(), m.probability()});
   if (p.has_platform()) {
     const v1::PlatformPose& pose = p.platform();
-    const auto get = [](const v1::Vector3& v) { return engine::Vec3(v.x(), v.y(), v.z()); };
     engine::PlatformAttitude a;
     a.body_to_world = Eigen::Quaterniond(pose.body_to_world().w(), pose.body_to_world().x(), pose.body_to_world().y(),
                                          pose.body_to_world().z());
-    a.euler_rad = get(pose.euler_rad());
-    a.euler_sd_rad = get(pose.euler_sd_rad());
-    a.origin_m = get(pose.origin_m());
+    a.euler_rad = GetVector(pose.euler_rad());
+    a.euler_sd_rad = GetVector(pose.euler_sd_rad());
+    a.origin_m = GetVector(pose.origin_m());
     e.platform = a;
+  }
+  for (const v1::SourceDirection& source : p.sources()) {
+    engine::SourceEstimate s;
+    s.source_id = source.source_id();
+    s.status = StatusFromProto(source.status());
+    s.direction = GetVector(source.direction());
+    s.azimuth_rad = source.azimuth_rad();
+    s.elevation_rad = source.elevation_rad();
+    s.cone_angle_rad = source.cone_angle_rad();
+    s.sigma_rad = source.sigma_rad();
+    s.source_present = source.source_present();
+    s.power_db = source.power_db();
+    e.sources.push_back(s);
   }
   return e;
 }

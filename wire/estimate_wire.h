@@ -3,16 +3,15 @@
 
 #include <string>
 
-#include "engine/array/array_geometry.h"
 #include "engine/core/estimate.h"
 #include "localizer/v1/localizer.pb.h"
 
 namespace localizer::wire {
 
 // Fills everything the engine measured; latency.queue_s and latency.total_s are the
-// server's to set. `array` names each pair's sensor.
-void EstimateToProto(const engine::Estimate& e, const engine::ArrayGeometry& array, const std::string& backend,
-                     v1::Estimate* out);
+// server's to set. Pair k is (reference_sensor, the k-th other sensor): it names each
+// pair's sensor (engine/array/array_geometry.h).
+void EstimateToProto(const engine::Estimate& e, int reference_sensor, const std::string& backend, v1::Estimate* out);
 
 // The inverse, for clients that write estimates.csv from a stream (fields the wire does
 // not carry stay default).

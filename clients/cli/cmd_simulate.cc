@@ -135,7 +135,7 @@ int RunOnServer(const SimulateFlags& f, const io::SimulationRun& run) {
   if (!f.out_dir.empty()) {
     auto files = io::WriteSimulationFiles(f.out_dir, run);
     if (!files.ok()) return RuntimeError(kCommand, files.status());
-    auto opened = io::OpenEstimatesCsv((std::filesystem::path(f.out_dir) / "estimates.csv").string(), *array);
+    auto opened = io::OpenEstimatesCsv((std::filesystem::path(f.out_dir) / "estimates.csv").string(), &*array);
     if (!opened.ok()) return RuntimeError(kCommand, opened.status());
     writer = std::move(*opened);
   }

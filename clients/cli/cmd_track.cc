@@ -47,7 +47,29 @@ void RegisterFlags(FlagSet& flags, TrackFlags* f) {
   RegisterStreamFlags(flags, &f->stream, "max");
 }
 
-void PrintEstimate(const engine::Estimate& e) {
+constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+
+// Direction sessions: the frame, then per source its id, status and angles in degrees.
+void PrintSources(const engine::Estimate& e) {
+  std::printf("frame=%llu t_s=%.3f sources=%zu", static_cast<unsigned long long>(e.frame_index), e.t_s,
+              e.sources.size());
+  for (const engine::SourceEstimate& s : e.sources) {
+    std::printf(" [id=%llu %s", static_cast<unsigned long long>(s.source_id), engine::SourceStatusName(s.status));
+    if (std::isfinite(s.cone_angle_rad)) {
+      std::printf(" cone_deg=%.1f", s.cone_angle_rad * kDegPerRad);
+    } else {
+      std::printf(" az_deg=%.1f el_deg=%.1f", s.azimuth_rad * kDegPerRad, s.elevation_rad * kDegPerRad);
+    }
+    std::printf(" sd_deg=%.1f]", s.sigma_rad * kDegPerRad);
+  }
+  std::printf("\n");
+}
+
+void PrintEstimate(const engine::Estimate& e, engine::Localization localization) {
+  if (localization == engine::Localization::kDirection) {
+    PrintSources(e);
+    return;
+  }
   if (!e.initialised) {
     std::printf("frame=%llu t_s=%.3f initialised=0\n", static_cast<unsigned long long>(e.frame_index), e.t_s);
     return;
@@ -91,12 +113,12 @@ io::TrackSummary SummaryOf(const client::RemoteTrackResult& r, int channel_count
   return s;
 }
 
-io::TrackCallbacks MakeCallbacks(int print_every, ProgressReporter* progress) {
+io::TrackCallbacks MakeCallbacks(int print_every, engine::Localization localization, ProgressReporter* progress) {
   io::TrackCallbacks callbacks;
   callbacks.on_warning = [](const std::string& message) { Warning(kCommand, message); };
   if (print_every > 0) {
-    callbacks.on_estimate = [print_every](const engine::Estimate& e) {
-      if (e.frame_index % static_cast<uint64_t>(print_every) == 0) PrintEstimate(e);
+    callbacks.on_estimate = [print_every, localization](const engine::Estimate& e) {
+      if (e.frame_index % static_cast<uint64_t>(print_every) == 0) PrintEstimate(e, localization);
     };
   }
   callbacks.on_progress = [progress](const io::TrackProgress& p) { progress->Update(p); };
@@ -116,9 +138,9 @@ client::StreamCallbacks RejectionWarnings() {
   return callbacks;
 }
 
-int RunLocal(const TrackFlags& f, const io::TrackJob& job) {
+int RunLocal(const TrackFlags& f, const io::TrackJob& job, engine::Localization localization) {
   ProgressReporter progress;
-  auto summary = io::RunTrack(job, MakeCallbacks(f.print_every, &progress));
+  auto summary = io::RunTrack(job, MakeCallbacks(f.print_every, localization, &progress));
   progress.Finish();
   if (!summary.ok()) return RuntimeError(kCommand, summary.status());
   PrintSummary(*summary, f.out_path);
@@ -126,13 +148,15 @@ int RunLocal(const TrackFlags& f, const io::TrackJob& job) {
   return kExitOk;
 }
 
-int RunOnServer(const TrackFlags& f, const io::TrackJob& job, client::RemoteTrackOptions options) {
+int RunOnServer(const TrackFlags& f, const io::TrackJob& job, engine::Localization localization,
+                client::RemoteTrackOptions options) {
   options.on_opened = PrintOpened;
   ProgressReporter progress;
   auto channel = client::Connect(f.stream.server, f.stream.connect);
   if (!channel.ok()) return RuntimeError(kCommand, channel.status());
   auto result =
-      client::RunRemoteTrack(*channel, job, options, MakeCallbacks(f.print_every, &progress), RejectionWarnings());
+      client::RunRemoteTrack(*channel, job, options, MakeCallbacks(f.print_every, localization, &progress),
+                             RejectionWarnings());
   progress.Finish();
   if (!result.ok()) return RuntimeError(kCommand, result.status());
   PrintSummary(SummaryOf(*result, static_cast<int>(job.config.sensors_m.size())), f.out_path);
@@ -150,8 +174,10 @@ int RunTrack(const std::vector<std::string>& args) {
       "localizer-cli track --array FILE --wav FILE [--wav FILE ...] --out FILE [--server "
       "HOST:PORT] [flags]",
       "Streams a recording through one tracking session (GCC TDOAs + particle filter) and\n"
-      "writes one row per frame to the estimates CSV. The WAV header's sample rate wins over\n"
-      "the array file's. Progress goes to stderr for recordings over 5 s; every Nth estimate\n"
+      "writes one row per frame to the estimates CSV. Planar and linear arrays (and\n"
+      "--localization direction) give directions instead: SRP-PHAT peaks followed by a\n"
+      "direction tracker, up to --max-sources sources with ids, one CSV row per frame and\n"
+      "source. The WAV header's sample rate wins over the array file's. Progress goes to stderr for recordings over 5 s; every Nth estimate\n"
       "and a final summary (frames, wall time, mean stage times) to stdout.\n"
       "With --server the session runs on a localizer-server: the same config is sent with\n"
       "every field explicit, the recording is streamed in blocks of --block-samples, and the\n"
@@ -179,7 +205,7 @@ int RunTrack(const std::vector<std::string>& args) {
     options = std::move(*parsed);
   }
 
-  auto array = io::ReadArrayFile(f.array_path);
+  auto array = io::ReadArrayFile(f.array_path, io::ArrayUse::kAuto);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
   // The header's rate is needed to validate the config (band edges against Nyquist).
   double sample_rate_hz = 0.0;
@@ -198,7 +224,9 @@ int RunTrack(const std::vector<std::string>& args) {
   job.config = *config;
   job.estimates_csv_path = f.out_path;
   job.block_s = f.block_s;
-  return remote ? RunOnServer(f, job, std::move(options)) : RunLocal(f, job);
+  auto localization = engine::ResolveLocalization(job.config);  // BuildSessionConfig checked it
+  if (!localization.ok()) return UsageError(kCommand, localization.status().message());
+  return remote ? RunOnServer(f, job, *localization, std::move(options)) : RunLocal(f, job, *localization);
 }
 
 }  // namespace localizer::cli

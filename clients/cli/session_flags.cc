@@ -69,6 +69,15 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "a track coasting this long with no source heard is dropped and acquisition restarts");
   flags.Double("despike-k", &c.despike_k, "K", "robust sd",
                "clip each frame's channels at K robust standard deviations before the GCC (0: off)");
+  flags.String("localization", &f->localization, "NAME",
+               "what is reported: position (3-D; 4+ sensors off a common plane) | direction (up to "
+               "--max-sources sources, any array) | auto (position for a volumetric array, else direction) "
+               "(default: the array file's, else auto)");
+  flags.OptionalInt("max-sources", &f->max_sources, "K", "the array file's, else 4",
+                    "direction: sources per frame, 1..16");
+  flags.String("source-side", &f->source_side, "X,Y,Z",
+               "direction, planar arrays: the sources lie where (p - array centre) . (X,Y,Z) > 0 "
+               "(default: the array file's source_side, else not stated: mirror images)");
 }
 
 StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::string& text, bool is_min) {
@@ -152,7 +161,20 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
     }
     overrides.bounds_max_m = *v;
   }
-  const engine::AudioSessionConfig config = io::TrackConfigFor(std::move(base), array, overrides, sample_rate_hz);
+  engine::AudioSessionConfig config = io::TrackConfigFor(std::move(base), array, overrides, sample_rate_hz);
+  if (!f.localization.empty()) {
+    auto localization = engine::ParseLocalization(f.localization, "--localization");
+    if (!localization.ok()) return localization.status();
+    config.localization = *localization;
+  }
+  if (f.max_sources) config.max_sources = *f.max_sources;
+  if (!f.source_side.empty()) {
+    auto side = ParseBoundsFlag("source-side", f.source_side, true);
+    if (!side.ok() || !side->allFinite() || side->isZero()) {
+      return InvalidArgument("--source-side is \"" + f.source_side + "\"; expected X,Y,Z, finite and not all zero");
+    }
+    config.source_side = *side;
+  }
   for (int axis = 0; axis < 3; ++axis) {
     if (!(config.bounds_min_m[axis] < config.bounds_max_m[axis])) {
       const char* names[3] = {"x", "y", "z"};

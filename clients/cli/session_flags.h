@@ -4,6 +4,7 @@
 // array file (io::TrackConfigFor).
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "clients/io/array_json.h"
@@ -30,6 +31,9 @@ struct SessionFlags {
   io::ArrayOverrides array;  // --sound-speed, --reference, --surface-z, --bottom-z
   std::string bounds_min;    // --bounds-min X,Y,Z ("" = the array file's)
   std::string bounds_max;    // --bounds-max X,Y,Z
+  std::string localization;  // --localization ("" = the array file's, else auto)
+  std::optional<int> max_sources;  // --max-sources (unset: the array file's, else 4)
+  std::string source_side;         // --source-side X,Y,Z ("" = the array file's, else unstated)
 };
 
 // --sound-speed, --reference, --weighting, --phat-beta, --band-low, --band-high.
@@ -38,7 +42,8 @@ void RegisterGccFlags(FlagSet& flags, SessionFlags* f);
 // --particles, --likelihood, --outlier-probability, --SEED_FLAG, --tdoa-sigma-us,
 // --accel-noise, --backend, --despike-k; source presence and bounds: --bounds-min,
 // --bounds-max, --surface-z, --bottom-z, --search-radius, --presence-false-alarm,
-// --source-timeout. `seed_flag` names the filter seed's flag ("seed" for track; simulate's
+// --source-timeout; what is reported: --localization, --max-sources, --source-side.
+// `seed_flag` names the filter seed's flag ("seed" for track; simulate's
 // --seed is the scenario's).
 void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& seed_flag);
 

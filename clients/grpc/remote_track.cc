@@ -2,9 +2,11 @@
 
 #include <atomic>
 #include <chrono>
+#include <optional>
 #include <utility>
 
 #include "clients/grpc/track_stream.h"
+#include "engine/pipeline/session.h"
 #include "wire/config_wire.h"
 
 namespace localizer::client {
@@ -24,8 +26,14 @@ StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>&
   if (!prepared.ok()) return prepared.status();
   const engine::AudioSessionConfig& config = prepared->config;
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
-  auto array = engine::ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
-  if (!array.ok()) return array.status();
+  auto localization = engine::ResolveLocalization(config);
+  if (!localization.ok()) return localization.status();
+  std::optional<engine::ArrayGeometry> array;  // position sessions: names the CSV's pair columns
+  if (*localization == engine::Localization::kPosition) {
+    auto made = engine::ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
+    if (!made.ok()) return made.status();
+    array = std::move(made).value();
+  }
   StreamOptions stream_options;
   stream_options.channel_count = prepared->stream.channel_count();
   stream_options.sample_rate_hz = prepared->stream.sample_rate_hz();
@@ -33,7 +41,7 @@ StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>&
   stream_options.pacing = options.pacing;
   stream_options.encoding = options.encoding;
   LOCALIZER_RETURN_IF_ERROR(stream_options.Validate());
-  auto writer = io::OpenEstimatesCsv(job.estimates_csv_path, *array);
+  auto writer = io::OpenEstimatesCsv(job.estimates_csv_path, array ? &*array : nullptr);
   if (!writer.ok()) return writer.status();
 
   auto stream = OpenTrackSession(channel, config, options.label, options.session_key);

@@ -238,13 +238,15 @@ StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& s
   auto array = FromJson(root, source);
   if (!array.ok()) return array;
   const bool wants_direction = array->localization == ArrayFile::Localization::kDirection;
-  if (wants_direction != (use == ArrayUse::kDirection) && array->localization != ArrayFile::Localization::kAuto) {
+  if (use != ArrayUse::kAuto && wants_direction != (use == ArrayUse::kDirection) &&
+      array->localization != ArrayFile::Localization::kAuto) {
     return InvalidArgument(source + (wants_direction
                                          ? ": localization is \"direction\": use localizer-cli doa (or \"auto\")"
                                          : ": localization is \"position\": localizer-cli doa reports directions"));
   }
   // Validate the geometry now so that a bad array fails where the file is named.
-  if (use == ArrayUse::kDirection) {
+  if (use == ArrayUse::kDirection ||
+      (use == ArrayUse::kAuto && array->localization != ArrayFile::Localization::kPosition)) {
     auto shape = engine::ClassifyArray(array->sensors_m);
     if (!shape.ok()) return InvalidArgument(source + ": " + shape.status().message());
     if (array->reference_sensor >= static_cast<int>(array->sensors_m.size()))

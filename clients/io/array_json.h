@@ -54,7 +54,7 @@ struct ArrayFile {
   engine::Vec3 bounds_min_m = engine::Vec3::Constant(-std::numeric_limits<double>::infinity());
   engine::Vec3 bounds_max_m = engine::Vec3::Constant(std::numeric_limits<double>::infinity());
   bool has_bounds() const { return bounds_min_m.array().isFinite().any() || bounds_max_m.array().isFinite().any(); }
-  // Direction finding (above).
+  // Direction finding (above); in engine::Localization's order.
   enum class Localization { kAuto, kPosition, kDirection };
   Localization localization = Localization::kAuto;
   std::optional<engine::Vec3> source_side_normal;  // finite, not zero
@@ -65,6 +65,8 @@ struct ArrayFile {
 enum class ArrayUse {
   kPosition,   // 3-D localisation (track, locate, simulate): 4 or more sensors, not coplanar
   kDirection,  // direction of arrival (doa): 2 or more distinct sensors, any shape
+  kAuto,       // either, as the file's localization says (track): "auto" takes any array of
+               // 2 or more distinct sensors, and the session picks position for a volumetric one
 };
 
 // `source` names the text in messages (usually its path).

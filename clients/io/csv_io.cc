@@ -150,8 +150,64 @@ StatusOr<EstimatesCsvWriter> EstimatesCsvWriter::Open(const std::string& path, c
   return writer;
 }
 
+StatusOr<EstimatesCsvWriter> EstimatesCsvWriter::OpenSources(const std::string& path) {
+  EstimatesCsvWriter writer;
+  writer.path_ = path;
+  writer.sources_ = true;
+  writer.out_ = std::make_unique<std::ofstream>(path);
+  if (!*writer.out_) return InvalidArgument(path + ": cannot open for writing");
+  *writer.out_ << "t_s,frame,source_id,status,source_present,azimuth_rad,elevation_rad,cone_angle_rad,sigma_rad,"
+                  "power_db,x_m,y_m,z_m,frame_source_present,presence_statistic,presence_threshold,tdoa_ms\n";
+  return writer;
+}
+
+namespace {
+
+// A number, or nothing for NaN (a field the array cannot observe).
+void AppendField(double value, std::string* line) {
+  line->push_back(',');
+  if (!std::isnan(value)) AppendNumber(value, line);
+}
+
+void AppendSourceRow(const engine::Estimate& e, const engine::SourceEstimate* s, std::string* line) {
+  line->clear();
+  AppendNumber(e.t_s, line);
+  line->push_back(',');
+  line->append(std::to_string(e.frame_index));
+  line->push_back(',');
+  if (s != nullptr) {
+    line->append(std::to_string(s->source_id));
+    line->push_back(',');
+    line->append(engine::SourceStatusName(s->status));
+    line->append(s->source_present ? ",1" : ",0");
+    for (double v : {s->azimuth_rad, s->elevation_rad, s->cone_angle_rad, s->sigma_rad, s->power_db}) {
+      AppendField(v, line);
+    }
+  } else {
+    line->append(",,,,,,,");  // status .. power_db
+  }
+  line->append(",,,");  // x_m, y_m, z_m: directions only
+  line->append(e.source_present ? ",1" : ",0");
+  for (double v : {e.presence_statistic, e.presence_threshold, e.timings.tdoa_s * 1e3}) AppendField(v, line);
+  line->push_back('\n');
+}
+
+}  // namespace
+
 Status EstimatesCsvWriter::Write(const engine::Estimate& e) {
   if (!out_) return FailedPrecondition(path_ + ": writer is closed");
+  if (sources_) {
+    if (e.sources.empty()) {
+      AppendSourceRow(e, nullptr, &line_);
+      *out_ << line_;
+    }
+    for (const engine::SourceEstimate& s : e.sources) {
+      AppendSourceRow(e, &s, &line_);
+      *out_ << line_;
+    }
+    if (!*out_) return InvalidArgument(path_ + ": write failed");
+    return Status::Ok();
+  }
   const engine::Vec6& s = e.state;
   std::vector<double> values = {e.t_s, s[0], s[1], s[2], s[3], s[4], s[5]};
   for (int axis = 0; axis < 3; ++axis) {

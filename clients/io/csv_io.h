@@ -58,6 +58,15 @@ class EstimatesCsvWriter {
  public:
   // `pair_sensors[p]`: the non-reference sensor of pair p (ArrayGeometry::sensor_of_pair).
   static StatusOr<EstimatesCsvWriter> Open(const std::string& path, const std::vector<int>& pair_sensors);
+  // Direction sessions: one row per (frame, source) of Estimate::sources, or one row with
+  // an empty source_id for a frame that has none:
+  //     t_s,frame,source_id,status,source_present,azimuth_rad,elevation_rad,cone_angle_rad,
+  //     sigma_rad,power_db,x_m,y_m,z_m,frame_source_present,presence_statistic,
+  //     presence_threshold,tdoa_ms
+  // A field the array cannot observe is empty (azimuth and elevation for a line, the cone
+  // angle otherwise; x_m, y_m, z_m always, for now: directions only). frame_source_present
+  // says whether any source was heard on the frame; source_present whether this one was.
+  static StatusOr<EstimatesCsvWriter> OpenSources(const std::string& path);
   Status Write(const engine::Estimate& estimate);
   // Flushes and closes; reports a failed write that the stream only notices at the end.
   Status Close();
@@ -66,6 +75,7 @@ class EstimatesCsvWriter {
   EstimatesCsvWriter() = default;
   std::string path_;
   size_t pair_count_ = 0;
+  bool sources_ = false;  // OpenSources' layout
   std::unique_ptr<std::ofstream> out_;
   std::string line_;  // reused per row
 };

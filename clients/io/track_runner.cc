@@ -125,7 +125,7 @@ StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callb
   if (!prepared.ok()) return prepared.status();
   auto session = engine::Session::Create(prepared->config);
   if (!session.ok()) return session.status();
-  auto writer = OpenEstimatesCsv(job.estimates_csv_path, (*session)->array());
+  auto writer = OpenEstimatesCsv(job.estimates_csv_path, (*session)->geometry());
   if (!writer.ok()) return writer.status();
   TrackRun run(std::move(prepared->stream), std::move(*session), std::move(*writer), callbacks);
   return run.Run(job.block_s);
@@ -147,6 +147,10 @@ engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig config, con
     config.bounds_min_m = array.bounds_min_m;
     config.bounds_max_m = array.bounds_max_m;
   }
+  // ArrayFile::Localization lists the names in engine::Localization's order.
+  config.localization = static_cast<engine::Localization>(static_cast<int>(array.localization));
+  if (array.max_sources) config.max_sources = *array.max_sources;
+  if (array.source_side_normal) config.source_side = *array.source_side_normal;
   if (overrides.bounds_min_m) config.bounds_min_m = *overrides.bounds_min_m;
   if (overrides.bounds_max_m) config.bounds_max_m = *overrides.bounds_max_m;
   if (overrides.bottom_z_m) config.bounds_min_m.z() = *overrides.bottom_z_m;
@@ -164,11 +168,11 @@ StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& 
 }
 
 StatusOr<std::unique_ptr<EstimatesCsvWriter>> OpenEstimatesCsv(const std::string& path,
-                                                               const engine::ArrayGeometry& array) {
+                                                               const engine::ArrayGeometry* array) {
   if (path.empty()) return std::unique_ptr<EstimatesCsvWriter>();
   std::vector<int> pair_sensors;
-  for (int p = 0; p < array.pair_count(); ++p) pair_sensors.push_back(array.sensor_of_pair(p));
-  auto writer = EstimatesCsvWriter::Open(path, pair_sensors);
+  for (int p = 0; array != nullptr && p < array->pair_count(); ++p) pair_sensors.push_back(array->sensor_of_pair(p));
+  auto writer = array != nullptr ? EstimatesCsvWriter::Open(path, pair_sensors) : EstimatesCsvWriter::OpenSources(path);
   if (!writer.ok()) return writer.status();
   return std::make_unique<EstimatesCsvWriter>(std::move(*writer));
 }

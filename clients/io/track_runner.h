@@ -103,9 +103,11 @@ struct PreparedTrack {
 };
 StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});
 
-// The estimates CSV for a session over `array`, one pair column group per non-reference
-// sensor; a null writer when `path` is empty.
+// The estimates CSV for a position session over `array`, one pair column group per
+// non-reference sensor, or for a direction session (array null: Session::geometry()) one
+// row per frame and source (EstimatesCsvWriter::OpenSources); a null writer when `path` is
+// empty.
 StatusOr<std::unique_ptr<EstimatesCsvWriter>> OpenEstimatesCsv(const std::string& path,
-                                                               const engine::ArrayGeometry& array);
+                                                               const engine::ArrayGeometry* array);
 
 }  // namespace localizer::io

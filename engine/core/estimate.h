@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -31,6 +32,31 @@ struct PlatformAttitude {
   Vec3 euler_rad = Vec3::Zero();  // (roll, pitch, yaw)
   Vec3 euler_sd_rad = Vec3::Zero();
   Vec3 origin_m = Vec3::Zero();
+};
+
+// One acoustic source followed by direction (sessions whose localization is direction:
+// planar and linear arrays, or any array asked for directions; engine/pipeline/
+// direction_stage.h). Angles in the array's frame: azimuth = atan2(y, x), elevation from the
+// x-y plane towards +z; a linear array observes only the cone angle to its axis (the other
+// fields NaN).
+enum class SourceStatus { kTentative, kConfirmed, kCoasting };
+constexpr const char* SourceStatusName(SourceStatus s) {
+  return s == SourceStatus::kTentative ? "tentative" : s == SourceStatus::kConfirmed ? "confirmed" : "coasting";
+}
+
+struct SourceEstimate {
+  static constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+  uint64_t source_id = 0;  // 1, 2, 3, ... never reused within a session
+  SourceStatus status = SourceStatus::kTentative;
+  Vec3 direction = Vec3::Constant(kNan);  // unit, array -> source
+  double azimuth_rad = kNan;
+  double elevation_rad = kNan;
+  double cone_angle_rad = kNan;  // linear arrays: angle to the array axis, [0, pi]
+  double sigma_rad = kNan;       // RMS angular standard deviation of the estimate
+  // This frame's peak assigned to the source: heard (present) and its power over the noise
+  // level (dB; NaN when not heard: the direction is a prediction).
+  bool source_present = false;
+  double power_db = kNan;
 };
 
 struct Estimate {
@@ -70,6 +96,11 @@ struct Estimate {
   // Sessions whose array rides a platform (AudioSessionConfig::array_in_body_frame): the pose the
   // frame's TDOA model used; unset for fixed arrays and before the first IMU sample.
   std::optional<PlatformAttitude> platform;
+  // Direction sessions: the sources followed, in order of id (confirmed and coasting ones;
+  // tentative ones are not reported). Position sessions leave it empty and fill the fields
+  // above; direction sessions leave those at their defaults except the presence fields
+  // (present: some source heard; the statistic is the strongest peak's).
+  std::vector<SourceEstimate> sources;
   StageTimings timings;
 };
 

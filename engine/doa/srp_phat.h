@@ -117,6 +117,7 @@ class SrpPhat {
   const ArrayShapeInfo& shape() const { return shape_; }
   const SrpOptions& options() const { return options_; }
   int pair_count() const { return spectra_.pair_count(); }
+  double threshold() const { return threshold_; }  // t, the statistic a source must reach
 
   // Sources in the frame (sensors x frame_samples floats, channel-major), strongest first,
   // at most max_sources; empty when none passes the threshold. INVALID_ARGUMENT for a

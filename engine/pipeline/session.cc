@@ -5,6 +5,7 @@
 #include <string>
 
 #include "engine/core/finite.h"
+#include "engine/pipeline/direction_stage.h"
 #include "engine/pipeline/session_impl.h"
 
 namespace localizer::engine {
@@ -42,7 +43,26 @@ Status ValidateBlock(const BlockView& block, int channels, int64_t max_samples, 
   return Status::Ok();
 }
 
+double FrameCentre_s(int64_t first_sample, const AudioSessionConfig& config) {
+  return (static_cast<double>(first_sample) + 0.5 * (config.frame_samples - 1)) / config.sample_rate_hz;
+}
+
 }  // namespace
+
+// A direction session's state: the block intake (as Impl's) and the frame step.
+struct Session::DirectionImpl {
+  DirectionImpl(AudioSessionConfig c, std::unique_ptr<DirectionStage> s)
+      : config(std::move(c)),
+        stage(std::move(s)),
+        framer(static_cast<int>(config.sensors_m.size()), config.frame_samples, config.hop_samples) {}
+  AudioSessionConfig config;
+  std::unique_ptr<DirectionStage> stage;
+  Framer framer;
+  bool have_sequence = false;
+  uint64_t last_sequence = 0;
+  uint64_t frames = 0;
+  std::string backend = "cpu";
+};
 
 bool Session::Impl::MoveArray(double t_s, Estimate* e) {
   auto pose = platform->At(t_s);
@@ -59,7 +79,7 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
   Estimate e;
   e.frame_index = frames++;
   e.sequence = sequence;
-  e.t_s = (static_cast<double>(first_sample) + 0.5 * (config.frame_samples - 1)) / config.sample_rate_hz;
+  e.t_s = FrameCentre_s(first_sample, config);
 
   const auto tdoa_start = std::chrono::steady_clock::now();
   if (despike.despike_k > 0.0) {
@@ -104,11 +124,49 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
   out->push_back(std::move(e));
 }
 
-Session::Session(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Session::Session(ArrayShapeInfo shape, Localization localization, size_t sensors, std::unique_ptr<Impl> impl,
+                 std::unique_ptr<DirectionImpl> direction)
+    : shape_(shape),
+      localization_(localization),
+      shape_sensors_(sensors),
+      impl_(std::move(impl)),
+      direction_(std::move(direction)) {}
 Session::~Session() = default;
+
+StatusOr<Localization> ResolveLocalization(const AudioSessionConfig& config) {
+  auto shape = ClassifyArray(config.sensors_m);
+  if (!shape.ok()) return InvalidArgument("array.sensors_m: " + shape.status().message());
+  Localization localization = config.localization;
+  if (localization == Localization::kAuto) {
+    localization = shape->shape == ArrayShape::kVolumetric ? Localization::kPosition : Localization::kDirection;
+  }
+  if (localization == Localization::kPosition && shape->shape != ArrayShape::kVolumetric) {
+    return InvalidArgument(std::string("localization position needs 4 or more sensors off a common plane; this array "
+                                       "is ") +
+                           ArrayShapeName(shape->shape) +
+                           ": use localization direction or auto (positions from planar and linear arrays in a "
+                           "stated plane or half-space are not built yet)");
+  }
+  return localization;
+}
 
 StatusOr<std::unique_ptr<Session>> Session::Create(const AudioSessionConfig& config) {
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
+  auto resolved = ResolveLocalization(config);
+  if (!resolved.ok()) return resolved.status();
+  const Localization localization = *resolved;
+  auto shape = ClassifyArray(config.sensors_m);  // resolved above: cannot fail
+  if (!shape.ok()) return shape.status();
+  if (localization == Localization::kDirection) {
+    if (config.array_in_body_frame) {
+      return InvalidArgument("localization direction does not take a moving array (platform) yet");
+    }
+    auto stage = DirectionStage::Create(config);
+    if (!stage.ok()) return stage.status();
+    auto direction = std::make_unique<DirectionImpl>(config, std::move(stage).value());
+    return std::unique_ptr<Session>(
+        new Session(*shape, localization, config.sensors_m.size(), nullptr, std::move(direction)));
+  }
   auto array = ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
   if (!array.ok()) return array.status();
   TrackerOptions tracker = config.tracker;
@@ -129,11 +187,35 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const AudioSessionConfig& con
   auto parts = BuildComponents(config.backend, *array, config.GccOptionsFor(), tracker, config.array_in_body_frame);
   if (!parts.ok()) return parts.status();
   parts->tracker->SetBounds(config.bounds_min_m, config.bounds_max_m);
-  return std::unique_ptr<Session>(new Session(std::make_unique<Impl>(
-      config, std::move(array).value(), std::move(parts).value(), std::move(pose), std::move(acquisition).value())));
+  return std::unique_ptr<Session>(
+      new Session(*shape, localization, config.sensors_m.size(),
+                  std::make_unique<Impl>(config, std::move(array).value(), std::move(parts).value(), std::move(pose),
+                                         std::move(acquisition).value()),
+                  nullptr));
 }
 
 Status Session::Process(const BlockView& block, std::vector<Estimate>* out) {
+  if (direction_ != nullptr) {
+    DirectionImpl& d = *direction_;
+    LOCALIZER_RETURN_IF_ERROR(ValidateBlock(block, sensor_count(), d.config.max_block_samples, d.have_sequence,
+                                            d.last_sequence));
+    d.have_sequence = true;
+    d.last_sequence = block.sequence;
+    d.framer.Append(block);
+    const float* frame = nullptr;
+    int64_t first = 0;
+    while (d.framer.Next(&frame, &first)) {
+      Estimate e;
+      e.frame_index = d.frames++;
+      e.sequence = block.sequence;
+      e.t_s = FrameCentre_s(first, d.config);
+      const auto start = std::chrono::steady_clock::now();
+      d.stage->Frame(frame, e.t_s, &e);
+      e.timings.tdoa_s = SecondsSince(start);  // the spatial spectrum and the tracker
+      out->push_back(std::move(e));
+    }
+    return Status::Ok();
+  }
   Impl& s = *impl_;
   LOCALIZER_RETURN_IF_ERROR(
       ValidateBlock(block, s.array.sensor_count(), s.config.max_block_samples, s.have_sequence, s.last_sequence));
@@ -150,12 +232,12 @@ Status Session::Skip(int64_t samples_per_channel) {
   if (samples_per_channel < 0 || samples_per_channel > (int64_t{1} << 40)) {
     return InvalidArgument("skipped samples " + std::to_string(samples_per_channel) + " not in [0, 2^40]");
   }
-  impl_->framer.Skip(samples_per_channel);
+  (direction_ != nullptr ? direction_->framer : impl_->framer).Skip(samples_per_channel);
   return Status::Ok();
 }
 
 Status Session::AddImu(const std::vector<ImuSample>& samples) {
-  if (impl_->platform == nullptr) {
+  if (impl_ == nullptr || impl_->platform == nullptr) {
     return FailedPrecondition(
         "IMU samples for a session whose array is fixed in the world "
         "(open it with the array in the platform's body frame)");
@@ -164,15 +246,19 @@ Status Session::AddImu(const std::vector<ImuSample>& samples) {
 }
 
 Status Session::SetPlatformOrigin(const Vec3& origin_m) {
-  if (impl_->platform == nullptr) {
+  if (impl_ == nullptr || impl_->platform == nullptr) {
     return FailedPrecondition("platform origin for a session whose array is fixed in the world");
   }
   return impl_->platform->SetOrigin(origin_m);
 }
 
-const AudioSessionConfig& Session::config() const { return impl_->config; }
-const std::string& Session::backend() const { return impl_->components.backend; }
-const ArrayGeometry& Session::array() const { return impl_->array; }
-uint64_t Session::frames_processed() const { return impl_->frames; }
+const AudioSessionConfig& Session::config() const {
+  return direction_ != nullptr ? direction_->config : impl_->config;
+}
+const std::string& Session::backend() const {
+  return direction_ != nullptr ? direction_->backend : impl_->components.backend;
+}
+const ArrayGeometry* Session::geometry() const { return impl_ != nullptr ? &impl_->array : nullptr; }
+uint64_t Session::frames_processed() const { return direction_ != nullptr ? direction_->frames : impl_->frames; }
 
 }  // namespace localizer::engine

@@ -23,6 +23,9 @@
 // A moving array (config.array_in_body_frame) is moved, every frame, to where its platform's
 // attitude (from the IMU samples given with AddImu) puts it; until the first IMU sample its
 // frames are measured but not tracked (the array's pose is unknown).
+// Direction sessions (config.localization direction, or auto with a planar or linear array):
+// the same framing and block checks, and each frame goes to a DirectionStage
+// (direction_stage.h: SRP-PHAT peaks, a direction tracker); estimates list the sources.
 // A pure function of its config (seed included) and the blocks (and IMU samples) it was given.
 #pragma once
 
@@ -35,14 +38,22 @@
 #include "engine/core/block.h"
 #include "engine/core/estimate.h"
 #include "engine/core/imu.h"
+#include "engine/doa/array_shape.h"
 #include "engine/pipeline/session_config.h"
 
 namespace localizer::engine {
 
+// What a session opened with `config` reports: config.localization with auto resolved from
+// the array's shape (position for a volumetric array, direction otherwise). INVALID_ARGUMENT
+// for an array with fewer than 2 distinct sensors, or position from a planar or linear array.
+StatusOr<Localization> ResolveLocalization(const AudioSessionConfig& config);
+
 class Session {
  public:
   // INVALID_ARGUMENT naming the field when config.Validate() fails or a stage refuses its
-  // options; FAILED_PRECONDITION for backend gpu without a usable GPU.
+  // options, or when the array cannot give what config.localization asks for (a position
+  // from a planar or linear array; directions from a moving array); FAILED_PRECONDITION for
+  // backend gpu without a usable GPU.
   static StatusOr<std::unique_ptr<Session>> Create(const AudioSessionConfig& config);
   ~Session();
   Session(const Session&) = delete;
@@ -68,13 +79,25 @@ class Session {
 
   const AudioSessionConfig& config() const;
   const std::string& backend() const;  // "cpu" or "gpu": what BuildComponents chose
-  const ArrayGeometry& array() const;
+  // What the session reports: config.localization with auto resolved; and its array's shape.
+  Localization localization() const { return localization_; }
+  const ArrayShapeInfo& shape() const { return shape_; }
+  int sensor_count() const { return static_cast<int>(shape_sensors_); }
+  // Position sessions: the array in the world at the latest frame; nullptr for direction
+  // sessions (they have no TDOA model).
+  const ArrayGeometry* geometry() const;
   uint64_t frames_processed() const;
 
  private:
   struct Impl;
-  explicit Session(std::unique_ptr<Impl> impl);
-  std::unique_ptr<Impl> impl_;
+  struct DirectionImpl;
+  Session(ArrayShapeInfo shape, Localization localization, size_t sensors, std::unique_ptr<Impl> impl,
+          std::unique_ptr<DirectionImpl> direction);
+  ArrayShapeInfo shape_;
+  Localization localization_;
+  size_t shape_sensors_;
+  std::unique_ptr<Impl> impl_;                // position sessions
+  std::unique_ptr<DirectionImpl> direction_;  // direction sessions
 };
 
 }  // namespace localizer::engine

@@ -20,6 +20,17 @@ Status ValidateTrackerKind(const TrackerOptions& t) {
 
 }  // namespace
 
+StatusOr<Localization> ParseLocalization(const std::string& name, const std::string& field) {
+  if (name == "auto") return Localization::kAuto;
+  if (name == "position") return Localization::kPosition;
+  if (name == "direction") return Localization::kDirection;
+  return InvalidArgument(field + " '" + name + "' is not one of: auto, position, direction");
+}
+
+const char* LocalizationName(Localization l) {
+  return l == Localization::kAuto ? "auto" : l == Localization::kPosition ? "position" : "direction";
+}
+
 Status DetectionSessionConfig::Validate() const { return tws.Validate(); }
 
 Status AudioSessionConfig::Validate() const {
@@ -28,10 +39,16 @@ Status AudioSessionConfig::Validate() const {
     if (const Status s = attitude.Validate(); !s.ok()) return InvalidArgument("platform.attitude: " + s.message());
     if (!platform_origin_m.allFinite()) return InvalidArgument("platform.origin_m must be finite");
   }
-  if (sensors_m.size() < 4) {
-    return InvalidArgument("array.sensors_m has " + std::to_string(sensors_m.size()) +
-                           " sensors; at least 4 are needed");
+  const size_t min_sensors = localization == Localization::kPosition ? 4 : 2;
+  if (sensors_m.size() < min_sensors) {
+    return InvalidArgument("array.sensors_m has " + std::to_string(sensors_m.size()) + " sensors; at least " +
+                           std::to_string(min_sensors) + " are needed" +
+                           (min_sensors == 4 ? " for localization position" : ""));
   }
+  if (max_sources < 1 || max_sources > 16) {
+    return InvalidArgument("max_sources must be in [1, 16], got " + std::to_string(max_sources));
+  }
+  if (!source_side.allFinite()) return InvalidArgument("source_side must be finite");
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz) || sample_rate_hz > 10e6) {
     return InvalidArgument("sample_rate_hz must be in (0, 1e7], got " + Num(sample_rate_hz));
   }

@@ -21,6 +21,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <variant>
 #include <vector>
 
@@ -33,12 +34,28 @@
 
 namespace localizer::engine {
 
+// What an audio session reports (issue 18): a 3-D position (volumetric arrays: four or more
+// sensors off a common plane), or the directions of up to max_sources sources (any array
+// of two or more sensors; a planar array's direction has a mirror image across its plane
+// unless source_side is stated, a linear array's is a cone angle). auto: position for a
+// volumetric array, direction otherwise.
+enum class Localization { kAuto, kPosition, kDirection };
+// "auto" | "position" | "direction"; INVALID_ARGUMENT naming `field` otherwise.
+StatusOr<Localization> ParseLocalization(const std::string& name, const std::string& field);
+const char* LocalizationName(Localization l);
+
 struct AudioSessionConfig {
   // Array
-  std::vector<Vec3> sensors_m;      // >= 4, not coplanar
+  std::vector<Vec3> sensors_m;      // >= 2 (position: >= 4, not coplanar)
   double sound_speed_mps = 1500.0;  // > 0 (1500 water, 343 air)
   int reference_sensor = 0;
   double sample_rate_hz = 0.0;  // > 0
+  // What the session reports (above) and, for directions, how many sources per frame
+  // (in [1, 16]) and on which side of a planar array they lie: where
+  // (p - centroid).source_side > 0 (zero: not stated; then each direction has a mirror).
+  Localization localization = Localization::kAuto;
+  int max_sources = 4;
+  Vec3 source_side = Vec3::Zero();
   // Framing
   int frame_samples = 4096;             // per channel, in [64, 1 << 20]
   int hop_samples = 2048;               // in [1, frame_samples]

@@ -13,8 +13,9 @@ AudioRunner::AudioRunner(std::unique_ptr<engine::Session> session, ServiceMetric
       metrics_(metrics),
       stages_(metrics->stages(session_->backend())),
       info_{"samples", engine::FilterKindName(session_->config().tracker.kind), session_->backend(),
-            session_->array().sensor_count(), true},
-      block_limits_{session_->array().sensor_count(), session_->config().max_block_samples} {}
+            session_->sensor_count(), true, engine::ArrayShapeName(session_->shape().shape),
+            engine::LocalizationName(session_->localization())},
+      block_limits_{session_->sensor_count(), session_->config().max_block_samples} {}
 
 WorkItem AudioRunner::DecodeBlock(const v1::SampleBlock& block, Clock::time_point received,
                                   wire::DecodedBlock* scratch) const {
@@ -89,7 +90,7 @@ void AudioRunner::ProcessBlock(const BlockWork& block, Clock::time_point receive
   for (const engine::Estimate& e : estimates_) {
     auto response = std::make_shared<v1::TrackResponse>();
     v1::Estimate* wire_estimate = response->mutable_estimate();
-    wire::EstimateToProto(e, session_->array(), session_->backend(), wire_estimate);
+    wire::EstimateToProto(e, session_->config().reference_sensor, session_->backend(), wire_estimate);
     wire_estimate->mutable_latency()->set_queue_s(Seconds(started - received));
     wire_estimate->mutable_latency()->set_total_s(Seconds(done - received));
     Observe(stages_.tdoa, e.timings.tdoa_s);

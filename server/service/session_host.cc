@@ -37,6 +37,8 @@ v1::SessionOpened SessionHost::OpenedLocked(bool resumed) const {
   if (inbox_.last_sequence()) opened.set_last_sequence(*inbox_.last_sequence());
   opened.set_frames_processed(outbox_.frames());
   opened.set_session_ttl_s(limits_.ttl_s);
+  opened.set_array_shape(runner_->info().array_shape);
+  opened.set_localization(runner_->info().localization);
   return opened;
 }
 

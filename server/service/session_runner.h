@@ -43,6 +43,10 @@ struct RunnerInfo {
   std::string backend;            // where it runs: "cpu" | "gpu"
   int channel_count = 0;          // SessionInfo.channel_count: sensors per sample block (0: takes none)
   bool reports_presence = false;  // its estimates carry source presence (the sessions JSON's "presence")
+  // Audio sessions (SessionOpened): the array's shape ("linear" | "planar" | "volumetric")
+  // and what the estimates carry ("position" | "direction"); empty for detection sessions.
+  std::string array_shape;
+  std::string localization;
 };
 
 class SessionRunner {

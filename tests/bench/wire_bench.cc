@@ -66,7 +66,7 @@ void BM_EncodeEstimate(benchmark::State& state) {
   std::string bytes;
   for (auto _ : state) {
     v1::TrackResponse response;
-    EstimateToProto(e, array, "cpu", response.mutable_estimate());
+    EstimateToProto(e, array.reference_sensor(), "cpu", response.mutable_estimate());
     response.SerializeToString(&bytes);
     benchmark::DoNotOptimize(bytes.data());
   }

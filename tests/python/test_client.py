@@ -348,10 +348,41 @@ class ServerTest(unittest.TestCase):
     def test_bad_config_raises_invalid_argument(self):
         bad = config("py-bad-config")
         del bad.array.sensors_m[3]  # 3 sensors cannot give a 3-D fix
+        bad.localization = "position"  # (they can give directions: "auto")
         with self.assertRaises(grpc.RpcError) as caught:
             lc.TrackSession(self.channel, bad, timeout=30)
         self.assertEqual(caught.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
         self.assertIn("sensors", caught.exception.details())
+
+    def test_planar_array_session_reports_directions(self):
+        # A 1 m square in the x-y plane (coplanar: no position) and a far source above it: a
+        # plane wave from `toward`, each sensor's delay rounded to whole samples.
+        square = np.array([[0.5, 0, 0], [0, 0.5, 0], [-0.5, 0, 0], [0, -0.5, 0]])
+        toward = np.array([8.0, 6.0, 5.0]) / np.linalg.norm([8.0, 6.0, 5.0])
+        lag_per_direction = -(square - square[0]) * FS_HZ / SOUND_SPEED_MPS  # samples per unit u
+        tdoa = np.round(lag_per_direction @ toward).astype(int)
+        # The direction those whole-sample delays say (least squares in the board's plane,
+        # above it): what the session should find.
+        in_plane = np.linalg.lstsq(lag_per_direction[1:, :2], tdoa[1:], rcond=None)[0]
+        truth = np.append(in_plane, np.sqrt(1.0 - in_plane @ in_plane))
+        audio = synth.broadband_at_sensors(tdoa, 10 * BLOCK, FS_HZ, band_hz=BAND_HZ, snr_db=20.0, seed=3)
+        cfg = lc.session_config(square, FS_HZ, sound_speed_mps=SOUND_SPEED_MPS, frame_samples=FRAME,
+                                hop_samples=HOP, band_hz=BAND_HZ, seed=1, label="py-planar")
+        cfg.source_side.z = 1.0  # the source is above the board
+        session = lc.TrackSession(self.channel, cfg, timeout=60)
+        self.assertEqual(session.opened.array_shape, "planar")
+        self.assertEqual(session.opened.localization, "direction")
+        self.stream(session, [(k + 1, audio[k * BLOCK:(k + 1) * BLOCK]) for k in range(10)])
+        estimates = list(session.estimates())
+        self.assertEqual(session.code(), grpc.StatusCode.OK)
+        last = estimates[-1]
+        self.assertEqual(len(last.sources), 1, [[(s.source_id, s.status) for s in e.sources] for e in estimates])
+        found = last.sources[0]
+        self.assertEqual(found.status, lc.pb.TRACK_STATUS_CONFIRMED)
+        got = np.array([found.direction.x, found.direction.y, found.direction.z])
+        angle_deg = np.degrees(np.arccos(np.clip(truth @ got, -1.0, 1.0)))
+        self.assertLess(angle_deg, 3.0, f"direction {got} vs {truth}")
+        self.assertFalse(last.initialised)  # no position from a planar array
 
     def test_bounds_and_presence_config_echo_and_estimate_fields(self):
         cfg = config("py-bounds")

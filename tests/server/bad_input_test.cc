@@ -171,11 +171,19 @@ TEST_F(ServiceTest, BadConfigsAreInvalidArgumentNamingTheField) {
     std::string field;
   };
   const std::vector<Case> cases = {
-      {[](v1::SessionConfig* c) { c->mutable_array()->mutable_sensors_m()->RemoveLast(); }, "array.sensors_m"},
+      // Positions need 4 sensors off a common plane (fewer, or coplanar: directions).
+      {[](v1::SessionConfig* c) {
+         c->mutable_array()->mutable_sensors_m()->RemoveLast();
+         c->set_localization("position");
+       },
+       "array.sensors_m"},
       {[](v1::SessionConfig* c) {
          for (auto& p : *c->mutable_array()->mutable_sensors_m()) p.set_z(0.0);  // coplanar
+         c->set_localization("position");
        },
-       "coplanar"},
+       "planar"},
+      {[](v1::SessionConfig* c) { c->set_localization("everywhere"); }, "localization"},
+      {[](v1::SessionConfig* c) { c->set_max_sources(99); }, "max_sources"},
       {[](v1::SessionConfig* c) { c->set_sample_rate_hz(-1.0); }, "sample_rate_hz"},
       {[](v1::SessionConfig* c) { c->mutable_array()->set_sound_speed_mps(0.0); }, "sound_speed_mps"},
       {[](v1::SessionConfig* c) { c->set_frame_samples(16); }, "frame_samples"},

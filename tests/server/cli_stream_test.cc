@@ -480,10 +480,12 @@ TEST_F(CliStreamTest, LocateFixIsWithinTheCrlbBoundOfTheTruth) {
       << "fix " << fix.transpose() << " truth " << truth.transpose() << " crlb_m " << crlb_m;
 }
 
-// (d) The server validates the config: 3 sensors are refused naming the proto field.
+// (d) The server validates the config: 3 sensors cannot give a position, refused naming the
+// proto field (they can give directions: localization auto).
 TEST_F(CliStreamTest, ThreeSensorsIsInvalidArgumentNamingTheField) {
   engine::AudioSessionConfig config;
   config.sensors_m = {engine::Vec3(0, 0, 0), engine::Vec3(1, 0, 0), engine::Vec3(0, 1, 0)};
+  config.localization = engine::Localization::kPosition;
   config.sample_rate_hz = 11025.0;
   auto stream = TrackStream::Open(channel_, wire::ConfigToProto(config, "three"), "key-3");
   ASSERT_FALSE(stream.ok());

@@ -83,7 +83,8 @@ TEST_F(SessionRunnerTest, ADetectionConfigMakesADetectionRunner) {
 
 TEST_F(SessionRunnerTest, ABadConfigIsTheEnginesError) {
   engine::AudioSessionConfig bad = Audio();
-  bad.sensors_m.pop_back();  // three sensors
+  bad.sensors_m.pop_back();  // three sensors: no position
+  bad.localization = engine::Localization::kPosition;
   auto runner = MakeSessionRunner(bad, metrics_.get());
   ASSERT_FALSE(runner.ok());
   EXPECT_EQ(runner.status().code(), StatusCode::kInvalidArgument);

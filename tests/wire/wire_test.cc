@@ -338,12 +338,12 @@ TEST(EstimateWire, ModelProbabilitiesRoundTrip) {
   e.state << 1, 2, 3, 0.1, 0.2, 0.3;
   e.model_probabilities = {{"cv", 0.25}, {"ct", 0.75}};
   v1::Estimate wire;
-  EstimateToProto(e, array, "cpu", &wire);
+  EstimateToProto(e, array.reference_sensor(), "cpu", &wire);
   ASSERT_EQ(wire.model_probabilities_size(), 2);
   EXPECT_EQ(wire.model_probabilities(1).model(), "ct");
   EXPECT_EQ(wire.model_probabilities(1).probability(), 0.75);
   // A reused message is refilled, not appended to.
-  EstimateToProto(e, array, "cpu", &wire);
+  EstimateToProto(e, array.reference_sensor(), "cpu", &wire);
   EXPECT_EQ(wire.model_probabilities_size(), 2);
   const engine::Estimate back = EstimateFromProto(wire);
   ASSERT_EQ(back.model_probabilities.size(), 2u);
@@ -352,7 +352,7 @@ TEST(EstimateWire, ModelProbabilitiesRoundTrip) {
   EXPECT_EQ(back.state, e.state);
   // Single-model filters: no entries on the wire.
   e.model_probabilities.clear();
-  EstimateToProto(e, array, "cpu", &wire);
+  EstimateToProto(e, array.reference_sensor(), "cpu", &wire);
   EXPECT_EQ(wire.model_probabilities_size(), 0);
 }
 
@@ -487,7 +487,7 @@ TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
   e.ambiguous = true;
   e.modes = 2;
   v1::Estimate wire;
-  EstimateToProto(e, array, "cpu", &wire);
+  EstimateToProto(e, array.reference_sensor(), "cpu", &wire);
   EXPECT_TRUE(wire.source_present());
   EXPECT_EQ(wire.presence_statistic(), 12.5);
   EXPECT_EQ(wire.presence_threshold(), 4.25);
@@ -503,7 +503,7 @@ TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
   engine::Estimate silent;
   silent.presence_statistic = 1.5;
   silent.presence_threshold = 4.25;
-  EstimateToProto(silent, array, "cpu", &wire);
+  EstimateToProto(silent, array.reference_sensor(), "cpu", &wire);
   EXPECT_FALSE(wire.source_present());
   EXPECT_FALSE(wire.ambiguous());
   EXPECT_EQ(wire.modes(), 0u);
@@ -511,6 +511,75 @@ TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
   EXPECT_FALSE(back.source_present);
   EXPECT_EQ(back.presence_statistic, 1.5);
   EXPECT_EQ(back.modes, 0);
+}
+
+// Direction sessions: the config fields round-trip, bad values are named, and an
+// estimate's sources survive the wire (NaN where the array cannot observe).
+TEST(ConfigWire, LocalizationFieldsRoundTripAndBadOnesAreNamed) {
+  v1::SessionConfig p = MinimalConfig();
+  auto config = AudioFromProto(p, {});
+  ASSERT_TRUE(config.ok());
+  EXPECT_EQ(config->localization, engine::Localization::kAuto);
+  EXPECT_EQ(config->max_sources, 4);
+  EXPECT_TRUE(config->source_side.isZero());
+  p.set_localization("direction");
+  p.set_max_sources(2);
+  p.mutable_source_side()->set_z(1.0);
+  config = AudioFromProto(p, {});
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  EXPECT_EQ(config->localization, engine::Localization::kDirection);
+  EXPECT_EQ(config->max_sources, 2);
+  EXPECT_EQ(config->source_side, engine::Vec3::UnitZ());
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  EXPECT_EQ(effective.localization(), "direction");
+  EXPECT_EQ(effective.max_sources(), 2u);
+  EXPECT_EQ(effective.source_side().z(), 1.0);
+  p.set_localization("sideways");
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("localization 'sideways'"), std::string::npos);
+  p.set_localization("auto");
+  p.set_max_sources(0);
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("max_sources is 0"), std::string::npos);
+  p.set_max_sources(3);
+  p.mutable_source_side()->set_x(std::numeric_limits<double>::infinity());
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("source_side"), std::string::npos);
+}
+
+TEST(EstimateWire, SourcesRoundTrip) {
+  engine::Estimate e;
+  e.source_present = true;
+  engine::SourceEstimate a;
+  a.source_id = 3;
+  a.status = engine::SourceStatus::kCoasting;
+  a.direction = engine::Vec3(0.6, 0.8, 0.0);
+  a.azimuth_rad = 0.927;
+  a.elevation_rad = 0.0;
+  a.sigma_rad = 0.02;
+  engine::SourceEstimate line;  // a linear array's: the cone angle only
+  line.source_id = 4;
+  line.status = engine::SourceStatus::kConfirmed;
+  line.cone_angle_rad = 1.2;
+  line.source_present = true;
+  line.power_db = 9.5;
+  e.sources = {a, line};
+  v1::Estimate wire;
+  EstimateToProto(e, 0, "cpu", &wire);
+  ASSERT_EQ(wire.sources_size(), 2);
+  EXPECT_EQ(wire.sources(0).status(), v1::TRACK_STATUS_COASTING);
+  EXPECT_EQ(wire.sources(1).status(), v1::TRACK_STATUS_CONFIRMED);
+  const engine::Estimate back = EstimateFromProto(wire);
+  ASSERT_EQ(back.sources.size(), 2u);
+  EXPECT_EQ(back.sources[0].source_id, 3u);
+  EXPECT_EQ(back.sources[0].status, engine::SourceStatus::kCoasting);
+  EXPECT_EQ(back.sources[0].direction, a.direction);
+  EXPECT_DOUBLE_EQ(back.sources[0].azimuth_rad, 0.927);
+  EXPECT_TRUE(std::isnan(back.sources[0].power_db));
+  EXPECT_FALSE(back.sources[0].source_present);
+  EXPECT_TRUE(std::isnan(back.sources[1].azimuth_rad));
+  EXPECT_DOUBLE_EQ(back.sources[1].cone_angle_rad, 1.2);
+  EXPECT_DOUBLE_EQ(back.sources[1].power_db, 9.5);
+  // A reused message is overwritten, not appended to.
+  EstimateToProto(engine::Estimate{}, 0, "cpu", &wire);
+  EXPECT_EQ(wire.sources_size(), 0);
 }
 
 TEST(ImuWire, ABatchAboveTheSampleLimitIsInvalidArgumentNamingIt) {

@@ -1,0 +1,90 @@
+#include "engine/pipeline/direction_stage.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace localizer::engine {
+namespace {
+
+constexpr double kHeardSigmas = 3.0;  // a peak this many sigmas from a track is its own
+
+SourceStatus StatusOf(tws::TrackStatus s) {
+  return s == tws::TrackStatus::kTentative   ? SourceStatus::kTentative
+         : s == tws::TrackStatus::kConfirmed ? SourceStatus::kConfirmed
+                                             : SourceStatus::kCoasting;
+}
+
+// Angle between a track and a peak: of directions, or of cone angles (linear arrays).
+double Separation(const SourceTrack& track, const DirectionPeak& peak) {
+  if (std::isfinite(track.cone_angle_rad)) return std::abs(track.cone_angle_rad - peak.cone_angle_rad);
+  return std::atan2(track.direction.cross(peak.direction).norm(), track.direction.dot(peak.direction));
+}
+
+}  // namespace
+
+StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSessionConfig& config) {
+  SrpOptions srp;
+  srp.sample_rate_hz = config.sample_rate_hz;
+  srp.sound_speed_mps = config.sound_speed_mps;
+  srp.frame_samples = config.frame_samples;
+  srp.band_low_hz = config.band_low_hz;
+  srp.band_high_hz = config.band_high_hz;
+  srp.max_sources = config.max_sources;
+  srp.false_alarm = config.presence_false_alarm;
+  srp.source_side = config.source_side;
+  auto made = SrpPhat::Create(config.sensors_m, srp);
+  if (!made.ok()) return made.status();
+  DirectionTrackerOptions options;
+  options.frame_period_s = config.hop_samples / config.sample_rate_hz;
+  auto tracker = DirectionTracker::Create(made->shape().shape, options);
+  if (!tracker.ok()) return tracker.status();
+  return std::unique_ptr<DirectionStage>(
+      new DirectionStage(std::move(made).value(), std::move(tracker).value(), options.peak_sigma_rad));
+}
+
+void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
+  auto peaks = srp_.Analyse(frame);  // the session validated the samples: cannot fail
+  if (!peaks.ok()) peaks = std::vector<DirectionPeak>{};
+  // A later source's re-estimation among the others can leave its statistic below the
+  // threshold (it had taken up a biased earlier source's residue): no longer a detection.
+  std::erase_if(*peaks, [](const DirectionPeak& p) { return !(p.statistic >= p.threshold); });
+  e->source_present = !peaks->empty();
+  e->presence_statistic = peaks->empty() ? 0.0 : peaks->front().statistic;
+  e->presence_threshold = srp_.threshold();
+  if (!tracker_.Update(t_s, *peaks, &tracks_).ok()) tracks_.clear();
+  // Each peak is heard by the nearest track that took a plot this frame (not coasting),
+  // within kHeardSigmas of its sigma (at least the peaks' own).
+  heard_by_.assign(peaks->size(), -1);
+  for (size_t k = 0; k < peaks->size(); ++k) {
+    double nearest_rad = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < tracks_.size(); ++j) {
+      const SourceTrack& track = tracks_[j];
+      if (track.status == tws::TrackStatus::kCoasting) continue;
+      const double d = Separation(track, (*peaks)[k]);
+      if (d <= kHeardSigmas * std::max(track.sigma_rad, peak_sigma_rad_) && d < nearest_rad) {
+        nearest_rad = d;
+        heard_by_[k] = static_cast<int>(j);
+      }
+    }
+  }
+  for (size_t j = 0; j < tracks_.size(); ++j) {
+    const SourceTrack& track = tracks_[j];
+    SourceEstimate s;
+    s.source_id = track.id;
+    s.status = StatusOf(track.status);
+    s.direction = track.direction;
+    s.azimuth_rad = track.azimuth_rad;
+    s.elevation_rad = track.elevation_rad;
+    s.cone_angle_rad = track.cone_angle_rad;
+    s.sigma_rad = track.sigma_rad;
+    for (size_t k = 0; k < peaks->size(); ++k) {
+      if (heard_by_[k] != static_cast<int>(j)) continue;
+      s.source_present = true;
+      s.power_db = std::isnan(s.power_db) ? (*peaks)[k].power_db : std::max(s.power_db, (*peaks)[k].power_db);
+    }
+    e->sources.push_back(s);
+  }
+}
+
+}  // namespace localizer::engine
