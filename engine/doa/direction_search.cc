@@ -74,6 +74,12 @@ double SrpPhat::Exact(const Cell& cell) const {
   return sum / spectra_.noise_sigma() / std::sqrt(static_cast<double>(pair_count()));
 }
 
+double SrpPhat::Whole(const Cell& cell, bool previous) const {
+  double sum = 0.0;
+  for (int p = 0; p < pair_count(); ++p) sum += spectra_.WholeAt(p, Lag(p, cell), previous);
+  return sum / spectra_.noise_sigma() / std::sqrt(static_cast<double>(pair_count()));
+}
+
 // The spectrum's sum over pairs at a cell's centre with its gradient and Hessian in the
 // refinement's coordinates (one pass over the bins). Arcs: theta (the 1 x 1 corner).
 // Sphere: the tangent plane at u. Planar arrays: the array plane, on the direction's
@@ -159,6 +165,8 @@ SrpPhat::Cell SrpPhat::Refine(Cell cell) const {
 DirectionPeak SrpPhat::Describe(const Cell& cell, double statistic) const {
   DirectionPeak peak;
   peak.statistic = statistic;
+  peak.previous_statistic = Whole(cell, true);
+  peak.rise = Whole(cell, false) - peak.previous_statistic;
   peak.threshold = threshold_;
   peak.power_db = 20.0 * std::log10(std::max(statistic, 1e-9) / std::sqrt(static_cast<double>(pair_count())));
   if (linear()) {

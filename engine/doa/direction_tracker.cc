@@ -16,13 +16,19 @@ Status DirectionTrackerOptions::Validate() const {
     return InvalidArgument("max_coast_s and frame_period_s must be positive (and their ratio at most 1e6)");
   if (!(initial_rate_sigma_radps > 0.0) || !std::isfinite(initial_rate_sigma_radps))
     return InvalidArgument("initial_rate_sigma_radps must be positive");
+  if (!(max_elevation_sigma_rad >= peak_sigma_rad) || max_elevation_sigma_rad > 1.0)
+    return InvalidArgument("max_elevation_sigma_rad must be in [peak_sigma_rad, 1]");
+  if (!(echo_window_s >= 0.0) || !std::isfinite(echo_window_s)) return InvalidArgument("echo_window_s must be >= 0");
   return Status::Ok();  // confirm_hits / confirm_window: TwsOptions::Validate names them
 }
 
-StatusOr<DirectionTracker> DirectionTracker::Create(ArrayShape shape, const DirectionTrackerOptions& options) {
+StatusOr<DirectionTracker> DirectionTracker::Create(const ArrayShapeInfo& shape,
+                                                    const DirectionTrackerOptions& options) {
   LOCALIZER_RETURN_IF_ERROR(options.Validate());
+  if (shape.shape == ArrayShape::kPlanar && !(std::abs(shape.axis.norm() - 1.0) < 1e-6))
+    return InvalidArgument("a planar array's shape needs its unit normal in axis");
   tws::TwsOptions tws;
-  tws.dimensions = shape == ArrayShape::kLinear ? 2 : 3;
+  tws.dimensions = shape.shape == ArrayShape::kLinear ? 2 : 3;
   tws.accel_noise_mps2 = options.angular_accel_noise_radps2;
   tws.confirm_hits = options.confirm_hits;
   tws.confirm_window = options.confirm_window;
@@ -30,24 +36,72 @@ StatusOr<DirectionTracker> DirectionTracker::Create(ArrayShape shape, const Dire
   tws.max_position_sigma_m = kMaxSigmaRad;
   tws.initial_speed_sigma_mps = options.initial_rate_sigma_radps;
   tws.max_tracks = 64;
+  if (options.start_at_onsets_only) tws.max_initiations_per_scan = 1;
   auto tracker = tws::TwsTracker::Create(tws);
   if (!tracker.ok()) return tracker.status();
-  return DirectionTracker(shape, options, std::move(*tracker));
+  OnsetOptions onset;
+  onset.min_rise_db = options.onset_min_rise_db;
+  onset.memory_s = options.onset_memory_s;
+  onset.frame_period_s = options.frame_period_s;
+  auto detector = OnsetDetector::Create(onset);
+  if (!detector.ok()) return InvalidArgument("onset_" + detector.status().message());
+  return DirectionTracker(shape, options, std::move(*tracker), std::move(*detector));
 }
 
-Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& peaks, std::vector<SourceTrack>* out,
-                                bool include_tentative) {
-  const bool linear = shape_ == ArrayShape::kLinear;
+Mat3 DirectionTracker::PeakCovariance(const Vec3& u) const {
   const double s2 = options_.peak_sigma_rad * options_.peak_sigma_rad;
+  const Mat3 radial = u * u.transpose();
+  const Mat3 radial_part = kRadialShare * kRadialShare * s2 * radial;
+  if (shape_.shape != ArrayShape::kPlanar) return s2 * (Mat3::Identity() - radial) + radial_part;
+  const Vec3& n = shape_.axis;
+  const double z = u.dot(n);
+  const Vec3 in_plane = u - z * n;
+  // The sign of z follows the hemisphere the peak was reported on; its size is floored.
+  const double floor = options_.peak_sigma_rad / options_.max_elevation_sigma_rad;
+  const double z_eff = std::copysign(std::max(std::abs(z), floor), z == 0.0 ? 1.0 : z);
+  const Mat3 step = Mat3::Identity() - n * in_plane.transpose() / z_eff;
+  const Mat3 plane = Mat3::Identity() - n * n.transpose();
+  return s2 * step * plane * step.transpose() + radial_part;
+}
+
+Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& peaks, double band_power,
+                                std::vector<SourceTrack>* out, bool include_tentative) {
+  LOCALIZER_RETURN_IF_ERROR(onset_.Push(band_power));
+  // Not on a frame whose power fell (an offset): there the direct sound stops first and
+  // the reflections linger, so they rise relative to it.
+  const bool may_start = onset_.onset();
+  const bool linear = shape_.shape == ArrayShape::kLinear;
+  const double s2 = options_.peak_sigma_rad * options_.peak_sigma_rad;
+  // Precedence: the peak that rose most is where the onset's source is; the others are
+  // earlier sources or reflections of the new one.
+  const DirectionPeak* riser = nullptr;
+  for (const DirectionPeak& peak : peaks)
+    if (!riser || peak.rise > riser->rise) riser = &peak;
+  // Echo suppression: for echo_window_s after a direction rose past the threshold, the
+  // reflections of that source build up and rise too; only a peak at least as strong as the
+  // one that rose may start a track then (a second source, not an image: images are weaker).
+  bool echo_blocks = false;
+  if (riser && riser->rise >= riser->threshold) {
+    const bool open = t_s <= echo_until_s_;
+    echo_blocks = open && riser->statistic < echo_statistic_;
+    echo_statistic_ = open ? std::max(echo_statistic_, riser->statistic) : riser->statistic;
+    echo_until_s_ = t_s + options_.echo_window_s;
+  }
   plots_.clear();
   for (const DirectionPeak& peak : peaks) {
     const Vec3 u = linear ? Vec3(std::cos(peak.cone_angle_rad), std::sin(peak.cone_angle_rad), 0.0) : peak.direction;
     if (!u.allFinite()) return InvalidArgument("a peak without a direction for this array's shape");
     tws::CartesianPlot plot;
     plot.position_m = u;
-    const Mat3 radial = u * u.transpose();
-    plot.covariance_m2 = s2 * (Mat3::Identity() - radial) + kRadialShare * kRadialShare * s2 * radial;
-    if (linear) plot.covariance_m2(2, 2) = s2;  // unused by a 2-D tracker; keeps it definite
+    plot.may_start_track =
+        !options_.start_at_onsets_only || (may_start && !echo_blocks && &peak == riser && peak.rise >= peak.threshold);
+    if (linear) {
+      const Mat3 radial = u * u.transpose();
+      plot.covariance_m2 = s2 * (Mat3::Identity() - radial) + kRadialShare * kRadialShare * s2 * radial;
+      plot.covariance_m2(2, 2) = s2;  // unused by a 2-D tracker; keeps it definite
+    } else {
+      plot.covariance_m2 = PeakCovariance(u);
+    }
     plots_.push_back(plot);
   }
   LOCALIZER_RETURN_IF_ERROR(tracker_->ProcessCartesian(t_s, plots_));

@@ -5,13 +5,39 @@
 //
 // A direction is tracked as a point on the unit circle or sphere (the Cartesian plot
 // interface, TwsTracker::ProcessCartesian):
-//   volumetric, planar  3-D: the peak's direction u, covariance sigma^2 (I - u u^T) +
-//                       (sigma / 10)^2 u u^T (tangential noise; the radius is nearly known);
-//   linear              2-D: (cos theta, sin theta) of the cone angle theta, the same way.
+//   volumetric  3-D: the peak's direction u, covariance sigma^2 (I - u u^T) +
+//               (sigma / 10)^2 u u^T (tangential noise; the radius is nearly known);
+//   planar      3-D: u, but the noise is sigma^2 in the plane's coordinates, where the lags
+//               are linear, carried to the sphere: u = u_p + z n with z = sqrt(1 - |u_p|^2),
+//               so a step d u_p moves u by (I - n u_p^T / z) d u_p. Along elevation the
+//               sigma is sigma / sin(elevation): a board sees a source near its plane
+//               through cos(elevation), which is flat there (in a room the peaks' elevation
+//               scatters by 5-15 degrees from frame to frame while their azimuth holds to a
+//               few). z is floored at sigma / max_elevation_sigma_rad. With the isotropic
+//               covariance of the volumetric case, a peak's elevation jump fell outside its
+//               track's gate and started a second track at the same azimuth;
+//   linear      2-D: (cos theta, sin theta) of the cone angle theta, the same way.
 // So "metres" in the tracker are radians on the sphere: velocity is an angular rate
 // (rad/s), accel_noise an angular acceleration (rad/s^2). A track's reported direction is
 // its position normalised. Planar arrays without a stated side: the direction on the
 // normal's side (the mirror is the same source).
+//
+// Which peaks start tracks (precedence). A room's reflections are coherent copies of a
+// source from other directions: they pass the noise threshold and repeat frame after frame
+// while their source sounds, so a tracker that starts a track from every unexplained peak
+// confirms them (issue 18: 270-500 s of false track per minute at RT60 0.2-0.6 s). A source
+// that starts, though, is heard first through its direct path; its reflections follow,
+// weaker, and build up over tens of milliseconds. So a tentative track starts only from the
+// frame's peak whose direction rose most (DirectionPeak::rise: against the last frame that
+// does not overlap this one), when that rise itself passes the detection threshold, on a
+// frame whose power did not fall (onset.h; when a sound stops its direct path goes first
+// and its reflections rise relative to it), and at most one per frame. For echo_window_s
+// after any direction rose so (a new source, or a paused one resuming and taken by its
+// track), a later riser starts a track only if its statistic is at least that source's: a
+// second source, not its reflections, which rise as the room fills. Costs: a source that
+// starts while a louder one's echo window is open, or in the same frame as another, waits
+// for its next onset; a source that sounds without onsets (a steady hum) after others is
+// never started.
 //
 // Defaults suit talkers around a board: sigma 0.05 rad (3 degrees, about a small board's
 // frame-by-frame spread in a reverberant room), angular acceleration 2 rad/s^2, 3 of 5
@@ -27,6 +53,7 @@
 #include "engine/core/status.h"
 #include "engine/core/types.h"
 #include "engine/doa/array_shape.h"
+#include "engine/doa/onset.h"
 #include "engine/doa/srp_phat.h"
 #include "engine/tws/track_report.h"
 #include "engine/tws/tws_tracker.h"
@@ -41,6 +68,12 @@ struct DirectionTrackerOptions {
   double max_coast_s = 1.0;
   double frame_period_s = 0.016;  // hop / sample rate: turns max_coast_s into frames
   double initial_rate_sigma_radps = 1.0;
+  double max_elevation_sigma_rad = 0.3;  // planar arrays: the largest elevation sigma a peak is given
+  // Precedence (see the class comment). false: every peak no track took starts a track.
+  bool start_at_onsets_only = true;
+  double onset_min_rise_db = 0.0;  // OnsetOptions::min_rise_db: the frame's power did not fall
+  double onset_memory_s = 0.05;    // OnsetOptions::memory_s
+  double echo_window_s = 0.1;      // after a direction rose, births only from peaks as strong
 
   Status Validate() const;
 };
@@ -59,19 +92,27 @@ struct SourceTrack {
 class DirectionTracker {
  public:
   // INVALID_ARGUMENT naming the option.
-  static StatusOr<DirectionTracker> Create(ArrayShape shape, const DirectionTrackerOptions& options);
+  // `shape` as SrpPhat::shape() gives it (planar arrays need its unit normal in `axis`).
+  static StatusOr<DirectionTracker> Create(const ArrayShapeInfo& shape, const DirectionTrackerOptions& options);
 
-  // One frame's peaks at time t_s (after the previous frame's). Fills `out` with the
-  // confirmed and coasting tracks (tentative ones too when asked), in order of id.
-  Status Update(double t_s, const std::vector<DirectionPeak>& peaks, std::vector<SourceTrack>* out,
+  // One frame's peaks at time t_s (after the previous frame's) and its in-band power
+  // (SrpPhat::band_power, for onsets). Fills `out` with the confirmed and coasting tracks
+  // (tentative ones too when asked), in order of id.
+  Status Update(double t_s, const std::vector<DirectionPeak>& peaks, double band_power, std::vector<SourceTrack>* out,
                 bool include_tentative = false);
+  bool last_frame_onset() const { return onset_.onset(); }
 
  private:
-  DirectionTracker(ArrayShape shape, const DirectionTrackerOptions& options, std::unique_ptr<tws::TwsTracker> tracker)
-      : shape_(shape), options_(options), tracker_(std::move(tracker)) {}
-  ArrayShape shape_;
+  DirectionTracker(const ArrayShapeInfo& shape, const DirectionTrackerOptions& options,
+                   std::unique_ptr<tws::TwsTracker> tracker, OnsetDetector onset)
+      : shape_(shape), options_(options), tracker_(std::move(tracker)), onset_(std::move(onset)) {}
+  Mat3 PeakCovariance(const Vec3& u) const;  // 3-D shapes, rad^2
+  ArrayShapeInfo shape_;
   DirectionTrackerOptions options_;
   std::unique_ptr<tws::TwsTracker> tracker_;
+  OnsetDetector onset_;
+  double echo_until_s_ = -1e300;
+  double echo_statistic_ = 0.0;
   std::vector<tws::CartesianPlot> plots_;
   std::vector<tws::TrackReport> reports_;
 };

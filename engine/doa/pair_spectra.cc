@@ -24,6 +24,7 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
   if (!(o.band_low_hz >= 0.0) || !(high_hz > o.band_low_hz) || high_hz > nyquist_hz)
     return InvalidArgument("band must satisfy 0 <= band_low_hz < band_high_hz <= sample_rate_hz / 2");
   if (o.max_lag_samples < 1) return InvalidArgument("max_lag_samples must be at least 1");
+  if (o.rise_lag_frames < 1 || o.rise_lag_frames > 64) return InvalidArgument("rise_lag_frames must be in [1, 64]");
 
   PairSpectra s;
   s.options_ = o;
@@ -42,6 +43,7 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
   for (int i = 0; i < o.sensors; ++i)
     for (int j = i + 1; j < o.sensors; ++j) s.pairs_.emplace_back(i, j);
   s.g_.assign(s.pairs_.size(), std::vector<std::complex<double>>(s.bins_.size()));
+  s.history_.assign(static_cast<size_t>(o.rise_lag_frames) + 1, s.g_);
 
   const int time_stride = Stride(s.fft_size_), spectrum_stride = Stride(2 * (half + 1));
   s.time_ = AllocateFftwFloats(static_cast<size_t>(time_stride) * o.sensors);
@@ -75,18 +77,22 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
   for (int c = 0; c < options_.sensors; ++c)
     for (int k : bins_) mean_power += std::norm(bin(c, k));
   mean_power /= static_cast<double>(options_.sensors) * static_cast<double>(bins_.size());
+  band_power_ = mean_power;
   const double floor = kRelativeFloor * mean_power;
 
   field->sample_rate_hz = options_.sample_rate_hz;
   field->pairs.resize(pairs_.size());
+  newest_ = (newest_ + 1) % history_.size();  // overwrites the oldest whole spectrum
   for (size_t p = 0; p < pairs_.size(); ++p) {
     for (size_t b = 0; b < bins_.size(); ++b) {
       const std::complex<double> c = bin(pairs_[p].first, bins_[b]) * std::conj(bin(pairs_[p].second, bins_[b]));
       const double magnitude = std::sqrt(std::norm(c));  // std::abs calls hypot: 3x slower here
       g_[p][b] = magnitude > floor && magnitude > 0.0 ? c / magnitude : 0.0;
     }
+    history_[newest_][p] = g_[p];
     FillField(static_cast<int>(p), &field->pairs[p]);
   }
+  ++frames_analysed_;
   return Status::Ok();
 }
 
@@ -136,12 +142,21 @@ void PairSpectra::RestoreDelay(int p, double lag_samples, std::complex<double> a
   for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) g[b] += amplitude * std::conj(phasor);
 }
 
+double PairSpectra::WholeAt(int p, double lag_samples, bool previous) const {
+  const size_t back = previous ? history_.size() - 1 : 0;
+  if (frames_analysed_ <= static_cast<int64_t>(back)) return 0.0;
+  return Evaluate(history_[(newest_ + history_.size() - back) % history_.size()][static_cast<size_t>(p)], lag_samples).r;
+}
+
 PairSpectra::Value PairSpectra::At(int p, double lag_samples) const {
+  return Evaluate(g_[static_cast<size_t>(p)], lag_samples);
+}
+
+PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>& g, double lag_samples) const {
   // sum_b G(b) exp(i w_b l), w_b = step (first + b), in real arithmetic over kLanes
   // interleaved phasor chains (each advanced by rotate^kLanes): one chain is a serial
   // dependency of complex products, and std::complex's product checks for infinities.
   constexpr int kLanes = 4;
-  const std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
   const double step = 2.0 * std::numbers::pi / fft_size_;  // radians per bin per sample of lag
   const auto n = static_cast<int>(g.size());
   const int first = bins_.front();  // the in-band bins are consecutive

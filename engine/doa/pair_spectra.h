@@ -40,6 +40,7 @@ struct PairSpectraOptions {
   double band_low_hz = 0.0;   // in-band: low <= f <= high, DC and Nyquist excluded
   double band_high_hz = 0.0;  // 0: up to the Nyquist frequency
   int max_lag_samples = 0;    // the field covers lags [-max_lag, max_lag]
+  int rise_lag_frames = 1;    // WholeAt(previous): how many frames back, in [1, 64]
 };
 
 class PairSpectra {
@@ -66,6 +67,9 @@ class PairSpectra {
   void RestoreDelay(int p, double lag_samples, std::complex<double> amplitude);
   // Rewrites `field` (as Analyse filled it) from the current spectra: one inverse FFT per pair.
   void FillFields(Measurement* field);
+  // The last analysed frame's in-band power: the mean of |X_c(k)|^2 over the sensors and the
+  // in-band bins (unnormalised FFT of the frame). What is heard, before PHAT discards it.
+  double band_power() const { return band_power_; }
   // The noise-only deviation of R_p at one lag.
   double noise_sigma() const { return noise_sigma_; }
 
@@ -74,16 +78,26 @@ class PairSpectra {
     double r = 0.0, dr = 0.0, d2r = 0.0;
   };
   Value At(int p, double lag_samples) const;
+  // R_p at a fractional lag from the whole spectrum of the last analysed frame (no source
+  // removed) or, previous = true, of the frame rise_lag_frames before it (0 when there was
+  // none). For the rise of a direction between frames (SrpPhat, DirectionPeak::rise).
+  double WholeAt(int p, double lag_samples, bool previous) const;
 
  private:
   PairSpectra() = default;
   void FillField(int p, PairMeasurement* out);
+  Value Evaluate(const std::vector<std::complex<double>>& g, double lag_samples) const;
   PairSpectraOptions options_;
   int fft_size_ = 0;
   double noise_sigma_ = 0.0;
+  double band_power_ = 0.0;
   std::vector<std::pair<int, int>> pairs_;
   std::vector<int> bins_;                             // in-band bin indices
   std::vector<std::vector<std::complex<double>>> g_;  // per pair, per in-band bin
+  // g_ before any removal, for the last rise_lag_frames + 1 frames (a ring; newest_ is this frame's)
+  std::vector<std::vector<std::vector<std::complex<double>>>> history_;
+  size_t newest_ = 0;
+  int64_t frames_analysed_ = 0;
   FftwFloats time_, spectra_, cross_, gcc_;
   FftwPlan forward_, inverse_;
 };

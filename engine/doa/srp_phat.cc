@@ -29,6 +29,8 @@ Status SrpOptions::Validate() const {
   if (max_sources < 1 || max_sources > 16) return InvalidArgument("max_sources must be in [1, 16]");
   if (!(false_alarm > 0.0) || false_alarm > 0.1) return InvalidArgument("false_alarm must be in (0, 0.1]");
   if (!source_side.allFinite()) return InvalidArgument("source_side must be finite");
+  if (hop_samples < 0 || (hop_samples > 0 && (frame_samples + hop_samples - 1) / hop_samples > 64))
+    return InvalidArgument("hop_samples must be 0 or in [frame_samples / 64, ...)");
   if (cell_budget < 64 || cell_budget > (1 << 20)) return InvalidArgument("cell_budget must be in [64, 2^20]");
   if (!(min_relative_statistic >= 0.0) || !(min_relative_statistic < 1.0))
     return InvalidArgument("min_relative_statistic must be in [0, 1)");
@@ -64,6 +66,9 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
   po.band_low_hz = options.band_low_hz;
   po.band_high_hz = options.band_high_hz;
   po.max_lag_samples = static_cast<int>(std::ceil(spread)) + 2;  // + the bound's half sample and interpolation
+  // The last frame that does not overlap this one: a source that starts within this frame
+  // or the one before it is absent there.
+  po.rise_lag_frames = options.hop_samples > 0 ? (options.frame_samples + options.hop_samples - 1) / options.hop_samples : 1;
   StatusOr<PairSpectra> spectra = PairSpectra::Create(po);
   if (!spectra.ok()) return spectra.status();
 

@@ -71,6 +71,9 @@ struct SrpOptions {
   double sample_rate_hz = 16000.0;
   double sound_speed_mps = 343.0;
   int frame_samples = 512;
+  // Samples between the starts of consecutive frames (0: frames do not overlap). Only for
+  // DirectionPeak::rise, measured against the last frame that does not overlap this one.
+  int hop_samples = 0;
   double band_low_hz = 0.0;
   double band_high_hz = 0.0;  // 0: the Nyquist frequency
   int max_sources = 4;        // in [1, 16]
@@ -103,6 +106,13 @@ struct DirectionPeak {
   bool mirror_ambiguous = false;
   Vec3 mirror_direction = Vec3::Constant(kNan);
   double statistic = 0.0;  // z at the peak (after the removal of stronger sources)
+  // z at the peak's direction in this frame's whole spectrum (no source removed) less z
+  // there in the last frame that does not overlap it (hop_samples; 0 before the first such
+  // frame): how much the direction rose.
+  // A source that starts rises most at its own direction: its direct sound arrives first,
+  // and each reflection is weaker than it (onset.h).
+  double rise = 0.0;
+  double previous_statistic = 0.0;  // z there in that earlier frame (rise = whole z now - this)
   double threshold = 0.0;  // t
   // The pairs' mean peak height over their noise-only deviation, 20 log10(z / sqrt(P)):
   // 0 dB is the noise level.
@@ -123,6 +133,9 @@ class SrpPhat {
   // at most max_sources; empty when none passes the threshold. INVALID_ARGUMENT for a
   // non-finite sample.
   StatusOr<std::vector<DirectionPeak>> Analyse(const float* frame);
+
+  // The last analysed frame's in-band power (PairSpectra::band_power): for onsets (onset.h).
+  double band_power() const { return spectra_.band_power(); }
 
   // z at a direction (far-field lags; linear arrays read only u.axis) from the last
   // analysed frame's exact spectrum, less the sources removed before its last search (none
@@ -156,6 +169,7 @@ class SrpPhat {
   Cell Moved(const Cell& cell, const Probe& probe, const Eigen::Vector2d& step) const;
   Cell Refine(Cell cell) const;
   double Exact(const Cell& cell) const;  // z from the exact (residual) spectrum
+  double Whole(const Cell& cell, bool previous) const;  // z from a whole spectrum (PairSpectra::WholeAt)
   DirectionPeak Describe(const Cell& cell, double statistic) const;
 
   ArrayShapeInfo shape_;

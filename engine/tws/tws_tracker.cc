@@ -1,5 +1,6 @@
 #include "engine/tws/tws_tracker.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -49,6 +50,7 @@ class TrackerImpl final : public TwsTracker {
     }
     if (!scan.sensor_position_m.allFinite()) return InvalidArgument("sensor_position_m is not finite");
     plots_.resize(scan.detections.size());
+    may_start_.assign(scan.detections.size(), 1);
     for (size_t i = 0; i < scan.detections.size(); ++i) {
       const Detection& d = scan.detections[i];
       if constexpr (D == 2) {
@@ -75,7 +77,9 @@ class TrackerImpl final : public TwsTracker {
         return InvalidArgument("plots[" + std::to_string(i) + "] is not finite");
     }
     plots_.resize(plots.size());
+    may_start_.resize(plots.size());
     for (size_t i = 0; i < plots.size(); ++i) {
+      may_start_[i] = plots[i].may_start_track ? 1 : 0;
       plots_[i].mean = plots[i].position_m.template head<D>();
       plots_[i].covariance = plots[i].covariance_m2.template topLeftCorner<D, D>();
     }
@@ -192,8 +196,11 @@ class TrackerImpl final : public TwsTracker {
   }
 
   void Initiate(double dt, ScanSummary& s) {
-    const int room = options_.max_tracks - static_cast<int>(tracks_.size());
-    initiator_.Initiate(plots_, associator_.taken(), dt, room, &started_);
+    const int room = std::min(options_.max_initiations_per_scan, options_.max_tracks - static_cast<int>(tracks_.size()));
+    const std::vector<char>& taken = associator_.taken();
+    blocked_.resize(taken.size());
+    for (size_t j = 0; j < taken.size(); ++j) blocked_[j] = taken[j] || !may_start_[j];
+    initiator_.Initiate(plots_, blocked_, dt, room, &started_);
     for (const auto& st : started_) {
       Track tr;
       tr.id = next_id_++;
@@ -216,6 +223,8 @@ class TrackerImpl final : public TwsTracker {
   int64_t total_updates_ = 0;
   // Per-scan work arrays, kept between scans.
   std::vector<Gaussian<D>> plots_;     // the scan's plots, converted
+  std::vector<char> may_start_;        // per plot: may it start a track
+  std::vector<char> blocked_;          // per plot: taken by a track, or may not start one
   std::vector<int> stage_tracks_;      // the tracks of one association stage
   std::vector<Gaussian<D>> expected_;  // and what each expects to measure
   std::vector<int> assigned_;

@@ -25,7 +25,8 @@
 //     that can no longer reach M is deleted; a confirmed track is deleted after
 //     max_coast_scans misses in a row; any track whose position variance exceeds
 //     max_position_sigma_m^2 is deleted;
-//  7. plots still left initiate tentative tracks: one-point (x = (z, 0), P = diag(R,
+//  7. plots still left (and allowed to: CartesianPlot::may_start_track), at most
+//     max_initiations_per_scan of them in plot order, initiate tentative tracks: one-point (x = (z, 0), P = diag(R,
 //     sigma_v^2 I)) or two-point (paired with a leftover plot of the previous scan within
 //     max_speed dt: v = (z2 - z1)/dt, P from both R); unpaired two-point plots wait one scan.
 // Clutter and P_D < 1 are handled by the gate (clutter rarely falls in it), by coasting
@@ -51,10 +52,13 @@
 namespace localizer::engine::tws {
 
 // A plot already in the world frame (Cartesian measurement model): position and its
-// covariance. A 2-D tracker reads the x-y part.
+// covariance. A 2-D tracker reads the x-y part. may_start_track false: the plot may update
+// a track but starts none when no track takes it (a caller that knows a plot is unlikely to
+// be a new target, e.g. a reflection, says so).
 struct CartesianPlot {
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
   Eigen::Matrix3d covariance_m2 = Eigen::Matrix3d::Identity();
+  bool may_start_track = true;
 };
 
 class TwsTracker {

@@ -9,12 +9,15 @@
 // hop 256, max_sources 4 (--max-sources), source_side +z. A talker "sounds" in a frame when it is on over the
 // whole frame.
 // Per RT60 it prints: median and p90 azimuth error of the peaks within 20 degrees of a
-// sounding talker; the share of sounding talker-frames with such a peak (detected); seconds
+// sounding talker; the share of sounding talker-frames with such a peak (detected by a peak);
+// the share with a confirmed or coasting track within 20 degrees (detected by a track: what a
+// user of the tracks sees) and that track's median azimuth error; seconds
 // of confirmed or coasting track per minute further than 20 degrees from both talkers (false;
 // two such tracks at once count twice); identity switches (the track nearest a sounding
 // talker changes id).
 //
 //   build/tests/bench/doa_room_report [--seconds 20] [--seed 1] [--max-sources 4] [--relative 0]
+//                                     [--dump peaks_and_tracks.csv]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -40,13 +43,17 @@ constexpr int kFrame = 512, kHop = 256;
 
 double Wrap(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 
-int Run(double seconds, uint64_t seed, int max_sources, double relative_floor) {
+int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, const std::string& dump_path,
+        const DirectionTrackerOptions& tracking_flags) {
+  FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
+  if (dump) std::fprintf(dump, "kind,rt60,frame,on0,on1,energy,onset,rank,id,status,az,el,stat,rise,dist0,dist1\n");
   const Vec3 centre(2.2, 1.9, 1.0);
   const double a = 0.0405;
   std::vector<Vec3> board, relative{Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
   for (const Vec3& m : relative) board.push_back(centre + m);
   const auto samples = static_cast<int64_t>(seconds * kFs);
-  std::printf("RT60 | talker azimuth error median / p90 (deg) | detected | false track s/min | id switches\n");
+  std::printf("RT60 | peak azimuth error median / p90 (deg) | detected by a peak | by a track / its error median (deg) | "
+              "false track s/min | id switches\n");
   for (const double rt60_s : {0.2, 0.4, 0.6}) {
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> normal;
@@ -95,13 +102,16 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor) {
     options.band_high_hz = 7000.0;
     options.source_side = Vec3::UnitZ();
     options.max_sources = max_sources;
+    options.hop_samples = kHop;
     options.min_relative_statistic = relative_floor;
     auto srp = SrpPhat::Create(relative, options);
-    DirectionTrackerOptions tracking;
+    DirectionTrackerOptions tracking = tracking_flags;
     tracking.frame_period_s = kHop / kFs;
-    auto tracker = DirectionTracker::Create(ArrayShape::kPlanar, tracking);
-    if (!srp.ok() || !tracker.ok()) return std::fprintf(stderr, "setup failed\n"), 1;
-    std::vector<double> errors_deg;
+    if (!srp.ok()) return std::fprintf(stderr, "setup failed\n"), 1;
+    auto tracker = DirectionTracker::Create(srp->shape(), tracking);
+    if (!tracker.ok()) return std::fprintf(stderr, "setup failed\n"), 1;
+    std::vector<double> errors_deg, track_errors_deg;
+    int tracked = 0;
     int sounding = 0, detected = 0, false_frames = 0, frames = 0, switches = 0;
     std::map<int, uint64_t> last_id;
     std::vector<float> frame(4 * kFrame);
@@ -110,8 +120,26 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor) {
       for (int m = 0; m < 4; ++m)
         std::copy_n(signals->begin() + m * samples + start, kFrame, frame.begin() + m * kFrame);
       auto peaks = srp->Analyse(frame.data());
-      if (!peaks.ok() || !tracker->Update(static_cast<double>(start) / kFs, *peaks, &tracks).ok()) return 1;
+      if (!peaks.ok() || !tracker->Update(static_cast<double>(start) / kFs, *peaks, srp->band_power(), &tracks).ok()) return 1;
       std::vector<bool> on(2);
+      if (dump) {
+        const double energy = srp->band_power();
+        auto on_of = [&](int k) {
+          const Talker& t = talkers[static_cast<size_t>(k)];
+          return int(t.on[static_cast<size_t>(start)]) + 2 * int(t.on[static_cast<size_t>(start + kFrame - 1)]);
+        };
+        auto dist = [&](double az, int k) { return std::abs(Wrap(az - talkers[static_cast<size_t>(k)].azimuth_rad)) * 180 / std::numbers::pi; };
+        for (size_t r = 0; r < peaks->size(); ++r) {
+          const DirectionPeak& p = (*peaks)[r];
+          std::fprintf(dump, "p,%.1f,%d,%d,%d,%.6g,%d,%zu,0,0,%.4f,%.4f,%.3f,%.3f,%.2f,%.2f\n", rt60_s, frames, on_of(0), on_of(1), energy,
+                       int(tracker->last_frame_onset()), r, p.azimuth_rad, p.elevation_rad, p.statistic, p.rise, dist(p.azimuth_rad, 0), dist(p.azimuth_rad, 1));
+        }
+        for (const SourceTrack& tr : tracks)
+          std::fprintf(dump, "t,%.1f,%d,%d,%d,%.6g,%d,0,%llu,%d,%.4f,%.4f,0,0,%.2f,%.2f\n", rt60_s, frames, on_of(0), on_of(1), energy,
+                       int(tracker->last_frame_onset()),
+                       static_cast<unsigned long long>(tr.id), static_cast<int>(tr.status), tr.azimuth_rad, tr.elevation_rad,
+                       dist(tr.azimuth_rad, 0), dist(tr.azimuth_rad, 1));
+      }
       for (int k = 0; k < 2; ++k) {
         const Talker& t = talkers[static_cast<size_t>(k)];
         on[static_cast<size_t>(k)] = t.on[static_cast<size_t>(start)] && t.on[static_cast<size_t>(start + kFrame - 1)];
@@ -122,6 +150,12 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor) {
         if (best < 20.0 * std::numbers::pi / 180) {
           ++detected;
           errors_deg.push_back(best * 180 / std::numbers::pi);
+        }
+        double track_best = 1e9;
+        for (const SourceTrack& tr : tracks) track_best = std::min(track_best, std::abs(Wrap(tr.azimuth_rad - t.azimuth_rad)));
+        if (track_best < 20.0 * std::numbers::pi / 180) {
+          ++tracked;
+          track_errors_deg.push_back(track_best * 180 / std::numbers::pi);
         }
         for (const SourceTrack& tr : tracks) {
           if (std::abs(Wrap(tr.azimuth_rad - t.azimuth_rad)) < 20.0 * std::numbers::pi / 180) {
@@ -142,9 +176,12 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor) {
     std::sort(errors_deg.begin(), errors_deg.end());
     const double median = errors_deg.empty() ? NAN : errors_deg[errors_deg.size() / 2];
     const double p90 = errors_deg.empty() ? NAN : errors_deg[errors_deg.size() * 9 / 10];
+    std::sort(track_errors_deg.begin(), track_errors_deg.end());
+    const double track_median = track_errors_deg.empty() ? NAN : track_errors_deg[track_errors_deg.size() / 2];
     const double minutes = static_cast<double>(frames) * kHop / kFs / 60.0;
-    std::printf("%.1f s | %.1f / %.1f | %.1f %% of %d | %.1f | %d\n", rt60_s, median, p90,
-                100.0 * detected / std::max(1, sounding), sounding, false_frames * kHop / kFs / minutes, switches);
+    std::printf("%.1f s | %.1f / %.1f | %.1f %% of %d | %.1f %% / %.1f | %.1f | %d\n", rt60_s, median, p90,
+                100.0 * detected / std::max(1, sounding), sounding, 100.0 * tracked / std::max(1, sounding), track_median,
+                false_frames * kHop / kFs / minutes, switches);
   }
   return 0;
 }
@@ -157,6 +194,9 @@ int main(int argc, char** argv) {
   uint64_t seed = 1;
   int max_sources = 4;
   double relative = 0.0;
+  std::string dump;
+  localizer::engine::DirectionTrackerOptions tracking;
+  bool start_anywhere = false;
   localizer::FlagSet flags("doa_room_report [flags]",
                            "Two talkers with pauses around a 4-microphone board in rooms of RT60 0.2, 0.4 and\n"
                            "0.6 s, through SrpPhat and DirectionTracker; one line of figures per RT60.");
@@ -164,6 +204,10 @@ int main(int argc, char** argv) {
   flags.Uint64("seed", &seed, "N", "talkers, their bursts and the noise");
   flags.Int("max-sources", &max_sources, "K", "sources", "SrpOptions::max_sources, in [1, 16]");
   flags.Double("relative", &relative, "R", "", "SrpOptions::min_relative_statistic, in [0, 1) (0: off)");
+  flags.Bool("start-anywhere", &start_anywhere,
+             "tracks start from any unexplained peak on any frame (DirectionTrackerOptions::start_at_onsets_only false)");
+  flags.Double("onset-rise", &tracking.onset_min_rise_db, "DB", "dB", "DirectionTrackerOptions::onset_min_rise_db");
+  flags.String("dump", &dump, "PATH", "CSV of every frame's peaks and tracks (for analysis)");
   const localizer::Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
   if (flags.help_requested()) return std::printf("%s", flags.Usage().c_str()), 0;
   if (!parsed.ok()) return std::fprintf(stderr, "doa_room_report: %s\n", parsed.message().c_str()), 2;
@@ -173,5 +217,6 @@ int main(int argc, char** argv) {
     return std::fprintf(stderr, "doa_room_report: --max-sources must be in [1, 16]\n"), 2;
   if (!(relative >= 0.0 && relative < 1.0))
     return std::fprintf(stderr, "doa_room_report: --relative must be in [0, 1)\n"), 2;
-  return localizer::engine::Run(seconds, seed, max_sources, relative);
+  tracking.start_at_onsets_only = !start_anywhere;
+  return localizer::engine::Run(seconds, seed, max_sources, relative, dump, tracking);
 }

@@ -29,6 +29,13 @@ PlaneWaveScene Circle() {
   return scene;
 }
 
+ArrayShapeInfo Board() {
+  ArrayShapeInfo shape;
+  shape.shape = ArrayShape::kPlanar;
+  shape.axis = Vec3::UnitZ();
+  return shape;
+}
+
 struct Pipeline {
   SrpPhat srp;
   DirectionTracker tracker;
@@ -40,7 +47,9 @@ Pipeline Make(const PlaneWaveScene& scene) {
   options.source_side = Vec3::UnitZ();
   DirectionTrackerOptions tracking;
   tracking.frame_period_s = kHop_s;
-  return {*SrpPhat::Create(scene.sensors_m, options), *DirectionTracker::Create(ArrayShape::kPlanar, tracking)};
+  SrpPhat srp = *SrpPhat::Create(scene.sensors_m, options);
+  DirectionTracker tracker = *DirectionTracker::Create(srp.shape(), tracking);
+  return {std::move(srp), std::move(tracker)};
 }
 
 // Per frame: the truths (empty direction = silent), and the confirmed tracks' ids nearest
@@ -51,12 +60,13 @@ struct Score {
   std::vector<int> first_confirmed_frame;
 };
 
-// Two equal talkers crossing in azimuth. Asserted: both confirmed within 3 of the first 5
-// frames. Printed, not yet asserted (issue 18 open): identity switches and frames with a
+// Two equal talkers crossing in azimuth. Asserted: the first confirmed within 3 of the first
+// 5 frames, the second within 0.4 s. Printed, not yet asserted (issue 18 open): identity switches and frames with a
 // confirmed track at neither talker. On this 9 cm circle the two peaks merge into one for
 // about 2 s around the crossing; meanwhile weaker peaks at the hemisphere's rim (elevation
 // 0) start tracks, and the coasting track of one talker drifts or is replaced. When written:
-// 6 switches and 256 false-track frames in 375.
+// 6 switches and 256 false-track frames in 375; with the planar peak covariance and
+// precedence (direction_tracker.h) 4 and 137.
 TEST(DirectionTracker, TwoCrossingTalkersAreConfirmedAtOnce) {
   const PlaneWaveScene scene = Circle();
   Pipeline run = Make(scene);
@@ -71,7 +81,7 @@ TEST(DirectionTracker, TwoCrossingTalkersAreConfirmedAtOnce) {
     const std::vector<float> frame = PlaneWaveFrame(scene, {PlaneSource{a, 1.0}, PlaneSource{b, 1.0}}, 7000 + f);
     auto peaks = run.srp.Analyse(frame.data());
     ASSERT_TRUE(peaks.ok());
-    ASSERT_TRUE(run.tracker.Update(t, *peaks, &tracks).ok());
+    ASSERT_TRUE(run.tracker.Update(t, *peaks, run.srp.band_power(), &tracks).ok());
     const Vec3 truths[2] = {a, b};
     bool far_from_crossing = std::abs(AngleBetween(a, b)) > 0.3;
     for (int k = 0; k < 2; ++k) {
@@ -99,7 +109,10 @@ TEST(DirectionTracker, TwoCrossingTalkersAreConfirmedAtOnce) {
   EXPECT_GE(score.first_confirmed_frame[0], 0);
   EXPECT_LE(score.first_confirmed_frame[0], 6);  // 3 of 5 frames: 0.1 s
   EXPECT_GE(score.first_confirmed_frame[1], 0);
-  EXPECT_LE(score.first_confirmed_frame[1], 6);
+  // Both start in frame 0, and a frame starts at most one track (precedence,
+  // direction_tracker.h): the second waits for a frame where it rises most. When written:
+  // frame 17 (0.27 s).
+  EXPECT_LE(score.first_confirmed_frame[1], 25);
 }
 
 TEST(DirectionTracker, ASourceThatStopsIsDeletedAndOneThatStartsIsConfirmed) {
@@ -117,7 +130,7 @@ TEST(DirectionTracker, ASourceThatStopsIsDeletedAndOneThatStartsIsConfirmed) {
     const std::vector<float> frame = PlaneWaveFrame(scene, sources, 9000 + f);
     auto peaks = run.srp.Analyse(frame.data());
     ASSERT_TRUE(peaks.ok());
-    ASSERT_TRUE(run.tracker.Update(t, *peaks, &tracks).ok());
+    ASSERT_TRUE(run.tracker.Update(t, *peaks, run.srp.band_power(), &tracks).ok());
     for (const SourceTrack& tr : tracks) {
       ++frames_seen[tr.id];
       if (AngleBetween(tr.direction, first) < 0.15) last_frame_with_first = f;
@@ -144,7 +157,7 @@ TEST(DirectionTracker, NoiseAloneConfirmsNothing) {
     const std::vector<float> frame = PlaneWaveFrame(scene, {}, 20000 + f);
     auto peaks = run.srp.Analyse(frame.data());
     ASSERT_TRUE(peaks.ok());
-    ASSERT_TRUE(run.tracker.Update(f * kHop_s, *peaks, &tracks).ok());
+    ASSERT_TRUE(run.tracker.Update(f * kHop_s, *peaks, run.srp.band_power(), &tracks).ok());
     confirmed_frames += !tracks.empty();
   }
   EXPECT_EQ(confirmed_frames, 0);
@@ -153,12 +166,12 @@ TEST(DirectionTracker, NoiseAloneConfirmsNothing) {
 TEST(DirectionTracker, BadOptionsAndPeaksAreNamed) {
   DirectionTrackerOptions options;
   options.peak_sigma_rad = 0.0;
-  EXPECT_NE(DirectionTracker::Create(ArrayShape::kPlanar, options).status().message().find("peak_sigma_rad"),
+  EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("peak_sigma_rad"),
             std::string::npos);
-  auto tracker = DirectionTracker::Create(ArrayShape::kPlanar, DirectionTrackerOptions{});
+  auto tracker = DirectionTracker::Create(Board(), DirectionTrackerOptions{});
   ASSERT_TRUE(tracker.ok());
   std::vector<SourceTrack> out;
-  EXPECT_EQ(tracker->Update(0.0, {DirectionPeak{}}, &out).code(), StatusCode::kInvalidArgument);  // NaN direction
+  EXPECT_EQ(tracker->Update(0.0, {DirectionPeak{}}, 1.0, &out).code(), StatusCode::kInvalidArgument);  // NaN direction
 }
 
 }  // namespace
