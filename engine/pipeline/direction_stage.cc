@@ -33,11 +33,12 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
   srp.max_sources = config.max_sources;
   srp.false_alarm = config.presence_false_alarm;
   srp.source_side = config.source_side;
+  srp.hop_samples = config.hop_samples;  // onsets: the rise against the last frame not overlapping
   auto made = SrpPhat::Create(config.sensors_m, srp);
   if (!made.ok()) return made.status();
   DirectionTrackerOptions options;
   options.frame_period_s = config.hop_samples / config.sample_rate_hz;
-  auto tracker = DirectionTracker::Create(made->shape().shape, options);
+  auto tracker = DirectionTracker::Create(made->shape(), options);
   if (!tracker.ok()) return tracker.status();
   return std::unique_ptr<DirectionStage>(
       new DirectionStage(std::move(made).value(), std::move(tracker).value(), options.peak_sigma_rad));
@@ -52,7 +53,7 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
   e->source_present = !peaks->empty();
   e->presence_statistic = peaks->empty() ? 0.0 : peaks->front().statistic;
   e->presence_threshold = srp_.threshold();
-  if (!tracker_.Update(t_s, *peaks, &tracks_).ok()) tracks_.clear();
+  if (!tracker_.Update(t_s, *peaks, srp_.band_power(), &tracks_).ok()) tracks_.clear();
   // Each peak is heard by the nearest track that took a plot this frame (not coasting),
   // within kHeardSigmas of its sigma (at least the peaks' own).
   heard_by_.assign(peaks->size(), -1);
