@@ -154,9 +154,8 @@ int RunOnServer(const TrackFlags& f, const io::TrackJob& job, engine::Localizati
   ProgressReporter progress;
   auto channel = client::Connect(f.stream.server, f.stream.connect);
   if (!channel.ok()) return RuntimeError(kCommand, channel.status());
-  auto result =
-      client::RunRemoteTrack(*channel, job, options, MakeCallbacks(f.print_every, localization, &progress),
-                             RejectionWarnings());
+  auto result = client::RunRemoteTrack(*channel, job, options, MakeCallbacks(f.print_every, localization, &progress),
+                                       RejectionWarnings());
   progress.Finish();
   if (!result.ok()) return RuntimeError(kCommand, result.status());
   PrintSummary(SummaryOf(*result, static_cast<int>(job.config.sensors_m.size())), f.out_path);
@@ -177,7 +176,8 @@ int RunTrack(const std::vector<std::string>& args) {
       "writes one row per frame to the estimates CSV. Planar and linear arrays (and\n"
       "--localization direction) give directions instead: SRP-PHAT peaks followed by a\n"
       "direction tracker, up to --max-sources sources with ids, one CSV row per frame and\n"
-      "source. The WAV header's sample rate wins over the array file's. Progress goes to stderr for recordings over 5 s; every Nth estimate\n"
+      "source. The WAV header's sample rate wins over the array file's. Progress goes to stderr for recordings over 5 "
+      "s; every Nth estimate\n"
       "and a final summary (frames, wall time, mean stage times) to stdout.\n"
       "With --server the session runs on a localizer-server: the same config is sent with\n"
       "every field explicit, the recording is streamed in blocks of --block-samples, and the\n"

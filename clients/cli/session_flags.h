@@ -28,10 +28,10 @@ struct SessionFlags {
   std::string imm_variant = engine::KalmanVariantName(engine::AudioSessionConfig{}.tracker.imm_variant);
   std::string robust = engine::RobustUpdateName(engine::AudioSessionConfig{}.tracker.kalman.robust);
   std::string backend = engine::BackendChoiceName(engine::AudioSessionConfig{}.backend);
-  io::ArrayOverrides array;  // --sound-speed, --reference, --surface-z, --bottom-z
-  std::string bounds_min;    // --bounds-min X,Y,Z ("" = the array file's)
-  std::string bounds_max;    // --bounds-max X,Y,Z
-  std::string localization;  // --localization ("" = the array file's, else auto)
+  io::ArrayOverrides array;        // --sound-speed, --reference, --surface-z, --bottom-z
+  std::string bounds_min;          // --bounds-min X,Y,Z ("" = the array file's)
+  std::string bounds_max;          // --bounds-max X,Y,Z
+  std::string localization;        // --localization ("" = the array file's, else auto)
   std::optional<int> max_sources;  // --max-sources (unset: the array file's, else 4)
   std::string source_side;         // --source-side X,Y,Z ("" = the array file's, else unstated)
 };

@@ -25,8 +25,7 @@ StatusOr<OnsetDetector> OnsetDetector::Create(const OnsetOptions& options) {
 }
 
 Status OnsetDetector::Push(double band_power) {
-  if (!(band_power >= 0.0) || !std::isfinite(band_power))
-    return InvalidArgument("band_power must be finite and >= 0");
+  if (!(band_power >= 0.0) || !std::isfinite(band_power)) return InvalidArgument("band_power must be finite and >= 0");
   const double quietest = past_.empty() ? 0.0 : *std::min_element(past_.begin(), past_.end());
   if (quietest > 0.0) {
     rise_db_ = band_power > 0.0 ? 10.0 * std::log10(band_power / quietest) : -std::numeric_limits<double>::infinity();

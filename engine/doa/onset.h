@@ -19,9 +19,9 @@
 namespace localizer::engine {
 
 struct OnsetOptions {
-  double min_rise_db = 0.0;      // finite
-  double memory_s = 0.05;        // the recent past, >= frame_period_s
-  double frame_period_s = 0.016; // hop / sample rate
+  double min_rise_db = 0.0;       // finite
+  double memory_s = 0.05;         // the recent past, >= frame_period_s
+  double frame_period_s = 0.016;  // hop / sample rate
 
   Status Validate() const;  // INVALID_ARGUMENT naming the option
 };

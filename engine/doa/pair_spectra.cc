@@ -145,7 +145,8 @@ void PairSpectra::RestoreDelay(int p, double lag_samples, std::complex<double> a
 double PairSpectra::WholeAt(int p, double lag_samples, bool previous) const {
   const size_t back = previous ? history_.size() - 1 : 0;
   if (frames_analysed_ <= static_cast<int64_t>(back)) return 0.0;
-  return Evaluate(history_[(newest_ + history_.size() - back) % history_.size()][static_cast<size_t>(p)], lag_samples).r;
+  return Evaluate(history_[(newest_ + history_.size() - back) % history_.size()][static_cast<size_t>(p)], lag_samples)
+      .r;
 }
 
 PairSpectra::Value PairSpectra::At(int p, double lag_samples) const {

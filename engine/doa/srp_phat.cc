@@ -68,7 +68,8 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
   po.max_lag_samples = static_cast<int>(std::ceil(spread)) + 2;  // + the bound's half sample and interpolation
   // The last frame that does not overlap this one: a source that starts within this frame
   // or the one before it is absent there.
-  po.rise_lag_frames = options.hop_samples > 0 ? (options.frame_samples + options.hop_samples - 1) / options.hop_samples : 1;
+  po.rise_lag_frames =
+      options.hop_samples > 0 ? (options.frame_samples + options.hop_samples - 1) / options.hop_samples : 1;
   StatusOr<PairSpectra> spectra = PairSpectra::Create(po);
   if (!spectra.ok()) return spectra.status();
 

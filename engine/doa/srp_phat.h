@@ -113,7 +113,7 @@ struct DirectionPeak {
   // and each reflection is weaker than it (onset.h).
   double rise = 0.0;
   double previous_statistic = 0.0;  // z there in that earlier frame (rise = whole z now - this)
-  double threshold = 0.0;  // t
+  double threshold = 0.0;           // t
   // The pairs' mean peak height over their noise-only deviation, 20 log10(z / sqrt(P)):
   // 0 dB is the noise level.
   double power_db = 0.0;
@@ -168,7 +168,7 @@ class SrpPhat {
   Probe ProbeAt(const Cell& cell) const;
   Cell Moved(const Cell& cell, const Probe& probe, const Eigen::Vector2d& step) const;
   Cell Refine(Cell cell) const;
-  double Exact(const Cell& cell) const;  // z from the exact (residual) spectrum
+  double Exact(const Cell& cell) const;                 // z from the exact (residual) spectrum
   double Whole(const Cell& cell, bool previous) const;  // z from a whole spectrum (PairSpectra::WholeAt)
   DirectionPeak Describe(const Cell& cell, double statistic) const;
 

@@ -38,6 +38,9 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
   if (!made.ok()) return made.status();
   DirectionTrackerOptions options;
   options.frame_period_s = config.hop_samples / config.sample_rate_hz;
+  // Onsets compare with the recent past, which must span at least one frame (long hops:
+  // underwater frames of thousands of samples).
+  options.onset_memory_s = std::max(options.onset_memory_s, options.frame_period_s);
   auto tracker = DirectionTracker::Create(made->shape(), options);
   if (!tracker.ok()) return tracker.status();
   return std::unique_ptr<DirectionStage>(

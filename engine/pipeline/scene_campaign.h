@@ -91,7 +91,7 @@ struct SceneScore {
   bool acquired_bearing = false;
   double time_to_acquire_bearing_s = std::numeric_limits<double>::infinity();
   double range_apertures_median = std::numeric_limits<double>::quiet_NaN();  // the truth's, counted frames
-  double rmse_over_crlb = std::numeric_limits<double>::quiet_NaN();  // after acquisition
+  double rmse_over_crlb = std::numeric_limits<double>::quiet_NaN();          // after acquisition
   // The same against the theoretical per-frame CRLB (NaN without theory sigmas): shows how
   // far the measured TDOA spread itself is from what the scene's SNR and band allow.
   double rmse_over_crlb_theory = std::numeric_limits<double>::quiet_NaN();
@@ -151,7 +151,7 @@ struct CampaignSummary {
   int acquired = 0;
   int lost = 0;  // scenes with lost frames
   int silent_failures = 0;
-  int acquired_theory = 0;                                                           // against 3 x the theoretical CRLB
+  int acquired_theory = 0;                    // against 3 x the theoretical CRLB
   int acquired_bearing = 0;                   // in bearing from the centroid (against its CRLB)
   int acquired_bearing_not_position = 0;      // of those, not acquired in position
   int acquired_bearing_not_position_far = 0;  // of those, the truth beyond 3 apertures (median)

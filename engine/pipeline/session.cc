@@ -197,8 +197,8 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const AudioSessionConfig& con
 Status Session::Process(const BlockView& block, std::vector<Estimate>* out) {
   if (direction_ != nullptr) {
     DirectionImpl& d = *direction_;
-    LOCALIZER_RETURN_IF_ERROR(ValidateBlock(block, sensor_count(), d.config.max_block_samples, d.have_sequence,
-                                            d.last_sequence));
+    LOCALIZER_RETURN_IF_ERROR(
+        ValidateBlock(block, sensor_count(), d.config.max_block_samples, d.have_sequence, d.last_sequence));
     d.have_sequence = true;
     d.last_sequence = block.sequence;
     d.framer.Append(block);
@@ -252,9 +252,7 @@ Status Session::SetPlatformOrigin(const Vec3& origin_m) {
   return impl_->platform->SetOrigin(origin_m);
 }
 
-const AudioSessionConfig& Session::config() const {
-  return direction_ != nullptr ? direction_->config : impl_->config;
-}
+const AudioSessionConfig& Session::config() const { return direction_ != nullptr ? direction_->config : impl_->config; }
 const std::string& Session::backend() const {
   return direction_ != nullptr ? direction_->backend : impl_->components.backend;
 }

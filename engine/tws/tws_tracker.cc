@@ -196,7 +196,8 @@ class TrackerImpl final : public TwsTracker {
   }
 
   void Initiate(double dt, ScanSummary& s) {
-    const int room = std::min(options_.max_initiations_per_scan, options_.max_tracks - static_cast<int>(tracks_.size()));
+    const int room =
+        std::min(options_.max_initiations_per_scan, options_.max_tracks - static_cast<int>(tracks_.size()));
     const std::vector<char>& taken = associator_.taken();
     blocked_.resize(taken.size());
     for (size_t j = 0; j < taken.size(); ++j) blocked_[j] = taken[j] || !may_start_[j];

@@ -12,8 +12,12 @@ AudioRunner::AudioRunner(std::unique_ptr<engine::Session> session, ServiceMetric
     : session_(std::move(session)),
       metrics_(metrics),
       stages_(metrics->stages(session_->backend())),
-      info_{"samples", engine::FilterKindName(session_->config().tracker.kind), session_->backend(),
-            session_->sensor_count(), true, engine::ArrayShapeName(session_->shape().shape),
+      info_{"samples",
+            engine::FilterKindName(session_->config().tracker.kind),
+            session_->backend(),
+            session_->sensor_count(),
+            true,
+            engine::ArrayShapeName(session_->shape().shape),
             engine::LocalizationName(session_->localization())},
       block_limits_{session_->sensor_count(), session_->config().max_block_samples} {}
 

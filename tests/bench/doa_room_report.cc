@@ -52,8 +52,9 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
   std::vector<Vec3> board, relative{Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
   for (const Vec3& m : relative) board.push_back(centre + m);
   const auto samples = static_cast<int64_t>(seconds * kFs);
-  std::printf("RT60 | peak azimuth error median / p90 (deg) | detected by a peak | by a track / its error median (deg) | "
-              "false track s/min | id switches\n");
+  std::printf(
+      "RT60 | peak azimuth error median / p90 (deg) | detected by a peak | by a track / its error median (deg) | "
+      "false track s/min | id switches\n");
   for (const double rt60_s : {0.2, 0.4, 0.6}) {
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> normal;
@@ -120,7 +121,8 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
       for (int m = 0; m < 4; ++m)
         std::copy_n(signals->begin() + m * samples + start, kFrame, frame.begin() + m * kFrame);
       auto peaks = srp->Analyse(frame.data());
-      if (!peaks.ok() || !tracker->Update(static_cast<double>(start) / kFs, *peaks, srp->band_power(), &tracks).ok()) return 1;
+      if (!peaks.ok() || !tracker->Update(static_cast<double>(start) / kFs, *peaks, srp->band_power(), &tracks).ok())
+        return 1;
       std::vector<bool> on(2);
       if (dump) {
         const double energy = srp->band_power();
@@ -128,17 +130,20 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
           const Talker& t = talkers[static_cast<size_t>(k)];
           return int(t.on[static_cast<size_t>(start)]) + 2 * int(t.on[static_cast<size_t>(start + kFrame - 1)]);
         };
-        auto dist = [&](double az, int k) { return std::abs(Wrap(az - talkers[static_cast<size_t>(k)].azimuth_rad)) * 180 / std::numbers::pi; };
+        auto dist = [&](double az, int k) {
+          return std::abs(Wrap(az - talkers[static_cast<size_t>(k)].azimuth_rad)) * 180 / std::numbers::pi;
+        };
         for (size_t r = 0; r < peaks->size(); ++r) {
           const DirectionPeak& p = (*peaks)[r];
-          std::fprintf(dump, "p,%.1f,%d,%d,%d,%.6g,%d,%zu,0,0,%.4f,%.4f,%.3f,%.3f,%.2f,%.2f\n", rt60_s, frames, on_of(0), on_of(1), energy,
-                       int(tracker->last_frame_onset()), r, p.azimuth_rad, p.elevation_rad, p.statistic, p.rise, dist(p.azimuth_rad, 0), dist(p.azimuth_rad, 1));
+          std::fprintf(dump, "p,%.1f,%d,%d,%d,%.6g,%d,%zu,0,0,%.4f,%.4f,%.3f,%.3f,%.2f,%.2f\n", rt60_s, frames,
+                       on_of(0), on_of(1), energy, int(tracker->last_frame_onset()), r, p.azimuth_rad, p.elevation_rad,
+                       p.statistic, p.rise, dist(p.azimuth_rad, 0), dist(p.azimuth_rad, 1));
         }
         for (const SourceTrack& tr : tracks)
-          std::fprintf(dump, "t,%.1f,%d,%d,%d,%.6g,%d,0,%llu,%d,%.4f,%.4f,0,0,%.2f,%.2f\n", rt60_s, frames, on_of(0), on_of(1), energy,
-                       int(tracker->last_frame_onset()),
-                       static_cast<unsigned long long>(tr.id), static_cast<int>(tr.status), tr.azimuth_rad, tr.elevation_rad,
-                       dist(tr.azimuth_rad, 0), dist(tr.azimuth_rad, 1));
+          std::fprintf(dump, "t,%.1f,%d,%d,%d,%.6g,%d,0,%llu,%d,%.4f,%.4f,0,0,%.2f,%.2f\n", rt60_s, frames, on_of(0),
+                       on_of(1), energy, int(tracker->last_frame_onset()), static_cast<unsigned long long>(tr.id),
+                       static_cast<int>(tr.status), tr.azimuth_rad, tr.elevation_rad, dist(tr.azimuth_rad, 0),
+                       dist(tr.azimuth_rad, 1));
       }
       for (int k = 0; k < 2; ++k) {
         const Talker& t = talkers[static_cast<size_t>(k)];
@@ -152,7 +157,8 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
           errors_deg.push_back(best * 180 / std::numbers::pi);
         }
         double track_best = 1e9;
-        for (const SourceTrack& tr : tracks) track_best = std::min(track_best, std::abs(Wrap(tr.azimuth_rad - t.azimuth_rad)));
+        for (const SourceTrack& tr : tracks)
+          track_best = std::min(track_best, std::abs(Wrap(tr.azimuth_rad - t.azimuth_rad)));
         if (track_best < 20.0 * std::numbers::pi / 180) {
           ++tracked;
           track_errors_deg.push_back(track_best * 180 / std::numbers::pi);
@@ -180,8 +186,8 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
     const double track_median = track_errors_deg.empty() ? NAN : track_errors_deg[track_errors_deg.size() / 2];
     const double minutes = static_cast<double>(frames) * kHop / kFs / 60.0;
     std::printf("%.1f s | %.1f / %.1f | %.1f %% of %d | %.1f %% / %.1f | %.1f | %d\n", rt60_s, median, p90,
-                100.0 * detected / std::max(1, sounding), sounding, 100.0 * tracked / std::max(1, sounding), track_median,
-                false_frames * kHop / kFs / minutes, switches);
+                100.0 * detected / std::max(1, sounding), sounding, 100.0 * tracked / std::max(1, sounding),
+                track_median, false_frames * kHop / kFs / minutes, switches);
   }
   return 0;
 }
@@ -204,8 +210,9 @@ int main(int argc, char** argv) {
   flags.Uint64("seed", &seed, "N", "talkers, their bursts and the noise");
   flags.Int("max-sources", &max_sources, "K", "sources", "SrpOptions::max_sources, in [1, 16]");
   flags.Double("relative", &relative, "R", "", "SrpOptions::min_relative_statistic, in [0, 1) (0: off)");
-  flags.Bool("start-anywhere", &start_anywhere,
-             "tracks start from any unexplained peak on any frame (DirectionTrackerOptions::start_at_onsets_only false)");
+  flags.Bool(
+      "start-anywhere", &start_anywhere,
+      "tracks start from any unexplained peak on any frame (DirectionTrackerOptions::start_at_onsets_only false)");
   flags.Double("onset-rise", &tracking.onset_min_rise_db, "DB", "dB", "DirectionTrackerOptions::onset_min_rise_db");
   flags.String("dump", &dump, "PATH", "CSV of every frame's peaks and tracks (for analysis)");
   const localizer::Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));

@@ -218,11 +218,11 @@ void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s)
                "\"median_rmse_over_crlb_gaussian\": %s, \"median_rmse_over_crlb_hard\": %s, "
                "\"median_nees_per_dim\": %s, \"median_rmse_over_crlb_theory\": %s},\n  \"scenes\": [\n",
                s.scenes, s.run_errors, s.acquired, s.lost, s.silent_failures, s.acquired_theory, s.acquired_bearing,
-               s.acquired_bearing_not_position,
-               JsonNum(s.median_time_to_acquire_s).c_str(), JsonNum(s.p95_time_to_acquire_s).c_str(),
-               JsonNum(s.median_time_to_acquire_acquired_s).c_str(), JsonNum(s.p95_time_to_acquire_acquired_s).c_str(),
-               JsonNum(s.median_rmse_over_crlb_gaussian).c_str(), JsonNum(s.median_rmse_over_crlb_hard).c_str(),
-               JsonNum(s.median_nees_per_dim).c_str(), JsonNum(s.median_rmse_over_crlb_theory).c_str());
+               s.acquired_bearing_not_position, JsonNum(s.median_time_to_acquire_s).c_str(),
+               JsonNum(s.p95_time_to_acquire_s).c_str(), JsonNum(s.median_time_to_acquire_acquired_s).c_str(),
+               JsonNum(s.p95_time_to_acquire_acquired_s).c_str(), JsonNum(s.median_rmse_over_crlb_gaussian).c_str(),
+               JsonNum(s.median_rmse_over_crlb_hard).c_str(), JsonNum(s.median_nees_per_dim).c_str(),
+               JsonNum(s.median_rmse_over_crlb_theory).c_str());
   for (size_t i = 0; i < s.rows.size(); ++i) {
     const SceneRow& r = s.rows[i];
     const SceneScore& c = r.score;
@@ -264,12 +264,13 @@ int Trace(uint64_t seed, const RandomSceneOptions& scene_options, const Args& a)
   std::printf("%s\nrobust TDOA sigma per pair (us):", row.description.c_str());
   for (double s : sigma_s) std::printf(" %.3g", 1e6 * s);
   std::printf("\n%8s %4s %4s %4s %10s %10s %9s %9s %10s %10s %5s %7s %9s  %s\n", "t_s", "init", "pres", "amb",
-              "error_m", "crlb_m", "err/crlb", "brg/crlb", "sd_m", "nees", "pairs", "nis", "sigma_us", "per pair (measured - true) / sigma");
+              "error_m", "crlb_m", "err/crlb", "brg/crlb", "sd_m", "nees", "pairs", "nis", "sigma_us",
+              "per pair (measured - true) / sigma");
   for (const FrameScore& f : row.score.per_frame) {
     std::printf("%8.3f %4d %4d %4d %10s %10s %9s %9s %10s %10s %5d %7.3g %9.3g ", f.t_s, f.initialised, f.present,
                 f.ambiguous, Num(f.error_m, "%.4g").c_str(), Num(f.crlb_m, "%.4g").c_str(),
-                Num(f.error_m / f.crlb_m).c_str(), Num(f.bearing_error_rad / f.bearing_crlb_rad).c_str(), Num(f.sd_m, "%.4g").c_str(), Num(f.nees_position).c_str(),
-                f.pairs_used, f.nis, 1e6 * f.tdoa_sigma_s);
+                Num(f.error_m / f.crlb_m).c_str(), Num(f.bearing_error_rad / f.bearing_crlb_rad).c_str(),
+                Num(f.sd_m, "%.4g").c_str(), Num(f.nees_position).c_str(), f.pairs_used, f.nis, 1e6 * f.tdoa_sigma_s);
     for (size_t p = 0; p < f.tdoa_error_s.size() && p < sigma_s.size(); ++p) {
       std::printf(" %s", Num(f.tdoa_error_s[p] / sigma_s[p], "%.1f").c_str());
     }
@@ -315,16 +316,17 @@ int main(int argc, char** argv) {
 
   const CampaignSummary s = SummariseCampaign(rows);
   std::printf("%10s %-9s %-3s %-3s %6s %7s %4s %8s %8s %9s %9s %8s %6s %6s %6s  %s\n", "seed", "class", "acq", "brg",
-              "r_aper", "t_acq_s", "init",
-              "crlb_m", "crlb_th_m", "rmse/crlb", "rmse/crth", "nees/dim", "lost", "silent", "wall_s", "scene");
+              "r_aper", "t_acq_s", "init", "crlb_m", "crlb_th_m", "rmse/crlb", "rmse/crth", "nees/dim", "lost",
+              "silent", "wall_s", "scene");
   for (const SceneRow& r : s.rows) PrintRow(stdout, r);
   std::printf("\nscenes %d (run errors %d), duration %g s, campaign seed %" PRIu64 "\n", s.scenes, s.run_errors,
               a.duration_s, a.seed);
   std::printf("acquired %d / %d; scenes with lost frames %d; silent failures %d\n", s.acquired, s.scenes - s.run_errors,
               s.lost, s.silent_failures);
-  std::printf("acquired in bearing from the centroid (3 x its CRLB): %d; of them not in position %d (%d with the "
-              "source beyond 3 apertures)\n",
-              s.acquired_bearing, s.acquired_bearing_not_position, s.acquired_bearing_not_position_far);
+  std::printf(
+      "acquired in bearing from the centroid (3 x its CRLB): %d; of them not in position %d (%d with the "
+      "source beyond 3 apertures)\n",
+      s.acquired_bearing, s.acquired_bearing_not_position, s.acquired_bearing_not_position_far);
   std::printf("acquired against 3 x the theoretical CRLB: %d; median time (never = inf) %s s\n", s.acquired_theory,
               Num(s.median_time_to_acquire_theory_s, "%.2f").c_str());
   std::printf("time to acquire, all scenes (never = inf): median %s s, p95 %s s\n",

@@ -166,8 +166,7 @@ TEST(DirectionTracker, NoiseAloneConfirmsNothing) {
 TEST(DirectionTracker, BadOptionsAndPeaksAreNamed) {
   DirectionTrackerOptions options;
   options.peak_sigma_rad = 0.0;
-  EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("peak_sigma_rad"),
-            std::string::npos);
+  EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("peak_sigma_rad"), std::string::npos);
   auto tracker = DirectionTracker::Create(Board(), DirectionTrackerOptions{});
   ASSERT_TRUE(tracker.ok());
   std::vector<SourceTrack> out;

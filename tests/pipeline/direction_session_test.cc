@@ -29,7 +29,9 @@ std::vector<Vec3> Line() {
   for (int i = 0; i < 8; ++i) s.emplace_back(0.04 * i, 0, 0);
   return s;
 }
-std::vector<Vec3> Tetrahedron() { return {{0.05, 0.05, 0.05}, {0.05, -0.05, -0.05}, {-0.05, 0.05, -0.05}, {-0.05, -0.05, 0.05}}; }
+std::vector<Vec3> Tetrahedron() {
+  return {{0.05, 0.05, 0.05}, {0.05, -0.05, -0.05}, {-0.05, 0.05, -0.05}, {-0.05, -0.05, 0.05}};
+}
 
 AudioSessionConfig DirectionConfig(std::vector<Vec3> sensors) {
   AudioSessionConfig c;
@@ -53,8 +55,7 @@ std::vector<Estimate> Stream(Session* session, int frames, const SourcesAt& at, 
   for (int i = 0; i < frames; ++i) {
     const std::vector<float> frame = PlaneWaveFrame(scene, at(i), 1000 + static_cast<uint64_t>(i));
     // PlaneWaveFrame is channel-major per frame, as a block is.
-    const BlockView block{static_cast<uint64_t>(i + 1), static_cast<int>(scene.sensors_m.size()), kFrame,
-                          frame.data()};
+    const BlockView block{static_cast<uint64_t>(i + 1), static_cast<int>(scene.sensors_m.size()), kFrame, frame.data()};
     EXPECT_TRUE(session->Process(block, &out).ok());
   }
   return out;
@@ -74,6 +75,13 @@ TEST(DirectionSession, AutoGivesDirectionsForAPlanarBoardAndPositionForAVolume) 
   ASSERT_TRUE(volume.ok());
   EXPECT_EQ((*volume)->localization(), Localization::kPosition);
   EXPECT_NE((*volume)->geometry(), nullptr);
+  // Long hops (underwater framing: 4096 / 2048 at 11 kHz) are fine too.
+  AudioSessionConfig slow = DirectionConfig(Square());
+  slow.sample_rate_hz = 11025.0;
+  slow.frame_samples = 4096;
+  slow.hop_samples = 2048;
+  slow.band_high_hz = 5000.0;
+  EXPECT_TRUE(Session::Create(slow).ok()) << Session::Create(slow).status().ToString();
   AudioSessionConfig asked = DirectionConfig(Tetrahedron());
   asked.localization = Localization::kDirection;
   auto directions = Session::Create(asked);
@@ -143,7 +151,8 @@ TEST(DirectionSession, ALineReportsTheConeAngle) {
 // source; then one stops and its track coasts and is deleted within max_coast_s (1 s).
 TEST(DirectionSession, TwoSourcesKeepTwoIdsAndOneThatStopsIsDropped) {
   std::vector<Vec3> circle = {{0, 0, 0}};
-  for (int k = 0; k < 6; ++k) circle.emplace_back(0.0465 * std::cos(k * std::numbers::pi / 3), 0.0465 * std::sin(k * std::numbers::pi / 3), 0);
+  for (int k = 0; k < 6; ++k)
+    circle.emplace_back(0.0465 * std::cos(k * std::numbers::pi / 3), 0.0465 * std::sin(k * std::numbers::pi / 3), 0);
   AudioSessionConfig c = DirectionConfig(circle);
   c.source_side = Vec3::UnitZ();
   auto session = Session::Create(c);

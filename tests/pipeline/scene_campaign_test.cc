@@ -153,7 +153,8 @@ TEST(SceneScore, BearingIsScoredApartFromRange) {
   EXPECT_GT(s.range_apertures_median, 2.6);
   EXPECT_LT(s.range_apertures_median, 3.2);
   const auto sideways = Estimates(
-      array, sim, [&](double, const Vec3& truth) -> Vec3 { return truth + (truth - centre).cross(Vec3::UnitZ()); }, 0.01);
+      array, sim, [&](double, const Vec3& truth) -> Vec3 { return truth + (truth - centre).cross(Vec3::UnitZ()); },
+      0.01);
   const SceneScore w = ScoreScene(array, sim, sideways);
   EXPECT_FALSE(w.acquired);
   EXPECT_FALSE(w.acquired_bearing);

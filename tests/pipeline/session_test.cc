@@ -156,7 +156,8 @@ TEST(Session, ConfigurationErrorsNameTheField) {
   EXPECT_EQ(s.status().code(), StatusCode::kInvalidArgument);
   EXPECT_NE(s.status().message().find("sensors_m"), std::string::npos);
   c.localization = Localization::kAuto;
-  EXPECT_TRUE(Session::Create(c).ok());  // a direction session (direction_session_test.cc)
+  EXPECT_TRUE(Session::Create(c).ok())
+      << Session::Create(c).status().ToString();  // directions (direction_session_test.cc)
 
   c = ConfigFor(f.scenario);
   c.hop_samples = c.frame_samples + 1;
