@@ -19,6 +19,8 @@ Status DirectionTrackerOptions::Validate() const {
   if (!(max_elevation_sigma_rad >= peak_sigma_rad) || max_elevation_sigma_rad > 1.0)
     return InvalidArgument("max_elevation_sigma_rad must be in [peak_sigma_rad, 1]");
   if (!(echo_window_s >= 0.0) || !std::isfinite(echo_window_s)) return InvalidArgument("echo_window_s must be >= 0");
+  if (!(resume_after_s >= 0.0) || resume_after_s / frame_period_s > 1e6)
+    return InvalidArgument("resume_after_s must be >= 0 (and at most 1e6 frames)");
   return Status::Ok();  // confirm_hits / confirm_window: TwsOptions::Validate names them
 }
 
@@ -37,6 +39,8 @@ StatusOr<DirectionTracker> DirectionTracker::Create(const ArrayShapeInfo& shape,
   tws.initial_speed_sigma_mps = options.initial_rate_sigma_radps;
   tws.max_tracks = 64;
   if (options.start_at_onsets_only) tws.max_initiations_per_scan = 1;
+  if (options.resume_after_s > 0.0)
+    tws.resume_misses = std::max(1, static_cast<int>(std::ceil(options.resume_after_s / options.frame_period_s)));
   auto tracker = tws::TwsTracker::Create(tws);
   if (!tracker.ok()) return tracker.status();
   OnsetOptions onset;
@@ -95,6 +99,7 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     plot.position_m = u;
     plot.may_start_track =
         !options_.start_at_onsets_only || (may_start && !echo_blocks && &peak == riser && peak.rise >= peak.threshold);
+    plot.may_resume_track = peak.rise >= peak.threshold;  // used only when resume_after_s > 0
     if (linear) {
       const Mat3 radial = u * u.transpose();
       plot.covariance_m2 = s2 * (Mat3::Identity() - radial) + kRadialShare * kRadialShare * s2 * radial;

@@ -39,6 +39,16 @@
 // for its next onset; a source that sounds without onsets (a steady hum) after others is
 // never started.
 //
+// Resuming. A talker's track coasts through a pause with a gate that widens as its
+// prediction's uncertainty grows (to ~0.5 rad after 1 s), while the other talker's
+// reflections keep arriving from fixed directions: the coasting track took one and followed
+// it (most of the false-track time left after precedence). A paused source that resumes is
+// heard as a rise at its direction, like a new one; a reflection of a source that kept
+// sounding is not. So a track silent for resume_after_s or more is updated only by a peak
+// whose rise passes the threshold (TwsOptions::resume_misses,
+// CartesianPlot::may_resume_track); it is taken after the tracks heard lately have taken
+// theirs.
+//
 // Defaults suit talkers around a board: sigma 0.05 rad (3 degrees, about a small board's
 // frame-by-frame spread in a reverberant room), angular acceleration 2 rad/s^2, 3 of 5
 // frames to confirm, deletion after max_coast_s of silence (1 s: pauses in speech keep their
@@ -74,6 +84,9 @@ struct DirectionTrackerOptions {
   double onset_min_rise_db = 0.0;  // OnsetOptions::min_rise_db: the frame's power did not fall
   double onset_memory_s = 0.05;    // OnsetOptions::memory_s
   double echo_window_s = 0.1;      // after a direction rose, births only from peaks as strong
+  // A track silent this long (0: off) is resumed only by a peak that rose past the threshold
+  // (see "Resuming" above).
+  double resume_after_s = 0.25;
 
   Status Validate() const;
 };

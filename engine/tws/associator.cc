@@ -17,6 +17,7 @@ void GnnAssociator<D>::BeginScan(const std::vector<Gaussian<D>>& measurements) {
   }
   grid_.Build(xy_);
   taken_.assign(measurements.size(), 0);
+  withheld_ = nullptr;
 }
 
 template <int D>
@@ -36,7 +37,7 @@ void GnnAssociator<D>::Associate(const std::vector<Gaussian<D>>& expected, std::
     const double hx = std::sqrt(gate_ * (a(0, 0) + max_r_diag_(0)));
     const double hy = std::sqrt(gate_ * (a(1, 1) + max_r_diag_(1)));
     const auto test = [&](int j) {
-      if (taken_[j]) return;
+      if (taken_[j] || (withheld_ != nullptr && (*withheld_)[j])) return;
       const Gaussian<D>& z = measurements[j];
       const PosCov sm = a + z.covariance;
       const Pos nu = z.mean - p;

@@ -70,6 +70,10 @@ class GnnAssociator {
   void BeginScan(const std::vector<Gaussian<D>>& measurements);
   void Associate(const std::vector<Gaussian<D>>& expected, std::vector<int>* assigned, AssociationStats* stats);
 
+  // Measurements the next Associate calls must not give out (1 = withheld; null: none), for
+  // tracks that may take only some of the scan's plots. Not owned; reset by BeginScan.
+  void Withhold(const std::vector<char>* withheld) { withheld_ = withheld; }
+
   // Per measurement of the scan: 1 when a track took it.
   const std::vector<char>& taken() const { return taken_; }
   double gate_threshold() const { return gate_; }
@@ -91,6 +95,7 @@ class GnnAssociator {
   std::vector<Eigen::Vector2d> xy_;  // the measurements' first two coordinates, for the grid
   Eigen::Matrix<double, D, 1> max_r_diag_;
   std::vector<char> taken_;
+  const std::vector<char>* withheld_ = nullptr;
   PointGrid grid_;
   std::vector<Edge> edges_, sorted_edges_, greedy_edges_;
   UnionFind uf_;

@@ -22,6 +22,9 @@
 //   initial_speed_sigma_mps    150        m/s    one-point: velocity prior std per axis
 //   max_speed_mps              400        m/s    two-point: fastest target to pair plots for
 //   max_initiations_per_scan   10000      -      tracks one scan may start (in plot order)
+//   resume_misses              0          scans  a track that missed this many scans in a row
+//                                                takes only plots that may resume a track
+//                                                (CartesianPlot::may_resume_track); 0: any
 //   max_tracks                 10000      -      a scan that would exceed it initiates fewer
 //                                                (a TrackList of 10^4 tracks is ~3.6 MB)
 // Bounds on one scan's work, so that no scan (adversarial or cluttered) costs more than
@@ -64,6 +67,7 @@ struct TwsOptions {
   double max_speed_mps = 400.0;
   int max_tracks = 10000;
   int max_initiations_per_scan = 10000;
+  int resume_misses = 0;
   int max_plots_per_scan = 65536;
   int64_t gate_search_budget = 64;
   int64_t max_assignment_cells = 65536;

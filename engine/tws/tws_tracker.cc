@@ -51,6 +51,7 @@ class TrackerImpl final : public TwsTracker {
     if (!scan.sensor_position_m.allFinite()) return InvalidArgument("sensor_position_m is not finite");
     plots_.resize(scan.detections.size());
     may_start_.assign(scan.detections.size(), 1);
+    may_not_resume_.assign(scan.detections.size(), 0);
     for (size_t i = 0; i < scan.detections.size(); ++i) {
       const Detection& d = scan.detections[i];
       if constexpr (D == 2) {
@@ -78,8 +79,10 @@ class TrackerImpl final : public TwsTracker {
     }
     plots_.resize(plots.size());
     may_start_.resize(plots.size());
+    may_not_resume_.resize(plots.size());
     for (size_t i = 0; i < plots.size(); ++i) {
       may_start_[i] = plots[i].may_start_track ? 1 : 0;
+      may_not_resume_[i] = plots[i].may_resume_track ? 0 : 1;
       plots_[i].mean = plots[i].position_m.template head<D>();
       plots_[i].covariance = plots[i].covariance_m2.template topLeftCorner<D, D>();
     }
@@ -156,20 +159,31 @@ class TrackerImpl final : public TwsTracker {
     if (summary) *summary = s;
   }
 
-  // Confirmed tracks first, then tentative ones on the plots left.
+  // Which association stage a track joins: confirmed ones that heard a plot lately (0),
+  // confirmed ones silent for resume_misses scans (1: only plots that may resume a track),
+  // tentative ones (2), each on the plots the stages before left.
+  int StageOf(const Track& tr) const {
+    if (!tr.history.confirmed) return 2;
+    return options_.resume_misses > 0 && tr.history.misses >= options_.resume_misses ? 1 : 0;
+  }
+
   void Associate(ScanSummary& s) {
     associator_.BeginScan(plots_);
     AssociationStats stats;
     for (Track& tr : tracks_) tr.measurement = -1;
-    for (int stage = 0; stage < 2; ++stage) {
+    const bool filtered = options_.resume_misses > 0;
+    for (int stage = 0; stage < 3; ++stage) {
       stage_tracks_.clear();
       expected_.clear();
       for (int i = 0; i < static_cast<int>(tracks_.size()); ++i) {
-        if (tracks_[i].history.confirmed != (stage == 0)) continue;
+        if (StageOf(tracks_[i]) != stage) continue;
         stage_tracks_.push_back(i);
         expected_.push_back(updater_.Expected(tracks_[i].filter));
       }
+      if (stage_tracks_.empty()) continue;
+      associator_.Withhold(stage == 1 && filtered ? &may_not_resume_ : nullptr);
       associator_.Associate(expected_, &assigned_, &stats);
+      associator_.Withhold(nullptr);
       for (size_t k = 0; k < stage_tracks_.size(); ++k) {
         if (assigned_[k] >= 0) tracks_[stage_tracks_[k]].measurement = assigned_[k];
       }
@@ -225,6 +239,7 @@ class TrackerImpl final : public TwsTracker {
   // Per-scan work arrays, kept between scans.
   std::vector<Gaussian<D>> plots_;     // the scan's plots, converted
   std::vector<char> may_start_;        // per plot: may it start a track
+  std::vector<char> may_not_resume_;   // per plot: 1 if it may not update a long-silent track
   std::vector<char> blocked_;          // per plot: taken by a track, or may not start one
   std::vector<int> stage_tracks_;      // the tracks of one association stage
   std::vector<Gaussian<D>> expected_;  // and what each expects to measure

@@ -14,7 +14,9 @@
 // One scan at time t (Process):
 //  1. every track predicts to t (dt = t - previous scan's time);
 //  2. plots are converted to world-frame positions with covariance R_j;
-//  3. confirmed and coasting tracks are gated against all plots: d^2 = nu^T (A + R_j)^-1 nu
+//  3. confirmed and coasting tracks are gated against all plots (those that missed
+//     resume_misses scans in a row, when > 0, after the others and only against plots that
+//     may resume a track): d^2 = nu^T (A + R_j)^-1 nu
 //     <= g, g = chi^2_D quantile of gate_probability; the gate graph's connected components
 //     are solved alone by SolveGnn with cost d^2 and miss cost g (a plot inside the gate is
 //     always preferred to a miss, and the total of d^2 over the scan is minimal);
@@ -59,6 +61,10 @@ struct CartesianPlot {
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
   Eigen::Matrix3d covariance_m2 = Eigen::Matrix3d::Identity();
   bool may_start_track = true;
+  // false: the plot may not update a track that has missed TwsOptions::resume_misses (> 0)
+  // scans in a row (a caller that knows a plot is not a silent target resuming, e.g. a
+  // steady reflection of another, says so).
+  bool may_resume_track = true;
 };
 
 class TwsTracker {

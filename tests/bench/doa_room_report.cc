@@ -214,6 +214,9 @@ int main(int argc, char** argv) {
       "start-anywhere", &start_anywhere,
       "tracks start from any unexplained peak on any frame (DirectionTrackerOptions::start_at_onsets_only false)");
   flags.Double("onset-rise", &tracking.onset_min_rise_db, "DB", "dB", "DirectionTrackerOptions::onset_min_rise_db");
+  flags.Double("resume-after", &tracking.resume_after_s, "S", "s",
+               "DirectionTrackerOptions::resume_after_s: a track silent this long resumes only on a rising peak (0: "
+               "off)");
   flags.String("dump", &dump, "PATH", "CSV of every frame's peaks and tracks (for analysis)");
   const localizer::Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
   if (flags.help_requested()) return std::printf("%s", flags.Usage().c_str()), 0;
