@@ -80,7 +80,9 @@ fi
 for t in "${targets[@]}"; do
   [ -x "$dir/$t" ] || { echo "$dir/$t is missing: build the fuzz preset (drop --no-build)" >&2; exit 1; }
 done
-"$dir/fuzz_seeds" "$dir/corpus" >/dev/null
+# One writer at a time: two check.sh runs side by side (two targets on two cores) would
+# otherwise share the seed writer's scratch folder.
+flock "$dir/.seeds.lock" "$dir/fuzz_seeds" "$dir/corpus" >/dev/null
 
 failed=0
 printf '%-22s %12s %8s %10s  %s\n' target executions seconds exec/s status

@@ -9,6 +9,7 @@
 #include <variant>
 
 #include "engine/array/array_geometry.h"
+#include "engine/pipeline/session.h"
 #include "fuzz_util.h"
 #include "wire/block_wire.h"
 #include "wire/config_wire.h"
@@ -47,7 +48,11 @@ inline void CheckAcceptedConfig(const engine::SessionConfig& config, const wire:
   if (const auto* audio = std::get_if<engine::AudioSessionConfig>(&config)) {
     FUZZ_CHECK(audio->Validate().ok(), audio->Validate().ToString());
     const int sensors = static_cast<int>(audio->sensors_m.size());
-    FUZZ_CHECK(sensors >= 4 && sensors <= policy.max_channels, std::to_string(sensors));
+    // Directions take any 2 or more sensors; a position needs 4 (engine/pipeline/session.h).
+    const int min_sensors = audio->localization == engine::Localization::kPosition ? 4 : 2;
+    FUZZ_CHECK(sensors >= min_sensors && sensors <= policy.max_channels, std::to_string(sensors));
+    FUZZ_CHECK(audio->max_sources >= 1 && audio->max_sources <= 16, std::to_string(audio->max_sources));
+    FUZZ_CHECK(audio->source_side.allFinite(), "non-finite source_side accepted");
     FUZZ_CHECK(audio->reference_sensor >= 0 && audio->reference_sensor < sensors,
                std::to_string(audio->reference_sensor));
     FUZZ_CHECK(audio->tracker.particle.particles >= 1 && audio->tracker.particle.particles <= policy.max_particles,
@@ -56,6 +61,7 @@ inline void CheckAcceptedConfig(const engine::SessionConfig& config, const wire:
                std::to_string(audio->max_block_samples));
     // What a session builds next from the config: must answer, whatever it answers.
     (void)engine::ArrayGeometry::Create(audio->sensors_m, audio->sound_speed_mps, audio->reference_sensor);
+    (void)engine::ResolveLocalization(*audio);
     (void)audio->GccOptionsFor().Validate();
   } else {
     const auto& detection = std::get<engine::DetectionSessionConfig>(config);
