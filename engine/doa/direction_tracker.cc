@@ -1,5 +1,6 @@
 #include "engine/doa/direction_tracker.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace localizer::engine {
@@ -21,6 +22,8 @@ Status DirectionTrackerOptions::Validate() const {
   if (!(echo_window_s >= 0.0) || !std::isfinite(echo_window_s)) return InvalidArgument("echo_window_s must be >= 0");
   if (!(resume_after_s >= 0.0) || resume_after_s / frame_period_s > 1e6)
     return InvalidArgument("resume_after_s must be >= 0 (and at most 1e6 frames)");
+  if (!(lost_source_after_s >= 0.0) || !std::isfinite(lost_source_after_s))
+    return InvalidArgument("lost_source_after_s must be >= 0");
   return Status::Ok();  // confirm_hits / confirm_window: TwsOptions::Validate names them
 }
 
@@ -97,8 +100,13 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     if (!u.allFinite()) return InvalidArgument("a peak without a direction for this array's shape");
     tws::CartesianPlot plot;
     plot.position_m = u;
-    plot.may_start_track =
-        !options_.start_at_onsets_only || (may_start && !echo_blocks && &peak == riser && peak.rise >= peak.threshold);
+    // A source that sounds on without onsets (a steady one whose track was lost) is still
+    // the frame's strongest peak: when no confirmed track has been heard for
+    // lost_source_after_s, it may start a track on a frame whose power did not fall.
+    const bool strongest = options_.lost_source_after_s > 0.0 && unheard_s_ >= options_.lost_source_after_s &&
+                           &peak == &peaks.front();
+    plot.may_start_track = !options_.start_at_onsets_only ||
+                           (may_start && ((!echo_blocks && &peak == riser && peak.rise >= peak.threshold) || strongest));
     plot.may_resume_track = peak.rise >= peak.threshold;  // used only when resume_after_s > 0
     if (linear) {
       const Mat3 radial = u * u.transpose();
@@ -111,6 +119,9 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   }
   LOCALIZER_RETURN_IF_ERROR(tracker_->ProcessCartesian(t_s, plots_));
   tracker_->Tracks(&reports_, include_tentative);
+  const bool heard = std::any_of(reports_.begin(), reports_.end(),
+                                 [](const tws::TrackReport& r) { return r.status == tws::TrackStatus::kConfirmed; });
+  unheard_s_ = heard ? 0.0 : unheard_s_ + options_.frame_period_s;
   out->clear();
   for (const tws::TrackReport& r : reports_) {
     SourceTrack track;

@@ -34,10 +34,12 @@
 // and its reflections rise relative to it), and at most one per frame. For echo_window_s
 // after any direction rose so (a new source, or a paused one resuming and taken by its
 // track), a later riser starts a track only if its statistic is at least that source's: a
-// second source, not its reflections, which rise as the room fills. Costs: a source that
-// starts while a louder one's echo window is open, or in the same frame as another, waits
-// for its next onset; a source that sounds without onsets (a steady hum) after others is
-// never started.
+// second source, not its reflections, which rise as the room fills. And when no confirmed
+// track has taken a peak for lost_source_after_s (a steady source whose track was lost: it
+// rises nowhere), the frame's strongest peak may start one too: a reflection is never the
+// strongest while its source sounds. Costs: a source that starts while a louder one's echo
+// window is open, or in the same frame as another, waits for its next onset; a source that
+// sounds without onsets (a steady hum) beside others that are tracked is never started.
 //
 // Resuming. A talker's track coasts through a pause with a gate that widens as its
 // prediction's uncertainty grows (to ~0.5 rad after 1 s), while the other talker's
@@ -84,6 +86,9 @@ struct DirectionTrackerOptions {
   double onset_min_rise_db = 0.0;  // OnsetOptions::min_rise_db: the frame's power did not fall
   double onset_memory_s = 0.05;    // OnsetOptions::memory_s
   double echo_window_s = 0.1;      // after a direction rose, births only from peaks as strong
+  // When no confirmed track has been heard this long (0: never), the frame's strongest peak
+  // may start a track as well (see "Which peaks start tracks").
+  double lost_source_after_s = 0.25;
   // A track silent this long (0: off) is resumed only by a peak that rose past the threshold
   // (see "Resuming" above).
   double resume_after_s = 0.25;
@@ -126,6 +131,7 @@ class DirectionTracker {
   OnsetDetector onset_;
   double echo_until_s_ = -1e300;
   double echo_statistic_ = 0.0;
+  double unheard_s_ = 1e300;  // since a confirmed track last took a peak (none yet: forever)
   std::vector<tws::CartesianPlot> plots_;
   std::vector<tws::TrackReport> reports_;
 };

@@ -163,6 +163,53 @@ TEST(DirectionTracker, NoiseAloneConfirmsNothing) {
   EXPECT_EQ(confirmed_frames, 0);
 }
 
+// A steady source that never rises (its peak's rise stays below the threshold: a hum, or a
+// source whose track was lost mid-sound) is started only by the lost-source rule: while no
+// confirmed track has been heard for lost_source_after_s (from the start: none ever was),
+// the frame's strongest peak may start a track. Here a steady peak is tracked from the start;
+// at frame 40 it jumps 1 rad (the track cannot follow: it coasts, unheard), and the new
+// direction gets a track once 0.25 s have passed. With the rule off neither is ever started.
+TEST(DirectionTracker, ASteadySourceWithoutOnsetsIsStartedOnlyByTheLostSourceRule) {
+  const auto steady = [](double azimuth_rad) {
+    DirectionPeak peak;
+    peak.direction = FromAzimuthElevation(azimuth_rad, 0.4);
+    peak.azimuth_rad = azimuth_rad;
+    peak.elevation_rad = 0.4;
+    peak.statistic = 40.0;
+    peak.threshold = 4.3;
+    peak.rise = 0.5;  // below the threshold: no onset anywhere
+    return peak;
+  };
+  const DirectionPeak a = steady(0.3), b = steady(1.3);
+  for (double lost_after_s : {0.25, 0.0}) {
+    DirectionTrackerOptions options;
+    options.frame_period_s = kHop_s;
+    options.lost_source_after_s = lost_after_s;
+    auto tracker = DirectionTracker::Create(Board(), options);
+    ASSERT_TRUE(tracker.ok());
+    std::vector<SourceTrack> tracks;
+    int a_confirmed = -1, b_confirmed = -1;
+    for (int f = 0; f < 100; ++f) {
+      const DirectionPeak& peak = f < 40 ? a : b;
+      ASSERT_TRUE(tracker->Update(f * kHop_s, {peak}, 1.0, &tracks).ok());
+      for (const SourceTrack& t : tracks) {
+        if (t.status != tws::TrackStatus::kConfirmed) continue;
+        if (AngleBetween(t.direction, a.direction) < 0.05 && a_confirmed < 0) a_confirmed = f;
+        if (AngleBetween(t.direction, b.direction) < 0.05 && b_confirmed < 0) b_confirmed = f;
+      }
+    }
+    if (lost_after_s > 0.0) {
+      EXPECT_EQ(a_confirmed, 2);  // third hit
+      const int silent_frames = static_cast<int>(std::ceil(lost_after_s / kHop_s));
+      EXPECT_GE(b_confirmed, 40 + silent_frames);
+      EXPECT_LE(b_confirmed, 40 + silent_frames + 4);
+    } else {
+      EXPECT_EQ(a_confirmed, -1);
+      EXPECT_EQ(b_confirmed, -1);
+    }
+  }
+}
+
 TEST(DirectionTracker, BadOptionsAndPeaksAreNamed) {
   DirectionTrackerOptions options;
   options.peak_sigma_rad = 0.0;
