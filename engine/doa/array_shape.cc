@@ -50,7 +50,9 @@ StatusOr<ArrayShapeInfo> ClassifyArray(const std::vector<Vec3>& sensors_m) {
   for (size_t i = 0; i < n; ++i)
     centred.row(static_cast<Eigen::Index>(i)) = (sensors_m[i] - info.centroid_m).transpose();
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centred, Eigen::ComputeFullV);
-  const Eigen::Vector3d sv = svd.singularValues();
+  // Two sensors give a 2 x 3 matrix and only 2 singular values: the missing ones are 0.
+  Eigen::Vector3d sv = Eigen::Vector3d::Zero();
+  sv.head(svd.singularValues().size()) = svd.singularValues();
   auto flat = [&](double s) { return s < kRelativeFlatness * sv(0) || s < kFlatness_m; };
   if (flat(sv(1))) {
     info.shape = ArrayShape::kLinear;
