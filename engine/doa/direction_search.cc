@@ -197,14 +197,14 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   std::vector<DirectionPeak> peaks;
   struct Found {
     Cell cell;
-    std::vector<std::complex<double>> amplitudes;  // per pair, what RemoveDelay took
+    std::vector<std::vector<std::complex<double>>> amplitudes;  // per pair and bin, what RemoveDelay took
     double statistic = 0.0;
   };
   std::vector<Found> found;
   auto remove = [&](Found* f) {
     f->amplitudes.resize(static_cast<size_t>(pair_count()));
     for (int p = 0; p < pair_count(); ++p)
-      f->amplitudes[static_cast<size_t>(p)] = spectra_.RemoveDelay(p, Lag(p, f->cell));
+      spectra_.RemoveDelay(p, Lag(p, f->cell), &f->amplitudes[static_cast<size_t>(p)]);
   };
   while (static_cast<int>(found.size()) < options_.max_sources) {
     if (!found.empty()) spectra_.FillFields(&field_input_);  // the residual, for the search

@@ -8,6 +8,15 @@
 namespace localizer::engine {
 namespace {
 constexpr double kRelativeFloor = 1e-12;  // of the frame's mean power: a silent bin
+// Each bin's share of signal (RemoveDelay): 1 - N / P_k (at least 0), P_k the bin's power
+// averaged over the sensors and kShareWindowBins neighbours, N the noise level: the
+// kFloorQuantile of those averages times kNoiseOverFloor (the 10th percentile of a mean of
+// 8 bins of noise, exponential each, is about 0.6 of its mean: noise-only bins get ~0, not
+// 0.4). All ones when the frame is flat (its upper quantile within kFlatSpread of the floor).
+constexpr size_t kShareWindowBins = 8;
+constexpr double kFloorQuantile = 0.1;
+constexpr double kNoiseOverFloor = 1.7;
+constexpr double kFlatSpread = 4.0;
 
 // Floats per channel, rounded up so every channel starts SIMD-aligned (FFTW's new-array
 // execute needs the alignment the plan was made with).
@@ -56,6 +65,40 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
   return s;
 }
 
+void PairSpectra::FindSignalShare() {
+  share_ready_ = true;
+  const size_t n = bins_.size();
+  const size_t spectrum_stride = Stride(2 * (fft_size_ / 2 + 1));
+  bin_power_.assign(n, 0.0);
+  for (int c = 0; c < options_.sensors; ++c) {
+    const float* x = spectra_.get() + static_cast<size_t>(c) * spectrum_stride;
+    for (size_t b = 0; b < n; ++b) {
+      const float* z = x + 2 * static_cast<size_t>(bins_[b]);
+      bin_power_[b] += static_cast<double>(z[0]) * z[0] + static_cast<double>(z[1]) * z[1];
+    }
+  }
+  smoothed_power_.assign(n, 0.0);
+  const size_t half = kShareWindowBins / 2;
+  double sum = 0.0;
+  size_t lo = 0, hi = 0;  // the window [lo, hi), clipped at the band's edges
+  for (size_t b = 0; b < n; ++b) {
+    const size_t want_lo = b > half ? b - half : 0, want_hi = std::min(n, b + half + 1);
+    while (hi < want_hi) sum += bin_power_[hi++];
+    while (lo < want_lo) sum -= bin_power_[lo++];
+    smoothed_power_[b] = sum / static_cast<double>(hi - lo);
+  }
+  sorted_power_ = smoothed_power_;
+  const auto rank = static_cast<size_t>(kFloorQuantile * static_cast<double>(n - 1));
+  std::nth_element(sorted_power_.begin(), sorted_power_.begin() + static_cast<std::ptrdiff_t>(rank),
+                   sorted_power_.end());
+  const double floor = sorted_power_[rank];
+  signal_share_.assign(n, 1.0);
+  // A frame whose power is flat (white sources, or noise alone) keeps every bin whole: the
+  // floor is then the signal, not the noise.
+  if (!(floor > 0.0) || sorted_power_[n - 1 - rank] < kFlatSpread * floor) return;
+  for (size_t b = 0; b < n; ++b) signal_share_[b] = std::max(0.0, 1.0 - kNoiseOverFloor * floor / smoothed_power_[b]);
+}
+
 Status PairSpectra::Analyse(const float* frame, Measurement* field) {
   const int n = options_.frame_samples, m = fft_size_, half = m / 2;
   const int time_stride = Stride(m), spectrum_stride = Stride(2 * (half + 1));
@@ -79,6 +122,7 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
   mean_power /= static_cast<double>(options_.sensors) * static_cast<double>(bins_.size());
   band_power_ = mean_power;
   const double floor = kRelativeFloor * mean_power;
+  share_ready_ = false;  // RemoveDelay finds the signal share when a frame needs it
 
   field->sample_rate_hz = options_.sample_rate_hz;
   field->pairs.resize(pairs_.size());
@@ -118,28 +162,39 @@ void PairSpectra::FillField(int p, PairMeasurement* out) {
   out->peak_snr = 1.0;
 }
 
-std::complex<double> PairSpectra::RemoveDelay(int p, double lag_samples) {
-  const std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
+void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::complex<double>>* taken) {
+  std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
   const double step = 2.0 * std::numbers::pi / fft_size_;
   const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
-  std::complex<double> phasor = std::polar(1.0, step * lag_samples * bins_.front());
-  std::complex<double> amplitude = 0.0;
-  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) amplitude += g[b] * phasor;
-  amplitude /= static_cast<double>(g.size());
-  RestoreDelay(p, lag_samples, -amplitude);
-  return amplitude;
+  const std::complex<double> start = std::polar(1.0, step * lag_samples * bins_.front());
+  if (!share_ready_) FindSignalShare();
+  // The weighted least-squares pure delay: c minimising sum_k |G_p(k) - c w_k e^(-i w k l)|^2,
+  // w_k the bin's share of signal (FindOccupiedBand), subtracted with those weights.
+  std::complex<double> phasor = start, amplitude = 0.0;
+  double norm = 0.0;
+  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) {
+    amplitude += signal_share_[b] * g[b] * phasor;
+    norm += signal_share_[b] * signal_share_[b];
+  }
+  amplitude /= std::max(norm, 1e-12);
+  taken->assign(g.size(), 0.0);
+  phasor = start;
+  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) {
+    (*taken)[b] = amplitude * signal_share_[b];
+    g[b] -= (*taken)[b] * std::conj(phasor);
+  }
 }
 
 void PairSpectra::FillFields(Measurement* field) {
   for (size_t p = 0; p < pairs_.size(); ++p) FillField(static_cast<int>(p), &field->pairs[p]);
 }
 
-void PairSpectra::RestoreDelay(int p, double lag_samples, std::complex<double> amplitude) {
+void PairSpectra::RestoreDelay(int p, double lag_samples, const std::vector<std::complex<double>>& taken) {
   std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
   const double step = 2.0 * std::numbers::pi / fft_size_;
   const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
   std::complex<double> phasor = std::polar(1.0, step * lag_samples * bins_.front());
-  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) g[b] += amplitude * std::conj(phasor);
+  for (size_t b = 0; b < g.size() && b < taken.size(); ++b, phasor *= rotate) g[b] += taken[b] * std::conj(phasor);
 }
 
 double PairSpectra::WholeAt(int p, double lag_samples, bool previous) const {

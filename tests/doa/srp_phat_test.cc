@@ -229,6 +229,50 @@ TEST(SrpPhat, TwoSourcesAreBothFoundAndAQuieterOneToo) {
   }
 }
 
+// One source that fills part of the analysed band (1000-4000 Hz of 0-8000 Hz, white sensor
+// noise over the whole band 20 dB below the source's in-band level) on the board, four
+// source slots: the source's removal should not leave residue that passes for a second
+// source. Removed with one amplitude over the whole band (pair_spectra.h, "Removing a
+// source"): the source's azimuth in 10 of 20 frames, 23 extra peaks. Weighted by each bin's
+// share of signal, when written: 20 of 20, 7 extra peaks, all but one 0.4-0.6 rad from the
+// source at 55-70 % of its statistic (the same azimuth at another elevation, most likely: a
+// board resolves elevation poorly over 3 kHz; not analysed). Asserted: 20 of 20, at most 10.
+TEST(SrpPhat, ABandLimitedSourceLeavesNoSecondPeak) {
+  PlaneWaveScene scene;
+  scene.sensors_m = Respeaker4();
+  scene.band_low_hz = 1000.0;
+  scene.band_high_hz = 4000.0;
+  scene.noise_power = 0.0;  // added below, over the whole band
+  SrpOptions options = OptionsFor(scene);
+  options.band_low_hz = 0.0;  // no band hint: analyse up to Nyquist
+  options.band_high_hz = 0.0;
+  options.source_side = Vec3::UnitZ();
+  StatusOr<SrpPhat> srp = SrpPhat::Create(scene.sensors_m, options);
+  ASSERT_TRUE(srp.ok());
+  const Vec3 u = FromAzimuthElevation(1.0, 0.5);
+  std::mt19937_64 rng(41);
+  int extra = 0, found = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<float> frame = PlaneWaveFrame(scene, {PlaneSource{u, 1.0}}, 700 + trial);
+    double power = 0.0;
+    for (float v : frame) power += static_cast<double>(v) * v;
+    // The source's in-band power spread over the whole band is its time-domain power; the
+    // noise's per-bin level 20 dB below the source's in-band level.
+    const double in_band_share = (scene.band_high_hz - scene.band_low_hz) / (0.5 * scene.sample_rate_hz);
+    std::normal_distribution<double> noise(0.0, std::sqrt(power / frame.size() / in_band_share * 0.01));
+    for (float& v : frame) v += static_cast<float>(noise(rng));
+    StatusOr<std::vector<DirectionPeak>> peaks = srp->Analyse(frame.data());
+    ASSERT_TRUE(peaks.ok());
+    // Azimuth: a board sees elevation through cos(elevation), poorly over a 3 kHz band.
+    if (!peaks->empty() && std::abs(std::remainder(peaks->front().azimuth_rad - 1.0, 2.0 * std::numbers::pi)) < 0.1)
+      ++found;
+    extra += peaks->empty() ? 0 : static_cast<int>(peaks->size()) - 1;
+  }
+  std::printf("band-limited source: found in %d of 20 frames, %d extra peaks\n", found, extra);
+  EXPECT_EQ(found, 20);
+  EXPECT_LE(extra, 10);
+}
+
 TEST(SrpPhat, NoiseAloneRarelyMakesASource) {
   // 600 frames of independent noise: at false_alarm 1e-3 per search, 0.6 expected.
   PlaneWaveScene scene = SceneOn(Respeaker4());
