@@ -103,10 +103,11 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     // A source that sounds on without onsets (a steady one whose track was lost) is still
     // the frame's strongest peak: when no confirmed track has been heard for
     // lost_source_after_s, it may start a track on a frame whose power did not fall.
-    const bool strongest = options_.lost_source_after_s > 0.0 && unheard_s_ >= options_.lost_source_after_s &&
-                           &peak == &peaks.front();
-    plot.may_start_track = !options_.start_at_onsets_only ||
-                           (may_start && ((!echo_blocks && &peak == riser && peak.rise >= peak.threshold) || strongest));
+    const bool strongest =
+        options_.lost_source_after_s > 0.0 && unheard_s_ >= options_.lost_source_after_s && &peak == &peaks.front();
+    plot.may_start_track =
+        !options_.start_at_onsets_only ||
+        (may_start && ((!echo_blocks && &peak == riser && peak.rise >= peak.threshold) || strongest));
     plot.may_resume_track = peak.rise >= peak.threshold;  // used only when resume_after_s > 0
     if (linear) {
       const Mat3 radial = u * u.transpose();

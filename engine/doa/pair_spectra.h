@@ -16,8 +16,8 @@
 // Removing a source (RemoveDelay): the pure-delay component at lag l, weighted per bin by the
 // bin's share of signal w_k = 1 - N / P_k (P_k its power over the sensors before PHAT,
 // smoothed over neighbouring bins, N the noise level from the frame's quietest bins; 0 at
-// the noise level, ~1 where a source dominates; all 1 when the frame's spectrum is flat), c = sum_k w_k G_p(k) e^(2 pi i k l / M) / sum_k w_k^2,
-// is subtracted (c w_k per bin), which takes the source's peak and its sidelobes out of R_p
+// the noise level, ~1 where a source dominates; all 1 when the frame's spectrum is flat), c = sum_k w_k G_p(k) e^(2 pi
+// i k l / M) / sum_k w_k^2, is subtracted (c w_k per bin), which takes the source's peak and its sidelobes out of R_p
 // (CLEAN-style) and leaves the other sources. Unweighted (the plain least-squares pure
 // delay), a source that fills part of the band (300-6000 Hz at 16 kHz) was left at 1 - c in
 // its bins and at -c in the noise-only ones: two sincs of different widths whose difference

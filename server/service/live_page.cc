@@ -42,7 +42,8 @@ constexpr std::string_view kPage = R"html(<!DOCTYPE html>
 <div class="legend"><span style="color:#1f77b4">&#9679;</span> sensor &nbsp;
   <span style="color:#d62728">&#9473;</span> estimated track (last fixes) &nbsp;
   <span style="color:#d62728">&#9679;</span> latest estimate (&#9675; hollow: no source heard, a prediction) &nbsp;
-  <span style="color:#2ca02c">&#9632;</span> target track (detection sessions) &nbsp; axes in metres</div>
+  <span style="color:#2ca02c">&#9632;</span> target track (detection sessions) &nbsp; axes in metres;
+  direction sessions: each source's azimuth over time and its direction now, one colour per id (hollow: not heard)</div>
 <div id="sessions"></div>
 <p><a href="/metrics">/metrics</a> (Prometheus) &middot; <a href="/sessions">/sessions</a> (JSON)</p>
 <script>
@@ -121,6 +122,65 @@ function drawPanel(svg, title, a, b, sensors, track, targets, silent) {
   });
 }
 
+// Direction sessions: one colour per source id.
+const PALETTE = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf"];
+const colourOf = id => PALETTE[(id - 1) % PALETTE.length];
+const DEG = 180 / Math.PI;
+
+// Axes of a plot in data units: x over [x0, x1], y over [y0, y1], ticks every xs / ys.
+function axes(svg, title, xName, yName, x0, x1, y0, y1, xs, ys) {
+  while (svg.firstChild) svg.removeChild(svg.firstChild);
+  const plotW = W - LEFT - RIGHT, plotH = H - TOP - BOTTOM;
+  const X = v => LEFT + (v - x0) / (x1 - x0) * plotW, Y = v => TOP + plotH - (v - y0) / (y1 - y0) * plotH;
+  for (let v = Math.ceil(x0 / xs) * xs; v <= x1; v += xs) {
+    el("svg:line", {class: "grid", x1: X(v), x2: X(v), y1: TOP, y2: TOP + plotH}, svg);
+    el("svg:text", {x: X(v), y: TOP + plotH + 14, "text-anchor": "middle"}, svg, fmt(v));
+  }
+  for (let v = Math.ceil(y0 / ys) * ys; v <= y1; v += ys) {
+    el("svg:line", {class: "grid", x1: LEFT, x2: LEFT + plotW, y1: Y(v), y2: Y(v)}, svg);
+    el("svg:text", {x: LEFT - 5, y: Y(v) + 4, "text-anchor": "end"}, svg, fmt(v));
+  }
+  el("svg:rect", {class: "frame", x: LEFT, y: TOP, width: plotW, height: plotH}, svg);
+  el("svg:text", {class: "title", x: LEFT, y: 17}, svg, title);
+  el("svg:text", {x: LEFT + plotW / 2, y: H - 6, "text-anchor": "middle"}, svg, xName);
+  el("svg:text", {x: 14, y: TOP + plotH / 2, "text-anchor": "middle",
+                  transform: `rotate(-90 14 ${TOP + plotH / 2})`}, svg, yName);
+  return {X, Y};
+}
+
+// Direction sessions, left: each source's azimuth (a line's cone angle) against time,
+// coloured by id; hollow where not heard (a prediction).
+function drawDirectionsInTime(svg, directions, linear) {
+  const angle = d => (linear ? d.cone_angle_rad : d.azimuth_rad);
+  const pts = directions.filter(d => angle(d) !== null);
+  const t1 = pts.length ? pts[pts.length - 1].t_s : 1, t0 = pts.length ? Math.min(pts[0].t_s, t1 - 1) : 0;
+  const {X, Y} = axes(svg, linear ? "cone angle against time" : "azimuth against time", "t (s)",
+                      linear ? "cone angle (deg)" : "azimuth (deg)", t0, t1, linear ? 0 : -180, 180,
+                      tickStep(t1 - t0), linear ? 30 : 45);
+  for (const d of pts) {
+    const c = el("svg:circle", {class: "direction", cx: X(d.t_s), cy: Y(angle(d) * DEG), r: 2,
+                                fill: d.source_present ? colourOf(d.id) : "none", stroke: colourOf(d.id)}, svg);
+    el("svg:title", {}, c, `source ${d.id} at ${fmt(d.t_s)} s: ${fmt(angle(d) * DEG)} deg`);
+  }
+}
+
+// Direction sessions, right: the latest frame's sources on an azimuth-elevation map (a line:
+// its cone angles on one axis), labelled with their ids.
+function drawDirectionMap(svg, sources, linear) {
+  const {X, Y} = linear ? axes(svg, "cone angles now", "cone angle (deg)", "", 0, 180, -1, 1, 30, 1)
+                        : axes(svg, "directions now", "azimuth (deg)", "elevation (deg)", -180, 180, -90, 90, 45, 30);
+  for (const s of sources) {
+    const a = linear ? s.cone_angle_rad : s.azimuth_rad, e = linear ? 0 : s.elevation_rad;
+    if (a === null || e === null) continue;
+    const g = el("svg:g", {class: "source"}, svg);
+    el("svg:circle", {cx: X(a * DEG), cy: Y(linear ? 0 : e * DEG), r: 6, fill: s.source_present ? colourOf(s.id) : "#fff",
+                      stroke: colourOf(s.id), "stroke-width": 2}, g);
+    el("svg:text", {x: X(a * DEG) + 8, y: Y(linear ? 0 : e * DEG) - 8}, g, String(s.id));
+    el("svg:title", {}, g, `source ${s.id}: ` + (linear ? `cone ${fmt(a * DEG)} deg` :
+                                                 `azimuth ${fmt(a * DEG)}, elevation ${fmt(e * DEG)} deg`));
+  }
+}
+
 const cards = new Map();  // session id -> {root, heading, meta, xy, xz}
 
 function card(id) {
@@ -174,8 +234,15 @@ function render(doc) {
       }
     }
     const silent = !!(pr && pr.state === "silent");
-    drawPanel(c.xy, "x-y (top view)", 0, 1, s.sensors_m, s.track, s.targets, silent);
-    drawPanel(c.xz, "x-z (side view)", 0, 2, s.sensors_m, s.track, s.targets, silent);
+    if (s.localization === "direction") {
+      const linear = s.array_shape === "linear";
+      c.text.textContent += ` / ${s.array_shape} array, directions: ${s.sources.length} source(s) now`;
+      drawDirectionsInTime(c.xy, s.directions, linear);
+      drawDirectionMap(c.xz, s.sources, linear);
+    } else {
+      drawPanel(c.xy, "x-y (top view)", 0, 1, s.sensors_m, s.track, s.targets, silent);
+      drawPanel(c.xz, "x-z (side view)", 0, 2, s.sensors_m, s.track, s.targets, silent);
+    }
   }
   for (const [id, c] of cards) if (!seen.has(id)) { c.root.remove(); cards.delete(id); }
   const shown = doc.sessions.length ? `${doc.sessions_total} session(s)` :

@@ -88,6 +88,27 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
     }
   }
   s["track"] = std::move(points);
+  // Direction sessions: what the estimates carry, the latest frame's sources and (with the
+  // track) the recent (frame, source) directions, oldest first. NaN angles (what the array
+  // cannot observe) are null.
+  s["localization"] = host.runner_info().localization.empty() ? nullptr : json(host.runner_info().localization);
+  s["array_shape"] = host.runner_info().array_shape.empty() ? nullptr : json(host.runner_info().array_shape);
+  const auto direction = [](const DirectionPoint& d) {
+    return json{{"frame", d.frame_index},
+                {"t_s", Number(d.t_s)},
+                {"id", d.source_id},
+                {"azimuth_rad", Number(d.azimuth_rad)},
+                {"elevation_rad", Number(d.elevation_rad)},
+                {"cone_angle_rad", Number(d.cone_angle_rad)},
+                {"source_present", d.source_present}};
+  };
+  json sources = json::array(), directions = json::array();
+  for (const DirectionPoint& d : track.sources) sources.push_back(direction(d));
+  if (with_track) {
+    for (const DirectionPoint& d : track.directions) directions.push_back(direction(d));
+  }
+  s["sources"] = std::move(sources);
+  s["directions"] = std::move(directions);
   json models = json::array();
   for (const engine::ModelProbability& m : track.model_probabilities) {
     models.push_back({{"model", m.model}, {"probability", Number(m.probability)}});

@@ -30,10 +30,26 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
   presence.threshold = estimate.presence_threshold;
   presence.ambiguous = estimate.ambiguous;
   presence.modes = estimate.modes;
+  std::vector<DirectionPoint> sources;
+  sources.reserve(estimate.sources.size());
+  for (const engine::SourceEstimate& s : estimate.sources) {
+    sources.push_back({estimate.frame_index, estimate.t_s, s.source_id, s.azimuth_rad, s.elevation_rad,
+                       s.cone_angle_rad, s.source_present});
+  }
   MutexLock lock(&mutex_);
   ++frames_;
   if (estimate.source_present) ++present_frames_;
   presence_ = presence;
+  const size_t direction_capacity = capacity_ * kSourcesPerFrame;
+  for (const DirectionPoint& d : sources) {
+    if (directions_.size() < direction_capacity) {
+      directions_.push_back(d);
+    } else {
+      directions_[next_direction_] = d;
+      next_direction_ = (next_direction_ + 1) % direction_capacity;
+    }
+  }
+  sources_ = std::move(sources);
   model_probabilities_ = estimate.model_probabilities;
   if (estimate.platform) platform_ = estimate.platform;
   if (!estimate.initialised) return;
@@ -72,6 +88,10 @@ TrackSnapshot TrackHistory::Snapshot() const {
   snapshot.targets = targets_;
   snapshot.presence = presence_;
   snapshot.present_frames = present_frames_;
+  snapshot.sources = sources_;
+  snapshot.directions.reserve(directions_.size());
+  for (size_t k = 0; k < directions_.size(); ++k)
+    snapshot.directions.push_back(directions_[(next_direction_ + k) % directions_.size()]);
   snapshot.points.reserve(ring_.size());
   // Oldest first: once the ring is full, the oldest point sits at next_.
   for (size_t k = 0; k < ring_.size(); ++k) snapshot.points.push_back(ring_[(next_ + k) % ring_.size()]);

@@ -1,7 +1,9 @@
 // TrackHistory: a session's recent estimated track for the live web view (GET /sessions).
 //
 // A bounded ring of the last `capacity` initialised positions (with their frame instant
-// t_s) and the latest estimate's model probabilities, source presence and ambiguity. Frames before the tracker's first
+// t_s) and the latest estimate's model probabilities, source presence and ambiguity; for
+// direction sessions, a ring of the last kSourcesPerFrame x capacity (frame, source)
+// directions and the latest frame's sources. Frames before the tracker's first
 // fix carry no position and are only counted. Memory is fixed once the ring is full
 // (capacity x 40 bytes), so a long session costs no more than a short one.
 //
@@ -32,6 +34,18 @@ struct TrackPoint {
   bool ambiguous = false;         // several position hypotheses fit this frame
 };
 
+// A direction session's source at one frame (engine::SourceEstimate); angles NaN where the
+// array cannot observe them (azimuth and elevation of a line, the cone angle otherwise).
+struct DirectionPoint {
+  uint64_t frame_index = 0;
+  double t_s = 0.0;
+  uint64_t source_id = 0;
+  double azimuth_rad = 0.0;
+  double elevation_rad = 0.0;
+  double cone_angle_rad = 0.0;
+  bool source_present = false;  // heard at this frame (else a prediction)
+};
+
 // A detection session's target after its latest scan.
 struct TargetPoint {
   uint64_t id = 0;
@@ -56,6 +70,9 @@ struct TrackSnapshot {
   std::vector<engine::ModelProbability> model_probabilities;  // of the latest estimate
   std::optional<engine::PlatformAttitude> platform;           // moving arrays: the latest pose
   std::vector<TargetPoint> targets;                           // detection sessions: the latest scan's tracks
+  std::vector<DirectionPoint> directions;                     // direction sessions: oldest first, at most
+                                                              // kSourcesPerFrame x capacity
+  std::vector<DirectionPoint> sources;                        // direction sessions: the latest frame's
   std::optional<PresencePoint> presence;                      // audio sessions: the latest frame's; none before it
   uint64_t present_frames = 0;                                // frames that held a source
   uint64_t frames = 0;                                        // estimates appended, initialised or not (detection
@@ -67,6 +84,8 @@ struct TrackSnapshot {
 class TrackHistory final {
  public:
   static constexpr size_t kDefaultCapacity = 600;
+  // Direction sessions keep capacity x this many (frame, source) points.
+  static constexpr size_t kSourcesPerFrame = 4;
 
   explicit TrackHistory(size_t capacity = kDefaultCapacity);  // capacity 0 is taken as 1
   TrackHistory(const TrackHistory&) = delete;
@@ -86,6 +105,9 @@ class TrackHistory final {
   std::vector<engine::ModelProbability> model_probabilities_ GUARDED_BY(mutex_);
   std::optional<engine::PlatformAttitude> platform_ GUARDED_BY(mutex_);
   std::vector<TargetPoint> targets_ GUARDED_BY(mutex_);
+  std::vector<DirectionPoint> directions_ GUARDED_BY(mutex_);  // a ring like ring_
+  size_t next_direction_ GUARDED_BY(mutex_) = 0;
+  std::vector<DirectionPoint> sources_ GUARDED_BY(mutex_);
   std::optional<PresencePoint> presence_ GUARDED_BY(mutex_);
   uint64_t present_frames_ GUARDED_BY(mutex_) = 0;
   uint64_t frames_ GUARDED_BY(mutex_) = 0;

@@ -5,11 +5,14 @@
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "server/service/sessions_json.h"
 #include "server/service/track_history.h"
 #include "tests/server/http_client.h"
 #include "tests/server/service_fixture.h"
+#include "wire/block_wire.h"
+#include "wire/config_wire.h"
 
 namespace localizer::server::testing {
 namespace {
@@ -89,6 +92,42 @@ TEST(TrackHistoryTest, KeepsTheLatestPresenceAndAmbiguity) {
   EXPECT_FALSE(s.points[1].source_present);
 }
 
+// Direction sessions: every (frame, source) direction in a ring of kSourcesPerFrame x
+// capacity, oldest first, and the latest frame's sources; a frame without sources clears
+// them. Position sessions keep none.
+TEST(TrackHistoryTest, KeepsDirectionsPerSourceAndTheLatestSources) {
+  TrackHistory track(2);  // room for 2 x 4 = 8 directions
+  for (uint64_t frame = 0; frame < 5; ++frame) {
+    engine::Estimate e;
+    e.frame_index = frame;
+    e.t_s = 0.1 * static_cast<double>(frame);
+    for (uint64_t id = 1; id <= 2; ++id) {
+      engine::SourceEstimate s;
+      s.source_id = id;
+      s.azimuth_rad = 0.1 * static_cast<double>(id) + 0.01 * static_cast<double>(frame);
+      s.elevation_rad = 0.2;
+      s.source_present = id == 1;
+      e.sources.push_back(s);
+    }
+    track.Append(e);
+  }
+  TrackSnapshot s = track.Snapshot();
+  ASSERT_EQ(s.directions.size(), 8u);  // frames 1..4, two sources each
+  EXPECT_EQ(s.directions.front().frame_index, 1u);
+  EXPECT_EQ(s.directions.back().frame_index, 4u);
+  EXPECT_EQ(s.directions.back().source_id, 2u);
+  EXPECT_DOUBLE_EQ(s.directions.back().azimuth_rad, 0.24);
+  for (size_t i = 1; i < s.directions.size(); ++i) EXPECT_GE(s.directions[i].t_s, s.directions[i - 1].t_s);
+  ASSERT_EQ(s.sources.size(), 2u);
+  EXPECT_TRUE(s.sources[0].source_present);
+  EXPECT_FALSE(s.sources[1].source_present);
+  EXPECT_TRUE(s.points.empty());     // no position
+  track.Append(engine::Estimate{});  // a frame with no source
+  s = track.Snapshot();
+  EXPECT_TRUE(s.sources.empty());
+  EXPECT_EQ(s.directions.size(), 8u);
+}
+
 TEST(SessionsJsonTest, NoSessionsIsAnEmptyList) {
   const auto doc = nlohmann::json::parse(SessionsJson({}, Clock::now(), 60.0));
   EXPECT_EQ(doc.at("sessions_total"), 0);
@@ -156,6 +195,61 @@ TEST_F(ServiceTest, SessionsJsonListsTheStreamedTrack) {
   ASSERT_TRUE(stream.Close().ok());
 }
 
+// A direction session (a planar board) on the server: /sessions says what it reports and
+// lists its sources' directions. One white source, whole-sample delays of a plane wave
+// from azimuth 0.9, elevation 0.4 rad, 20 dB over the sensors' noise.
+TEST_F(ServiceTest, SessionsJsonListsADirectionSessionsSources) {
+  constexpr double kFs = 16000.0, kC = 343.0;
+  const std::vector<engine::Vec3> board = {{0.3, 0, 0}, {0, 0.3, 0}, {-0.3, 0, 0}, {0, -0.3, 0}};
+  const engine::Vec3 u(std::cos(0.4) * std::cos(0.9), std::cos(0.4) * std::sin(0.9), std::sin(0.4));
+  engine::AudioSessionConfig config;
+  config.sensors_m = board;
+  config.sound_speed_mps = kC;
+  config.sample_rate_hz = kFs;
+  config.frame_samples = 1024;
+  config.hop_samples = 512;
+  config.source_side = engine::Vec3::UnitZ();
+  v1::TrackRequest open;
+  *open.mutable_open() = wire::ConfigToProto(config, "board");
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(open));
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal;
+  constexpr int kSamples = 16000, kPad = 64;
+  std::vector<double> source(kSamples + 2 * kPad);
+  for (double& v : source) v = normal(rng);
+  std::vector<float> samples(board.size() * kSamples);  // channel-major
+  for (size_t m = 0; m < board.size(); ++m) {
+    const auto delay = static_cast<int>(std::lround(-board[m].dot(u) / kC * kFs));
+    for (int i = 0; i < kSamples; ++i)
+      samples[m * kSamples + i] = static_cast<float>(source[static_cast<size_t>(kPad + i - delay)] + 0.1 * normal(rng));
+  }
+  v1::TrackRequest block;
+  wire::EncodeBlock({1, static_cast<int>(board.size()), kSamples, samples.data()}, false, block.mutable_block());
+  ASSERT_TRUE(stream.Send(block));
+  const size_t frames = (kSamples - 1024) / 512 + 1;
+  ASSERT_TRUE(stream.WaitForEstimates(frames));
+  EXPECT_EQ(stream.opened().localization(), "direction");
+  EXPECT_EQ(stream.opened().array_shape(), "planar");
+
+  const auto response = localizer::testing::Request(server_->metrics_port(), "GET", "/sessions");
+  ASSERT_EQ(response.status, 200);
+  const nlohmann::json doc = nlohmann::json::parse(response.body);
+  const auto& session = doc.at("sessions")[0];
+  EXPECT_EQ(session.at("localization"), "direction");
+  EXPECT_EQ(session.at("array_shape"), "planar");
+  EXPECT_TRUE(session.at("track").empty());  // no positions
+  ASSERT_EQ(session.at("sources").size(), 1u) << session.dump();
+  const auto& now = session.at("sources")[0];
+  EXPECT_NEAR(now.at("azimuth_rad").get<double>(), 0.9, 0.1);
+  EXPECT_TRUE(now.at("cone_angle_rad").is_null());  // NaN: not a line
+  const auto& directions = session.at("directions");
+  ASSERT_FALSE(directions.empty());
+  EXPECT_EQ(directions.back().at("id"), now.at("id"));
+  EXPECT_EQ(directions.back().at("frame").get<uint64_t>(), frames - 1);
+  ASSERT_TRUE(stream.Close().ok());
+}
+
 TEST_F(ServiceTest, RootServesTheSelfContainedLivePage) {
   const auto response = localizer::testing::Request(server_->metrics_port(), "GET", "/");
   ASSERT_EQ(response.status, 200);
@@ -164,6 +258,7 @@ TEST_F(ServiceTest, RootServesTheSelfContainedLivePage) {
   EXPECT_NE(response.body.find("<a href=\"/metrics\">"), std::string::npos);
   EXPECT_NE(response.body.find("s.presence"), std::string::npos);  // presence and ambiguity shown
   EXPECT_NE(response.body.find("ambiguous"), std::string::npos);
+  EXPECT_NE(response.body.find("drawDirectionMap(c.xz, s.sources"), std::string::npos);  // direction sessions
   // Self-contained: nothing loaded from another origin.
   EXPECT_EQ(response.body.find("src="), std::string::npos);
   EXPECT_EQ(response.body.find("https://"), std::string::npos);
