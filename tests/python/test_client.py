@@ -367,8 +367,9 @@ class ServerTest(unittest.TestCase):
         truth = np.append(in_plane, np.sqrt(1.0 - in_plane @ in_plane))
         audio = synth.broadband_at_sensors(tdoa, 10 * BLOCK, FS_HZ, band_hz=BAND_HZ, snr_db=20.0, seed=3)
         cfg = lc.session_config(square, FS_HZ, sound_speed_mps=SOUND_SPEED_MPS, frame_samples=FRAME,
-                                hop_samples=HOP, band_hz=BAND_HZ, seed=1, label="py-planar")
-        cfg.source_side.z = 1.0  # the source is above the board
+                                hop_samples=HOP, band_hz=BAND_HZ, seed=1, label="py-planar",
+                                max_sources=2, source_side=(0, 0, 1))  # the source is above the board
+        self.assertEqual(cfg.localization, "")  # auto: the server picks directions for a board
         session = lc.TrackSession(self.channel, cfg, timeout=60)
         self.assertEqual(session.opened.array_shape, "planar")
         self.assertEqual(session.opened.localization, "direction")
@@ -383,6 +384,11 @@ class ServerTest(unittest.TestCase):
         angle_deg = np.degrees(np.arccos(np.clip(truth @ got, -1.0, 1.0)))
         self.assertLess(angle_deg, 3.0, f"direction {got} vs {truth}")
         self.assertFalse(last.initialised)  # no position from a planar array
+        self.assertEqual(session.opened.effective_config.max_sources, 2)
+        rows = lc.sources(last)
+        self.assertEqual([(r["id"], r["status"]) for r in rows], [(found.source_id, "confirmed")])
+        self.assertAlmostEqual(rows[0]["azimuth_rad"], found.azimuth_rad)
+        self.assertTrue(np.isnan(rows[0]["cone_angle_rad"]))  # a board has no cone angle
 
     def test_bounds_and_presence_config_echo_and_estimate_fields(self):
         cfg = config("py-bounds")

@@ -50,7 +50,7 @@ from . import synth  # noqa: F401  (re-exported)
 __all__ = ["pb", "pb_grpc", "synth", "SESSION_KEY_METADATA", "AUTHORIZATION_METADATA", "connect",
            "tls_credentials", "read_token_file", "auth_metadata", "add_connect_arguments", "connect_kwargs",
            "vector3",
-           "session_config", "bounds", "presence_summary", "platform_config", "detection_config", "sample_block", "imu_batch",
+           "session_config", "sources", "bounds", "presence_summary", "platform_config", "detection_config", "sample_block", "imu_batch",
            "scan", "pcm16_bytes", "TrackSession", "locate",
            "list_sessions", "close_session", "InstanceLost", "from_proxy_reset"]
 
@@ -176,10 +176,16 @@ def vector3(xyz):
 def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, reference_sensor=0,
                    frame_samples=0, hop_samples=0, particles=0, band_hz=None, seed=None,
                    backend="", label="", init_region=None, platform=None, bounds=None,
-                   search_radius_m=0.0, presence_false_alarm=0.0, source_timeout_s=0.0):
+                   search_radius_m=0.0, presence_false_alarm=0.0, source_timeout_s=0.0,
+                   localization="", max_sources=None, source_side=None):
     """A ``pb.SessionConfig``.
 
-    sensors_m: (C, 3) sensor positions, metres (C >= 4, not coplanar). band_hz: (low, high) of
+    sensors_m: (C, 3) sensor positions, metres (C >= 2; a position needs 4 off a common plane).
+    localization: "position", "direction" or "auto" / "" (position for a volumetric array,
+    directions for a planar or linear one: SessionOpened.localization says which; each
+    estimate's ``sources`` then lists the sources followed, see ``sources()``). max_sources:
+    direction sessions' sources per frame, 1..16 (None: 4). source_side: (x, y, z), a planar
+    array's side that holds the sources (None: not stated; mirror images). band_hz: (low, high) of
     the GCC band or None for the whole spectrum. init_region: ((xmin, ymin, zmin), (xmax, ymax,
     zmax)) or None. Zero / empty values mean "the server's default" (frame 4096, hop frame/2,
     4096 particles, seed 1, the server's --backend); SessionOpened.effective_config tells.
@@ -212,7 +218,27 @@ def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, referen
     config.search_radius_m = float(search_radius_m)
     config.presence_false_alarm = float(presence_false_alarm)
     config.source_timeout_s = float(source_timeout_s)
+    config.localization = localization
+    if max_sources is not None:
+        config.max_sources = int(max_sources)
+    if source_side is not None:
+        config.source_side.CopyFrom(vector3(source_side))
     return config
+
+
+def sources(estimate):
+    """A direction session's estimate as plain rows: one dict per source followed, in order of
+    id, with ``id``, ``status`` ("confirmed" or "coasting"), ``azimuth_rad``,
+    ``elevation_rad``, ``cone_angle_rad`` (NaN where the array cannot observe it),
+    ``direction`` (a unit (x, y, z) tuple), ``sigma_rad``, ``source_present`` and ``power_db``."""
+    names = {pb.TRACK_STATUS_TENTATIVE: "tentative", pb.TRACK_STATUS_CONFIRMED: "confirmed",
+             pb.TRACK_STATUS_COASTING: "coasting"}
+    return [{"id": s.source_id, "status": names.get(s.status, "unspecified"),
+             "azimuth_rad": s.azimuth_rad, "elevation_rad": s.elevation_rad,
+             "cone_angle_rad": s.cone_angle_rad,
+             "direction": (s.direction.x, s.direction.y, s.direction.z),
+             "sigma_rad": s.sigma_rad, "source_present": s.source_present, "power_db": s.power_db}
+            for s in estimate.sources]
 
 
 def bounds(min_m=None, max_m=None, *, surface_z_m=None, bottom_z_m=None):
