@@ -1,6 +1,10 @@
 #include "engine/pipeline/session_memory.h"
 
 #include <algorithm>
+#include <cmath>
+
+#include "engine/doa/array_shape.h"
+#include "engine/pipeline/session.h"
 
 namespace localizer::engine {
 namespace {
@@ -21,6 +25,8 @@ constexpr int64_t kChannelSampleBytes = 56;
 constexpr int64_t kTrackBytes = 1024;   // a track, its report, its history
 constexpr int64_t kEdgeBytes = 16 * 6;  // a gate pair: edges, sorted and greedy copies, x2 growth
 constexpr int64_t kPlotBytes = 256;     // a converted plot and its grid cell
+constexpr int64_t kPairBinBytes = 16 * 3 / 2;  // a pair's complex double per bin, with a margin
+constexpr int64_t kPairLagBytes = 64;          // a pair's lag-field entry (GCC float, field double, ...)
 
 int64_t ParticleBytes(const AudioSessionConfig& config) {
   switch (config.tracker.kind) {
@@ -35,8 +41,30 @@ int64_t ParticleBytes(const AudioSessionConfig& config) {
 
 }  // namespace
 
+// A direction session (direction_stage.h): every pair's cross-spectrum (complex doubles over
+// up to half the transform) in the current frame and in the ring of earlier frames its
+// rises look back on (frame / hop of them), each pair's lag field, the channels' transforms.
+// Pairs grow with the square of the sensors: 64 sensors are 2016 pairs.
+int64_t DirectionSessionBytes(const AudioSessionConfig& config) {
+  const auto sensors = static_cast<int64_t>(config.sensors_m.size());
+  const int64_t pairs = sensors * (sensors - 1) / 2;
+  const auto shape = ClassifyArray(config.sensors_m);
+  const double aperture_m = shape.ok() ? shape->aperture_m : 0.0;
+  const int64_t frame = std::max(config.frame_samples, 64);
+  const auto max_lag =
+      static_cast<int64_t>(std::ceil(aperture_m / std::max(config.sound_speed_mps, 1e-9) * config.sample_rate_hz)) +
+      3;
+  const int64_t transform = (frame + max_lag + 1) * 5 / 4;  // NextFastFftSize rounds up by less
+  const int64_t rise_frames = (frame + std::max(config.hop_samples, 1) - 1) / std::max(config.hop_samples, 1);
+  const int64_t spectra = kPairBinBytes * pairs * (transform / 2) * (rise_frames + 2);
+  const int64_t fields = kPairLagBytes * pairs * (2 * max_lag + 1);
+  return kAudioBaseBytes + spectra + fields + kChannelSampleBytes * sensors * transform;
+}
+
 int64_t SessionMemoryBytes(const AudioSessionConfig& config) {
   const int64_t channels = static_cast<int64_t>(config.sensors_m.size());
+  const auto localization = ResolveLocalization(config);
+  if (localization.ok() && *localization == Localization::kDirection) return DirectionSessionBytes(config);
   return kAudioBaseBytes + ParticleBytes(config) + kChannelSampleBytes * channels * std::max(config.frame_samples, 64);
 }
 

@@ -5,7 +5,8 @@
 // An upper bound on the heap a session holds once running (its engine state: particles and
 // their work arrays, each channel's frame and spectrum, each pair's cross-spectrum and GCC,
 // FFT plans, the acquisition search, the detection tracker's tracks and per-scan work
-// arrays), not counting the blocks queued for it. The coefficients were measured
+// arrays; direction sessions: every sensor pair's cross-spectra, current and the earlier frames
+// their rises look back on), not counting the blocks queued for it. The coefficients were measured
 // (tests/pipeline/session_memory_test.cc checks the bound holds, and is not loose by more
 // than its stated factor, over a spread of configs).
 #pragma once

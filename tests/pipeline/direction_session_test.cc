@@ -103,6 +103,16 @@ TEST(DirectionSession, PositionFromAPlanarArrayIsRefusedNamingWhy) {
   c = DirectionConfig(Square());
   c.max_sources = 17;
   EXPECT_NE(Session::Create(c).status().message().find("max_sources"), std::string::npos);
+  c = DirectionConfig(Square());
+  c.source_side = Vec3::UnitX();  // in the board's plane: says nothing of the side
+  const auto side = Session::Create(c);
+  EXPECT_EQ(side.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(side.status().message().find("source_side"), std::string::npos) << side.status().message();
+  c = DirectionConfig(Square());
+  c.array_in_body_frame = true;  // a moving board: not built for directions
+  const auto moving = Session::Create(c);
+  EXPECT_EQ(moving.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(moving.status().message().find("moving array"), std::string::npos) << moving.status().message();
 }
 
 // One source above a board, side stated: confirmed within a few frames, one identity, and

@@ -113,6 +113,43 @@ TEST(SessionMemory, TheEstimateBoundsWhatAnAudioSessionHolds) {
   }
 }
 
+// Direction sessions (planar and linear arrays, or localization direction): every pair's
+// cross-spectra, now and over the frames a rise looks back on (frame / hop of them).
+TEST(SessionMemory, TheEstimateBoundsADirectionSession) {
+  struct Case {
+    int channels, frame, hop;
+    bool planar;
+  };
+  const std::vector<Case> cases = {
+      {4, 512, 256, true}, {7, 2048, 32, true}, {8, 4096, 1024, true}, {16, 8192, 2048, false}, {32, 2048, 512, false},
+  };
+  for (const Case& c : cases) {
+    AudioSessionConfig config;
+    config.sensors_m = Sphere(c.channels);
+    if (c.planar) {
+      for (Vec3& s : config.sensors_m) s.z() = 0.0, s *= 0.1;  // a 20 cm disc
+    }
+    config.localization = Localization::kDirection;
+    config.sound_speed_mps = 343.0;
+    config.sample_rate_hz = 16000.0;
+    config.frame_samples = c.frame;
+    config.hop_samples = c.hop;
+    char what[96];
+    std::snprintf(what, sizeof what, "direction ch=%d frame=%d hop=%d%s", c.channels, c.frame, c.hop,
+                  c.planar ? " planar" : "");
+    Check(what, MeasureAudio(config));
+  }
+  // The largest config the wire allows is charged what it would take, so a budget refuses it.
+  AudioSessionConfig huge;
+  huge.sensors_m = Sphere(64);
+  huge.localization = Localization::kDirection;
+  huge.sound_speed_mps = 343.0;
+  huge.sample_rate_hz = 48000.0;
+  huge.frame_samples = 1 << 20;
+  huge.hop_samples = (1 << 20) / 64;
+  EXPECT_GT(SessionMemoryBytes(huge), int64_t{100} << 30);  // over 100 GiB
+}
+
 TEST(SessionMemory, TheEstimateBoundsADetectionSessionAtItsLimits) {
   // The tracker at max_tracks with every gate saturated: the worst a scan can make it hold.
   DetectionSessionConfig config;
