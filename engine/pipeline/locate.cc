@@ -40,7 +40,11 @@ StatusOr<LocateResult> Locate(const AudioSessionConfig& config, const BlockView&
   checked.hop_samples = checked.frame_samples;
   LOCALIZER_RETURN_IF_ERROR(checked.Validate());
   auto array = ArrayGeometry::Create(checked.sensors_m, checked.sound_speed_mps, checked.reference_sensor);
-  if (!array.ok()) return array.status();
+  if (!array.ok()) {
+    return InvalidArgument("array.sensors_m: " + array.status().message() +
+                           "; Locate gives a position (for the directions of a planar or linear array, open a "
+                           "session: localization direction)");
+  }
   LOCALIZER_RETURN_IF_ERROR(ValidateLocateBlock(block, array->sensor_count(), checked.max_block_samples));
 
   GccOptions gcc = checked.GccOptionsFor();
