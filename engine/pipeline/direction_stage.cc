@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 namespace localizer::engine {
 namespace {
 
 constexpr double kHeardSigmas = 3.0;  // a peak this many sigmas from a track is its own
+constexpr int kMaxRiseFrames = 64;    // PairSpectraOptions::rise_lag_frames' ceiling
 
 SourceStatus StatusOf(tws::TrackStatus s) {
   return s == tws::TrackStatus::kTentative   ? SourceStatus::kTentative
@@ -24,6 +26,12 @@ double Separation(const SourceTrack& track, const DirectionPeak& peak) {
 }  // namespace
 
 StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSessionConfig& config) {
+  // Rises look back over the frames that overlap this one: at most kMaxRiseFrames of them.
+  if (config.hop_samples * kMaxRiseFrames < config.frame_samples) {
+    return InvalidArgument("hop_samples is " + std::to_string(config.hop_samples) +
+                           "; direction sessions need at least frame_samples/" + std::to_string(kMaxRiseFrames) +
+                           " = " + std::to_string((config.frame_samples + kMaxRiseFrames - 1) / kMaxRiseFrames));
+  }
   SrpOptions srp;
   srp.sample_rate_hz = config.sample_rate_hz;
   srp.sound_speed_mps = config.sound_speed_mps;

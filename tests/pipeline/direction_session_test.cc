@@ -109,6 +109,10 @@ TEST(DirectionSession, PositionFromAPlanarArrayIsRefusedNamingWhy) {
   EXPECT_EQ(side.status().code(), StatusCode::kInvalidArgument);
   EXPECT_NE(side.status().message().find("source_side"), std::string::npos) << side.status().message();
   c = DirectionConfig(Square());
+  c.hop_samples = 4;  // 128 frames overlap each: more than a rise can look back on
+  EXPECT_NE(Session::Create(c).status().message().find("hop_samples is 4"), std::string::npos)
+      << Session::Create(c).status().message();
+  c = DirectionConfig(Square());
   c.array_in_body_frame = true;  // a moving board: not built for directions
   const auto moving = Session::Create(c);
   EXPECT_EQ(moving.status().code(), StatusCode::kInvalidArgument);
