@@ -231,6 +231,9 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
       }
     }
   }
+  // A later source's re-estimation among the others can leave its statistic below the
+  // threshold (it had taken up a biased earlier source's residue): no longer a detection.
+  std::erase_if(found, [this](const Found& f) { return !(f.statistic >= threshold_); });
   std::stable_sort(found.begin(), found.end(),
                    [](const Found& a, const Found& b) { return a.statistic > b.statistic; });
   for (const Found& f : found) peaks.push_back(Describe(f.cell, f.statistic));

@@ -38,7 +38,8 @@
 // falls below the threshold. Each earlier source was refined with the later ones still in
 // its spectrum, which biases it, and a removal at a biased lag leaves structured residue
 // that the next search takes for a source: so after each new source, every source found is
-// put back, refined among the others' residual and removed again (2 passes). The threshold is
+// put back, refined among the others' residual and removed again (2 passes); one whose
+// statistic falls below the threshold there is not reported. The threshold is
 //     t = Q^-1(false_alarm / M),  M = the leaf cells that tile the domain,
 // a union bound over the directions the search chooses from (presence.h), so a frame of
 // noise reports a source with probability <= false_alarm per search.

@@ -58,30 +58,12 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
 void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
   auto peaks = srp_.Analyse(frame);  // the session validated the samples: cannot fail
   if (!peaks.ok()) peaks = std::vector<DirectionPeak>{};
-  // A later source's re-estimation among the others can leave its statistic below the
-  // threshold (it had taken up a biased earlier source's residue): no longer a detection.
-  std::erase_if(*peaks, [](const DirectionPeak& p) { return !(p.statistic >= p.threshold); });
   e->source_present = !peaks->empty();
   e->presence_statistic = peaks->empty() ? 0.0 : peaks->front().statistic;
   e->presence_threshold = srp_.threshold();
   if (!tracker_.Update(t_s, *peaks, srp_.band_power(), &tracks_).ok()) tracks_.clear();
-  // Each peak is heard by the nearest track that took a plot this frame (not coasting),
-  // within kHeardSigmas of its sigma (at least the peaks' own).
-  heard_by_.assign(peaks->size(), -1);
-  for (size_t k = 0; k < peaks->size(); ++k) {
-    double nearest_rad = std::numeric_limits<double>::infinity();
-    for (size_t j = 0; j < tracks_.size(); ++j) {
-      const SourceTrack& track = tracks_[j];
-      if (track.status == tws::TrackStatus::kCoasting) continue;
-      const double d = Separation(track, (*peaks)[k]);
-      if (d <= kHeardSigmas * std::max(track.sigma_rad, peak_sigma_rad_) && d < nearest_rad) {
-        nearest_rad = d;
-        heard_by_[k] = static_cast<int>(j);
-      }
-    }
-  }
-  for (size_t j = 0; j < tracks_.size(); ++j) {
-    const SourceTrack& track = tracks_[j];
+  const size_t first = e->sources.size();
+  for (const SourceTrack& track : tracks_) {
     SourceEstimate s;
     s.source_id = track.id;
     s.status = StatusOf(track.status);
@@ -90,12 +72,25 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
     s.elevation_rad = track.elevation_rad;
     s.cone_angle_rad = track.cone_angle_rad;
     s.sigma_rad = track.sigma_rad;
-    for (size_t k = 0; k < peaks->size(); ++k) {
-      if (heard_by_[k] != static_cast<int>(j)) continue;
-      s.source_present = true;
-      s.power_db = std::isnan(s.power_db) ? (*peaks)[k].power_db : std::max(s.power_db, (*peaks)[k].power_db);
-    }
     e->sources.push_back(s);
+  }
+  // Each peak is heard by the nearest track that took a plot this frame (not coasting),
+  // within kHeardSigmas of its sigma (at least the peaks' own).
+  for (const DirectionPeak& peak : *peaks) {
+    double nearest_rad = std::numeric_limits<double>::infinity();
+    SourceEstimate* heard = nullptr;
+    for (size_t j = 0; j < tracks_.size(); ++j) {
+      const SourceTrack& track = tracks_[j];
+      if (track.status == tws::TrackStatus::kCoasting) continue;
+      const double d = Separation(track, peak);
+      if (d <= kHeardSigmas * std::max(track.sigma_rad, peak_sigma_rad_) && d < nearest_rad) {
+        nearest_rad = d;
+        heard = &e->sources[first + j];
+      }
+    }
+    if (heard == nullptr) continue;
+    heard->source_present = true;
+    heard->power_db = std::isnan(heard->power_db) ? peak.power_db : std::max(heard->power_db, peak.power_db);
   }
 }
 

@@ -8,7 +8,7 @@
 // frames and deletes silent ones. Estimate::sources gets the confirmed and coasting tracks;
 // each peak is heard by the nearest track that took a plot this frame, within three of its
 // angular sigmas, which then reports the peak's power (otherwise the track is a prediction).
-// Peaks whose statistic fell below the threshold in SrpPhat's re-estimation are dropped. Estimate::source_present says
+// Estimate::source_present says
 // whether any peak passed the threshold; presence_statistic is the strongest peak's statistic (0 when none passed) and
 // presence_threshold the threshold.
 // Cost: SrpPhat's (srp_phat.h: about 0.1 ms per frame for one source on a 4-microphone
@@ -45,7 +45,6 @@ class DirectionStage {
   DirectionTracker tracker_;
   double peak_sigma_rad_;
   std::vector<SourceTrack> tracks_;
-  std::vector<int> heard_by_;  // per peak: the index of the track that heard it, or -1
 };
 
 }  // namespace localizer::engine

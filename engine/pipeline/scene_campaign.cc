@@ -49,23 +49,26 @@ std::vector<double> RobustTdoaSigma(const ArrayGeometry& array, const SimResult&
   return sigma;
 }
 
-double Crlb(const ArrayGeometry& array, const Vec3& at_m, const std::vector<double>& sigma_s) {
-  if (static_cast<int>(sigma_s.size()) != array.pair_count()) return kNan;
+// The position bound's covariance at a point (NaN without one sigma per pair).
+Mat3 CrlbCovariance(const ArrayGeometry& array, const Vec3& at_m, const std::vector<double>& sigma_s) {
+  if (static_cast<int>(sigma_s.size()) != array.pair_count()) return Mat3::Constant(kNan);
   const Eigen::VectorXd sigma = Eigen::Map<const Eigen::VectorXd>(sigma_s.data(), array.pair_count());
-  return std::sqrt(TdoaPositionCrlb(array, at_m, sigma).trace());
+  return TdoaPositionCrlb(array, at_m, sigma);
+}
+
+double Crlb(const ArrayGeometry& array, const Vec3& at_m, const std::vector<double>& sigma_s) {
+  return std::sqrt(CrlbCovariance(array, at_m, sigma_s).trace());
 }
 
 // The bearing's bound: the position bound's covariance across the line of sight from the
 // centroid, over the range.
-double BearingCrlb(const ArrayGeometry& array, const Vec3& at_m, const std::vector<double>& sigma_s) {
-  if (static_cast<int>(sigma_s.size()) != array.pair_count()) return kNan;
+double BearingCrlb(const ArrayGeometry& array, const Vec3& at_m, const Mat3& crlb_covariance) {
   const Vec3 line_m = at_m - array.centroid_m();
   const double range_m = line_m.norm();
   if (!(range_m > 0.0)) return kNan;
-  const Eigen::VectorXd sigma = Eigen::Map<const Eigen::VectorXd>(sigma_s.data(), array.pair_count());
   const Vec3 u = line_m / range_m;
   const Mat3 across = Mat3::Identity() - u * u.transpose();
-  return std::sqrt((across * TdoaPositionCrlb(array, at_m, sigma) * across).trace()) / range_m;
+  return std::sqrt((across * crlb_covariance * across).trace()) / range_m;
 }
 
 double AngleBetween(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
@@ -128,9 +131,10 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
     }
     f.counted = e.t_s <= t_end_s && (!score.presence_reported || e.source_present);
     const Vec3 truth_m = sim.TruthAt(e.t_s).position_m;
-    f.crlb_m = Crlb(array, truth_m, score.tdoa_sigma_robust_s);
+    const Mat3 crlb_covariance = CrlbCovariance(array, truth_m, score.tdoa_sigma_robust_s);
+    f.crlb_m = std::sqrt(crlb_covariance.trace());
     f.crlb_theory_m = Crlb(array, truth_m, theory_sigma_s);
-    f.bearing_crlb_rad = BearingCrlb(array, truth_m, score.tdoa_sigma_robust_s);
+    f.bearing_crlb_rad = BearingCrlb(array, truth_m, crlb_covariance);
     f.range_apertures = (truth_m - array.centroid_m()).norm() / array.aperture_m();
     if (f.counted) {
       crlbs.push_back(f.crlb_m);

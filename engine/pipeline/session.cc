@@ -124,16 +124,20 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
   out->push_back(std::move(e));
 }
 
-Session::Session(ArrayShapeInfo shape, Localization localization, size_t sensors, std::unique_ptr<Impl> impl,
+Session::Session(ArrayShapeInfo shape, Localization localization, std::unique_ptr<Impl> impl,
                  std::unique_ptr<DirectionImpl> direction)
-    : shape_(shape),
-      localization_(localization),
-      shape_sensors_(sensors),
-      impl_(std::move(impl)),
-      direction_(std::move(direction)) {}
+    : shape_(shape), localization_(localization), impl_(std::move(impl)), direction_(std::move(direction)) {}
 Session::~Session() = default;
 
-StatusOr<Localization> ResolveLocalization(const AudioSessionConfig& config) {
+namespace {
+
+// The array's shape and what a session on it reports (ResolveLocalization).
+struct Resolved {
+  ArrayShapeInfo shape;
+  Localization localization = Localization::kAuto;
+};
+
+StatusOr<Resolved> Resolve(const AudioSessionConfig& config) {
   auto shape = ClassifyArray(config.sensors_m);
   if (!shape.ok()) return InvalidArgument("array.sensors_m: " + shape.status().message());
   Localization localization = config.localization;
@@ -147,16 +151,22 @@ StatusOr<Localization> ResolveLocalization(const AudioSessionConfig& config) {
                            ": use localization direction or auto (positions from planar and linear arrays in a "
                            "stated plane or half-space are not built yet)");
   }
-  return localization;
+  return Resolved{*shape, localization};
+}
+
+}  // namespace
+
+StatusOr<Localization> ResolveLocalization(const AudioSessionConfig& config) {
+  auto resolved = Resolve(config);
+  if (!resolved.ok()) return resolved.status();
+  return resolved->localization;
 }
 
 StatusOr<std::unique_ptr<Session>> Session::Create(const AudioSessionConfig& config) {
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
-  auto resolved = ResolveLocalization(config);
+  auto resolved = Resolve(config);
   if (!resolved.ok()) return resolved.status();
-  const Localization localization = *resolved;
-  auto shape = ClassifyArray(config.sensors_m);  // resolved above: cannot fail
-  if (!shape.ok()) return shape.status();
+  const auto& [shape, localization] = *resolved;
   if (localization == Localization::kDirection) {
     if (config.array_in_body_frame) {
       return InvalidArgument("localization direction does not take a moving array (platform) yet");
@@ -164,8 +174,7 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const AudioSessionConfig& con
     auto stage = DirectionStage::Create(config);
     if (!stage.ok()) return stage.status();
     auto direction = std::make_unique<DirectionImpl>(config, std::move(stage).value());
-    return std::unique_ptr<Session>(
-        new Session(*shape, localization, config.sensors_m.size(), nullptr, std::move(direction)));
+    return std::unique_ptr<Session>(new Session(shape, localization, nullptr, std::move(direction)));
   }
   auto array = ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
   if (!array.ok()) return array.status();
@@ -188,7 +197,7 @@ StatusOr<std::unique_ptr<Session>> Session::Create(const AudioSessionConfig& con
   if (!parts.ok()) return parts.status();
   parts->tracker->SetBounds(config.bounds_min_m, config.bounds_max_m);
   return std::unique_ptr<Session>(
-      new Session(*shape, localization, config.sensors_m.size(),
+      new Session(shape, localization,
                   std::make_unique<Impl>(config, std::move(array).value(), std::move(parts).value(), std::move(pose),
                                          std::move(acquisition).value()),
                   nullptr));

@@ -82,7 +82,7 @@ class Session {
   // What the session reports: config.localization with auto resolved; and its array's shape.
   Localization localization() const { return localization_; }
   const ArrayShapeInfo& shape() const { return shape_; }
-  int sensor_count() const { return static_cast<int>(shape_sensors_); }
+  int sensor_count() const { return static_cast<int>(config().sensors_m.size()); }
   // Position sessions: the array in the world at the latest frame; nullptr for direction
   // sessions (they have no TDOA model).
   const ArrayGeometry* geometry() const;
@@ -91,11 +91,10 @@ class Session {
  private:
   struct Impl;
   struct DirectionImpl;
-  Session(ArrayShapeInfo shape, Localization localization, size_t sensors, std::unique_ptr<Impl> impl,
+  Session(ArrayShapeInfo shape, Localization localization, std::unique_ptr<Impl> impl,
           std::unique_ptr<DirectionImpl> direction);
   ArrayShapeInfo shape_;
   Localization localization_;
-  size_t shape_sensors_;
   std::unique_ptr<Impl> impl_;                // position sessions
   std::unique_ptr<DirectionImpl> direction_;  // direction sessions
 };

@@ -4,6 +4,29 @@
 #include <cmath>
 
 namespace localizer::server {
+namespace {
+
+// A ring that grows to `capacity`, then overwrites its oldest entry (at *next).
+template <typename T>
+void Push(const T& value, size_t capacity, std::vector<T>* ring, size_t* next) {
+  if (ring->size() < capacity) {
+    ring->push_back(value);
+  } else {
+    (*ring)[*next] = value;
+    *next = (*next + 1) % capacity;
+  }
+}
+
+// Its entries oldest first: once full, the oldest sits at `next`.
+template <typename T>
+std::vector<T> Oldest(const std::vector<T>& ring, size_t next) {
+  std::vector<T> out;
+  out.reserve(ring.size());
+  for (size_t k = 0; k < ring.size(); ++k) out.push_back(ring[(next + k) % ring.size()]);
+  return out;
+}
+
+}  // namespace
 
 TrackHistory::TrackHistory(size_t capacity) : capacity_(std::max<size_t>(1, capacity)) {}
 
@@ -40,26 +63,13 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
   ++frames_;
   if (estimate.source_present) ++present_frames_;
   presence_ = presence;
-  const size_t direction_capacity = capacity_ * kSourcesPerFrame;
-  for (const DirectionPoint& d : sources) {
-    if (directions_.size() < direction_capacity) {
-      directions_.push_back(d);
-    } else {
-      directions_[next_direction_] = d;
-      next_direction_ = (next_direction_ + 1) % direction_capacity;
-    }
-  }
+  for (const DirectionPoint& d : sources) Push(d, capacity_ * kSourcesPerFrame, &directions_, &next_direction_);
   sources_ = std::move(sources);
   model_probabilities_ = estimate.model_probabilities;
   if (estimate.platform) platform_ = estimate.platform;
   if (!estimate.initialised) return;
   ++initialised_frames_;
-  if (ring_.size() < capacity_) {
-    ring_.push_back(point);
-  } else {
-    ring_[next_] = point;
-    next_ = (next_ + 1) % capacity_;
-  }
+  Push(point, capacity_, &ring_, &next_);
 }
 
 void TrackHistory::SetTargets(const std::vector<engine::tws::TrackReport>& tracks) {
@@ -89,12 +99,8 @@ TrackSnapshot TrackHistory::Snapshot() const {
   snapshot.presence = presence_;
   snapshot.present_frames = present_frames_;
   snapshot.sources = sources_;
-  snapshot.directions.reserve(directions_.size());
-  for (size_t k = 0; k < directions_.size(); ++k)
-    snapshot.directions.push_back(directions_[(next_direction_ + k) % directions_.size()]);
-  snapshot.points.reserve(ring_.size());
-  // Oldest first: once the ring is full, the oldest point sits at next_.
-  for (size_t k = 0; k < ring_.size(); ++k) snapshot.points.push_back(ring_[(next_ + k) % ring_.size()]);
+  snapshot.directions = Oldest(directions_, next_direction_);
+  snapshot.points = Oldest(ring_, next_);
   return snapshot;
 }
 
