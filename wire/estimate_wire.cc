@@ -62,6 +62,8 @@ void EstimateToProto(const engine::Estimate& e, int reference_sensor, const std:
   out->set_presence_threshold(e.presence_threshold);
   out->set_ambiguous(e.ambiguous);
   out->set_modes(static_cast<uint32_t>(std::max(0, e.modes)));
+  out->set_far_field(e.far_field);
+  out->set_range_sd_m(e.range_sd_m);
   out->clear_pairs();
   for (size_t k = 0; k < e.delay_s.size(); ++k) {
     v1::PairTdoa* pair = out->add_pairs();
@@ -129,6 +131,8 @@ engine::Estimate EstimateFromProto(const v1::Estimate& p) {
   e.presence_threshold = p.presence_threshold();
   e.ambiguous = p.ambiguous();
   e.modes = static_cast<int>(std::min<uint32_t>(p.modes(), 1u << 30));
+  e.far_field = p.far_field();
+  e.range_sd_m = p.range_sd_m();
   for (const v1::PairTdoa& pair : p.pairs()) {
     e.delay_s.push_back(pair.delay_s());
     e.quality.push_back(pair.quality());

@@ -142,7 +142,7 @@ StatusOr<EstimatesCsvWriter> EstimatesCsvWriter::Open(const std::string& path, c
   if (!*writer.out_) return InvalidArgument(path + ": cannot open for writing");
   std::string header = std::string(kStateColumns) +
                        ",sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,reinitialised,tdoa_ms,filter_ms,"
-                       "source_present,presence_statistic,presence_threshold,ambiguous,modes";
+                       "source_present,presence_statistic,presence_threshold,ambiguous,modes,far_field,range_sd_m";
   for (int k : pair_sensors) {
     header += ",delay_s_" + std::to_string(k) + ",quality_" + std::to_string(k);
   }
@@ -216,7 +216,8 @@ Status EstimatesCsvWriter::Write(const engine::Estimate& e) {
   values.insert(values.end(), {e.ess, e.nis, static_cast<double>(e.pairs_used), e.tdoa_sigma_s * 1e6,
                                e.initialised ? 1.0 : 0.0, e.reinitialised ? 1.0 : 0.0, e.timings.tdoa_s * 1e3,
                                e.timings.filter_s * 1e3, e.source_present ? 1.0 : 0.0, e.presence_statistic,
-                               e.presence_threshold, e.ambiguous ? 1.0 : 0.0, static_cast<double>(e.modes)});
+                               e.presence_threshold, e.ambiguous ? 1.0 : 0.0, static_cast<double>(e.modes),
+                               e.far_field ? 1.0 : 0.0, e.range_sd_m});
   for (size_t p = 0; p < pair_count_; ++p) {
     values.push_back(p < e.delay_s.size() ? e.delay_s[p] : NAN);
     values.push_back(p < e.quality.size() ? e.quality[p] : NAN);

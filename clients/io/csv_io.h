@@ -15,6 +15,8 @@
 //   presence_threshold,                        statistic and threshold behind it
 //   ambiguous,modes,                           several position hypotheses (0 or 1), and
 //                                              how many (1 resolved, 0 not initialised)
+//   far_field,range_sd_m,                      the frame does not bound the range (0 or 1),
+//                                              and the range sd its TDOAs allow (0: none)
 //   delay_s_<k>,quality_<k>, ...               per sensor pair (reference, k), k ascending
 // Missing per-pair values are written as nan. Readers look columns up by name, so extra
 // columns are ignored; files written before the presence columns existed still read.

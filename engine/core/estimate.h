@@ -82,6 +82,15 @@ struct Estimate {
   // not initialised.
   bool ambiguous = false;
   int modes = 0;
+  // Range observability (position sessions): range_sd_m is the standard deviation of the
+  // source's range from the array's centroid that this frame's TDOAs alone allow at the
+  // estimate (the Cramer-Rao bound with each pair's own delay sigma; 0 when not computed).
+  // far_field: range_sd_m exceeds a third of the range, so the frame's data do not bound
+  // the range from above at three sigma (the TDOAs fix 1/range, nearly Gaussian, not
+  // range): the direction from the centroid holds, the range is the tracker's guess. The
+  // direction a volumetric array gives when its source is far (issue 18's `auto`).
+  bool far_field = false;
+  double range_sd_m = 0.0;
   Vec6 state = Vec6::Zero();  // (x, y, z, vx, vy, vz): m, m/s
   Mat6 covariance = Mat6::Zero();
   double ess = 0.0;             // effective sample size after the update (particle filter)

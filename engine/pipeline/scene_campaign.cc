@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "engine/array/multilateration.h"
+#include "engine/pipeline/range_observability.h"
 
 namespace localizer::engine {
 namespace {
@@ -69,6 +70,14 @@ double BearingCrlb(const ArrayGeometry& array, const Vec3& at_m, const Mat3& crl
   const Vec3 u = line_m / range_m;
   const Mat3 across = Mat3::Identity() - u * u.transpose();
   return std::sqrt((across * crlb_covariance * across).trace()) / range_m;
+}
+
+// The bound's variance along the line of sight from the centroid.
+double RadialVariance(const ArrayGeometry& array, const Vec3& at_m, const Mat3& crlb_covariance) {
+  const Vec3 line_m = at_m - array.centroid_m();
+  if (!(line_m.norm() > 0.0)) return kNan;
+  const Vec3 u = line_m.normalized();
+  return u.dot(crlb_covariance * u);
 }
 
 double AngleBetween(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
@@ -135,19 +144,28 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
     f.crlb_m = std::sqrt(crlb_covariance.trace());
     f.crlb_theory_m = Crlb(array, truth_m, theory_sigma_s);
     f.bearing_crlb_rad = BearingCrlb(array, truth_m, crlb_covariance);
-    f.range_apertures = (truth_m - array.centroid_m()).norm() / array.aperture_m();
+    f.range_m = (truth_m - array.centroid_m()).norm();
+    f.range_apertures = f.range_m / array.aperture_m();
     if (f.counted) {
       crlbs.push_back(f.crlb_m);
       theory_crlbs.push_back(f.crlb_theory_m);
       ranges.push_back(f.range_apertures);
     }
+    f.range_share = std::sqrt(std::max(0.0, RadialVariance(array, truth_m, crlb_covariance))) / f.range_m;
     if (e.initialised) {
       ++score.initialised_frames;
       const Vec3 error = e.state.head<3>() - truth_m;
       f.error_m = error.norm();
+      f.range_error_m = (e.state.head<3>() - array.centroid_m()).norm() - f.range_m;
       f.bearing_error_rad = AngleBetween(e.state.head<3>() - array.centroid_m(), truth_m - array.centroid_m());
       f.nees_position = PositionNees(e, error);
       f.sd_m = std::sqrt(e.covariance.topLeftCorner<3, 3>().trace());
+      f.far_field = e.far_field;
+      f.bearing_sd_rad = BearingCrlb(array, e.state.head<3>(), e.covariance.topLeftCorner<3, 3>());
+      // A far-field claim is honoured where the truth's own bound agrees the range is weak.
+      const bool in_bearing = e.far_field && !(f.range_share < kFarFieldRangeShare / 2.0);
+      f.reported_error = in_bearing ? f.bearing_error_rad : f.error_m;
+      f.reported_bound = in_bearing ? f.bearing_crlb_rad : f.crlb_m;
     }
     score.per_frame.push_back(f);
   }
@@ -166,6 +184,12 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
   if (acquired_bearing_at >= 0) {
     score.acquired_bearing = true;
     score.time_to_acquire_bearing_s = score.per_frame[acquired_bearing_at].t_s;
+  }
+  const int acquired_reported_at = AcquiredFrom(score.per_frame, &FrameScore::reported_bound,
+                                                options.acquire_crlb_multiple, &FrameScore::reported_error);
+  if (acquired_reported_at >= 0) {
+    score.acquired_reported = true;
+    score.time_to_acquire_reported_s = score.per_frame[acquired_reported_at].t_s;
   }
   if (acquired_theory_at >= 0) {
     score.acquired_theory = true;
@@ -217,6 +241,28 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
     }
   }
   score.silent_failure = score.silent_failure_s > options.silent_min_s;
+
+  // As reported: far-field frames answer for their bearing, and must not withhold a range
+  // the data held.
+  for (int i = 0; i < n; ++i) {
+    const FrameScore& f = score.per_frame[i];
+    if (!judged(f)) continue;
+    const bool withheld = f.far_field && f.range_share < kFarFieldRangeShare / 2.0;
+    score.far_field_frames += f.far_field;
+    if (withheld) score.range_withheld_s += hop_s;
+    if (!f.far_field || withheld) {
+      if (!estimates[i].ambiguous && f.error_m > options.lost_crlb_multiple * f.crlb_m &&
+          f.nees_position > options.silent_nees) {
+        score.silent_failure_reported_s += hop_s;
+      }
+      continue;
+    }
+    if (!estimates[i].ambiguous && f.bearing_error_rad > options.lost_crlb_multiple * f.bearing_crlb_rad &&
+        !(f.bearing_error_rad <= 3.0 * f.bearing_sd_rad)) {
+      score.silent_failure_reported_s += hop_s;
+    }
+  }
+  score.silent_failure_reported = score.silent_failure_reported_s > options.silent_min_s;
   return score;
 }
 
@@ -287,7 +333,7 @@ SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options, 
 
 CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
   CampaignSummary s;
-  std::vector<double> times_theory;
+  std::vector<double> times_theory, times_reported;
   std::vector<double> times_all, times_acquired, nees, rmse_gaussian, rmse_hard, rmse_theory;
   std::vector<double> rmse_class[3];
   ClassSummary* classes[3] = {&s.gaussian, &s.multipath, &s.impulsive};
@@ -312,6 +358,10 @@ CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
     }
     if (score.lost_frames > 0) ++s.lost;
     if (score.silent_failure) ++s.silent_failures;
+    if (score.silent_failure_reported) ++s.silent_failures_reported;
+    if (score.acquired_reported) ++s.acquired_reported;
+    if (score.range_withheld_s > 1.0) ++s.range_withheld;
+    times_reported.push_back(score.time_to_acquire_reported_s);
     if (!score.acquired) continue;
     ++s.acquired;
     ++classes[c]->acquired;
@@ -324,6 +374,8 @@ CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
   s.median_time_to_acquire_s = Quantile(times_all, 0.5);
   s.p95_time_to_acquire_s = Quantile(times_all, 0.95);
   s.median_time_to_acquire_theory_s = Quantile(times_theory, 0.5);
+  s.median_time_to_acquire_reported_s = Quantile(times_reported, 0.5);
+  s.p95_time_to_acquire_reported_s = Quantile(times_reported, 0.95);
   s.median_time_to_acquire_acquired_s = Quantile(times_acquired, 0.5);
   s.p95_time_to_acquire_acquired_s = Quantile(times_acquired, 0.95);
   s.median_rmse_over_crlb_gaussian = Median(rmse_gaussian);

@@ -24,10 +24,18 @@
 //     estimate - centroid and truth - centroid, against the bearing CRLB, the CRLB's position
 //     covariance projected across the line of sight and divided by the range; acquired in
 //     bearing like acquired in position, with the same multiple;
+//   - as reported (issue 18's far field): a frame whose estimate says far_field (its range
+//     unobservable) is judged in bearing where the truth's own bound agrees that the range is
+//     weak (its range sd at least a sixth of the range: half the engine's kFarFieldRangeShare),
+//     every other frame in position; acquired as reported like acquired in position. A frame
+//     that says far field where the truth's bound is tighter withholds a range the data held:
+//     it is judged in position and adds one hop to range_withheld_s;
 //   - silent failure: counted frames that are initialised, not ambiguous, with error >
 //     lost_crlb_multiple x CRLB and position NEES > silent_nees add one hop each; more than
 //     silent_min_s of them in total is a silent failure (the tracker was badly wrong and said
-//     it was sure).
+//     it was sure). As reported: far-field frames count instead when the bearing error exceeds
+//     lost_crlb_multiple x its bound and 3 x the estimate's own bearing sd (its covariance
+//     across the line of sight over the range).
 #pragma once
 
 #include <cstdint>
@@ -62,6 +70,15 @@ struct FrameScore {
   double bearing_error_rad = std::numeric_limits<double>::quiet_NaN();
   double bearing_crlb_rad = std::numeric_limits<double>::quiet_NaN();
   double range_apertures = std::numeric_limits<double>::quiet_NaN();  // the truth's, from the centroid
+  double range_m = std::numeric_limits<double>::quiet_NaN();          // the truth's, from the centroid
+  double range_error_m = std::numeric_limits<double>::quiet_NaN();    // estimate's range - truth's (signed)
+  double range_share = std::numeric_limits<double>::quiet_NaN();  // the truth's range bound / range
+  bool far_field = false;                                         // the estimate's Estimate::far_field
+  // What the frame is judged on as reported: bearing error and bound when far field, else
+  // position error and bound.
+  double reported_error = std::numeric_limits<double>::quiet_NaN();
+  double reported_bound = std::numeric_limits<double>::quiet_NaN();
+  double bearing_sd_rad = std::numeric_limits<double>::quiet_NaN();  // the estimate's own
   // What the estimate said of itself, for traces: sqrt(trace) of its position covariance,
   // and its presence and ambiguity flags.
   double sd_m = std::numeric_limits<double>::quiet_NaN();
@@ -90,6 +107,13 @@ struct SceneScore {
   // The same for the bearing from the array's centroid (see above).
   bool acquired_bearing = false;
   double time_to_acquire_bearing_s = std::numeric_limits<double>::infinity();
+  // As reported (see above).
+  bool acquired_reported = false;
+  double time_to_acquire_reported_s = std::numeric_limits<double>::infinity();
+  int far_field_frames = 0;  // counted, initialised frames that said far field
+  double range_withheld_s = 0.0;
+  double silent_failure_reported_s = 0.0;
+  bool silent_failure_reported = false;
   double range_apertures_median = std::numeric_limits<double>::quiet_NaN();  // the truth's, counted frames
   double rmse_over_crlb = std::numeric_limits<double>::quiet_NaN();          // after acquisition
   // The same against the theoretical per-frame CRLB (NaN without theory sigmas): shows how
@@ -155,6 +179,11 @@ struct CampaignSummary {
   int acquired_bearing = 0;                   // in bearing from the centroid (against its CRLB)
   int acquired_bearing_not_position = 0;      // of those, not acquired in position
   int acquired_bearing_not_position_far = 0;  // of those, the truth beyond 3 apertures (median)
+  int acquired_reported = 0;        // in what each frame reported (position, or bearing when far field)
+  int silent_failures_reported = 0;  // the same, for silent failures
+  int range_withheld = 0;            // scenes with more than 1 s of range withheld (see ScoreScene)
+  double median_time_to_acquire_reported_s = std::numeric_limits<double>::infinity();  // all scenes
+  double p95_time_to_acquire_reported_s = std::numeric_limits<double>::infinity();
   double median_time_to_acquire_theory_s = std::numeric_limits<double>::infinity();  // all scenes
   // Over every scene run, a scene never acquired counting as +inf.
   double median_time_to_acquire_s = std::numeric_limits<double>::infinity();

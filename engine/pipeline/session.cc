@@ -118,6 +118,7 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
   } else {
     AcquireFrame(measured, &e);  // the modes already hold this frame's TDOAs
   }
+  if (measured) pair_sigmas.Add(measurement, e.tdoa_sigma_s);
   if (live && tracker.initialised()) Report(&e);
   last_t_s = e.t_s;
   e.timings.filter_s = SecondsSince(filter_start);

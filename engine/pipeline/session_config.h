@@ -38,7 +38,8 @@ namespace localizer::engine {
 // sensors off a common plane), or the directions of up to max_sources sources (any array
 // of two or more sensors; a planar array's direction has a mirror image across its plane
 // unless source_side is stated, a linear array's is a cone angle). auto: position for a
-// volumetric array, direction otherwise.
+// volumetric array (each estimate saying, by Estimate::far_field, whether its frame bounds
+// the range or only the direction), direction otherwise.
 enum class Localization { kAuto, kPosition, kDirection };
 // "auto" | "position" | "direction"; INVALID_ARGUMENT naming `field` otherwise.
 StatusOr<Localization> ParseLocalization(const std::string& name, const std::string& field);

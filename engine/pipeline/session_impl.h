@@ -12,6 +12,7 @@
 #include "engine/pipeline/backend.h"
 #include "engine/pipeline/framer.h"
 #include "engine/pipeline/platform_pose.h"
+#include "engine/pipeline/range_observability.h"
 #include "engine/pipeline/session.h"
 #include "engine/tdoa/despike.h"
 
@@ -54,7 +55,8 @@ struct Session::Impl {
   // through acquisition when the divergence test fires: from the frame's modes and the
   // track's own prediction (`predicted`), equally weighted.
   void UpdateAndWatch(const TrackState& predicted, Estimate* e);
-  // The estimate's state: the strongest hypothesis, with a covariance that covers all of them.
+  // The estimate's state: the strongest hypothesis, with a covariance that covers all of
+  // them; and whether this frame's TDOAs bound its range (range_observability.h).
   void Report(Estimate* e) const;
   // Multipath: a pair whose main peak is far from where the track predicts it, while its GCC
   // has another peak (a local maximum at least kCandidateShare of the main peak's height)
@@ -82,6 +84,7 @@ struct Session::Impl {
   DespikeScratch despike_scratch;
   std::vector<float> despiked;  // the frame as the estimator sees it, when despiking
   DivergenceMonitor monitor;
+  PairSigmaHistory pair_sigmas;  // the recent frames' delay sigmas, for Estimate::far_field
   Measurement measurement;
   Eigen::VectorXd delays;
   bool have_sequence = false;

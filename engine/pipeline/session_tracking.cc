@@ -206,6 +206,9 @@ void Session::Impl::Report(Estimate* e) const {
   e->covariance = covariance;
   e->modes = std::max(modes, 1);
   e->ambiguous = e->modes > 1;
+  const RangeObservability range = JudgeRange(array, e->state.head<3>(), pair_sigmas.Median());
+  e->range_sd_m = range.range_sd_m;
+  e->far_field = range.far_field;
   e->model_probabilities = components.tracker->ModelProbabilities();
 }
 

@@ -9,7 +9,7 @@
 namespace localizer::server {
 
 DetectionRunner::DetectionRunner(std::unique_ptr<engine::ScanSession> scans, ServiceMetrics* metrics)
-    : scans_(std::move(scans)), metrics_(metrics), info_{"detections", "tws", "cpu", 0, false} {}
+    : scans_(std::move(scans)), metrics_(metrics), info_{"detections", "tws", "cpu", 0, false, "", ""} {}
 
 WorkItem DetectionRunner::DecodeBlock(const v1::SampleBlock& block, Clock::time_point received,
                                       wire::DecodedBlock* /*scratch*/) const {

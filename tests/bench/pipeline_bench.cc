@@ -5,6 +5,7 @@
 //      --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
+#include "engine/pipeline/range_observability.h"
 #include "engine/pipeline/session.h"
 #include "engine/sim/simulator.h"
 
@@ -73,6 +74,28 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   state.SetLabel(LikelihoodName(config.tracker.particle.likelihood));
 }
 BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}})->Unit(benchmark::kMillisecond);
+
+// The far-field judgement a position session adds to every frame (Estimate::far_field):
+// the pair sigmas' running median and the frame's range bound at the estimate, on the same
+// array; compare with the pipeline's per-frame time (its ms_per_audio_s / frames per s).
+void BM_FarFieldJudgementPerFrame(benchmark::State& state) {
+  Scenario scenario;
+  (void)Audio(44100.0, &scenario);
+  const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
+  Measurement m;
+  m.pairs.resize(static_cast<size_t>(array.pair_count()));
+  for (size_t p = 0; p < m.pairs.size(); ++p) {
+    m.pairs[p].peak_value = 0.5;
+    m.pairs[p].delay_sigma_s = 2e-6 * static_cast<double>(p + 1);
+  }
+  PairSigmaHistory history;
+  const Vec3 at = scenario.sim.trajectory.position_m;
+  for (auto _ : state) {
+    history.Add(m, 3e-6);
+    benchmark::DoNotOptimize(JudgeRange(array, at, history.Median()));
+  }
+}
+BENCHMARK(BM_FarFieldJudgementPerFrame)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace localizer::engine

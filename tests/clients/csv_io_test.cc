@@ -62,7 +62,7 @@ TEST(CsvIo, EstimatesHeaderAndRows) {
   ASSERT_TRUE(writer->Close().ok());
   EXPECT_EQ(FirstLine(dir.File("est.csv")),
             "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,"
-            "reinitialised,tdoa_ms,filter_ms,source_present,presence_statistic,presence_threshold,ambiguous,modes,"
+            "reinitialised,tdoa_ms,filter_ms,source_present,presence_statistic,presence_threshold,ambiguous,modes,far_field,range_sd_m,"
             "delay_s_1,quality_1,delay_s_2,quality_2,"
             "delay_s_3,quality_3");
   auto rows = ReadEstimatesCsv(dir.File("est.csv"));

@@ -40,9 +40,9 @@ SimResult Truth() {
 // position from `position_at(t, truth)`, covariance sd^2 I.
 template <typename PositionAt>
 std::vector<Estimate> Estimates(const ArrayGeometry& array, const SimResult& sim, PositionAt position_at,
-                                double position_sd_m) {
+                                double position_sd_m, double tdoa_sigma_s = kTdoaSigmaS) {
   std::mt19937_64 engine(11);
-  std::normal_distribution<double> noise(0.0, kTdoaSigmaS);
+  std::normal_distribution<double> noise(0.0, tdoa_sigma_s);
   std::vector<Estimate> out;
   for (int i = 0; 0.2 + i * kHopS <= 5.9; ++i) {
     Estimate e;
@@ -158,6 +158,47 @@ TEST(SceneScore, BearingIsScoredApartFromRange) {
   const SceneScore w = ScoreScene(array, sim, sideways);
   EXPECT_FALSE(w.acquired);
   EXPECT_FALSE(w.acquired_bearing);
+}
+
+// The range overshoot above, with every frame saying far field: honoured (judged in bearing)
+// only where the truth's own bound agrees that the range is weak (its sd >= a sixth of it).
+TEST(SceneScore, AFarFieldClaimIsJudgedInBearingOnlyWhereTheRangeIsWeak) {
+  const ArrayGeometry array = Array();
+  const SimResult sim = Truth();
+  const Vec3 centre = array.centroid_m();
+  auto overshoot = [&](double, const Vec3& truth) -> Vec3 { return centre + 3.0 * (truth - centre); };
+  auto claim_far = [](std::vector<Estimate> estimates) {
+    for (Estimate& e : estimates) e.far_field = true;
+    return estimates;
+  };
+  auto judged_as_claimed = [](const SceneScore& s) {
+    int withheld = 0;
+    for (const FrameScore& f : s.per_frame) {
+      const bool weak = f.range_share >= 1.0 / 6.0;
+      withheld += !weak;
+      EXPECT_EQ(f.reported_bound, weak ? f.bearing_crlb_rad : f.crlb_m) << "t " << f.t_s;
+      EXPECT_EQ(f.reported_error, weak ? f.bearing_error_rad : f.error_m) << "t " << f.t_s;
+    }
+    EXPECT_NEAR(s.range_withheld_s, kHopS * withheld, 1e-9);
+    return withheld;
+  };
+  // 2 us TDOAs: the range is known to a few centimetres at 6 m on most of the track (the
+  // bound grows only where the tetrahedron's geometry is near singular): claiming far field
+  // there withholds it, and those frames are judged in position, which the overshoot fails.
+  const auto precise = Estimates(array, sim, overshoot, 0.01);
+  EXPECT_FALSE(ScoreScene(array, sim, precise).acquired_reported) << "no claim: judged in position";
+  const SceneScore withheld = ScoreScene(array, sim, claim_far(precise));
+  EXPECT_TRUE(withheld.acquired_bearing);
+  EXPECT_FALSE(withheld.acquired_reported);
+  EXPECT_EQ(withheld.far_field_frames, static_cast<int>(precise.size()));
+  EXPECT_GT(judged_as_claimed(withheld), static_cast<int>(precise.size()) * 3 / 4);
+  // 400 us TDOAs: the frame's range sd is a large share of the range; the claim stands on
+  // every frame, and the bearing is right.
+  const auto coarse = Estimates(array, sim, overshoot, 0.01, 200 * kTdoaSigmaS);
+  const SceneScore honoured = ScoreScene(array, sim, claim_far(coarse));
+  EXPECT_EQ(judged_as_claimed(honoured), 0);
+  EXPECT_TRUE(honoured.acquired_reported);
+  EXPECT_DOUBLE_EQ(honoured.time_to_acquire_reported_s, coarse.front().t_s);
 }
 
 TEST(SceneScore, LateAcquisitionAndLaterLoss) {

@@ -476,7 +476,7 @@ TEST(ConfigWire, BadBoundsAndPresenceFieldsAreInvalidArgumentNamingTheField) {
   refused(p, "source_timeout_s");
 }
 
-TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
+TEST(EstimateWire, PresenceAmbiguityAndRangeRoundTrip) {
   const engine::ArrayGeometry array =
       *engine::ArrayGeometry::Create({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, 1500.0);
   engine::Estimate e;
@@ -486,8 +486,12 @@ TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
   e.presence_threshold = 4.25;
   e.ambiguous = true;
   e.modes = 2;
+  e.far_field = true;
+  e.range_sd_m = 7.5;
   v1::Estimate wire;
   EstimateToProto(e, array.reference_sensor(), "cpu", &wire);
+  EXPECT_TRUE(wire.far_field());
+  EXPECT_EQ(wire.range_sd_m(), 7.5);
   EXPECT_TRUE(wire.source_present());
   EXPECT_EQ(wire.presence_statistic(), 12.5);
   EXPECT_EQ(wire.presence_threshold(), 4.25);
@@ -499,6 +503,8 @@ TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
   EXPECT_EQ(back.presence_threshold, 4.25);
   EXPECT_TRUE(back.ambiguous);
   EXPECT_EQ(back.modes, 2);
+  EXPECT_TRUE(back.far_field);
+  EXPECT_EQ(back.range_sd_m, 7.5);
   // A silent, uninitialised frame: all false / zero, and a reused message is overwritten.
   engine::Estimate silent;
   silent.presence_statistic = 1.5;
@@ -507,6 +513,8 @@ TEST(EstimateWire, PresenceAndAmbiguityRoundTrip) {
   EXPECT_FALSE(wire.source_present());
   EXPECT_FALSE(wire.ambiguous());
   EXPECT_EQ(wire.modes(), 0u);
+  EXPECT_FALSE(wire.far_field());
+  EXPECT_EQ(wire.range_sd_m(), 0.0);
   back = EstimateFromProto(wire);
   EXPECT_FALSE(back.source_present);
   EXPECT_EQ(back.presence_statistic, 1.5);
