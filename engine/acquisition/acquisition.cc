@@ -181,17 +181,31 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
       [&](const Vec3& start, const std::vector<double>& a, const std::vector<double>& b, bool siblings) {
         PositionMode mode;
         if (!Refine(start, a, b, &mode)) return;
-        if (!InBounds(mode.position_m) || (mode.position_m - centre).norm() > 1.5 * radius) return;
+        // A solution beyond the searched sphere says "far, that way": it stands on the sphere
+        // (scored there), its range spread below reaching back over the volume.
+        const double reach_m = (mode.position_m - centre).norm();
+        if (reach_m > 1.5 * radius) {
+          mode.position_m = centre + radius / reach_m * (mode.position_m - centre);
+          mode.score = Score(mode.position_m);
+        }
+        if (!InBounds(mode.position_m)) return;
         // The source lies within the searched sphere: no axis of the covariance may exceed it
         // (far away, range is barely observable and (H^T W H)^-1 grows without bound).
         const Eigen::SelfAdjointEigenSolver<Mat3> eig(mode.covariance_m2);
         mode.covariance_m2 = eig.eigenvectors() *
                              eig.eigenvalues().cwiseMax(0.0).cwiseMin(radius * radius).asDiagonal() *
                              eig.eigenvectors().transpose();
+        // The same mode when each lies within 3 sd of the other by the other's own covariance:
+        // a sum of the two would let a far mode's range spread (tens of metres) swallow a
+        // distinct near one, e.g. a 4-sensor array's second exact solution near the array.
+        const Mat3 floor = std::pow(1e-6 * array_.aperture_m(), 2) * Mat3::Identity();
+        auto within = [&](const Vec3& delta, const Mat3& covariance) {
+          return delta.dot((covariance + floor).ldlt().solve(delta)) < 9.0;
+        };
         for (PositionMode& other : modes) {
           const Vec3 delta = mode.position_m - other.position_m;
-          const Mat3 spread = mode.covariance_m2 + other.covariance_m2;
-          if (delta.dot(spread.ldlt().solve(delta)) < 9.0 || delta.norm() < 1e-3 * array_.aperture_m()) {
+          if ((within(delta, mode.covariance_m2) && within(delta, other.covariance_m2)) ||
+              delta.norm() < 1e-3 * array_.aperture_m()) {
             if (mode.score > other.score) other = mode;
             best = std::max(best, mode.score);
             return;

@@ -82,6 +82,33 @@ TEST(Acquisition, FindsBothExactSolutionsOfAFourSensorArray) {
   EXPECT_NEAR(result.modes[0].score, result.modes[1].score, 3.0 * std::sqrt(3.0));
 }
 
+// The same tetrahedron with the source 60 apertures out, far beyond the searched sphere (10
+// apertures): the TDOAs' far solution says "that way, far"; it stands on the sphere, on the
+// true line of sight, with a range spread reaching back over the volume, beside the exact
+// solution near the array. (It used to be dropped, or swallowed by the near one, and a
+// track started near the array.)
+TEST(Acquisition, ASourceBeyondTheSearchedSphereKeepsItsDirection) {
+  const auto array = testing::TetrahedronArray();
+  const Vec3 centre = array.centroid_m();
+  const Vec3 truth = centre + 60.0 * array.aperture_m() * Vec3(0.48, -0.6, 0.64).normalized();
+  const SignalSpec spec;
+  const Measurement m = Measure(
+      array, spec, DelayedNoiseFrame(spec, ChannelDelaysSamples(array, truth, spec.sample_rate_hz), 20.0, 9));
+  auto acquisition = *Acquisition::Create(array, AcquisitionOptions{});
+  const AcquisitionResult result = acquisition.Search(m);
+  ASSERT_TRUE(result.presence.present);
+  const double radius = acquisition.search_radius_m();
+  const Vec3 line = (truth - centre).normalized();
+  int far_modes = 0;
+  for (const PositionMode& mode : result.modes) {
+    const Vec3 out = mode.position_m - centre;
+    if (out.normalized().dot(line) < std::cos(0.05) || out.norm() < 0.99 * radius) continue;
+    ++far_modes;
+    EXPECT_GT(std::sqrt(line.dot(mode.covariance_m2 * line)), radius / 3.0) << "its range is not known";
+  }
+  EXPECT_EQ(far_modes, 1) << result.modes.size() << " modes";
+}
+
 // A volumetric 8-sensor array: one solution, found although two pairs lock on an echo.
 TEST(Acquisition, EightSensorsFindTheSourceThroughAnEcho) {
   std::vector<Vec3> sensors;

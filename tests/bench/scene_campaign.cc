@@ -238,7 +238,8 @@ void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s)
         "    {\"seed\": %" PRIu64
         ", \"class\": %s, \"description\": %s, \"error\": %s, \"frames\": %d, "
         "\"initialised_frames\": %d, \"acquired\": %s, \"acquired_bearing\": %s, \"acquired_reported\": %s, "
-        "\"far_field_frames\": %d, \"range_withheld_s\": %s, \"range_apertures_median\": %s, "
+        "\"far_field_frames\": %d, \"range_withheld_s\": %s, \"time_to_acquire_reported_s\": %s, "
+        "\"range_apertures_median\": %s, "
         "\"time_to_acquire_s\": %s, \"time_to_acquire_theory_s\": %s, "
         "\"crlb_median_m\": %s, "
         "\"crlb_theory_median_m\": %s, \"rmse_over_crlb\": %s, \"rmse_over_crlb_theory\": %s, \"median_error_m\": %s, "
@@ -247,7 +248,8 @@ void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s)
         r.seed, JsonString(SceneClassName(r.scene_class)).c_str(), JsonString(r.description).c_str(),
         JsonString(r.error).c_str(), c.frames, c.initialised_frames, c.acquired ? "true" : "false",
         c.acquired_bearing ? "true" : "false", c.acquired_reported ? "true" : "false", c.far_field_frames,
-        JsonNum(c.range_withheld_s).c_str(), JsonNum(c.range_apertures_median).c_str(),
+        JsonNum(c.range_withheld_s).c_str(), JsonNum(c.time_to_acquire_reported_s).c_str(),
+        JsonNum(c.range_apertures_median).c_str(),
         JsonNum(c.time_to_acquire_s).c_str(), JsonNum(c.time_to_acquire_theory_s).c_str(),
         JsonNum(c.crlb_median_m).c_str(), JsonNum(c.crlb_theory_median_m).c_str(), JsonNum(c.rmse_over_crlb).c_str(),
         JsonNum(c.rmse_over_crlb_theory).c_str(), JsonNum(c.median_error_m).c_str(),
