@@ -145,6 +145,7 @@ int RunLocal(const TrackFlags& f, const io::TrackJob& job, engine::Localization 
   if (!summary.ok()) return RuntimeError(kCommand, summary.status());
   PrintSummary(*summary, f.out_path);
   if (auto line = summary->presence.NoSourceLine()) std::printf("%s\n", line->c_str());
+  if (auto line = summary->presence.FarFieldLine()) std::printf("%s\n", line->c_str());
   return kExitOk;
 }
 

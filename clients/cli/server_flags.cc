@@ -73,6 +73,7 @@ void PrintStreamTotals(const client::StreamResult& result) {
   io::PresenceSummary presence;
   for (const client::StreamedEstimate& s : result.estimates) presence.Add(s.estimate);
   if (auto line = presence.NoSourceLine()) std::printf("%s\n", line->c_str());
+  if (auto line = presence.FarFieldLine()) std::printf("%s\n", line->c_str());
 }
 
 }  // namespace localizer::cli

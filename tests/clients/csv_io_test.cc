@@ -130,6 +130,20 @@ TEST(CsvIo, EstimatesWithoutPresenceColumnsStillRead) {
   EXPECT_NE(half.status().message().find("presence_statistic"), std::string::npos) << half.status().message();
 }
 
+TEST(PresenceSummary, FarFieldLineCountsThePositionsWithoutARange) {
+  PresenceSummary summary;
+  summary.Add(MakeEstimate(0.0, false));  // not initialised: not a position
+  for (int i = 1; i <= 4; ++i) summary.Add(MakeEstimate(0.1 * i, true));
+  EXPECT_FALSE(summary.FarFieldLine().has_value());
+  engine::Estimate far = MakeEstimate(0.5, true);
+  far.far_field = true;
+  summary.Add(far);
+  ASSERT_TRUE(summary.FarFieldLine().has_value());
+  EXPECT_EQ(*summary.FarFieldLine(),
+            "range unobservable (far field) in 1 of 5 positions: their direction from the array's centroid holds, "
+            "their range does not");
+}
+
 TEST(PresenceSummary, NoSourceLineWhenNoFrameHeldASource) {
   PresenceSummary summary;
   for (int i = 0; i < 12; ++i) {

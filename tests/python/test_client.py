@@ -145,6 +145,8 @@ class SyntheticSignalTest(unittest.TestCase):
         summary = lc.presence_summary(heard)
         self.assertFalse(summary["no_source"])
         self.assertEqual((summary["present"], summary["ambiguous"]), (1, 1))
+        far = [lc.pb.Estimate(initialised=True, far_field=k % 2 == 0, range_sd_m=4.0) for k in range(5)]
+        self.assertEqual((lc.presence_summary(far)["initialised"], lc.presence_summary(far)["far_field"]), (5, 3))
         # Estimates without a presence test (threshold 0: an older server) are not a silent run.
         self.assertFalse(lc.presence_summary([lc.pb.Estimate(initialised=True)])["no_source"])
 

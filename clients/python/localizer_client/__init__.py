@@ -276,13 +276,17 @@ def presence_summary(estimates):
     """Source presence over a run: a dict with ``frames``, ``tested`` (estimates whose
     presence test ran: threshold > 0), ``present``, ``ambiguous``, ``max_statistic`` and the
     ``threshold`` of that frame, and ``no_source`` (frames were tested and none held a
-    source; the line ``localizer-cli`` prints then is ``no_source_line``)."""
+    source; the line ``localizer-cli`` prints then is ``no_source_line``); ``initialised``
+    (positions) and ``far_field`` (of those, the ones whose frame could not bound the range:
+    trust their direction from the array's centroid, not their range)."""
     out = {"frames": 0, "tested": 0, "present": 0, "ambiguous": 0, "max_statistic": 0.0,
-           "threshold": 0.0}
+           "threshold": 0.0, "initialised": 0, "far_field": 0}
     for e in estimates:
         out["frames"] += 1
         out["present"] += int(e.source_present)
         out["ambiguous"] += int(e.ambiguous)
+        out["initialised"] += int(e.initialised)
+        out["far_field"] += int(e.initialised and e.far_field)
         if e.presence_threshold > 0.0:
             if out["tested"] == 0 or e.presence_statistic > out["max_statistic"]:
                 out["max_statistic"] = e.presence_statistic
