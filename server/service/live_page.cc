@@ -34,6 +34,7 @@ constexpr std::string_view kPage = R"html(<!DOCTYPE html>
   .presence.present { background: #2ca02c; } .presence.silent { background: #888; }
   .presence.untested { background: #ccc; color: #333; }
   .presence.ambiguous { background: #ff7f0e; }
+  .presence.far { background: #9467bd; }
 </style>
 </head>
 <body>
@@ -231,6 +232,11 @@ function render(doc) {
       if (pr.ambiguous) {
         el("span", {class: "presence ambiguous", title: "several position hypotheses fit the data"},
            c.badges, `ambiguous: ${pr.modes} modes`);
+      }
+      if (pr.far_field) {
+        el("span", {class: "presence far", title: `this frame bounds the direction, not the range ` +
+                                                   `(range sd ${fmt(pr.range_sd_m || 0)} m)`},
+           c.badges, "far field: direction only");
       }
     }
     const silent = !!(pr && pr.state === "silent");

@@ -54,7 +54,8 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
   s["frames"] = info.frames_processed();
   s["initialised_frames"] = track.initialised_frames;
   s["present_frames"] = track.present_frames;
-  // The latest frame's source presence and ambiguity; null before the first frame and for
+  // The latest frame's source presence, ambiguity and range observability (far_field,
+  // range_sd_m: engine::Estimate); null before the first frame and for
   // detection sessions. "state": "present", "silent", or "untested" (the engine ran no
   // presence test: threshold 0).
   if (track.presence && host.runner_info().reports_presence) {
@@ -66,7 +67,9 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
                      {"statistic", Number(p.statistic)},
                      {"threshold", Number(p.threshold)},
                      {"ambiguous", p.ambiguous},
-                     {"modes", p.modes}};
+                     {"modes", p.modes},
+                     {"far_field", p.far_field},
+                     {"range_sd_m", Number(p.range_sd_m)}};
   } else {
     s["presence"] = nullptr;
   }
@@ -84,7 +87,8 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
                         {"position_std_m", Triple(p.position_std_m)},
                         {"reinitialised", p.reinitialised},
                         {"source_present", p.source_present},
-                        {"ambiguous", p.ambiguous}});
+                        {"ambiguous", p.ambiguous},
+                        {"far_field", p.far_field}});
     }
   }
   s["track"] = std::move(points);

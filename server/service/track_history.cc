@@ -39,6 +39,7 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
     point.reinitialised = estimate.reinitialised;
     point.source_present = estimate.source_present;
     point.ambiguous = estimate.ambiguous;
+    point.far_field = estimate.far_field;
     for (int i = 0; i < 3; ++i) {
       point.position_m[i] = estimate.state(i);
       point.velocity_mps[i] = estimate.state(3 + i);
@@ -53,6 +54,8 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
   presence.threshold = estimate.presence_threshold;
   presence.ambiguous = estimate.ambiguous;
   presence.modes = estimate.modes;
+  presence.far_field = estimate.initialised && estimate.far_field;
+  presence.range_sd_m = estimate.range_sd_m;
   std::vector<DirectionPoint> sources;
   sources.reserve(estimate.sources.size());
   for (const engine::SourceEstimate& s : estimate.sources) {

@@ -32,6 +32,7 @@ struct TrackPoint {
   bool reinitialised = false;     // the tracker restarted from a new fix at this frame
   bool source_present = false;    // a source was heard at this frame (else a prediction)
   bool ambiguous = false;         // several position hypotheses fit this frame
+  bool far_field = false;         // the frame could not bound the range (engine::Estimate::far_field)
 };
 
 // A direction session's source at one frame (engine::SourceEstimate); angles NaN where the
@@ -53,7 +54,7 @@ struct TargetPoint {
   double position_m[3] = {};
 };
 
-// An audio session's source presence and ambiguity at its latest frame
+// An audio session's source presence, ambiguity and range observability at its latest frame
 // (engine::Estimate::source_present, ...); `tested` is false when the engine ran no
 // presence test (threshold 0).
 struct PresencePoint {
@@ -63,6 +64,8 @@ struct PresencePoint {
   double threshold = 0.0;
   bool ambiguous = false;
   int modes = 0;
+  bool far_field = false;
+  double range_sd_m = 0.0;
 };
 
 struct TrackSnapshot {

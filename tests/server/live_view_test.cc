@@ -71,11 +71,14 @@ TEST(TrackHistoryTest, KeepsTheLatestPresenceAndAmbiguity) {
   heard.presence_threshold = 5.0;
   heard.ambiguous = true;
   heard.modes = 2;
+  heard.far_field = true;
+  heard.range_sd_m = 12.5;
   track.Append(heard);
   engine::Estimate silent = Fix(1, 1.1);  // the tracker coasts: a prediction
   silent.presence_statistic = 2.0;
   silent.presence_threshold = 5.0;
   silent.modes = 1;
+  silent.range_sd_m = 0.5;
   track.Append(silent);
   const TrackSnapshot s = track.Snapshot();
   ASSERT_TRUE(s.presence.has_value());
@@ -85,11 +88,15 @@ TEST(TrackHistoryTest, KeepsTheLatestPresenceAndAmbiguity) {
   EXPECT_EQ(s.presence->threshold, 5.0);
   EXPECT_FALSE(s.presence->ambiguous);
   EXPECT_EQ(s.presence->modes, 1);
+  EXPECT_FALSE(s.presence->far_field);
+  EXPECT_EQ(s.presence->range_sd_m, 0.5);
   EXPECT_EQ(s.present_frames, 1u);
   ASSERT_EQ(s.points.size(), 2u);
   EXPECT_TRUE(s.points[0].source_present);
   EXPECT_TRUE(s.points[0].ambiguous);
+  EXPECT_TRUE(s.points[0].far_field);
   EXPECT_FALSE(s.points[1].source_present);
+  EXPECT_FALSE(s.points[1].far_field);
 }
 
 // Direction sessions: every (frame, source) direction in a ring of kSourcesPerFrame x
@@ -179,6 +186,7 @@ TEST_F(ServiceTest, SessionsJsonListsTheStreamedTrack) {
   for (size_t i = 1; i < track.size(); ++i) EXPECT_GT(track[i].at("t_s"), track[i - 1].at("t_s"));
   EXPECT_EQ(point.at("source_present").get<bool>(), last.source_present());
   EXPECT_EQ(point.at("ambiguous").get<bool>(), last.ambiguous());
+  EXPECT_EQ(point.at("far_field").get<bool>(), last.far_field());
   // The latest frame's presence and ambiguity, as the stream received them.
   const v1::Estimate latest = stream.estimates().back();  // a copy: estimates() returns a temporary
   const auto& presence = session.at("presence");
@@ -186,6 +194,8 @@ TEST_F(ServiceTest, SessionsJsonListsTheStreamedTrack) {
   EXPECT_EQ(presence.at("source_present").get<bool>(), latest.source_present());
   EXPECT_EQ(presence.at("ambiguous").get<bool>(), latest.ambiguous());
   EXPECT_EQ(presence.at("modes").get<uint32_t>(), latest.modes());
+  EXPECT_EQ(presence.at("far_field").get<bool>(), latest.initialised() && latest.far_field());
+  EXPECT_DOUBLE_EQ(presence.at("range_sd_m").get<double>(), latest.range_sd_m());
   EXPECT_DOUBLE_EQ(presence.at("threshold").get<double>(), latest.presence_threshold());
   const std::string state = presence.at("state");
   EXPECT_EQ(state, latest.presence_threshold() <= 0.0 ? "untested" : latest.source_present() ? "present" : "silent");
