@@ -2,27 +2,11 @@
 
 #include <algorithm>
 
+#include "wire/track_status_wire.h"
+
 namespace localizer::wire {
 
 namespace {
-
-v1::TrackStatus StatusToProto(engine::SourceStatus s) {
-  switch (s) {
-    case engine::SourceStatus::kTentative:
-      return v1::TRACK_STATUS_TENTATIVE;
-    case engine::SourceStatus::kConfirmed:
-      return v1::TRACK_STATUS_CONFIRMED;
-    case engine::SourceStatus::kCoasting:
-      return v1::TRACK_STATUS_COASTING;
-  }
-  return v1::TRACK_STATUS_UNSPECIFIED;
-}
-
-engine::SourceStatus StatusFromProto(v1::TrackStatus s) {
-  return s == v1::TRACK_STATUS_CONFIRMED  ? engine::SourceStatus::kConfirmed
-         : s == v1::TRACK_STATUS_COASTING ? engine::SourceStatus::kCoasting
-                                          : engine::SourceStatus::kTentative;
-}
 
 void SetVector(const engine::Vec3& from, v1::Vector3* to) {
   to->set_x(from.x());
@@ -97,7 +81,7 @@ void EstimateToProto(const engine::Estimate& e, int reference_sensor, const std:
   for (const engine::SourceEstimate& s : e.sources) {
     v1::SourceDirection* source = out->add_sources();
     source->set_source_id(s.source_id);
-    source->set_status(StatusToProto(s.status));
+    source->set_status(TrackStatusToProto(s.status));
     SetVector(s.direction, source->mutable_direction());
     source->set_azimuth_rad(s.azimuth_rad);
     source->set_elevation_rad(s.elevation_rad);
@@ -154,7 +138,7 @@ engine::Estimate EstimateFromProto(const v1::Estimate& p) {
   for (const v1::SourceDirection& source : p.sources()) {
     engine::SourceEstimate s;
     s.source_id = source.source_id();
-    s.status = StatusFromProto(source.status());
+    s.status = TrackStatusFromProto(source.status());
     s.direction = GetVector(source.direction());
     s.azimuth_rad = source.azimuth_rad();
     s.elevation_rad = source.elevation_rad();

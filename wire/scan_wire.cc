@@ -5,6 +5,8 @@
 #include <numbers>
 #include <string>
 
+#include "wire/track_status_wire.h"
+
 namespace localizer::wire {
 namespace {
 
@@ -12,29 +14,6 @@ void ToProto(const Eigen::Vector3d& v, v1::Vector3* out) {
   out->set_x(v.x());
   out->set_y(v.y());
   out->set_z(v.z());
-}
-
-v1::TrackStatus StatusToProto(engine::tws::TrackStatus s) {
-  switch (s) {
-    case engine::tws::TrackStatus::kTentative:
-      return v1::TRACK_STATUS_TENTATIVE;
-    case engine::tws::TrackStatus::kConfirmed:
-      return v1::TRACK_STATUS_CONFIRMED;
-    case engine::tws::TrackStatus::kCoasting:
-      return v1::TRACK_STATUS_COASTING;
-  }
-  return v1::TRACK_STATUS_UNSPECIFIED;
-}
-
-engine::tws::TrackStatus StatusFromProto(v1::TrackStatus s) {
-  switch (s) {
-    case v1::TRACK_STATUS_CONFIRMED:
-      return engine::tws::TrackStatus::kConfirmed;
-    case v1::TRACK_STATUS_COASTING:
-      return engine::tws::TrackStatus::kCoasting;
-    default:
-      return engine::tws::TrackStatus::kTentative;
-  }
 }
 
 }  // namespace
@@ -97,7 +76,7 @@ void TrackListToProto(const engine::ScanResult& result, uint64_t sequence, v1::T
   for (const engine::tws::TrackReport& t : result.tracks) {
     v1::TargetTrack* p = out->add_tracks();
     p->set_id(t.id);
-    p->set_status(StatusToProto(t.status));
+    p->set_status(TrackStatusToProto(t.status));
     ToProto(t.position_m, p->mutable_position_m());
     ToProto(t.velocity_mps, p->mutable_velocity_mps());
     auto* cov = p->mutable_covariance();
@@ -156,7 +135,7 @@ engine::ScanResult TrackListFromProto(const v1::TrackList& proto) {
   for (const v1::TargetTrack& t : proto.tracks()) {
     engine::tws::TrackReport r;
     r.id = t.id();
-    r.status = StatusFromProto(t.status());
+    r.status = TrackStatusFromProto(t.status());
     r.position_m = Eigen::Vector3d(t.position_m().x(), t.position_m().y(), t.position_m().z());
     r.velocity_mps = Eigen::Vector3d(t.velocity_mps().x(), t.velocity_mps().y(), t.velocity_mps().z());
     if (t.covariance_size() == 36) {

@@ -54,7 +54,7 @@ void PrintSources(const engine::Estimate& e) {
   std::printf("frame=%llu t_s=%.3f sources=%zu", static_cast<unsigned long long>(e.frame_index), e.t_s,
               e.sources.size());
   for (const engine::SourceEstimate& s : e.sources) {
-    std::printf(" [id=%llu %s", static_cast<unsigned long long>(s.source_id), engine::SourceStatusName(s.status));
+    std::printf(" [id=%llu %s", static_cast<unsigned long long>(s.source_id), engine::TrackStatusName(s.status));
     if (std::isfinite(s.cone_angle_rad)) {
       std::printf(" cone_deg=%.1f", s.cone_angle_rad * kDegPerRad);
     } else {

@@ -178,7 +178,7 @@ void AppendSourceRow(const engine::Estimate& e, const engine::SourceEstimate* s,
   if (s != nullptr) {
     line->append(std::to_string(s->source_id));
     line->push_back(',');
-    line->append(engine::SourceStatusName(s->status));
+    line->append(engine::TrackStatusName(s->status));
     line->append(s->source_present ? ",1" : ",0");
     for (double v : {s->azimuth_rad, s->elevation_rad, s->cone_angle_rad, s->sigma_rad, s->power_db}) {
       AppendField(v, line);

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/core/track_status.h"
 #include "engine/core/types.h"
 
 namespace localizer::engine {
@@ -39,15 +40,11 @@ struct PlatformAttitude {
 // direction_stage.h). Angles in the array's frame: azimuth = atan2(y, x), elevation from the
 // x-y plane towards +z; a linear array observes only the cone angle to its axis (the other
 // fields NaN).
-enum class SourceStatus { kTentative, kConfirmed, kCoasting };
-constexpr const char* SourceStatusName(SourceStatus s) {
-  return s == SourceStatus::kTentative ? "tentative" : s == SourceStatus::kConfirmed ? "confirmed" : "coasting";
-}
 
 struct SourceEstimate {
   static constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
   uint64_t source_id = 0;  // 1, 2, 3, ... never reused within a session
-  SourceStatus status = SourceStatus::kTentative;
+  TrackStatus status = TrackStatus::kTentative;
   Vec3 direction = Vec3::Constant(kNan);  // unit, array -> source
   double azimuth_rad = kNan;
   double elevation_rad = kNan;

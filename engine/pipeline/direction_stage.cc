@@ -11,12 +11,6 @@ namespace {
 constexpr double kHeardSigmas = 3.0;  // a peak this many sigmas from a track is its own
 constexpr int kMaxRiseFrames = 64;    // PairSpectraOptions::rise_lag_frames' ceiling
 
-SourceStatus StatusOf(tws::TrackStatus s) {
-  return s == tws::TrackStatus::kTentative   ? SourceStatus::kTentative
-         : s == tws::TrackStatus::kConfirmed ? SourceStatus::kConfirmed
-                                             : SourceStatus::kCoasting;
-}
-
 // Angle between a track and a peak: of directions, or of cone angles (linear arrays).
 double Separation(const SourceTrack& track, const DirectionPeak& peak) {
   if (std::isfinite(track.cone_angle_rad)) return std::abs(track.cone_angle_rad - peak.cone_angle_rad);
@@ -66,7 +60,7 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
   for (const SourceTrack& track : tracks_) {
     SourceEstimate s;
     s.source_id = track.id;
-    s.status = StatusOf(track.status);
+    s.status = track.status;
     s.direction = track.direction;
     s.azimuth_rad = track.azimuth_rad;
     s.elevation_rad = track.elevation_rad;

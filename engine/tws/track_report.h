@@ -9,10 +9,12 @@
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "engine/core/track_status.h"
+
 namespace localizer::engine::tws {
 
-enum class TrackStatus { kTentative, kConfirmed, kCoasting };
-const char* TrackStatusName(TrackStatus status);  // "tentative" | "confirmed" | "coasting"
+using engine::TrackStatus;  // engine/core/track_status.h: shared with direction sessions
+using engine::TrackStatusName;
 
 struct TrackReport {
   uint64_t id = 0;

@@ -68,9 +68,9 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
     };
     std::vector<Talker> talkers(2);
     std::vector<double> fir = DesignBandPassFir(100.0, 7000.0, kFs).taps;
-    double energy = 0.0;
-    for (double h : fir) energy += h * h;
-    for (double& h : fir) h /= std::sqrt(energy);  // unit power out of unit-power noise
+    double fir_energy = 0.0;
+    for (double h : fir) fir_energy += h * h;
+    for (double& h : fir) h /= std::sqrt(fir_energy);  // unit power out of unit-power noise
     for (int k = 0; k < 2; ++k) {
       Talker& t = talkers[static_cast<size_t>(k)];
       t.azimuth_rad = Wrap(0.4 + k * std::numbers::pi / 2);

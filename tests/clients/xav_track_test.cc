@@ -1,8 +1,10 @@
 // The real XAV recordings (Mouy et al. 2023, BSD 3-Clause) track end to end through
 // engine::Session by way of io::RunTrack, the code behind `localizer-cli track`. There is
 // no ground truth: the checks are that nothing valid is rejected, the frame count is
-// exact, every value is finite, and fixes stay near the array (fish call within a few
-// metres of it; 50 m is a loose bound that a diverged or mirrored track would break).
+// exact, every value is finite, and fixes whose frame bounds the range stay near the array
+// (fish call within a few metres of it; 50 m is a loose bound that a diverged or mirrored
+// track would break). A far-field fix (Estimate::far_field: the frame gives a direction, not
+// a range; the quiet periods' distant source) may lie further out, and says so.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -56,7 +58,7 @@ TEST(XavTrack, WholeRecordingTracksWithoutRejectionAndStaysNearTheArray) {
 
   engine::Vec3 centroid = engine::Vec3::Zero();
   for (const engine::Vec3& m : xav->array.sensors_m) centroid += m / 6.0;
-  int initialised = 0;
+  int initialised = 0, far_field = 0;
   for (size_t i = 0; i < estimates.size(); ++i) {
     const engine::Estimate& e = estimates[i];
     EXPECT_EQ(e.frame_index, i);
@@ -68,10 +70,13 @@ TEST(XavTrack, WholeRecordingTracksWithoutRejectionAndStaysNearTheArray) {
     }
     if (!e.initialised) continue;
     ++initialised;
+    far_field += e.far_field;
     const double range_m = (e.state.head<3>() - centroid).norm();
-    EXPECT_LT(range_m, 50.0) << "frame " << i << " at t = " << e.t_s << " s";
+    if (!e.far_field) {
+      EXPECT_LT(range_m, 50.0) << "frame " << i << " at t = " << e.t_s << " s";
+    }
   }
-  std::printf("XAV: %zu frames, %d initialised\n", estimates.size(), initialised);
+  std::printf("XAV: %zu frames, %d initialised, %d far field\n", estimates.size(), initialised, far_field);
 }
 
 }  // namespace

@@ -557,14 +557,14 @@ TEST(EstimateWire, SourcesRoundTrip) {
   e.source_present = true;
   engine::SourceEstimate a;
   a.source_id = 3;
-  a.status = engine::SourceStatus::kCoasting;
+  a.status = engine::TrackStatus::kCoasting;
   a.direction = engine::Vec3(0.6, 0.8, 0.0);
   a.azimuth_rad = 0.927;
   a.elevation_rad = 0.0;
   a.sigma_rad = 0.02;
   engine::SourceEstimate line;  // a linear array's: the cone angle only
   line.source_id = 4;
-  line.status = engine::SourceStatus::kConfirmed;
+  line.status = engine::TrackStatus::kConfirmed;
   line.cone_angle_rad = 1.2;
   line.source_present = true;
   line.power_db = 9.5;
@@ -577,7 +577,7 @@ TEST(EstimateWire, SourcesRoundTrip) {
   const engine::Estimate back = EstimateFromProto(wire);
   ASSERT_EQ(back.sources.size(), 2u);
   EXPECT_EQ(back.sources[0].source_id, 3u);
-  EXPECT_EQ(back.sources[0].status, engine::SourceStatus::kCoasting);
+  EXPECT_EQ(back.sources[0].status, engine::TrackStatus::kCoasting);
   EXPECT_EQ(back.sources[0].direction, a.direction);
   EXPECT_DOUBLE_EQ(back.sources[0].azimuth_rad, 0.927);
   EXPECT_TRUE(std::isnan(back.sources[0].power_db));
