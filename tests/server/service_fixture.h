@@ -205,8 +205,25 @@ inline void ExpectSameEstimate(const engine::Estimate& want, const v1::Estimate&
   ASSERT_EQ(got.covariance_size(), 36);
   for (int i = 0; i < 36; ++i) EXPECT_EQ(got.covariance(i), want.covariance(i / 6, i % 6));
   EXPECT_EQ(got.ess(), want.ess);
+  EXPECT_EQ(got.source_present(), want.source_present);
+  EXPECT_EQ(got.presence_statistic(), want.presence_statistic);
+  EXPECT_EQ(got.far_field(), want.far_field);
+  EXPECT_EQ(got.range_sd_m(), want.range_sd_m);
   ASSERT_EQ(static_cast<size_t>(got.pairs_size()), want.delay_s.size());
   for (int p = 0; p < got.pairs_size(); ++p) EXPECT_EQ(got.pairs(p).delay_s(), want.delay_s[static_cast<size_t>(p)]);
+  // Direction sessions: every source, bit for bit.
+  ASSERT_EQ(static_cast<size_t>(got.sources_size()), want.sources.size()) << "frame " << want.frame_index;
+  for (int k = 0; k < got.sources_size(); ++k) {
+    const v1::SourceDirection& g = got.sources(k);
+    const engine::SourceEstimate& w = want.sources[static_cast<size_t>(k)];
+    EXPECT_EQ(g.source_id(), w.source_id);
+    EXPECT_EQ(g.direction().x(), w.direction.x());
+    EXPECT_EQ(g.direction().z(), w.direction.z());
+    EXPECT_EQ(g.azimuth_rad(), w.azimuth_rad);
+    EXPECT_EQ(g.elevation_rad(), w.elevation_rad);
+    EXPECT_EQ(g.sigma_rad(), w.sigma_rad);
+    EXPECT_EQ(g.source_present(), w.source_present);
+  }
 }
 
 }  // namespace localizer::server::testing
