@@ -170,6 +170,8 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
                     [](const Cell& a, const Cell& b) { return a.upper > b.upper; });
 
   const double margin = options_.mode_margin * std::sqrt(static_cast<double>(usable));
+  // A search direction's radius: the cap of an equal-area cell's solid angle, 4 pi / N = pi r^2.
+  const double cos_cell = std::cos(2.0 / std::sqrt(static_cast<double>(options_.azimuth_cells * options_.polar_cells)));
   std::vector<PositionMode> modes;
   double best = -std::numeric_limits<double>::infinity();
   int refined = 0;
@@ -184,7 +186,8 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
         // A solution beyond the searched sphere says "far, that way": it stands on the sphere
         // (scored there), its range spread below reaching back over the volume.
         const double reach_m = (mode.position_m - centre).norm();
-        if (reach_m > 1.5 * radius) {
+        const bool parked = reach_m > 1.5 * radius;
+        if (parked) {
           mode.position_m = centre + radius / reach_m * (mode.position_m - centre);
           mode.score = Score(mode.position_m);
         }
@@ -202,9 +205,16 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
         auto within = [&](const Vec3& delta, const Mat3& covariance) {
           return delta.dot((covariance + floor).ldlt().solve(delta)) < 9.0;
         };
+        // Two far solutions parked on the sphere within one search direction's radius are one
+        // hypothesis ("far, that way"), however the solves that found them differed in range.
+        auto both_parked_alike = [&](const PositionMode& other) {
+          const Vec3 other_out = other.position_m - centre;
+          return parked && std::abs(other_out.norm() - radius) <= 1e-9 * radius &&
+                 other_out.normalized().dot((mode.position_m - centre).normalized()) >= cos_cell;
+        };
         for (PositionMode& other : modes) {
           const Vec3 delta = mode.position_m - other.position_m;
-          if ((within(delta, mode.covariance_m2) && within(delta, other.covariance_m2)) ||
+          if ((within(delta, mode.covariance_m2) && within(delta, other.covariance_m2)) || both_parked_alike(other) ||
               delta.norm() < 1e-3 * array_.aperture_m()) {
             if (mode.score > other.score) other = mode;
             best = std::max(best, mode.score);

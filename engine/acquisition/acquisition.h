@@ -18,7 +18,9 @@
 // is off the solution by more than 3 sigma and 1.5 samples is left out of the solve, the
 // consensus subset, keeping at least 3 pairs). The mode's score is the normalised spectrum at the
 // solution, summed over all usable pairs; a mode within 3 position standard deviations of a
-// stronger one, by each one's own covariance, is merged into it. Every mode within mode_margin sqrt(P) of the best survives (a
+// stronger one, by each one's own covariance, is merged into it. A solution beyond 1.5 x
+// the radius is parked on the sphere in its direction (its range spread clipped to the
+// radius), and two parked within one search direction's radius are one mode. Every mode within mode_margin sqrt(P) of the best survives (a
 // 4-sensor array's two exact TDOA solutions score alike and both survive), at most max_modes,
 // strongest first, each with its fix covariance (H^T W H)^-1.
 //
