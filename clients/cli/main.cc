@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "clients/cli/commands.h"
+#include "engine/core/version.h"
 #include "engine/pipeline/backend.h"
 #include "gpu/backend/gpu_backend.h"
 
@@ -57,7 +58,8 @@ std::string GlobalUsage() {
     text += name + c.summary + "\n";
   }
   text +=
-      "\n'localizer-cli COMMAND --help' lists a command's flags, defaults and units.\n"
+      "\n'localizer-cli COMMAND --help' lists a command's flags, defaults and units;\n"
+      "'localizer-cli --version' prints the version.\n"
       "Exit codes: 0 success, 1 runtime error (file, data or server: \"CODE: message\" with the\n"
       "gRPC status code), 2 usage error.\n"
       "Example:\n"
@@ -103,6 +105,10 @@ int Main(int argc, char** argv) {
   }
   if (name == "--help" || name == "-h" || name == "help") {
     std::cout << GlobalUsage();
+    return kExitOk;
+  }
+  if (name == "--version" || name == "version") {
+    std::cout << "localizer-cli " << kLocalizerVersion << "\n";
     return kExitOk;
   }
   const Command* command = FindCommand(name);

@@ -1,6 +1,9 @@
-// The version this build reports (localizer_build_info, --version, SessionOpened logs).
+// The version this build reports (localizer_build_info, --version, SessionOpened logs):
+// engine/core/version.h's, shared with the CLI.
 #pragma once
 
+#include "engine/core/version.h"
+
 namespace localizer::server {
-inline constexpr const char* kLocalizerVersion = "0.3.0";
+using localizer::kLocalizerVersion;
 }  // namespace localizer::server

@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "clients/grpc/connection.h"
+#include "engine/core/version.h"
 #include "clients/grpc/latency_summary.h"
 #include "clients/grpc/remote_track.h"
 #include "clients/grpc/streamer.h"
@@ -301,6 +302,21 @@ TEST_F(CliStreamTest, CliUnreachableServerExitsOne) {
   const auto [usage_code, usage_err] = RunCli(
       "track --rate max --array " + files.array_path + " --wav " + files.wav_path + " --out " + dir.File("e.csv"), dir);
   EXPECT_EQ(usage_code, 2) << usage_err;  // --rate without --server
+#endif
+}
+
+// localizer-cli --version prints the build's version (the server's too) and exits 0.
+TEST_F(CliStreamTest, CliVersionPrintsTheBuildsVersion) {
+#ifndef LOCALIZER_CLI_BIN
+  GTEST_SKIP() << "LOCALIZER_CLI_BIN not defined by the build";
+#else
+  TempDir dir;
+  const auto [code, err] = RunCli("--version", dir);
+  EXPECT_EQ(code, 0) << err;
+  std::ifstream out(dir.File("stdout.txt"));
+  std::string line;
+  std::getline(out, line);
+  EXPECT_EQ(line, std::string("localizer-cli ") + kLocalizerVersion);
 #endif
 }
 
