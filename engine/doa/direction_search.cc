@@ -68,6 +68,16 @@ bool SrpPhat::Search(Cell* best) const {
   return found;
 }
 
+double SrpPhat::FieldCeiling() const {
+  double sum = 0.0;
+  for (int p = 0; p < pair_count(); ++p) {
+    if (!field_.usable(p)) continue;
+    const double first = field_.first_lag(p), last = field_.last_lag(p);
+    sum += std::max(0.0, field_.MaxAround(p, 0.5 * (first + last), 0.5 * (last - first)));
+  }
+  return interpolation_margin_ * sum / std::sqrt(static_cast<double>(pair_count()));
+}
+
 double SrpPhat::Exact(const Cell& cell) const {
   double sum = 0.0;
   for (int p = 0; p < pair_count(); ++p) sum += spectra_.At(p, Lag(p, cell)).r;
@@ -209,6 +219,7 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   while (static_cast<int>(found.size()) < options_.max_sources) {
     if (!found.empty()) spectra_.FillFields(&field_input_);  // the residual, for the search
     field_.Build(field_input_);
+    if (!found.empty() && FieldCeiling() < threshold_) break;  // nothing left can reach it
     Cell best;
     if (!Search(&best)) break;
     best = Refine(best);

@@ -82,6 +82,14 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
   if (shape->shape == ArrayShape::kPlanar) leaves = 2.0 / (r * r);  // a hemisphere
   if (linear) leaves = std::numbers::pi / (2.0 * r);                // arcs of 2 r over [0, pi]
   srp.threshold_ = PresenceThreshold(options.false_alarm, std::max(1.0, leaves));
+  // A band [f1, f2] (cycles per sample) peak read half a sample off keeps its mean cos:
+  // (sin(pi f2) - sin(pi f1)) / (pi (f2 - f1)); the margin is its inverse, 10 % more.
+  const double f1 = options.band_low_hz / options.sample_rate_hz;
+  const double f2 = options.band_high_hz > 0.0 ? options.band_high_hz / options.sample_rate_hz : 0.5;
+  const double kept = f2 > f1 ? (std::sin(std::numbers::pi * f2) - std::sin(std::numbers::pi * f1)) /
+                                    (std::numbers::pi * (f2 - f1))
+                              : 1.0;
+  srp.interpolation_margin_ = 1.1 / std::max(kept, 0.1);
   // Roots as fine as the leaves when that is at most kMaxRoots of them.
   if (linear) {
     srp.root_count_ = std::clamp(static_cast<int>(std::ceil(std::numbers::pi / (2.0 * r))), kMinRoots, kMaxRoots);

@@ -259,7 +259,7 @@ TEST(SrpPhat, ABandLimitedSourceLeavesNoSecondPeak) {
     // The source's in-band power spread over the whole band is its time-domain power; the
     // noise's per-bin level 20 dB below the source's in-band level.
     const double in_band_share = (scene.band_high_hz - scene.band_low_hz) / (0.5 * scene.sample_rate_hz);
-    std::normal_distribution<double> noise(0.0, std::sqrt(power / frame.size() / in_band_share * 0.01));
+    std::normal_distribution<double> noise(0.0, std::sqrt(power / static_cast<double>(frame.size()) / in_band_share * 0.01));
     for (float& v : frame) v += static_cast<float>(noise(rng));
     StatusOr<std::vector<DirectionPeak>> peaks = srp->Analyse(frame.data());
     ASSERT_TRUE(peaks.ok());
