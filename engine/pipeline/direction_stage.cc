@@ -75,7 +75,7 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
     SourceEstimate* heard = nullptr;
     for (size_t j = 0; j < tracks_.size(); ++j) {
       const SourceTrack& track = tracks_[j];
-      if (track.status == tws::TrackStatus::kCoasting) continue;
+      if (track.status == TrackStatus::kCoasting) continue;
       const double d = Separation(track, peak);
       if (d <= kHeardSigmas * std::max(track.sigma_rad, peak_sigma_rad_) && d < nearest_rad) {
         nearest_rad = d;

@@ -28,6 +28,10 @@ struct RangeObservability {
   bool far_field = false;   // range_sd_m > kFarFieldRangeShare * range_m
 };
 
+// The standard deviation along the line of sight from the array's centroid to `at_m` of a
+// position covariance (m^2); NaN at the centroid.
+double RangeSd(const ArrayGeometry& array, const Vec3& at_m, const Mat3& covariance_m2);
+
 // The bound with one delay sigma per pair (seconds; 0 or non-finite: the pair is left out).
 // Fewer than 3 pairs, or a position on the centroid: range_sd_m 0 and not far field.
 RangeObservability JudgeRange(const ArrayGeometry& array, const Vec3& position_m, const Eigen::VectorXd& pair_sigma_s);
@@ -41,11 +45,14 @@ class PairSigmaHistory {
   void Add(const Measurement& measurement, double fallback_sigma_s);
   // One per pair of the last Add (0: no peak in the window).
   Eigen::VectorXd Median() const;
-  void Reset() { frames_.clear(); }
+  void Reset() {
+    frames_.clear();
+    next_ = 0;
+  }
 
  private:
-  std::vector<Eigen::VectorXd> frames_;  // ring, oldest first after next_
-  size_t next_ = 0;
+  std::vector<Eigen::VectorXd> frames_;  // up to kFrames, written in place
+  size_t next_ = 0;                      // the oldest once the ring is full
 };
 
 }  // namespace localizer::engine

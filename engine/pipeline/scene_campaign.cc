@@ -72,13 +72,9 @@ double BearingCrlb(const ArrayGeometry& array, const Vec3& at_m, const Mat3& crl
   return std::sqrt((across * crlb_covariance * across).trace()) / range_m;
 }
 
-// The bound's variance along the line of sight from the centroid.
-double RadialVariance(const ArrayGeometry& array, const Vec3& at_m, const Mat3& crlb_covariance) {
-  const Vec3 line_m = at_m - array.centroid_m();
-  if (!(line_m.norm() > 0.0)) return kNan;
-  const Vec3 u = line_m.normalized();
-  return u.dot(crlb_covariance * u);
-}
+// A far-field claim where the truth's own bound holds the range to better than a sixth of
+// itself (half the engine's kFarFieldRangeShare) withholds a range the data held.
+bool WithholdsRange(const FrameScore& f) { return f.far_field && f.range_share < kFarFieldRangeShare / 2.0; }
 
 double AngleBetween(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
 
@@ -151,7 +147,7 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
       theory_crlbs.push_back(f.crlb_theory_m);
       ranges.push_back(f.range_apertures);
     }
-    f.range_share = std::sqrt(std::max(0.0, RadialVariance(array, truth_m, crlb_covariance))) / f.range_m;
+    f.range_share = RangeSd(array, truth_m, crlb_covariance) / f.range_m;
     if (e.initialised) {
       ++score.initialised_frames;
       const Vec3 error = e.state.head<3>() - truth_m;
@@ -163,7 +159,7 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
       f.far_field = e.far_field;
       f.bearing_sd_rad = BearingCrlb(array, e.state.head<3>(), e.covariance.topLeftCorner<3, 3>());
       // A far-field claim is honoured where the truth's own bound agrees the range is weak.
-      const bool in_bearing = e.far_field && !(f.range_share < kFarFieldRangeShare / 2.0);
+      const bool in_bearing = e.far_field && !WithholdsRange(f);
       f.reported_error = in_bearing ? f.bearing_error_rad : f.error_m;
       f.reported_bound = in_bearing ? f.bearing_crlb_rad : f.crlb_m;
     }
@@ -247,7 +243,7 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
   for (int i = 0; i < n; ++i) {
     const FrameScore& f = score.per_frame[i];
     if (!judged(f)) continue;
-    const bool withheld = f.far_field && f.range_share < kFarFieldRangeShare / 2.0;
+    const bool withheld = WithholdsRange(f);
     score.far_field_frames += f.far_field;
     if (withheld) score.range_withheld_s += hop_s;
     if (!f.far_field || withheld) {

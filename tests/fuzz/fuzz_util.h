@@ -15,6 +15,7 @@
 #include <string>
 
 #include "localizer/v1/localizer.pb.h"
+#include "tests/wire/minimal_config.h"
 #include "wire/config_wire.h"
 
 #define FUZZ_CHECK(cond, what)                                                                  \
@@ -45,18 +46,9 @@ inline wire::ConfigPolicy FuzzPolicy() {
   return policy;
 }
 
-// A valid audio config as the tests send it: a tetrahedron in water, 48 kHz.
+// A valid audio config as the tests send it: the wire tests' tetrahedron in water, 48 kHz.
 inline v1::SessionConfig TetraConfig() {
-  v1::SessionConfig c;
-  const double sensors[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  for (const auto& s : sensors) {
-    v1::Vector3* v = c.mutable_array()->add_sensors_m();
-    v->set_x(s[0]);
-    v->set_y(s[1]);
-    v->set_z(s[2]);
-  }
-  c.mutable_array()->set_sound_speed_mps(1500.0);
-  c.set_sample_rate_hz(48000.0);
+  v1::SessionConfig c = wire::testing::MinimalConfig();
   c.set_frame_samples(1024);
   c.set_label("fuzz");
   return c;
