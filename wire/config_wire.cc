@@ -422,6 +422,11 @@ StatusOr<engine::AudioSessionConfig> AudioConfigFromProto(const v1::SessionConfi
     c.max_sources = static_cast<int>(p.max_sources());
   }
   if (p.has_source_side()) c.source_side = FromProto(p.source_side());
+  if (p.has_source_plane()) {
+    c.source_plane_point_m = FromProto(p.source_plane().point_m());
+    c.source_plane_normal = FromProto(p.source_plane().normal());
+    if (c.source_plane_normal == Vec3::Zero()) return InvalidArgument("source_plane.normal must not be zero");
+  }
   if (p.has_platform()) {
     const v1::PlatformConfig& platform = p.platform();
     c.array_in_body_frame = true;
@@ -498,6 +503,10 @@ v1::SessionConfig ConfigToProto(const engine::AudioSessionConfig& c, const std::
   p.set_localization(engine::LocalizationName(c.localization));
   p.set_max_sources(static_cast<uint32_t>(c.max_sources));
   if (c.source_side != Vec3::Zero()) ToProto(c.source_side, p.mutable_source_side());
+  if (c.source_plane_normal != Vec3::Zero()) {
+    ToProto(c.source_plane_point_m, p.mutable_source_plane()->mutable_point_m());
+    ToProto(c.source_plane_normal, p.mutable_source_plane()->mutable_normal());
+  }
   if (c.array_in_body_frame) {
     v1::PlatformConfig* platform = p.mutable_platform();
     platform->set_attitude_filter(engine::AttitudeFilterKindName(c.attitude.kind));

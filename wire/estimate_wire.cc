@@ -89,6 +89,13 @@ void EstimateToProto(const engine::Estimate& e, int reference_sensor, const std:
     source->set_sigma_rad(s.sigma_rad);
     source->set_source_present(s.source_present);
     source->set_power_db(s.power_db);
+    if (s.position_m.allFinite()) {
+      SetVector(s.position_m, source->mutable_position_m());
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) source->add_position_covariance(s.position_covariance_m2(r, c));
+      }
+    }
+    source->set_range_sd_m(s.range_sd_m);
   }
 }
 
@@ -146,6 +153,11 @@ engine::Estimate EstimateFromProto(const v1::Estimate& p) {
     s.sigma_rad = source.sigma_rad();
     s.source_present = source.source_present();
     s.power_db = source.power_db();
+    if (source.has_position_m()) s.position_m = GetVector(source.position_m());
+    if (source.position_covariance_size() == 9) {
+      for (int k = 0; k < 9; ++k) s.position_covariance_m2(k / 3, k % 3) = source.position_covariance(k);
+    }
+    s.range_sd_m = source.range_sd_m();
     e.sources.push_back(s);
   }
   return e;

@@ -60,13 +60,18 @@ void PrintSources(const engine::Estimate& e) {
     } else {
       std::printf(" az_deg=%.1f el_deg=%.1f", s.azimuth_rad * kDegPerRad, s.elevation_rad * kDegPerRad);
     }
-    std::printf(" sd_deg=%.1f]", s.sigma_rad * kDegPerRad);
+    std::printf(" sd_deg=%.1f", s.sigma_rad * kDegPerRad);
+    if (s.position_m.allFinite()) {
+      std::printf(" x_m=%.3f y_m=%.3f z_m=%.3f range_sd_m=%.3f", s.position_m.x(), s.position_m.y(), s.position_m.z(),
+                  s.range_sd_m);
+    }
+    std::printf("]");
   }
   std::printf("\n");
 }
 
-void PrintEstimate(const engine::Estimate& e, engine::Localization localization) {
-  if (localization == engine::Localization::kDirection) {
+void PrintEstimate(const engine::Estimate& e, bool sources) {
+  if (sources) {
     PrintSources(e);
     return;
   }
@@ -113,12 +118,12 @@ io::TrackSummary SummaryOf(const client::RemoteTrackResult& r, int channel_count
   return s;
 }
 
-io::TrackCallbacks MakeCallbacks(int print_every, engine::Localization localization, ProgressReporter* progress) {
+io::TrackCallbacks MakeCallbacks(int print_every, bool sources, ProgressReporter* progress) {
   io::TrackCallbacks callbacks;
   callbacks.on_warning = [](const std::string& message) { Warning(kCommand, message); };
   if (print_every > 0) {
-    callbacks.on_estimate = [print_every, localization](const engine::Estimate& e) {
-      if (e.frame_index % static_cast<uint64_t>(print_every) == 0) PrintEstimate(e, localization);
+    callbacks.on_estimate = [print_every, sources](const engine::Estimate& e) {
+      if (e.frame_index % static_cast<uint64_t>(print_every) == 0) PrintEstimate(e, sources);
     };
   }
   callbacks.on_progress = [progress](const io::TrackProgress& p) { progress->Update(p); };
@@ -138,9 +143,9 @@ client::StreamCallbacks RejectionWarnings() {
   return callbacks;
 }
 
-int RunLocal(const TrackFlags& f, const io::TrackJob& job, engine::Localization localization) {
+int RunLocal(const TrackFlags& f, const io::TrackJob& job, bool sources) {
   ProgressReporter progress;
-  auto summary = io::RunTrack(job, MakeCallbacks(f.print_every, localization, &progress));
+  auto summary = io::RunTrack(job, MakeCallbacks(f.print_every, sources, &progress));
   progress.Finish();
   if (!summary.ok()) return RuntimeError(kCommand, summary.status());
   PrintSummary(*summary, f.out_path);
@@ -149,13 +154,13 @@ int RunLocal(const TrackFlags& f, const io::TrackJob& job, engine::Localization 
   return kExitOk;
 }
 
-int RunOnServer(const TrackFlags& f, const io::TrackJob& job, engine::Localization localization,
+int RunOnServer(const TrackFlags& f, const io::TrackJob& job, bool sources,
                 client::RemoteTrackOptions options) {
   options.on_opened = PrintOpened;
   ProgressReporter progress;
   auto channel = client::Connect(f.stream.server, f.stream.connect);
   if (!channel.ok()) return RuntimeError(kCommand, channel.status());
-  auto result = client::RunRemoteTrack(*channel, job, options, MakeCallbacks(f.print_every, localization, &progress),
+  auto result = client::RunRemoteTrack(*channel, job, options, MakeCallbacks(f.print_every, sources, &progress),
                                        RejectionWarnings());
   progress.Finish();
   if (!result.ok()) return RuntimeError(kCommand, result.status());
@@ -177,7 +182,9 @@ int RunTrack(const std::vector<std::string>& args) {
       "writes one row per frame to the estimates CSV. Planar and linear arrays (and\n"
       "--localization direction) give directions instead: SRP-PHAT peaks followed by a\n"
       "direction tracker, up to --max-sources sources with ids, one CSV row per frame and\n"
-      "source. The WAV header's sample rate wins over the array file's. Progress goes to stderr for recordings over 5 "
+      "source; with --localization position (a planar array with --source-side, a linear one\n"
+      "with --source-plane and --source-side) each heard source also gets x_m, y_m, z_m where\n"
+      "the frame bounds its range. The WAV header's sample rate wins over the array file's. Progress goes to stderr for recordings over 5 "
       "s; every Nth estimate\n"
       "and a final summary (frames, wall time, mean stage times) to stdout.\n"
       "With --server the session runs on a localizer-server: the same config is sent with\n"
@@ -225,9 +232,9 @@ int RunTrack(const std::vector<std::string>& args) {
   job.config = *config;
   job.estimates_csv_path = f.out_path;
   job.block_s = f.block_s;
-  auto localization = engine::ResolveLocalization(job.config);  // BuildSessionConfig checked it
-  if (!localization.ok()) return UsageError(kCommand, localization.status().message());
-  return remote ? RunOnServer(f, job, *localization, std::move(options)) : RunLocal(f, job, *localization);
+  auto sources = engine::ReportsSources(job.config);  // BuildSessionConfig checked it
+  if (!sources.ok()) return UsageError(kCommand, sources.status().message());
+  return remote ? RunOnServer(f, job, *sources, std::move(options)) : RunLocal(f, job, *sources);
 }
 
 }  // namespace localizer::cli

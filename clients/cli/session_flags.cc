@@ -1,7 +1,9 @@
 #include "clients/cli/session_flags.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace localizer::cli {
@@ -70,14 +72,42 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
   flags.Double("despike-k", &c.despike_k, "K", "robust sd",
                "clip each frame's channels at K robust standard deviations before the GCC (0: off)");
   flags.String("localization", &f->localization, "NAME",
-               "what is reported: position (3-D; 4+ sensors off a common plane) | direction (up to "
-               "--max-sources sources, any array) | auto (position for a volumetric array, else direction) "
-               "(default: the array file's, else auto)");
+               "what is reported: position (3-D from 4+ sensors off a common plane; per source from a "
+               "planar array with --source-side, or a linear one with --source-plane and --source-side) | "
+               "direction (up to --max-sources sources, any array) | auto (position for a volumetric array "
+               "or a linear one with --source-plane, else direction) (default: the array file's, else auto)");
   flags.OptionalInt("max-sources", &f->max_sources, "K", "the array file's, else 4",
                     "direction: sources per frame, 1..16");
   flags.String("source-side", &f->source_side, "X,Y,Z",
-               "direction, planar arrays: the sources lie where (p - array centre) . (X,Y,Z) > 0 "
+               "planar and linear arrays: the sources lie where (p - array centre) . (X,Y,Z) > 0 "
                "(default: the array file's source_side, else not stated: mirror images)");
+  flags.String("source-plane", &f->source_plane, "PX,PY,PZ,NX,NY,NZ",
+               "linear arrays, positions: the plane holding the array and the sources, a point on it and "
+               "its normal, m (default: the array file's source_plane, else none)");
+}
+
+// --source-plane: six finite numbers, the normal not zero.
+StatusOr<std::pair<engine::Vec3, engine::Vec3>> ParseSourcePlane(const std::string& text) {
+  const auto refused = [&text] {
+    return InvalidArgument("--source-plane is \"" + text +
+                           "\"; expected PX,PY,PZ,NX,NY,NZ (a point and the normal, finite, the normal not zero)");
+  };
+  std::vector<double> values;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = text.find(',', start);
+    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    char* end = nullptr;
+    const double v = std::strtod(part.c_str(), &end);
+    if (part.empty() || end != part.c_str() + part.size() || !std::isfinite(v)) return refused();
+    values.push_back(v);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (values.size() != 6) return refused();
+  const engine::Vec3 point(values[0], values[1], values[2]), normal(values[3], values[4], values[5]);
+  if (normal.isZero()) return refused();
+  return std::make_pair(point, normal);
 }
 
 StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::string& text, bool is_min) {
@@ -174,6 +204,12 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
       return InvalidArgument("--source-side is \"" + f.source_side + "\"; expected X,Y,Z, finite and not all zero");
     }
     config.source_side = *side;
+  }
+  if (!f.source_plane.empty()) {
+    auto plane = ParseSourcePlane(f.source_plane);
+    if (!plane.ok()) return plane.status();
+    config.source_plane_point_m = plane->first;
+    config.source_plane_normal = plane->second;
   }
   for (int axis = 0; axis < 3; ++axis) {
     if (!(config.bounds_min_m[axis] < config.bounds_max_m[axis])) {

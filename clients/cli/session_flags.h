@@ -34,6 +34,7 @@ struct SessionFlags {
   std::string localization;        // --localization ("" = the array file's, else auto)
   std::optional<int> max_sources;  // --max-sources (unset: the array file's, else 4)
   std::string source_side;         // --source-side X,Y,Z ("" = the array file's, else unstated)
+  std::string source_plane;        // --source-plane PX,PY,PZ,NX,NY,NZ ("" = the array file's)
 };
 
 // --sound-speed, --reference, --weighting, --phat-beta, --band-low, --band-high.

@@ -26,10 +26,10 @@ StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>&
   if (!prepared.ok()) return prepared.status();
   const engine::AudioSessionConfig& config = prepared->config;
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
-  auto localization = engine::ResolveLocalization(config);
-  if (!localization.ok()) return localization.status();
-  std::optional<engine::ArrayGeometry> array;  // position sessions: names the CSV's pair columns
-  if (*localization == engine::Localization::kPosition) {
+  auto sources = engine::ReportsSources(config);
+  if (!sources.ok()) return sources.status();
+  std::optional<engine::ArrayGeometry> array;  // the tracker's positions: names the CSV's pair columns
+  if (!*sources) {
     auto made = engine::ArrayGeometry::Create(config.sensors_m, config.sound_speed_mps, config.reference_sensor);
     if (!made.ok()) return made.status();
     array = std::move(made).value();

@@ -20,7 +20,8 @@ using nlohmann::json;
 
 const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz", "sensors_m",    "reference_sensor",
                                             "band_hz",         "bounds_min_m",   "bounds_max_m", "surface_z_m",
-                                            "bottom_z_m",      "localization",   "source_side",  "max_sources"};
+                                            "bottom_z_m",      "localization",   "source_side",  "max_sources",
+                                            "source_plane"};
 const char* const kLocalizationNames[] = {"auto", "position", "direction"};  // ArrayFile::Localization order
 
 // A finite number at `value`, or an error naming `field`.
@@ -31,6 +32,20 @@ StatusOr<double> FiniteNumber(const json& value, const std::string& source, cons
   const double x = value.get<double>();
   if (!std::isfinite(x)) return InvalidArgument(source + ": " + field + " is not finite");
   return x;
+}
+
+// Three finite numbers at `value`, or an error naming `field`.
+StatusOr<engine::Vec3> FiniteVector(const json& value, const std::string& source, const std::string& field) {
+  if (!value.is_array() || value.size() != 3) {
+    return InvalidArgument(source + ": " + field + " must be [x, y, z], got " + value.dump());
+  }
+  engine::Vec3 out;
+  for (int axis = 0; axis < 3; ++axis) {
+    auto x = FiniteNumber(value[static_cast<size_t>(axis)], source, field);
+    if (!x.ok()) return x.status();
+    out[axis] = *x;
+  }
+  return out;
 }
 
 StatusOr<double> PositiveNumber(const json& value, const std::string& source, const std::string& field) {
@@ -143,7 +158,7 @@ Status CheckFields(const json& root, const std::string& source) {
       return InvalidArgument(source + ": unknown field \"" + item.key() +
                              "\" (known: sound_speed_mps, sample_rate_hz, sensors_m, "
                              "reference_sensor, band_hz, bounds_min_m, bounds_max_m, surface_z_m, "
-                             "bottom_z_m, localization, source_side, max_sources)");
+                             "bottom_z_m, localization, source_side, max_sources, source_plane)");
     }
   }
   for (const char* required : {"sound_speed_mps", "sensors_m"}) {
@@ -171,18 +186,25 @@ Status ParseDirectionFields(const json& root, const std::string& source, ArrayFi
   }
   if (root.contains("source_side")) {
     const json& side = root["source_side"];
-    if (!side.is_object() || side.size() != 1 || !side.contains("normal") || !side["normal"].is_array() ||
-        side["normal"].size() != 3) {
+    if (!side.is_object() || side.size() != 1 || !side.contains("normal")) {
       return InvalidArgument(source + ": source_side must be {\"normal\": [x, y, z]}");
     }
-    engine::Vec3 normal;
-    for (int axis = 0; axis < 3; ++axis) {
-      auto x = FiniteNumber(side["normal"][static_cast<size_t>(axis)], source, "source_side.normal");
-      if (!x.ok()) return x.status();
-      normal[axis] = *x;
+    auto normal = FiniteVector(side["normal"], source, "source_side.normal");
+    if (!normal.ok()) return normal.status();
+    if (!(normal->norm() > 0.0)) return InvalidArgument(source + ": source_side.normal must not be zero");
+    array->source_side_normal = *normal;
+  }
+  if (root.contains("source_plane")) {
+    const json& plane = root["source_plane"];
+    if (!plane.is_object() || plane.size() != 2 || !plane.contains("point_m") || !plane.contains("normal")) {
+      return InvalidArgument(source + ": source_plane must be {\"point_m\": [x, y, z], \"normal\": [nx, ny, nz]}");
     }
-    if (!(normal.norm() > 0.0)) return InvalidArgument(source + ": source_side.normal must not be zero");
-    array->source_side_normal = normal;
+    auto point = FiniteVector(plane["point_m"], source, "source_plane.point_m");
+    if (!point.ok()) return point.status();
+    auto normal = FiniteVector(plane["normal"], source, "source_plane.normal");
+    if (!normal.ok()) return normal.status();
+    if (!(normal->norm() > 0.0)) return InvalidArgument(source + ": source_plane.normal must not be zero");
+    array->source_plane = ArrayFile::Plane{*point, *normal};
   }
   if (root.contains("max_sources")) {
     const json& v = root["max_sources"];
@@ -245,8 +267,8 @@ StatusOr<ArrayFile> ParseArrayJson(const std::string& text, const std::string& s
                                          : ": localization is \"position\": localizer-cli doa reports directions"));
   }
   // Validate the geometry now so that a bad array fails where the file is named.
-  if (use == ArrayUse::kDirection ||
-      (use == ArrayUse::kAuto && array->localization != ArrayFile::Localization::kPosition)) {
+  // (kAuto: the session decides what the shape gives, and says what is missing.)
+  if (use == ArrayUse::kDirection || use == ArrayUse::kAuto) {
     auto shape = engine::ClassifyArray(array->sensors_m);
     if (!shape.ok()) return InvalidArgument(source + ": " + shape.status().message());
     if (array->reference_sensor >= static_cast<int>(array->sensors_m.size()))
@@ -285,6 +307,10 @@ Status WriteArrayJson(const std::string& path, const ArrayFile& array) {
     root["localization"] = kLocalizationNames[static_cast<int>(array.localization)];
   if (const auto& n = array.source_side_normal) root["source_side"] = {{"normal", {n->x(), n->y(), n->z()}}};
   if (array.max_sources) root["max_sources"] = *array.max_sources;
+  if (const auto& plane = array.source_plane) {
+    root["source_plane"] = {{"point_m", {plane->point_m.x(), plane->point_m.y(), plane->point_m.z()}},
+                            {"normal", {plane->normal.x(), plane->normal.y(), plane->normal.z()}}};
+  }
   json rows = json::array();
   for (const engine::Vec3& m : array.sensors_m) rows.push_back({m.x(), m.y(), m.z()});
   root["sensors_m"] = std::move(rows);

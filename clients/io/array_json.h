@@ -15,14 +15,19 @@
 //     "bottom_z_m": -0.97,                     surface is the upper z bound, the bottom the
 //                                              lower (each excludes the same side of
 //                                              bounds_max_m / bounds_min_m)
-//     "localization": "auto",                  optional: "auto" (default), "position" (3-D
-//                                              position: track, locate) or "direction"
+//     "localization": "auto",                  optional: "auto" (default), "position"
+//                                              (track, locate) or "direction"
 //                                              (localizer-cli doa); a file that says one is
 //                                              refused by the other
-//     "source_side": {"normal": [0, 0, 1]},    optional, directions: the sources lie where
-//                                              (direction . normal) > 0 (a planar array's side)
+//     "source_side": {"normal": [0, 0, 1]},    optional: the sources lie where
+//                                              (p - centroid) . normal > 0 (a planar array's
+//                                              side; a linear one's within source_plane)
+//     "source_plane": {"point_m": [0, 0, 1.5], optional, a linear array's positions: the
+//                      "normal": [0, 0, 1]},   plane that holds the array and the sources
 //     "max_sources": 4                         optional, directions: sources per frame, 1..16
 //   }
+// Positions from a planar array need source_side; from a linear one, source_plane and
+// source_side (engine/pipeline/session_config.h).
 //
 // Reading also checks the geometry against its use (ArrayUse), so a bad array fails at load
 // time with the engine's message, naming the file: for positions it builds an
@@ -59,14 +64,19 @@ struct ArrayFile {
   Localization localization = Localization::kAuto;
   std::optional<engine::Vec3> source_side_normal;  // finite, not zero
   std::optional<int> max_sources;                  // 1..16
+  struct Plane {
+    engine::Vec3 point_m = engine::Vec3::Zero();
+    engine::Vec3 normal = engine::Vec3::UnitZ();  // finite, not zero
+  };
+  std::optional<Plane> source_plane;
 };
 
 // What the array will be used for, which decides the geometry it needs.
 enum class ArrayUse {
   kPosition,   // 3-D localisation (track, locate, simulate): 4 or more sensors, not coplanar
   kDirection,  // direction of arrival (doa): 2 or more distinct sensors, any shape
-  kAuto,       // either, as the file's localization says (track): "auto" takes any array of
-               // 2 or more distinct sensors, and the session picks position for a volumetric one
+  kAuto,       // as the file's localization says (track): any array of 2 or more distinct
+               // sensors; the session decides what it gives (and names a missing constraint)
 };
 
 // `source` names the text in messages (usually its path).

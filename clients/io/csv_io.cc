@@ -157,7 +157,7 @@ StatusOr<EstimatesCsvWriter> EstimatesCsvWriter::OpenSources(const std::string& 
   writer.out_ = std::make_unique<std::ofstream>(path);
   if (!*writer.out_) return InvalidArgument(path + ": cannot open for writing");
   *writer.out_ << "t_s,frame,source_id,status,source_present,azimuth_rad,elevation_rad,cone_angle_rad,sigma_rad,"
-                  "power_db,x_m,y_m,z_m,frame_source_present,presence_statistic,presence_threshold,tdoa_ms\n";
+                  "power_db,x_m,y_m,z_m,frame_source_present,presence_statistic,presence_threshold,tdoa_ms,range_sd_m\n";
   return writer;
 }
 
@@ -186,9 +186,12 @@ void AppendSourceRow(const engine::Estimate& e, const engine::SourceEstimate* s,
   } else {
     line->append(",,,,,,,");  // status .. power_db
   }
-  line->append(",,,");  // x_m, y_m, z_m: directions only
+  const double nan = engine::SourceEstimate::kNan;
+  const engine::Vec3 position_m = s != nullptr ? s->position_m : engine::Vec3::Constant(nan);  // NaN: not bounded
+  for (int axis = 0; axis < 3; ++axis) AppendField(position_m[axis], line);
   line->append(e.source_present ? ",1" : ",0");
   for (double v : {e.presence_statistic, e.presence_threshold, e.timings.tdoa_s * 1e3}) AppendField(v, line);
+  AppendField(s != nullptr ? s->range_sd_m : nan, line);
   line->push_back('\n');
 }
 

@@ -60,13 +60,15 @@ class EstimatesCsvWriter {
  public:
   // `pair_sensors[p]`: the non-reference sensor of pair p (ArrayGeometry::sensor_of_pair).
   static StatusOr<EstimatesCsvWriter> Open(const std::string& path, const std::vector<int>& pair_sensors);
-  // Direction sessions: one row per (frame, source) of Estimate::sources, or one row with
-  // an empty source_id for a frame that has none:
+  // Sessions that list sources (directions; positions from planar and linear arrays): one
+  // row per (frame, source) of Estimate::sources, or one row with an empty source_id for a
+  // frame that has none:
   //     t_s,frame,source_id,status,source_present,azimuth_rad,elevation_rad,cone_angle_rad,
   //     sigma_rad,power_db,x_m,y_m,z_m,frame_source_present,presence_statistic,
-  //     presence_threshold,tdoa_ms
+  //     presence_threshold,tdoa_ms,range_sd_m
   // A field the array cannot observe is empty (azimuth and elevation for a line, the cone
-  // angle otherwise; x_m, y_m, z_m always, for now: directions only). frame_source_present
+  // angle otherwise; x_m, y_m, z_m unless the session gives positions and the frame bounds
+  // the source's range; range_sd_m where a near-field fit was made). frame_source_present
   // says whether any source was heard on the frame; source_present whether this one was.
   static StatusOr<EstimatesCsvWriter> OpenSources(const std::string& path);
   Status Write(const engine::Estimate& estimate);

@@ -151,6 +151,10 @@ engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig config, con
   config.localization = static_cast<engine::Localization>(static_cast<int>(array.localization));
   if (array.max_sources) config.max_sources = *array.max_sources;
   if (array.source_side_normal) config.source_side = *array.source_side_normal;
+  if (array.source_plane) {
+    config.source_plane_point_m = array.source_plane->point_m;
+    config.source_plane_normal = array.source_plane->normal;
+  }
   if (overrides.bounds_min_m) config.bounds_min_m = *overrides.bounds_min_m;
   if (overrides.bounds_max_m) config.bounds_max_m = *overrides.bounds_max_m;
   if (overrides.bottom_z_m) config.bounds_min_m.z() = *overrides.bottom_z_m;

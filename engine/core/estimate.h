@@ -54,6 +54,15 @@ struct SourceEstimate {
   // level (dB; NaN when not heard: the direction is a prediction).
   bool source_present = false;
   double power_db = kNan;
+  // Positions from a planar or linear array (localization position; engine/doa/near_field.h):
+  // where this frame's fit bounds the source's range (heard, and the range's standard
+  // deviation within a third of the range), its position in the array's frame and the fit's
+  // covariance (m^2; a linear array's in its source plane); NaN otherwise. range_sd_m: the
+  // fit's range standard deviation from the array's centroid whenever a fit was made (also
+  // far field), NaN when none was.
+  Vec3 position_m = Vec3::Constant(kNan);
+  Mat3 position_covariance_m2 = Mat3::Constant(kNan);
+  double range_sd_m = kNan;
 };
 
 struct Estimate {

@@ -204,6 +204,7 @@ DirectionPeak SrpPhat::Describe(const Cell& cell, double statistic) const {
 
 StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   LOCALIZER_RETURN_IF_ERROR(spectra_.Analyse(frame, &field_input_));
+  whole_field_ = field_input_;  // same sizes every frame: no allocation after the first
   std::vector<DirectionPeak> peaks;
   struct Found {
     Cell cell;

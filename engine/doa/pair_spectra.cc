@@ -204,6 +204,11 @@ double PairSpectra::WholeAt(int p, double lag_samples, bool previous) const {
       .r;
 }
 
+PairSpectra::Value PairSpectra::WholeValueAt(int p, double lag_samples) const {
+  if (frames_analysed_ == 0) return Value{};
+  return Evaluate(history_[newest_][static_cast<size_t>(p)], lag_samples);
+}
+
 PairSpectra::Value PairSpectra::At(int p, double lag_samples) const {
   return Evaluate(g_[static_cast<size_t>(p)], lag_samples);
 }

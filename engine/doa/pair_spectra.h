@@ -92,6 +92,9 @@ class PairSpectra {
   // removed) or, previous = true, of the frame rise_lag_frames before it (0 when there was
   // none). For the rise of a direction between frames (SrpPhat, DirectionPeak::rise).
   double WholeAt(int p, double lag_samples, bool previous) const;
+  // The same (this frame's whole spectrum) with its first two derivatives per sample
+  // (near-field fits, near_field.h); zero before the first frame.
+  Value WholeValueAt(int p, double lag_samples) const;
 
  private:
   PairSpectra() = default;

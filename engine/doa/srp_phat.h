@@ -143,6 +143,11 @@ class SrpPhat {
 
   // The last analysed frame's in-band power (PairSpectra::band_power): for onsets (onset.h).
   double band_power() const { return spectra_.band_power(); }
+  // The pair spectra of the last analysed frame (near-field fits read its whole spectrum).
+  const PairSpectra& spectra() const { return spectra_; }
+  // The last analysed frame's GCC of every pair at integer lags, before any source was
+  // removed (PairSpectra::Analyse's field): near-field fits' coarse search reads it.
+  const Measurement& whole_field() const { return whole_field_; }
 
   // z at a direction (far-field lags; linear arrays read only u.axis) from the last
   // analysed frame's exact spectrum, less the sources removed before its last search (none
@@ -194,6 +199,7 @@ class SrpPhat {
   double threshold_ = 0.0;
   double interpolation_margin_ = 1.0;  // continuous GCC maximum / sampled maximum, at most (above)
   Measurement field_input_;
+  Measurement whole_field_;  // field_input_ as Analyse left it (no source removed)
   LagField field_;
 };
 

@@ -19,7 +19,17 @@ double Separation(const SourceTrack& track, const DirectionPeak& peak) {
 
 }  // namespace
 
-StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSessionConfig& config) {
+NearFieldOptions NearFieldOptionsFor(const AudioSessionConfig& config) {
+  NearFieldOptions near;
+  near.sample_rate_hz = config.sample_rate_hz;
+  near.sound_speed_mps = config.sound_speed_mps;
+  near.source_side = config.source_side;
+  near.plane_point_m = config.source_plane_point_m;
+  near.plane_normal = config.source_plane_normal;
+  return near;
+}
+
+StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSessionConfig& config, bool positions) {
   // Rises look back over the frames that overlap this one: at most kMaxRiseFrames of them.
   if (config.hop_samples * kMaxRiseFrames < config.frame_samples) {
     return InvalidArgument("hop_samples is " + std::to_string(config.hop_samples) +
@@ -45,8 +55,35 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
   options.onset_memory_s = std::max(options.onset_memory_s, options.frame_period_s);
   auto tracker = DirectionTracker::Create(made->shape(), options);
   if (!tracker.ok()) return tracker.status();
-  return std::unique_ptr<DirectionStage>(
-      new DirectionStage(std::move(made).value(), std::move(tracker).value(), options.peak_sigma_rad));
+  std::optional<NearFieldLocator> near;
+  if (positions) {
+    auto locator = NearFieldLocator::Create(config.sensors_m, NearFieldOptionsFor(config));
+    if (!locator.ok()) return locator.status();
+    near = std::move(locator).value();
+  }
+  return std::unique_ptr<DirectionStage>(new DirectionStage(std::move(made).value(), std::move(tracker).value(),
+                                                            options.peak_sigma_rad, std::move(near)));
+}
+
+void DirectionStage::Locate(SourceEstimate* source) const {
+  const Vec3 direction =
+      std::isfinite(source->cone_angle_rad) ? near_->DirectionAt(source->cone_angle_rad) : source->direction;
+  const NearFieldFix fix = near_->Locate(srp_.spectra(), srp_.whole_field(), direction);
+  source->range_sd_m = fix.range_sd_m;
+  if (!fix.near_field) return;
+  source->position_m = fix.position_m;
+  source->position_covariance_m2 = fix.covariance_m2;
+  // The direction of a source with a position is the position's: the far-field one is
+  // biased by the wavefront's curvature (near_field.h).
+  const ArrayShapeInfo& shape = near_->shape();
+  const Vec3 u = (fix.position_m - shape.centroid_m).normalized();
+  if (std::isfinite(source->cone_angle_rad)) {
+    source->cone_angle_rad = std::acos(std::clamp(u.dot(shape.axis), -1.0, 1.0));
+  } else {
+    source->direction = u;
+    source->azimuth_rad = std::atan2(u.y(), u.x());
+    source->elevation_rad = std::asin(std::clamp(u.z(), -1.0, 1.0));
+  }
 }
 
 void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
@@ -85,6 +122,10 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
     if (heard == nullptr) continue;
     heard->source_present = true;
     heard->power_db = std::isnan(heard->power_db) ? peak.power_db : std::max(heard->power_db, peak.power_db);
+  }
+  if (!near_) return;
+  for (size_t j = first; j < e->sources.size(); ++j) {
+    if (e->sources[j].source_present) Locate(&e->sources[j]);
   }
 }
 

@@ -1,6 +1,9 @@
-// The frame step of a direction session (AudioSessionConfig::localization resolved to
-// direction): each frame's SRP-PHAT peaks (engine/doa/srp_phat.h) go to a direction
-// tracker (engine/doa/direction_tracker.h), and the estimate lists the sources it follows.
+// The frame step of a session that follows sources by direction (AudioSessionConfig::
+// localization resolved to direction, or to position with a planar or linear array): each
+// frame's SRP-PHAT peaks (engine/doa/srp_phat.h) go to a direction tracker
+// (engine/doa/direction_tracker.h), and the estimate lists the sources it follows. With
+// positions, each source heard in the frame also gets a near-field fit near its direction
+// (engine/doa/near_field.h): SourceEstimate::position_m where the frame bounds its range.
 //
 // Per frame: up to config.max_sources peaks, each above the threshold set by
 // config.presence_false_alarm per search; the tracker associates them with its tracks
@@ -16,21 +19,28 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "engine/core/estimate.h"
 #include "engine/core/status.h"
 #include "engine/doa/array_shape.h"
 #include "engine/doa/direction_tracker.h"
+#include "engine/doa/near_field.h"
 #include "engine/doa/srp_phat.h"
 #include "engine/pipeline/session_config.h"
 
 namespace localizer::engine {
 
+// The near-field options a session's config states (source_side, source_plane, the
+// sample rate and sound speed).
+NearFieldOptions NearFieldOptionsFor(const AudioSessionConfig& config);
+
 class DirectionStage {
  public:
-  // INVALID_ARGUMENT naming the option (a source_side in a planar array's plane, ...).
-  static StatusOr<std::unique_ptr<DirectionStage>> Create(const AudioSessionConfig& config);
+  // INVALID_ARGUMENT naming the option (a source_side in a planar array's plane, positions
+  // from a linear array without source_plane, ...).
+  static StatusOr<std::unique_ptr<DirectionStage>> Create(const AudioSessionConfig& config, bool positions);
 
   const ArrayShapeInfo& shape() const { return srp_.shape(); }
 
@@ -39,11 +49,16 @@ class DirectionStage {
   void Frame(const float* frame, double t_s, Estimate* e);
 
  private:
-  DirectionStage(SrpPhat srp, DirectionTracker tracker, double peak_sigma_rad)
-      : srp_(std::move(srp)), tracker_(std::move(tracker)), peak_sigma_rad_(peak_sigma_rad) {}
+  DirectionStage(SrpPhat srp, DirectionTracker tracker, double peak_sigma_rad, std::optional<NearFieldLocator> near)
+      : srp_(std::move(srp)),
+        tracker_(std::move(tracker)),
+        peak_sigma_rad_(peak_sigma_rad),
+        near_(std::move(near)) {}
+  void Locate(SourceEstimate* source) const;  // near-field fit of a heard source
   SrpPhat srp_;
   DirectionTracker tracker_;
   double peak_sigma_rad_;
+  std::optional<NearFieldLocator> near_;  // sessions with positions
   std::vector<SourceTrack> tracks_;
 };
 

@@ -14,13 +14,11 @@
 #include <vector>
 
 #include "engine/array/array_geometry.h"
+#include "engine/core/far_field.h"
 #include "engine/core/measurement.h"
 #include "engine/core/types.h"
 
 namespace localizer::engine {
-
-// sigma_r / r above which a frame is far field: 1/3 puts 1/r's 3-sigma interval at zero.
-inline constexpr double kFarFieldRangeShare = 1.0 / 3.0;
 
 struct RangeObservability {
   double range_m = 0.0;     // position - centroid

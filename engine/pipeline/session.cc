@@ -136,23 +136,30 @@ namespace {
 struct Resolved {
   ArrayShapeInfo shape;
   Localization localization = Localization::kAuto;
+  bool sources = false;  // the estimates list sources (Estimate::sources)
 };
 
 StatusOr<Resolved> Resolve(const AudioSessionConfig& config) {
   auto shape = ClassifyArray(config.sensors_m);
   if (!shape.ok()) return InvalidArgument("array.sensors_m: " + shape.status().message());
+  const bool volumetric = shape->shape == ArrayShape::kVolumetric;
+  const bool linear = shape->shape == ArrayShape::kLinear;
   Localization localization = config.localization;
   if (localization == Localization::kAuto) {
-    localization = shape->shape == ArrayShape::kVolumetric ? Localization::kPosition : Localization::kDirection;
+    const bool plane_stated = config.source_plane_normal != Vec3::Zero();
+    localization = volumetric || (linear && plane_stated) ? Localization::kPosition : Localization::kDirection;
   }
-  if (localization == Localization::kPosition && shape->shape != ArrayShape::kVolumetric) {
-    return InvalidArgument(std::string("localization position needs 4 or more sensors off a common plane; this array "
-                                       "is ") +
-                           ArrayShapeName(shape->shape) +
-                           ": use localization direction or auto (positions from planar and linear arrays in a "
-                           "stated plane or half-space are not built yet)");
+  if (localization == Localization::kPosition && !volumetric) {
+    const size_t needed = linear ? 3 : 4;
+    if (config.sensors_m.size() < needed) {
+      return InvalidArgument("array.sensors_m has " + std::to_string(config.sensors_m.size()) +
+                             " sensors; localization position with a " + ArrayShapeName(shape->shape) +
+                             " array needs " + std::to_string(needed) + " or more (or use localization direction)");
+    }
+    auto locator = NearFieldLocator::Create(config.sensors_m, NearFieldOptionsFor(config));
+    if (!locator.ok()) return InvalidArgument(locator.status().message() + " (or use localization direction)");
   }
-  return Resolved{*shape, localization};
+  return Resolved{*shape, localization, localization == Localization::kDirection || !volumetric};
 }
 
 }  // namespace
@@ -163,16 +170,23 @@ StatusOr<Localization> ResolveLocalization(const AudioSessionConfig& config) {
   return resolved->localization;
 }
 
+StatusOr<bool> ReportsSources(const AudioSessionConfig& config) {
+  auto resolved = Resolve(config);
+  if (!resolved.ok()) return resolved.status();
+  return resolved->sources;
+}
+
 StatusOr<std::unique_ptr<Session>> Session::Create(const AudioSessionConfig& config) {
   LOCALIZER_RETURN_IF_ERROR(config.Validate());
   auto resolved = Resolve(config);
   if (!resolved.ok()) return resolved.status();
-  const auto& [shape, localization] = *resolved;
-  if (localization == Localization::kDirection) {
+  const auto& [shape, localization, sources] = *resolved;
+  if (sources) {
     if (config.array_in_body_frame) {
-      return InvalidArgument("localization direction does not take a moving array (platform) yet");
+      return InvalidArgument(std::string("localization ") + LocalizationName(localization) + " with a " +
+                             ArrayShapeName(shape.shape) + " array does not take a moving array (platform) yet");
     }
-    auto stage = DirectionStage::Create(config);
+    auto stage = DirectionStage::Create(config, localization == Localization::kPosition);
     if (!stage.ok()) return stage.status();
     auto direction = std::make_unique<DirectionImpl>(config, std::move(stage).value());
     return std::unique_ptr<Session>(new Session(shape, localization, nullptr, std::move(direction)));

@@ -44,9 +44,13 @@
 namespace localizer::engine {
 
 // What a session opened with `config` reports: config.localization with auto resolved from
-// the array's shape (position for a volumetric array, direction otherwise). INVALID_ARGUMENT
-// for an array with fewer than 2 distinct sensors, or position from a planar or linear array.
+// the array's shape and the constraints stated (session_config.h). INVALID_ARGUMENT for an
+// array with fewer than 2 distinct sensors, or positions from a planar or linear array
+// without the constraints they need (naming what is missing: "a planar array needs
+// source_side for position", ...).
 StatusOr<Localization> ResolveLocalization(const AudioSessionConfig& config);
+// Whether such a session's estimates list sources (Session::reports_sources); the same errors.
+StatusOr<bool> ReportsSources(const AudioSessionConfig& config);
 
 class Session {
  public:
@@ -81,6 +85,9 @@ class Session {
   const std::string& backend() const;  // "cpu" or "gpu": what BuildComponents chose
   // What the session reports: config.localization with auto resolved; and its array's shape.
   Localization localization() const { return localization_; }
+  // Whether its estimates list sources (Estimate::sources: directions, and positions from a
+  // planar or linear array) rather than the tracker's one position.
+  bool reports_sources() const { return direction_ != nullptr; }
   const ArrayShapeInfo& shape() const { return shape_; }
   int sensor_count() const { return static_cast<int>(config().sensors_m.size()); }
   // Position sessions: the array in the world at the latest frame; nullptr for direction

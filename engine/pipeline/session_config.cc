@@ -39,16 +39,17 @@ Status AudioSessionConfig::Validate() const {
     if (const Status s = attitude.Validate(); !s.ok()) return InvalidArgument("platform.attitude: " + s.message());
     if (!platform_origin_m.allFinite()) return InvalidArgument("platform.origin_m must be finite");
   }
-  const size_t min_sensors = localization == Localization::kPosition ? 4 : 2;
-  if (sensors_m.size() < min_sensors) {
-    return InvalidArgument("array.sensors_m has " + std::to_string(sensors_m.size()) + " sensors; at least " +
-                           std::to_string(min_sensors) + " are needed" +
-                           (min_sensors == 4 ? " for localization position" : ""));
+  if (sensors_m.size() < 2) {
+    return InvalidArgument("array.sensors_m has " + std::to_string(sensors_m.size()) +
+                           " sensors; at least 2 are needed");
   }
   if (max_sources < 1 || max_sources > 16) {
     return InvalidArgument("max_sources must be in [1, 16], got " + std::to_string(max_sources));
   }
   if (!source_side.allFinite()) return InvalidArgument("source_side must be finite");
+  if (!source_plane_point_m.allFinite() || !source_plane_normal.allFinite()) {
+    return InvalidArgument("source_plane must be finite");
+  }
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz) || sample_rate_hz > 10e6) {
     return InvalidArgument("sample_rate_hz must be in (0, 1e7], got " + Num(sample_rate_hz));
   }

@@ -34,12 +34,20 @@
 
 namespace localizer::engine {
 
-// What an audio session reports (issue 18): a 3-D position (volumetric arrays: four or more
-// sensors off a common plane), or the directions of up to max_sources sources (any array
-// of two or more sensors; a planar array's direction has a mirror image across its plane
-// unless source_side is stated, a linear array's is a cone angle). auto: position for a
-// volumetric array (each estimate saying, by Estimate::far_field, whether its frame bounds
-// the range or only the direction), direction otherwise.
+// What an audio session reports (issue 18): positions, or the directions of up to
+// max_sources sources (any array of two or more sensors; a planar array's direction has a
+// mirror image across its plane unless source_side is stated, a linear array's is a cone
+// angle). Positions:
+//   volumetric (4 or more sensors off a common plane): the tracker's 3-D position, each
+//     estimate saying (Estimate::far_field) whether its frame bounds the range;
+//   planar (4 or more sensors), with source_side: each source's 3-D position on that side;
+//   linear (3 or more sensors), with source_plane (a plane holding the array and the
+//     sources) and source_side (which side of the array in that plane): 2-D positions;
+// the last two follow sources by direction (Estimate::sources) and give each a position
+// where the frame bounds its range (engine/doa/near_field.h), the direction otherwise.
+// auto: position for a volumetric array and for a linear one with source_plane stated,
+// direction otherwise (a planar array's source_side also serves directions: ask for
+// position to have its near-field positions).
 enum class Localization { kAuto, kPosition, kDirection };
 // "auto" | "position" | "direction"; INVALID_ARGUMENT naming `field` otherwise.
 StatusOr<Localization> ParseLocalization(const std::string& name, const std::string& field);
@@ -47,7 +55,7 @@ const char* LocalizationName(Localization l);
 
 struct AudioSessionConfig {
   // Array
-  std::vector<Vec3> sensors_m;      // >= 2 (position: >= 4, not coplanar)
+  std::vector<Vec3> sensors_m;      // >= 2 (positions: above)
   double sound_speed_mps = 1500.0;  // > 0 (1500 water, 343 air)
   int reference_sensor = 0;
   double sample_rate_hz = 0.0;  // > 0
@@ -57,6 +65,10 @@ struct AudioSessionConfig {
   Localization localization = Localization::kAuto;
   int max_sources = 4;
   Vec3 source_side = Vec3::Zero();
+  // Linear arrays, positions: the plane holding the array and the sources, a point on it and
+  // its normal (zero normal: not stated).
+  Vec3 source_plane_point_m = Vec3::Zero();
+  Vec3 source_plane_normal = Vec3::Zero();
   // Framing
   int frame_samples = 4096;             // per channel, in [64, 1 << 20]
   int hop_samples = 2048;               // in [1, frame_samples]

@@ -63,8 +63,8 @@ int64_t DirectionSessionBytes(const AudioSessionConfig& config) {
 
 int64_t SessionMemoryBytes(const AudioSessionConfig& config) {
   const int64_t channels = static_cast<int64_t>(config.sensors_m.size());
-  const auto localization = ResolveLocalization(config);
-  if (localization.ok() && *localization == Localization::kDirection) return DirectionSessionBytes(config);
+  const auto sources = ReportsSources(config);
+  if (sources.ok() && *sources) return DirectionSessionBytes(config);
   return kAudioBaseBytes + ParticleBytes(config) + kChannelSampleBytes * channels * std::max(config.frame_samples, 64);
 }
 

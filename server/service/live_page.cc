@@ -240,7 +240,8 @@ function render(doc) {
       }
     }
     const silent = !!(pr && pr.state === "silent");
-    if (s.localization === "direction") {
+    // Directions, and positions from planar and linear arrays, come as a list of sources.
+    if (s.localization === "direction" || (s.array_shape && s.array_shape !== "volumetric")) {
       const linear = s.array_shape === "linear";
       c.text.textContent += ` / ${s.array_shape} array, directions: ${s.sources.length} source(s) now`;
       drawDirectionsInTime(c.xy, s.directions, linear);

@@ -92,9 +92,9 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
     }
   }
   s["track"] = std::move(points);
-  // Direction sessions: what the estimates carry, the latest frame's sources and (with the
-  // track) the recent (frame, source) directions, oldest first. NaN angles (what the array
-  // cannot observe) are null.
+  // Sessions that list sources: what the estimates carry, the latest frame's sources and
+  // (with the track) the recent (frame, source) directions, oldest first. NaN angles (what
+  // the array cannot observe) and positions (none bounded, or directions only) are null.
   s["localization"] = host.runner_info().localization.empty() ? nullptr : json(host.runner_info().localization);
   s["array_shape"] = host.runner_info().array_shape.empty() ? nullptr : json(host.runner_info().array_shape);
   const auto direction = [](const DirectionPoint& d) {
@@ -104,7 +104,8 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
                 {"azimuth_rad", Number(d.azimuth_rad)},
                 {"elevation_rad", Number(d.elevation_rad)},
                 {"cone_angle_rad", Number(d.cone_angle_rad)},
-                {"source_present", d.source_present}};
+                {"source_present", d.source_present},
+                {"position_m", json{Number(d.position_m[0]), Number(d.position_m[1]), Number(d.position_m[2])}}};
   };
   json sources = json::array(), directions = json::array();
   for (const DirectionPoint& d : track.sources) sources.push_back(direction(d));

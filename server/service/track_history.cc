@@ -60,7 +60,7 @@ void TrackHistory::Append(const engine::Estimate& estimate) {
   sources.reserve(estimate.sources.size());
   for (const engine::SourceEstimate& s : estimate.sources) {
     sources.push_back({estimate.frame_index, estimate.t_s, s.source_id, s.azimuth_rad, s.elevation_rad,
-                       s.cone_angle_rad, s.source_present});
+                       s.cone_angle_rad, s.source_present, {s.position_m.x(), s.position_m.y(), s.position_m.z()}});
   }
   MutexLock lock(&mutex_);
   ++frames_;

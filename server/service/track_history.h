@@ -45,6 +45,8 @@ struct DirectionPoint {
   double elevation_rad = 0.0;
   double cone_angle_rad = 0.0;
   bool source_present = false;  // heard at this frame (else a prediction)
+  // Positions from a planar or linear array: where the frame bounded the range, else NaN.
+  double position_m[3] = {engine::SourceEstimate::kNan, engine::SourceEstimate::kNan, engine::SourceEstimate::kNan};
 };
 
 // A detection session's target after its latest scan.

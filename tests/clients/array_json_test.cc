@@ -206,6 +206,31 @@ TEST(ArrayJson, DirectionFieldsAreReadWrittenAndCheckedAgainstTheUse) {
   EXPECT_EQ(again->max_sources, array->max_sources);
 }
 
+TEST(ArrayJson, SourcePlaneIsReadWrittenAndALineWithItIsAccepted) {
+  const std::string line = R"({"sound_speed_mps": 343, "sensors_m": [[0,0,1.5],[0.1,0,1.5],[0.2,0,1.5]],
+      "localization": "position", "source_plane": {"point_m": [0, 0, 1.5], "normal": [0, 0, 1]},
+      "source_side": {"normal": [0, 1, 0]}})";
+  auto array = ParseArrayJson(line, "line.json", ArrayUse::kAuto);
+  ASSERT_TRUE(array.ok()) << array.status().ToString();
+  ASSERT_TRUE(array->source_plane.has_value());
+  EXPECT_EQ(array->source_plane->point_m, engine::Vec3(0, 0, 1.5));
+  EXPECT_EQ(array->source_plane->normal, engine::Vec3::UnitZ());
+  TempDir dir;
+  ASSERT_TRUE(WriteArrayJson(dir.File("l.json"), *array).ok());
+  auto again = ReadArrayJson(dir.File("l.json"), ArrayUse::kAuto);
+  ASSERT_TRUE(again.ok()) << again.status().ToString();
+  ASSERT_TRUE(again->source_plane.has_value());
+  EXPECT_EQ(again->source_plane->normal, array->source_plane->normal);
+  const std::string head = R"({"sound_speed_mps": 343, "sensors_m": [[0,0,0],[1,0,0],[2,0,0]], )";
+  for (const auto& [field, expected] : std::vector<std::pair<std::string, std::string>>{
+           {R"("source_plane": {"normal": [0, 0, 1]}})", "source_plane must be"},
+           {R"("source_plane": {"point_m": [0, 0], "normal": [0, 0, 1]}})", "source_plane.point_m"},
+           {R"("source_plane": {"point_m": [0, 0, 0], "normal": [0, 0, 0]}})", "must not be zero"}}) {
+    const Status s = ParseArrayJson(head + field, "l.json", ArrayUse::kAuto).status();
+    EXPECT_NE(s.message().find(expected), std::string::npos) << field << ": " << s.message();
+  }
+}
+
 TEST(ArrayJson, BadDirectionFieldsAreNamed) {
   const std::string head = R"({"sound_speed_mps": 343, "sensors_m": [[0,0,0],[1,0,0],[0,1,0],[0,0,1]], )";
   for (const auto& [field, expected] : std::vector<std::pair<std::string, std::string>>{

@@ -369,5 +369,28 @@ TEST(ConfigWire, LocalizationFieldsRoundTripAndBadOnesAreNamed) {
   EXPECT_NE(AudioFromProto(p, {}).status().message().find("source_side"), std::string::npos);
 }
 
+TEST(ConfigWire, SourcePlaneRoundTripsAndAZeroNormalIsNamed) {
+  v1::SessionConfig p = MinimalConfig();
+  auto config = AudioFromProto(p, {});
+  ASSERT_TRUE(config.ok());
+  EXPECT_TRUE(config->source_plane_normal.isZero());
+  EXPECT_FALSE(ConfigToProto(*config, "").has_source_plane());
+  p.mutable_source_plane()->mutable_point_m()->set_z(1.5);
+  p.mutable_source_plane()->mutable_normal()->set_z(2.0);
+  config = AudioFromProto(p, {});
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  EXPECT_EQ(config->source_plane_point_m, engine::Vec3(0, 0, 1.5));
+  EXPECT_EQ(config->source_plane_normal, engine::Vec3(0, 0, 2.0));
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  EXPECT_EQ(effective.source_plane().point_m().z(), 1.5);
+  EXPECT_EQ(effective.source_plane().normal().z(), 2.0);
+  p.mutable_source_plane()->mutable_normal()->set_z(0.0);
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("source_plane.normal must not be zero"),
+            std::string::npos);
+  p.mutable_source_plane()->mutable_normal()->set_z(1.0);
+  p.mutable_source_plane()->mutable_point_m()->set_y(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("source_plane"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace localizer::wire

@@ -223,9 +223,32 @@ TEST(EstimateWire, SourcesRoundTrip) {
   EXPECT_TRUE(std::isnan(back.sources[1].azimuth_rad));
   EXPECT_DOUBLE_EQ(back.sources[1].cone_angle_rad, 1.2);
   EXPECT_DOUBLE_EQ(back.sources[1].power_db, 9.5);
+  EXPECT_FALSE(wire.sources(0).has_position_m());  // none bounded: unset, not zeros
+  EXPECT_FALSE(back.sources[0].position_m.allFinite());
   // A reused message is overwritten, not appended to.
   EstimateToProto(engine::Estimate{}, 0, "cpu", &wire);
   EXPECT_EQ(wire.sources_size(), 0);
+}
+
+// Positions from a planar or linear array: position, covariance and range sd per source.
+TEST(EstimateWire, SourcePositionsRoundTrip) {
+  engine::Estimate e;
+  engine::SourceEstimate s;
+  s.source_id = 2;
+  s.cone_angle_rad = 1.1;
+  s.position_m = engine::Vec3(1.0, 2.0, 1.5);
+  s.position_covariance_m2 = engine::Mat3::Identity() * 1e-4;
+  s.position_covariance_m2(0, 1) = s.position_covariance_m2(1, 0) = 2e-5;
+  s.range_sd_m = 0.012;
+  e.sources = {s};
+  v1::Estimate wire;
+  EstimateToProto(e, 0, "cpu", &wire);
+  ASSERT_TRUE(wire.sources(0).has_position_m());
+  EXPECT_EQ(wire.sources(0).position_covariance_size(), 9);
+  const engine::Estimate back = EstimateFromProto(wire);
+  EXPECT_EQ(back.sources[0].position_m, s.position_m);
+  EXPECT_EQ(back.sources[0].position_covariance_m2, s.position_covariance_m2);
+  EXPECT_DOUBLE_EQ(back.sources[0].range_sd_m, 0.012);
 }
 
 TEST(ImuWire, ABatchAboveTheSampleLimitIsInvalidArgumentNamingIt) {

@@ -14,7 +14,7 @@ def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, referen
                    frame_samples=0, hop_samples=0, particles=0, band_hz=None, seed=None,
                    backend="", label="", init_region=None, platform=None, bounds=None,
                    search_radius_m=0.0, presence_false_alarm=0.0, source_timeout_s=0.0,
-                   localization="", max_sources=None, source_side=None):
+                   localization="", max_sources=None, source_side=None, source_plane=None):
     """A ``pb.SessionConfig``.
 
     sensors_m: (C, 3) sensor positions, metres (C >= 2; a position needs 4 off a common plane).
@@ -22,7 +22,10 @@ def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, referen
     directions for a planar or linear one: SessionOpened.localization says which; each
     estimate's ``sources`` then lists the sources followed, see ``sources()``). max_sources:
     direction sessions' sources per frame, 1..16 (None: 4). source_side: (x, y, z), a planar
-    array's side that holds the sources (None: not stated; mirror images). band_hz: (low, high) of
+    array's side that holds the sources (None: not stated; mirror images); with a linear array,
+    the side within source_plane. source_plane: ((x, y, z) point, (nx, ny, nz) normal), the
+    plane holding a linear array and its sources: positions per source (localization
+    "position", or "auto" with it). band_hz: (low, high) of
     the GCC band or None for the whole spectrum. init_region: ((xmin, ymin, zmin), (xmax, ymax,
     zmax)) or None. Zero / empty values mean "the server's default" (frame 4096, hop frame/2,
     4096 particles, seed 1, the server's --backend); SessionOpened.effective_config tells.
@@ -60,6 +63,9 @@ def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, referen
         config.max_sources = int(max_sources)
     if source_side is not None:
         config.source_side.CopyFrom(vector3(source_side))
+    if source_plane is not None:
+        config.source_plane.point_m.CopyFrom(vector3(source_plane[0]))
+        config.source_plane.normal.CopyFrom(vector3(source_plane[1]))
     return config
 
 
@@ -67,14 +73,19 @@ def sources(estimate):
     """A direction session's estimate as plain rows: one dict per source followed, in order of
     id, with ``id``, ``status`` ("confirmed" or "coasting"), ``azimuth_rad``,
     ``elevation_rad``, ``cone_angle_rad`` (NaN where the array cannot observe it),
-    ``direction`` (a unit (x, y, z) tuple), ``sigma_rad``, ``source_present`` and ``power_db``."""
+    ``direction`` (a unit (x, y, z) tuple), ``sigma_rad``, ``source_present``, ``power_db``,
+    and for positions from a planar or linear array ``position_m`` (an (x, y, z) tuple where
+    the frame bounds the source's range, else None) and ``range_sd_m``."""
     names = {pb.TRACK_STATUS_TENTATIVE: "tentative", pb.TRACK_STATUS_CONFIRMED: "confirmed",
              pb.TRACK_STATUS_COASTING: "coasting"}
     return [{"id": s.source_id, "status": names.get(s.status, "unspecified"),
              "azimuth_rad": s.azimuth_rad, "elevation_rad": s.elevation_rad,
              "cone_angle_rad": s.cone_angle_rad,
              "direction": (s.direction.x, s.direction.y, s.direction.z),
-             "sigma_rad": s.sigma_rad, "source_present": s.source_present, "power_db": s.power_db}
+             "sigma_rad": s.sigma_rad, "source_present": s.source_present, "power_db": s.power_db,
+             "position_m": ((s.position_m.x, s.position_m.y, s.position_m.z)
+                            if s.HasField("position_m") else None),
+             "range_sd_m": s.range_sd_m}
             for s in estimate.sources]
 
 
