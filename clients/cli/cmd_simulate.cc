@@ -12,6 +12,7 @@
 #include "clients/grpc/remote_track.h"
 #include "clients/grpc/streamer.h"
 #include "clients/io/array_json.h"
+#include "clients/io/room_scene_files.h"
 #include "clients/io/score.h"
 #include "clients/io/simulation_files.h"
 #include "clients/io/track_runner.h"
@@ -26,6 +27,8 @@ const char* const kCommand = "simulate";
 
 struct SimulateFlags {
   std::string scenario_name;
+  std::string room_path;   // --room: a room scene file (room_scene_files.h)
+  std::string array_path;  // --array: with --room
   uint64_t random_seed = 0;  // --random: a scene drawn from this seed (random_scene.h)
   std::string out_dir;
   uint64_t seed = 1;
@@ -182,6 +185,26 @@ int RunOnServer(const SimulateFlags& f, const io::SimulationRun& run) {
   return kExitOk;
 }
 
+// --room: the scene rendered for the array, written to --out.
+int RunRoomScene(const SimulateFlags& f) {
+  auto scene = io::ReadRoomSceneJson(f.room_path);
+  if (!scene.ok()) return RuntimeError(kCommand, scene.status());
+  auto array = io::ReadArrayFile(f.array_path, io::ArrayUse::kAuto);
+  if (!array.ok()) return RuntimeError(kCommand, array.status());
+  auto files = io::SimulateRoomScene(*scene, *array, f.seed, f.duration_s, f.out_dir);
+  if (!files.ok()) {
+    return RuntimeError(kCommand, Status(files.status().code(), f.room_path + ": " + files.status().message()));
+  }
+  const engine::RoomScene& s = scene->scene;
+  std::printf(
+      "simulated room %gx%gx%g m, RT60 %g s: %zu source(s), %zu channels, %.3f s at %g Hz, seed %llu -> %s "
+      "(signals.wav, array.json, sources.csv, sounding.csv)\n",
+      s.room.size_m.x(), s.room.size_m.y(), s.room.size_m.z(), s.room.rt60_s, s.sources.size(),
+      array->sensors_m.size(), static_cast<double>(files->samples_per_channel) / s.sample_rate_hz, s.sample_rate_hz,
+      static_cast<unsigned long long>(f.seed), f.out_dir.c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 int RunSimulate(const std::vector<std::string>& args) {
@@ -189,6 +212,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   FlagSet flags(
       "localizer-cli simulate --scenario NAME --out DIR [flags] | --list\n"
       "       localizer-cli simulate --random SEED --out DIR [flags]\n"
+      "       localizer-cli simulate --room SCENE.json --array ARRAY.json --out DIR [--seed S] [--duration S]\n"
       "       localizer-cli simulate --scenario NAME --server HOST:PORT [--out DIR] [flags]",
       "Simulates a named scenario (engine/sim) and writes DIR/signals.wav (float32,\n"
       "channel k = sensor k), DIR/array.json (with sample_rate_hz) and DIR/truth.csv.\n"
@@ -200,9 +224,17 @@ int RunSimulate(const std::vector<std::string>& args) {
       "also writes DIR/estimates.csv.\n"
       "--random SEED simulates a scene drawn at random from SEED instead (geometry, medium,\n"
       "range, SNR, spectrum, echoes, impulses: engine/sim/random_scene.h; the seeds\n"
-      "scene_campaign prints), written and streamed the same way.");
+      "scene_campaign prints), written and streamed the same way.\n"
+      "--room SCENE.json renders your array (--array) in a shoebox room by the image-source\n"
+      "method: fixed sources emitting broadband noise, tones or speech-like bursts, with\n"
+      "sensor noise (the scene file's format: clients/io/room_scene_files.h; named scenes in\n"
+      "scenes/). It writes DIR/signals.wav, DIR/array.json (sensors moved into the room),\n"
+      "DIR/sources.csv (each source's position, range and direction from the array) and\n"
+      "DIR/sounding.csv (when each source is heard); `track` or `doa` then runs on them.");
   flags.String("scenario", &f.scenario_name, "NAME", "scenario to simulate (see --list)");
   flags.String("out", &f.out_dir, "DIR", "output directory, created if missing");
+  flags.String("room", &f.room_path, "FILE", "render a room scene file for --array instead of a scenario");
+  flags.String("array", &f.array_path, "FILE", "with --room: the array file (array.json) to render for");
   flags.Uint64("random", &f.random_seed, "SEED", "simulate a random scene drawn from SEED instead of a named scenario");
   flags.Uint64("seed", &f.seed, "S", "random seed of the scenario: source signal, noise, jitter");
   flags.OptionalDouble("duration", &f.duration_s, "S", "the scenario's own", "seconds of recording to simulate");
@@ -217,6 +249,18 @@ int RunSimulate(const std::vector<std::string>& args) {
   if (f.list) return ListScenarios();
   const bool remote = !f.stream.server.empty();
   const bool random = flags.seen("random");
+  if (!f.room_path.empty()) {
+    if (random || !f.scenario_name.empty()) return UsageError(kCommand, "--room excludes --scenario and --random");
+    if (remote) return UsageError(kCommand, "--room writes files; stream them with `track --server`");
+    if (f.array_path.empty()) return UsageError(kCommand, "--room needs --array");
+    if (f.out_dir.empty()) return UsageError(kCommand, "missing required flag --out");
+    if (f.duration_s && *f.duration_s <= 0.0) return UsageError(kCommand, "--duration must be > 0");
+    for (const std::string& name : ServerOnlyFlags()) {
+      if (flags.seen(name)) return UsageError(kCommand, "--" + name + " is not used by --room");
+    }
+    return RunRoomScene(f);
+  }
+  if (!f.array_path.empty()) return UsageError(kCommand, "--array is for --room");
   if (random && !f.scenario_name.empty()) return UsageError(kCommand, "--random and --scenario exclude each other");
   if (random && flags.seen("seed"))
     return UsageError(kCommand, "--seed is a named scenario's; --random SEED seeds the whole scene");

@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "clients/io/json_fields.h"
 #include "clients/io/xav_array.h"
 #include "engine/array/array_geometry.h"
 #include "engine/doa/array_shape.h"
@@ -23,38 +24,6 @@ const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz",
                                             "bottom_z_m",      "localization",   "source_side",  "max_sources",
                                             "source_plane"};
 const char* const kLocalizationNames[] = {"auto", "position", "direction"};  // ArrayFile::Localization order
-
-// A finite number at `value`, or an error naming `field`.
-StatusOr<double> FiniteNumber(const json& value, const std::string& source, const std::string& field) {
-  if (!value.is_number()) {
-    return InvalidArgument(source + ": " + field + " is " + value.dump() + ", not a number");
-  }
-  const double x = value.get<double>();
-  if (!std::isfinite(x)) return InvalidArgument(source + ": " + field + " is not finite");
-  return x;
-}
-
-// Three finite numbers at `value`, or an error naming `field`.
-StatusOr<engine::Vec3> FiniteVector(const json& value, const std::string& source, const std::string& field) {
-  if (!value.is_array() || value.size() != 3) {
-    return InvalidArgument(source + ": " + field + " must be [x, y, z], got " + value.dump());
-  }
-  engine::Vec3 out;
-  for (int axis = 0; axis < 3; ++axis) {
-    auto x = FiniteNumber(value[static_cast<size_t>(axis)], source, field);
-    if (!x.ok()) return x.status();
-    out[axis] = *x;
-  }
-  return out;
-}
-
-StatusOr<double> PositiveNumber(const json& value, const std::string& source, const std::string& field) {
-  auto x = FiniteNumber(value, source, field);
-  if (x.ok() && *x <= 0.0) {
-    return InvalidArgument(source + ": " + field + " is " + value.dump() + ", must be > 0");
-  }
-  return x;
-}
 
 StatusOr<std::vector<engine::Vec3>> ParseSensors(const json& rows, const std::string& source) {
   if (!rows.is_array()) {
