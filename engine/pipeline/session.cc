@@ -111,6 +111,7 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
     live =
         tracker.InitialiseRegion(config.init_region_min_m, config.init_region_max_m, config.init_speed_sigma_mps).ok();
     monitor.Reset();
+    consistency.Reset();
     if (live && measured) {
       e.source_present = true;  // the user says so; the presence test runs once tracking
       UpdateAndWatch(tracker.Hypotheses().front().belief, &e);

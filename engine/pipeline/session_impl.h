@@ -11,6 +11,7 @@
 #include "engine/filters/divergence_monitor.h"
 #include "engine/pipeline/backend.h"
 #include "engine/pipeline/framer.h"
+#include "engine/pipeline/innovation_consistency.h"
 #include "engine/pipeline/platform_pose.h"
 #include "engine/pipeline/range_observability.h"
 #include "engine/pipeline/session.h"
@@ -85,6 +86,7 @@ struct Session::Impl {
   std::vector<float> despiked;  // the frame as the estimator sees it, when despiking
   DivergenceMonitor monitor;
   PairSigmaHistory pair_sigmas;  // the recent frames' delay sigmas, for Estimate::far_field
+  InnovationConsistency consistency;  // the recent frames' NIS, for Estimate::covariance
   Measurement measurement;
   Eigen::VectorXd delays;
   bool have_sequence = false;

@@ -117,6 +117,7 @@ bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
   outscored = 0;
   frames_since_audit = 0;
   monitor.Reset();
+  consistency.Reset();
   return true;
 }
 
@@ -128,6 +129,7 @@ void Session::Impl::UpdateAndWatch(const TrackState& predicted, Estimate* e) {
   e->ess = report->ess;
   e->tdoa_sigma_s = report->tdoa_sigma_s;
   e->pairs_used = report->pair_count;
+  consistency.Add(report->nis, report->pair_count);
   if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count, report->anchored_z)) return;
   // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too),
   // and the track's own: the frame that tripped the test may itself hold the bad pair (a
@@ -203,7 +205,8 @@ void Session::Impl::Report(Estimate* e) const {
   // Positions outside the bounds are impossible (the particle filter keeps its particles in;
   // the Kalman filters' Gaussian may straddle a wall).
   e->state.head<3>() = e->state.head<3>().cwiseMax(config.bounds_min_m).cwiseMin(config.bounds_max_m);
-  e->covariance = covariance;
+  // Innovations that disagree with the track widen what it reports (innovation_consistency.h).
+  e->covariance = covariance * consistency.Inflation();
   e->modes = std::max(modes, 1);
   e->ambiguous = e->modes > 1;
   const RangeObservability range = JudgeRange(array, e->state.head<3>(), pair_sigmas.Median());
