@@ -98,6 +98,8 @@ struct Estimate {
   bool far_field = false;
   double range_sd_m = 0.0;
   Vec6 state = Vec6::Zero();  // (x, y, z, vx, vy, vz): m, m/s
+  // Widened by the last frames' NIS over their pairs when above 1 (engine/pipeline/
+  // innovation_consistency.h): the measurements' disagreement with the track is reported.
   Mat6 covariance = Mat6::Zero();
   double ess = 0.0;             // effective sample size after the update (particle filter)
   double tdoa_sigma_s = 0.0;    // TDOA noise std the tracker assumed (adaptive by default)
