@@ -12,10 +12,12 @@
 namespace localizer::engine {
 namespace {
 
-constexpr int kRaySteps = 48;          // ranges probed along each direction
+constexpr int kRaySteps = 32;           // ranges probed along each direction
 constexpr double kDegree_rad = std::numbers::pi / 180.0;
-constexpr int kLinearWindowSteps = 30;  // cone angles within 30 degrees of the track's, 1 degree apart
-constexpr int kPlanarWindowSteps = 5;   // directions within 15 degrees on two axes, 3 degrees apart
+constexpr int kLinearWindowSteps = 15;  // cone angles within 30 degrees of the track's,
+constexpr double kLinearStep_rad = 2.0 * kDegree_rad;  // 2 degrees apart
+constexpr int kPlanarWindowSteps = 5;  // directions within 15 degrees on two axes,
+constexpr double kPlanarStep_rad = 3.0 * kDegree_rad;  // 3 degrees apart
 constexpr int kIterations = 8;         // Gauss-Newton steps per start
 constexpr double kMaxStepLag = 0.5;    // samples of lag a step may move any pair
 constexpr double kDefaultMinRange = 0.1;   // apertures
@@ -208,7 +210,7 @@ std::vector<Vec3> NearFieldLocator::CandidateDirections(const Vec3& u) const {
   if (free_ == 2) {
     const double theta = std::acos(std::clamp(u.dot(shape_.axis), -1.0, 1.0));
     for (int k = -kLinearWindowSteps; k <= kLinearWindowSteps; ++k) {
-      const double t = theta + k * kDegree_rad;
+      const double t = theta + k * kLinearStep_rad;
       if (k != 0 && t > 0.0 && t < std::numbers::pi) out.push_back(DirectionAt(t));
     }
     return out;
@@ -218,7 +220,7 @@ std::vector<Vec3> NearFieldLocator::CandidateDirections(const Vec3& u) const {
   for (int a = -kPlanarWindowSteps; a <= kPlanarWindowSteps; ++a) {
     for (int b = -kPlanarWindowSteps; b <= kPlanarWindowSteps; ++b) {
       if (a == 0 && b == 0) continue;
-      const Vec3 v = (u + 3.0 * kDegree_rad * (a * e1 + b * e2)).normalized();
+      const Vec3 v = (u + kPlanarStep_rad * (a * e1 + b * e2)).normalized();
       if (v.dot(side_) > 0.0) out.push_back(v);
     }
   }
@@ -259,8 +261,9 @@ NearFieldFix NearFieldLocator::Locate(const PairSpectra& spectra, const Measurem
   std::vector<Eigen::Vector3d> lag_gradients;
   Vec3 best_m = starts_m[1];
   double best = -std::numeric_limits<double>::infinity();
-  for (const Vec3& start_m : starts_m) {
-    Vec3 p_m = start_m;
+  const int starts = (starts_m[0] - starts_m[1]).norm() > 1e-9 ? 2 : 1;  // the window's best may be on u
+  for (int k = 0; k < starts; ++k) {
+    Vec3 p_m = starts_m[k];
     double value = Spectrum(spectra, p_m);
     for (int iteration = 0; iteration < kIterations; ++iteration) {
       Eigen::Vector3d gradient = Eigen::Vector3d::Zero();

@@ -9,14 +9,15 @@
 // spectrum (PairSpectra::WholeAt: no source removed), is maximised near the direction u the
 // far-field search gave (from the array's centroid c):
 //   1. a coarse grid, from the frame's sampled GCC (linear interpolation between lags): at
-//      kRaySteps ranges, geometric from min_range_m to max_range_m, along u and along every
-//      direction of a window about it (linear arrays: cone angles within 30 degrees, 1
-//      degree apart; planar: a 11 x 11 grid of directions 3 degrees apart). The window is
+//      32 ranges, geometric from min_range_m to max_range_m, along u and along every
+//      direction of a window about it (linear arrays: cone angles within 30 degrees, 2
+//      degrees apart; planar: a 11 x 11 grid of directions 3 degrees apart). The window is
 //      needed because a far-field search misplaces a near source: its wavefront is curved, so
 //      the plane wave that fits best is defocused, and in a room a wall's image further away
 //      (in focus) can outscore it (measured: a line 1.7 apertures from a talker, RT60 0.4 s,
 //      followed the image of the wall behind it, 16 degrees off);
-//   2. from the best grid point on u and the best in the window, Gauss-Newton on the
+//   2. from the best grid point on u and the best in the window (one start when they
+//      coincide), Gauss-Newton on the
 //      position's free coordinates (3 in space, 2 in the plane) with each pair's exact R_p,
 //      R_p' and R_p'', each step kept within half a sample of lag on every pair, and on the
 //      stated side; the better end point is the fit.
@@ -33,9 +34,12 @@
 // rule a volumetric array's estimates use) and the fit lies inside the searched ranges;
 // otherwise the frame gives the direction only (far field).
 //
-// Cost per source and frame: the grid's 48 x 61 (linear) or 48 x 121 (planar) points of P
+// Cost per source and frame: the grid's 32 x 31 (linear) or 32 x 121 (planar) points of P
 // interpolated lookups, plus up to 2 x 8 Gauss-Newton steps of a few P exact evaluations (P
-// pairs, each a pass over the B in-band bins).
+// pairs, each a pass over the B in-band bins). Measured (near_field_report, 8 microphones on
+// a line, 16 kHz, 1024-sample frames): 0.5 ms per frame with one source, beside 0.4-0.5 ms
+// for the direction session's own search and tracking. A grid of 48 ranges and 1-degree
+// steps cost 1.1-1.5 ms for the same errors to 0.1 mm.
 #pragma once
 
 #include <limits>
