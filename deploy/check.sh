@@ -30,10 +30,10 @@ USAGE
 }
 
 targets=(fuzz_session_config fuzz_track_stream fuzz_sample_block fuzz_imu_batch fuzz_scan fuzz_locate_request
-         fuzz_array_json fuzz_csv_readers fuzz_wav)
+         fuzz_array_json fuzz_csv_readers fuzz_wav fuzz_room_scene)
 # Largest input per target: whole protos and files up to 1 MiB; the proto decoders' cost
 # grows with the input, so larger adds time, not coverage.
-declare -A max_len=([fuzz_array_json]=65536 [fuzz_csv_readers]=65536 [fuzz_wav]=262144)
+declare -A max_len=([fuzz_array_json]=65536 [fuzz_csv_readers]=65536 [fuzz_wav]=262144 [fuzz_room_scene]=65536)
 # fuzz_wav: Debian's libsndfile hands MP3-like input to libmpg123, which writes several lines to
 # stderr for every malformed frame (about 9 per execution, some 200 MB of log a minute). libFuzzer's
 # -close_fd_mask=2 closes the target's stderr; libFuzzer's own lines and the sanitizer reports go

@@ -197,6 +197,16 @@ void FileSeeds(const fs::path& scratch) {
        R"({"sound_speed_mps": 343, "sensors_m": [[0,0,0],[0.1,0,0],[0,0.1,0],[0,0,0.1]], "surface_z_m": 2.5,)"
        R"( "bottom_z_m": -1, "bounds_min_m": [null, -5, null], "bounds_max_m": ["inf", 5, null]})");
 
+  // Room scenes: the named ones of the tree, and one with every field.
+  for (const auto& entry : fs::directory_iterator(fs::path(LOCALIZER_SOURCE_DIR) / "scenes" / "rooms")) {
+    Seed("fuzz_room_scene", ReadFile(entry.path()));
+  }
+  Seed("fuzz_room_scene",
+       R"({"room": {"size_m": [6, 5, 3], "rt60_s": 0.3}, "array_position_m": [2, 2, 1], "sample_rate_hz": 8000,)"
+       R"( "duration_s": 2, "noise_db": -30, "sources": [{"position_m": [4, 3, 1.5], "signal": "tones",)"
+       R"( "band_hz": [200, 3000], "level_db": -6, "on_s": [0.2, 0.5], "off_s": [0.1, 0.3], "start_s": 0.5,)"
+       R"( "stop_s": 1.5}]})");
+
   const auto csv_seed = [](char selector, const std::string& text) { Seed("fuzz_csv_readers", selector + text); };
   std::vector<engine::TruthRow> truth(3);
   for (int i = 0; i < 3; ++i) {
