@@ -5,6 +5,8 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <chrono>
 #include <condition_variable>
 #include <functional>
@@ -216,13 +218,24 @@ inline void ExpectSameEstimate(const engine::Estimate& want, const v1::Estimate&
   for (int k = 0; k < got.sources_size(); ++k) {
     const v1::SourceDirection& g = got.sources(k);
     const engine::SourceEstimate& w = want.sources[static_cast<size_t>(k)];
+    // The same number, or both NaN (what the array cannot observe).
+    const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
     EXPECT_EQ(g.source_id(), w.source_id);
-    EXPECT_EQ(g.direction().x(), w.direction.x());
-    EXPECT_EQ(g.direction().z(), w.direction.z());
-    EXPECT_EQ(g.azimuth_rad(), w.azimuth_rad);
-    EXPECT_EQ(g.elevation_rad(), w.elevation_rad);
+    EXPECT_TRUE(same(g.direction().x(), w.direction.x()));
+    EXPECT_TRUE(same(g.direction().z(), w.direction.z()));
+    EXPECT_TRUE(same(g.azimuth_rad(), w.azimuth_rad));
+    EXPECT_TRUE(same(g.elevation_rad(), w.elevation_rad));
+    EXPECT_TRUE(same(g.cone_angle_rad(), w.cone_angle_rad));
     EXPECT_EQ(g.sigma_rad(), w.sigma_rad);
     EXPECT_EQ(g.source_present(), w.source_present);
+    // Positions from planar and linear arrays: set exactly where the engine bounded the range.
+    EXPECT_EQ(g.has_position_m(), w.position_m.allFinite());
+    if (g.has_position_m()) {
+      EXPECT_EQ(g.position_m().x(), w.position_m.x());
+      EXPECT_EQ(g.position_m().y(), w.position_m.y());
+      EXPECT_EQ(g.position_m().z(), w.position_m.z());
+    }
+    EXPECT_TRUE(same(g.range_sd_m(), w.range_sd_m));
   }
 }
 
