@@ -222,6 +222,8 @@ int RunTrack(const std::vector<std::string>& args) {
     if (!stream.ok()) return RuntimeError(kCommand, stream.status());
     sample_rate_hz = stream->sample_rate_hz();
   }
+  f.session.frame_given = flags.seen("frame");
+  f.session.hop_given = flags.seen("hop");
   auto config = BuildSessionConfig(f.session, *array, sample_rate_hz, remote ? Runs::kOnServer : Runs::kLocally);
   if (!config.ok()) return UsageError(kCommand, config.status().message());
 

@@ -24,8 +24,10 @@ void RegisterGccFlags(FlagSet& flags, SessionFlags* f) {
 
 void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& seed_flag) {
   engine::AudioSessionConfig& c = f->config;
-  flags.Int("frame", &c.frame_samples, "N", "samples", "samples per channel per TDOA frame");
-  flags.Int("hop", &c.hop_samples, "N", "samples", "samples between frame starts");
+  flags.Int("frame", &c.frame_samples, "N", "samples",
+            "samples per channel per TDOA frame (sessions that list sources: about 32 ms unless given)");
+  flags.Int("hop", &c.hop_samples, "N", "samples",
+            "samples between frame starts (sessions that list sources: half a frame unless given)");
   flags.String("filter", &f->filter, "NAME",
                "tracker: pf (particle filter) | ekf (extended Kalman) | ukf (unscented Kalman) | "
                "mmpf (multiple-model particle filter: cv, manoeuvre, turns) | imm (interacting "
@@ -218,6 +220,12 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
                              " is not below max " + FormatDouble(config.bounds_max_m[axis]) +
                              " (--bounds-min/--bounds-max, --bottom-z/--surface-z, or the array file)");
     }
+  }
+  auto sources = engine::ReportsSources(config);
+  if (sources.ok() && *sources && !f.frame_given) {
+    const double frame = std::exp2(std::round(std::log2(std::max(64.0, 0.032 * config.sample_rate_hz))));
+    config.frame_samples = static_cast<int>(std::min(frame, double{1 << 20}));
+    if (!f.hop_given) config.hop_samples = config.frame_samples / 2;
   }
   engine::AudioSessionConfig check = config;
   if (runs == Runs::kOnServer) check.backend = engine::BackendChoice::kCpu;

@@ -35,6 +35,12 @@ struct SessionFlags {
   std::optional<int> max_sources;  // --max-sources (unset: the array file's, else 4)
   std::string source_side;         // --source-side X,Y,Z ("" = the array file's, else unstated)
   std::string source_plane;        // --source-plane PX,PY,PZ,NX,NY,NZ ("" = the array file's)
+  // Whether --frame / --hop were given (the caller sets them from FlagSet::seen). When not,
+  // sessions that list sources get frames of about 32 ms (the power of two nearest
+  // 0.032 x the rate, at least 64 samples) and a hop of half a frame: the default 4096 is
+  // 256 ms at 16 kHz, longer than a talker's syllables and pauses.
+  bool frame_given = false;
+  bool hop_given = false;
 };
 
 // --sound-speed, --reference, --weighting, --phat-beta, --band-low, --band-high.
