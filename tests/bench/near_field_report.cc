@@ -14,10 +14,15 @@
 // spatial spectrum, the tracker and the near-field fit; 32 ms of audio per hop) beside a
 // direction session's on the same audio (the difference is the fit's cost).
 //
-//   build/tests/bench/near_field_report [--scenes 10] [--seed 1]
+// --array circle instead: 8 microphones on a horizontal circle of 0.15-0.45 m radius, the
+// talker above it (source_side +z) at 1-3 apertures and 15-60 degrees of elevation; the
+// least-squares fix is then 3-D.
+//
+//   build/tests/bench/near_field_report [--scenes 10] [--seed 1] [--array line|circle]
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "engine/core/flags.h"
@@ -30,7 +35,7 @@ namespace {
 using testing::LeastSquaresFixes;
 using testing::Median;
 
-int Run(int scenes, uint64_t seed) {
+int Run(int scenes, uint64_t seed, bool circle) {
   std::printf("RT60 s | scenes | median error, session (m) | least squares (m) | ratio | frames with a position | "
               "error / range sd | frame ms (median) | directions only, frame ms (median)\n");
   for (const double rt60_s : {0.0, 0.2, 0.4, 0.6}) {
@@ -44,30 +49,56 @@ int Run(int scenes, uint64_t seed) {
       scene.room.rt60_s = rt60_s;
       scene.seconds = 3.0;
       scene.seed = rng();
-      const double spacing_m = in(0.05, 0.15);
-      const double y_m = in(0.5, 1.5), z_m = in(1.0, 2.0);
-      const double x0_m = 0.5 * (scene.room.size_m.x() - 7 * spacing_m);
-      for (int i = 0; i < 8; ++i) scene.sensors_m.emplace_back(x0_m + i * spacing_m, y_m, z_m);
-      const Vec3 centre_m(x0_m + 3.5 * spacing_m, y_m, z_m);
-      const double aperture_m = 7 * spacing_m;
-      Vec3 source_m;
-      for (int attempt = 0; attempt < 100; ++attempt) {
-        const double range_m = in(1.0, 3.0) * aperture_m, angle = in(30.0, 150.0) * std::numbers::pi / 180.0;
-        source_m = centre_m + range_m * Vec3(std::cos(angle), std::sin(angle), 0.0);
-        const Vec3 margin = Vec3::Constant(0.3);
-        if ((source_m - margin).minCoeff() > 0.0 && (scene.room.size_m - source_m - margin).minCoeff() > 0.0) break;
-      }
-      scene.sources_m = {source_m};
       AudioSessionConfig c;
-      c.sensors_m = scene.sensors_m;
       c.sound_speed_mps = 343.0;
       c.sample_rate_hz = 16000.0;
       c.frame_samples = 1024;
       c.hop_samples = 512;
       c.max_sources = 1;
-      c.source_plane_point_m = centre_m;
-      c.source_plane_normal = Vec3::UnitZ();
-      c.source_side = Vec3::UnitY();
+      Vec3 centre_m, source_m, plane_normal = Vec3::UnitZ();
+      double aperture_m = 0.0;
+      if (circle) {
+        // 8 microphones on a horizontal circle of radius 0.15-0.45 m, 0.8-1.2 m high; the
+        // talker above it (side +z) at 1-3 apertures, 15-60 degrees of elevation.
+        const double radius_m = in(0.15, 0.45), z_m = in(0.8, 1.2);
+        centre_m = Vec3(0.5 * scene.room.size_m.x(), 0.5 * scene.room.size_m.y(), z_m);
+        for (int i = 0; i < 8; ++i) {
+          const double a = 2.0 * std::numbers::pi * i / 8.0;
+          scene.sensors_m.push_back(centre_m + radius_m * Vec3(std::cos(a), std::sin(a), 0.0));
+        }
+        aperture_m = 2.0 * radius_m;
+        plane_normal = Vec3::Zero();  // the least-squares fix is 3-D
+        c.localization = Localization::kPosition;
+        c.source_side = Vec3::UnitZ();
+      } else {
+        const double spacing_m = in(0.05, 0.15);
+        const double y_m = in(0.5, 1.5), z_m = in(1.0, 2.0);
+        const double x0_m = 0.5 * (scene.room.size_m.x() - 7 * spacing_m);
+        for (int i = 0; i < 8; ++i) scene.sensors_m.emplace_back(x0_m + i * spacing_m, y_m, z_m);
+        centre_m = Vec3(x0_m + 3.5 * spacing_m, y_m, z_m);
+        aperture_m = 7 * spacing_m;
+        c.source_plane_point_m = centre_m;
+        c.source_plane_normal = Vec3::UnitZ();
+        c.source_side = Vec3::UnitY();
+      }
+      for (int attempt = 0; attempt < 100; ++attempt) {
+        const double range_m = in(1.0, 3.0) * aperture_m;
+        Vec3 u;
+        if (circle) {
+          const double azimuth = in(-std::numbers::pi, std::numbers::pi);
+          const double elevation = in(15.0, 60.0) * std::numbers::pi / 180.0;
+          u = Vec3(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+                   std::sin(elevation));
+        } else {
+          const double angle = in(30.0, 150.0) * std::numbers::pi / 180.0;
+          u = Vec3(std::cos(angle), std::sin(angle), 0.0);
+        }
+        source_m = centre_m + range_m * u;
+        const Vec3 margin = Vec3::Constant(0.3);
+        if ((source_m - margin).minCoeff() > 0.0 && (scene.room.size_m - source_m - margin).minCoeff() > 0.0) break;
+      }
+      scene.sources_m = {source_m};
+      c.sensors_m = scene.sensors_m;
       auto session = Session::Create(c);
       if (!session.ok()) {
         std::fprintf(stderr, "scene %d: %s\n", k, session.status().message().c_str());
@@ -94,7 +125,7 @@ int Run(int scenes, uint64_t seed) {
         }
       }
       for (const Vec3& fix : LeastSquaresFixes(samples, c.sensors_m, 16000.0, 343.0, 1024, 512, source_m,
-                                               Vec3::UnitZ())) {
+                                               plane_normal)) {
         ls_m.push_back((fix - source_m).norm());
       }
       const double mine = errors_m.empty() ? INFINITY : Median(errors_m);
@@ -118,14 +149,19 @@ int Run(int scenes, uint64_t seed) {
 int main(int argc, char** argv) {
   int scenes = 10;
   uint64_t seed = 1;
+  std::string shape = "line";
   localizer::FlagSet flags("near_field_report [flags]",
                            "Positions from an 8-microphone line in randomised rooms (RT60 0, 0.2, 0.4, 0.6 s)\n"
                            "against a per-frame least-squares fix on all pairs; one line per RT60.");
   flags.Int("scenes", &scenes, "N", "scenes", "scenes per RT60, in [1, 1000]");
   flags.Uint64("seed", &seed, "N", "rooms, arrays, talkers and noise");
+  flags.String("array", &shape, "SHAPE", "line (in its horizontal plane) or circle (a planar array, talker above)");
   const localizer::Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
   if (flags.help_requested()) return std::printf("%s", flags.Usage().c_str()), 0;
   if (!parsed.ok()) return std::fprintf(stderr, "near_field_report: %s\n", parsed.message().c_str()), 2;
   if (scenes < 1 || scenes > 1000) return std::fprintf(stderr, "near_field_report: --scenes must be in [1, 1000]\n"), 2;
-  return localizer::engine::Run(scenes, seed);
+  if (shape != "line" && shape != "circle") {
+    return std::fprintf(stderr, "near_field_report: --array must be line or circle\n"), 2;
+  }
+  return localizer::engine::Run(scenes, seed, shape == "circle");
 }
