@@ -1,7 +1,6 @@
 #include "clients/cli/session_flags.h"
 
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -88,40 +87,43 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "its normal, m (default: the array file's source_plane, else none)");
 }
 
-// --source-plane: six finite numbers, the normal not zero.
-StatusOr<std::pair<engine::Vec3, engine::Vec3>> ParseSourcePlane(const std::string& text) {
-  const auto refused = [&text] {
-    return InvalidArgument("--source-plane is \"" + text +
-                           "\"; expected PX,PY,PZ,NX,NY,NZ (a point and the normal, finite, the normal not zero)");
-  };
-  std::vector<double> values;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = text.find(',', start);
-    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    char* end = nullptr;
-    const double v = std::strtod(part.c_str(), &end);
-    if (part.empty() || end != part.c_str() + part.size() || !std::isfinite(v)) return refused();
-    values.push_back(v);
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  if (values.size() != 6) return refused();
-  const engine::Vec3 point(values[0], values[1], values[2]), normal(values[3], values[4], values[5]);
-  if (normal.isZero()) return refused();
-  return std::make_pair(point, normal);
-}
+namespace {
 
-StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::string& text, bool is_min) {
-  const std::string open = is_min ? "-inf" : "inf";
+// "a,b,c" -> {"a", "b", "c"} (empty parts kept: "1,,2" has three).
+std::vector<std::string> SplitCommas(const std::string& text) {
   std::vector<std::string> parts;
   size_t start = 0;
   while (true) {
     const size_t comma = text.find(',', start);
     parts.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
-    if (comma == std::string::npos) break;
+    if (comma == std::string::npos) return parts;
     start = comma + 1;
   }
+}
+
+}  // namespace
+
+// --source-plane: six finite numbers, the normal not zero.
+StatusOr<std::pair<engine::Vec3, engine::Vec3>> ParseSourcePlane(const std::string& text) {
+  const Status refused = InvalidArgument("--source-plane is \"" + text +
+                                         "\"; expected PX,PY,PZ,NX,NY,NZ (a point and the normal, finite, the "
+                                         "normal not zero)");
+  const std::vector<std::string> parts = SplitCommas(text);
+  if (parts.size() != 6) return refused;
+  double values[6];
+  for (size_t k = 0; k < 6; ++k) {
+    auto v = ParseFiniteDouble(parts[k]);
+    if (!v.ok()) return refused;
+    values[k] = *v;
+  }
+  const engine::Vec3 point(values[0], values[1], values[2]), normal(values[3], values[4], values[5]);
+  if (normal.isZero()) return refused;
+  return std::make_pair(point, normal);
+}
+
+StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::string& text, bool is_min) {
+  const std::string open = is_min ? "-inf" : "inf";
+  const std::vector<std::string> parts = SplitCommas(text);
   if (parts.size() != 3) {
     return InvalidArgument("--" + flag + " is \"" + text + "\"; expected X,Y,Z (a number or " + open + " per axis)");
   }

@@ -163,12 +163,6 @@ StatusOr<EstimatesCsvWriter> EstimatesCsvWriter::OpenSources(const std::string& 
 
 namespace {
 
-// A number, or nothing for NaN (a field the array cannot observe).
-void AppendField(double value, std::string* line) {
-  line->push_back(',');
-  if (!std::isnan(value)) AppendNumber(value, line);
-}
-
 void AppendSourceRow(const engine::Estimate& e, const engine::SourceEstimate* s, std::string* line) {
   line->clear();
   AppendNumber(e.t_s, line);

@@ -1,6 +1,7 @@
 #include "clients/io/csv_table.h"
 
 #include <charconv>
+#include <cmath>
 #include <fstream>
 
 namespace localizer::io {
@@ -76,6 +77,11 @@ void AppendNumber(double value, std::string* out) {
   char buffer[32];
   const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, 10);
   out->append(buffer, result.ptr);
+}
+
+void AppendField(double value, std::string* line) {
+  line->push_back(',');
+  if (!std::isnan(value)) AppendNumber(value, line);
 }
 
 }  // namespace localizer::io

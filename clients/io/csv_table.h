@@ -39,5 +39,8 @@ class CsvTable {
 // Appends `value` with 10 significant digits (enough for microseconds over hours and
 // micrometres over kilometres); non-finite values as "nan", "inf", "-inf".
 void AppendNumber(double value, std::string* out);
+// A comma, then `value` as AppendNumber writes it, or nothing for NaN (a field the data do
+// not give): one more field of a row.
+void AppendField(double value, std::string* line);
 
 }  // namespace localizer::io

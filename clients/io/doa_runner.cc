@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "clients/io/wav_io.h"
+#include "engine/doa/array_shape.h"
 #include "engine/core/block.h"
 #include "engine/core/flags.h"
 #include "engine/pipeline/framer.h"
@@ -24,8 +25,8 @@ void WriteRow(std::ofstream& out, double t_s, int peak, const engine::DirectionP
   }
   double mirror_azimuth = NAN, mirror_elevation = NAN;
   if (p->mirror_ambiguous) {
-    mirror_azimuth = std::atan2(p->mirror_direction.y(), p->mirror_direction.x());
-    mirror_elevation = std::asin(std::clamp(p->mirror_direction.z(), -1.0, 1.0));
+    mirror_azimuth = engine::AzimuthRad(p->mirror_direction);
+    mirror_elevation = engine::ElevationRad(p->mirror_direction);
   }
   out << peak << ",1," << Cell(p->azimuth_rad) << ',' << Cell(p->elevation_rad) << ',' << Cell(p->cone_angle_rad) << ','
       << Cell(mirror_azimuth) << ',' << Cell(mirror_elevation) << ',' << Cell(p->statistic) << ',' << Cell(p->threshold)

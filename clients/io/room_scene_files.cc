@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "clients/io/csv_io.h"
+#include "clients/io/csv_table.h"
 #include "clients/io/json_fields.h"
 #include "clients/io/wav_io.h"
 #include "engine/doa/array_shape.h"
@@ -81,14 +81,6 @@ StatusOr<engine::RoomSceneSource> ParseSource(const json& s, const std::string& 
     std::tie(*low, *high) = *v;
   }
   return out;
-}
-
-std::string Cell(double v) {
-  if (std::isnan(v)) return "";
-  std::ostringstream out;
-  out.precision(9);
-  out << v;
-  return out.str();
 }
 
 }  // namespace
@@ -181,16 +173,17 @@ StatusOr<RoomSimulationFiles> SimulateRoomScene(const RoomSceneFile& file, const
   std::vector<double> travel_s;
   for (size_t i = 0; i < scene.sources.size(); ++i) {
     const engine::RoomSceneSource& s = scene.sources[i];
-    const engine::Vec3 line = s.position_m - shape->centroid_m;
-    const double range_m = line.norm();
-    const engine::Vec3 u = line / range_m;
-    const double cone = shape->shape == engine::ArrayShape::kLinear
-                            ? std::acos(std::clamp(u.dot(shape->axis), -1.0, 1.0))
-                            : std::nan("");
-    sources << i << ',' << engine::RoomSignalName(s.signal) << ',' << Cell(s.position_m.x()) << ','
-            << Cell(s.position_m.y()) << ',' << Cell(s.position_m.z()) << ',' << Cell(range_m) << ','
-            << Cell(std::atan2(u.y(), u.x())) << ',' << Cell(std::asin(std::clamp(u.z(), -1.0, 1.0))) << ','
-            << Cell(cone) << '\n';
+    const engine::Vec3 sight_m = s.position_m - shape->centroid_m;
+    const double range_m = sight_m.norm();
+    const engine::Vec3 u = sight_m / range_m;
+    const double cone =
+        shape->shape == engine::ArrayShape::kLinear ? engine::ConeAngleRad(u, shape->axis) : std::nan("");
+    std::string row = std::to_string(i) + ',' + engine::RoomSignalName(s.signal);
+    for (double v : {s.position_m.x(), s.position_m.y(), s.position_m.z(), range_m, engine::AzimuthRad(u),
+                     engine::ElevationRad(u), cone}) {
+      AppendField(v, &row);
+    }
+    sources << row << '\n';
     travel_s.push_back(range_m / scene.room.sound_speed_mps);
   }
   if (!sources.flush()) return InvalidArgument(files.sources_path + ": write failed");
@@ -198,7 +191,10 @@ StatusOr<RoomSimulationFiles> SimulateRoomScene(const RoomSceneFile& file, const
   sounding << "source,on_s,off_s\n";
   for (const engine::SoundingInterval& s : rendered->sounding) {
     const double delay_s = travel_s[static_cast<size_t>(s.source)];
-    sounding << s.source << ',' << Cell(s.on_s + delay_s) << ',' << Cell(s.off_s + delay_s) << '\n';
+    std::string row = std::to_string(s.source);
+    AppendField(s.on_s + delay_s, &row);
+    AppendField(s.off_s + delay_s, &row);
+    sounding << row << '\n';
   }
   if (!sounding.flush()) return InvalidArgument(files.sounding_path + ": write failed");
   return files;

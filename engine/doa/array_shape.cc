@@ -52,7 +52,7 @@ StatusOr<ArrayShapeInfo> ClassifyArray(const std::vector<Vec3>& sensors_m) {
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centred, Eigen::ComputeFullV);
   // Two sensors give a 2 x 3 matrix and only 2 singular values: the missing ones are 0.
   Eigen::Vector3d sv = Eigen::Vector3d::Zero();
-  sv.head(svd.singularValues().size()) = svd.singularValues();
+  for (Eigen::Index k = 0; k < svd.singularValues().size() && k < 3; ++k) sv(k) = svd.singularValues()(k);
   auto flat = [&](double s) { return s < kRelativeFlatness * sv(0) || s < kFlatness_m; };
   if (flat(sv(1))) {
     info.shape = ArrayShape::kLinear;

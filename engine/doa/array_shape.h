@@ -13,6 +13,8 @@
 // The signs of `axis` are fixed so that its largest component is positive (deterministic).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "engine/core/status.h"
@@ -35,5 +37,11 @@ struct ArrayShapeInfo {
 // INVALID_ARGUMENT (naming the sensors) for fewer than 2 sensors, a non-finite coordinate,
 // or two sensors closer than 1 mm.
 StatusOr<ArrayShapeInfo> ClassifyArray(const std::vector<Vec3>& sensors_m);
+
+// The angles of a unit direction u in the array's frame: azimuth = atan2(y, x), elevation
+// from the x-y plane towards +z, and the cone angle to a linear array's axis, in [0, pi].
+inline double AzimuthRad(const Vec3& u) { return std::atan2(u.y(), u.x()); }
+inline double ElevationRad(const Vec3& u) { return std::asin(std::clamp(u.z(), -1.0, 1.0)); }
+inline double ConeAngleRad(const Vec3& u, const Vec3& axis) { return std::acos(std::clamp(u.dot(axis), -1.0, 1.0)); }
 
 }  // namespace localizer::engine

@@ -197,14 +197,14 @@ DirectionPeak SrpPhat::Describe(const Cell& cell, double statistic) const {
     }
   }
   peak.direction = u;
-  peak.azimuth_rad = std::atan2(u.y(), u.x());
-  peak.elevation_rad = std::asin(std::clamp(u.z(), -1.0, 1.0));
+  peak.azimuth_rad = AzimuthRad(u);
+  peak.elevation_rad = ElevationRad(u);
   return peak;
 }
 
 StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   LOCALIZER_RETURN_IF_ERROR(spectra_.Analyse(frame, &field_input_));
-  whole_field_ = field_input_;  // same sizes every frame: no allocation after the first
+  if (options_.keep_whole_field) whole_field_ = field_input_;  // same sizes every frame: allocates once
   std::vector<DirectionPeak> peaks;
   struct Found {
     Cell cell;
@@ -255,7 +255,7 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
 double SrpPhat::Statistic(const Vec3& direction) const {
   Cell cell;
   if (linear()) {
-    cell.theta_rad = std::acos(std::clamp(direction.normalized().dot(shape_.axis), -1.0, 1.0));
+    cell.theta_rad = ConeAngleRad(direction.normalized(), shape_.axis);
   } else {
     cell.u = direction.normalized();
   }

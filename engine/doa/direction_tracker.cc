@@ -139,8 +139,8 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
       track.cone_angle_rad = std::atan2(std::abs(u.y()), u.x());
     } else {
       track.direction = u;
-      track.azimuth_rad = std::atan2(u.y(), u.x());
-      track.elevation_rad = std::asin(std::clamp(u.z(), -1.0, 1.0));
+      track.azimuth_rad = AzimuthRad(u);
+      track.elevation_rad = ElevationRad(u);
     }
     out->push_back(track);
   }

@@ -144,30 +144,34 @@ double NearFieldLocator::Lag(int i, int j, const Vec3& position_m, Vec3* gradien
   return (di - dj) * per_m;
 }
 
-double NearFieldLocator::Spectrum(const PairSpectra& spectra, const Vec3& position_m) const {
-  double sum = 0.0;
+NearFieldLocator::Probe NearFieldLocator::ProbeAt(const PairSpectra& spectra, const Vec3& position_m) const {
+  Probe out;
+  out.position_m = position_m;
+  out.pairs.reserve(static_cast<size_t>(spectra.pair_count()));
   for (int p = 0; p < spectra.pair_count(); ++p) {
     const auto [i, j] = spectra.sensors_of(p);
-    sum += spectra.WholeAt(p, Lag(i, j, position_m, nullptr), false);
+    Vec3 gradient_m;
+    const double lag = Lag(i, j, position_m, &gradient_m);
+    const PairSpectra::Value v = spectra.WholeValueAt(p, lag);
+    const Eigen::Vector3d g = basis_.transpose() * gradient_m;
+    out.value += v.r;
+    out.gradient += v.dr * g;
+    out.hessian += v.d2r * g * g.transpose();
+    out.pairs.push_back({g, v.r, v.d2r});
   }
-  return sum;
+  return out;
 }
 
-NearFieldFix NearFieldLocator::Bound(const PairSpectra& spectra, const Vec3& position_m) const {
+NearFieldFix NearFieldLocator::Bound(const PairSpectra& spectra, const Probe& fit) const {
   NearFieldFix fix;
-  const Vec3 line_m = position_m - shape_.centroid_m;
+  const Vec3 line_m = fit.position_m - shape_.centroid_m;
   fix.range_m = line_m.norm();
   const double noise_var = spectra.noise_sigma() * spectra.noise_sigma();
   Eigen::Matrix3d fisher = Eigen::Matrix3d::Zero();
   int used = 0;
-  for (int p = 0; p < spectra.pair_count(); ++p) {
-    const auto [i, j] = spectra.sensors_of(p);
-    Vec3 gradient;
-    const double lag = Lag(i, j, position_m, &gradient);
-    const PairSpectra::Value v = spectra.WholeValueAt(p, lag);
-    if (!(v.r > 0.0) || !(v.d2r < 0.0)) continue;
-    const Eigen::Vector3d g = basis_.transpose() * gradient;
-    fisher += g * g.transpose() * (v.r * -v.d2r / noise_var);
+  for (const PairTerm& pair : fit.pairs) {
+    if (!(pair.r > 0.0) || !(pair.d2r < 0.0)) continue;
+    fisher += pair.lag_gradient * pair.lag_gradient.transpose() * (pair.r * -pair.d2r / noise_var);
     ++used;
   }
   if (used < free_ || !(fix.range_m > 0.0)) return fix;
@@ -184,7 +188,7 @@ NearFieldFix NearFieldLocator::Bound(const PairSpectra& spectra, const Vec3& pos
   const bool inside = fix.range_m > min_range_m_ && fix.range_m < max_range_m_;
   if (inside && sd_m <= kFarFieldRangeShare * fix.range_m) {
     fix.near_field = true;
-    fix.position_m = position_m;
+    fix.position_m = fit.position_m;
     fix.covariance_m2 = covariance_m2;
   }
   return fix;
@@ -208,7 +212,7 @@ double NearFieldLocator::CoarseSpectrum(const PairSpectra& spectra, const Measur
 std::vector<Vec3> NearFieldLocator::CandidateDirections(const Vec3& u) const {
   std::vector<Vec3> out{u};
   if (free_ == 2) {
-    const double theta = std::acos(std::clamp(u.dot(shape_.axis), -1.0, 1.0));
+    const double theta = ConeAngleRad(u, shape_.axis);
     for (int k = -kLinearWindowSteps; k <= kLinearWindowSteps; ++k) {
       const double t = theta + k * kLinearStep_rad;
       if (k != 0 && t > 0.0 && t < std::numbers::pi) out.push_back(DirectionAt(t));
@@ -257,59 +261,42 @@ NearFieldFix NearFieldLocator::Locate(const PairSpectra& spectra, const Measurem
     }
   }
 
-  // 2. Gauss-Newton from each start on the exact spectrum.
-  std::vector<Eigen::Vector3d> lag_gradients;
-  Vec3 best_m = starts_m[1];
-  double best = -std::numeric_limits<double>::infinity();
+  // 2. Gauss-Newton from each start on the exact spectrum; each probe's pair terms serve the
+  // next step, and the best end point's the bound.
+  Probe best;
+  best.value = -std::numeric_limits<double>::infinity();
   const int starts = (starts_m[0] - starts_m[1]).norm() > 1e-9 ? 2 : 1;  // the window's best may be on u
   for (int k = 0; k < starts; ++k) {
-    Vec3 p_m = starts_m[k];
-    double value = Spectrum(spectra, p_m);
+    Probe here = ProbeAt(spectra, starts_m[k]);
     for (int iteration = 0; iteration < kIterations; ++iteration) {
-      Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
-      Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
-      double largest_lag_rate = 0.0;  // samples of lag per unit of step, worst pair
-      lag_gradients.clear();
-      for (int p = 0; p < spectra.pair_count(); ++p) {
-        const auto [i, j] = spectra.sensors_of(p);
-        Vec3 g_m;
-        const double lag = Lag(i, j, p_m, &g_m);
-        const Eigen::Vector3d g = basis_.transpose() * g_m;
-        const PairSpectra::Value v = spectra.WholeValueAt(p, lag);
-        gradient += v.dr * g;
-        hessian += v.d2r * g * g.transpose();
-        lag_gradients.push_back(g);
-      }
+      Eigen::Matrix3d hessian = here.hessian;
+      Eigen::Vector3d gradient = here.gradient;
       Pin(&hessian, -1.0);
       if (free_ == 2) gradient(2) = 0.0;
       // Ascent: -H^-1 g where H is negative definite; otherwise a gradient step.
       Eigen::Vector3d step = -hessian.ldlt().solve(gradient);
       if (!step.allFinite() || step.dot(gradient) <= 0.0) step = gradient;
-      for (const Eigen::Vector3d& g : lag_gradients) {
-        largest_lag_rate = std::max(largest_lag_rate, std::abs(g.dot(step)));
+      double largest_lag_rate = 0.0;  // samples of lag the step moves the worst pair
+      for (const PairTerm& pair : here.pairs) {
+        largest_lag_rate = std::max(largest_lag_rate, std::abs(pair.lag_gradient.dot(step)));
       }
       if (largest_lag_rate > kMaxStepLag) step *= kMaxStepLag / largest_lag_rate;
       // Backtrack until S does not fall and the position stays on the side.
       bool moved = false;
       for (int halving = 0; halving < 6 && !moved; ++halving, step *= 0.5) {
-        const Eigen::Vector3d x = CoordinatesOf(p_m) + step;
-        const Vec3 next_m = PositionOf(x);
+        const Vec3 next_m = PositionOf(CoordinatesOf(here.position_m) + step);
         if (!OnSide(next_m)) continue;
-        const double next = Spectrum(spectra, next_m);
-        if (next >= value) {
-          p_m = next_m;
-          value = next;
+        Probe there = ProbeAt(spectra, next_m);
+        if (there.value >= here.value) {
+          here = std::move(there);
           moved = true;
         }
       }
       if (!moved || largest_lag_rate < 1e-3) break;
     }
-    if (value > best) {
-      best = value;
-      best_m = p_m;
-    }
+    if (here.value > best.value) best = std::move(here);
   }
-  return Bound(spectra, best_m);
+  return Bound(spectra, best);
 }
 
 }  // namespace localizer::engine

@@ -35,11 +35,10 @@
 //
 // Cost per source and frame: the grid's 32 x 31 (linear) or 32 x 121 (planar) points of P
 // interpolated lookups, plus up to 2 x 8 Gauss-Newton steps of a few P exact evaluations (P
-// pairs, each a pass over the B in-band bins). Measured (near_field_report, 8 microphones on
-// a line, 16 kHz, 1024-sample frames): 0.5 ms per frame with one source, beside 0.4-0.5 ms
-// for the direction session's own search and tracking. A grid of 48 ranges and 1-degree
-// steps cost 1.1-1.5 ms for the same errors to 0.1 mm. On an 8-microphone circle (planar,
-// 0.3-0.9 m) the fit costs 1.2-1.6 ms.
+// pairs, each a pass over the B in-band bins; a probe's pair terms serve the next step and
+// the bound). Measured (near_field_report; BENCHMARKS.md): 0.4-0.5 ms per frame and source
+// for 8 microphones on a line at 16 kHz with 1024-sample frames, 1.0-1.3 ms on an
+// 8-microphone circle.
 #pragma once
 
 #include <limits>
@@ -102,11 +101,26 @@ class NearFieldLocator {
   Vec3 PositionOf(const Eigen::Vector3d& x) const;  // free coordinates -> position
   Eigen::Vector3d CoordinatesOf(const Vec3& position_m) const;
   bool OnSide(const Vec3& position_m) const;
-  double Spectrum(const PairSpectra& spectra, const Vec3& position_m) const;  // S, exact
+  // One pair at a probed position: d lag / d free coordinates, R_p and R_p''.
+  struct PairTerm {
+    Eigen::Vector3d lag_gradient = Eigen::Vector3d::Zero();
+    double r = 0.0, d2r = 0.0;
+  };
+  // S at a position from the exact spectrum, its gradient and Gauss-Newton Hessian in the
+  // free coordinates (one pass over every pair's bins), and the pair terms (for the step
+  // limit and the range bound).
+  struct Probe {
+    Vec3 position_m = Vec3::Zero();
+    double value = 0.0;
+    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+    std::vector<PairTerm> pairs;
+  };
+  Probe ProbeAt(const PairSpectra& spectra, const Vec3& position_m) const;
   double CoarseSpectrum(const PairSpectra& spectra, const Measurement& field, const Vec3& position_m) const;
   std::vector<Vec3> CandidateDirections(const Vec3& u) const;  // u first, then its window
   double Lag(int i, int j, const Vec3& position_m, Vec3* gradient) const;  // samples; d lag / d position
-  NearFieldFix Bound(const PairSpectra& spectra, const Vec3& position_m) const;
+  NearFieldFix Bound(const PairSpectra& spectra, const Probe& fit) const;
   // In the plane (2 free coordinates): the normal's row and column of a 3 x 3 matrix over
   // the free coordinates set to `diagonal` on the diagonal and 0 elsewhere.
   void Pin(Eigen::Matrix3d* m, double diagonal) const;

@@ -94,6 +94,9 @@ struct SrpOptions {
   // other directions that pass the noise threshold; a source 10 dB below another has ~0.1
   // of its statistic (srp_phat.h, "Limits"), so a share above that loses such sources.
   double min_relative_statistic = 0.0;
+  // Keep each frame's field before any source is removed (whole_field()), for near-field
+  // fits (near_field.h); off, a frame copies nothing.
+  bool keep_whole_field = false;
 
   Status Validate() const;
 };
@@ -145,8 +148,9 @@ class SrpPhat {
   double band_power() const { return spectra_.band_power(); }
   // The pair spectra of the last analysed frame (near-field fits read its whole spectrum).
   const PairSpectra& spectra() const { return spectra_; }
-  // The last analysed frame's GCC of every pair at integer lags, before any source was
-  // removed (PairSpectra::Analyse's field): near-field fits' coarse search reads it.
+  // With SrpOptions::keep_whole_field, the last analysed frame's GCC of every pair at
+  // integer lags before any source was removed (PairSpectra::Analyse's field): near-field
+  // fits' coarse search reads it. Empty otherwise.
   const Measurement& whole_field() const { return whole_field_; }
 
   // z at a direction (far-field lags; linear arrays read only u.axis) from the last
@@ -199,7 +203,7 @@ class SrpPhat {
   double threshold_ = 0.0;
   double interpolation_margin_ = 1.0;  // continuous GCC maximum / sampled maximum, at most (above)
   Measurement field_input_;
-  Measurement whole_field_;  // field_input_ as Analyse left it (no source removed)
+  Measurement whole_field_;  // field_input_ as Analyse left it (keep_whole_field only)
   LagField field_;
 };
 

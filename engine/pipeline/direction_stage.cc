@@ -46,6 +46,7 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
   srp.false_alarm = config.presence_false_alarm;
   srp.source_side = config.source_side;
   srp.hop_samples = config.hop_samples;  // onsets: the rise against the last frame not overlapping
+  srp.keep_whole_field = positions;      // the near-field fits' coarse grid reads it
   auto made = SrpPhat::Create(config.sensors_m, srp);
   if (!made.ok()) return made.status();
   DirectionTrackerOptions options;
@@ -78,11 +79,11 @@ void DirectionStage::Locate(SourceEstimate* source) const {
   const ArrayShapeInfo& shape = near_->shape();
   const Vec3 u = (fix.position_m - shape.centroid_m).normalized();
   if (std::isfinite(source->cone_angle_rad)) {
-    source->cone_angle_rad = std::acos(std::clamp(u.dot(shape.axis), -1.0, 1.0));
+    source->cone_angle_rad = ConeAngleRad(u, shape.axis);
   } else {
     source->direction = u;
-    source->azimuth_rad = std::atan2(u.y(), u.x());
-    source->elevation_rad = std::asin(std::clamp(u.z(), -1.0, 1.0));
+    source->azimuth_rad = AzimuthRad(u);
+    source->elevation_rad = ElevationRad(u);
   }
 }
 

@@ -44,8 +44,9 @@ int64_t ParticleBytes(const AudioSessionConfig& config) {
 // A direction session (direction_stage.h): every pair's cross-spectrum (complex doubles over
 // up to half the transform) in the current frame and in the ring of earlier frames its
 // rises look back on (frame / hop of them), each pair's lag field, the channels' transforms.
-// Pairs grow with the square of the sensors: 64 sensors are 2016 pairs.
-int64_t DirectionSessionBytes(const AudioSessionConfig& config) {
+// Pairs grow with the square of the sensors: 64 sensors are 2016 pairs. Positions (a planar
+// or linear array asked for them) keep a second copy of the lag fields (SrpPhat::whole_field).
+int64_t DirectionSessionBytes(const AudioSessionConfig& config, bool positions) {
   const auto sensors = static_cast<int64_t>(config.sensors_m.size());
   const int64_t pairs = sensors * (sensors - 1) / 2;
   const auto shape = ClassifyArray(config.sensors_m);
@@ -57,14 +58,17 @@ int64_t DirectionSessionBytes(const AudioSessionConfig& config) {
   const int64_t transform = (frame + max_lag + 1) * 5 / 4;  // NextFastFftSize rounds up by less
   const int64_t rise_frames = (frame + std::max(config.hop_samples, 1) - 1) / std::max(config.hop_samples, 1);
   const int64_t spectra = kPairBinBytes * pairs * (transform / 2) * (rise_frames + 2);
-  const int64_t fields = kPairLagBytes * pairs * (2 * max_lag + 1);
+  const int64_t fields = kPairLagBytes * pairs * (2 * max_lag + 1) * (positions ? 2 : 1);
   return kAudioBaseBytes + spectra + fields + kChannelSampleBytes * sensors * transform;
 }
 
 int64_t SessionMemoryBytes(const AudioSessionConfig& config) {
   const int64_t channels = static_cast<int64_t>(config.sensors_m.size());
   const auto sources = ReportsSources(config);
-  if (sources.ok() && *sources) return DirectionSessionBytes(config);
+  if (sources.ok() && *sources) {
+    const auto localization = ResolveLocalization(config);
+    return DirectionSessionBytes(config, localization.ok() && *localization == Localization::kPosition);
+  }
   return kAudioBaseBytes + ParticleBytes(config) + kChannelSampleBytes * channels * std::max(config.frame_samples, 64);
 }
 

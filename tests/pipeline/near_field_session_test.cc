@@ -98,7 +98,9 @@ TEST(NearFieldSession, LinearArrayInAStatedPlaneGivesTwoDimensionalPositions) {
   const Positions p = Score(estimates, scene.sources_m);
   for (const Estimate& e : estimates) {
     for (const SourceEstimate& s : e.sources) {
-      if (s.position_m.allFinite()) EXPECT_NEAR(s.position_m.z(), 1.5, 1e-9);  // in the stated plane
+      if (s.position_m.allFinite()) {
+        EXPECT_NEAR(s.position_m.z(), 1.5, 1e-9);  // in the stated plane
+      }
     }
   }
   std::printf("free field: positions in %zu of %zu frames; median error %.4f m, median range sd %.4f m\n",
@@ -167,7 +169,9 @@ TEST(NearFieldSession, TwoTalkersGetTwoIdentitiesWithPositions) {
     EXPECT_LT(Median(errors_m[k]), 3.0 * Median(sds_m[k])) << "talker " << k;
     EXPECT_EQ(ids_near[k].size(), 1u) << "talker " << k;
   }
-  if (!ids_near[0].empty() && !ids_near[1].empty()) EXPECT_NE(*ids_near[0].begin(), *ids_near[1].begin());
+  if (!ids_near[0].empty() && !ids_near[1].empty()) {
+    EXPECT_NE(*ids_near[0].begin(), *ids_near[1].begin());
+  }
 }
 
 // Far beyond the line's reach the frame bounds the direction, not the range: no position,
