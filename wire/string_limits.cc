@@ -47,6 +47,8 @@ std::string Escape(std::string_view value) {
   return out;
 }
 
+Status NameRefusal(const Status& status) { return {status.code(), EscapeUnprintable(status.message())}; }
+
 std::string EscapeUnprintable(std::string_view message) {
   std::string out;
   out.reserve(message.size());

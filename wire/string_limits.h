@@ -29,6 +29,9 @@ std::string Escape(std::string_view value);
 // stay. For messages that quote a client's string as given (the engine's name parsers do:
 // "filter.robust 'x' is not one of: ..."), before they go back to the client or into a log.
 std::string EscapeUnprintable(std::string_view message);
+// A refusal from one of the engine's name parsers, which quote the name they refuse as the
+// client sent it: control and non-ASCII bytes escaped before the message leaves the server.
+Status NameRefusal(const Status& status);
 // The first `max_bytes` of `value`, escaped, with "..." when cut.
 std::string EscapedPrefix(std::string_view value, size_t max_bytes = 16);
 
