@@ -67,6 +67,8 @@ Status Rename(Status status) {
       {"min_peak_snr", "filter.min_peak_snr"},
       {"manoeuvre_share", "filter.manoeuvre_share"},
       {"manoeuvre_scale", "filter.manoeuvre_scale"},
+      {"accel_level_floor", "filter.accel_level_floor"},
+      {"accel_level_switch_hz", "filter.accel_level_switch_hz"},
   };
   for (const auto& [from, to] : renames) {
     const size_t at = m.find(from);

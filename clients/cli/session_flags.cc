@@ -55,6 +55,14 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
   flags.Double("manoeuvre-scale", &c.tracker.particle.manoeuvre_scale, "K", "",
                "particle filter: manoeuvring particles' acceleration std over the quiet ones', >= 1 (the "
                "mixture keeps --accel-noise as its RMS)");
+  flags.Double("accel-level-floor", &c.tracker.particle.accel_level_floor, "G", "",
+               "particle filter: smallest per-particle gain on --accel-noise (levels drawn log-uniform "
+               "between floor and ceiling, kept by the particles the data favour; floor = ceiling = 1: "
+               "one std)");
+  flags.Double("accel-level-ceiling", &c.tracker.particle.accel_level_ceiling, "G", "",
+               "particle filter: largest per-particle gain on --accel-noise");
+  flags.Double("accel-level-switch", &c.tracker.particle.accel_level_switch_hz, "HZ", "Hz",
+               "particle filter: rate at which a particle redraws its acceleration level");
   flags.String("backend", &f->backend, "NAME", "compute backend: cpu|gpu|auto (with --server: on the server)");
   flags.String("bounds-min", &f->bounds_min, "X,Y,Z",
                "lower corner of the box that can hold the source, m; per axis a number or -inf "

@@ -35,6 +35,13 @@ Status ParticleFilterOptions::Validate() const {
   if (!(manoeuvre_scale >= 1.0) || !std::isfinite(manoeuvre_scale)) {
     return InvalidArgument("manoeuvre_scale must be finite and >= 1, got " + std::to_string(manoeuvre_scale));
   }
+  if (!(accel_level_floor >= 1e-6 && accel_level_floor <= accel_level_ceiling && accel_level_ceiling <= 100.0)) {
+    return InvalidArgument("accel_level_floor and accel_level_ceiling must satisfy 1e-6 <= floor <= ceiling <= 100, got " +
+                           std::to_string(accel_level_floor) + " and " + std::to_string(accel_level_ceiling));
+  }
+  if (!(accel_level_switch_hz >= 0.0 && accel_level_switch_hz <= 1000.0)) {
+    return InvalidArgument("accel_level_switch_hz must be in [0, 1000], got " + std::to_string(accel_level_switch_hz));
+  }
   if (!(tdoa_sigma_s >= 0.0) || !std::isfinite(tdoa_sigma_s)) {
     return InvalidArgument("tdoa_sigma_s must be finite and >= 0 (0: adaptive), got " + std::to_string(tdoa_sigma_s));
   }
@@ -70,6 +77,7 @@ struct ParticleFilter::Impl {
   Impl(const ArrayGeometry& a, const ParticleFilterOptions& o)
       : array(a), options(o), set(a, o), noise(o.tdoa_sigma_s) {
     set.SetManoeuvre(o.manoeuvre_share, o.manoeuvre_scale);
+    set.SetAccelLevels(o.accel_level_floor, o.accel_level_ceiling, o.accel_level_switch_hz);
   }
   ArrayGeometry array;
   ParticleFilterOptions options;

@@ -76,6 +76,7 @@ void ParticleSet::SampleMixture(const std::vector<Component>& components) {
     first = end;
   }
   labels_ = k;
+  DrawLevels();
   if (bounded_) ApplyBounds();
   SetEqualWeights();
 }
@@ -120,6 +121,7 @@ void ParticleSet::ResampleModes(double kernel_scale) {
     shift[c] = ((1.0 - a) * moments.mean[c]).cast<float>();
   }
   SystematicIndices();
+  CarryLevels();
   DrawKernelNoise();
   const std::array<float*, 6> from = cur_.Pointers(), to = next_.Pointers();
   const float fa = static_cast<float>(a);

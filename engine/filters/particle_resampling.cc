@@ -48,6 +48,7 @@ void ParticleSet::ResampleSystematic(double kernel_scale) {
     return;
   }
   SystematicIndices();
+  CarryLevels();
   const int n = n_;
   const int* __restrict index = index_.data();
   const std::array<float*, 6> from = cur_.Pointers(), to = next_.Pointers();

@@ -78,6 +78,7 @@ void ParticleSet::SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32
 
 void ParticleSet::SampleGaussian(const Vec6& mean, const Mat6& root) {
   SampleGaussianRange(mean, root, NextKey(), 0, n_);
+  DrawLevels();
   labels_ = 1;
   if (bounded_) ApplyBounds();
   SetEqualWeights();
@@ -97,6 +98,7 @@ void ParticleSet::SampleUniformBox(const Vec3& min_m, const Vec3& max_m, double 
     cur_.vz[i] = s * NormalFromUniform(UniformFromCounter(key, c + 5));
   }
   labels_ = 1;
+  DrawLevels();
   if (bounded_) ApplyBounds();
   SetEqualWeights();
 }
@@ -108,7 +110,7 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_
   const float d = static_cast<float>(decay);
   const float a_to_v = static_cast<float>(accel_sigma_mps2 * dt_s);
   const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
-  DrawAccelNormals(NextKey());  // axis k of particle i reads accel_[k * N + i]
+  DrawAccelNormals(NextKey(), SwitchProbability(dt_s));  // axis k of particle i reads accel_[k * N + i]
   moments_valid_ = false;
   const int n = n_;
   const float* __restrict ax = accel_.data();
@@ -138,7 +140,38 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_
   if (bounded_) ApplyBounds();
 }
 
-void ParticleSet::DrawAccelNormals(uint32_t key) {
+float ParticleSet::SwitchProbability(double dt_s) const {
+  return static_cast<float>(-std::expm1(-level_switch_rate_hz_ * std::max(0.0, dt_s)));
+}
+
+void ParticleSet::SetAccelLevels(double floor, double ceiling, double switch_rate_hz) {
+  log_level_floor_ = static_cast<float>(std::log(floor));
+  log_level_ceiling_ = static_cast<float>(std::log(ceiling));
+  level_switch_rate_hz_ = switch_rate_hz;
+  if (floor == 1.0 && ceiling == 1.0) {  // off (ParticleFilterOptions::accel_levels)
+    gain_.clear();
+    next_gain_.clear();
+    return;
+  }
+  gain_.assign(n_, 1.0f);
+  next_gain_.assign(n_, 1.0f);
+  DrawLevels();
+}
+
+void ParticleSet::DrawLevels() {
+  if (gain_.empty()) return;  // off: no key drawn, so the random stream is as before
+  const uint32_t key = NextKey();
+  const float lo = log_level_floor_, span = log_level_ceiling_ - log_level_floor_;
+  for (int i = 0; i < n_; ++i) gain_[i] = std::exp(lo + span * UniformFromCounter(key, static_cast<uint32_t>(i)));
+}
+
+void ParticleSet::CarryLevels() {
+  if (gain_.empty()) return;
+  for (int m = 0; m < n_; ++m) next_gain_[m] = gain_[index_[m]];
+  std::swap(gain_, next_gain_);
+}
+
+void ParticleSet::DrawAccelNormals(uint32_t key, float switch_probability) {
   // 3N standard normals, two per Box–Muller draw: accel_[j] and accel_[half + j] come from
   // uniforms 2j and 2j + 1.
   const int half = static_cast<int>(accel_.size() / 2);
@@ -149,11 +182,27 @@ void ParticleSet::DrawAccelNormals(uint32_t key) {
     const uint32_t c = 2u * static_cast<uint32_t>(j);
     NormalPairFromUniforms(UniformFromCounter(key, c), UniformFromCounter(key, c + 1), &first[j], &second[j]);
   }
+  if (!gain_.empty()) {
+    // Particle i's level jumps when its uniform (counters past the normals') is below the
+    // switch probability; the new gain takes the next counter. Then its normals scale.
+    const int n = n_;
+    const uint32_t base = static_cast<uint32_t>(accel_.size());
+    const float lo = log_level_floor_, span = log_level_ceiling_ - log_level_floor_;
+    float* __restrict a = accel_.data();
+    float* __restrict g = gain_.data();
+    for (int i = 0; i < n; ++i) {
+      const uint32_t c = base + 2u * static_cast<uint32_t>(i);
+      if (UniformFromCounter(key, c) < switch_probability) g[i] = std::exp(lo + span * UniformFromCounter(key, c + 1));
+      a[i] *= g[i];
+      a[n + i] *= g[i];
+      a[2 * n + i] *= g[i];
+    }
+  }
   if (manoeuvre_share_ <= 0.0f) return;
   // Particle i manoeuvres this step when its uniform (counters past the normals') is below
   // the share: its three axes' normals take the manoeuvre gain, the others the quiet gain.
   const int n = n_;
-  const uint32_t base = static_cast<uint32_t>(accel_.size());
+  const uint32_t base = static_cast<uint32_t>(accel_.size() + 2 * gain_.size());
   const float share = manoeuvre_share_, quiet = quiet_gain_, loud = manoeuvre_gain_;
   float* __restrict a = accel_.data();
   for (int i = 0; i < n; ++i) {
@@ -185,7 +234,7 @@ void ParticleSet::PredictTurn(double dt_s, double turn_rate_radps, double accel_
   const float dt = static_cast<float>(dt_s);
   const float a_to_v = static_cast<float>(accel_sigma_mps2 * dt_s);
   const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
-  DrawAccelNormals(key);
+  DrawAccelNormals(key, SwitchProbability(dt_s));
   moments_valid_ = false;
   const int n = n_;
   const float* __restrict ax = accel_.data();
@@ -222,6 +271,7 @@ void ParticleSet::CopyCloudFrom(const ParticleSet& other) {
   moments_valid_ = other.moments_valid_;
   label_ = other.label_;
   labels_ = other.labels_;
+  gain_ = other.gain_;
 }
 
 double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candidates, const std::vector<uint8_t>& choice,

@@ -70,6 +70,11 @@ class ParticleSet {
   // stays accel_sigma^2 (ManoeuvreGainsFor). share 0 (the default) is plain white
   // acceleration. share in [0, 1), scale >= 1.
   void SetManoeuvre(double share, double scale);
+  // Acceleration levels that persist (ParticleFilterOptions::accel_level_*): each particle
+  // carries its own gain on the white acceleration, log-uniform in [floor, ceiling] when
+  // drawn; a particle redraws its gain at rate switch_rate_hz (a jump process), and
+  // resampling copies the gain with the particle. floor = ceiling = 1 (the default): off.
+  void SetAccelLevels(double floor, double ceiling, double switch_rate_hz);
   // A fresh random-stream key per use: hash of (seed, use count).
   uint32_t NextKey();
   // Copies `other`'s particles and weights (same array and particle count; the random
@@ -140,7 +145,12 @@ class ParticleSet {
     // The six columns in state order (x, y, z, vx, vy, vz).
     std::array<float*, 6> Pointers() { return {x.data(), y.data(), z.data(), vx.data(), vy.data(), vz.data()}; }
   };
-  void DrawAccelNormals(uint32_t key);  // fills accel_ with 3N standard normals (see SetManoeuvre)
+  // Fills accel_ with 3N standard normals (see SetManoeuvre), each particle's scaled by its
+  // level gain (SetAccelLevels; the levels first jump with probability switch_probability).
+  void DrawAccelNormals(uint32_t key, float switch_probability = 0.0f);
+  void DrawLevels();  // every particle's gain afresh (after sampling)
+  void CarryLevels();             // gain_[m] <- gain_[index_[m]] (after SystematicIndices)
+  float SwitchProbability(double dt_s) const;  // 1 - exp(-rate dt)
   // Particles [first, end) ~ N(mean, root root^T), normals keyed by (key, 6 i + k).
   void SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32_t key, int first, int end);
   void SetEqualWeights();
@@ -168,6 +178,10 @@ class ParticleSet {
   std::vector<int> index_, first_slot_;                 // scratch for ResampleSystematic
   // SetManoeuvre: the share of particles that manoeuvre each step, and both gains.
   float manoeuvre_share_ = 0.0f, quiet_gain_ = 1.0f, manoeuvre_gain_ = 1.0f;
+  // SetAccelLevels: ln floor, ln ceiling, switch rate; gain_ empty while off.
+  float log_level_floor_ = 0.0f, log_level_ceiling_ = 0.0f;
+  double level_switch_rate_hz_ = 0.0;
+  std::vector<float> gain_, next_gain_;
   // Weighted mean and covariance of the current particles, computed on demand and kept
   // until the particles or weights change (State() and the regulariser share them).
   mutable TrackState moments_;

@@ -114,10 +114,12 @@ StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGe
     if (reason.empty()) {
       auto estimator = provider->MakeEstimator(array, gcc);
       if (!estimator.ok()) return estimator.status();
-      // The device kernels weigh by the peak or GCC likelihood of a fixed array; the mixture
-      // likelihood's particle filter, and one on a moving array, run on the CPU beside the
-      // GPU GCC, as the Kalman filters do.
-      const bool on_device = particle && tracker.particle.likelihood != Likelihood::kMixture && !moving_array;
+      // The device kernels weigh by the peak or GCC likelihood of a fixed array with one
+      // acceleration std; the mixture likelihood's particle filter, one with acceleration
+      // levels and one on a moving array run on the CPU beside the GPU GCC, as
+      // the Kalman filters do.
+      const bool on_device = particle && tracker.particle.likelihood != Likelihood::kMixture &&
+                             !tracker.particle.accel_levels() && !moving_array;
       auto made = on_device  ? provider->MakeTracker(array, tracker.particle)
                   : particle ? MakeCpuParticleFilter(array, tracker.particle)
                              : MakeCpuOnly(array, tracker);

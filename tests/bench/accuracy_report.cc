@@ -1,10 +1,14 @@
 // Accuracy over seeds: every named scenario, both likelihoods, seeds 1..N; prints each run
 // and the median RMSE / per-frame CRLB and p95 / RMSE per scenario (BENCHMARKS.md).
-// Run: build/tests/bench/accuracy_report [N=5]
+// Run: build/tests/bench/accuracy_report [N=5] [--one-std | --levels FLOOR,CEILING,HZ]
+// --one-std: the particle filter with one acceleration std (levels off); --levels: these
+// acceleration levels instead of the defaults (particle_filter.h).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
+#include <tuple>
 
 #include "engine/core/flags.h"
 #include "engine/pipeline/session.h"
@@ -25,6 +29,19 @@ double Median(std::vector<double> v) {
 int main(int argc, char** argv) {
   using namespace localizer::engine;
   int seeds = 5;
+  bool one_std = false;
+  double floor = -1.0, ceiling = -1.0, switch_hz = -1.0;
+  if (argc > 1 && std::string(argv[argc - 1]) == "--one-std") {
+    one_std = true;
+    --argc;
+  }
+  if (argc > 2 && std::string(argv[argc - 2]) == "--levels") {
+    if (std::sscanf(argv[argc - 1], "%lf,%lf,%lf", &floor, &ceiling, &switch_hz) != 3) {
+      std::fprintf(stderr, "accuracy_report: --levels takes FLOOR,CEILING,HZ, got \"%s\"\n", argv[argc - 1]);
+      return 2;
+    }
+    argc -= 2;
+  }
   if (argc > 1) {
     const auto n = localizer::ParseInteger(argv[1]);
     if (!n.ok() || *n < 1 || *n > 1000000) {
@@ -39,7 +56,15 @@ int main(int argc, char** argv) {
     for (Likelihood likelihood : {Likelihood::kPeak, Likelihood::kGcc}) {
       std::vector<double> ratios, tails;
       for (int seed = 1; seed <= seeds; ++seed) {
-        const TrackScore s = TrackScenario(name, static_cast<uint64_t>(seed), likelihood).score;
+        const auto adjust = [&](AudioSessionConfig* c) {
+          ParticleFilterOptions& p = c->tracker.particle;
+          if (one_std) p.accel_level_floor = p.accel_level_ceiling = 1.0;
+          if (floor > 0.0) std::tie(p.accel_level_floor, p.accel_level_ceiling, p.accel_level_switch_hz) =
+              std::tuple(floor, ceiling, switch_hz);
+        };
+        const TrackScore s = TrackScenario(name, static_cast<uint64_t>(seed), likelihood, BackendChoice::kCpu,
+                                           FilterKind::kPf, MotionModelKind::kCv, adjust)
+                                 .score;
         std::printf("%-16s %-5s %5d %8.3f %8.3f %8.3f %8.3f %7.2f %6d\n", name.c_str(), LikelihoodName(likelihood),
                     seed, s.rmse_m, s.p95_m, s.crlb_m, s.rmse_over_crlb, s.p95_m / s.rmse_m, s.reinitialisations);
         ratios.push_back(s.rmse_over_crlb);

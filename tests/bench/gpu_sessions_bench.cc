@@ -67,6 +67,9 @@ AudioSessionConfig ConfigFor(const Audio& a, BackendChoice backend, int particle
   c.frame_samples = kFrame;
   c.hop_samples = kHop;
   c.tracker.particle.particles = particles;
+  // One acceleration std on both backends: the device filter has no acceleration levels (a
+  // session with them runs its filter on the CPU), and like is compared with like.
+  c.tracker.particle.accel_level_floor = c.tracker.particle.accel_level_ceiling = 1.0;
   c.backend = backend;
   c.seed = seed;
   return c;

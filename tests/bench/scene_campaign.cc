@@ -41,6 +41,10 @@ struct Args {
   double manoeuvre_share = -1.0;       // < 0: the session default
   int tempered_updates = -1;           // < 0: the session default
   double manoeuvre_scale = 0.0;        // < 1: the session default
+  std::optional<Likelihood> likelihood;  // unset: the session default
+  double outlier_probability = -1.0;   // < 0: the session default
+  double kernel_scale = -1.0;          // < 0: the session default
+  double level_floor = -1.0, level_ceiling = -1.0, level_switch_hz = -1.0;  // < 0: the default
   bool help = false;                   // --help: print the usage and exit 0
 };
 
@@ -52,6 +56,14 @@ void Adjust(const Args& a, AudioSessionConfig* c) {
   if (a.manoeuvre_share >= 0.0) c->tracker.particle.manoeuvre_share = a.manoeuvre_share;
   if (a.manoeuvre_scale >= 1.0) c->tracker.particle.manoeuvre_scale = a.manoeuvre_scale;
   if (a.tempered_updates >= 0) c->tracker.particle.tempered_updates = a.tempered_updates;
+  if (a.likelihood) c->tracker.particle.likelihood = *a.likelihood;
+  if (a.outlier_probability >= 0.0) c->tracker.particle.outlier_probability = a.outlier_probability;
+  if (a.kernel_scale >= 0.0) c->tracker.particle.kernel_scale = a.kernel_scale;
+  if (a.level_floor > 0.0) {
+    c->tracker.particle.accel_level_floor = a.level_floor;
+    c->tracker.particle.accel_level_ceiling = a.level_ceiling;
+    c->tracker.particle.accel_level_switch_hz = a.level_switch_hz;
+  }
   if (a.accel_noise_mps2 >= 0.0) {
     c->tracker.particle.accel_noise_mps2 = a.accel_noise_mps2;
     c->tracker.kalman.motion.accel_noise_mps2 = a.accel_noise_mps2;
@@ -65,7 +77,8 @@ void Usage(FILE* out) {
       "                      [--duration SECONDS] [--jobs J] [--weighting phat|phat-coherence|...]\n"
       "                      [--filter pf|ekf|ukf|mmpf|imm] [--particles N] [--accel-noise MPS2]\n"
       "                      [--manoeuvre-share P] [--manoeuvre-scale K] [--tempered-updates N]\n"
-      "                      [--trace SEED]\n"
+      "                      [--likelihood peak|gcc|mixture] [--outlier-probability EPS]\n"
+      "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
       "within 3 x CRLB to the end), RMSE/CRLB and median NEES/dim after acquisition, lost frames\n"
@@ -78,7 +91,10 @@ void Usage(FILE* out) {
       "--weighting, --filter, --particles, --accel-noise (the motion model's white acceleration\n"
       "std, m/s^2) and --manoeuvre-share/--manoeuvre-scale (particle filter: the share of particles\n"
       "whose acceleration std is scaled each step) and --tempered-updates (particle filter: updates\n"
-      "after each (re)start tempered in stages) override the session's defaults.\n"
+      "after each (re)start tempered in stages), --likelihood, --outlier-probability (the mixture\n"
+      "likelihood's eps), --kernel-scale (the particle filter's regularisation) and\n"
+      "--accel-levels (its acceleration levels, e.g. 0.003,3,1; particle_filter.h) override the\n"
+      "session's defaults.\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
       "initialised, present, ambiguous, far field, true range, range error, error, CRLB, error/CRLB, bearing error/its CRLB, reported sd,\n"
       "position NEES.\n"
@@ -124,6 +140,22 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->manoeuvre_scale = std::strtod(value.c_str(), &end);
       if (*end != '\0' || !(a->manoeuvre_scale >= 1.0))
         return std::fprintf(stderr, "scene_campaign: --manoeuvre-scale must be >= 1\n"), false;
+    } else if (flag == "--likelihood") {
+      auto parsed = ParseLikelihood(value);
+      if (!parsed.ok()) return std::fprintf(stderr, "scene_campaign: %s\n", parsed.status().ToString().c_str()), false;
+      a->likelihood = *parsed;
+    } else if (flag == "--outlier-probability") {
+      a->outlier_probability = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(a->outlier_probability >= 0.0 && a->outlier_probability < 1.0))
+        return std::fprintf(stderr, "scene_campaign: --outlier-probability must be in [0, 1)\n"), false;
+    } else if (flag == "--kernel-scale") {
+      a->kernel_scale = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(a->kernel_scale >= 0.0 && a->kernel_scale <= 2.0))
+        return std::fprintf(stderr, "scene_campaign: --kernel-scale must be in [0, 2]\n"), false;
+    } else if (flag == "--accel-levels") {
+      if (std::sscanf(value.c_str(), "%lf,%lf,%lf", &a->level_floor, &a->level_ceiling, &a->level_switch_hz) != 3 ||
+          !(a->level_floor > 0.0))
+        return std::fprintf(stderr, "scene_campaign: --accel-levels takes FLOOR,CEILING,HZ (floor > 0)\n"), false;
     } else if (flag == "--tempered-updates") {
       a->tempered_updates = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->tempered_updates < 0 || a->tempered_updates > 100)

@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
 #include <random>
+#include <tuple>
 
 #include "engine/array/multilateration.h"
 #include "engine/filters/particle_set.h"
@@ -349,6 +352,109 @@ TEST(ParticleFilter, ManoeuvresKeepTheAccelerationVarianceAndFattenItsTails) {
   bad = Options();
   bad.manoeuvre_scale = 0.5;
   EXPECT_NE(ParticleFilter::Create(array, bad).status().message().find("manoeuvre_scale"), std::string::npos);
+}
+
+TEST(ParticleFilter, AccelerationLevelsScaleTheWhiteAccelerationLogUniformly) {
+  // Gains log-uniform in [f, c]: one step of dt from a point gives velocity changes of
+  // variance (sigma dt)^2 E[g^2] per axis, E[g^2] = (c^2 - f^2) / (2 ln(c / f)).
+  const ArrayGeometry array = Tetrahedron(2.0, Vec3::Zero(), 343.0);
+  const double sigma = 2.0, dt_s = 0.25, floor = 0.01, ceiling = 1.0;
+  ParticleFilterOptions o = Options();
+  o.particles = 1 << 18;
+  ParticleSet set(array, o);
+  set.SetAccelLevels(floor, ceiling, 0.0);
+  set.SampleGaussian(Vec6::Zero(), Mat6::Zero());
+  set.Predict(dt_s, sigma);
+  const double mean_g2 = (ceiling * ceiling - floor * floor) / (2.0 * std::log(ceiling / floor));
+  const double expected_var = sigma * sigma * dt_s * dt_s * mean_g2;
+  for (int k = 3; k < 6; ++k) {
+    const float* v = set.columns()[static_cast<size_t>(k)];
+    double m2 = 0.0;
+    int quiet = 0;  // |dv| below 0.1 sigma dt: most of the particles whose gain is below 0.1
+    for (int i = 0; i < o.particles; ++i) {
+      m2 += static_cast<double>(v[i]) * v[i];
+      quiet += std::abs(v[i]) < 0.1 * sigma * dt_s;
+    }
+    EXPECT_NEAR(m2 / o.particles, expected_var, 0.03 * expected_var) << "axis " << k;
+    // Half the gains lie below 0.1 (the log-midpoint); a plain normal of the RMS would put
+    // only 14 % of its draws that close to zero.
+    EXPECT_GT(static_cast<double>(quiet) / o.particles, 0.4) << "axis " << k;
+  }
+  EXPECT_FALSE(ParticleFilterOptions{}.accel_levels()) << "off by default";
+  ParticleFilterOptions bad = Options();
+  bad.accel_level_floor = 2.0;
+  bad.accel_level_ceiling = 1.0;
+  EXPECT_NE(ParticleFilter::Create(array, bad).status().message().find("accel_level_floor"), std::string::npos);
+  bad = Options();
+  bad.accel_level_switch_hz = -1.0;
+  EXPECT_NE(ParticleFilter::Create(array, bad).status().message().find("accel_level_switch_hz"), std::string::npos);
+}
+
+// A source that sits still for 6 s, then moves off at 1.5 m/s, tracked with the session's
+// acceleration std (1 m/s^2): with acceleration levels the quiet particles win while it
+// sits (frames average over seconds) and the loud ones when it starts.
+struct StillThenMovingResult {
+  double still_rmse_m = 0.0, moving_rmse_m = 0.0, crlb_m = 0.0;
+};
+StillThenMovingResult RunStillThenMoving(bool levels, uint64_t noise_seed) {
+  const ArrayGeometry array = Tetrahedron(2.0, Vec3(0, 0, -10), 1500.0);
+  const Vec3 p0(1.5, -1.0, -9.0), v(1.5, 0.0, 0.0);
+  const double fs = 11025.0, hop_s = 2048.0 / fs, sigma_s = 8e-6, start_s = 6.0;
+  ParticleFilterOptions o = Options();
+  o.accel_noise_mps2 = 1.0;
+  if (levels) std::tie(o.accel_level_floor, o.accel_level_ceiling, o.accel_level_switch_hz) = std::tuple(0.003, 3.0, 1.0);
+  auto pf = ParticleFilter::Create(array, o);
+  EXPECT_TRUE(pf.ok());
+  TrackState belief;
+  const Mat3 fix_cov = TdoaPositionCrlb(array, p0, sigma_s);
+  belief.mean.head<3>() = p0 + fix_cov.diagonal().cwiseSqrt();
+  belief.covariance.topLeftCorner<3, 3>() = fix_cov;
+  belief.covariance.bottomRightCorner<3, 3>() = 0.25 * Mat3::Identity();
+  EXPECT_TRUE((*pf)->Initialise(belief).ok());
+  std::mt19937_64 rng(noise_seed);
+  double still_se = 0.0, moving_se = 0.0, crlb2 = 0.0;
+  int still = 0, moving = 0;
+  const int frames = static_cast<int>(10.0 / hop_s);
+  for (int f = 0; f < frames; ++f) {
+    const double t = f * hop_s;
+    if (f > 0) (*pf)->Predict(hop_s);
+    const bool moved = t >= start_s;
+    // Moving: p0 + v (t - start), i.e. p0 - v start + v t.
+    const Measurement m = moved ? MakeMeasurement(array, p0 - v * start_s, v, t, sigma_s, fs, rng)
+                                : MakeMeasurement(array, p0, Vec3::Zero(), t, sigma_s, fs, rng);
+    EXPECT_TRUE((*pf)->Update(m).ok());
+    const Vec3 truth = moved ? Vec3(p0 + v * (t - start_s)) : p0;
+    const double e2 = ((*pf)->State().mean.head<3>() - truth).squaredNorm();
+    if (t >= 2.0 && !moved) {
+      still_se += e2;
+      crlb2 += TdoaPositionCrlb(array, truth, sigma_s).trace();
+      ++still;
+    }
+    if (t >= start_s + 2.0) {  // two seconds to take up the new motion
+      moving_se += e2;
+      ++moving;
+    }
+  }
+  return {std::sqrt(still_se / still), std::sqrt(moving_se / moving), std::sqrt(crlb2 / still)};
+}
+
+// Three seeds, pooled: one run's error varies by 2x between seeds (the moving leg's bound
+// grows as the source leaves), and the claim is about the filter, not a seed. Measured:
+// still 0.52-0.89 x the error without levels (mean 0.69), moving pooled 0.97 x.
+TEST(ParticleFilter, AccelerationLevelsAverageAStillSourceAndFollowItWhenItMoves) {
+  double ratio_still = 0.0, moving_on2 = 0.0, moving_off2 = 0.0;
+  for (uint64_t seed : {1u, 2u, 3u}) {
+    const StillThenMovingResult on = RunStillThenMoving(true, seed), off = RunStillThenMoving(false, seed);
+    std::printf("seed %llu: still rmse %.4f m with levels, %.4f m without (crlb %.4f m); moving %.4f / %.4f m\n",
+                static_cast<unsigned long long>(seed), on.still_rmse_m, off.still_rmse_m, on.crlb_m, on.moving_rmse_m,
+                off.moving_rmse_m);
+    ratio_still += on.still_rmse_m / off.still_rmse_m / 3.0;
+    EXPECT_LT(on.still_rmse_m, on.crlb_m) << "seed " << seed;  // frames average
+    moving_on2 += on.moving_rmse_m * on.moving_rmse_m;
+    moving_off2 += off.moving_rmse_m * off.moving_rmse_m;
+  }
+  EXPECT_LT(ratio_still, 0.8) << "levels should cut a still source's error";
+  EXPECT_LT(std::sqrt(moving_on2), 1.3 * std::sqrt(moving_off2)) << "levels should take up the start";
 }
 
 }  // namespace

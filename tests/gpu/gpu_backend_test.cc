@@ -24,9 +24,17 @@ using engine::AudioSessionConfig;
 using engine::Estimate;
 using engine::Session;
 
+// The device particle filter has one acceleration std: sessions that must run it there say
+// so, whatever the default (a session with acceleration levels runs its filter on the CPU).
+AudioSessionConfig DeviceFilter(AudioSessionConfig config) {
+  config.tracker.particle.accel_level_floor = config.tracker.particle.accel_level_ceiling = 1.0;
+  return config;
+}
+void DeviceFilterInPlace(AudioSessionConfig* config) { *config = DeviceFilter(*config); }
+
 AudioSessionConfig TetraWaterConfig() {
   const engine::Scenario scenario = *engine::MakeScenario("tetra-water", 1);
-  return engine::SessionConfigFor(scenario);
+  return DeviceFilter(engine::SessionConfigFor(scenario));
 }
 
 TEST(GpuBackend, GpuWithoutADeviceIsFailedPreconditionNamingTheReason) {
@@ -81,8 +89,10 @@ TEST(GpuBackend, ScenarioRmseWithinTenPercentOfTheCpu) {
     for (auto likelihood : {engine::Likelihood::kPeak, engine::Likelihood::kGcc}) {
       double cpu_sq = 0.0, gpu_sq = 0.0;
       for (int seed = 1; seed <= kSeeds; ++seed) {
-        const auto cpu = engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kCpu);
-        const auto gpu = engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kGpu);
+        const auto cpu = engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kCpu,
+                                               engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
+        const auto gpu = engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kGpu,
+                                               engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
         ASSERT_EQ(gpu.estimates.size(), cpu.estimates.size());
         EXPECT_GE(gpu.score.scored, cpu.score.scored - 2) << name << " seed " << seed;
         cpu_sq += cpu.score.rmse_m * cpu.score.rmse_m;
@@ -136,8 +146,10 @@ TEST(GpuBackend, MovingArrayKeepsTheFilterOnTheCpuAndMatchesTheCpuBackend) {
 
 TEST(GpuBackend, SameSeedSameEstimatesTwice) {
   LOCALIZER_SKIP_WITHOUT_GPU();
-  const auto first = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, engine::BackendChoice::kGpu);
-  const auto second = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, engine::BackendChoice::kGpu);
+  const auto first = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, engine::BackendChoice::kGpu,
+                                          engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
+  const auto second = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, engine::BackendChoice::kGpu,
+                                          engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
   ASSERT_EQ(first.estimates.size(), second.estimates.size());
   for (size_t i = 0; i < first.estimates.size(); ++i) {
     EXPECT_EQ(first.estimates[i].state, second.estimates[i].state) << "frame " << i;
@@ -156,7 +168,7 @@ TEST(GpuBackend, ThousandConcurrentSessionsGetWhatEachGetsAlone) {
   const engine::SimResult sim = *engine::Simulate(array, short_run.sim);
   const engine::BlockView block{1, sim.channel_count, sim.samples_per_channel, sim.samples.data()};
   auto run = [&](uint64_t seed, std::vector<Estimate>* out) {
-    AudioSessionConfig config = engine::SessionConfigFor(short_run);
+    AudioSessionConfig config = DeviceFilter(engine::SessionConfigFor(short_run));
     config.backend = engine::BackendChoice::kGpu;
     config.seed = seed;
     auto session = Session::Create(config);

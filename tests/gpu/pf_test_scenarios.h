@@ -55,6 +55,7 @@ inline engine::ParticleFilterOptions CvOptions(int particles = 4096, uint64_t se
   o.tdoa_sigma_s = 8e-6;
   o.seed = seed;
   o.tempered_updates = 0;  // the device filter has no progressive correction yet: compare like with like
+  o.accel_level_floor = o.accel_level_ceiling = 1.0;  // nor acceleration levels
   return o;
 }
 

@@ -2,6 +2,7 @@
 // shared by the accuracy tests and tests/bench/accuracy_report.cc.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -17,7 +18,8 @@ struct ScenarioRun {
   SimResult sim;  // the simulated recording and its truth
 };
 
-// The session config that tracks `scenario`: its array, sample rate and band.
+// The session config that tracks `scenario`: its array, sample rate and band. TrackScenario's
+// `adjust`, when set, changes the config last.
 inline AudioSessionConfig SessionConfigFor(const Scenario& scenario) {
   AudioSessionConfig config;
   config.sensors_m = scenario.sensors_m;
@@ -30,7 +32,8 @@ inline AudioSessionConfig SessionConfigFor(const Scenario& scenario) {
 
 inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelihood likelihood,
                                  BackendChoice backend = BackendChoice::kCpu, FilterKind filter = FilterKind::kPf,
-                                 MotionModelKind motion_model = MotionModelKind::kCv) {
+                                 MotionModelKind motion_model = MotionModelKind::kCv,
+                                 const std::function<void(AudioSessionConfig*)>& adjust = nullptr) {
   const Scenario scenario = *MakeScenario(name, seed);
   const ArrayGeometry array = *ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
   SimResult sim = *Simulate(array, scenario.sim);
@@ -40,6 +43,7 @@ inline ScenarioRun TrackScenario(const std::string& name, uint64_t seed, Likelih
   config.backend = backend;
   config.tracker.kind = filter;
   config.tracker.kalman.motion_model = motion_model;
+  if (adjust) adjust(&config);
   auto session = std::move(*Session::Create(config));
   ScenarioRun run;
   (void)session->Process({1, sim.channel_count, sim.samples_per_channel, sim.samples.data()}, &run.estimates);

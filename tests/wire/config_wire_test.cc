@@ -117,6 +117,35 @@ TEST(ConfigWire, ManoeuvreShareZeroIsHonouredAndBadValuesAreNamed) {
   }
 }
 
+TEST(ConfigWire, AccelerationLevelsDefaultRoundTripAndAreValidated) {
+  v1::SessionConfig p = MinimalConfig();
+  const engine::ParticleFilterOptions engine_default;
+  auto defaulted = AudioFromProto(p, {});
+  ASSERT_TRUE(defaulted.ok()) << defaulted.status().ToString();
+  EXPECT_EQ(defaulted->tracker.particle.accel_level_floor, engine_default.accel_level_floor);
+  EXPECT_EQ(defaulted->tracker.particle.accel_level_ceiling, engine_default.accel_level_ceiling);
+  EXPECT_EQ(defaulted->tracker.particle.accel_level_switch_hz, engine_default.accel_level_switch_hz);
+  p.mutable_filter()->set_accel_level_floor(0.01);
+  p.mutable_filter()->set_accel_level_ceiling(5.0);
+  p.mutable_filter()->set_accel_level_switch_hz(-1.0);  // negative: a rate of 0 (levels never redrawn)
+  auto config = AudioFromProto(p, {});
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  EXPECT_EQ(config->tracker.particle.accel_level_floor, 0.01);
+  EXPECT_EQ(config->tracker.particle.accel_level_ceiling, 5.0);
+  EXPECT_EQ(config->tracker.particle.accel_level_switch_hz, 0.0);
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  auto again = AudioFromProto(effective, {});
+  ASSERT_TRUE(again.ok()) << again.status().ToString();
+  EXPECT_EQ(again->tracker.particle.accel_level_floor, 0.01);
+  EXPECT_EQ(again->tracker.particle.accel_level_ceiling, 5.0);
+  EXPECT_EQ(again->tracker.particle.accel_level_switch_hz, 0.0);
+  p.mutable_filter()->set_accel_level_floor(6.0);  // above the ceiling (5)
+  auto bad = AudioFromProto(p, {});
+  const Status status = bad.ok() ? (*bad).Validate() : bad.status();
+  EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(status.message().find("filter.accel_level_floor"), std::string::npos) << status.message();
+}
+
 TEST(ConfigWire, FilterTypeAndMotionModelRoundTrip) {
   v1::SessionConfig p = MinimalConfig();
   p.mutable_filter()->set_type(v1::FILTER_TYPE_UKF);
