@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 #include "clients/cli/commands.h"
 #include "clients/cli/progress.h"
@@ -12,6 +13,7 @@
 #include "clients/grpc/connection.h"
 #include "clients/grpc/remote_track.h"
 #include "clients/io/array_json.h"
+#include "clients/io/raw_pcm.h"
 #include "clients/io/track_runner.h"
 #include "clients/io/wav_io.h"
 #include "engine/pipeline/session.h"
@@ -26,6 +28,11 @@ const char* const kCommand = "track";
 struct TrackFlags {
   std::string array_path;
   std::vector<std::string> wav_paths;
+  // --raw: headerless PCM (clients/io/raw_pcm.h) instead of --wav.
+  std::string raw_path;
+  std::string raw_format = "s16le";
+  std::optional<int> raw_channels;
+  std::optional<double> raw_sample_rate_hz;
   std::string out_path;
   SessionFlags session;
   StreamFlags stream;
@@ -36,8 +43,19 @@ struct TrackFlags {
 void RegisterFlags(FlagSet& flags, TrackFlags* f) {
   flags.String("array", &f->array_path, "FILE", "sensor array: array.json, or the XAV hydrophones_config CSV")
       .Required();
-  flags.Strings("wav", &f->wav_paths, "FILE", "one multichannel WAV, or one mono WAV per sensor in sensor order")
-      .Required();
+  flags.Strings("wav", &f->wav_paths, "FILE",
+                "one multichannel WAV, or one mono WAV per sensor in sensor order (or --raw)");
+  flags.String("raw", &f->raw_path, "FILE",
+               "instead of --wav: headerless interleaved PCM from FILE, or - for standard input (a pipe from "
+               "arecord, sox or ffmpeg is read as it arrives); needs --channels and --sample-rate");
+  flags.String("raw-format", &f->raw_format, "FMT",
+               "with --raw: s16le | s32le | f32le, little-endian; integers scaled to full scale 1.0 as WAV "
+               "samples are (s16 / 32768, s32 / 2^31)");
+  flags.OptionalInt("channels", &f->raw_channels, "N", "",
+                    "required with --raw: channels per interleaved frame, channel k = sensor k (the array's "
+                    "sensor count)");
+  flags.OptionalDouble("sample-rate", &f->raw_sample_rate_hz, "HZ", "",
+                       "required with --raw: samples per second per channel, Hz (wins over the array file's)");
   flags.String("out", &f->out_path, "FILE", "estimates CSV to write").Required();
   RegisterTrackerFlags(flags, &f->session, "seed");
   RegisterGccFlags(flags, &f->session);
@@ -130,6 +148,39 @@ io::TrackCallbacks MakeCallbacks(int print_every, bool sources, ProgressReporter
   return callbacks;
 }
 
+// The raw PCM input the flags describe; nullopt for --wav. INVALID_ARGUMENT naming the flag
+// for a missing or contradictory one.
+StatusOr<std::optional<io::RawPcmOptions>> RawOptions(const FlagSet& flags, const TrackFlags& f) {
+  const bool wav = !f.wav_paths.empty();
+  const bool raw = flags.seen("raw");
+  if (wav && raw) return InvalidArgument("--raw and --wav both given; read the recording from one of them");
+  if (!wav && !raw) return InvalidArgument("no recording: give --wav FILE or --raw FILE (- for standard input)");
+  if (!raw) {
+    for (const char* name : {"raw-format", "channels", "sample-rate"}) {
+      if (flags.seen(name)) return InvalidArgument(std::string("--") + name + " needs --raw");
+    }
+    return std::optional<io::RawPcmOptions>();
+  }
+  if (f.raw_path.empty()) return InvalidArgument("--raw needs a file name, or - for standard input");
+  if (!f.raw_channels) return InvalidArgument("--raw needs --channels N (channels per interleaved frame)");
+  if (!f.raw_sample_rate_hz) return InvalidArgument("--raw needs --sample-rate HZ (samples per second per channel)");
+  io::RawPcmOptions options;
+  options.path = f.raw_path;
+  auto format = io::ParseRawPcmFormat(f.raw_format);
+  if (!format.ok()) return InvalidArgument("--raw-format: " + format.status().message());
+  options.format = *format;
+  options.channel_count = *f.raw_channels;
+  if (options.channel_count < 1 || options.channel_count > io::kMaxRawPcmChannels) {
+    return InvalidArgument("--channels is " + std::to_string(options.channel_count) + ", must be in [1, " +
+                           std::to_string(io::kMaxRawPcmChannels) + "]");
+  }
+  options.sample_rate_hz = *f.raw_sample_rate_hz;
+  if (!(options.sample_rate_hz > 0.0)) {
+    return InvalidArgument("--sample-rate is " + FormatDouble(options.sample_rate_hz) + ", must be > 0");
+  }
+  return std::optional<io::RawPcmOptions>(options);
+}
+
 client::StreamCallbacks RejectionWarnings() {
   client::StreamCallbacks callbacks;
   callbacks.on_rejected = [](const client::BlockRejection& r) {
@@ -176,8 +227,8 @@ int RunOnServer(const TrackFlags& f, const io::TrackJob& job, bool sources,
 int RunTrack(const std::vector<std::string>& args) {
   TrackFlags f;
   FlagSet flags(
-      "localizer-cli track --array FILE --wav FILE [--wav FILE ...] --out FILE [--server "
-      "HOST:PORT] [flags]",
+      "localizer-cli track --array FILE (--wav FILE [--wav FILE ...] | --raw FILE|- --channels N "
+      "--sample-rate HZ [--raw-format FMT]) --out FILE [--server HOST:PORT] [flags]",
       "Streams a recording through one tracking session (GCC TDOAs + particle filter) and\n"
       "writes one row per frame to the estimates CSV. Planar and linear arrays (and\n"
       "--localization direction) give directions instead: SRP-PHAT peaks followed by a\n"
@@ -187,6 +238,12 @@ int RunTrack(const std::vector<std::string>& args) {
       "the frame bounds its range. The WAV header's sample rate wins over the array file's. Progress goes to stderr for recordings over 5 "
       "s; every Nth estimate\n"
       "and a final summary (frames, wall time, mean stage times) to stdout.\n"
+      "--raw reads headerless PCM instead (e.g. `arecord -t raw -f S16_LE -c 4 -r 48000 |\n"
+      "localizer-cli track --raw - --channels 4 --sample-rate 48000 ...`), block by block, in\n"
+      "constant memory; the same samples give the same estimates as a WAV file. Trailing bytes\n"
+      "that do not make a whole frame are an error (exit 1, after the whole frames before them\n"
+      "were tracked): the input does not match --channels and --raw-format. Progress needs a\n"
+      "known length, so it is not shown for a pipe.\n"
       "With --server the session runs on a localizer-server: the same config is sent with\n"
       "every field explicit, the recording is streamed in blocks of --block-samples, and the\n"
       "CSV holds the same numbers as a local run with the same flags (the server runs the same\n"
@@ -213,11 +270,22 @@ int RunTrack(const std::vector<std::string>& args) {
     options = std::move(*parsed);
   }
 
+  auto raw = RawOptions(flags, f);
+  if (!raw.ok()) return UsageError(kCommand, raw.status().message());
+
   auto array = io::ReadArrayFile(f.array_path, io::ArrayUse::kAuto);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
-  // The header's rate is needed to validate the config (band edges against Nyquist).
+  // The input's rate is needed to validate the config (band edges against Nyquist). For raw
+  // PCM it is the flag's: opening standard input here would be harmless, but needless.
   double sample_rate_hz = 0.0;
-  {
+  if (*raw) {
+    if ((*raw)->channel_count != static_cast<int>(array->sensors_m.size())) {
+      return UsageError(kCommand, "--channels is " + std::to_string((*raw)->channel_count) + " but " + f.array_path +
+                                      " has " + std::to_string(array->sensors_m.size()) +
+                                      " sensors; they must match (channel k = sensor k)");
+    }
+    sample_rate_hz = (*raw)->sample_rate_hz;
+  } else {
     auto stream = io::WavStream::Open(f.wav_paths);
     if (!stream.ok()) return RuntimeError(kCommand, stream.status());
     sample_rate_hz = stream->sample_rate_hz();
@@ -229,6 +297,7 @@ int RunTrack(const std::vector<std::string>& args) {
 
   io::TrackJob job;
   job.wav_paths = f.wav_paths;
+  job.raw = *raw;
   job.array_source = f.array_path;
   job.array_sample_rate_hz = array->sample_rate_hz;
   job.config = *config;

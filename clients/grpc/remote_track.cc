@@ -35,8 +35,8 @@ StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>&
     array = std::move(made).value();
   }
   StreamOptions stream_options;
-  stream_options.channel_count = prepared->stream.channel_count();
-  stream_options.sample_rate_hz = prepared->stream.sample_rate_hz();
+  stream_options.channel_count = prepared->stream->channel_count();
+  stream_options.sample_rate_hz = prepared->stream->sample_rate_hz();
   stream_options.block_samples = options.block_samples;
   stream_options.pacing = options.pacing;
   stream_options.encoding = options.encoding;
@@ -53,14 +53,15 @@ StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>&
   if (options.on_opened) options.on_opened(result.opened);
 
   // The source runs on the writer thread; the reader reports progress from this counter.
-  io::WavStream& wav = prepared->stream;
+  io::SampleStream& input = *prepared->stream;
   std::atomic<int64_t> samples_read{0};
-  const SampleSource source = [&wav, &samples_read](int64_t max_samples, std::vector<float>* out) -> StatusOr<int64_t> {
-    auto n = wav.Read(max_samples, out);
+  const SampleSource source = [&input, &samples_read](int64_t max_samples,
+                                                      std::vector<float>* out) -> StatusOr<int64_t> {
+    auto n = input.Read(max_samples, out);
     if (n.ok()) samples_read += *n;
     return n;
   };
-  const int64_t total_samples = wav.total_frames();
+  const int64_t total_samples = input.total_frames();
   const auto start = std::chrono::steady_clock::now();
   Status csv_status;
   TrackStream& track_stream = **stream;

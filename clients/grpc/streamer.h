@@ -38,7 +38,7 @@ namespace localizer::client {
 
 // Fills `channel_major` (resized to channel_count * n, channel c at [c * n, (c + 1) * n))
 // with the next n <= max_samples_per_channel samples per channel and returns n; 0 at the
-// end. io::WavStream::Read has this shape.
+// end. io::SampleStream::Read (WAV files, raw PCM) has this shape.
 using SampleSource =
     std::function<StatusOr<int64_t>(int64_t max_samples_per_channel, std::vector<float>* channel_major)>;
 

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "clients/io/csv_io.h"
+#include "clients/io/raw_pcm.h"
 #include "clients/io/wav_io.h"
 
 namespace localizer::io {
@@ -20,8 +21,8 @@ void Warn(const TrackCallbacks& callbacks, const std::string& message) {
   if (callbacks.on_warning) callbacks.on_warning(message);
 }
 
-// The session config with the WAV's sample rate, after checking the WAV against the array.
-StatusOr<engine::AudioSessionConfig> ConfigForStream(const TrackJob& job, const WavStream& stream,
+// The session config with the input's sample rate, after checking the input against the array.
+StatusOr<engine::AudioSessionConfig> ConfigForStream(const TrackJob& job, const SampleStream& stream,
                                                      const TrackCallbacks& callbacks) {
   const int sensors = static_cast<int>(job.config.sensors_m.size());
   if (stream.channel_count() != sensors) {
@@ -35,7 +36,7 @@ StatusOr<engine::AudioSessionConfig> ConfigForStream(const TrackJob& job, const 
   if (job.array_sample_rate_hz && *job.array_sample_rate_hz != stream.sample_rate_hz()) {
     Warn(callbacks, job.array_source + " says sample_rate_hz " + std::to_string(*job.array_sample_rate_hz) + " but " +
                         stream.Describe() + " is sampled at " + std::to_string(stream.sample_rate_hz()) +
-                        " Hz; using the WAV header's rate");
+                        " Hz; using " + stream.RateOrigin());
   }
   return config;
 }
@@ -43,17 +44,17 @@ StatusOr<engine::AudioSessionConfig> ConfigForStream(const TrackJob& job, const 
 // One run: the stream, the session and the writer, fed block by block.
 class TrackRun {
  public:
-  TrackRun(WavStream stream, std::unique_ptr<engine::Session> session, std::unique_ptr<EstimatesCsvWriter> writer,
-           const TrackCallbacks& callbacks)
+  TrackRun(std::unique_ptr<SampleStream> stream, std::unique_ptr<engine::Session> session,
+           std::unique_ptr<EstimatesCsvWriter> writer, const TrackCallbacks& callbacks)
       : stream_(std::move(stream)), session_(std::move(session)), writer_(std::move(writer)), callbacks_(callbacks) {}
 
   StatusOr<TrackSummary> Run(double block_s) {
-    summary_.sample_rate_hz = stream_.sample_rate_hz();
-    summary_.channel_count = stream_.channel_count();
-    const int64_t block_frames = std::max<int64_t>(1, std::llround(block_s * stream_.sample_rate_hz()));
+    summary_.sample_rate_hz = stream_->sample_rate_hz();
+    summary_.channel_count = stream_->channel_count();
+    const int64_t block_frames = std::max<int64_t>(1, std::llround(block_s * stream_->sample_rate_hz()));
     const Clock::time_point start = Clock::now();
     while (true) {
-      auto frames = stream_.Read(block_frames, &samples_);
+      auto frames = stream_->Read(block_frames, &samples_);
       if (!frames.ok()) return frames.status();
       if (*frames == 0) break;
       LOCALIZER_RETURN_IF_ERROR(ProcessBlock(*frames));
@@ -72,14 +73,14 @@ class TrackRun {
   Status ProcessBlock(int64_t frames) {
     engine::BlockView block;
     block.sequence = ++summary_.blocks;
-    block.channel_count = stream_.channel_count();
+    block.channel_count = stream_->channel_count();
     block.samples_per_channel = frames;
     block.samples = samples_.data();
     estimates_.clear();
     const Status status = session_->Process(block, &estimates_);
     if (!status.ok()) {
       const double at_s = static_cast<double>(summary_.samples_per_channel) / summary_.sample_rate_hz;
-      return Status(status.code(), stream_.Describe() + ": block " + std::to_string(block.sequence) + " at " +
+      return Status(status.code(), stream_->Describe() + ": block " + std::to_string(block.sequence) + " at " +
                                        std::to_string(at_s) + " s rejected: " + status.message());
     }
     summary_.samples_per_channel += frames;
@@ -100,11 +101,11 @@ class TrackRun {
 
   void ReportProgress(Clock::time_point start) const {
     if (!callbacks_.on_progress) return;
-    callbacks_.on_progress(TrackProgress{summary_.samples_per_channel, stream_.total_frames(), summary_.sample_rate_hz,
+    callbacks_.on_progress(TrackProgress{summary_.samples_per_channel, stream_->total_frames(), summary_.sample_rate_hz,
                                          SecondsSince(start)});
   }
 
-  WavStream stream_;
+  std::unique_ptr<SampleStream> stream_;
   std::unique_ptr<engine::Session> session_;
   std::unique_ptr<EstimatesCsvWriter> writer_;
   const TrackCallbacks& callbacks_;
@@ -162,11 +163,26 @@ engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig config, con
   return config;
 }
 
+namespace {
+
+StatusOr<std::unique_ptr<SampleStream>> OpenInput(const TrackJob& job, const TrackCallbacks& callbacks) {
+  if (job.raw) {
+    auto raw = RawPcmStream::Open(*job.raw);
+    if (!raw.ok()) return raw.status();
+    return std::unique_ptr<SampleStream>(std::move(*raw));
+  }
+  auto wav = WavStream::Open(job.wav_paths);
+  if (!wav.ok()) return wav.status();
+  if (!wav->warning().empty()) Warn(callbacks, wav->warning());
+  return std::unique_ptr<SampleStream>(std::make_unique<WavStream>(std::move(*wav)));
+}
+
+}  // namespace
+
 StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& callbacks) {
-  auto stream = WavStream::Open(job.wav_paths);
+  auto stream = OpenInput(job, callbacks);
   if (!stream.ok()) return stream.status();
-  if (!stream->warning().empty()) Warn(callbacks, stream->warning());
-  auto config = ConfigForStream(job, *stream, callbacks);
+  auto config = ConfigForStream(job, **stream, callbacks);
   if (!config.ok()) return config.status();
   return PreparedTrack{std::move(*stream), std::move(*config)};
 }

@@ -1,13 +1,14 @@
-// Tracks a recording from WAV files into estimates: the body of `localizer-cli track`,
-// kept in the io library so that tests run exactly the code the command runs.
+// Tracks a recording from WAV files or raw PCM into estimates: the body of `localizer-cli
+// track`, kept in the io library so that tests run exactly the code the command runs.
 //
 // The recording is streamed in blocks of `block_s` seconds through one engine::Session with
 // sequence numbers 1, 2, 3, ...; every Estimate goes to the CSV (when a path is given) and
 // to `on_estimate`. Memory stays at one block plus the session's frame ring, whatever the
-// file length.
+// file length (raw PCM from a pipe included: it is read as the blocks are needed).
 //
-// Sample rate: the WAV header is what the samples were recorded at, so it wins over the
-// array file's sample_rate_hz; a difference is reported through `on_warning`.
+// Sample rate: the WAV header (or, for raw PCM, --sample-rate) is what the samples were
+// recorded at, so it wins over the array file's sample_rate_hz; a difference is reported
+// through `on_warning`.
 // Channel count must equal the array's sensor count (INVALID_ARGUMENT naming both).
 // A block the session rejects stops the run with the session's message and the block's
 // position in the file.
@@ -23,6 +24,8 @@
 #include "clients/io/array_json.h"
 #include "clients/io/csv_io.h"
 #include "clients/io/presence_summary.h"
+#include "clients/io/raw_pcm.h"
+#include "clients/io/sample_stream.h"
 #include "clients/io/wav_io.h"
 #include "engine/core/estimate.h"
 #include "engine/core/status.h"
@@ -32,9 +35,10 @@ namespace localizer::io {
 
 struct TrackJob {
   std::vector<std::string> wav_paths;          // one multichannel file or mono files per sensor
+  std::optional<RawPcmOptions> raw;            // set: read raw PCM (raw_pcm.h) instead of wav_paths
   std::string array_source = "array.json";     // names the array in messages
-  std::optional<double> array_sample_rate_hz;  // from the array file, checked against the WAV
-  engine::AudioSessionConfig config;           // sample_rate_hz is taken from the WAV header
+  std::optional<double> array_sample_rate_hz;  // from the array file, checked against the input's
+  engine::AudioSessionConfig config;           // sample_rate_hz is taken from the input (WAV header, raw)
   std::string estimates_csv_path;              // empty: write no CSV
   double block_s = 0.25;                       // audio per Session::Process call, > 0
 };
@@ -85,7 +89,7 @@ struct ArrayOverrides {
 
 // The session config `localizer-cli track` runs with, locally or on a server: `config` (the
 // user's choices) with the array file's sensors, sound speed and reference sensor unless
-// overridden, `sample_rate_hz` (the WAV header's), and, when `config` leaves both band edges
+// overridden, `sample_rate_hz` (the input's), and, when `config` leaves both band edges
 // at 0, the array file's band_hz as the GCC band (its high edge capped at Nyquist); when
 // `config` is unbounded, the array file's bounds; then the overrides' bounds. Not validated:
 // Session::Create (or the server) does that.
@@ -94,11 +98,12 @@ engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig config, con
 
 // The first half of RunTrack, shared with the remote track (clients/grpc/remote_track.h) so
 // that both track a recording with the same session config: opens the WAV(s) (a set's
-// truncation note goes to on_warning), checks the channel count against job.config's array
-// and sets config.sample_rate_hz from the WAV header (a different array-file rate goes to
-// on_warning). The config is not validated here; Session::Create (or the server) does that.
+// truncation note goes to on_warning) or the raw PCM input, checks the channel count against
+// job.config's array and sets config.sample_rate_hz from the input (a different array-file
+// rate goes to on_warning). The config is not validated here; Session::Create (or the
+// server) does that.
 struct PreparedTrack {
-  WavStream stream;  // positioned at the first sample
+  std::unique_ptr<SampleStream> stream;  // positioned at the first sample; never null
   engine::AudioSessionConfig config;
 };
 StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});

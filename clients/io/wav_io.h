@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "clients/io/sample_stream.h"
 #include "engine/core/status.h"
 
 namespace localizer::io {
@@ -40,28 +41,29 @@ inline constexpr double kMaxSetLengthMismatchS = 1.0;
 
 // Reads a multichannel file, or a set of mono files in chunks, so that long recordings
 // never need to sit in memory at once. Movable, not copyable.
-class WavStream {
+class WavStream final : public SampleStream {
  public:
   // `paths`: one file of any channel count, or several mono files (one per sensor).
   static StatusOr<WavStream> Open(const std::vector<std::string>& paths);
 
   WavStream(WavStream&&) noexcept;
   WavStream& operator=(WavStream&&) noexcept;
-  ~WavStream();
+  ~WavStream() override;
 
-  double sample_rate_hz() const { return sample_rate_hz_; }
-  int channel_count() const { return channel_count_; }
-  int64_t total_frames() const { return total_frames_; }  // after truncating a set
+  double sample_rate_hz() const override { return sample_rate_hz_; }
+  int channel_count() const override { return channel_count_; }
+  int64_t total_frames() const override { return total_frames_; }  // after truncating a set
   int64_t frames_read() const { return frames_read_; }
   // Empty, or a note that a set was truncated to its shortest file.
   const std::string& warning() const { return warning_; }
   // "signals.wav" or "a.wav + 5 more": for messages.
-  std::string Describe() const;
+  std::string Describe() const override;
+  std::string RateOrigin() const override { return "the WAV header's rate"; }
 
   // Reads up to `max_frames` per channel, resizes `channel_major` to channel_count * n and
   // fills it channel-major (chunk sample i of channel c at [c * n + i]); returns n, which is
   // 0 only at the end of the recording.
-  StatusOr<int64_t> Read(int64_t max_frames, std::vector<float>* channel_major);
+  StatusOr<int64_t> Read(int64_t max_frames, std::vector<float>* channel_major) override;
 
  private:
   struct File;
