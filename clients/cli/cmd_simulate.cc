@@ -134,11 +134,12 @@ int RunOnServer(const SimulateFlags& f, const io::SimulationRun& run) {
   auto array = engine::ArrayGeometry::Create(config->sensors_m, config->sound_speed_mps, config->reference_sensor);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
 
-  std::unique_ptr<io::EstimatesCsvWriter> writer;
+  std::unique_ptr<io::EstimatesWriter> writer;
   if (!f.out_dir.empty()) {
     auto files = io::WriteSimulationFiles(f.out_dir, run);
     if (!files.ok()) return RuntimeError(kCommand, files.status());
-    auto opened = io::OpenEstimatesCsv((std::filesystem::path(f.out_dir) / "estimates.csv").string(), &*array);
+    auto opened = io::OpenEstimatesWriter((std::filesystem::path(f.out_dir) / "estimates.csv").string(),
+                                          io::EstimatesFormat::kCsv, &*array);
     if (!opened.ok()) return RuntimeError(kCommand, opened.status());
     writer = std::move(*opened);
   }

@@ -34,6 +34,7 @@ struct TrackFlags {
   std::optional<int> raw_channels;
   std::optional<double> raw_sample_rate_hz;
   std::string out_path;
+  std::string format = "csv";
   SessionFlags session;
   StreamFlags stream;
   int print_every = 10;
@@ -56,7 +57,10 @@ void RegisterFlags(FlagSet& flags, TrackFlags* f) {
                     "sensor count)");
   flags.OptionalDouble("sample-rate", &f->raw_sample_rate_hz, "HZ", "",
                        "required with --raw: samples per second per channel, Hz (wins over the array file's)");
-  flags.String("out", &f->out_path, "FILE", "estimates CSV to write").Required();
+  flags.String("out", &f->out_path, "FILE", "estimates file to write (--format)").Required();
+  flags.String("format", &f->format, "FMT",
+               "csv (one row per frame, or per frame and source) | jsonl (one JSON object per frame, "
+               "sources nested; non-finite numbers null)");
   RegisterTrackerFlags(flags, &f->session, "seed");
   RegisterGccFlags(flags, &f->session);
   flags.Double("block", &f->block_s, "S", "s", "audio handed to the local session per call");
@@ -228,9 +232,9 @@ int RunTrack(const std::vector<std::string>& args) {
   TrackFlags f;
   FlagSet flags(
       "localizer-cli track --array FILE (--wav FILE [--wav FILE ...] | --raw FILE|- --channels N "
-      "--sample-rate HZ [--raw-format FMT]) --out FILE [--server HOST:PORT] [flags]",
+      "--sample-rate HZ [--raw-format FMT]) --out FILE [--format csv|jsonl] [--server HOST:PORT] [flags]",
       "Streams a recording through one tracking session (GCC TDOAs + particle filter) and\n"
-      "writes one row per frame to the estimates CSV. Planar and linear arrays (and\n"
+      "writes one row per frame to the estimates CSV (--format jsonl: one JSON object per line). Planar and linear arrays (and\n"
       "--localization direction) give directions instead: SRP-PHAT peaks followed by a\n"
       "direction tracker, up to --max-sources sources with ids, one CSV row per frame and\n"
       "source; with --localization position (a planar array with --source-side, a linear one\n"
@@ -255,6 +259,8 @@ int RunTrack(const std::vector<std::string>& args) {
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   if (f.print_every < 0) return UsageError(kCommand, "--print-every must be >= 0");
   if (!(f.block_s > 0)) return UsageError(kCommand, "--block must be > 0");
+  const auto format = io::ParseEstimatesFormat(f.format);
+  if (!format.ok()) return UsageError(kCommand, "--format: " + format.status().message());
   const bool remote = !f.stream.server.empty();
   if (!remote) {
     for (const std::string& name : StreamFlagNames()) {
@@ -301,7 +307,8 @@ int RunTrack(const std::vector<std::string>& args) {
   job.array_source = f.array_path;
   job.array_sample_rate_hz = array->sample_rate_hz;
   job.config = *config;
-  job.estimates_csv_path = f.out_path;
+  job.estimates_path = f.out_path;
+  job.estimates_format = *format;
   job.block_s = f.block_s;
   auto sources = engine::ReportsSources(job.config);  // BuildSessionConfig checked it
   if (!sources.ok()) return UsageError(kCommand, sources.status().message());

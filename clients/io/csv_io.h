@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "clients/io/estimates_writer.h"
 #include "engine/core/estimate.h"
 #include "engine/core/status.h"
 #include "engine/sim/simulator.h"
@@ -56,7 +57,7 @@ struct EstimateRow {
 StatusOr<std::vector<EstimateRow>> ReadEstimatesCsv(const std::string& path);
 
 // Writes estimates.csv row by row, so a long run can stream to disk. Movable.
-class EstimatesCsvWriter {
+class EstimatesCsvWriter final : public EstimatesWriter {
  public:
   // `pair_sensors[p]`: the non-reference sensor of pair p (ArrayGeometry::sensor_of_pair).
   static StatusOr<EstimatesCsvWriter> Open(const std::string& path, const std::vector<int>& pair_sensors);
@@ -71,9 +72,9 @@ class EstimatesCsvWriter {
   // the source's range; range_sd_m where a near-field fit was made). frame_source_present
   // says whether any source was heard on the frame; source_present whether this one was.
   static StatusOr<EstimatesCsvWriter> OpenSources(const std::string& path);
-  Status Write(const engine::Estimate& estimate);
+  Status Write(const engine::Estimate& estimate) override;
   // Flushes and closes; reports a failed write that the stream only notices at the end.
-  Status Close();
+  Status Close() override;
 
  private:
   EstimatesCsvWriter() = default;

@@ -45,7 +45,7 @@ StatusOr<engine::AudioSessionConfig> ConfigForStream(const TrackJob& job, const 
 class TrackRun {
  public:
   TrackRun(std::unique_ptr<SampleStream> stream, std::unique_ptr<engine::Session> session,
-           std::unique_ptr<EstimatesCsvWriter> writer, const TrackCallbacks& callbacks)
+           std::unique_ptr<EstimatesWriter> writer, const TrackCallbacks& callbacks)
       : stream_(std::move(stream)), session_(std::move(session)), writer_(std::move(writer)), callbacks_(callbacks) {}
 
   StatusOr<TrackSummary> Run(double block_s) {
@@ -107,7 +107,7 @@ class TrackRun {
 
   std::unique_ptr<SampleStream> stream_;
   std::unique_ptr<engine::Session> session_;
-  std::unique_ptr<EstimatesCsvWriter> writer_;
+  std::unique_ptr<EstimatesWriter> writer_;
   const TrackCallbacks& callbacks_;
   std::vector<float> samples_;               // one block, channel-major; reused
   std::vector<engine::Estimate> estimates_;  // one block's estimates; reused
@@ -126,7 +126,7 @@ StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callb
   if (!prepared.ok()) return prepared.status();
   auto session = engine::Session::Create(prepared->config);
   if (!session.ok()) return session.status();
-  auto writer = OpenEstimatesCsv(job.estimates_csv_path, (*session)->geometry());
+  auto writer = OpenEstimatesWriter(job.estimates_path, job.estimates_format, (*session)->geometry());
   if (!writer.ok()) return writer.status();
   TrackRun run(std::move(prepared->stream), std::move(*session), std::move(*writer), callbacks);
   return run.Run(job.block_s);
@@ -185,16 +185,6 @@ StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& 
   auto config = ConfigForStream(job, **stream, callbacks);
   if (!config.ok()) return config.status();
   return PreparedTrack{std::move(*stream), std::move(*config)};
-}
-
-StatusOr<std::unique_ptr<EstimatesCsvWriter>> OpenEstimatesCsv(const std::string& path,
-                                                               const engine::ArrayGeometry* array) {
-  if (path.empty()) return std::unique_ptr<EstimatesCsvWriter>();
-  std::vector<int> pair_sensors;
-  for (int p = 0; array != nullptr && p < array->pair_count(); ++p) pair_sensors.push_back(array->sensor_of_pair(p));
-  auto writer = array != nullptr ? EstimatesCsvWriter::Open(path, pair_sensors) : EstimatesCsvWriter::OpenSources(path);
-  if (!writer.ok()) return writer.status();
-  return std::make_unique<EstimatesCsvWriter>(std::move(*writer));
 }
 
 }  // namespace localizer::io

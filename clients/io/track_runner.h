@@ -23,6 +23,7 @@
 
 #include "clients/io/array_json.h"
 #include "clients/io/csv_io.h"
+#include "clients/io/estimates_writer.h"
 #include "clients/io/presence_summary.h"
 #include "clients/io/raw_pcm.h"
 #include "clients/io/sample_stream.h"
@@ -39,7 +40,8 @@ struct TrackJob {
   std::string array_source = "array.json";     // names the array in messages
   std::optional<double> array_sample_rate_hz;  // from the array file, checked against the input's
   engine::AudioSessionConfig config;           // sample_rate_hz is taken from the input (WAV header, raw)
-  std::string estimates_csv_path;              // empty: write no CSV
+  std::string estimates_path;                  // empty: write no estimates file
+  EstimatesFormat estimates_format = EstimatesFormat::kCsv;
   double block_s = 0.25;                       // audio per Session::Process call, > 0
 };
 
@@ -108,11 +110,5 @@ struct PreparedTrack {
 };
 StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});
 
-// The estimates CSV for a position session over `array`, one pair column group per
-// non-reference sensor, or for a direction session (array null: Session::geometry()) one
-// row per frame and source (EstimatesCsvWriter::OpenSources); a null writer when `path` is
-// empty.
-StatusOr<std::unique_ptr<EstimatesCsvWriter>> OpenEstimatesCsv(const std::string& path,
-                                                               const engine::ArrayGeometry* array);
 
 }  // namespace localizer::io

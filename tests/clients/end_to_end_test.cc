@@ -37,7 +37,7 @@ TrackJob JobFor(const SimulationFiles& files, const ArrayFile& array, const std:
   job.config.sensors_m = array.sensors_m;
   job.config.sound_speed_mps = array.sound_speed_mps;
   job.config.reference_sensor = array.reference_sensor;
-  job.estimates_csv_path = out;
+  job.estimates_path = out;
   return job;
 }
 
@@ -83,14 +83,14 @@ TEST(EndToEnd, TetraWaterTracksBelowOneMetreRmse) {
   EXPECT_TRUE(warnings.empty());
   EXPECT_EQ(summary->estimates, (6u * 11025 - 4096) / 2048 + 1);
 
-  EXPECT_EQ(FirstLine(job.estimates_csv_path),
+  EXPECT_EQ(FirstLine(job.estimates_path),
             "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,sx_m,sy_m,sz_m,ess,nis,pairs_used,tdoa_sigma_us,initialised,"
             "reinitialised,tdoa_ms,filter_ms,source_present,presence_statistic,presence_threshold,ambiguous,modes,far_field,range_sd_m,"
             "delay_s_1,quality_1,delay_s_2,quality_2,"
             "delay_s_3,quality_3");
   auto truth = ReadTruthCsv(files->truth_path);
   ASSERT_TRUE(truth.ok());
-  auto estimates = ReadEstimatesCsv(job.estimates_csv_path);
+  auto estimates = ReadEstimatesCsv(job.estimates_path);
   ASSERT_TRUE(estimates.ok()) << estimates.status().ToString();
   auto score = Score(*truth, *estimates);
   ASSERT_TRUE(score.ok()) << score.status().ToString();

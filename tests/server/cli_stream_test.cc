@@ -164,7 +164,7 @@ class CliStreamTest : public ::testing::Test {
     job.array_source = files.array_path;
     job.array_sample_rate_hz = array->sample_rate_hz;
     job.config = io::TrackConfigFor(engine::AudioSessionConfig{}, *array, {}, array->sample_rate_hz.value_or(0.0));
-    job.estimates_csv_path = out;
+    job.estimates_path = out;
     return job;
   }
 
@@ -191,7 +191,7 @@ TEST_F(CliStreamTest, TrackOverServerIsBitIdenticalToOffline) {
   ASSERT_GT(offline.size(), 15u);
 
   io::TrackJob remote_job = job;
-  remote_job.estimates_csv_path = dir.File("server.csv");
+  remote_job.estimates_path = dir.File("server.csv");
   RemoteTrackOptions options;
   options.block_samples = kBlockSamples;
   options.label = "cli_stream_test";

@@ -1,0 +1,32 @@
+#include "clients/io/estimates_writer.h"
+
+#include <utility>
+#include <vector>
+
+#include "clients/io/csv_io.h"
+#include "clients/io/estimates_jsonl.h"
+
+namespace localizer::io {
+
+StatusOr<EstimatesFormat> ParseEstimatesFormat(const std::string& name) {
+  if (name == "csv") return EstimatesFormat::kCsv;
+  if (name == "jsonl") return EstimatesFormat::kJsonl;
+  return InvalidArgument("format '" + name + "' is unknown; valid: csv, jsonl");
+}
+
+StatusOr<std::unique_ptr<EstimatesWriter>> OpenEstimatesWriter(const std::string& path, EstimatesFormat format,
+                                                               const engine::ArrayGeometry* array) {
+  if (path.empty()) return std::unique_ptr<EstimatesWriter>();
+  std::vector<int> pair_sensors;
+  for (int p = 0; array != nullptr && p < array->pair_count(); ++p) pair_sensors.push_back(array->sensor_of_pair(p));
+  if (format == EstimatesFormat::kJsonl) {
+    auto writer = EstimatesJsonlWriter::Open(path, std::move(pair_sensors));
+    if (!writer.ok()) return writer.status();
+    return std::unique_ptr<EstimatesWriter>(std::move(*writer));
+  }
+  auto writer = array != nullptr ? EstimatesCsvWriter::Open(path, pair_sensors) : EstimatesCsvWriter::OpenSources(path);
+  if (!writer.ok()) return writer.status();
+  return std::unique_ptr<EstimatesWriter>(std::make_unique<EstimatesCsvWriter>(std::move(*writer)));
+}
+
+}  // namespace localizer::io

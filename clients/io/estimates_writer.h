@@ -1,0 +1,33 @@
+// Where a track's estimates go, one per frame as they come: a CSV (csv_io.h) or JSON lines
+// (estimates_jsonl.h). `localizer-cli track --format csv|jsonl` picks one; both stream, so a
+// long run writes as it goes and memory stays flat.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "engine/array/array_geometry.h"
+#include "engine/core/estimate.h"
+#include "engine/core/status.h"
+
+namespace localizer::io {
+
+enum class EstimatesFormat { kCsv, kJsonl };
+// "csv" | "jsonl"; INVALID_ARGUMENT naming the valid ones otherwise.
+StatusOr<EstimatesFormat> ParseEstimatesFormat(const std::string& name);
+
+class EstimatesWriter {
+ public:
+  virtual ~EstimatesWriter() = default;
+  virtual Status Write(const engine::Estimate& estimate) = 0;
+  // Flushes and closes; reports a failed write that the stream only notices at the end.
+  virtual Status Close() = 0;
+};
+
+// The writer for a position session over `array` (CSV: one pair column group per
+// non-reference sensor) or, with `array` null, a session that lists sources (CSV: one row
+// per frame and source). A null writer when `path` is empty.
+StatusOr<std::unique_ptr<EstimatesWriter>> OpenEstimatesWriter(const std::string& path, EstimatesFormat format,
+                                                               const engine::ArrayGeometry* array);
+
+}  // namespace localizer::io
