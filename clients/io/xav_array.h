@@ -1,16 +1,17 @@
 // The XAV hydrophone array of Mouy et al. (2023) as the authors describe it in
-// `hydrophones_config_07-HI.csv`: columns name,x,y,z,... (metres, array frame) and
-// file_name_root ("AMAR173.1.") naming each hydrophone's recording; one row per hydrophone
-// in channel order. The authors' localisation config gives the rest: sound speed
-// 1484 m/s and reference channel 3 (the hydrophone near the array centre). The recordings
-// are 32 kHz (deployment_info.csv).
-//
-// The water column, from deployment_info.csv: the water is 8 m deep (location_water_depth)
-// and each hydrophone's depth is 7.03 m - z (hydrophone_depth, to the centimetre), so z
-// points up, the surface is z = 7.03 m and the bottom z = 7.03 - 8 = -0.97 m (the lowest
-// hydrophones, z = -0.671, sit 0.3 m above it). Both are the array file's bounds
-// (bounds_max_m.z / bounds_min_m.z); x and y are open. The depths are the deployment's
-// nominal values: tide moves the surface by a few metres, the bottom not at all.
+// `hydrophones_config_07-HI.csv`: columns name,x,y,z,... (metres, array frame, z up),
+// array_channel (optional; else the row order) and file_name_root ("AMAR173.1.") naming each
+// hydrophone's recording; one row per hydrophone. The rest comes from the deployment's own
+// files beside it (xav_config.h), read for what they say, not assumed:
+//   localization_config*.yaml: sound speed (1484 m/s there) and reference channel (3, the
+//     hydrophone near the array centre);
+//   deployment_info.csv: sample rate (32 kHz), water depth (8 m) and each hydrophone's depth.
+// The water column: each hydrophone's depth is surface_z - z, so the surface is the median of
+// depth + z over the hydrophones (7.03 m in the array frame there) and the bottom lies the
+// water depth below it (-0.97 m); both become the array file's bounds (bounds_max_m.z /
+// bounds_min_m.z), x and y open. The depths are the deployment's nominal values: tide moves
+// the surface by a few metres, the bottom not at all. A CSV without those two files beside it
+// is refused, naming what is missing (write an array.json for other arrays).
 #pragma once
 
 #include <string>
@@ -21,16 +22,12 @@
 
 namespace localizer::io {
 
-inline constexpr double kXavSoundSpeedMps = 1484.0;
-inline constexpr int kXavReferenceSensor = 3;
-inline constexpr double kXavSampleRateHz = 32000.0;
-inline constexpr double kXavWaterDepthM = 8.0;
-inline constexpr double kXavSurfaceZM = 7.03;                            // array frame, z up
-inline constexpr double kXavBottomZM = kXavSurfaceZM - kXavWaterDepthM;  // -0.97
-
 struct XavArray {
-  ArrayFile array;                           // sensors, c = 1484 m/s, reference 3, 32 kHz, the water column as bounds
+  ArrayFile array;  // sensors, sound speed, reference, sample rate, the water column as bounds
   std::vector<std::string> file_name_roots;  // per hydrophone, e.g. "AMAR173.1."
+
+  double water_depth_m = 0.0;
+  double surface_z_m = 0.0;  // array frame, z up
 };
 
 StatusOr<XavArray> ReadXavHydrophoneCsv(const std::string& path);

@@ -163,12 +163,12 @@ TEST(ArrayJson, ReadArrayFileTakesTheXavCsv) {
   auto array = ReadArrayFile(testing::XavConfigCsv());
   ASSERT_TRUE(array.ok()) << array.status().ToString();
   ASSERT_EQ(array->sensors_m.size(), 6u);
-  EXPECT_EQ(array->sound_speed_mps, kXavSoundSpeedMps);
+  EXPECT_EQ(array->sound_speed_mps, 1484.0);  // localization_config_large_array.yaml
   EXPECT_EQ(array->reference_sensor, 3);
   EXPECT_EQ(array->sensors_m[5], engine::Vec3(0.858, 0.86, 0.671));
   // The water column (8 m deep, z up, the surface 7.03 m above the array frame's origin).
-  EXPECT_EQ(array->bounds_max_m.z(), kXavSurfaceZM);
-  EXPECT_EQ(array->bounds_min_m.z(), kXavBottomZM);
+  EXPECT_NEAR(array->bounds_max_m.z(), 7.03, 0.005);
+  EXPECT_DOUBLE_EQ(array->bounds_min_m.z(), array->bounds_max_m.z() - 8.0);
   EXPECT_FALSE(std::isfinite(array->bounds_min_m.x()));
   EXPECT_FALSE(std::isfinite(array->bounds_max_m.y()));
 }

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "clients/io/csv_table.h"
 #include "clients/io/wav_io.h"
@@ -32,7 +34,7 @@ TEST(XavData, HydrophoneConfigGivesSixSensorsAndTheirFiles) {
   EXPECT_NE(paths[5].find("AMAR173.6."), std::string::npos);
 }
 
-// The water column constants agree with the authors' deployment sheet: every hydrophone's
+// The water column read from the authors' deployment sheet: every hydrophone's
 // depth is surface_z - z (z up), and the bottom lies the water depth below the surface.
 TEST(XavData, WaterColumnBoundsMatchTheDeploymentSheet) {
   auto xav = ReadXavHydrophoneCsv(testing::XavConfigCsv());
@@ -48,11 +50,13 @@ TEST(XavData, WaterColumnBoundsMatchTheDeploymentSheet) {
     const int k = static_cast<int>(*sheet->Number(r, *channel));
     ASSERT_GE(k, 0);
     ASSERT_LT(k, 6);
-    EXPECT_NEAR(*sheet->Number(r, *depth), kXavSurfaceZM - xav->array.sensors_m[k].z(), 0.005) << "channel " << k;
-    EXPECT_EQ(*sheet->Number(r, *water), kXavWaterDepthM);
+    EXPECT_NEAR(*sheet->Number(r, *depth), xav->surface_z_m - xav->array.sensors_m[k].z(), 0.005) << "channel " << k;
+    EXPECT_EQ(*sheet->Number(r, *water), xav->water_depth_m);
   }
-  EXPECT_EQ(xav->array.bounds_max_m.z(), kXavSurfaceZM);
-  EXPECT_DOUBLE_EQ(xav->array.bounds_min_m.z(), -0.97);
+  EXPECT_EQ(xav->water_depth_m, 8.0);
+  EXPECT_NEAR(xav->surface_z_m, 7.03, 0.005);
+  EXPECT_EQ(xav->array.bounds_max_m.z(), xav->surface_z_m);
+  EXPECT_NEAR(xav->array.bounds_min_m.z(), -0.97, 0.005);
   for (const engine::Vec3& s : xav->array.sensors_m) {
     EXPECT_GT(s.z(), xav->array.bounds_min_m.z());
     EXPECT_LT(s.z(), xav->array.bounds_max_m.z());
@@ -89,6 +93,54 @@ TEST(XavData, TheSixFilesFormOneSixChannelRecording) {
   EXPECT_EQ(set->samples.size(), static_cast<size_t>(6 * set->frames));
   // AMAR173.1 is 230 samples longer than the others: truncated, with a note.
   EXPECT_NE(warning.find("truncated"), std::string::npos) << warning;
+}
+
+}  // namespace
+}  // namespace localizer::io
+
+namespace localizer::io {
+namespace {
+
+// The deployment's files are read for what they say: the authors' values, and other values
+// in a copy of the folder are taken up; a missing or bad file is refused naming it.
+TEST(XavData, SoundSpeedReferenceAndRateComeFromTheDeploymentFiles) {
+  auto xav = ReadXavHydrophoneCsv(testing::XavConfigCsv());
+  ASSERT_TRUE(xav.ok()) << xav.status().ToString();
+  EXPECT_EQ(xav->array.sound_speed_mps, 1484.0);
+  EXPECT_EQ(xav->array.reference_sensor, 3);
+  EXPECT_EQ(xav->array.sample_rate_hz, 32000.0);
+
+  testing::TempDir dir;
+  namespace fs = std::filesystem;
+  const fs::path src(testing::XavDir());
+  fs::copy_file(src / "hydrophones_config_07-HI.csv", dir.File("hydrophones.csv"));
+  fs::copy_file(src / "deployment_info.csv", dir.File("deployment_info.csv"));
+  const auto write_yaml = [&](const std::string& text) {
+    std::ofstream(dir.File("localization_config_copy.yaml")) << text;
+  };
+  write_yaml("ENVIRONMENT:\n    sound_speed_mps: 1500\nTDOA:\n    ref_channel: 2\n");
+  auto copy = ReadXavHydrophoneCsv(dir.File("hydrophones.csv"));
+  ASSERT_TRUE(copy.ok()) << copy.status().ToString();
+  EXPECT_EQ(copy->array.sound_speed_mps, 1500.0);
+  EXPECT_EQ(copy->array.reference_sensor, 2);
+
+  write_yaml("ENVIRONMENT:\n    sound_speed_mps: 1500\nTDOA:\n    ref_channel: 9\n");
+  auto bad_ref = ReadXavHydrophoneCsv(dir.File("hydrophones.csv"));
+  ASSERT_FALSE(bad_ref.ok());
+  EXPECT_NE(bad_ref.status().message().find("TDOA.ref_channel 9"), std::string::npos) << bad_ref.status().message();
+
+  write_yaml("ENVIRONMENT:\n    sound_speed: 1500\n");
+  auto missing_key = ReadXavHydrophoneCsv(dir.File("hydrophones.csv"));
+  ASSERT_FALSE(missing_key.ok());
+  EXPECT_NE(missing_key.status().message().find("ENVIRONMENT.sound_speed_mps missing"), std::string::npos)
+      << missing_key.status().message();
+
+  fs::remove(dir.File("localization_config_copy.yaml"));
+  auto no_yaml = ReadXavHydrophoneCsv(dir.File("hydrophones.csv"));
+  ASSERT_FALSE(no_yaml.ok());
+  EXPECT_EQ(no_yaml.status().code(), StatusCode::kNotFound);
+  EXPECT_NE(no_yaml.status().message().find("localization_config*.yaml"), std::string::npos)
+      << no_yaml.status().message();
 }
 
 }  // namespace

@@ -190,8 +190,8 @@ void ExpectContractOnTheRecording(const engine::AudioSessionConfig& base, const 
   const Xav& xav = LoadXav();
   ASSERT_EQ(xav.recording.channel_count, 6);
   const engine::AudioSessionConfig config = ConfigFor(base);
-  ASSERT_EQ(config.bounds_max_m.z(), kXavSurfaceZM);
-  ASSERT_EQ(config.bounds_min_m.z(), kXavBottomZM);
+  ASSERT_NEAR(config.bounds_max_m.z(), 7.03, 0.005);  // the surface, from deployment_info.csv
+  ASSERT_NEAR(config.bounds_min_m.z(), 7.03 - 8.0, 0.005);  // 8 m of water below it
   const auto estimates = Track(config, xav.recording);
   const int64_t expected = (xav.recording.frames - kFrame) / kHop + 1;
   ASSERT_EQ(static_cast<int64_t>(estimates.size()), expected);

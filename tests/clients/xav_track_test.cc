@@ -27,7 +27,7 @@ TEST(XavTrack, WholeRecordingTracksWithoutRejectionAndStaysNearTheArray) {
   job.array_source = testing::XavConfigCsv();
   job.array_sample_rate_hz = xav->array.sample_rate_hz;
   job.config.sensors_m = xav->array.sensors_m;
-  job.config.sound_speed_mps = kXavSoundSpeedMps;
+  job.config.sound_speed_mps = xav->array.sound_speed_mps;
   job.config.reference_sensor = xav->array.reference_sensor;
   job.config.frame_samples = 4096;
   job.config.hop_samples = 2048;

@@ -59,10 +59,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       break;
     }
     case 7: {
+      // The deployment's YAML and sheet are looked up beside the file: the in-memory file has
+      // none, so past the CSV's own checks the reader says NOT_FOUND naming them.
       auto xav = io::ReadXavHydrophoneCsv(path);
+      if (!xav.ok() && xav.status().code() == StatusCode::kNotFound) return 0;
       if (!xav.ok()) return expect_refused(xav.status()), 0;
       FUZZ_CHECK(table.ok() && xav->array.sensors_m.size() == table->row_count(), "row count");
-      FUZZ_CHECK(xav->array.sensors_m.size() > io::kXavReferenceSensor, "reference beyond the sensors");
+      FUZZ_CHECK(static_cast<size_t>(xav->array.reference_sensor) < xav->array.sensors_m.size(),
+                 "reference beyond the sensors");
       FUZZ_CHECK(xav->file_name_roots.size() == xav->array.sensors_m.size(), "roots");
       break;
     }
