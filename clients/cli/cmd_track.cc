@@ -60,7 +60,8 @@ void RegisterFlags(FlagSet& flags, TrackFlags* f) {
   flags.String("out", &f->out_path, "FILE", "estimates file to write (--format)").Required();
   flags.String("format", &f->format, "FMT",
                "csv (one row per frame, or per frame and source) | jsonl (one JSON object per frame, "
-               "sources nested; non-finite numbers null)");
+               "sources nested; non-finite numbers null) | geojson (a FeatureCollection of WGS84 points; needs "
+               "the array file's geodetic_origin with heading_deg)");
   RegisterTrackerFlags(flags, &f->session, "seed");
   RegisterGccFlags(flags, &f->session);
   flags.Double("block", &f->block_s, "S", "s", "audio handed to the local session per call");
@@ -232,7 +233,7 @@ int RunTrack(const std::vector<std::string>& args) {
   TrackFlags f;
   FlagSet flags(
       "localizer-cli track --array FILE (--wav FILE [--wav FILE ...] | --raw FILE|- --channels N "
-      "--sample-rate HZ [--raw-format FMT]) --out FILE [--format csv|jsonl] [--server HOST:PORT] [flags]",
+      "--sample-rate HZ [--raw-format FMT]) --out FILE [--format csv|jsonl|geojson] [--server HOST:PORT] [flags]",
       "Streams a recording through one tracking session (GCC TDOAs + particle filter) and\n"
       "writes one row per frame to the estimates CSV (--format jsonl: one JSON object per line). Planar and linear arrays (and\n"
       "--localization direction) give directions instead: SRP-PHAT peaks followed by a\n"
@@ -281,6 +282,10 @@ int RunTrack(const std::vector<std::string>& args) {
 
   auto array = io::ReadArrayFile(f.array_path, io::ArrayUse::kAuto);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
+  if (*format == io::EstimatesFormat::kGeoJson && !(array->geodetic_origin && array->geodetic_origin->heading_deg)) {
+    return UsageError(kCommand, "--format geojson needs " + f.array_path +
+                                    " to give geodetic_origin with latitude_deg, longitude_deg and heading_deg");
+  }
   // The input's rate is needed to validate the config (band edges against Nyquist). For raw
   // PCM it is the flag's: opening standard input here would be harmless, but needless.
   double sample_rate_hz = 0.0;
@@ -309,6 +314,7 @@ int RunTrack(const std::vector<std::string>& args) {
   job.config = *config;
   job.estimates_path = f.out_path;
   job.estimates_format = *format;
+  job.geodetic_origin = array->geodetic_origin;
   job.block_s = f.block_s;
   auto sources = engine::ReportsSources(job.config);  // BuildSessionConfig checked it
   if (!sources.ok()) return UsageError(kCommand, sources.status().message());

@@ -41,7 +41,8 @@ StatusOr<RemoteTrackResult> RunRemoteTrack(const std::shared_ptr<grpc::Channel>&
   stream_options.pacing = options.pacing;
   stream_options.encoding = options.encoding;
   LOCALIZER_RETURN_IF_ERROR(stream_options.Validate());
-  auto writer = io::OpenEstimatesWriter(job.estimates_path, job.estimates_format, array ? &*array : nullptr);
+  auto writer = io::OpenEstimatesWriter(job.estimates_path, job.estimates_format, array ? &*array : nullptr,
+                                       job.geodetic_origin);
   if (!writer.ok()) return writer.status();
 
   auto stream = OpenTrackSession(channel, config, options.label, options.session_key);

@@ -22,7 +22,7 @@ using nlohmann::json;
 const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz", "sensors_m",    "reference_sensor",
                                             "band_hz",         "bounds_min_m",   "bounds_max_m", "surface_z_m",
                                             "bottom_z_m",      "localization",   "source_side",  "max_sources",
-                                            "source_plane"};
+                                            "source_plane",    "geodetic_origin"};
 const char* const kLocalizationNames[] = {"auto", "position", "direction"};  // ArrayFile::Localization order
 
 StatusOr<std::vector<engine::Vec3>> ParseSensors(const json& rows, const std::string& source) {
@@ -120,6 +120,47 @@ Status ParseBounds(const json& root, const std::string& source, ArrayFile* array
   return Status::Ok();
 }
 
+// "geodetic_origin": {"latitude_deg", "longitude_deg", "altitude_m" (optional, 0),
+// "heading_deg" (optional)} (geodetic.h).
+Status ParseGeodeticOrigin(const json& root, const std::string& source, ArrayFile* array) {
+  if (!root.contains("geodetic_origin")) return Status::Ok();
+  const json& g = root["geodetic_origin"];
+  const std::set<std::string> known = {"latitude_deg", "longitude_deg", "altitude_m", "heading_deg"};
+  if (!g.is_object() || !g.contains("latitude_deg") || !g.contains("longitude_deg")) {
+    return InvalidArgument(source + ": geodetic_origin must be {\"latitude_deg\": ..., \"longitude_deg\": ..., "
+                                    "\"altitude_m\": ... (optional), \"heading_deg\": ... (optional)}");
+  }
+  for (const auto& item : g.items()) {
+    if (!known.contains(item.key())) {
+      return InvalidArgument(source + ": geodetic_origin: unknown field \"" + item.key() +
+                             "\" (known: latitude_deg, longitude_deg, altitude_m, heading_deg)");
+    }
+  }
+  GeodeticOrigin origin;
+  auto lat = FiniteNumber(g["latitude_deg"], source, "geodetic_origin.latitude_deg");
+  if (!lat.ok()) return lat.status();
+  auto lon = FiniteNumber(g["longitude_deg"], source, "geodetic_origin.longitude_deg");
+  if (!lon.ok()) return lon.status();
+  if (!(std::abs(*lat) <= 90.0) || !(std::abs(*lon) <= 180.0)) {
+    return InvalidArgument(source + ": geodetic_origin: latitude_deg must be in [-90, 90] and longitude_deg in "
+                                    "[-180, 180]");
+  }
+  origin.latitude_deg = *lat;
+  origin.longitude_deg = *lon;
+  if (g.contains("altitude_m")) {
+    auto alt = FiniteNumber(g["altitude_m"], source, "geodetic_origin.altitude_m");
+    if (!alt.ok()) return alt.status();
+    origin.altitude_m = *alt;
+  }
+  if (g.contains("heading_deg")) {
+    auto heading = FiniteNumber(g["heading_deg"], source, "geodetic_origin.heading_deg");
+    if (!heading.ok()) return heading.status();
+    origin.heading_deg = *heading;
+  }
+  array->geodetic_origin = origin;
+  return Status::Ok();
+}
+
 Status CheckFields(const json& root, const std::string& source) {
   if (!root.is_object()) return InvalidArgument(source + ": top level must be a JSON object");
   for (const auto& item : root.items()) {
@@ -127,7 +168,7 @@ Status CheckFields(const json& root, const std::string& source) {
       return InvalidArgument(source + ": unknown field \"" + item.key() +
                              "\" (known: sound_speed_mps, sample_rate_hz, sensors_m, "
                              "reference_sensor, band_hz, bounds_min_m, bounds_max_m, surface_z_m, "
-                             "bottom_z_m, localization, source_side, max_sources, source_plane)");
+                             "bottom_z_m, localization, source_side, max_sources, source_plane, geodetic_origin)");
     }
   }
   for (const char* required : {"sound_speed_mps", "sensors_m"}) {
@@ -214,6 +255,7 @@ StatusOr<ArrayFile> FromJson(const json& root, const std::string& source) {
   }
   LOCALIZER_RETURN_IF_ERROR(ParseBounds(root, source, &array));
   LOCALIZER_RETURN_IF_ERROR(ParseDirectionFields(root, source, &array));
+  LOCALIZER_RETURN_IF_ERROR(ParseGeodeticOrigin(root, source, &array));
   return array;
 }
 
@@ -279,6 +321,11 @@ Status WriteArrayJson(const std::string& path, const ArrayFile& array) {
   if (const auto& plane = array.source_plane) {
     root["source_plane"] = {{"point_m", {plane->point_m.x(), plane->point_m.y(), plane->point_m.z()}},
                             {"normal", {plane->normal.x(), plane->normal.y(), plane->normal.z()}}};
+  }
+  if (const auto& g = array.geodetic_origin) {
+    root["geodetic_origin"] = {
+        {"latitude_deg", g->latitude_deg}, {"longitude_deg", g->longitude_deg}, {"altitude_m", g->altitude_m}};
+    if (g->heading_deg) root["geodetic_origin"]["heading_deg"] = *g->heading_deg;
   }
   json rows = json::array();
   for (const engine::Vec3& m : array.sensors_m) rows.push_back({m.x(), m.y(), m.z()});

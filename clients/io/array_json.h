@@ -24,7 +24,11 @@
 //                                              side; a linear one's within source_plane)
 //     "source_plane": {"point_m": [0, 0, 1.5], optional, a linear array's positions: the
 //                      "normal": [0, 0, 1]},   plane that holds the array and the sources
-//     "max_sources": 4                         optional, directions: sources per frame, 1..16
+//     "max_sources": 4,                        optional, directions: sources per frame, 1..16
+//     "geodetic_origin": {"latitude_deg": 49.49,  optional: where the array frame's origin is
+//       "longitude_deg": -124.66,               (WGS84) and heading_deg, the bearing of its
+//       "altitude_m": 0, "heading_deg": 30}     +y axis from true north (geodetic.h); for
+//                                              --format geojson
 //   }
 // Positions from a planar array need source_side; from a linear one, source_plane and
 // source_side (engine/pipeline/session_config.h).
@@ -42,6 +46,7 @@
 #include <string>
 #include <vector>
 
+#include "clients/io/geodetic.h"
 #include "engine/core/status.h"
 #include "engine/core/types.h"
 
@@ -69,6 +74,7 @@ struct ArrayFile {
     engine::Vec3 normal = engine::Vec3::UnitZ();  // finite, not zero
   };
   std::optional<Plane> source_plane;
+  std::optional<GeodeticOrigin> geodetic_origin;  // geodetic.h
 };
 
 // What the array will be used for, which decides the geometry it needs.

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "clients/io/csv_io.h"
+#include "clients/io/estimates_geojson.h"
 #include "clients/io/estimates_jsonl.h"
 
 namespace localizer::io {
@@ -11,11 +12,23 @@ namespace localizer::io {
 StatusOr<EstimatesFormat> ParseEstimatesFormat(const std::string& name) {
   if (name == "csv") return EstimatesFormat::kCsv;
   if (name == "jsonl") return EstimatesFormat::kJsonl;
-  return InvalidArgument("format '" + name + "' is unknown; valid: csv, jsonl");
+  if (name == "geojson") return EstimatesFormat::kGeoJson;
+  return InvalidArgument("format '" + name + "' is unknown; valid: csv, jsonl, geojson");
 }
 
 StatusOr<std::unique_ptr<EstimatesWriter>> OpenEstimatesWriter(const std::string& path, EstimatesFormat format,
-                                                               const engine::ArrayGeometry* array) {
+                                                               const engine::ArrayGeometry* array,
+                                                               const std::optional<GeodeticOrigin>& origin) {
+  if (format == EstimatesFormat::kGeoJson) {
+    if (!origin) {
+      return InvalidArgument(
+          "geojson needs the array's geodetic_origin (array.json: latitude_deg, longitude_deg, heading_deg)");
+    }
+    if (path.empty()) return std::unique_ptr<EstimatesWriter>();
+    auto writer = EstimatesGeoJsonWriter::Open(path, *origin);
+    if (!writer.ok()) return writer.status();
+    return std::unique_ptr<EstimatesWriter>(std::move(*writer));
+  }
   if (path.empty()) return std::unique_ptr<EstimatesWriter>();
   std::vector<int> pair_sensors;
   for (int p = 0; array != nullptr && p < array->pair_count(); ++p) pair_sensors.push_back(array->sensor_of_pair(p));

@@ -1,19 +1,22 @@
-// Where a track's estimates go, one per frame as they come: a CSV (csv_io.h) or JSON lines
-// (estimates_jsonl.h). `localizer-cli track --format csv|jsonl` picks one; both stream, so a
-// long run writes as it goes and memory stays flat.
+// Where a track's estimates go, one per frame as they come: a CSV (csv_io.h), JSON lines
+// (estimates_jsonl.h) or GeoJSON points (estimates_geojson.h). `localizer-cli track --format
+// csv|jsonl|geojson` picks one; all stream, so a long run writes as it goes and memory stays
+// flat.
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 
+#include "clients/io/geodetic.h"
 #include "engine/array/array_geometry.h"
 #include "engine/core/estimate.h"
 #include "engine/core/status.h"
 
 namespace localizer::io {
 
-enum class EstimatesFormat { kCsv, kJsonl };
-// "csv" | "jsonl"; INVALID_ARGUMENT naming the valid ones otherwise.
+enum class EstimatesFormat { kCsv, kJsonl, kGeoJson };
+// "csv" | "jsonl" | "geojson"; INVALID_ARGUMENT naming the valid ones otherwise.
 StatusOr<EstimatesFormat> ParseEstimatesFormat(const std::string& name);
 
 class EstimatesWriter {
@@ -26,8 +29,10 @@ class EstimatesWriter {
 
 // The writer for a position session over `array` (CSV: one pair column group per
 // non-reference sensor) or, with `array` null, a session that lists sources (CSV: one row
-// per frame and source). A null writer when `path` is empty.
+// per frame and source). GeoJSON needs `origin` with its heading (INVALID_ARGUMENT saying so
+// otherwise). A null writer when `path` is empty.
 StatusOr<std::unique_ptr<EstimatesWriter>> OpenEstimatesWriter(const std::string& path, EstimatesFormat format,
-                                                               const engine::ArrayGeometry* array);
+                                                               const engine::ArrayGeometry* array,
+                                                               const std::optional<GeodeticOrigin>& origin = {});
 
 }  // namespace localizer::io

@@ -126,7 +126,7 @@ StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callb
   if (!prepared.ok()) return prepared.status();
   auto session = engine::Session::Create(prepared->config);
   if (!session.ok()) return session.status();
-  auto writer = OpenEstimatesWriter(job.estimates_path, job.estimates_format, (*session)->geometry());
+  auto writer = OpenEstimatesWriter(job.estimates_path, job.estimates_format, (*session)->geometry(), job.geodetic_origin);
   if (!writer.ok()) return writer.status();
   TrackRun run(std::move(prepared->stream), std::move(*session), std::move(*writer), callbacks);
   return run.Run(job.block_s);

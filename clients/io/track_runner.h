@@ -42,6 +42,7 @@ struct TrackJob {
   engine::AudioSessionConfig config;           // sample_rate_hz is taken from the input (WAV header, raw)
   std::string estimates_path;                  // empty: write no estimates file
   EstimatesFormat estimates_format = EstimatesFormat::kCsv;
+  std::optional<GeodeticOrigin> geodetic_origin;  // the array file's; geojson needs it
   double block_s = 0.25;                       // audio per Session::Process call, > 0
 };
 

@@ -80,6 +80,12 @@ StatusOr<XavArray> ReadXavHydrophoneCsv(const std::string& path) {
   xav.array.sample_rate_hz = deployment->sample_rate_hz;
   xav.array.bounds_max_m.z() = xav.surface_z_m;
   xav.array.bounds_min_m.z() = xav.surface_z_m - xav.water_depth_m;
+  // Where the mooring was; the sheet does not say which way the frame's axes point.
+  GeodeticOrigin origin;
+  origin.latitude_deg = deployment->latitude_deg;
+  origin.longitude_deg = deployment->longitude_deg;
+  origin.altitude_m = -xav.surface_z_m;  // the frame's origin, surface_z_m below sea level
+  xav.array.geodetic_origin = origin;
   return xav;
 }
 

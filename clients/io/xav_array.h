@@ -9,7 +9,9 @@
 // The water column: each hydrophone's depth is surface_z - z, so the surface is the median of
 // depth + z over the hydrophones (7.03 m in the array frame there) and the bottom lies the
 // water depth below it (-0.97 m); both become the array file's bounds (bounds_max_m.z /
-// bounds_min_m.z), x and y open. The depths are the deployment's nominal values: tide moves
+// bounds_min_m.z), x and y open. The sheet's latitude and longitude become the array's
+// geodetic origin (its altitude -surface_z_m: sea level taken as the ellipsoid, a few tens of
+// metres off, which only shifts GeoJSON altitudes); no heading, since the sheet gives none. The depths are the deployment's nominal values: tide moves
 // the surface by a few metres, the bottom not at all. A CSV without those two files beside it
 // is refused, naming what is missing (write an array.json for other arrays).
 #pragma once
