@@ -16,6 +16,7 @@ only sends cannot outrun the server.
 """
 from __future__ import annotations
 
+import asyncio
 from typing import AsyncIterator
 
 import grpc
@@ -31,9 +32,10 @@ from .session import locate_request
 __all__ = ["connect", "TrackSession", "locate", "list_sessions", "close_session"]
 
 
-class _BearerToken(grpc.aio.UnaryUnaryClientInterceptor, grpc.aio.UnaryStreamClientInterceptor,
-                   grpc.aio.StreamUnaryClientInterceptor, grpc.aio.StreamStreamClientInterceptor):
-    """Adds ``authorization: Bearer TOKEN`` to every call (over TLS or plaintext)."""
+class _BearerToken:
+    """Adds ``authorization: Bearer TOKEN`` to every call (over TLS or plaintext). One
+    interceptor object per call kind: grpc.aio 1.51 files an interceptor under the first kind
+    it implements only."""
 
     def __init__(self, token: str):
         self._pair = auth_metadata(token)
@@ -43,15 +45,23 @@ class _BearerToken(grpc.aio.UnaryUnaryClientInterceptor, grpc.aio.UnaryStreamCli
         return grpc.aio.ClientCallDetails(d.method, d.timeout, metadata, d.credentials,
                                           d.wait_for_ready)
 
+
+class _UnaryUnaryToken(_BearerToken, grpc.aio.UnaryUnaryClientInterceptor):
     async def intercept_unary_unary(self, continuation, details, request):
         return await continuation(self._details(details), request)
 
+
+class _UnaryStreamToken(_BearerToken, grpc.aio.UnaryStreamClientInterceptor):
     async def intercept_unary_stream(self, continuation, details, request):
         return await continuation(self._details(details), request)
 
+
+class _StreamUnaryToken(_BearerToken, grpc.aio.StreamUnaryClientInterceptor):
     async def intercept_stream_unary(self, continuation, details, request_iterator):
         return await continuation(self._details(details), request_iterator)
 
+
+class _StreamStreamToken(_BearerToken, grpc.aio.StreamStreamClientInterceptor):
     async def intercept_stream_stream(self, continuation, details, request_iterator):
         return await continuation(self._details(details), request_iterator)
 
@@ -64,7 +74,10 @@ def connect(target: str, *, options=(), credentials: grpc.ChannelCredentials | N
     if credentials is None:
         credentials = tls_credentials(tls_ca, tls_cert, tls_key)
     token = resolve_token(token, token_file)
-    interceptors = [_BearerToken(token)] if token is not None else None
+    interceptors = None
+    if token is not None:
+        interceptors = [kind(token) for kind in (_UnaryUnaryToken, _UnaryStreamToken,
+                                                 _StreamUnaryToken, _StreamStreamToken)]
     if credentials is not None:
         return grpc.aio.secure_channel(target, credentials, options=list(options),
                                        interceptors=interceptors)
@@ -85,14 +98,14 @@ class TrackSession(StreamState):
         self._call = pb_grpc.LocalizerStub(channel).Track(
             metadata=((SESSION_KEY_METADATA, self.session_key),), timeout=timeout)
         try:
-            await self._call.write(first_request)
-            first = await self._call.read()
+            await self._write(first_request)
+            first = await self._read()
         except grpc.RpcError as err:
             mapped = from_proxy_reset(err)
             if mapped is err:
                 raise
             raise mapped from err
-        if not self._opened(None if first is grpc.aio.EOF else first):
+        if not self._opened(first):
             self._call.cancel()
             raise RuntimeError(f"Track: expected `opened` first, got {first!r}")
         return self
@@ -119,23 +132,47 @@ class TrackSession(StreamState):
                                        last_frame_received=self.last_frame_received,
                                        session_key=self.session_key, timeout=timeout)
 
+    async def _read(self) -> pb.TrackResponse | None:
+        """The next response, None at the end of the stream."""
+        try:
+            response = await self._call.read()
+        except StopAsyncIteration:  # how an intercepted call (connect(token=...)) says EOF
+            return None
+        return None if response is grpc.aio.EOF else response
+
+    async def _write(self, request: pb.TrackRequest) -> None:
+        try:
+            await self._call.write(request)
+        except asyncio.InvalidStateError:
+            # A call that went through an interceptor (connect(token=...)) says "RPC already
+            # finished" where a plain call raises its status: raise the status here too.
+            if self._call.done():
+                code = await self._call.code()
+                if code != grpc.StatusCode.OK:
+                    raise from_proxy_reset(grpc.aio.AioRpcError(
+                        code, await self._call.initial_metadata(),
+                        await self._call.trailing_metadata(), await self._call.details()))
+            raise
+
     async def send(self, samples: npt.ArrayLike, *, sequence: int | None = None,
                    encoding: str = "float") -> int:
         """Send one block (channels, samples); returns its sequence number. ValueError for a
         bad block, as ``localizer.TrackSession.send``."""
         request = self._block_request(samples, sequence, encoding)
-        await self._call.write(request)
+        await self._write(request)
         return request.block.sequence
 
     async def send_block(self, block: pb.SampleBlock) -> None:
         """Send a ready ``pb.SampleBlock`` as is."""
-        await self._call.write(self._raw_block_request(block))
+        await self._write(self._raw_block_request(block))
 
     async def send_imu(self, batch: pb.ImuBatch) -> None:
-        await self._call.write(pb.TrackRequest(imu=batch))
+        """Send a ``pb.ImuBatch`` (moving-array sessions)."""
+        await self._write(pb.TrackRequest(imu=batch))
 
     async def send_scan(self, scan_message: pb.Scan) -> None:
-        await self._call.write(pb.TrackRequest(scan=scan_message))
+        """Send a ``pb.Scan`` (detection sessions); answered by a ``tracks`` response."""
+        await self._write(pb.TrackRequest(scan=scan_message))
 
     async def close(self) -> None:
         """Half-close: no more blocks; the server drains, ends OK and closes the session."""
@@ -148,8 +185,8 @@ class TrackSession(StreamState):
     async def _responses(self) -> AsyncIterator[pb.TrackResponse]:
         try:
             while True:
-                response = await self._call.read()
-                if response is grpc.aio.EOF:
+                response = await self._read()
+                if response is None:
                     return
                 self._note(response)
                 yield response
