@@ -41,7 +41,7 @@ see ``from_proxy_reset``.
 ``_version.py`` by the build that made this copy (setup.py or the CMake target).
 """
 from ._stubs import pb, pb_grpc
-from . import synth
+from . import audio, synth  # audio imports soundfile only when it reads
 from ._track import InstanceLost, from_proxy_reset
 from .blocks import check_samples, pcm16_bytes, sample_block
 from .connection import (AUTHORIZATION_METADATA, SESSION_KEY_METADATA, add_connect_arguments,
@@ -56,7 +56,7 @@ try:
 except ImportError:  # the source tree, used in place: no build wrote _version.py
     __version__ = "0+unknown"
 
-__all__ = ["__version__", "pb", "pb_grpc", "synth",
+__all__ = ["__version__", "pb", "pb_grpc", "audio", "synth",
            "SESSION_KEY_METADATA", "AUTHORIZATION_METADATA", "connect", "tls_credentials",
            "read_token_file", "auth_metadata", "add_connect_arguments", "connect_kwargs",
            "vector3", "session_config", "bounds", "presence_summary", "platform_config",
