@@ -19,6 +19,9 @@ packages=(
   openssl                # test certificates (deploy/tls/make_test_certs.sh, tests/server/security_test,
                          # tls_front_test, metrics_https_test)
   python3-grpcio python3-grpc-tools python3-numpy  # Python client and load test (clients/)
+  python3-protobuf python3-soundfile  # the package localizer: messages; localizer.audio (WAV, FLAC)
+  python3-pip python3-venv python3-setuptools python3-wheel  # pip install ./clients/python, offline
+                         # (--no-build-isolation), and its test (tests/python/test_package_install)
   python3-scipy          # Nolan's alpha-stable quantile table (tests/sim/alpha_stable_test)
   prometheus             # promtool, and a real Prometheus server in the ops tests (deploy/prometheus)
   python3-yaml           # the ops tests read the shipped YAML (deploy/prometheus, deploy/k8s)

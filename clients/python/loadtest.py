@@ -45,8 +45,8 @@ import grpc
 import grpc.aio
 import numpy as np
 
-import localizer_client as lc
-from localizer_client import pb, synth
+import localizer as lc
+from localizer import pb, synth
 from loadtest_report import Aggregator, print_summary
 
 SOUND_SPEED_MPS = 1500.0
@@ -132,7 +132,7 @@ class Workload:
                                            band_hz=self.band_hz(), snr_db=SNR_DB, seed=args.seed)
         self.bodies = []
         for k in range(n_blocks):
-            chunk = audio[k * args.block:(k + 1) * args.block]
+            chunk = audio[:, k * args.block:(k + 1) * args.block]  # (channels, samples)
             # sequence 0 is not serialised: the body is channel_count + samples only.
             self.bodies.append(lc.sample_block(0, chunk, encoding=args.encoding).SerializeToString())
         check = pb.TrackRequest.FromString(self.block_request(7, 0))

@@ -1,8 +1,9 @@
-"""The Python client against a real localizer-server over loopback.
+"""The Python client, through its deprecated alias localizer_client (the old (frames,
+channels) blocks and raw estimates: scripts written for it must keep working), against a real
+localizer-server over loopback. test_package_client tests the package localizer itself.
 
 Environment (set by tests/python/CMakeLists.txt):
-  LOCALIZER_PY_GEN         the generated stubs (<build>/clients/python/gen)
-  LOCALIZER_PY_CLIENT_DIR  the client library and scripts (<build>/clients/python)
+  LOCALIZER_PY_CLIENT_DIR  the client package, its stubs and scripts (<build>/clients/python)
   LOCALIZER_SERVER         the localizer-server binary; the server tests skip without it
 
 The synthetic recording: a 1.5 m regular tetrahedron of sensors, sound speed 1500 m/s,

@@ -1,50 +1,90 @@
-"""A small client for the localizer gRPC service (proto/localizer/v1/localizer.proto).
+"""Deprecated: the client's old name, kept so that scripts written for it run unchanged. New
+code imports ``localizer`` (pip install --no-build-isolation ./clients/python).
 
-    import localizer_client as lc
-    channel = lc.connect("127.0.0.1:50051")
-    config = lc.session_config(lc.synth.tetrahedron(1.5), 44100, sound_speed_mps=1500,
-                               band_hz=(200, 8000), label="array-1")
-    session = lc.TrackSession(channel, config)        # waits for `opened`
-    session.send(block)                               # numpy (frames, channels)
-    session.close()                                   # half-close: the server drains and ends OK
-    for estimate in session.estimates():
-        print(estimate.frame_index, estimate.position_m)
-
-Errors: every call raises ``grpc.RpcError`` when the server ends the call with a status other
-than OK; ``err.code()`` is the ``grpc.StatusCode`` (see the proto for what each means: e.g.
-INVALID_ARGUMENT for a bad config, NOT_FOUND / PERMISSION_DENIED for a bad resume,
-RESOURCE_EXHAUSTED when the server is full, UNAVAILABLE when it drains). A refused block does
-not end the stream: it comes back as a ``rejected`` response.
-
-Session affinity (several server instances behind a proxy, e.g. deploy/nginx/localizer.conf):
-a session lives in one server instance, so every call of a session must reach the same one.
-The client sends the metadata ``x-localizer-session-key`` (``SESSION_KEY_METADATA``) on every
-Track stream, and on ``locate`` / ``close_session`` when given a ``session_key``; the proxy
-routes by consistent hashing of it. ``TrackSession(..., session_key=...)`` sets it (default:
-the config's label, else a random one) and ``reattach()`` resumes with the same key. When
-resuming by hand with ``TrackSession.resume``, pass the ``session_key`` the session was opened
-with: without it the session id is used, which a proxy may route to another instance (the
-resume then fails with NOT_FOUND). Use any stable string, e.g. the array's name; keys that
-differ spread sessions over the instances. If the instance holding a session dies, the
-session is gone: its stream ends with UNAVAILABLE and resuming it fails (UNAVAILABLE or
-NOT_FOUND); open a new session (the proxy sends it to a live instance). Through a proxy,
-gRPC itself reports that loss as INTERNAL "Received RST_STREAM with error code 2" (the
-proxy cannot send trailers for a dead upstream, it resets the stream); ``TrackSession``
-raises it as ``InstanceLost`` (code UNAVAILABLE, the original error in ``.cause``), see
-``from_proxy_reset``.
-
-The generated stubs are found next to this package in the build tree, or through the
-environment variable LOCALIZER_PY_GEN (see ``_stubs``); they are re-exported as ``pb`` (the
-messages) and ``pb_grpc`` (the service stub).
+What this alias keeps from the old client, where ``localizer`` changed:
+  - blocks are numpy (frames, channels), frame-major as on the wire (``localizer``: (channels,
+    samples), checked against the array's channel count); no client-side checks;
+  - ``TrackSession.estimates()`` yields raw ``pb.Estimate`` messages and ``locate`` returns
+    the ``pb.LocateResponse`` (``localizer``: ``Estimate`` / ``Fix`` dataclasses);
+  - ``synth.broadband_at_sensors`` returns (samples, channels);
+  - ``sources(estimate)`` reads a raw estimate's sources as dicts.
+Everything else is ``localizer``'s own object.
 """
-from ._stubs import pb, pb_grpc  # noqa: F401  (re-exported)
-from . import synth  # noqa: F401  (re-exported)
-from .connection import (SESSION_KEY_METADATA, AUTHORIZATION_METADATA, read_token_file, auth_metadata,  # noqa: F401
-                         tls_credentials, connect, add_connect_arguments, connect_kwargs)
-from .messages import (vector3, session_config, sources, bounds, presence_summary, platform_config,  # noqa: F401
-                       detection_config, imu_batch, scan, sample_block, pcm16_bytes)
-from .session import (InstanceLost, from_proxy_reset, TrackSession, locate, list_sessions,  # noqa: F401
-                      close_session)
+import warnings
+
+import numpy as np
+
+import localizer as _localizer
+from localizer import (AUTHORIZATION_METADATA, SESSION_KEY_METADATA, InstanceLost,
+                       add_connect_arguments, auth_metadata, bounds, close_session, connect,
+                       connect_kwargs, detection_config, from_proxy_reset, imu_batch,
+                       list_sessions, pb, pb_grpc, pcm16_bytes, platform_config,
+                       presence_summary, read_token_file, scan, session_config,
+                       tls_credentials, vector3)
+from . import synth
+
+warnings.warn("localizer_client is deprecated: import localizer (blocks are (channels, "
+              "samples) there, estimates dataclasses)", DeprecationWarning, stacklevel=2)
+
+
+def sample_block(sequence, data, *, encoding="float"):
+    """A ``pb.SampleBlock`` from ``data`` of shape (frames, channels), frame-major as on the wire."""
+    data = np.asarray(data)
+    if data.ndim != 2:
+        raise ValueError(f"data must have shape (frames, channels), got {data.shape}")
+    if encoding == "pcm16":
+        return pb.SampleBlock(sequence=sequence, channel_count=data.shape[1],
+                              pcm_s16le=pcm16_bytes(data))
+    if encoding != "float":
+        raise ValueError(f"encoding must be 'float' or 'pcm16', got {encoding!r}")
+    block = pb.SampleBlock(sequence=sequence, channel_count=data.shape[1])
+    block.samples.extend(data.astype(np.float32).ravel().tolist())  # any values: the server judges
+    return block
+
+
+class TrackSession(_localizer.TrackSession):
+    """``localizer.TrackSession`` with the old block layout and raw estimates."""
+
+    def send(self, data, *, sequence=None, encoding="float"):
+        """Queue one block (numpy (frames, channels)); returns its sequence number."""
+        sequence = self.next_sequence if sequence is None else sequence
+        self.send_block(sample_block(sequence, data, encoding=encoding))
+        return sequence
+
+    def estimates(self):
+        """The ``pb.Estimate`` responses only; rejections and gaps go to .rejected / .gaps."""
+        for response in self:
+            kind = response.WhichOneof("kind")
+            if kind == "estimate":
+                yield response.estimate
+            elif kind == "rejected":
+                self.rejected.append(response.rejected)
+            elif kind == "gap":
+                self.gaps.append(response.gap)
+
+
+def locate(channel, config, data, *, encoding="float", session_key=None, timeout=None):
+    """One-shot TDOAs and fix of one block (numpy (frames, channels)): a ``pb.LocateResponse``."""
+    request = pb.LocateRequest(config=config, block=sample_block(1, data, encoding=encoding))
+    metadata = [(SESSION_KEY_METADATA, session_key)] if session_key else None
+    return pb_grpc.LocalizerStub(channel).Locate(request, metadata=metadata, timeout=timeout)
+
+
+def sources(estimate):
+    """A raw direction-session estimate's sources as dicts (``localizer.Source`` is the
+    dataclass): ``id``, ``status``, ``azimuth_rad``, ``elevation_rad``, ``cone_angle_rad``,
+    ``direction`` (tuple), ``sigma_rad``, ``source_present``, ``power_db``, ``position_m``
+    (tuple or None) and ``range_sd_m``."""
+    rows = []
+    for s in (_localizer.Source.from_proto(m) for m in estimate.sources):
+        rows.append({"id": s.id, "status": s.status, "azimuth_rad": s.azimuth_rad,
+                     "elevation_rad": s.elevation_rad, "cone_angle_rad": s.cone_angle_rad,
+                     "direction": tuple(s.direction.tolist()), "sigma_rad": s.sigma_rad,
+                     "source_present": s.source_present, "power_db": s.power_db,
+                     "position_m": None if s.position_m is None else tuple(s.position_m.tolist()),
+                     "range_sd_m": s.range_sd_m})
+    return rows
+
 
 __all__ = ["pb", "pb_grpc", "synth", "SESSION_KEY_METADATA", "AUTHORIZATION_METADATA", "connect",
            "tls_credentials", "read_token_file", "auth_metadata", "add_connect_arguments", "connect_kwargs",

@@ -1,5 +1,9 @@
 """Connecting to a localizer server: TLS and mutual TLS credentials, bearer tokens (a call
-interceptor), the session-affinity metadata, and the matching command-line arguments."""
+interceptor), the session-affinity metadata, and the matching command-line arguments.
+``localizer.aio.connect`` makes the asyncio channel from the same pieces."""
+from __future__ import annotations
+
+import argparse
 import collections
 
 import grpc
@@ -12,7 +16,7 @@ SESSION_KEY_METADATA = "x-localizer-session-key"
 AUTHORIZATION_METADATA = "authorization"
 
 
-def read_token_file(path):
+def read_token_file(path: str) -> str:
     """The bearer token in ``path``: its first line that is neither blank nor a ``#`` comment;
     a ``ROLE TOKEN`` line (as in the server's --auth-token-file) also works, the last field is
     the token. ValueError naming the flag and path when there is none; OSError when unreadable."""
@@ -24,12 +28,13 @@ def read_token_file(path):
     raise ValueError(f'--auth-token-file "{path}" holds no token')
 
 
-def auth_metadata(token):
+def auth_metadata(token: str) -> tuple[str, str]:
     """The metadata pair that carries ``token``, for calls made without ``connect(token=...)``."""
     return (AUTHORIZATION_METADATA, "Bearer " + token)
 
 
-def tls_credentials(tls_ca=None, tls_cert=None, tls_key=None):
+def tls_credentials(tls_ca: str | None = None, tls_cert: str | None = None,
+                    tls_key: str | None = None) -> grpc.ChannelCredentials | None:
     """``grpc.ssl_channel_credentials`` from PEM files (None when all three are None): the
     server is verified against ``tls_ca`` (None: the system's roots); ``tls_cert`` and
     ``tls_key`` (together) are the client certificate for mutual TLS."""
@@ -57,7 +62,7 @@ class _BearerToken(grpc.UnaryUnaryClientInterceptor, grpc.UnaryStreamClientInter
                    grpc.StreamUnaryClientInterceptor, grpc.StreamStreamClientInterceptor):
     """Adds ``authorization: Bearer TOKEN`` to every call (over TLS or plaintext)."""
 
-    def __init__(self, token):
+    def __init__(self, token: str):
         self._pair = auth_metadata(token)
 
     def _details(self, d):
@@ -78,8 +83,16 @@ class _BearerToken(grpc.UnaryUnaryClientInterceptor, grpc.UnaryStreamClientInter
         return continuation(self._details(details), request_iterator)
 
 
-def connect(target, *, options=(), credentials=None, tls_ca=None, tls_cert=None, tls_key=None,
-            token=None, token_file=None):
+def resolve_token(token: str | None, token_file: str | None) -> str | None:
+    """``token``, else the token in ``token_file`` (None when both are None)."""
+    if token is None and token_file is not None:
+        return read_token_file(token_file)
+    return token
+
+
+def connect(target: str, *, options=(), credentials: grpc.ChannelCredentials | None = None,
+            tls_ca: str | None = None, tls_cert: str | None = None, tls_key: str | None = None,
+            token: str | None = None, token_file: str | None = None) -> grpc.Channel:
     """A channel to ``target`` ("host:port").
 
     TLS when ``credentials`` (grpc.ChannelCredentials) or any of ``tls_ca`` / ``tls_cert`` /
@@ -92,14 +105,13 @@ def connect(target, *, options=(), credentials=None, tls_ca=None, tls_cert=None,
         channel = grpc.secure_channel(target, credentials, options=list(options))
     else:
         channel = grpc.insecure_channel(target, options=list(options))
-    if token is None and token_file is not None:
-        token = read_token_file(token_file)
+    token = resolve_token(token, token_file)
     if token is not None:
         channel = grpc.intercept_channel(channel, _BearerToken(token))
     return channel
 
 
-def add_connect_arguments(parser):
+def add_connect_arguments(parser: argparse.ArgumentParser) -> None:
     """Adds --tls-ca, --tls-cert, --tls-key and --auth-token-file to an argparse parser (the
     same flags as localizer-cli); pass the parsed namespace to ``connect_kwargs``."""
     parser.add_argument("--tls-ca", metavar="FILE",
@@ -111,7 +123,7 @@ def add_connect_arguments(parser):
                         help="file holding the bearer token sent on every call (first non-'#' line)")
 
 
-def connect_kwargs(args):
+def connect_kwargs(args: argparse.Namespace) -> dict:
     """``connect`` keyword arguments from what ``add_connect_arguments`` parsed."""
     return dict(tls_ca=args.tls_ca, tls_cert=args.tls_cert, tls_key=args.tls_key,
                 token_file=args.auth_token_file)

@@ -1,26 +1,44 @@
-"""Building the service's request messages (session configs, bounds, blocks, IMU batches,
-scans) from plain Python and numpy values, and reading estimates (sources, presence)."""
+"""Building the service's request messages (session configs, bounds, IMU batches, scans)
+from plain Python and numpy values, and a presence summary over a run's estimates. Blocks
+are built in ``blocks``, estimates read in ``estimates``."""
+from __future__ import annotations
+
+from typing import Iterable, Sequence
+
 import numpy as np
+import numpy.typing as npt
 
 from ._stubs import pb
 
-def vector3(xyz):
+__all__ = ["vector3", "session_config", "bounds", "presence_summary", "platform_config",
+           "detection_config", "imu_batch", "scan"]
+
+Triple = Sequence[float]
+
+
+def vector3(xyz: Triple) -> pb.Vector3:
     """A ``pb.Vector3`` from any 3-sequence (metres or m/s)."""
     x, y, z = (float(v) for v in xyz)
     return pb.Vector3(x=x, y=y, z=z)
 
 
-def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, reference_sensor=0,
-                   frame_samples=0, hop_samples=0, particles=0, band_hz=None, seed=None,
-                   backend="", label="", init_region=None, platform=None, bounds=None,
-                   search_radius_m=0.0, presence_false_alarm=0.0, source_timeout_s=0.0,
-                   localization="", max_sources=None, source_side=None, source_plane=None):
+def session_config(sensors_m: npt.ArrayLike, sample_rate_hz: float, *,
+                   sound_speed_mps: float = 1500.0, reference_sensor: int = 0,
+                   frame_samples: int = 0, hop_samples: int = 0, particles: int = 0,
+                   band_hz: tuple[float, float] | None = None, seed: int | None = None,
+                   backend: str = "", label: str = "",
+                   init_region: tuple[Triple, Triple] | None = None,
+                   platform: pb.PlatformConfig | None = None, bounds: pb.Bounds | None = None,
+                   search_radius_m: float = 0.0, presence_false_alarm: float = 0.0,
+                   source_timeout_s: float = 0.0, localization: str = "",
+                   max_sources: int | None = None, source_side: Triple | None = None,
+                   source_plane: tuple[Triple, Triple] | None = None) -> pb.SessionConfig:
     """A ``pb.SessionConfig``.
 
     sensors_m: (C, 3) sensor positions, metres (C >= 2; a position needs 4 off a common plane).
     localization: "position", "direction" or "auto" / "" (position for a volumetric array,
     directions for a planar or linear one: SessionOpened.localization says which; each
-    estimate's ``sources`` then lists the sources followed, see ``sources()``). max_sources:
+    estimate's ``sources`` then lists the sources followed, ``localizer.Source``). max_sources:
     direction sessions' sources per frame, 1..16 (None: 4). source_side: (x, y, z), a planar
     array's side that holds the sources (None: not stated; mirror images); with a linear array,
     the side within source_plane. source_plane: ((x, y, z) point, (nx, ny, nz) normal), the
@@ -69,27 +87,8 @@ def session_config(sensors_m, sample_rate_hz, *, sound_speed_mps=1500.0, referen
     return config
 
 
-def sources(estimate):
-    """A direction session's estimate as plain rows: one dict per source followed, in order of
-    id, with ``id``, ``status`` ("confirmed" or "coasting"), ``azimuth_rad``,
-    ``elevation_rad``, ``cone_angle_rad`` (NaN where the array cannot observe it),
-    ``direction`` (a unit (x, y, z) tuple), ``sigma_rad``, ``source_present``, ``power_db``,
-    and for positions from a planar or linear array ``position_m`` (an (x, y, z) tuple where
-    the frame bounds the source's range, else None) and ``range_sd_m``."""
-    names = {pb.TRACK_STATUS_TENTATIVE: "tentative", pb.TRACK_STATUS_CONFIRMED: "confirmed",
-             pb.TRACK_STATUS_COASTING: "coasting"}
-    return [{"id": s.source_id, "status": names.get(s.status, "unspecified"),
-             "azimuth_rad": s.azimuth_rad, "elevation_rad": s.elevation_rad,
-             "cone_angle_rad": s.cone_angle_rad,
-             "direction": (s.direction.x, s.direction.y, s.direction.z),
-             "sigma_rad": s.sigma_rad, "source_present": s.source_present, "power_db": s.power_db,
-             "position_m": ((s.position_m.x, s.position_m.y, s.position_m.z)
-                            if s.HasField("position_m") else None),
-             "range_sd_m": s.range_sd_m}
-            for s in estimate.sources]
-
-
-def bounds(min_m=None, max_m=None, *, surface_z_m=None, bottom_z_m=None):
+def bounds(min_m: Sequence[float | None] | None = None, max_m: Sequence[float | None] | None = None,
+           *, surface_z_m: float | None = None, bottom_z_m: float | None = None) -> pb.Bounds:
     """A ``pb.Bounds``: the box that can hold the source, metres, world frame.
 
     min_m, max_m: (x, y, z) corners or None; an axis that is None or infinite (-inf in min_m,
@@ -120,10 +119,10 @@ def bounds(min_m=None, max_m=None, *, surface_z_m=None, bottom_z_m=None):
     return b
 
 
-def presence_summary(estimates):
-    """Source presence over a run: a dict with ``frames``, ``tested`` (estimates whose
-    presence test ran: threshold > 0), ``present``, ``ambiguous``, ``max_statistic`` and the
-    ``threshold`` of that frame, and ``no_source`` (frames were tested and none held a
+def presence_summary(estimates: Iterable) -> dict:
+    """Source presence over a run (``localizer.Estimate``s or raw ``pb.Estimate``s): a dict
+    with ``frames``, ``tested`` (estimates whose presence test ran: threshold > 0),
+    ``present``, ``ambiguous``, ``max_statistic`` and the ``threshold`` of that frame, and ``no_source`` (frames were tested and none held a
     source; the line ``localizer-cli`` prints then is ``no_source_line``); ``initialised``
     (positions) and ``far_field`` (of those, the ones whose frame could not bound the range:
     trust their direction from the array's centroid, not their range)."""
@@ -147,16 +146,17 @@ def presence_summary(estimates):
     return out
 
 
-def platform_config(*, attitude_filter="", use_magnetometer=False, mag_declination_rad=0.0,
-                    origin_m=(0.0, 0.0, 0.0)):
+def platform_config(*, attitude_filter: str = "", use_magnetometer: bool = False,
+                    mag_declination_rad: float = 0.0,
+                    origin_m: Triple = (0.0, 0.0, 0.0)) -> pb.PlatformConfig:
     """A ``pb.PlatformConfig``: the array rides a platform whose attitude comes from its IMU
     ("quaternion" filter by default, or "euler"); origin_m: the body origin in the world."""
     return pb.PlatformConfig(attitude_filter=attitude_filter, use_magnetometer=use_magnetometer,
                              mag_declination_rad=mag_declination_rad, origin_m=vector3(origin_m))
 
 
-def detection_config(*, label="", dimensions=0, range_sigma_m=0.0, bearing_sigma_rad=0.0,
-                     **detections):
+def detection_config(*, label: str = "", dimensions: int = 0, range_sigma_m: float = 0.0,
+                     bearing_sigma_rad: float = 0.0, **detections) -> pb.SessionConfig:
     """A ``pb.SessionConfig`` for a detection (track-while-scan) session: the session takes
     ``scan()``s of plots and answers each with a ``pb.TrackList``. Keyword arguments are
     ``pb.DetectionConfig`` fields (confirm_hits, gate_probability, ...); 0 means the default."""
@@ -165,7 +165,9 @@ def detection_config(*, label="", dimensions=0, range_sigma_m=0.0, bearing_sigma
     return pb.SessionConfig(detections=d, label=label)
 
 
-def imu_batch(sequence, t_s, gyro_rps, accel_mps2, mag_uT=None, origin_m=None):
+def imu_batch(sequence: int, t_s: npt.ArrayLike, gyro_rps: npt.ArrayLike,
+              accel_mps2: npt.ArrayLike, mag_uT: npt.ArrayLike | None = None,
+              origin_m: Triple | None = None) -> pb.ImuBatch:
     """A ``pb.ImuBatch`` from arrays: t_s (N,), gyro_rps and accel_mps2 (N, 3), mag_uT (N, 3)
     or None; times on the session clock (seconds from its first audio sample), increasing."""
     batch = pb.ImuBatch(sequence=sequence)
@@ -182,8 +184,9 @@ def imu_batch(sequence, t_s, gyro_rps, accel_mps2, mag_uT=None, origin_m=None):
     return batch
 
 
-def scan(sequence, time_s, ranges_m, bearings_rad, *, elevations_rad=None, snr_db=None,
-         sensor_position_m=(0.0, 0.0, 0.0)):
+def scan(sequence: int, time_s: float, ranges_m: Sequence[float], bearings_rad: Sequence[float],
+         *, elevations_rad: Sequence[float] | None = None, snr_db: Sequence[float] | None = None,
+         sensor_position_m: Triple = (0.0, 0.0, 0.0)) -> pb.Scan:
     """A ``pb.Scan``: one sensor revolution's plots (range m, bearing rad from +x towards +y,
     optional elevation rad and SNR dB) at time_s, the sensor at sensor_position_m."""
     s = pb.Scan(sequence=sequence, time_s=float(time_s), sensor_position_m=vector3(sensor_position_m))
@@ -194,27 +197,3 @@ def scan(sequence, time_s, ranges_m, bearings_rad, *, elevations_rad=None, snr_d
         if snr_db is not None:
             d.snr_db = float(snr_db[i])
     return s
-
-
-def sample_block(sequence, data, *, encoding="float"):
-    """A ``pb.SampleBlock`` from ``data`` of shape (frames, channels), frame-major as on the wire.
-
-    encoding "float": ``samples`` as float32; "pcm16": ``pcm_s16le`` (value * 32768, clipped).
-    """
-    data = np.asarray(data)
-    if data.ndim != 2:
-        raise ValueError(f"data must have shape (frames, channels), got {data.shape}")
-    block = pb.SampleBlock(sequence=sequence, channel_count=data.shape[1])
-    if encoding == "float":
-        block.samples.extend(data.astype(np.float32).ravel().tolist())
-    elif encoding == "pcm16":
-        block.pcm_s16le = pcm16_bytes(data)
-    else:
-        raise ValueError(f"encoding must be 'float' or 'pcm16', got {encoding!r}")
-    return block
-
-
-def pcm16_bytes(data):
-    """16-bit little-endian PCM of ``data`` (any shape, amplitude 1 = full scale), C order."""
-    scaled = np.clip(np.round(np.asarray(data, np.float64) * 32768.0), -32768, 32767)
-    return scaled.astype("<i2").tobytes()
