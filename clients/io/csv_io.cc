@@ -225,13 +225,6 @@ Status EstimatesCsvWriter::Write(const engine::Estimate& e) {
   return Status::Ok();
 }
 
-Status EstimatesCsvWriter::Close() {
-  if (!out_) return Status::Ok();
-  out_->close();
-  const bool failed = !*out_;
-  out_.reset();
-  if (failed) return InvalidArgument(path_ + ": write failed when closing");
-  return Status::Ok();
-}
+Status EstimatesCsvWriter::Close() { return CloseOutput(&out_, path_); }
 
 }  // namespace localizer::io

@@ -72,13 +72,8 @@ Status EstimatesGeoJsonWriter::Write(const engine::Estimate& e) {
 }
 
 Status EstimatesGeoJsonWriter::Close() {
-  if (!out_) return Status::Ok();
-  *out_ << "\n]}\n";
-  out_->close();
-  const bool failed = !*out_;
-  out_.reset();
-  if (failed) return InvalidArgument(path_ + ": write failed when closing");
-  return Status::Ok();
+  if (out_) *out_ << "\n]}\n";
+  return CloseOutput(&out_, path_);
 }
 
 }  // namespace localizer::io

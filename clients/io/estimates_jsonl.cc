@@ -99,13 +99,6 @@ Status EstimatesJsonlWriter::Write(const engine::Estimate& estimate) {
   return Status::Ok();
 }
 
-Status EstimatesJsonlWriter::Close() {
-  if (!out_) return Status::Ok();
-  out_->close();
-  const bool failed = !*out_;
-  out_.reset();
-  if (failed) return InvalidArgument(path_ + ": write failed when closing");
-  return Status::Ok();
-}
+Status EstimatesJsonlWriter::Close() { return CloseOutput(&out_, path_); }
 
 }  // namespace localizer::io

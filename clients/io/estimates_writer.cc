@@ -16,6 +16,15 @@ StatusOr<EstimatesFormat> ParseEstimatesFormat(const std::string& name) {
   return InvalidArgument("format '" + name + "' is unknown; valid: csv, jsonl, geojson");
 }
 
+Status CloseOutput(std::unique_ptr<std::ofstream>* out, const std::string& path) {
+  if (!*out) return Status::Ok();
+  (*out)->close();
+  const bool failed = !**out;
+  out->reset();
+  if (failed) return InvalidArgument(path + ": write failed when closing");
+  return Status::Ok();
+}
+
 StatusOr<std::unique_ptr<EstimatesWriter>> OpenEstimatesWriter(const std::string& path, EstimatesFormat format,
                                                                const engine::ArrayGeometry* array,
                                                                const std::optional<GeodeticOrigin>& origin) {

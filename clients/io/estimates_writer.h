@@ -4,6 +4,7 @@
 // flat.
 #pragma once
 
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -26,6 +27,10 @@ class EstimatesWriter {
   // Flushes and closes; reports a failed write that the stream only notices at the end.
   virtual Status Close() = 0;
 };
+
+// Closes `*out` (a no-op when null or already closed) and resets it; INVALID_ARGUMENT naming
+// `path` when the stream failed, which a buffered stream may only notice now.
+Status CloseOutput(std::unique_ptr<std::ofstream>* out, const std::string& path);
 
 // The writer for a position session over `array` (CSV: one pair column group per
 // non-reference sensor) or, with `array` null, a session that lists sources (CSV: one row
