@@ -39,6 +39,7 @@ struct TrackFlags {
   StreamFlags stream;
   int print_every = 10;
   double block_s = 0.25;
+  uint64_t legacy_seed = 0;  // --seed, the old name of --filter-seed
 };
 
 void RegisterFlags(FlagSet& flags, TrackFlags* f) {
@@ -62,7 +63,9 @@ void RegisterFlags(FlagSet& flags, TrackFlags* f) {
                "csv (one row per frame, or per frame and source) | jsonl (one JSON object per frame, "
                "sources nested; non-finite numbers null) | geojson (a FeatureCollection of WGS84 points; needs "
                "the array file's geodetic_origin with heading_deg)");
-  RegisterTrackerFlags(flags, &f->session, "seed");
+  // --filter-seed, as in simulate (where --seed is the scene's); --seed is its old name.
+  RegisterTrackerFlags(flags, &f->session, "filter-seed");
+  flags.Uint64("seed", &f->legacy_seed, "S", "deprecated: the old name of --filter-seed (says so on stderr)");
   RegisterGccFlags(flags, &f->session);
   flags.Double("block", &f->block_s, "S", "s", "audio handed to the local session per call");
   flags.Int("print-every", &f->print_every, "N", "frames", "print every Nth estimate to stdout (0: none)");
@@ -260,6 +263,12 @@ int RunTrack(const std::vector<std::string>& args) {
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   if (f.print_every < 0) return UsageError(kCommand, "--print-every must be >= 0");
   if (!(f.block_s > 0)) return UsageError(kCommand, "--block must be > 0");
+  if (flags.seen("seed")) {
+    if (flags.seen("filter-seed")) return UsageError(kCommand, "--seed is the old name of --filter-seed; give one");
+    std::fprintf(stderr, "localizer-cli track: --seed is deprecated, use --filter-seed (the filter's seed; in "
+                         "simulate --seed is the scene's)\n");
+    f.session.config.seed = f.legacy_seed;
+  }
   const auto format = io::ParseEstimatesFormat(f.format);
   if (!format.ok()) return UsageError(kCommand, "--format: " + format.status().message());
   const bool remote = !f.stream.server.empty();

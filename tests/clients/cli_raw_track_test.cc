@@ -99,7 +99,7 @@ class CliRawTrack : public ::testing::Test {
   // track with the array of the scene, a fixed seed and `input` flags; returns the exit code.
   int Track(const std::string& input, const std::string& out_csv, const std::string& pipe_from = "") {
     const std::string track = "\"$CLI\" track --array " + dir_.File("sim/array.json") + " " + input + " --out " +
-                              out_csv + " --seed 7 --print-every 0";
+                              out_csv + " --filter-seed 7 --print-every 0";
     return Shell(pipe_from.empty() ? track : "cat " + pipe_from + " | " + track, dir_);
   }
 
