@@ -22,7 +22,7 @@
 
 #include "clients/io/wav_io.h"
 #include "tests/clients/test_util.h"
-#include "tests/server/run_shell.h"
+#include "tests/clients/cli_shell.h"
 
 namespace localizer::io {
 namespace {
@@ -30,21 +30,10 @@ namespace {
 using testing::TempDir;
 
 #ifdef LOCALIZER_CLI_BIN
-// Runs `command` (a shell line; the CLI is "$CLI") and returns the exit code; stderr goes to
-// dir/stderr.txt.
-int Shell(const std::string& command, const TempDir& dir) {
-  const std::string line = "CLI='" + std::string(LOCALIZER_CLI_BIN) + "'; " + command + " > " + dir.File("stdout.txt") +
-                           " 2> " + dir.File("stderr.txt");
-  const int status = localizer::testing::RunShell(line);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+int Shell(const std::string& command, const testing::TempDir& dir) {
+  return testing::RunCliShell(LOCALIZER_CLI_BIN, command, dir);
 }
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using testing::ReadText;
 
 // The CSV's rows as fields, without the stage wall-time columns.
 std::vector<std::vector<std::string>> RowsWithoutTimes(const std::string& path) {

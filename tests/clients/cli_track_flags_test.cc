@@ -8,25 +8,16 @@
 #include <string>
 
 #include "tests/clients/test_util.h"
-#include "tests/server/run_shell.h"
+#include "tests/clients/cli_shell.h"
 
 namespace localizer::io {
 namespace {
 
 #ifdef LOCALIZER_CLI_BIN
 int Shell(const std::string& command, const testing::TempDir& dir) {
-  const std::string line = "CLI='" + std::string(LOCALIZER_CLI_BIN) + "'; " + command + " > " + dir.File("stdout.txt") +
-                           " 2> " + dir.File("stderr.txt");
-  const int status = localizer::testing::RunShell(line);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return testing::RunCliShell(LOCALIZER_CLI_BIN, command, dir);
 }
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using testing::ReadText;
 
 // The CSV's x_m, y_m, z_m columns (2 to 4), row by row.
 std::string Positions(const std::string& path) {
