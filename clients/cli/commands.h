@@ -24,6 +24,7 @@ int RunSimulate(const std::vector<std::string>& args);
 int RunTrack(const std::vector<std::string>& args);
 int RunDoa(const std::vector<std::string>& args);  // cmd_doa.cc
 int RunScore(const std::vector<std::string>& args);
+int RunPlot(const std::vector<std::string>& args);  // cmd_plot.cc
 int RunLocate(const std::vector<std::string>& args);
 int RunList(const std::vector<std::string>& args);
 int RunClose(const std::vector<std::string>& args);

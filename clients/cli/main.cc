@@ -33,6 +33,7 @@ constexpr Command kCommands[] = {
      "            (linear, planar, volumetric; SRP-PHAT) to a CSV",
      RunDoa},
     {"score", "compare an estimates CSV with a truth CSV (rmse, median, p95, max error)", RunScore},
+    {"plot", "draw an estimates CSV against its truth and sensors as an SVG picture", RunPlot},
     {"locate", "one block of a recording through the server's one-shot Locate: pairs and fix", RunLocate},
     {"list", "the sessions a server holds, one line each", RunList},
     {"close", "end a server session (needs its resume token)", RunClose},
@@ -66,6 +67,7 @@ std::string GlobalUsage() {
       "  localizer-cli simulate --scenario tetra-water --out run --duration 6\n"
       "  localizer-cli track --array run/array.json --wav run/signals.wav --out run/est.csv\n"
       "  localizer-cli score --truth run/truth.csv --estimates run/est.csv\n"
+      "  localizer-cli plot --estimates run/est.csv --truth run/truth.csv --array run/array.json --out run/track.svg\n"
       "  localizer-cli doa --array board.json --wav talk.wav --out directions.csv\n"
       "  localizer-cli experiment pf-vs-ekf-2d --runs 100 --seed 1\n"
       "  localizer-cli attitude --imu trial.csv --out orientation.csv --mag\n"

@@ -22,11 +22,12 @@ out="$(PATH="$bin_dir:$PATH" bash -euo pipefail -c "$block" 2> stderr.txt)" || {
   exit 1
 }
 echo "$out"
-for f in scene/array.json scene/signals.wav scene/truth.csv scene/estimates.csv; do
+for f in scene/array.json scene/signals.wav scene/truth.csv scene/estimates.csv scene/track.svg; do
   [ -s "$f" ] || { echo "missing or empty: $f" >&2; exit 1; }
 done
 score="$(echo "$out" | grep -E '^n=[0-9]+, rmse_m=' || true)"
 [ -n "$score" ] || { echo "no score line (n=..., rmse_m=...) in the output" >&2; exit 1; }
 rmse="$(echo "$score" | sed -E 's/.*rmse_m=([0-9.eE+-]+).*/\1/')"
 awk -v r="$rmse" 'BEGIN { exit !(r < 1.0) }' || { echo "rmse_m=$rmse is not below 1 m" >&2; exit 1; }
+grep -q '#d62728' scene/track.svg || { echo "scene/track.svg has no estimates drawn" >&2; exit 1; }
 echo "quick start ok: $score"
