@@ -291,9 +291,8 @@ int RunTrack(const std::vector<std::string>& args) {
 
   auto array = io::ReadArrayFile(f.array_path, io::ArrayUse::kAuto);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
-  if (*format == io::EstimatesFormat::kGeoJson && !(array->geodetic_origin && array->geodetic_origin->heading_deg)) {
-    return UsageError(kCommand, "--format geojson needs " + f.array_path +
-                                    " to give geodetic_origin with latitude_deg, longitude_deg and heading_deg");
+  if (Status needs = io::CheckFormatNeeds(*format, array->geodetic_origin); !needs.ok()) {
+    return UsageError(kCommand, "--format " + f.format + ": " + f.array_path + ": " + needs.message());
   }
   // The input's rate is needed to validate the config (band edges against Nyquist). For raw
   // PCM it is the flag's: opening standard input here would be harmless, but needless.

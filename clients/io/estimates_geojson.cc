@@ -28,11 +28,7 @@ json PointFeature(const GeodeticOrigin& origin, const engine::Vec3& p_m, json pr
 
 StatusOr<std::unique_ptr<EstimatesGeoJsonWriter>> EstimatesGeoJsonWriter::Open(const std::string& path,
                                                                                const GeodeticOrigin& origin) {
-  if (!origin.heading_deg) {
-    return InvalidArgument(
-        "geojson needs the array's heading (geodetic_origin.heading_deg in array.json: the bearing of the array "
-        "frame's +y axis from true north)");
-  }
+  LOCALIZER_RETURN_IF_ERROR(CheckFormatNeeds(EstimatesFormat::kGeoJson, origin));
   std::unique_ptr<EstimatesGeoJsonWriter> writer(new EstimatesGeoJsonWriter());
   writer->path_ = path;
   writer->origin_ = origin;

@@ -16,6 +16,15 @@ StatusOr<EstimatesFormat> ParseEstimatesFormat(const std::string& name) {
   return InvalidArgument("format '" + name + "' is unknown; valid: csv, jsonl, geojson");
 }
 
+Status CheckFormatNeeds(EstimatesFormat format, const std::optional<GeodeticOrigin>& origin) {
+  if (format == EstimatesFormat::kGeoJson && !(origin && origin->heading_deg)) {
+    return InvalidArgument(
+        "geojson needs the array's geodetic_origin with latitude_deg, longitude_deg and heading_deg (the bearing of "
+        "the array frame's +y axis from true north)");
+  }
+  return Status::Ok();
+}
+
 Status CloseOutput(std::unique_ptr<std::ofstream>* out, const std::string& path) {
   if (!*out) return Status::Ok();
   (*out)->close();
@@ -28,11 +37,8 @@ Status CloseOutput(std::unique_ptr<std::ofstream>* out, const std::string& path)
 StatusOr<std::unique_ptr<EstimatesWriter>> OpenEstimatesWriter(const std::string& path, EstimatesFormat format,
                                                                const engine::ArrayGeometry* array,
                                                                const std::optional<GeodeticOrigin>& origin) {
+  LOCALIZER_RETURN_IF_ERROR(CheckFormatNeeds(format, origin));
   if (format == EstimatesFormat::kGeoJson) {
-    if (!origin) {
-      return InvalidArgument(
-          "geojson needs the array's geodetic_origin (array.json: latitude_deg, longitude_deg, heading_deg)");
-    }
     if (path.empty()) return std::unique_ptr<EstimatesWriter>();
     auto writer = EstimatesGeoJsonWriter::Open(path, *origin);
     if (!writer.ok()) return writer.status();

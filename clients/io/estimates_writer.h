@@ -28,14 +28,18 @@ class EstimatesWriter {
   virtual Status Close() = 0;
 };
 
+// What a format needs beyond the estimates: GeoJSON the array's geodetic origin with its
+// heading (INVALID_ARGUMENT saying so otherwise); the others nothing.
+Status CheckFormatNeeds(EstimatesFormat format, const std::optional<GeodeticOrigin>& origin);
+
 // Closes `*out` (a no-op when null or already closed) and resets it; INVALID_ARGUMENT naming
 // `path` when the stream failed, which a buffered stream may only notice now.
 Status CloseOutput(std::unique_ptr<std::ofstream>* out, const std::string& path);
 
 // The writer for a position session over `array` (CSV: one pair column group per
 // non-reference sensor) or, with `array` null, a session that lists sources (CSV: one row
-// per frame and source). GeoJSON needs `origin` with its heading (INVALID_ARGUMENT saying so
-// otherwise). A null writer when `path` is empty.
+// per frame and source). `origin` as CheckFormatNeeds requires. A null writer when `path` is
+// empty.
 StatusOr<std::unique_ptr<EstimatesWriter>> OpenEstimatesWriter(const std::string& path, EstimatesFormat format,
                                                                const engine::ArrayGeometry* array,
                                                                const std::optional<GeodeticOrigin>& origin = {});

@@ -90,27 +90,15 @@ StatusOr<XavArray> ReadXavHydrophoneCsv(const std::string& path) {
 }
 
 StatusOr<std::vector<std::string>> FindXavRecordings(const std::string& dir, const std::vector<std::string>& roots) {
-  std::error_code error;
-  std::vector<std::string> names;
-  for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
-    names.push_back(entry.path().filename().string());
-  }
-  if (error) return NotFound(dir + ": " + error.message());
-  std::sort(names.begin(), names.end());
   std::vector<std::string> paths;
   for (const std::string& root : roots) {
-    std::vector<std::string> matches;
-    for (const std::string& name : names) {
-      if (!root.empty() && name.starts_with(root) && name.ends_with(".wav")) {
-        matches.push_back(name);
-      }
+    if (root.empty()) return NotFound(dir + ": a hydrophone has no file_name_root to find its recording by");
+    auto path = FindOneFile(dir, root, ".wav");
+    if (!path.ok()) {
+      if (path.status().code() == StatusCode::kNotFound) return path.status();
+      return InvalidArgument(path.status().message() + "; keep one recording per hydrophone");
     }
-    if (matches.empty()) return NotFound(dir + ": no " + root + "*.wav");
-    if (matches.size() > 1) {
-      return InvalidArgument(dir + ": several " + root + "*.wav (" + matches[0] + ", " + matches[1] +
-                             "); keep one recording per hydrophone");
-    }
-    paths.push_back((std::filesystem::path(dir) / matches.front()).string());
+    paths.push_back(*path);
   }
   return paths;
 }
