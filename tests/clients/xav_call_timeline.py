@@ -15,7 +15,19 @@ import numpy as np
 
 D = '/work/shared/data/xav-large-array'
 FS, FRAME, HOP = 32000, 4096, 2048
-SURFACE, BOTTOM = 7.03, -0.97
+
+def water_column(data_dir):
+    """Surface and bottom z (z up) as localizer-cli's reader takes them from the deployment's
+    files (clients/io/xav_array.h): the median over hydrophones of depth + z, and the water
+    depth below it. 7.029 and -0.971 m for the XAV deployment."""
+    with open(f'{data_dir}/hydrophones_config_07-HI.csv') as f:
+        z = {int(r['array_channel']): float(r['z']) for r in csv.DictReader(f)}
+    with open(f'{data_dir}/deployment_info.csv') as f:
+        rows = list(csv.DictReader(f))
+    surfaces = sorted(float(r['hydrophone_depth']) + z[int(r['audio_channel_number'])] for r in rows)
+    m = len(surfaces)
+    surface = surfaces[m // 2] if m % 2 else 0.5 * (surfaces[m // 2 - 1] + surfaces[m // 2])
+    return surface, surface - float(rows[0]['location_water_depth'])
 
 def read24(path):
     w = wave.open(path)
@@ -60,6 +72,7 @@ def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
     D = sys.argv[1]
+    surface, bottom = water_column(D)
     channel = 3  # detection_config_large_array.yaml: channel 3
     ks = [2.0, 3.0, 4.0, 8.0]
     est = {a.split('=', 1)[0]: load(a.split('=', 1)[1]) for a in sys.argv[2:]}
@@ -75,10 +88,10 @@ def main():
         p = a['source_present'] > 0.5
         ini = a['initialised'] > 0.5
         z = a['z_m']
-        outz = (z > SURFACE) | (z < BOTTOM)
+        outz = (z > surface) | (z < bottom)
         st = a['presence_statistic']; th = a['presence_threshold']
         print(f'\n== {name}: frames {n}, present {p.sum()}, absent {(~p).sum()}, initialised {ini.sum()}, ambiguous {(a["ambiguous"]>0.5).sum()}, reinitialised {(a["reinitialised"]>0.5).sum()}')
-        print(f'   present outside water column: {(p & outz).sum()} (above surface {(p & (z > SURFACE)).sum()}, below bottom {(p & (z < BOTTOM)).sum()}); initialised outside: {(ini & outz).sum()}')
+        print(f'   present outside water column: {(p & outz).sum()} (above surface {(p & (z > surface)).sum()}, below bottom {(p & (z < bottom)).sum()}); initialised outside: {(ini & outz).sum()}')
         print(f'   finite: {all(np.isfinite(v).all() for v in a.values())}; z range {z.min():.3f}..{z.max():.3f}; |xy| max {np.hypot(a["x_m"], a["y_m"]).max():.2f} m')
         for lab, m in (('present', p), ('absent', ~p)):
             if m.sum():
