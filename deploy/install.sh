@@ -22,6 +22,8 @@ packages=(
   python3-protobuf python3-soundfile  # the package localizer: messages; localizer.audio (WAV, FLAC)
   python3-pip python3-venv python3-setuptools python3-wheel  # pip install ./clients/python, offline
                          # (--no-build-isolation), and its test (tests/python/test_package_install)
+  pybind11-dev python3-pybind11 python3-dev  # localizer.engine, the in-process engine bindings
+                         # of the Python package (clients/python/engine_module)
   python3-scipy          # Nolan's alpha-stable quantile table (tests/sim/alpha_stable_test)
   prometheus             # promtool, and a real Prometheus server in the ops tests (deploy/prometheus)
   python3-yaml           # the ops tests read the shipped YAML (deploy/prometheus, deploy/k8s)
