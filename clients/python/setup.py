@@ -89,7 +89,8 @@ def engine_module():
         # The target is up to date in a second when nothing changed; a stale module is rebuilt.
         done = subprocess.run(["cmake", "--build", str(build_dir), "--target", "localizer_engine_py"],
                               capture_output=True, text=True)
-        if done.returncode != 0:
+        unknown_target = "unknown target" in done.stderr or "No rule to make target" in done.stderr
+        if done.returncode != 0 and not unknown_target:  # unknown: configured without pybind11
             raise ExecError(f"cmake --build {build_dir} --target localizer_engine_py failed "
                             f"({done.returncode}):\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}")
     if module.is_file():
