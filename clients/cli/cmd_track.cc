@@ -8,10 +8,12 @@
 #include <iostream>
 #include <optional>
 
+#include "clients/cli/capture_signals.h"
 #include "clients/cli/commands.h"
 #include "clients/cli/progress.h"
 #include "clients/cli/server_flags.h"
 #include "clients/cli/session_flags.h"
+#include "clients/cli/track_input.h"
 #include "clients/grpc/connection.h"
 #include "clients/grpc/remote_track.h"
 #include "clients/io/alsa_capture.h"
@@ -30,18 +32,7 @@ const char* const kCommand = "track";
 // Flag values; the numeric defaults come from engine::AudioSessionConfig.
 struct TrackFlags {
   std::string array_path;
-  std::vector<std::string> wav_paths;
-  // --raw: headerless PCM (clients/io/raw_pcm.h) instead of --wav.
-  std::string raw_path;
-  std::string raw_format = "s16le";
-  std::optional<int> raw_channels;
-  std::optional<double> raw_sample_rate_hz;
-  // --alsa: live capture from an ALSA device (clients/io/alsa_capture.h), with --channels
-  // and --sample-rate as for --raw.
-  std::string alsa_device;
-  std::string alsa_format = "best";
-  double duration_s = 0.0;
-  io::AlsaCaptureOptions alsa_defaults;  // period, buffer, timeout defaults
+  TrackInputFlags input;  // --wav, --raw or --alsa (track_input.h)
   std::string out_path;
   std::string format = "csv";
   SessionFlags session;
@@ -54,38 +45,7 @@ struct TrackFlags {
 void RegisterFlags(FlagSet& flags, TrackFlags* f) {
   flags.String("array", &f->array_path, "FILE", "sensor array: array.json, or the XAV hydrophones_config CSV")
       .Required();
-  flags.Strings("wav", &f->wav_paths, "FILE",
-                "one multichannel WAV, or one mono WAV per sensor in sensor order (or --raw)");
-  flags.String("raw", &f->raw_path, "FILE",
-               "instead of --wav: headerless interleaved PCM from FILE, or - for standard input (a pipe from "
-               "arecord, sox or ffmpeg is read as it arrives); needs --channels and --sample-rate");
-  flags.String("raw-format", &f->raw_format, "FMT",
-               "with --raw: s16le | s32le | f32le, little-endian; integers scaled to full scale 1.0 as WAV "
-               "samples are (s16 / 32768, s32 / 2^31)");
-  flags.String("alsa", &f->alsa_device, "DEVICE",
-               std::string("instead of --wav: capture live from an ALSA PCM device (hw:1,0, plughw:CARD=X, default, "
-                           "a name from .asoundrc) at exactly --channels and --sample-rate (refused, never "
-                           "resampled, if the device cannot); ends after --duration or on SIGINT/SIGTERM, "
-                           "writing what was tracked") +
-                   (io::AlsaCaptureAvailable() ? "" : std::string("; ") + io::kAlsaUnavailableMessage));
-  flags.String("alsa-format", &f->alsa_format, "FMT",
-               "with --alsa: the device's sample format: s16 | s32 | f32 (S16_LE, S32_LE, FLOAT_LE), or best: "
-               "the first of s32, f32, s16 the device offers");
-  flags.Double("duration", &f->duration_s, "S", "s",
-               "with --alsa: stop after this much audio (captured plus lost in overruns); 0: until SIGINT/SIGTERM");
-  flags.Double("alsa-period", &f->alsa_defaults.period_s, "S", "s",
-               "with --alsa: the device's period (how often it delivers), asked for; the device rounds it");
-  flags.Double("alsa-buffer", &f->alsa_defaults.buffer_s, "S", "s",
-               "with --alsa: the device's buffer, asked for: how long tracking may fall behind before samples "
-               "are lost (an overrun: counted, and skipped so estimate times stay right)");
-  flags.Double("alsa-timeout", &f->alsa_defaults.no_data_timeout_s, "S", "s",
-               "with --alsa: give up (exit 1) when the device delivers no sample for this long");
-  flags.OptionalInt("channels", &f->raw_channels, "N", "",
-                    "required with --raw and --alsa: channels per interleaved frame, channel k = sensor k (the "
-                    "array's sensor count)");
-  flags.OptionalDouble("sample-rate", &f->raw_sample_rate_hz, "HZ", "",
-                       "required with --raw and --alsa: samples per second per channel, Hz (wins over the array "
-                       "file's)");
+  RegisterTrackInputFlags(flags, &f->input);
   flags.String("out", &f->out_path, "FILE", "estimates file to write (--format)").Required();
   flags.String("format", &f->format, "FMT",
                "csv (one row per frame, or per frame and source) | jsonl (one JSON object per frame, "
@@ -184,97 +144,6 @@ io::TrackCallbacks MakeCallbacks(int print_every, bool sources, ProgressReporter
   return callbacks;
 }
 
-// The input the flags describe: raw PCM, an ALSA device, or (neither set) --wav.
-struct InputChoice {
-  std::optional<io::RawPcmOptions> raw;
-  std::optional<io::AlsaCaptureOptions> alsa;
-};
-
-// Which of --raw, --alsa, --wav were given: "--raw and --wav both given".
-std::string GivenInputs(bool wav, bool raw, bool alsa) {
-  std::vector<std::string> names;
-  if (raw) names.push_back("--raw");
-  if (alsa) names.push_back("--alsa");
-  if (wav) names.push_back("--wav");
-  if (names.size() == 3) return "--raw, --alsa and --wav all given";
-  return names[0] + " and " + names[1] + " both given";
-}
-
-// --channels and --sample-rate, checked, for the input flag `input` ("--raw", "--alsa").
-Status ReadFormatFlags(const TrackFlags& f, const std::string& input, int* channels, double* sample_rate_hz) {
-  if (!f.raw_channels) return InvalidArgument(input + " needs --channels N (channels per interleaved frame)");
-  if (!f.raw_sample_rate_hz) return InvalidArgument(input + " needs --sample-rate HZ (samples per second per channel)");
-  *channels = *f.raw_channels;
-  if (*channels < 1 || *channels > io::kMaxRawPcmChannels) {
-    return InvalidArgument("--channels is " + std::to_string(*channels) + ", must be in [1, " +
-                           std::to_string(io::kMaxRawPcmChannels) + "]");
-  }
-  *sample_rate_hz = *f.raw_sample_rate_hz;
-  if (!(*sample_rate_hz > 0.0)) {
-    return InvalidArgument("--sample-rate is " + FormatDouble(*sample_rate_hz) + ", must be > 0");
-  }
-  return Status::Ok();
-}
-
-// INVALID_ARGUMENT naming the flag for a missing or contradictory one.
-StatusOr<InputChoice> InputOptions(const FlagSet& flags, const TrackFlags& f) {
-  const bool wav = !f.wav_paths.empty();
-  const bool raw = flags.seen("raw");
-  const bool alsa = flags.seen("alsa");
-  if (int(wav) + int(raw) + int(alsa) > 1) {
-    return InvalidArgument(GivenInputs(wav, raw, alsa) + "; read the recording from one of them");
-  }
-  if (!wav && !raw && !alsa) {
-    return InvalidArgument("no recording: give --wav FILE or --raw FILE (- for standard input), or --alsa DEVICE");
-  }
-  if (!raw && flags.seen("raw-format")) return InvalidArgument("--raw-format needs --raw");
-  if (!alsa) {
-    for (const char* name : {"alsa-format", "duration", "alsa-period", "alsa-buffer", "alsa-timeout"}) {
-      if (flags.seen(name)) return InvalidArgument(std::string("--") + name + " needs --alsa");
-    }
-  }
-  if (wav) {
-    for (const char* name : {"channels", "sample-rate"}) {
-      if (flags.seen(name)) return InvalidArgument(std::string("--") + name + " needs --raw or --alsa");
-    }
-    return InputChoice{};
-  }
-  InputChoice choice;
-  if (raw) {
-    if (f.raw_path.empty()) return InvalidArgument("--raw needs a file name, or - for standard input");
-    io::RawPcmOptions options;
-    options.path = f.raw_path;
-    auto format = io::ParseRawPcmFormat(f.raw_format);
-    if (!format.ok()) return InvalidArgument("--raw-format: " + format.status().message());
-    options.format = *format;
-    LOCALIZER_RETURN_IF_ERROR(ReadFormatFlags(f, "--raw", &options.channel_count, &options.sample_rate_hz));
-    choice.raw = options;
-    return choice;
-  }
-  if (f.alsa_device.empty()) return InvalidArgument("--alsa needs a device name (hw:1,0, default, ...)");
-  io::AlsaCaptureOptions options = f.alsa_defaults;
-  options.device = f.alsa_device;
-  auto format = io::ParseAlsaSampleFormat(f.alsa_format);
-  if (!format.ok()) return InvalidArgument("--alsa-format: " + format.status().message());
-  options.format = *format;
-  LOCALIZER_RETURN_IF_ERROR(ReadFormatFlags(f, "--alsa", &options.channel_count, &options.sample_rate_hz));
-  options.duration_s = f.duration_s;
-  if (Status valid = options.Validate(); !valid.ok()) {
-    // Name the flags, not the fields.
-    std::string m = valid.message();
-    for (const auto& [field, flag] : {std::pair<std::string, std::string>{"ALSA sample_rate_hz", "--sample-rate"},
-                                      {"ALSA period_s", "--alsa-period"},
-                                      {"ALSA buffer_s", "--alsa-buffer"},
-                                      {"duration_s", "--duration"},
-                                      {"ALSA no_data_timeout_s", "--alsa-timeout"}}) {
-      if (m.rfind(field, 0) == 0) m = flag + m.substr(field.size());
-    }
-    return InvalidArgument(m);
-  }
-  choice.alsa = options;
-  return choice;
-}
-
 client::StreamCallbacks RejectionWarnings() {
   client::StreamCallbacks callbacks;
   callbacks.on_rejected = [](const client::BlockRejection& r) {
@@ -288,42 +157,9 @@ client::StreamCallbacks RejectionWarnings() {
   return callbacks;
 }
 
-// Live capture ends cleanly on SIGINT or SIGTERM: the handler only raises the flag the
-// capture polls (alsa_capture.h), so the blocks read so far are tracked, the estimates file
-// is closed and the summary printed. A second signal is not fatal, because senders such as
-// timeout(1) signal the process and its group, i.e. twice; a third kills as usual.
-std::atomic<bool> stop_capture{false};
-std::atomic<int> stop_signal{0};
-std::atomic<int> stop_signals_received{0};
-static_assert(std::atomic<bool>::is_always_lock_free && std::atomic<int>::is_always_lock_free,
-              "set from a signal handler");
-
-extern "C" void OnStopSignal(int signal_number) {
-  if (stop_signals_received.fetch_add(1) >= 2) {
-    std::signal(signal_number, SIG_DFL);  // both async-signal-safe
-    std::raise(signal_number);
-    return;
-  }
-  if (stop_signal.load() == 0) stop_signal.store(signal_number);
-  stop_capture.store(true);
-}
-
-void InstallStopHandlers() {
-  struct sigaction action {};
-  action.sa_handler = OnStopSignal;
-  sigemptyset(&action.sa_mask);
-  action.sa_flags = 0;  // the capture polls the flag every wait slice (100 ms) anyway
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
-}
-
 // The capture's own figures: what the device delivered, lost and why it ended.
 void PrintCaptureSummary(const io::TrackSummary& s, double duration_s) {
-  const int signal_number = stop_signal.load();
-  const char* stopped = signal_number == SIGINT    ? "SIGINT"
-                        : signal_number == SIGTERM ? "SIGTERM"
-                        : duration_s > 0           ? "duration"
-                                                   : "end";
+  const char* stopped = CaptureStopReason(duration_s);
   std::printf("capture: frames=%lld overruns=%lld samples_lost=%lld stopped_by=%s\n",
               static_cast<long long>(s.samples_per_channel), static_cast<long long>(s.overruns),
               static_cast<long long>(s.frames_lost), stopped);
@@ -333,7 +169,7 @@ int RunLocal(const TrackFlags& f, const io::TrackJob& job, bool sources) {
   ProgressReporter progress;
   io::TrackCallbacks callbacks = MakeCallbacks(f.print_every, sources, &progress);
   if (job.alsa) {
-    InstallStopHandlers();
+    InstallCaptureStopHandlers();
     callbacks.on_opened = [](const io::SampleStream& stream) {
       const auto* alsa = dynamic_cast<const io::AlsaCaptureStream*>(&stream);
       if (alsa == nullptr) return;
@@ -434,7 +270,7 @@ int RunTrack(const std::vector<std::string>& args) {
     options = std::move(*parsed);
   }
 
-  auto input = InputOptions(flags, f);
+  auto input = ParseTrackInput(flags, f.input);
   if (!input.ok()) return UsageError(kCommand, input.status().message());
   // The wire states a gap only as whole missing blocks, so an overrun's exact loss could not
   // reach a server's session; until it can, live capture tracks locally.
@@ -444,9 +280,10 @@ int RunTrack(const std::vector<std::string>& args) {
                       "pipe arecord into --raw - --server (overruns then go unnoticed)");
   }
   if (input->alsa) {
-    input->alsa->stop = &stop_capture;
+    input->alsa->stop = CaptureStopFlag();
     if (!io::AlsaCaptureAvailable()) {
-      return RuntimeError(kCommand, FailedPrecondition("--alsa " + f.alsa_device + ": " + io::kAlsaUnavailableMessage));
+      return RuntimeError(kCommand,
+                          FailedPrecondition("--alsa " + f.input.alsa_device + ": " + io::kAlsaUnavailableMessage));
     }
   }
 
@@ -467,7 +304,7 @@ int RunTrack(const std::vector<std::string>& args) {
     }
     sample_rate_hz = input->raw ? input->raw->sample_rate_hz : input->alsa->sample_rate_hz;
   } else {
-    auto stream = io::WavStream::Open(f.wav_paths);
+    auto stream = io::WavStream::Open(f.input.wav_paths);
     if (!stream.ok()) return RuntimeError(kCommand, stream.status());
     sample_rate_hz = stream->sample_rate_hz();
   }
@@ -477,7 +314,7 @@ int RunTrack(const std::vector<std::string>& args) {
   if (!config.ok()) return UsageError(kCommand, config.status().message());
 
   io::TrackJob job;
-  job.wav_paths = f.wav_paths;
+  job.wav_paths = f.input.wav_paths;
   job.raw = input->raw;
   job.alsa = input->alsa;
   job.array_source = f.array_path;
