@@ -313,6 +313,8 @@ TEST(AlsaCapture, AnOverrunIsRecoveredCountedAndItsLossMeasured) {
   EXPECT_GT(gap, 1000);
   EXPECT_NEAR(static_cast<double>(stream.frames_lost_before_last_read()), static_cast<double>(gap), 0.002 * kRateHz)
       << "true gap " << gap;
+  ::testing::Test::RecordProperty("true_gap_frames", std::to_string(gap));  // --gtest_output=xml shows them
+  ::testing::Test::RecordProperty("estimated_gap_frames", std::to_string(stream.frames_lost_before_last_read()));
   EXPECT_EQ(stream.frames_lost(), stream.frames_lost_before_last_read());
   read_block(200, &gap);  // and it goes on without loss
   EXPECT_EQ(gap, 0);
