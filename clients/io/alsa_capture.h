@@ -49,7 +49,7 @@
 #include "clients/io/sample_stream.h"
 #include "engine/core/status.h"
 
-struct _snd_pcm;  // alsa/pcm.h's snd_pcm_t, kept out of this header
+struct _snd_pcm;  // NOLINT(bugprone-reserved-identifier): ALSA's own name for snd_pcm_t, kept out of this header
 
 namespace localizer::io {
 
