@@ -14,6 +14,8 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler  # service (server/, proto/)
   libcivetweb-dev        # /metrics HTTP endpoint (server/)
   libyaml-cpp-dev        # the XAV deployment's localization YAML (clients/io/xav_config.h)
+  libasound2-dev         # live capture from ALSA devices, track --alsa (clients/io/alsa_capture.h);
+                         # optional at configure time: without it the flag says so
   libssl-dev             # SHA-256 and constant-time compare of tokens, TLS file checks (server/service),
                          # HTTPS on the HTTP side (server/metrics/tls_front)
   openssl                # test certificates (deploy/tls/make_test_certs.sh, tests/server/security_test,

@@ -1,17 +1,22 @@
 // localizer-cli track: stream a recording through an engine::Session (or, with --server,
 // a session on a localizer-server) into estimates.csv.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <optional>
 
+#include "clients/cli/capture_signals.h"
 #include "clients/cli/commands.h"
 #include "clients/cli/progress.h"
 #include "clients/cli/server_flags.h"
 #include "clients/cli/session_flags.h"
+#include "clients/cli/track_input.h"
 #include "clients/grpc/connection.h"
 #include "clients/grpc/remote_track.h"
+#include "clients/io/alsa_capture.h"
 #include "clients/io/array_json.h"
 #include "clients/io/raw_pcm.h"
 #include "clients/io/track_runner.h"
@@ -27,12 +32,7 @@ const char* const kCommand = "track";
 // Flag values; the numeric defaults come from engine::AudioSessionConfig.
 struct TrackFlags {
   std::string array_path;
-  std::vector<std::string> wav_paths;
-  // --raw: headerless PCM (clients/io/raw_pcm.h) instead of --wav.
-  std::string raw_path;
-  std::string raw_format = "s16le";
-  std::optional<int> raw_channels;
-  std::optional<double> raw_sample_rate_hz;
+  TrackInputFlags input;  // --wav, --raw or --alsa (track_input.h)
   std::string out_path;
   std::string format = "csv";
   SessionFlags session;
@@ -45,19 +45,7 @@ struct TrackFlags {
 void RegisterFlags(FlagSet& flags, TrackFlags* f) {
   flags.String("array", &f->array_path, "FILE", "sensor array: array.json, or the XAV hydrophones_config CSV")
       .Required();
-  flags.Strings("wav", &f->wav_paths, "FILE",
-                "one multichannel WAV, or one mono WAV per sensor in sensor order (or --raw)");
-  flags.String("raw", &f->raw_path, "FILE",
-               "instead of --wav: headerless interleaved PCM from FILE, or - for standard input (a pipe from "
-               "arecord, sox or ffmpeg is read as it arrives); needs --channels and --sample-rate");
-  flags.String("raw-format", &f->raw_format, "FMT",
-               "with --raw: s16le | s32le | f32le, little-endian; integers scaled to full scale 1.0 as WAV "
-               "samples are (s16 / 32768, s32 / 2^31)");
-  flags.OptionalInt("channels", &f->raw_channels, "N", "",
-                    "required with --raw: channels per interleaved frame, channel k = sensor k (the array's "
-                    "sensor count)");
-  flags.OptionalDouble("sample-rate", &f->raw_sample_rate_hz, "HZ", "",
-                       "required with --raw: samples per second per channel, Hz (wins over the array file's)");
+  RegisterTrackInputFlags(flags, &f->input);
   flags.String("out", &f->out_path, "FILE", "estimates file to write (--format)").Required();
   flags.String("format", &f->format, "FMT",
                "csv (one row per frame, or per frame and source) | jsonl (one JSON object per frame, "
@@ -156,39 +144,6 @@ io::TrackCallbacks MakeCallbacks(int print_every, bool sources, ProgressReporter
   return callbacks;
 }
 
-// The raw PCM input the flags describe; nullopt for --wav. INVALID_ARGUMENT naming the flag
-// for a missing or contradictory one.
-StatusOr<std::optional<io::RawPcmOptions>> RawOptions(const FlagSet& flags, const TrackFlags& f) {
-  const bool wav = !f.wav_paths.empty();
-  const bool raw = flags.seen("raw");
-  if (wav && raw) return InvalidArgument("--raw and --wav both given; read the recording from one of them");
-  if (!wav && !raw) return InvalidArgument("no recording: give --wav FILE or --raw FILE (- for standard input)");
-  if (!raw) {
-    for (const char* name : {"raw-format", "channels", "sample-rate"}) {
-      if (flags.seen(name)) return InvalidArgument(std::string("--") + name + " needs --raw");
-    }
-    return std::optional<io::RawPcmOptions>();
-  }
-  if (f.raw_path.empty()) return InvalidArgument("--raw needs a file name, or - for standard input");
-  if (!f.raw_channels) return InvalidArgument("--raw needs --channels N (channels per interleaved frame)");
-  if (!f.raw_sample_rate_hz) return InvalidArgument("--raw needs --sample-rate HZ (samples per second per channel)");
-  io::RawPcmOptions options;
-  options.path = f.raw_path;
-  auto format = io::ParseRawPcmFormat(f.raw_format);
-  if (!format.ok()) return InvalidArgument("--raw-format: " + format.status().message());
-  options.format = *format;
-  options.channel_count = *f.raw_channels;
-  if (options.channel_count < 1 || options.channel_count > io::kMaxRawPcmChannels) {
-    return InvalidArgument("--channels is " + std::to_string(options.channel_count) + ", must be in [1, " +
-                           std::to_string(io::kMaxRawPcmChannels) + "]");
-  }
-  options.sample_rate_hz = *f.raw_sample_rate_hz;
-  if (!(options.sample_rate_hz > 0.0)) {
-    return InvalidArgument("--sample-rate is " + FormatDouble(options.sample_rate_hz) + ", must be > 0");
-  }
-  return std::optional<io::RawPcmOptions>(options);
-}
-
 client::StreamCallbacks RejectionWarnings() {
   client::StreamCallbacks callbacks;
   callbacks.on_rejected = [](const client::BlockRejection& r) {
@@ -202,19 +157,39 @@ client::StreamCallbacks RejectionWarnings() {
   return callbacks;
 }
 
+// The capture's own figures: what the device delivered, lost and why it ended.
+void PrintCaptureSummary(const io::TrackSummary& s, double duration_s) {
+  const char* stopped = CaptureStopReason(duration_s);
+  std::printf("capture: frames=%lld overruns=%lld samples_lost=%lld stopped_by=%s\n",
+              static_cast<long long>(s.samples_per_channel), static_cast<long long>(s.overruns),
+              static_cast<long long>(s.frames_lost), stopped);
+}
+
 int RunLocal(const TrackFlags& f, const io::TrackJob& job, bool sources) {
   ProgressReporter progress;
-  auto summary = io::RunTrack(job, MakeCallbacks(f.print_every, sources, &progress));
+  io::TrackCallbacks callbacks = MakeCallbacks(f.print_every, sources, &progress);
+  if (job.alsa) {
+    InstallCaptureStopHandlers();
+    callbacks.on_opened = [](const io::SampleStream& stream) {
+      const auto* alsa = dynamic_cast<const io::AlsaCaptureStream*>(&stream);
+      if (alsa == nullptr) return;
+      std::fprintf(stderr, "%s: capturing %d channels at %.0f Hz, %s, period %lld frames, buffer %lld frames\n",
+                   alsa->Describe().c_str(), alsa->channel_count(), alsa->sample_rate_hz(),
+                   io::RawPcmFormatName(alsa->sample_format()), static_cast<long long>(alsa->period_frames()),
+                   static_cast<long long>(alsa->buffer_frames()));
+    };
+  }
+  auto summary = io::RunTrack(job, callbacks);
   progress.Finish();
   if (!summary.ok()) return RuntimeError(kCommand, summary.status());
   PrintSummary(*summary, f.out_path);
+  if (job.alsa) PrintCaptureSummary(*summary, job.alsa->duration_s);
   if (auto line = summary->presence.NoSourceLine()) std::printf("%s\n", line->c_str());
   if (auto line = summary->presence.FarFieldLine()) std::printf("%s\n", line->c_str());
   return kExitOk;
 }
 
-int RunOnServer(const TrackFlags& f, const io::TrackJob& job, bool sources,
-                client::RemoteTrackOptions options) {
+int RunOnServer(const TrackFlags& f, const io::TrackJob& job, bool sources, client::RemoteTrackOptions options) {
   options.on_opened = PrintOpened;
   ProgressReporter progress;
   auto channel = client::Connect(f.stream.server, f.stream.connect);
@@ -236,14 +211,17 @@ int RunTrack(const std::vector<std::string>& args) {
   TrackFlags f;
   FlagSet flags(
       "localizer-cli track --array FILE (--wav FILE [--wav FILE ...] | --raw FILE|- --channels N "
-      "--sample-rate HZ [--raw-format FMT]) --out FILE [--format csv|jsonl|geojson] [--server HOST:PORT] [flags]",
+      "--sample-rate HZ [--raw-format FMT] | --alsa DEVICE --channels N --sample-rate HZ [--alsa-format FMT] "
+      "[--duration S]) --out FILE [--format csv|jsonl|geojson] [--server HOST:PORT] [flags]",
       "Streams a recording through one tracking session (GCC TDOAs + particle filter) and\n"
-      "writes one row per frame to the estimates CSV (--format jsonl: one JSON object per line). Planar and linear arrays (and\n"
+      "writes one row per frame to the estimates CSV (--format jsonl: one JSON object per line). Planar and linear "
+      "arrays (and\n"
       "--localization direction) give directions instead: SRP-PHAT peaks followed by a\n"
       "direction tracker, up to --max-sources sources with ids, one CSV row per frame and\n"
       "source; with --localization position (a planar array with --source-side, a linear one\n"
       "with --source-plane and --source-side) each heard source also gets x_m, y_m, z_m where\n"
-      "the frame bounds its range. The WAV header's sample rate wins over the array file's. Progress goes to stderr for recordings over 5 "
+      "the frame bounds its range. The WAV header's sample rate wins over the array file's. Progress goes to stderr "
+      "for recordings over 5 "
       "s; every Nth estimate\n"
       "and a final summary (frames, wall time, mean stage times) to stdout.\n"
       "--raw reads headerless PCM instead (e.g. `arecord -t raw -f S16_LE -c 4 -r 48000 |\n"
@@ -252,6 +230,11 @@ int RunTrack(const std::vector<std::string>& args) {
       "that do not make a whole frame are an error (exit 1, after the whole frames before them\n"
       "were tracked): the input does not match --channels and --raw-format. Progress needs a\n"
       "known length, so it is not shown for a pipe.\n"
+      "--alsa captures from an ALSA device instead, at exactly --channels and --sample-rate (a\n"
+      "device that cannot is refused, naming what it offers); until --duration or SIGINT/SIGTERM,\n"
+      "after which the estimates so far are written and the summary printed, with a line\n"
+      "\"capture: frames=N overruns=K samples_lost=M stopped_by=...\". Samples lost in an\n"
+      "overrun are skipped in the session, so estimate times stay those of their samples.\n"
       "With --server the session runs on a localizer-server: the same config is sent with\n"
       "every field explicit, the recording is streamed in blocks of --block-samples, and the\n"
       "CSV holds the same numbers as a local run with the same flags (the server runs the same\n"
@@ -265,8 +248,9 @@ int RunTrack(const std::vector<std::string>& args) {
   if (!(f.block_s > 0)) return UsageError(kCommand, "--block must be > 0");
   if (flags.seen("seed")) {
     if (flags.seen("filter-seed")) return UsageError(kCommand, "--seed is the old name of --filter-seed; give one");
-    std::fprintf(stderr, "localizer-cli track: --seed is deprecated, use --filter-seed (the filter's seed; in "
-                         "simulate --seed is the scene's)\n");
+    std::fprintf(stderr,
+                 "localizer-cli track: --seed is deprecated, use --filter-seed (the filter's seed; in "
+                 "simulate --seed is the scene's)\n");
     f.session.config.seed = f.legacy_seed;
   }
   const auto format = io::ParseEstimatesFormat(f.format);
@@ -286,8 +270,22 @@ int RunTrack(const std::vector<std::string>& args) {
     options = std::move(*parsed);
   }
 
-  auto raw = RawOptions(flags, f);
-  if (!raw.ok()) return UsageError(kCommand, raw.status().message());
+  auto input = ParseTrackInput(flags, f.input);
+  if (!input.ok()) return UsageError(kCommand, input.status().message());
+  // The wire states a gap only as whole missing blocks, so an overrun's exact loss could not
+  // reach a server's session; until it can, live capture tracks locally.
+  if (input->alsa && remote) {
+    return UsageError(kCommand,
+                      "--alsa tracks locally (the wire cannot state an overrun's exact gap); to stream to a server, "
+                      "pipe arecord into --raw - --server (overruns then go unnoticed)");
+  }
+  if (input->alsa) {
+    input->alsa->stop = CaptureStopFlag();
+    if (!io::AlsaCaptureAvailable()) {
+      return RuntimeError(kCommand,
+                          FailedPrecondition("--alsa " + f.input.alsa_device + ": " + io::kAlsaUnavailableMessage));
+    }
+  }
 
   auto array = io::ReadArrayFile(f.array_path, io::ArrayUse::kAuto);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
@@ -297,15 +295,16 @@ int RunTrack(const std::vector<std::string>& args) {
   // The input's rate is needed to validate the config (band edges against Nyquist). For raw
   // PCM it is the flag's: opening standard input here would be harmless, but needless.
   double sample_rate_hz = 0.0;
-  if (*raw) {
-    if ((*raw)->channel_count != static_cast<int>(array->sensors_m.size())) {
-      return UsageError(kCommand, "--channels is " + std::to_string((*raw)->channel_count) + " but " + f.array_path +
-                                      " has " + std::to_string(array->sensors_m.size()) +
+  if (input->raw || input->alsa) {
+    const int channels = input->raw ? input->raw->channel_count : input->alsa->channel_count;
+    if (channels != static_cast<int>(array->sensors_m.size())) {
+      return UsageError(kCommand, "--channels is " + std::to_string(channels) + " but " + f.array_path + " has " +
+                                      std::to_string(array->sensors_m.size()) +
                                       " sensors; they must match (channel k = sensor k)");
     }
-    sample_rate_hz = (*raw)->sample_rate_hz;
+    sample_rate_hz = input->raw ? input->raw->sample_rate_hz : input->alsa->sample_rate_hz;
   } else {
-    auto stream = io::WavStream::Open(f.wav_paths);
+    auto stream = io::WavStream::Open(f.input.wav_paths);
     if (!stream.ok()) return RuntimeError(kCommand, stream.status());
     sample_rate_hz = stream->sample_rate_hz();
   }
@@ -315,8 +314,9 @@ int RunTrack(const std::vector<std::string>& args) {
   if (!config.ok()) return UsageError(kCommand, config.status().message());
 
   io::TrackJob job;
-  job.wav_paths = f.wav_paths;
-  job.raw = *raw;
+  job.wav_paths = f.input.wav_paths;
+  job.raw = input->raw;
+  job.alsa = input->alsa;
   job.array_source = f.array_path;
   job.array_sample_rate_hz = array->sample_rate_hz;
   job.config = *config;

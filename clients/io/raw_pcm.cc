@@ -134,7 +134,8 @@ StatusOr<int64_t> RawPcmStream::Read(int64_t max_frames, std::vector<float>* cha
   }
   const int64_t frames = static_cast<int64_t>(got) / frame_bytes();
   const int64_t leftover = static_cast<int64_t>(got) % frame_bytes();
-  Convert(frames, channel_major);
+  channel_major->resize(static_cast<size_t>(frames) * options_.channel_count);
+  ConvertInterleavedPcm(options_.format, raw_.data(), frames, options_.channel_count, channel_major->data());
   frames_read_ += frames;
   if (leftover != 0) {
     pending_ = InvalidArgument(RemnantMessage(leftover));
@@ -143,18 +144,14 @@ StatusOr<int64_t> RawPcmStream::Read(int64_t max_frames, std::vector<float>* cha
   return frames;
 }
 
-// Interleaved little-endian codes -> channel-major floats with the WAV reader's scaling.
-void RawPcmStream::Convert(int64_t frames, std::vector<float>* channel_major) const {
-  const int channels = options_.channel_count;
-  channel_major->resize(static_cast<size_t>(frames) * channels);
-  float* out = channel_major->data();
-  const unsigned char* in = raw_.data();
-  const int bytes = RawPcmBytesPerSample(options_.format);
+void ConvertInterleavedPcm(RawPcmFormat format, const unsigned char* interleaved, int64_t frames, int channel_count,
+                           float* channel_major) {
+  const int bytes = RawPcmBytesPerSample(format);
   for (int64_t n = 0; n < frames; ++n) {
-    for (int c = 0; c < channels; ++c) {
-      const unsigned char* p = in + (n * channels + c) * bytes;
+    for (int c = 0; c < channel_count; ++c) {
+      const unsigned char* p = interleaved + (n * channel_count + c) * bytes;
       float v = 0.0f;
-      switch (options_.format) {
+      switch (format) {
         case RawPcmFormat::kS16le:
           v = static_cast<float>(Le16(p)) * kS16Scale;
           break;
@@ -165,7 +162,7 @@ void RawPcmStream::Convert(int64_t frames, std::vector<float>* channel_major) co
           v = std::bit_cast<float>(Le32(p));
           break;
       }
-      out[c * frames + n] = v;
+      channel_major[c * frames + n] = v;
     }
   }
 }

@@ -46,6 +46,13 @@ StatusOr<RawPcmFormat> ParseRawPcmFormat(const std::string& name);
 const char* RawPcmFormatName(RawPcmFormat format);
 int RawPcmBytesPerSample(RawPcmFormat format);
 
+// `frames` interleaved little-endian frames of `channel_count` samples at `interleaved` ->
+// channel-major floats at `channel_major` (channel c's sample i at [c * frames + i]), scaled
+// as above. Shared with live capture (alsa_capture.h), so that the same codes give the same
+// floats, hence the same estimates, whether they come from a file, a pipe or a device.
+void ConvertInterleavedPcm(RawPcmFormat format, const unsigned char* interleaved, int64_t frames, int channel_count,
+                           float* channel_major);
+
 // Largest channel count accepted; far above any array, it keeps frame sizes small.
 inline constexpr int kMaxRawPcmChannels = 4096;
 
@@ -78,7 +85,6 @@ class RawPcmStream final : public SampleStream {
   explicit RawPcmStream(const RawPcmOptions& options) : options_(options) {}
   int64_t frame_bytes() const;
   std::string RemnantMessage(int64_t leftover_bytes) const;
-  void Convert(int64_t frames, std::vector<float>* channel_major) const;
 
   RawPcmOptions options_;
   int fd_ = -1;

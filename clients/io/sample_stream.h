@@ -4,6 +4,7 @@
 // implementation:
 //   WavStream     (wav_io.h)   one multichannel WAV or a set of mono WAVs, via libsndfile
 //   RawPcmStream  (raw_pcm.h)  headerless interleaved PCM from a file or standard input
+//   AlsaCaptureStream (alsa_capture.h)  live capture from an ALSA PCM device
 // Every implementation returns float32 samples with integer PCM scaled to full scale 1.0 the
 // way libsndfile does (wav_io.h), so the same samples give the same estimates whichever way
 // they arrive. Not thread-safe per object.
@@ -36,6 +37,15 @@ class SampleStream {
   // and fills it channel-major (sample i of channel c at [c * n + i]); returns n, which is 0
   // only at the end of the recording. An error names the input and where in it.
   virtual StatusOr<int64_t> Read(int64_t max_frames, std::vector<float>* channel_major) = 0;
+
+  // A live input can lose samples (a capture overrun: the device's buffer filled before it
+  // was read). Samples per channel lost just before the block the latest Read returned, so
+  // that the runner tells the session (engine::Session::Skip) and the estimates' times stay
+  // those of the samples; a file loses nothing.
+  virtual int64_t frames_lost_before_last_read() const { return 0; }
+  // Over the whole run: how many times samples were lost, and how many per channel.
+  virtual int64_t overrun_count() const { return 0; }
+  virtual int64_t frames_lost() const { return 0; }
 };
 
 }  // namespace localizer::io

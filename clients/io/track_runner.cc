@@ -57,11 +57,13 @@ class TrackRun {
       auto frames = stream_->Read(block_frames, &samples_);
       if (!frames.ok()) return frames.status();
       if (*frames == 0) break;
+      LOCALIZER_RETURN_IF_ERROR(SkipLost(stream_->frames_lost_before_last_read()));
       LOCALIZER_RETURN_IF_ERROR(ProcessBlock(*frames));
       ReportProgress(start);
     }
     if (writer_) LOCALIZER_RETURN_IF_ERROR(writer_->Close());
     summary_.wall_s = SecondsSince(start);
+    summary_.overruns = stream_->overrun_count();
     if (summary_.estimates > 0) {
       summary_.mean_tdoa_s = tdoa_total_s_ / static_cast<double>(summary_.estimates);
       summary_.mean_filter_s = filter_total_s_ / static_cast<double>(summary_.estimates);
@@ -70,6 +72,14 @@ class TrackRun {
   }
 
  private:
+  // The input lost `frames` before the block just read: the session's clock jumps over them.
+  Status SkipLost(int64_t frames) {
+    if (frames <= 0) return Status::Ok();
+    LOCALIZER_RETURN_IF_ERROR(session_->Skip(frames));
+    summary_.frames_lost += frames;
+    return Status::Ok();
+  }
+
   Status ProcessBlock(int64_t frames) {
     engine::BlockView block;
     block.sequence = ++summary_.blocks;
@@ -79,7 +89,8 @@ class TrackRun {
     estimates_.clear();
     const Status status = session_->Process(block, &estimates_);
     if (!status.ok()) {
-      const double at_s = static_cast<double>(summary_.samples_per_channel) / summary_.sample_rate_hz;
+      const double at_s =
+          static_cast<double>(summary_.samples_per_channel + summary_.frames_lost) / summary_.sample_rate_hz;
       return Status(status.code(), stream_->Describe() + ": block " + std::to_string(block.sequence) + " at " +
                                        std::to_string(at_s) + " s rejected: " + status.message());
     }
@@ -116,20 +127,41 @@ class TrackRun {
   double filter_total_s_ = 0.0;
 };
 
-}  // namespace
+// The second half of RunTrack: the session and the writer for a prepared input, and the run.
+StatusOr<TrackSummary> RunPrepared(PreparedTrack prepared, const TrackJob& job, const TrackCallbacks& callbacks) {
+  if (callbacks.on_opened) callbacks.on_opened(*prepared.stream);
+  auto session = engine::Session::Create(prepared.config);
+  if (!session.ok()) return session.status();
+  auto writer =
+      OpenEstimatesWriter(job.estimates_path, job.estimates_format, (*session)->geometry(), job.geodetic_origin);
+  if (!writer.ok()) return writer.status();
+  TrackRun run(std::move(prepared.stream), std::move(*session), std::move(*writer), callbacks);
+  return run.Run(job.block_s);
+}
 
-StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks) {
+Status CheckBlock(const TrackJob& job) {
   if (!(job.block_s > 0.0 && std::isfinite(job.block_s))) {
     return InvalidArgument("block_s is " + std::to_string(job.block_s) + ", must be > 0");
   }
+  return Status::Ok();
+}
+
+}  // namespace
+
+StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks) {
+  LOCALIZER_RETURN_IF_ERROR(CheckBlock(job));
   auto prepared = PrepareTrack(job, callbacks);
   if (!prepared.ok()) return prepared.status();
-  auto session = engine::Session::Create(prepared->config);
-  if (!session.ok()) return session.status();
-  auto writer = OpenEstimatesWriter(job.estimates_path, job.estimates_format, (*session)->geometry(), job.geodetic_origin);
-  if (!writer.ok()) return writer.status();
-  TrackRun run(std::move(prepared->stream), std::move(*session), std::move(*writer), callbacks);
-  return run.Run(job.block_s);
+  return RunPrepared(std::move(*prepared), job, callbacks);
+}
+
+StatusOr<TrackSummary> RunTrackOn(std::unique_ptr<SampleStream> stream, const TrackJob& job,
+                                  const TrackCallbacks& callbacks) {
+  LOCALIZER_RETURN_IF_ERROR(CheckBlock(job));
+  if (stream == nullptr) return InvalidArgument("RunTrackOn: no input stream");
+  auto config = ConfigForStream(job, *stream, callbacks);
+  if (!config.ok()) return config.status();
+  return RunPrepared(PreparedTrack{std::move(stream), std::move(*config)}, job, callbacks);
 }
 
 engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig config, const ArrayFile& array,
@@ -166,6 +198,11 @@ engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig config, con
 namespace {
 
 StatusOr<std::unique_ptr<SampleStream>> OpenInput(const TrackJob& job, const TrackCallbacks& callbacks) {
+  if (job.alsa) {
+    auto alsa = AlsaCaptureStream::Open(*job.alsa);
+    if (!alsa.ok()) return alsa.status();
+    return std::unique_ptr<SampleStream>(std::move(*alsa));
+  }
   if (job.raw) {
     auto raw = RawPcmStream::Open(*job.raw);
     if (!raw.ok()) return raw.status();

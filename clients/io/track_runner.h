@@ -1,4 +1,4 @@
-// Tracks a recording from WAV files or raw PCM into estimates: the body of `localizer-cli
+// Tracks a recording from WAV files, raw PCM or an ALSA device into estimates: the body of `localizer-cli
 // track`, kept in the io library so that tests run exactly the code the command runs.
 //
 // The recording is streamed in blocks of `block_s` seconds through one engine::Session with
@@ -12,6 +12,9 @@
 // Channel count must equal the array's sensor count (INVALID_ARGUMENT naming both).
 // A block the session rejects stops the run with the session's message and the block's
 // position in the file.
+// Samples a live input lost (an overrun; SampleStream::frames_lost_before_last_read) are
+// skipped in the session before the next block (engine::Session::Skip), so the frames after
+// the gap carry the times of their samples; the summary counts them.
 #pragma once
 
 #include <cstdint>
@@ -21,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "clients/io/alsa_capture.h"
 #include "clients/io/array_json.h"
 #include "clients/io/csv_io.h"
 #include "clients/io/estimates_writer.h"
@@ -37,13 +41,14 @@ namespace localizer::io {
 struct TrackJob {
   std::vector<std::string> wav_paths;          // one multichannel file or mono files per sensor
   std::optional<RawPcmOptions> raw;            // set: read raw PCM (raw_pcm.h) instead of wav_paths
+  std::optional<AlsaCaptureOptions> alsa;      // set: capture from an ALSA device (alsa_capture.h) instead
   std::string array_source = "array.json";     // names the array in messages
   std::optional<double> array_sample_rate_hz;  // from the array file, checked against the input's
   engine::AudioSessionConfig config;           // sample_rate_hz is taken from the input (WAV header, raw)
   std::string estimates_path;                  // empty: write no estimates file
   EstimatesFormat estimates_format = EstimatesFormat::kCsv;
   std::optional<GeodeticOrigin> geodetic_origin;  // the array file's; geojson needs it
-  double block_s = 0.25;                       // audio per Session::Process call, > 0
+  double block_s = 0.25;                          // audio per Session::Process call, > 0
 };
 
 struct TrackProgress {
@@ -55,6 +60,8 @@ struct TrackProgress {
 
 struct TrackSummary {
   int64_t samples_per_channel = 0;  // consumed
+  int64_t overruns = 0;             // live input: times samples were lost
+  int64_t frames_lost = 0;          // live input: samples per channel lost (skipped in the session)
   double sample_rate_hz = 0.0;
   int channel_count = 0;
   uint64_t blocks = 0;
@@ -71,12 +78,17 @@ struct TrackSummary {
 };
 
 struct TrackCallbacks {
+  std::function<void(const SampleStream&)> on_opened;        // the input, once opened (its format, for a device)
   std::function<void(const std::string&)> on_warning;        // before processing starts
   std::function<void(const engine::Estimate&)> on_estimate;  // every frame, in order
   std::function<void(const TrackProgress&)> on_progress;     // after every block
 };
 
 StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});
+// RunTrack on an input opened elsewhere (the job's wav_paths, raw and alsa are not used):
+// an input kind the job cannot name, or a test's stand-in for a device that loses samples.
+StatusOr<TrackSummary> RunTrackOn(std::unique_ptr<SampleStream> stream, const TrackJob& job,
+                                  const TrackCallbacks& callbacks = {});
 
 // Flag values that override what the array file says.
 struct ArrayOverrides {
@@ -101,7 +113,7 @@ engine::AudioSessionConfig TrackConfigFor(engine::AudioSessionConfig config, con
 
 // The first half of RunTrack, shared with the remote track (clients/grpc/remote_track.h) so
 // that both track a recording with the same session config: opens the WAV(s) (a set's
-// truncation note goes to on_warning) or the raw PCM input, checks the channel count against
+// truncation note goes to on_warning), the raw PCM input or the ALSA device, checks the channel count against
 // job.config's array and sets config.sample_rate_hz from the input (a different array-file
 // rate goes to on_warning). The config is not validated here; Session::Create (or the
 // server) does that.
@@ -110,6 +122,5 @@ struct PreparedTrack {
   engine::AudioSessionConfig config;
 };
 StatusOr<PreparedTrack> PrepareTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});
-
 
 }  // namespace localizer::io
