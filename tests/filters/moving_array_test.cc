@@ -97,9 +97,10 @@ TEST_P(MovingArray, FollowingThePoseHoldsTheSourceIgnoringItDoesNot) {
   EXPECT_LT(followed.error_m, 0.3) << GetParam();
   EXPECT_LE(followed.gated, 8) << GetParam();
   // The array turns by 4 rad: with its first pose the model is wrong by metres of position,
-  // so the particle filters are dragged off and the Kalman gate refuses most frames (the
-  // filter coasts blind on its prior).
-  EXPECT_TRUE(fixed.error_m > 1.0 || fixed.gated > 80)
+  // so the particle filters are dragged off (measured: 20-60 x the error of following the
+  // pose; how far depends on the filter's random stream, so the bound is relative) and the
+  // Kalman gate refuses most frames (the filter coasts blind on its prior).
+  EXPECT_TRUE(fixed.error_m > 10.0 * followed.error_m || fixed.gated > 80)
       << GetParam() << ": " << fixed.error_m << " m, " << fixed.gated << " gated";
 }
 
