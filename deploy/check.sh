@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzz check (docs/FUZZING.md; README, "Development"): builds the libFuzzer targets of
+# Fuzz check (docs/FUZZING.md; docs/DEVELOPMENT.md): builds the libFuzzer targets of
 # tests/fuzz with the `fuzz` preset (clang, ASan + UBSan, build-fuzz/), writes their seed
 # corpora, and runs each target for a fixed time, printing its executions and exit status.
 # Optionally runs the sanitizer test suites too (deploy/sanitize.sh asan, tsan).

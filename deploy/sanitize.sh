@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Sanitizer builds and their tests (README, "Development"). Incremental and idempotent.
+# Sanitizer builds and their tests (docs/DEVELOPMENT.md). Incremental and idempotent.
 # Usage: deploy/sanitize.sh asan|tsan [extra ctest options]
 #   asan  ASan + UBSan build in build-asan; every GoogleTest test (engine, gpu stub, server,
 #         clients), i.e. all but the ops and Python tests

@@ -96,7 +96,7 @@ int Main(int argc, char** argv) {
   flags.Int("gpu-bank-mib", &o.gpu_bank_mib, "N", "MiB",
             "GPU: device memory for particles (0: 3/4 of free); a session beyond it gets RESOURCE_EXHAUSTED");
   flags.String("tls-cert", &o.tls_cert, "FILE",
-               "PEM certificate chain: serve gRPC over TLS (with --tls-key; README \"Security\")");
+               "PEM certificate chain: serve gRPC over TLS (with --tls-key; docs/SECURITY.md)");
   flags.String("tls-key", &o.tls_key, "FILE", "PEM private key of --tls-cert (unencrypted)");
   flags.String("tls-client-ca", &o.tls_client_ca, "FILE",
                "PEM CA certificates: require and verify client certificates signed by them (mutual TLS)");

@@ -2,7 +2,7 @@
 //
 // Connect(target) makes a plaintext channel; Connect(target, ConnectOptions) adds TLS (the
 // server verified against a CA), a client certificate (mutual TLS) and a bearer token sent
-// on every call (README "Security"). Messages up to 64 MiB pass either way,
+// on every call (docs/SECURITY.md). Messages up to 64 MiB pass either way,
 // enough for a block of 2^20 samples on 16 float32 channels. A grpc::Channel is thread-safe
 // and cheap to share; a failed connection is retried by gRPC in the background.
 #pragma once

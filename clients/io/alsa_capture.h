@@ -1,4 +1,4 @@
-// Live audio in: `localizer-cli track --alsa DEVICE` (README, "Live capture") reads an ALSA
+// Live audio in: `localizer-cli track --alsa DEVICE` (docs/CLI.md, "Live capture") reads an ALSA
 // PCM capture device through libasound2, block by block, as the SampleStream the tracker
 // runs on (sample_stream.h). The alternative without this code is a pipe:
 //     arecord -D DEVICE -t raw -f S16_LE -c 4 -r 48000 | localizer-cli track --raw - ...

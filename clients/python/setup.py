@@ -95,7 +95,7 @@ def engine_module():
                             f"({done.returncode}):\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}")
     if module.is_file():
         return module
-    message = (f"localizer.engine not found at {module}: build it first (README: cmake -S . -B build; "
+    message = (f"localizer.engine not found at {module}: build it first (docs/PYTHON.md: cmake -S . -B build; "
                "cmake --build build --target localizer_engine_py; Debian: pybind11-dev) or set "
                "LOCALIZER_BUILD_DIR to the build directory")
     if os.environ.get("LOCALIZER_REQUIRE_ENGINE") == "1":

@@ -53,7 +53,7 @@ done
 openssl rand -hex 32 > client.token
 openssl rand -hex 32 > operator.token
 {
-  echo "# role token (server --auth-token-file; see README, Security)"
+  echo "# role token (server --auth-token-file; see docs/SECURITY.md)"
   echo "client $(cat client.token)"
   echo "operator $(cat operator.token)"
 } > tokens

@@ -45,7 +45,7 @@ void PokeListener(const ListenAddress& address) {
 // "host:port" -> the address, whose ToString() is civetweb's listening_ports syntax
 // ("127.0.0.1:8080", "[::1]:8080"). The port is digits only: civetweb's "s" (TLS) and "r"
 // (redirect) suffixes are refused. Its TLS cannot work against Debian 12's OpenSSL 3 (a
-// handshake, then a crash on the first request; README "Security", "HTTP and TLS"): HTTPS is
+// handshake, then a crash on the first request; docs/SECURITY.md, "HTTP and TLS"): HTTPS is
 // served by TlsFront (tls_front.h) in front of a loopback exposer instead.
 StatusOr<ListenAddress> ToCivetwebListeningPort(const std::string& listen) {
   StatusOr<ListenAddress> address = ParseListenAddress(listen);

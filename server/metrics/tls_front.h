@@ -1,6 +1,6 @@
 // TlsFront: HTTPS (and mutual TLS) in front of HttpExposer, with OpenSSL 3 directly.
 //
-// Debian 12's civetweb cannot do TLS against OpenSSL 3 (README "Security", "HTTP and TLS"),
+// Debian 12's civetweb cannot do TLS against OpenSSL 3 (docs/SECURITY.md, "HTTP and TLS"),
 // so the server serves its HTTP pages over HTTPS this way instead:
 //
 //   client --TLS--> TlsFront (public address) --plain TCP--> civetweb on 127.0.0.1:backend_port

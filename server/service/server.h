@@ -1,7 +1,7 @@
 // A running localizer server: the gRPC service (with the standard health and reflection
 // services), the worker pool, the session registry, and the HTTP endpoint (/metrics, the
 // live view at /, /sessions), with TLS / mutual TLS and bearer tokens when the options name
-// their files (tls_credentials.h, auth.h; README "Security"). With metrics_tls_cert the HTTP
+// their files (tls_credentials.h, auth.h; docs/SECURITY.md). With metrics_tls_cert the HTTP
 // side is HTTPS: civetweb listens on an ephemeral loopback port and a TlsFront
 // (server/metrics/tls_front.h) on metrics_listen; metrics_port() is the front's.
 //

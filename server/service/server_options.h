@@ -50,7 +50,7 @@ struct ServerOptions {
   int gpu_max_batch = 1024;          // frames (or filter steps) per launch
   int gpu_bank_mib = 0;              // particle memory; 0: 3/4 of free
 
-  // Transport security and authentication (README "Security"; server/service/auth.h).
+  // Transport security and authentication (docs/SECURITY.md; server/service/auth.h).
   // Files are read once, at Start; unreadable or malformed ones stop the start with an error
   // naming the flag and the path.
   std::string tls_cert;         // PEM certificate chain; with tls_key, gRPC is served over TLS

@@ -7,7 +7,7 @@
 // Abseil (included by gRPC's headers) defines GUARDED_BY, PT_GUARDED_BY, ACQUIRED_AFTER,
 // ACQUIRED_BEFORE and NO_THREAD_SAFETY_ANALYSIS to the same attributes: whichever header comes
 // first defines them.
-// The check: README.md, "Development".
+// The check: docs/DEVELOPMENT.md.
 #pragma once
 
 #if defined(__clang__) && !defined(SWIG)

@@ -165,7 +165,7 @@ class LiveViewTest(unittest.TestCase):
 
     @unittest.skipUnless(CHROMIUM, "no chromium (apt-get install chromium) for the headless browser check")
     def test_chromium_draws_the_track(self):
-        # The README's copy shows a longer track (about 30 s of streaming).
+        # The copy in docs/SERVER.md (docs/live_view.png) shows a longer track (about 30 s of streaming).
         self.wait_for_track(150 if os.environ.get("LIVE_VIEW_SCREENSHOT") else MIN_TRACK_POINTS)
         profile = self.tmp / "chromium-profile"
         common = CHROMIUM_FLAGS + [f"--user-data-dir={profile}", "--virtual-time-budget=5000"]

@@ -1,4 +1,4 @@
-// Transport security and authentication (README "Security"): TLS and mutual TLS on gRPC,
+// Transport security and authentication (docs/SECURITY.md): TLS and mutual TLS on gRPC,
 // bearer tokens with roles on gRPC and on the HTTP pages, clear start-up errors for bad
 // files. The PKI is made at test time by deploy/tls/make_test_certs.sh (the openssl CLI) in
 // a temporary directory; without openssl the TLS tests skip with the reason.

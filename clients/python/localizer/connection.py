@@ -12,7 +12,7 @@ import grpc
 SESSION_KEY_METADATA = "x-localizer-session-key"
 
 
-#: Metadata key of the bearer token ("authorization: Bearer TOKEN"), README "Security".
+#: Metadata key of the bearer token ("authorization: Bearer TOKEN"), docs/SECURITY.md.
 AUTHORIZATION_METADATA = "authorization"
 
 
