@@ -87,6 +87,11 @@ int Main(int argc, char** argv) {
   flags.Double("drain-timeout", &o.drain_timeout_s, "S", "s", "on SIGTERM, time allowed to finish in-flight work");
   flags.Double("memory-trim", &o.memory_trim_s, "S", "s",
                "hand the allocator's free pages back to the system this often (RSS follows use); 0: never");
+  flags.Int("live-keep-finished", &o.live_keep_finished, "N", "sessions",
+            "the live view (GET /, GET /sessions \"finished\") keeps this many ended sessions with their tracks, to "
+            "view and replay (0: none; at most 256)");
+  flags.Double("live-keep-finished-s", &o.live_keep_finished_s, "S", "s",
+               "how long the live view keeps an ended session");
   flags.String("ready-file", &o.ready_file, "PATH",
                "once serving, write {\"grpc_port\", \"metrics_port\", \"pid\"} as JSON here (atomically)");
   flags.String("log-level", &o.log_level, "LEVEL", "debug | info | warn | error (logfmt lines on stderr)");

@@ -16,6 +16,10 @@ constexpr std::string_view kPage = R"html(<!DOCTYPE html>
   .legend { color: #444; margin-bottom: 12px; }
   .session { border: 1px solid #ccc; border-radius: 6px; padding: 8px 12px; margin-bottom: 14px; }
   .session h2 { font-size: 16px; margin: 0 0 4px; }
+  .session.finished { border-style: dashed; background: #fafafa; }
+  .session.finished h2 { color: #555; }
+  button.replay { font-size: 12px; margin-left: 8px; }
+  h3.finished-title { font-size: 15px; margin: 18px 0 8px; color: #444; }
   .meta { color: #444; font-family: ui-monospace, monospace; font-size: 12px; margin-bottom: 6px; }
   .panels { display: flex; flex-wrap: wrap; gap: 10px; }
   svg.plot { width: 520px; height: 400px; border: 1px solid #eee; background: #fcfcfc; }
@@ -46,6 +50,8 @@ constexpr std::string_view kPage = R"html(<!DOCTYPE html>
   <span style="color:#2ca02c">&#9632;</span> target track (detection sessions) &nbsp; axes in metres;
   direction sessions: each source's azimuth over time and its direction now, one colour per id (hollow: not heard)</div>
 <div id="sessions"></div>
+<h3 class="finished-title" id="finished-title" hidden>Ended sessions (kept for a while: --live-keep-finished)</h3>
+<div id="finished"></div>
 <p><a href="/metrics">/metrics</a> (Prometheus) &middot; <a href="/sessions">/sessions</a> (JSON)</p>
 <script>
 "use strict";
@@ -182,85 +188,141 @@ function drawDirectionMap(svg, sources, linear) {
   }
 }
 
-const cards = new Map();  // session id -> {root, heading, meta, xy, xz}
+const cards = new Map();  // card key ("live:ID" or "ended:ID") -> {root, heading, meta, xy, xz, ...}
 
-function card(id) {
-  let c = cards.get(id);
+function card(key, parentId) {
+  let c = cards.get(key);
   if (c) return c;
-  const root = el("section", {class: "session", "data-id": id}, document.getElementById("sessions"));
+  const root = el("section", {class: "session", "data-id": key.slice(key.indexOf(":") + 1)},
+                  document.getElementById(parentId));
   c = {root, heading: el("h2", {}, root), meta: el("div", {class: "meta"}, root)};
   c.badges = el("div", {class: "badges"}, c.meta);
   c.text = el("span", {}, c.meta);
   const panels = el("div", {class: "panels"}, root);
   c.xy = el("svg:svg", {class: "plot xy", viewBox: `0 0 ${W} ${H}`}, panels);
   c.xz = el("svg:svg", {class: "plot xz", viewBox: `0 0 ${W} ${H}`}, panels);
-  cards.set(id, c);
+  cards.set(key, c);
   return c;
+}
+
+// A replay shows an ended session's track growing from its first fix to its last, in at most
+// REPLAY_S seconds (real time when the session was shorter).
+const REPLAY_S = 10;
+function replayCut(c, s) {
+  if (!c.replay) return Infinity;
+  const times = s.track.map(p => p.t_s).concat(s.directions.map(d => d.t_s)).filter(t => t !== null);
+  if (!times.length) { c.replay = null; return Infinity; }
+  const t0 = Math.min(...times), t1 = Math.max(...times);
+  const speed = Math.max(1, (t1 - t0) / REPLAY_S);
+  const cut = t0 + (performance.now() - c.replay.start) / 1000 * speed;
+  if (cut >= t1) { c.replay = null; return Infinity; }
+  return cut;
+}
+
+// One session's card: its text, badges and plots; `cut_t`: draw only what came before it
+// (a replay).
+function drawSession(c, whole, cut_t) {
+  const s = cut_t === Infinity ? whole : Object.assign({}, whole, {
+    track: whole.track.filter(p => p.t_s <= cut_t),
+    directions: whole.directions.filter(d => d.t_s <= cut_t)});
+  const last = s.track.length ? s.track[s.track.length - 1] : null;
+  let meta = `${s.backend} / ${s.filter_type} / ${s.attached ? "attached" : "detached"} / ` +
+             `${s.frames} frames, ${s.track.length} track points`;
+  if (last) meta += ` / t ${fmt(last.t_s)} s at (${last.position_m.map(v => v === null ? "?" : v.toFixed(2)).join(", ")}) m`;
+  if (s.kind === "detections") {
+    const confirmed = s.targets.filter(t => t.status !== "tentative").length;
+    meta = `track-while-scan / ${s.attached ? "attached" : "detached"} / ${s.frames} scans, ` +
+           `${confirmed} confirmed of ${s.targets.length} tracks`;
+  }
+  if (s.platform) {
+    meta += " / platform roll, pitch, yaw (" + s.platform.euler_rad.map(v => v === null ? "?" : (v * 180 / Math.PI).toFixed(1)).join(", ") + ") deg";
+  }
+  if (s.model_probabilities.length) {
+    meta += " / models " + s.model_probabilities.map(m => `${m.model} ${(100 * m.probability).toFixed(0)}%`).join(" ");
+  }
+  c.text.textContent = meta;
+  // The latest frame's presence (present / silent) and ambiguity, as badges.
+  while (c.badges.firstChild) c.badges.removeChild(c.badges.firstChild);
+  const pr = s.presence;
+  if (pr) {
+    const tip = pr.state === "untested" ? "the engine ran no presence test" :
+        `presence statistic ${fmt(pr.statistic || 0)}, threshold ${fmt(pr.threshold || 0)}; ` +
+        `${s.present_frames} of ${s.frames} frames held a source`;
+    el("span", {class: "presence " + pr.state, title: tip}, c.badges,
+       pr.state === "untested" ? "presence n/a" : pr.state);
+    if (pr.ambiguous) {
+      el("span", {class: "presence ambiguous", title: "several position hypotheses fit the data"},
+         c.badges, `ambiguous: ${pr.modes} modes`);
+    }
+    if (pr.far_field) {
+      el("span", {class: "presence far", title: `this frame bounds the direction, not the range ` +
+                                                 `(range sd ${fmt(pr.range_sd_m || 0)} m)`},
+         c.badges, "far field: direction only");
+    }
+  }
+  const silent = !!(pr && pr.state === "silent");
+  // Directions, and positions from planar and linear arrays, come as a list of sources.
+  if (s.localization === "direction" || (s.array_shape && s.array_shape !== "volumetric")) {
+    const linear = s.array_shape === "linear";
+    c.text.textContent += ` / ${s.array_shape} array, directions: ${s.sources.length} source(s) now`;
+    drawDirectionsInTime(c.xy, s.directions, linear);
+    drawDirectionMap(c.xz, s.sources, linear);
+  } else {
+    drawPanel(c.xy, "x-y (top view)", 0, 1, s.sensors_m, s.track, s.targets, silent);
+    drawPanel(c.xz, "x-z (side view)", 0, 2, s.sensors_m, s.track, s.targets, silent);
+  }
 }
 
 function render(doc) {
   const seen = new Set();
   for (const s of doc.sessions) {
-    seen.add(s.id);
-    const c = card(s.id);
+    const key = "live:" + s.id;
+    seen.add(key);
+    const c = card(key, "sessions");
     c.heading.textContent = (s.label || "(no label)") + "  [" + s.id + "]";
-    const last = s.track.length ? s.track[s.track.length - 1] : null;
-    let meta = `${s.backend} / ${s.filter_type} / ${s.attached ? "attached" : "detached"} / ` +
-               `${s.frames} frames, ${s.track.length} track points`;
-    if (last) meta += ` / t ${fmt(last.t_s)} s at (${last.position_m.map(v => v === null ? "?" : v.toFixed(2)).join(", ")}) m`;
-    if (s.kind === "detections") {
-      const confirmed = s.targets.filter(t => t.status !== "tentative").length;
-      meta = `track-while-scan / ${s.attached ? "attached" : "detached"} / ${s.frames} scans, ` +
-             `${confirmed} confirmed of ${s.targets.length} tracks`;
-    }
-    if (s.platform) {
-      meta += " / platform roll, pitch, yaw (" + s.platform.euler_rad.map(v => v === null ? "?" : (v * 180 / Math.PI).toFixed(1)).join(", ") + ") deg";
-    }
-    if (s.model_probabilities.length) {
-      meta += " / models " + s.model_probabilities.map(m => `${m.model} ${(100 * m.probability).toFixed(0)}%`).join(" ");
-    }
-    c.text.textContent = meta;
-    // The latest frame's presence (present / silent) and ambiguity, as badges.
-    while (c.badges.firstChild) c.badges.removeChild(c.badges.firstChild);
-    const pr = s.presence;
-    if (pr) {
-      const tip = pr.state === "untested" ? "the engine ran no presence test" :
-          `presence statistic ${fmt(pr.statistic || 0)}, threshold ${fmt(pr.threshold || 0)}; ` +
-          `${s.present_frames} of ${s.frames} frames held a source`;
-      el("span", {class: "presence " + pr.state, title: tip}, c.badges,
-         pr.state === "untested" ? "presence n/a" : pr.state);
-      if (pr.ambiguous) {
-        el("span", {class: "presence ambiguous", title: "several position hypotheses fit the data"},
-           c.badges, `ambiguous: ${pr.modes} modes`);
-      }
-      if (pr.far_field) {
-        el("span", {class: "presence far", title: `this frame bounds the direction, not the range ` +
-                                                   `(range sd ${fmt(pr.range_sd_m || 0)} m)`},
-           c.badges, "far field: direction only");
-      }
-    }
-    const silent = !!(pr && pr.state === "silent");
-    // Directions, and positions from planar and linear arrays, come as a list of sources.
-    if (s.localization === "direction" || (s.array_shape && s.array_shape !== "volumetric")) {
-      const linear = s.array_shape === "linear";
-      c.text.textContent += ` / ${s.array_shape} array, directions: ${s.sources.length} source(s) now`;
-      drawDirectionsInTime(c.xy, s.directions, linear);
-      drawDirectionMap(c.xz, s.sources, linear);
-    } else {
-      drawPanel(c.xy, "x-y (top view)", 0, 1, s.sensors_m, s.track, s.targets, silent);
-      drawPanel(c.xz, "x-z (side view)", 0, 2, s.sensors_m, s.track, s.targets, silent);
-    }
+    drawSession(c, s, Infinity);
   }
-  for (const [id, c] of cards) if (!seen.has(id)) { c.root.remove(); cards.delete(id); }
+  // Ended sessions, most recent first: drawn whole, or as far as their replay has come.
+  const ended = doc.finished || [];
+  document.getElementById("finished-title").hidden = !ended.length;
+  for (const f of ended) {
+    const s = f.session, key = "ended:" + s.id;
+    seen.add(key);
+    const fresh = !cards.has(key);
+    const c = card(key, "finished");
+    if (fresh) {
+      c.root.classList.add("finished");
+      c.title = el("span", {}, c.heading);
+      c.button = el("button", {class: "replay", type: "button"}, c.heading, "replay");
+      c.button.addEventListener("click", () => { c.replay = {start: performance.now()}; drawEnded(c); });
+      if (s.id === replayId) c.replay = {start: performance.now()};  // /?replay=ID: a link to a replay
+    }
+    c.session = s;
+    c.title.textContent = (s.label || "(no label)") + "  [" + s.id + "]  ended " +
+                          fmt(f.finished_ago_s) + " s ago (" + f.reason + ")";
+    drawEnded(c);
+  }
+  for (const [key, c] of cards) if (!seen.has(key)) { c.root.remove(); cards.delete(key); }
   const shown = doc.sessions.length ? `${doc.sessions_total} session(s)` :
       "no sessions (stream one, e.g. localizer-cli simulate --server HOST:PORT)";
   document.getElementById("status").textContent =
-      `localizer ${doc.version}: ${shown}; updated ${new Date().toLocaleTimeString()}`;
+      `localizer ${doc.version}: ${shown}` + (ended.length ? `, ${ended.length} ended` : "") +
+      `; updated ${new Date().toLocaleTimeString()}`;
 }
+
+function drawEnded(c) {
+  const cut = replayCut(c, c.session);
+  c.button.textContent = cut === Infinity ? "replay" : "replaying ...";
+  drawSession(c, c.session, cut);
+}
+
+// Replays advance ten times a second, between polls.
+setInterval(() => { for (const c of cards.values()) if (c.replay && c.session) drawEnded(c); }, 100);
 
 // A server started with --auth-token-file serves this page at /?token=OPERATOR_TOKEN; the
 // token goes on to /sessions as an Authorization header (never into another URL).
 const pageToken = new URLSearchParams(location.search).get("token");
+const replayId = new URLSearchParams(location.search).get("replay");
 const authHeaders = pageToken ? {Authorization: "Bearer " + pageToken} : {};
 
 async function poll() {

@@ -156,6 +156,16 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
   registry_options.policy.max_particles = options.max_particles;
   registry_options.policy.max_tracks = options.max_tracks;
   registry_options.policy.max_plots_per_scan = options.max_scan_plots;
+  // The live view keeps the sessions that ended (only when it is served).
+  s->finished_ = std::make_unique<FinishedSessions>(options.metrics_listen.empty() ? 0 : options.live_keep_finished,
+                                                    options.live_keep_finished_s);
+  if (s->finished_->enabled()) {
+    FinishedSessions* finished = s->finished_.get();
+    registry_options.on_retired = [finished](const SessionHost& host, const v1::SessionInfo& info,
+                                             const std::string& reason) {
+      finished->Add({FinishedSessionJson(host, info), reason, Clock::now()});
+    };
+  }
   s->sessions_ =
       std::make_unique<SessionRegistry>(registry_options, s->pool_.get(), s->metrics_.get(), s->budget_.get());
   LocateLimits locate_limits{options.max_concurrent_locate > 0 ? options.max_concurrent_locate : workers,
@@ -218,8 +228,10 @@ StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& options) {
     // The live view: GET / draws what GET /sessions lists. The exposer is stopped before
     // the registry is destroyed (Shutdown), so `sessions` outlives every request.
     const double ttl_s = options.session_ttl_s;
-    auto sessions_page = [sessions, ttl_s] {
-      return std::pair<int, std::string>(200, SessionsJson(sessions->Snapshot(), Clock::now(), ttl_s));
+    FinishedSessions* finished = s->finished_.get();
+    auto sessions_page = [sessions, finished, ttl_s] {
+      const Clock::time_point now = Clock::now();
+      return std::pair<int, std::string>(200, SessionsJson(sessions->Snapshot(), now, ttl_s, finished->Snapshot(now)));
     };
     auto live_page = [] { return std::pair<int, std::string>(200, std::string(LivePageHtml())); };
     // With tokens, both need an operator token: /sessions in the Authorization header (the

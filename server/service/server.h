@@ -24,6 +24,7 @@
 #include "server/metrics/registry.h"
 #include "server/metrics/tls_front.h"
 #include "server/service/auth.h"
+#include "server/service/finished_sessions.h"
 #include "server/service/localizer_service.h"
 #include "server/service/memory_budget.h"
 #include "server/service/server_options.h"
@@ -53,7 +54,8 @@ class Server final {
   const ServerOptions options_;
   metrics::Registry registry_;
   std::unique_ptr<ServiceMetrics> metrics_;
-  std::unique_ptr<MemoryBudget> budget_;  // outlives the sessions and calls charged to it
+  std::unique_ptr<MemoryBudget> budget_;        // outlives the sessions and calls charged to it
+  std::unique_ptr<FinishedSessions> finished_;  // the live view's ended sessions; outlives the registry
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<SessionRegistry> sessions_;
   std::unique_ptr<TokenAuthenticator> auth_;  // null: no authentication

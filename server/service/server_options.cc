@@ -4,6 +4,7 @@
 #include <string>
 #include <utility>
 
+#include "server/service/finished_sessions.h"
 #include "wire/scan_wire.h"
 
 namespace localizer::server {
@@ -47,6 +48,13 @@ Status ServerOptions::Validate() const {
   if (!(drain_timeout_s >= 0.0)) return InvalidArgument("drain_timeout_s must be >= 0");
   if (!(memory_trim_s >= 0.0 && memory_trim_s <= 86400.0)) {
     return InvalidArgument("memory_trim_s must be in [0, 86400] (0: never)");
+  }
+  if (live_keep_finished < 0 || live_keep_finished > static_cast<int>(FinishedSessions::kMaxKeep)) {
+    return InvalidArgument("live_keep_finished must be in [0, " + std::to_string(FinishedSessions::kMaxKeep) +
+                           "] (0: none)");
+  }
+  if (!(live_keep_finished_s >= 0.0 && live_keep_finished_s <= 86400.0)) {
+    return InvalidArgument("live_keep_finished_s must be in [0, 86400]");
   }
   if (log_level != "debug" && log_level != "info" && log_level != "warn" && log_level != "error") {
     return InvalidArgument("log_level '" + log_level + "' is not one of: debug, info, warn, error");

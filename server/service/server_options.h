@@ -43,6 +43,9 @@ struct ServerOptions {
   double drain_timeout_s = 10.0;                  // SIGTERM: time to finish in-flight work
   double memory_trim_s = 30.0;                    // hand the allocator's free pages back
                                                   // to the system this often; 0: never
+  int live_keep_finished = 16;                    // the live view keeps this many ended
+                                                  // sessions (finished_sessions.h); 0: none
+  double live_keep_finished_s = 600.0;            // ... each for this long
   std::string ready_file;                         // written once serving: JSON with ports
   std::string log_level = "info";                 // debug | info | warn | error
   // GPU backend (gpu/backend/gpu_backend.h); ignored without a device.

@@ -11,7 +11,7 @@ namespace localizer::server {
 
 SessionHost::SessionHost(std::string id, std::string token, std::string label, std::unique_ptr<SessionRunner> runner,
                          HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics,
-                         std::function<void()> on_finished, MemoryBudget::Charge charge)
+                         std::function<void(const v1::SessionInfo&)> on_finished, MemoryBudget::Charge charge)
     : charge_(std::move(charge)),
       id_(std::move(id)),
       token_(std::move(token)),
@@ -151,7 +151,7 @@ void SessionHost::PumpLocked() {
                                         "in the last estimate); resume or reopen on another instance"));
   }
   // Finished: the session ends before the client sees OK, so nothing can find it after.
-  if (on_finished_) on_finished_();
+  if (on_finished_) on_finished_(InfoLocked(Clock::now(), limits_.ttl_s));
   CloseLocked(grpc::Status::OK);
 }
 
@@ -229,6 +229,10 @@ SessionHost::Expiry SessionHost::ExpiryAt(Clock::time_point now, double ttl_s, d
 
 v1::SessionInfo SessionHost::Info(Clock::time_point now, double ttl_s) const {
   MutexLock lock(&mutex_);
+  return InfoLocked(now, ttl_s);
+}
+
+v1::SessionInfo SessionHost::InfoLocked(Clock::time_point now, double ttl_s) const {
   v1::SessionInfo info;
   info.set_session_id(id_);
   info.set_label(label_);

@@ -68,12 +68,13 @@ struct HostLimits {
 class SessionHost final : public std::enable_shared_from_this<SessionHost> {
  public:
   // `on_finished` runs (with the host's lock held) when the session finishes cleanly,
-  // before the stream sees OK: the registry forgets the session there. `charge` is the
+  // before the stream sees OK, with the session's final counters (Info's): the registry
+  // forgets the session there (and keeps it for the live view). `charge` is the
   // session's share of the server's memory budget, returned when the host is destroyed
   // (with the runner whose memory it stands for).
   SessionHost(std::string id, std::string token, std::string label, std::unique_ptr<SessionRunner> runner,
-              HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics, std::function<void()> on_finished,
-              MemoryBudget::Charge charge = {});
+              HostLimits limits, WorkerPool* pool, ServiceMetrics* metrics,
+              std::function<void(const v1::SessionInfo&)> on_finished, MemoryBudget::Charge charge = {});
 
   const std::string& id() const { return id_; }
   const std::string& resume_token() const { return token_; }  // a secret: never log it
@@ -141,6 +142,7 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   // Nothing queued, nothing processing: every accepted item has produced its responses.
   bool IdleLocked() const REQUIRES(mutex_) { return inbox_.empty() && !running_; }
   v1::SessionOpened OpenedLocked(bool resumed) const REQUIRES(mutex_);
+  v1::SessionInfo InfoLocked(Clock::time_point now, double ttl_s) const REQUIRES(mutex_);
 
   static constexpr int kItemsPerTurn = 4;  // per worker turn, so that sessions share the workers
 
@@ -152,7 +154,7 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   const HostLimits limits_;
   WorkerPool* const pool_;
   ServiceMetrics* const metrics_;
-  const std::function<void()> on_finished_;
+  const std::function<void(const v1::SessionInfo&)> on_finished_;
   const Clock::time_point created_;
   TrackHistory track_;  // appended by the runner; has its own lock
 

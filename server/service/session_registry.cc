@@ -81,7 +81,7 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   } while (sessions_.count(id) != 0);
   // A session that finishes (the client half-closed, all written) is forgotten before its
   // stream sees OK; the host calls this with its lock held (lock order: host -> registry).
-  auto forget = [this, id] { Forget(id, "finished"); };
+  auto forget = [this, id](const v1::SessionInfo& info) { Forget(id, "finished", info); };
   auto host = std::make_shared<SessionHost>(id, *token, config.label(), std::move(runner).value(), options_.host, pool_,
                                             metrics_, std::move(forget), std::move(charge));
   sessions_[id] = host;
@@ -110,15 +110,21 @@ void SessionRegistry::Remove(const std::string& id, const std::string& reason, c
   if (auto* c = metrics_->sessions_closed(reason)) c->Increment();
   LogEvent("info", "session_closed", {{"session", id}, {"reason", reason}});
   host->Close(status);
+  if (options_.on_retired) options_.on_retired(*host, host->Info(Clock::now(), options_.ttl_s), reason);
 }
 
-void SessionRegistry::Forget(const std::string& id, const std::string& reason) {
+void SessionRegistry::Forget(const std::string& id, const std::string& reason, const v1::SessionInfo& info) {
+  std::shared_ptr<SessionHost> host;  // the caller (the session itself) holds another reference
   {
     MutexLock lock(&mutex_);
-    if (sessions_.erase(id) == 0) return;
+    const auto it = sessions_.find(id);
+    if (it == sessions_.end()) return;
+    host = std::move(it->second);
+    sessions_.erase(it);
   }
   if (auto* c = metrics_->sessions_closed(reason)) c->Increment();
   LogEvent("info", "session_closed", {{"session", id}, {"reason", reason}});
+  if (options_.on_retired) options_.on_retired(*host, info, reason);
 }
 
 StatusOr<uint64_t> SessionRegistry::Close(const std::string& id, const std::string& token) {

@@ -13,6 +13,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -36,6 +37,11 @@ struct RegistryOptions {
   double memory_trim_s = 30.0;  // the sweep returns free heap pages this often; 0: never
   HostLimits host;
   wire::ConfigPolicy policy;
+  // Called once for each session that ends (it finished, was closed, expired or went idle;
+  // not at shutdown), after it left the registry, with its final counters and the reason
+  // (the closed-sessions metric's label): the live view keeps it (finished_sessions.h). It
+  // may run with the session's lock held, so it must not call the session's locking methods.
+  std::function<void(const SessionHost&, const v1::SessionInfo&, const std::string& reason)> on_retired;
 };
 
 class SessionRegistry final {
@@ -55,8 +61,9 @@ class SessionRegistry final {
   StatusOr<std::shared_ptr<SessionHost>> Find(const std::string& id, const std::string& token) const EXCLUDES(mutex_);
   // Removes and closes; `reason` labels the closed-sessions metric. No-op if unknown.
   void Remove(const std::string& id, const std::string& reason, const grpc::Status& status) EXCLUDES(mutex_);
-  // Removes without touching the session (the session itself calls this as it finishes).
-  void Forget(const std::string& id, const std::string& reason) EXCLUDES(mutex_);
+  // Removes without touching the session (the session itself calls this as it finishes,
+  // with its final counters).
+  void Forget(const std::string& id, const std::string& reason, const v1::SessionInfo& info) EXCLUDES(mutex_);
   // CloseSession: NOT_FOUND / PERMISSION_DENIED as Find; returns frames processed.
   StatusOr<uint64_t> Close(const std::string& id, const std::string& token) EXCLUDES(mutex_);
 

@@ -16,8 +16,7 @@ json Number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 json Triple(const double v[3]) { return json::array({Number(v[0]), Number(v[1]), Number(v[2])}); }
 
-json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, bool with_track) {
-  const v1::SessionInfo info = host.Info(now, ttl_s);
+json SessionJson(const SessionHost& host, const v1::SessionInfo& info, bool with_track) {
   const engine::AudioSessionConfig& config = host.config();
   const TrackSnapshot track = host.track().Snapshot();
   json s;
@@ -122,10 +121,19 @@ json SessionJson(const SessionHost& host, Clock::time_point now, double ttl_s, b
   return s;
 }
 
+// Labels come from clients: bytes that are not UTF-8 are replaced rather than thrown on.
+std::string Dump(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
+
 }  // namespace
 
+std::string FinishedSessionJson(const SessionHost& host, const v1::SessionInfo& info) {
+  json s = SessionJson(host, info, /*with_track=*/true);
+  s["attached"] = false;  // it ended: no stream holds it any more
+  return Dump(s);
+}
+
 std::string SessionsJson(const std::vector<std::shared_ptr<SessionHost>>& hosts, Clock::time_point now, double ttl_s,
-                         size_t max_track_sessions) {
+                         const std::vector<FinishedSession>& finished, size_t max_track_sessions) {
   std::vector<std::pair<double, const SessionHost*>> by_age;  // (age_s, host), oldest first
   by_age.reserve(hosts.size());
   for (const auto& host : hosts) {
@@ -138,11 +146,23 @@ std::string SessionsJson(const std::vector<std::shared_ptr<SessionHost>>& hosts,
   doc["track_sessions_max"] = max_track_sessions;
   json sessions = json::array();
   for (size_t i = 0; i < by_age.size(); ++i) {
-    sessions.push_back(SessionJson(*by_age[i].second, now, ttl_s, i < max_track_sessions));
+    sessions.push_back(SessionJson(*by_age[i].second, by_age[i].second->Info(now, ttl_s), i < max_track_sessions));
   }
   doc["sessions"] = std::move(sessions);
-  // Labels come from clients: bytes that are not UTF-8 are replaced rather than thrown on.
-  return doc.dump(-1, ' ', false, json::error_handler_t::replace);
+  std::string text = Dump(doc);
+  // The finished sessions were rendered when they ended: appended as they are, without
+  // parsing them again (the document is an object: its closing brace moves to the end).
+  text.pop_back();
+  text += ",\"finished\":[";
+  for (size_t i = 0; i < finished.size(); ++i) {
+    const FinishedSession& f = finished[i];
+    const double ago_s = std::chrono::duration<double>(now - f.finished_at).count();
+    if (i > 0) text += ',';
+    text += "{\"finished_ago_s\":" + Dump(Number(ago_s)) + ",\"reason\":" + Dump(json(f.reason)) +
+            ",\"session\":" + f.session_json + '}';
+  }
+  text += "]}";
+  return text;
 }
 
 }  // namespace localizer::server

@@ -8,6 +8,7 @@ LOCALIZER_CHROMIUM (optional; else `chromium` or `chromium-browser` on PATH),
 LIVE_VIEW_SCREENSHOT (optional: copy the screenshot there, e.g. docs/live_view.png).
 DetectionLiveViewTest also needs the Python client (LOCALIZER_PY_CLIENT_DIR, LOCALIZER_PY_GEN)
 and draws a detection session's targets (LIVE_VIEW_RADAR_SCREENSHOT: copy of its screenshot).
+EndedSessionLiveViewTest: a finished `--rate max` run stays listed and is drawn and replayed.
 Standard library only; run with /usr/bin/python3 -m unittest -v live_view_test.
 """
 import json
@@ -263,6 +264,58 @@ class DetectionLiveViewTest(unittest.TestCase):
             subprocess.run([CHROMIUM] + common + [f"--screenshot={shot}", base], capture_output=True, timeout=120,
                            env=env)
             shutil.copyfile(shot, os.environ["LIVE_VIEW_RADAR_SCREENSHOT"])
+
+
+@unittest.skipUnless(ops_util.have_binaries(),
+                     f"no localizer-server/localizer-cli (LOCALIZER_SERVER={SERVER!r}, LOCALIZER_CLI={CLI!r})")
+class EndedSessionLiveViewTest(unittest.TestCase):
+    """A run streamed as fast as the server takes it (it ends in well under a second) is still
+    listed after it ended, with its track, and the page draws it and replays it."""
+
+    def setUp(self):
+        self.tmp = Path(tempfile.mkdtemp(prefix="localizer-ops-ended-"))
+        self.addCleanup(shutil.rmtree, self.tmp, True)
+        self.server = ops_util.Server(self.tmp, "server", ["--backend", "cpu"])
+        self.addCleanup(self.server.stop)
+        self.base = f"http://{self.server.metrics_target}"
+        run = subprocess.run([CLI, "simulate", "--scenario", "tetra-water", "--duration", "10", "--rate", "max",
+                              "--server", self.server.grpc_target, "--label", "ended run"],
+                             capture_output=True, timeout=120)
+        self.assertEqual(run.returncode, 0, run.stderr.decode(errors="replace")[-2000:])
+
+    def test_the_ended_session_is_listed_and_drawn(self):
+        _, doc = get_json(self.base + "/sessions")
+        self.assertEqual(doc["sessions"], [])
+        self.assertEqual(len(doc["finished"]), 1, json.dumps(doc)[:1000])
+        ended = doc["finished"][0]
+        self.assertEqual(ended["reason"], "finished")
+        self.assertGreaterEqual(ended["finished_ago_s"], 0.0)
+        session = ended["session"]
+        self.assertEqual(session["label"], "ended run")
+        self.assertGreaterEqual(len(session["track"]), MIN_TRACK_POINTS)
+        if not CHROMIUM:
+            self.skipTest("no chromium (apt-get install chromium) for the headless browser check")
+        profile = self.tmp / "chromium-profile"
+        env = dict(os.environ, HOME=str(self.tmp))
+        common = CHROMIUM_FLAGS + [f"--user-data-dir={profile}"]
+
+        def dom(url, budget_ms):
+            run = subprocess.run([CHROMIUM] + common + [f"--virtual-time-budget={budget_ms}", "--dump-dom", url],
+                                 capture_output=True, timeout=120, env=env)
+            return run.stdout.decode(errors="replace")
+
+        whole = dom(self.base + "/", 2000)
+        self.assertIn('class="session finished"', whole, whole[:3000])
+        self.assertIn(">replay</button>", whole)
+        tracks = [int(n) for n in re.findall(r'<polyline class="track" data-points="(\d+)"', whole)]
+        self.assertEqual(tracks, [len(session["track"])] * 2, whole[:3000])
+        # /?replay=ID starts its replay at once: a 10 s session replays in 10 s of page time,
+        # so 4 s in, part of the track is drawn, and the button says so.
+        part = dom(self.base + "/?replay=" + session["id"], 4000)
+        self.assertIn(">replaying ...</button>", part, part[:3000])
+        drawn = [int(n) for n in re.findall(r'<polyline class="track" data-points="(\d+)"', part)]
+        self.assertEqual(len(drawn), 2, part[:3000])
+        self.assertTrue(0 < drawn[0] < len(session["track"]), (drawn, len(session["track"])))
 
 
 if __name__ == "__main__":

@@ -1,12 +1,14 @@
 // The live web view's data: the per-session track ring (bounded, oldest first, only
 // initialised fixes) and GET /sessions after real traffic (valid JSON of the documented
 // shape, holding the estimates the stream received; client labels escaped), and GET /
-// serving the self-contained page.
+// serving the self-contained page; ended sessions kept for the live view (bounded in number
+// and time, with their tracks).
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "server/service/finished_sessions.h"
 #include "server/service/sessions_json.h"
 #include "server/service/track_history.h"
 #include "tests/server/http_client.h"
@@ -140,6 +142,44 @@ TEST(SessionsJsonTest, NoSessionsIsAnEmptyList) {
   EXPECT_EQ(doc.at("sessions_total"), 0);
   EXPECT_TRUE(doc.at("sessions").is_array());
   EXPECT_TRUE(doc.at("sessions").empty());
+  EXPECT_TRUE(doc.at("finished").is_array());
+  EXPECT_TRUE(doc.at("finished").empty());
+}
+
+FinishedSession Ended(int n, Clock::time_point at) {
+  return {"{\"id\":\"s" + std::to_string(n) + "\"}", n % 2 ? "finished" : "expired", at};
+}
+
+TEST(FinishedSessionsTest, KeepsTheLastKeepForKeepSecondsMostRecentFirst) {
+  const Clock::time_point t0 = Clock::now();
+  FinishedSessions kept(3, 10.0);
+  for (int n = 1; n <= 5; ++n) kept.Add(Ended(n, t0 + std::chrono::seconds(n)));
+  std::vector<FinishedSession> now = kept.Snapshot(t0 + std::chrono::seconds(6));
+  ASSERT_EQ(now.size(), 3u);  // the two oldest went to make room
+  EXPECT_EQ(now[0].session_json, "{\"id\":\"s5\"}");
+  EXPECT_EQ(now[2].session_json, "{\"id\":\"s3\"}");
+  // s3 ended at 3 s: gone after 13 s; s4 and s5 stay until 14 s and 15 s.
+  now = kept.Snapshot(t0 + std::chrono::milliseconds(13500));
+  ASSERT_EQ(now.size(), 2u);
+  EXPECT_EQ(now[1].session_json, "{\"id\":\"s4\"}");
+  EXPECT_TRUE(kept.Snapshot(t0 + std::chrono::seconds(16)).empty());
+  // The document carries them after the live ones, as valid JSON.
+  const Clock::time_point t = t0 + std::chrono::seconds(7);
+  const auto doc = nlohmann::json::parse(SessionsJson({}, t, 60.0, {Ended(7, t0), Ended(8, t0)}));
+  ASSERT_EQ(doc.at("finished").size(), 2u);
+  EXPECT_EQ(doc.at("finished")[0].at("session").at("id"), "s7");
+  EXPECT_EQ(doc.at("finished")[1].at("reason"), "expired");
+  EXPECT_DOUBLE_EQ(doc.at("finished")[0].at("finished_ago_s").get<double>(), 7.0);
+}
+
+TEST(FinishedSessionsTest, KeepZeroKeepsNothing) {
+  FinishedSessions none(0, 600.0);
+  EXPECT_FALSE(none.enabled());
+  none.Add(Ended(1, Clock::now()));
+  EXPECT_TRUE(none.Snapshot(Clock::now()).empty());
+  FinishedSessions capped(100000, 600.0);
+  for (int n = 0; n < 300; ++n) capped.Add(Ended(n, Clock::now()));
+  EXPECT_EQ(capped.Snapshot(Clock::now()).size(), FinishedSessions::kMaxKeep);
 }
 
 TEST_F(ServiceTest, SessionsJsonListsTheStreamedTrack) {
@@ -260,6 +300,57 @@ TEST_F(ServiceTest, SessionsJsonListsADirectionSessionsSources) {
   ASSERT_TRUE(stream.Close().ok());
 }
 
+// A session streams its scene and half-closes: the stream ends OK, the session leaves the
+// registry, and GET /sessions lists it under "finished" with the track the stream received.
+TEST_F(ServiceTest, AnEndedSessionStaysInTheLiveViewWithItsTrack) {
+  const Scenario s = MakeScenario("tetra-water", 3.0, 1, kBlock, 512);
+  TestStream stream(stub_.get());
+  v1::TrackRequest open = s.OpenRequest();
+  open.mutable_open()->set_label("quick run");
+  ASSERT_TRUE(stream.Send(open));
+  for (int64_t k = 1; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(stream.Send(s.BlockRequest(k, kBlock)));
+  ASSERT_TRUE(stream.Close().ok());
+  std::vector<v1::Estimate> fixes;
+  for (const auto& e : stream.estimates()) {
+    if (e.initialised()) fixes.push_back(e);
+  }
+  ASSERT_FALSE(fixes.empty());
+
+  const auto response = localizer::testing::Request(server_->metrics_port(), "GET", "/sessions");
+  ASSERT_EQ(response.status, 200);
+  nlohmann::json doc;
+  ASSERT_NO_THROW(doc = nlohmann::json::parse(response.body)) << response.body.substr(0, 400);
+  EXPECT_TRUE(doc.at("sessions").empty());
+  ASSERT_EQ(doc.at("finished").size(), 1u);
+  const auto& ended = doc.at("finished")[0];
+  EXPECT_EQ(ended.at("reason"), "finished");
+  EXPECT_GE(ended.at("finished_ago_s").get<double>(), 0.0);
+  const auto& session = ended.at("session");
+  EXPECT_EQ(session.at("id"), stream.opened().session_id());
+  EXPECT_EQ(session.at("label"), "quick run");
+  EXPECT_EQ(session.at("frames"), s.offline.size());
+  EXPECT_EQ(session.at("blocks"), s.BlockCount(kBlock));
+  const auto& track = session.at("track");
+  ASSERT_EQ(track.size(), std::min<size_t>(fixes.size(), session.at("track_capacity").get<size_t>()));
+  EXPECT_EQ(track.back().at("frame"), fixes.back().frame_index());
+  EXPECT_DOUBLE_EQ(track.back().at("position_m")[0].get<double>(), fixes.back().position_m().x());
+}
+
+TEST_F(ServiceTest, ALiveViewKeepingNoEndedSessionListsNone) {
+  server_->Shutdown();
+  ServerOptions options;
+  options.live_keep_finished = 0;
+  StartServer(options);
+  const Scenario s = MakeScenario("tetra-water", 1.0, 1, kBlock, 512);
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(s.OpenRequest()));
+  for (int64_t k = 1; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(stream.Send(s.BlockRequest(k, kBlock)));
+  ASSERT_TRUE(stream.Close().ok());
+  const auto doc = nlohmann::json::parse(localizer::testing::Request(server_->metrics_port(), "GET", "/sessions").body);
+  EXPECT_TRUE(doc.at("sessions").empty());
+  EXPECT_TRUE(doc.at("finished").empty());
+}
+
 TEST_F(ServiceTest, RootServesTheSelfContainedLivePage) {
   const auto response = localizer::testing::Request(server_->metrics_port(), "GET", "/");
   ASSERT_EQ(response.status, 200);
@@ -269,6 +360,8 @@ TEST_F(ServiceTest, RootServesTheSelfContainedLivePage) {
   EXPECT_NE(response.body.find("s.presence"), std::string::npos);  // presence and ambiguity shown
   EXPECT_NE(response.body.find("ambiguous"), std::string::npos);
   EXPECT_NE(response.body.find("drawDirectionMap(c.xz, s.sources"), std::string::npos);  // direction sessions
+  EXPECT_NE(response.body.find("doc.finished"), std::string::npos);                      // ended sessions
+  EXPECT_NE(response.body.find("\"replay\""), std::string::npos);
   // Self-contained: nothing loaded from another origin.
   EXPECT_EQ(response.body.find("src="), std::string::npos);
   EXPECT_EQ(response.body.find("https://"), std::string::npos);
