@@ -10,9 +10,10 @@ localizer-cli and localizer.engine (issue 19: one session file for every reader)
 - ``engine_options`` open in localizer.engine the session `localizer-cli track --format jsonl`
   runs with the same file: every field the CLI writes equal, frame for frame.
 - ``to_session_config`` sets the pb.SessionConfig fields the file states, and refuses what
-  the wire cannot carry.
-Skips the CLI comparisons without localizer-cli, the engine one without localizer.engine
-(each with the reason).
+  the wire cannot carry; on a localizer-server the session it opens streams the estimates
+  `localizer-cli track` writes locally with the same file, frame for frame.
+Skips the CLI comparisons without localizer-cli, the engine one without localizer.engine, the
+server one without localizer-server (each with the reason).
 """
 import json
 import math
@@ -27,6 +28,7 @@ CLIENT_DIR = os.environ.get("LOCALIZER_PY_CLIENT_DIR") or str(
     Path(__file__).resolve().parents[2] / "build" / "clients" / "python")
 sys.path.insert(0, CLIENT_DIR)
 
+import grpc  # noqa: E402
 import numpy as np  # noqa: E402
 
 import localizer  # noqa: E402
@@ -277,6 +279,50 @@ class EngineMatchesCliTest(unittest.TestCase):
             if e["initialised"]:
                 self.assertEqual(list(row[["x_m", "y_m", "z_m"]].item()), e["position_m"])
                 self.assertEqual(row["covariance"].tolist(), e["covariance"])
+
+
+SERVER = os.environ.get("LOCALIZER_SERVER", "")
+HAVE_SERVER = bool(SERVER) and os.access(SERVER, os.X_OK)
+if HAVE_SERVER:
+    from test_client import ServerFixture  # a localizer-server on a loopback port per test
+else:
+    ServerFixture = unittest.TestCase
+
+
+@unittest.skipUnless(HAVE_CLI, "localizer-cli not built (LOCALIZER_CLI unset)")
+@unittest.skipUnless(HAVE_SERVER, f"no localizer-server binary (LOCALIZER_SERVER={SERVER!r})")
+class ServerMatchesCliTest(ServerFixture):
+    """``to_session_config`` opens on a server the session `localizer-cli track` runs locally
+    with the same file: the fields it leaves unset are the engine's defaults there too."""
+
+    def test_a_session_opened_from_the_file_streams_the_clis_estimates(self):
+        tmp = Path(self.tmp)
+        run = run_cli("simulate", "--scenario", "tetra-water", "--seed", "2", "--duration", "4", "--out", tmp / "sim")
+        self.assertEqual(run.returncode, 0, run.stderr)
+        array = json.loads((tmp / "sim" / "array.json").read_text())
+        array["session"] = EngineMatchesCliTest.SESSION
+        (tmp / "session.json").write_text(json.dumps(array))
+        run = run_cli("track", "--wav", tmp / "sim" / "signals.wav", "--array", tmp / "session.json", "--format",
+                      "jsonl", "--out", tmp / "cli.jsonl", "--print-every", "0")
+        self.assertEqual(run.returncode, 0, run.stderr)
+        cli = jsonl_rows(tmp / "cli.jsonl")
+
+        samples, fs = localizer.audio.read(str(tmp / "sim" / "signals.wav"))
+        config = read_session_file(tmp / "session.json").to_session_config(fs, label="session-file")
+        session = localizer.TrackSession.open(self.channel, config, timeout=60)
+        for start in range(0, samples.shape[1], 4096):
+            session.send(samples[:, start:start + 4096])
+        session.close()
+        estimates = list(session.estimates())
+        self.assertEqual(session.code(), grpc.StatusCode.OK)
+        self.assertEqual(len(estimates), len(cli))
+        self.assertGreater(sum(e.initialised for e in estimates), len(cli) // 2, "the scene was not tracked")
+        for e, want in zip(estimates, cli):
+            self.assertEqual((e.frame_index, e.t_s, e.initialised), (want["frame"], want["t_s"], want["initialised"]))
+            self.assertTrue(same_number(want["tdoa_sigma_s"], e.tdoa_sigma_s), (want["tdoa_sigma_s"], e.tdoa_sigma_s))
+            if e.initialised:
+                self.assertEqual(e.position_m.tolist(), want["position_m"])
+                self.assertEqual(e.covariance.tolist(), want["covariance"])
 
 
 if __name__ == "__main__":
