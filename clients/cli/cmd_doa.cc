@@ -2,6 +2,7 @@
 // an array of any shape (clients/io/doa_runner.h).
 #include <cstdio>
 #include <sstream>
+#include <utility>
 
 #include "clients/cli/commands.h"
 #include "clients/io/array_json.h"
@@ -43,7 +44,10 @@ int RunDoa(const std::vector<std::string>& args) {
                 "a volumetric array gives directions on the sphere, a planar one directions with their\n"
                 "mirror image across its plane (unless --source-side picks the side), a linear one the\n"
                 "cone angle to its axis. Far field; no tracking (a peak's rank is not an identity).\n"
-                "Prints the array's shape and a summary (frames, frames with a source, peaks, wall time).");
+                "Prints the array's shape and a summary (frames, frames with a source, peaks, wall time).\n"
+                "The array file's \"session\" object gives the defaults of --frame (frame_samples), --hop\n"
+                "(hop_samples), --band-low/--band-high (band_low_hz, band_high_hz) and --false-alarm\n"
+                "(presence_false_alarm); its tracker settings are not used here.");
   flags.String("array", &array_path, "FILE", "array.json (or the XAV hydrophone CSV): sensors and sound speed")
       .Required();
   flags.Strings("wav", &wav_paths, "FILE", "one multichannel WAV, or one mono WAV per sensor in order").Required();
@@ -71,8 +75,19 @@ int RunDoa(const std::vector<std::string>& args) {
   // The array file's source_side and max_sources, unless the flags say otherwise.
   if (side_text.empty() && array->source_side_normal) srp.source_side = *array->source_side_normal;
   if (!flags.seen("max-sources") && array->max_sources) srp.max_sources = *array->max_sources;
-  srp.band_low_hz = band_low_hz.value_or(array->band_hz ? array->band_hz->first : 0.0);
-  srp.band_high_hz = band_high_hz.value_or(array->band_hz ? array->band_hz->second : 0.0);
+  // Its "session" settings that a direction search reads (no tracking here: the tracker's are
+  // not used), unless the flags say otherwise; a session band replaces the band_hz hint, as
+  // in track.
+  const io::SessionSettings& session = array->session;
+  if (!flags.seen("frame") && session.frame_samples) srp.frame_samples = *session.frame_samples;
+  if (!flags.seen("hop") && session.hop_samples) hop_samples = *session.hop_samples;
+  if (!flags.seen("false-alarm") && session.presence_false_alarm) srp.false_alarm = *session.presence_false_alarm;
+  const bool session_band = session.band_low_hz.value_or(0.0) != 0.0 || session.band_high_hz.value_or(0.0) != 0.0;
+  const std::pair<double, double> band =
+      session_band ? std::make_pair(session.band_low_hz.value_or(0.0), session.band_high_hz.value_or(0.0))
+                   : array->band_hz.value_or(std::make_pair(0.0, 0.0));
+  srp.band_low_hz = band_low_hz.value_or(band.first);
+  srp.band_high_hz = band_high_hz.value_or(band.second);
 
   io::DoaJob job;
   job.wav_paths = wav_paths;

@@ -132,7 +132,7 @@ int RunLocate(const std::vector<std::string>& args) {
         kCommand, InvalidArgument("the recording has " + std::to_string(segment->channel_count) + " channels but " +
                                   array_path + " has " + std::to_string(array->sensors_m.size()) + " sensors"));
   }
-  auto config = BuildSessionConfig(session, *array, segment->sample_rate_hz, Runs::kOnServer);
+  auto config = BuildSessionConfig(session, flags, *array, segment->sample_rate_hz, Runs::kOnServer);
   if (!config.ok()) return UsageError(kCommand, config.status().message());
 
   v1::LocateRequest request;

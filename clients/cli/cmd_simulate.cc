@@ -124,12 +124,12 @@ void PrintScore(const client::StreamResult& result, const engine::SimResult& tru
   }
 }
 
-int RunOnServer(const SimulateFlags& f, const io::SimulationRun& run) {
+int RunOnServer(const SimulateFlags& f, const FlagSet& flags, const io::SimulationRun& run) {
   auto options = ParseStreamFlags(f.stream);
   if (!options.ok()) return UsageError(kCommand, options.status().message());
   const engine::SimResult& sim = run.result;
   const io::ArrayFile array_file = ArrayFileOf(run);
-  auto config = BuildSessionConfig(f.session, array_file, sim.sample_rate_hz, Runs::kOnServer);
+  auto config = BuildSessionConfig(f.session, flags, array_file, sim.sample_rate_hz, Runs::kOnServer);
   if (!config.ok()) return UsageError(kCommand, config.status().message());
   auto array = engine::ArrayGeometry::Create(config->sensors_m, config->sound_speed_mps, config->reference_sensor);
   if (!array.ok()) return RuntimeError(kCommand, array.status());
@@ -281,7 +281,7 @@ int RunSimulate(const std::vector<std::string>& args) {
   auto run = random ? SimulateRandomScene(f.random_seed, f.duration_s)
                     : io::SimulateScenario(f.scenario_name, f.seed, f.duration_s);
   if (!run.ok()) return RuntimeError(kCommand, run.status());
-  if (remote) return RunOnServer(f, *run);
+  if (remote) return RunOnServer(f, flags, *run);
   auto files = io::WriteSimulationFiles(f.out_dir, *run);
   if (!files.ok()) return RuntimeError(kCommand, files.status());
   const engine::SimResult& r = run->result;

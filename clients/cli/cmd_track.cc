@@ -43,7 +43,9 @@ struct TrackFlags {
 };
 
 void RegisterFlags(FlagSet& flags, TrackFlags* f) {
-  flags.String("array", &f->array_path, "FILE", "sensor array: array.json, or the XAV hydrophones_config CSV")
+  flags.String("array", &f->array_path, "FILE",
+               "sensor array: array.json (its optional \"session\" object sets the defaults of the session "
+               "flags; a flag given wins), or the XAV hydrophones_config CSV")
       .Required();
   RegisterTrackInputFlags(flags, &f->input);
   flags.String("out", &f->out_path, "FILE", "estimates file to write (--format)").Required();
@@ -252,6 +254,7 @@ int RunTrack(const std::vector<std::string>& args) {
                  "localizer-cli track: --seed is deprecated, use --filter-seed (the filter's seed; in "
                  "simulate --seed is the scene's)\n");
     f.session.config.seed = f.legacy_seed;
+    f.session.also_given.insert("filter-seed");  // over the array file's session seed, as --filter-seed
   }
   const auto format = io::ParseEstimatesFormat(f.format);
   if (!format.ok()) return UsageError(kCommand, "--format: " + format.status().message());
@@ -308,9 +311,7 @@ int RunTrack(const std::vector<std::string>& args) {
     if (!stream.ok()) return RuntimeError(kCommand, stream.status());
     sample_rate_hz = stream->sample_rate_hz();
   }
-  f.session.frame_given = flags.seen("frame");
-  f.session.hop_given = flags.seen("hop");
-  auto config = BuildSessionConfig(f.session, *array, sample_rate_hz, remote ? Runs::kOnServer : Runs::kLocally);
+  auto config = BuildSessionConfig(f.session, flags, *array, sample_rate_hz, remote ? Runs::kOnServer : Runs::kLocally);
   if (!config.ok()) return UsageError(kCommand, config.status().message());
 
   io::TrackJob job;

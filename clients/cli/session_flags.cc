@@ -97,6 +97,37 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
 
 namespace {
 
+// The session file's keys (io/session_file.h) and the flags that override them.
+const std::pair<const char*, const char*> kFlagOfKey[] = {
+    {"frame_samples", "frame"},
+    {"hop_samples", "hop"},
+    {"weighting", "weighting"},
+    {"phat_beta", "phat-beta"},
+    {"band_low_hz", "band-low"},
+    {"band_high_hz", "band-high"},
+    {"despike_k", "despike-k"},
+    {"filter", "filter"},
+    {"motion_model", "motion-model"},
+    {"imm_modes", "imm-modes"},
+    {"imm_variant", "imm-variant"},
+    {"robust", "robust"},
+    {"particles", "particles"},
+    {"likelihood", "likelihood"},
+    {"outlier_probability", "outlier-probability"},
+    {"tdoa_sigma_s", "tdoa-sigma-us"},
+    {"accel_noise_mps2", "accel-noise"},
+    {"manoeuvre_share", "manoeuvre-share"},
+    {"manoeuvre_scale", "manoeuvre-scale"},
+    {"accel_level_floor", "accel-level-floor"},
+    {"accel_level_ceiling", "accel-level-ceiling"},
+    {"accel_level_switch_hz", "accel-level-switch"},
+    {"seed", "filter-seed"},
+    {"search_radius_m", "search-radius"},
+    {"presence_false_alarm", "presence-false-alarm"},
+    {"source_timeout_s", "source-timeout"},
+    {"backend", "backend"},
+};
+
 // "a,b,c" -> {"a", "b", "c"} (empty parts kept: "1,,2" has three).
 std::vector<std::string> SplitCommas(const std::string& text) {
   std::vector<std::string> parts;
@@ -153,8 +184,16 @@ StatusOr<engine::Vec3> ParseBoundsFlag(const std::string& flag, const std::strin
   return v;
 }
 
-StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, const io::ArrayFile& array,
-                                                        double sample_rate_hz, Runs runs) {
+std::string FlagOfSessionKey(const std::string& key) {
+  for (const auto& [k, flag] : kFlagOfKey) {
+    if (key == k) return flag;
+  }
+  return "";
+}
+
+StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, const FlagSet& flags,
+                                                        const io::ArrayFile& array, double sample_rate_hz, Runs runs) {
+  const auto given = [&](const std::string& flag) { return flags.seen(flag) || f.also_given.contains(flag); };
   engine::AudioSessionConfig base = f.config;
   auto weighting = engine::ParseWeighting(f.weighting);
   if (!weighting.ok()) return InvalidArgument("--weighting: " + weighting.status().message());
@@ -163,11 +202,9 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   auto likelihood = engine::ParseLikelihood(f.likelihood);
   if (!likelihood.ok()) return InvalidArgument("--likelihood: " + likelihood.status().message());
   tracker.particle.likelihood = *likelihood;
-  tracker.particle.tdoa_sigma_s = f.tdoa_sigma_us * 1e-6;
-  // One motion and TDOA noise for every filter (--accel-noise, --tdoa-sigma-us).
-  tracker.kalman.motion.accel_noise_mps2 = tracker.particle.accel_noise_mps2;
-  tracker.kalman.tdoa_sigma_s = tracker.particle.tdoa_sigma_s;
-  tracker.kalman.min_peak_snr = tracker.particle.min_peak_snr;
+  // Divided, not multiplied by 1e-6: 25 / 1e6 is the double nearest 2.5e-05, as the session
+  // file's tdoa_sigma_s and localizer.engine's are (25 * 1e-6 is one ulp below).
+  tracker.particle.tdoa_sigma_s = f.tdoa_sigma_us / 1e6;
   auto filter = engine::ParseFilterKind(f.filter, "filter");
   if (!filter.ok()) return filter.status();
   tracker.kind = *filter;
@@ -186,6 +223,14 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   auto backend = engine::ParseBackendChoice(f.backend, "backend");
   if (!backend.ok()) return backend.status();
   base.backend = *backend;
+  // The session file's settings where no flag was given: where the flag would have put them,
+  // before the couplings below, so that a setting means the same from either.
+  io::ApplySessionSettings(
+      array.session, [&](const std::string& key) { return given(FlagOfSessionKey(key)); }, &base);
+  // One motion and TDOA noise for every filter (--accel-noise, --tdoa-sigma-us).
+  tracker.kalman.motion.accel_noise_mps2 = tracker.particle.accel_noise_mps2;
+  tracker.kalman.tdoa_sigma_s = tracker.particle.tdoa_sigma_s;
+  tracker.kalman.min_peak_snr = tracker.particle.min_peak_snr;
   io::ArrayOverrides overrides = f.array;
   if (!f.bounds_min.empty()) {
     auto v = ParseBoundsFlag("bounds-min", f.bounds_min, true);
@@ -232,10 +277,12 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
     }
   }
   auto sources = engine::ReportsSources(config);
-  if (sources.ok() && *sources && !f.frame_given) {
+  const bool frame_given = given("frame") || array.session.frame_samples;
+  const bool hop_given = given("hop") || array.session.hop_samples;
+  if (sources.ok() && *sources && !frame_given) {
     const double frame = std::exp2(std::round(std::log2(std::max(64.0, 0.032 * config.sample_rate_hz))));
     config.frame_samples = static_cast<int>(std::min(frame, double{1 << 20}));
-    if (!f.hop_given) config.hop_samples = config.frame_samples / 2;
+    if (!hop_given) config.hop_samples = config.frame_samples / 2;
   }
   engine::AudioSessionConfig check = config;
   if (runs == Runs::kOnServer) check.backend = engine::BackendChoice::kCpu;

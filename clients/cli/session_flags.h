@@ -1,10 +1,12 @@
 // The flags that build an engine::AudioSessionConfig, shared by `track` (local and
 // --server), `simulate --server` and `locate`, so that every path builds the same config from
-// the same flags: the defaults are engine::AudioSessionConfig's, the array comes from the
-// array file (io::TrackConfigFor).
+// the same flags: the defaults are engine::AudioSessionConfig's, overridden by the array
+// file's "session" object (io/session_file.h), overridden by a flag given on the command
+// line; the array comes from the array file (io::TrackConfigFor).
 #pragma once
 
 #include <optional>
+#include <set>
 #include <string>
 
 #include "clients/io/array_json.h"
@@ -35,12 +37,9 @@ struct SessionFlags {
   std::optional<int> max_sources;  // --max-sources (unset: the array file's, else 4)
   std::string source_side;         // --source-side X,Y,Z ("" = the array file's, else unstated)
   std::string source_plane;        // --source-plane PX,PY,PZ,NX,NY,NZ ("" = the array file's)
-  // Whether --frame / --hop were given (the caller sets them from FlagSet::seen). When not,
-  // sessions that list sources get frames of about 32 ms (the power of two nearest
-  // 0.032 x the rate, at least 64 samples) and a hop of half a frame: the default 4096 is
-  // 256 ms at 16 kHz, longer than a talker's syllables and pauses.
-  bool frame_given = false;
-  bool hop_given = false;
+  // Flags the caller counts as given although FlagSet::seen does not (track's deprecated
+  // --seed stands for --filter-seed), so that the session file does not override them.
+  std::set<std::string> also_given;
 };
 
 // --sound-speed, --reference, --weighting, --phat-beta, --band-low, --band-high.
@@ -66,7 +65,17 @@ enum class Runs { kLocally, kOnServer };
 // and the config built into a Session (some limits, e.g. band edges against Nyquist, are
 // only checked then). For kOnServer the session is built on the CPU, since the server, not
 // this machine, must have the GPU. INVALID_ARGUMENT naming the flag or field.
-StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, const io::ArrayFile& array,
-                                                        double sample_rate_hz, Runs runs);
+// Each setting of the array file's "session" object applies unless its flag (FlagOfSessionKey)
+// was given (`flags.seen`, or f.also_given). When neither --frame nor the file's frame_samples
+// is given, sessions that list sources get frames of about 32 ms (the power of two nearest
+// 0.032 x the rate, at least 64 samples) and, without --hop / hop_samples, a hop of half a
+// frame: the default 4096 is 256 ms at 16 kHz, longer than a talker's syllables and pauses.
+StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, const FlagSet& flags,
+                                                        const io::ArrayFile& array, double sample_rate_hz, Runs runs);
+
+// The flag (without "--") that overrides the session-file key `key` (io::SessionKeys()), e.g.
+// "tdoa-sigma-us" for "tdoa_sigma_s"; "" for a key no flag covers (none, today: a test holds
+// every key to a flag).
+std::string FlagOfSessionKey(const std::string& key);
 
 }  // namespace localizer::cli

@@ -19,10 +19,10 @@ namespace {
 
 using nlohmann::json;
 
-const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz", "sensors_m",    "reference_sensor",
-                                            "band_hz",         "bounds_min_m",   "bounds_max_m", "surface_z_m",
-                                            "bottom_z_m",      "localization",   "source_side",  "max_sources",
-                                            "source_plane",    "geodetic_origin"};
+const std::set<std::string> kKnownFields = {"sound_speed_mps", "sample_rate_hz",  "sensors_m",    "reference_sensor",
+                                            "band_hz",         "bounds_min_m",    "bounds_max_m", "surface_z_m",
+                                            "bottom_z_m",      "localization",    "source_side",  "max_sources",
+                                            "source_plane",    "geodetic_origin", "session"};
 const char* const kLocalizationNames[] = {"auto", "position", "direction"};  // ArrayFile::Localization order
 
 StatusOr<std::vector<engine::Vec3>> ParseSensors(const json& rows, const std::string& source) {
@@ -168,7 +168,8 @@ Status CheckFields(const json& root, const std::string& source) {
       return InvalidArgument(source + ": unknown field \"" + item.key() +
                              "\" (known: sound_speed_mps, sample_rate_hz, sensors_m, "
                              "reference_sensor, band_hz, bounds_min_m, bounds_max_m, surface_z_m, "
-                             "bottom_z_m, localization, source_side, max_sources, source_plane, geodetic_origin)");
+                             "bottom_z_m, localization, source_side, max_sources, source_plane, geodetic_origin, "
+                             "session)");
     }
   }
   for (const char* required : {"sound_speed_mps", "sensors_m"}) {
@@ -256,6 +257,7 @@ StatusOr<ArrayFile> FromJson(const json& root, const std::string& source) {
   LOCALIZER_RETURN_IF_ERROR(ParseBounds(root, source, &array));
   LOCALIZER_RETURN_IF_ERROR(ParseDirectionFields(root, source, &array));
   LOCALIZER_RETURN_IF_ERROR(ParseGeodeticOrigin(root, source, &array));
+  if (root.contains("session")) LOCALIZER_RETURN_IF_ERROR(ParseSessionSettings(root["session"], source, &array.session));
   return array;
 }
 
@@ -327,6 +329,7 @@ Status WriteArrayJson(const std::string& path, const ArrayFile& array) {
         {"latitude_deg", g->latitude_deg}, {"longitude_deg", g->longitude_deg}, {"altitude_m", g->altitude_m}};
     if (g->heading_deg) root["geodetic_origin"]["heading_deg"] = *g->heading_deg;
   }
+  if (!array.session.empty()) root["session"] = SessionSettingsToJson(array.session);
   json rows = json::array();
   for (const engine::Vec3& m : array.sensors_m) rows.push_back({m.x(), m.y(), m.z()});
   root["sensors_m"] = std::move(rows);

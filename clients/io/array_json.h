@@ -29,7 +29,12 @@
 //       "longitude_deg": -124.66,               (WGS84) and heading_deg, the bearing of its
 //       "altitude_m": 0, "heading_deg": 30}     +y axis from true north (geodetic.h); for
 //                                              --format geojson
+//     "session": {"particles": 1024,           optional: the session's tracking settings under
+//                 "filter": "ekf", ...}         localizer.engine's option names, read alike by
+//                                              localizer-cli (a flag wins), localizer.engine and
+//                                              the Python gRPC client (session_file.h)
 //   }
+// Array + "session" is the session file: one file that describes a whole session.
 // Positions from a planar array need source_side; from a linear one, source_plane and
 // source_side (engine/pipeline/session_config.h).
 //
@@ -47,6 +52,7 @@
 #include <vector>
 
 #include "clients/io/geodetic.h"
+#include "clients/io/session_file.h"
 #include "engine/core/status.h"
 #include "engine/core/types.h"
 
@@ -75,6 +81,7 @@ struct ArrayFile {
   };
   std::optional<Plane> source_plane;
   std::optional<GeodeticOrigin> geodetic_origin;  // geodetic.h
+  SessionSettings session;                        // "session" (session_file.h); empty if absent
 };
 
 // What the array will be used for, which decides the geometry it needs.

@@ -1,7 +1,7 @@
 // array.json text -> ParseArrayJson (what ReadArrayJson runs on a file's contents). An
 // accepted file holds what array_json.h documents, says what the JSON says (the reference
 // sensor is the integer written, not a truncation of it), and reads back the same after
-// WriteArrayJson.
+// WriteArrayJson (its "session" settings included).
 #include <nlohmann/json.hpp>
 
 #include "clients/io/array_json.h"
@@ -52,5 +52,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                  again->bounds_max_m == array->bounds_max_m && again->localization == array->localization &&
                  again->source_side_normal == array->source_side_normal && again->max_sources == array->max_sources,
              "array changes on a write and read");
+  FUZZ_CHECK(io::SessionSettingsToJson(again->session) == io::SessionSettingsToJson(array->session),
+             "session changes on a write and read: " + io::SessionSettingsToJson(array->session).dump());
   return 0;
 }

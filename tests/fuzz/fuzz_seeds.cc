@@ -196,6 +196,10 @@ void FileSeeds(const fs::path& scratch) {
   Seed("fuzz_array_json",
        R"({"sound_speed_mps": 343, "sensors_m": [[0,0,0],[0.1,0,0],[0,0.1,0],[0,0,0.1]], "surface_z_m": 2.5,)"
        R"( "bottom_z_m": -1, "bounds_min_m": [null, -5, null], "bounds_max_m": ["inf", 5, null]})");
+  Seed("fuzz_array_json",  // a session file: the array and its "session" settings (session_file.h)
+       R"({"sound_speed_mps": 1500, "sensors_m": [[0,0,0],[2,0,0],[0,2,0],[0,0,2]], "session": {"filter": "ekf",)"
+       R"( "motion_model": "ct", "particles": 1024, "frame_samples": 2048, "hop_samples": 1024, "seed": 7,)"
+       R"( "tdoa_sigma_s": 2.5e-05, "imm_modes": "cv,ct", "weighting": "phat-beta", "phat_beta": 0.5}})");
 
   // Room scenes: the named ones of the tree, and one with every field.
   for (const auto& entry : fs::directory_iterator(fs::path(LOCALIZER_SOURCE_DIR) / "scenes" / "rooms")) {

@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 #include <string>
@@ -335,6 +336,37 @@ TEST_F(CliStreamTest, BoundsAndPresenceSettingsReachTheServer) {
   // Well-formed bounds run.
   std::tie(code, err) = RunCli(track + " --bounds-min -inf,-inf,-60 --bounds-max inf,inf,50", dir);
   EXPECT_EQ(code, 0) << err;
+#endif
+}
+
+// CLI: the array file's "session" settings (clients/io/session_file.h) travel with --server as
+// with a local run: `track --server` with the settings in the file writes the estimates local
+// `track` writes with the same settings as flags (timings aside), and a flag given wins there too.
+TEST_F(CliStreamTest, CliTrackOverServerTakesTheSessionFile) {
+#ifndef LOCALIZER_CLI_BIN
+  GTEST_SKIP() << "LOCALIZER_CLI_BIN not defined by the build";
+#else
+  TempDir dir;
+  const io::SimulationFiles files = SimulateToFiles(dir, 3.0);
+  std::ifstream in(files.array_path);
+  nlohmann::json array = nlohmann::json::parse(in);
+  array["session"] = {{"particles", 1024},       {"frame_samples", 2048},   {"hop_samples", 1024},
+                      {"accel_noise_mps2", 0.5}, {"tdoa_sigma_s", 2.5e-05}, {"seed", 7}};
+  std::ofstream(dir.File("session.json")) << array.dump(2);
+  const std::string wav = " --wav " + files.wav_path + " --print-every 0 --out ";
+  auto [code, err] = RunCli("track --server " + target_ + " --array " + dir.File("session.json") + wav +
+                                dir.File("remote.csv") + " --filter-seed 9",
+                            dir);
+  ASSERT_EQ(code, 0) << err;
+  std::tie(code, err) = RunCli("track --array " + files.array_path + wav + dir.File("local.csv") +
+                                   " --particles 1024 --frame 2048 --hop 1024 --accel-noise 0.5 --tdoa-sigma-us 25 "
+                                   "--filter-seed 9",
+                               dir);
+  ASSERT_EQ(code, 0) << err;
+  const std::vector<std::string> timing_columns = {"tdoa_ms", "filter_ms"};
+  const auto remote = CsvWithout(dir.File("remote.csv"), timing_columns);
+  EXPECT_GT(remote.size(), 10u);
+  EXPECT_EQ(remote, CsvWithout(dir.File("local.csv"), timing_columns));
 #endif
 }
 

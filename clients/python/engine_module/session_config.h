@@ -8,6 +8,8 @@
 //   - frame_samples / hop_samples unset: 4096 / 2048, except for sessions that list sources,
 //     which get about 32 ms (the power of two nearest 0.032 x the rate) and half of it.
 // Units are in the names (SI; tdoa_sigma_s in seconds where the CLI takes microseconds).
+// The array file's "session" object (clients/io/session_file.h, localizer/session_file.py) uses
+// these names as its keys for the options a CLI flag covers: renaming an option renames a key.
 #pragma once
 
 #include <pybind11/pybind11.h>

@@ -37,6 +37,11 @@ RST_STREAM with error code 2" (the proxy cannot send trailers for a dead upstrea
 client raises it as ``InstanceLost`` (code UNAVAILABLE, the original error in ``.cause``),
 see ``from_proxy_reset``.
 
+A session file (an ``array.json`` with its optional ``"session"`` object of settings, read the
+same by ``localizer-cli``): ``read_session_file(path)`` gives a ``SessionFile`` whose
+``to_session_config(sample_rate_hz)`` is the ``pb.SessionConfig`` to open and whose
+``engine_options(sample_rate_hz)`` are ``localizer.engine.Session``'s keyword options.
+
 ``__version__`` is the project version (CMake's project(VERSION)), written into
 ``_version.py`` by the build that made this copy (setup.py or the CMake target).
 """
@@ -50,6 +55,7 @@ from .estimates import Estimate, Fix, PairTdoa, PlatformPose, Source, StageLaten
 from .messages import (bounds, detection_config, imu_batch, platform_config, presence_summary,
                        scan, session_config, vector3)
 from .session import TrackSession, close_session, list_sessions, locate
+from .session_file import SessionFile, parse_session_file, read_session_file
 
 try:
     from ._version import __version__
@@ -64,4 +70,4 @@ __all__ = ["__version__", "pb", "pb_grpc", "audio", "synth",
            "check_samples", "sample_block", "pcm16_bytes",
            "Estimate", "Fix", "PairTdoa", "PlatformPose", "Source", "StageLatency",
            "TrackSession", "locate", "list_sessions", "close_session", "InstanceLost",
-           "from_proxy_reset"]
+           "from_proxy_reset", "SessionFile", "read_session_file", "parse_session_file"]
