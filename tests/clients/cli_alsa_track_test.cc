@@ -24,6 +24,7 @@ namespace localizer::io {
 namespace {
 
 using testing::ReadText;
+using testing::RowsWithoutTimes;
 using testing::TempDir;
 
 #ifdef LOCALIZER_CLI_BIN
@@ -31,28 +32,6 @@ int Shell(const std::string& command, const TempDir& dir) {
   return testing::RunCliShell(LOCALIZER_CLI_BIN, command, dir);
 }
 
-// The CSV's rows as fields, without the stage wall-time columns.
-std::vector<std::vector<std::string>> RowsWithoutTimes(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::vector<std::string>> rows;
-  std::vector<bool> keep;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> fields;
-    std::stringstream split(line);
-    std::string field;
-    while (std::getline(split, field, ',')) fields.push_back(field);
-    if (keep.empty()) {
-      for (const std::string& name : fields) keep.push_back(name != "tdoa_ms" && name != "filter_ms");
-    }
-    std::vector<std::string> kept;
-    for (size_t i = 0; i < fields.size() && i < keep.size(); ++i) {
-      if (keep[i]) kept.push_back(fields[i]);
-    }
-    rows.push_back(std::move(kept));
-  }
-  return rows;
-}
 
 class CliAlsaTrack : public ::testing::Test {
  protected:

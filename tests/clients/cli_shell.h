@@ -7,6 +7,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tests/clients/test_util.h"
 #include "tests/server/run_shell.h"
@@ -27,6 +29,30 @@ inline std::string ReadText(const std::string& path) {
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
+}
+
+// An estimates CSV's rows as fields, without the stage wall-time columns (tdoa_ms,
+// filter_ms), so two runs on the same input compare equal.
+inline std::vector<std::vector<std::string>> RowsWithoutTimes(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::vector<std::string>> rows;
+  std::vector<bool> keep;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> fields;
+    std::stringstream split(line);
+    std::string field;
+    while (std::getline(split, field, ',')) fields.push_back(field);
+    if (keep.empty()) {
+      for (const std::string& name : fields) keep.push_back(name != "tdoa_ms" && name != "filter_ms");
+    }
+    std::vector<std::string> kept;
+    for (size_t i = 0; i < fields.size() && i < keep.size(); ++i) {
+      if (keep[i]) kept.push_back(fields[i]);
+    }
+    rows.push_back(std::move(kept));
+  }
+  return rows;
 }
 
 }  // namespace localizer::io::testing
