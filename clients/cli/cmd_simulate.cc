@@ -27,8 +27,8 @@ const char* const kCommand = "simulate";
 
 struct SimulateFlags {
   std::string scenario_name;
-  std::string room_path;   // --room: a room scene file (room_scene_files.h)
-  std::string array_path;  // --array: with --room
+  std::string room_path;     // --room: a room scene file (room_scene_files.h)
+  std::string array_path;    // --array: with --room
   uint64_t random_seed = 0;  // --random: a scene drawn from this seed (random_scene.h)
   std::string out_dir;
   uint64_t seed = 1;
@@ -200,8 +200,8 @@ int RunRoomScene(const SimulateFlags& f) {
   std::printf(
       "simulated room %gx%gx%g m, RT60 %g s: %zu source(s), %zu channels, %.3f s at %g Hz, seed %llu -> %s "
       "(signals.wav, array.json, sources.csv, sounding.csv)\n",
-      s.room.size_m.x(), s.room.size_m.y(), s.room.size_m.z(), s.room.rt60_s, s.sources.size(),
-      array->sensors_m.size(), static_cast<double>(files->samples_per_channel) / s.sample_rate_hz, s.sample_rate_hz,
+      s.room.size_m.x(), s.room.size_m.y(), s.room.size_m.z(), s.room.rt60_s, s.sources.size(), array->sensors_m.size(),
+      static_cast<double>(files->samples_per_channel) / s.sample_rate_hz, s.sample_rate_hz,
       static_cast<unsigned long long>(f.seed), f.out_dir.c_str());
   return kExitOk;
 }

@@ -43,9 +43,10 @@ struct TrackFlags {
 };
 
 void RegisterFlags(FlagSet& flags, TrackFlags* f) {
-  flags.String("array", &f->array_path, "FILE",
-               "sensor array: array.json (its optional \"session\" object sets the defaults of the session "
-               "flags; a flag given wins), or the XAV hydrophones_config CSV")
+  flags
+      .String("array", &f->array_path, "FILE",
+              "sensor array: array.json (its optional \"session\" object sets the defaults of the session "
+              "flags; a flag given wins), or the XAV hydrophones_config CSV")
       .Required();
   RegisterTrackInputFlags(flags, &f->input);
   flags.String("out", &f->out_path, "FILE", "estimates file to write (--format)").Required();

@@ -127,8 +127,9 @@ Status ParseGeodeticOrigin(const json& root, const std::string& source, ArrayFil
   const json& g = root["geodetic_origin"];
   const std::set<std::string> known = {"latitude_deg", "longitude_deg", "altitude_m", "heading_deg"};
   if (!g.is_object() || !g.contains("latitude_deg") || !g.contains("longitude_deg")) {
-    return InvalidArgument(source + ": geodetic_origin must be {\"latitude_deg\": ..., \"longitude_deg\": ..., "
-                                    "\"altitude_m\": ... (optional), \"heading_deg\": ... (optional)}");
+    return InvalidArgument(source +
+                           ": geodetic_origin must be {\"latitude_deg\": ..., \"longitude_deg\": ..., "
+                           "\"altitude_m\": ... (optional), \"heading_deg\": ... (optional)}");
   }
   for (const auto& item : g.items()) {
     if (!known.contains(item.key())) {
@@ -142,8 +143,9 @@ Status ParseGeodeticOrigin(const json& root, const std::string& source, ArrayFil
   auto lon = FiniteNumber(g["longitude_deg"], source, "geodetic_origin.longitude_deg");
   if (!lon.ok()) return lon.status();
   if (!(std::abs(*lat) <= 90.0) || !(std::abs(*lon) <= 180.0)) {
-    return InvalidArgument(source + ": geodetic_origin: latitude_deg must be in [-90, 90] and longitude_deg in "
-                                    "[-180, 180]");
+    return InvalidArgument(source +
+                           ": geodetic_origin: latitude_deg must be in [-90, 90] and longitude_deg in "
+                           "[-180, 180]");
   }
   origin.latitude_deg = *lat;
   origin.longitude_deg = *lon;
@@ -257,7 +259,8 @@ StatusOr<ArrayFile> FromJson(const json& root, const std::string& source) {
   LOCALIZER_RETURN_IF_ERROR(ParseBounds(root, source, &array));
   LOCALIZER_RETURN_IF_ERROR(ParseDirectionFields(root, source, &array));
   LOCALIZER_RETURN_IF_ERROR(ParseGeodeticOrigin(root, source, &array));
-  if (root.contains("session")) LOCALIZER_RETURN_IF_ERROR(ParseSessionSettings(root["session"], source, &array.session));
+  if (root.contains("session"))
+    LOCALIZER_RETURN_IF_ERROR(ParseSessionSettings(root["session"], source, &array.session));
   return array;
 }
 

@@ -32,7 +32,6 @@ int Shell(const std::string& command, const TempDir& dir) {
   return testing::RunCliShell(LOCALIZER_CLI_BIN, command, dir);
 }
 
-
 class CliAlsaTrack : public ::testing::Test {
  protected:
   static constexpr double kSceneS = 5.0;

@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "clients/io/wav_io.h"
-#include "tests/clients/test_util.h"
 #include "tests/clients/cli_shell.h"
+#include "tests/clients/test_util.h"
 
 namespace localizer::io {
 namespace {
@@ -35,7 +35,6 @@ int Shell(const std::string& command, const testing::TempDir& dir) {
 }
 using testing::ReadText;
 using testing::RowsWithoutTimes;
-
 
 void ExpectSameEstimates(const std::string& wav_csv, const std::string& raw_csv) {
   const auto a = RowsWithoutTimes(wav_csv);

@@ -28,7 +28,6 @@ int Shell(const std::string& command, const testing::TempDir& dir) {
 using testing::ReadText;
 using testing::RowsWithoutTimes;
 
-
 // The simulated array.json with `session` added, written to `path`.
 void WriteSessionFile(const testing::TempDir& dir, const std::string& session, const std::string& path) {
   nlohmann::json array = nlohmann::json::parse(ReadText(dir.File("sim/array.json")));

@@ -32,7 +32,6 @@
 #include <vector>
 
 #include "clients/grpc/connection.h"
-#include "engine/core/version.h"
 #include "clients/grpc/latency_summary.h"
 #include "clients/grpc/remote_track.h"
 #include "clients/grpc/streamer.h"
@@ -40,11 +39,12 @@
 #include "clients/io/array_json.h"
 #include "clients/io/simulation_files.h"
 #include "clients/io/track_runner.h"
+#include "engine/core/version.h"
 #include "localizer/v1/localizer.grpc.pb.h"
 #include "server/service/server.h"
-#include "tests/server/loopback_server.h"
 #include "tests/clients/test_util.h"
 #include "tests/pipeline/scenario_run.h"
+#include "tests/server/loopback_server.h"
 #include "tests/server/run_shell.h"
 #include "wire/config_wire.h"
 #include "wire/status_wire.h"

@@ -5,10 +5,10 @@
 
 namespace localizer::python {
 
-void RegisterSession(pybind11::module_& m);     // session_bindings.cc
-void RegisterTdoa(pybind11::module_& m);        // tdoa_bindings.cc: GCC-PHAT, multilateration
-void RegisterSimulator(pybind11::module_& m);   // sim_bindings.cc
-void RegisterAttitude(pybind11::module_& m);    // attitude_bindings.cc
-void RegisterTws(pybind11::module_& m);         // tws_bindings.cc
+void RegisterSession(pybind11::module_& m);    // session_bindings.cc
+void RegisterTdoa(pybind11::module_& m);       // tdoa_bindings.cc: GCC-PHAT, multilateration
+void RegisterSimulator(pybind11::module_& m);  // sim_bindings.cc
+void RegisterAttitude(pybind11::module_& m);   // attitude_bindings.cc
+void RegisterTws(pybind11::module_& m);        // tws_bindings.cc
 
 }  // namespace localizer::python

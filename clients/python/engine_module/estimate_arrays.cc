@@ -90,8 +90,8 @@ py::array EstimatesToArray(const std::vector<engine::Estimate>& estimates, int p
     out.SetMany(row, covariance_at, covariance.data(), 36);
     if (pair_count > 0) {
       // A frame without pair measurements (none made yet) reads NaN, as estimates.csv.
-      const bool has_pairs = static_cast<int>(e.delay_s.size()) == pair_count &&
-                             static_cast<int>(e.quality.size()) == pair_count;
+      const bool has_pairs =
+          static_cast<int>(e.delay_s.size()) == pair_count && static_cast<int>(e.quality.size()) == pair_count;
       out.SetMany(row, delay_at, has_pairs ? e.delay_s.data() : missing.data(), missing.size());
       out.SetMany(row, quality_at, has_pairs ? e.quality.data() : missing.data(), missing.size());
     }

@@ -64,7 +64,8 @@ ChannelMajorBlock BlockFrom(const py::handle& value, const std::string& name) {
   return block;
 }
 
-py::array_t<float, py::array::c_style | py::array::forcecast> ChannelFrom(const py::handle& value, const std::string& name) {
+py::array_t<float, py::array::c_style | py::array::forcecast> ChannelFrom(const py::handle& value,
+                                                                          const std::string& name) {
   py::array array = py::module_::import("numpy").attr("asarray")(value);
   if (array.dtype().kind() != 'f' && array.dtype().kind() != 'i') {
     ThrowValueError(name + ": dtype " + py::str(array.dtype()).cast<std::string>() + ", expected real samples");

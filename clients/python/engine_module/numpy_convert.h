@@ -37,14 +37,15 @@ struct ChannelMajorBlock {
 ChannelMajorBlock BlockFrom(const py::handle& value, const std::string& name);
 
 // A 1-D real array -> float32 samples (one channel of a pair).
-py::array_t<float, py::array::c_style | py::array::forcecast> ChannelFrom(const py::handle& value, const std::string& name);
+py::array_t<float, py::array::c_style | py::array::forcecast> ChannelFrom(const py::handle& value,
+                                                                          const std::string& name);
 
 // A numpy structured array built from (name, format[, shape]) columns and written by field
 // offset, so that a row costs a few stores, not a Python object per value.
 struct Column {
   std::string name;
-  std::string format;       // numpy type code: "<f8", "<i4", "<u8", "?", "U10"
-  std::vector<int> shape;   // empty: a scalar field
+  std::string format;      // numpy type code: "<f8", "<i4", "<u8", "?", "U10"
+  std::vector<int> shape;  // empty: a scalar field
 };
 py::dtype RecordDtype(const std::vector<Column>& columns);
 

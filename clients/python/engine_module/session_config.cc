@@ -46,9 +46,13 @@ Option Number(const std::string& name, Field field, const char* expected) {
           [=](const Config& c) { return py::cast(field(const_cast<Config&>(c))); }};
 }
 template <typename Field>
-Option Double(const std::string& name, Field field) { return Number<double>(name, field, "a number"); }
+Option Double(const std::string& name, Field field) {
+  return Number<double>(name, field, "a number");
+}
 template <typename Field>
-Option Int(const std::string& name, Field field) { return Number<int>(name, field, "an int"); }
+Option Int(const std::string& name, Field field) {
+  return Number<int>(name, field, "an int");
+}
 
 template <typename Field>
 Option Vector(const std::string& name, Field field) {
@@ -75,28 +79,34 @@ const std::vector<Option>& Options() {
       Int("reference_sensor", [](Config& c) -> int& { return c.reference_sensor; }),
       Int("frame_samples", [](Config& c) -> int& { return c.frame_samples; }),
       Int("hop_samples", [](Config& c) -> int& { return c.hop_samples; }),
-      Number<int64_t>("max_block_samples", [](Config& c) -> int64_t& { return c.max_block_samples; }, "an int"),
-      Choice("weighting", [](Config& c) -> engine::Weighting& { return c.weighting; },
-             [](const std::string& n, const std::string&) { return engine::ParseWeighting(n); },
-             engine::WeightingName),
+      Number<int64_t>(
+          "max_block_samples", [](Config& c) -> int64_t& { return c.max_block_samples; }, "an int"),
+      Choice(
+          "weighting", [](Config& c) -> engine::Weighting& { return c.weighting; },
+          [](const std::string& n, const std::string&) { return engine::ParseWeighting(n); }, engine::WeightingName),
       Double("phat_beta", [](Config& c) -> double& { return c.phat_beta; }),
       Double("band_low_hz", [](Config& c) -> double& { return c.band_low_hz; }),
       Double("band_high_hz", [](Config& c) -> double& { return c.band_high_hz; }),
       Double("despike_k", [](Config& c) -> double& { return c.despike_k; }),
-      Choice("filter", [](Config& c) -> engine::FilterKind& { return c.tracker.kind; }, engine::ParseFilterKind,
-             engine::FilterKindName),
-      Choice("motion_model", [](Config& c) -> engine::MotionModelKind& { return c.tracker.kalman.motion_model; },
-             engine::ParseMotionModelKind, engine::MotionModelKindName),
-      Choice("imm_modes", [](Config& c) -> std::vector<engine::MotionModelKind>& { return c.tracker.imm_modes; },
-             engine::ParseImmModes, engine::ImmModesName),
-      Choice("imm_variant", [](Config& c) -> engine::KalmanVariant& { return c.tracker.imm_variant; },
-             engine::ParseKalmanVariant, engine::KalmanVariantName),
-      Choice("robust", [](Config& c) -> engine::RobustUpdate& { return c.tracker.kalman.robust; },
-             engine::ParseRobustUpdate, engine::RobustUpdateName),
+      Choice(
+          "filter", [](Config& c) -> engine::FilterKind& { return c.tracker.kind; }, engine::ParseFilterKind,
+          engine::FilterKindName),
+      Choice(
+          "motion_model", [](Config& c) -> engine::MotionModelKind& { return c.tracker.kalman.motion_model; },
+          engine::ParseMotionModelKind, engine::MotionModelKindName),
+      Choice(
+          "imm_modes", [](Config& c) -> std::vector<engine::MotionModelKind>& { return c.tracker.imm_modes; },
+          engine::ParseImmModes, engine::ImmModesName),
+      Choice(
+          "imm_variant", [](Config& c) -> engine::KalmanVariant& { return c.tracker.imm_variant; },
+          engine::ParseKalmanVariant, engine::KalmanVariantName),
+      Choice(
+          "robust", [](Config& c) -> engine::RobustUpdate& { return c.tracker.kalman.robust; },
+          engine::ParseRobustUpdate, engine::RobustUpdateName),
       Int("particles", [](Config& c) -> int& { return c.tracker.particle.particles; }),
-      Choice("likelihood", [](Config& c) -> engine::Likelihood& { return c.tracker.particle.likelihood; },
-             [](const std::string& n, const std::string&) { return engine::ParseLikelihood(n); },
-             engine::LikelihoodName),
+      Choice(
+          "likelihood", [](Config& c) -> engine::Likelihood& { return c.tracker.particle.likelihood; },
+          [](const std::string& n, const std::string&) { return engine::ParseLikelihood(n); }, engine::LikelihoodName),
       Double("outlier_probability", [](Config& c) -> double& { return c.tracker.particle.outlier_probability; }),
       Double("tdoa_sigma_s", [](Config& c) -> double& { return c.tracker.particle.tdoa_sigma_s; }),
       Double("accel_noise_mps2", [](Config& c) -> double& { return c.tracker.particle.accel_noise_mps2; }),
@@ -105,7 +115,8 @@ const std::vector<Option>& Options() {
       Double("accel_level_floor", [](Config& c) -> double& { return c.tracker.particle.accel_level_floor; }),
       Double("accel_level_ceiling", [](Config& c) -> double& { return c.tracker.particle.accel_level_ceiling; }),
       Double("accel_level_switch_hz", [](Config& c) -> double& { return c.tracker.particle.accel_level_switch_hz; }),
-      Number<uint64_t>("seed", [](Config& c) -> uint64_t& { return c.seed; }, "a non-negative int"),
+      Number<uint64_t>(
+          "seed", [](Config& c) -> uint64_t& { return c.seed; }, "a non-negative int"),
       Double("init_speed_sigma_mps", [](Config& c) -> double& { return c.init_speed_sigma_mps; }),
       Vector("init_region_min_m", [](Config& c) -> engine::Vec3& { return c.init_region_min_m; }),
       Vector("init_region_max_m", [](Config& c) -> engine::Vec3& { return c.init_region_max_m; }),
@@ -115,14 +126,16 @@ const std::vector<Option>& Options() {
       Double("search_radius_m", [](Config& c) -> double& { return c.search_radius_m; }),
       Double("presence_false_alarm", [](Config& c) -> double& { return c.presence_false_alarm; }),
       Double("source_timeout_s", [](Config& c) -> double& { return c.source_timeout_s; }),
-      Choice("localization", [](Config& c) -> engine::Localization& { return c.localization; },
-             engine::ParseLocalization, engine::LocalizationName),
+      Choice(
+          "localization", [](Config& c) -> engine::Localization& { return c.localization; }, engine::ParseLocalization,
+          engine::LocalizationName),
       Int("max_sources", [](Config& c) -> int& { return c.max_sources; }),
       Vector("source_side", [](Config& c) -> engine::Vec3& { return c.source_side; }),
       Vector("source_plane_point_m", [](Config& c) -> engine::Vec3& { return c.source_plane_point_m; }),
       Vector("source_plane_normal", [](Config& c) -> engine::Vec3& { return c.source_plane_normal; }),
-      Choice("backend", [](Config& c) -> engine::BackendChoice& { return c.backend; }, engine::ParseBackendChoice,
-             engine::BackendChoiceName),
+      Choice(
+          "backend", [](Config& c) -> engine::BackendChoice& { return c.backend; }, engine::ParseBackendChoice,
+          engine::BackendChoiceName),
   };
   return options;
 }
@@ -137,7 +150,8 @@ engine::AudioSessionConfig SessionConfigFrom(const py::handle& sensors_m, double
   bool frame_given = false, hop_given = false;
   for (const auto& [key, value] : options) {
     const std::string name = py::str(key);
-    const auto option = std::find_if(Options().begin(), Options().end(), [&](const Option& o) { return o.name == name; });
+    const auto option =
+        std::find_if(Options().begin(), Options().end(), [&](const Option& o) { return o.name == name; });
     if (option == Options().end()) throw py::type_error("Session: unknown option '" + name + "'");
     if (value.is_none()) continue;  // None: the default
     option->set(config, value);

@@ -49,8 +49,8 @@ py::dict Render(const engine::Scenario& scenario) {
   ThrowIfError(result.status());
   // (samples, channels) in Fortran order is the engine's channel-major memory as it is:
   // Session.process takes it without a copy.
-  py::array_t<float, py::array::f_style> samples({static_cast<py::ssize_t>(result->samples_per_channel),
-                                                  static_cast<py::ssize_t>(result->channel_count)});
+  py::array_t<float, py::array::f_style> samples(
+      {static_cast<py::ssize_t>(result->samples_per_channel), static_cast<py::ssize_t>(result->channel_count)});
   std::copy(result->samples.begin(), result->samples.end(), samples.mutable_data());
   py::array_t<double> sensors({static_cast<py::ssize_t>(scenario.sensors_m.size()), py::ssize_t{3}});
   for (size_t i = 0; i < scenario.sensors_m.size(); ++i)

@@ -72,9 +72,8 @@ py::dict PairDict(const engine::PairMeasurement& p, double sample_rate_hz) {
 // as pair 0 of a stand-in tetrahedron with unit edges from the reference and the sound speed
 // 1 / max_delay_s, so that its delay bound (which sets the searched lag window) is
 // max_delay_s; the two other channels repeat the reference and are ignored.
-py::dict GccPhatPair(const py::handle& reference, const py::handle& other, double sample_rate_hz,
-                     double max_delay_s, const std::string& weighting, double phat_beta, double band_low_hz,
-                     double band_high_hz) {
+py::dict GccPhatPair(const py::handle& reference, const py::handle& other, double sample_rate_hz, double max_delay_s,
+                     const std::string& weighting, double phat_beta, double band_low_hz, double band_high_hz) {
   const auto x_ref = ChannelFrom(reference, "reference");
   const auto x_other = ChannelFrom(other, "other");
   if (x_ref.size() != x_other.size()) {
@@ -166,8 +165,8 @@ py::dict Multilaterate(const py::handle& sensors_m, const py::handle& tdoa_value
   StatusOr<engine::Fix> fix = Status(StatusCode::kInternal, "not computed");
   {
     py::gil_scoped_release release;
-    fix = engine::Multilaterate(array, Eigen::Map<const Eigen::VectorXd>(tdoa.data(), static_cast<Eigen::Index>(tdoa.size())),
-                                options);
+    fix = engine::Multilaterate(
+        array, Eigen::Map<const Eigen::VectorXd>(tdoa.data(), static_cast<Eigen::Index>(tdoa.size())), options);
   }
   ThrowIfError(fix.status());
   py::dict out;
@@ -198,10 +197,9 @@ void RegisterTdoa(py::module_& m) {
         py::arg("band_low_hz") = 0.0, py::arg("band_high_hz") = 0.0,
         "The delay of `other` behind `reference` (two 1-D arrays of one length, 64..2^20 samples) searched "
         "within +-max_delay_s: dict delay_s, delay_samples, quality, peak_value, peak_snr, delay_sigma_s.");
-  m.def("gcc_phat", &GccPhatArray, py::arg("frame"), py::arg("sensors_m"), py::arg("sample_rate_hz"),
-        py::kw_only(), py::arg("sound_speed_mps") = 1500.0, py::arg("reference_sensor") = 0,
-        py::arg("weighting") = "phat", py::arg("phat_beta") = gcc.phat_beta, py::arg("band_low_hz") = 0.0,
-        py::arg("band_high_hz") = 0.0,
+  m.def("gcc_phat", &GccPhatArray, py::arg("frame"), py::arg("sensors_m"), py::arg("sample_rate_hz"), py::kw_only(),
+        py::arg("sound_speed_mps") = 1500.0, py::arg("reference_sensor") = 0, py::arg("weighting") = "phat",
+        py::arg("phat_beta") = gcc.phat_beta, py::arg("band_low_hz") = 0.0, py::arg("band_high_hz") = 0.0,
         "Every pair (reference, k) of one frame (samples, channels): a structured array, one row per pair.");
   m.def("multilaterate", &Multilaterate, py::arg("sensors_m"), py::arg("tdoa_s"), py::kw_only(),
         py::arg("sound_speed_mps") = 1500.0, py::arg("reference_sensor") = 0,

@@ -22,20 +22,34 @@ using engine::tws::TwsOptions;
 void SetOption(TwsOptions& o, const std::string& name, const py::handle& v) {
   const auto d = [&] { return v.cast<double>(); };
   const auto i = [&] { return v.cast<int>(); };
-  if (name == "dimensions") o.dimensions = i();
-  else if (name == "range_sigma_m") o.noise.range_sigma_m = d();
-  else if (name == "bearing_sigma_rad") o.noise.bearing_sigma_rad = d();
-  else if (name == "elevation_sigma_rad") o.noise.elevation_sigma_rad = d();
-  else if (name == "accel_noise_mps2") o.accel_noise_mps2 = d();
-  else if (name == "gate_probability") o.gate_probability = d();
-  else if (name == "confirm_hits") o.confirm_hits = i();
-  else if (name == "confirm_window") o.confirm_window = i();
-  else if (name == "max_coast_scans") o.max_coast_scans = i();
-  else if (name == "max_position_sigma_m") o.max_position_sigma_m = d();
-  else if (name == "initial_speed_sigma_mps") o.initial_speed_sigma_mps = d();
-  else if (name == "max_speed_mps") o.max_speed_mps = d();
-  else if (name == "max_tracks") o.max_tracks = i();
-  else throw py::type_error("TwsTracker: unknown option '" + name + "'");
+  if (name == "dimensions")
+    o.dimensions = i();
+  else if (name == "range_sigma_m")
+    o.noise.range_sigma_m = d();
+  else if (name == "bearing_sigma_rad")
+    o.noise.bearing_sigma_rad = d();
+  else if (name == "elevation_sigma_rad")
+    o.noise.elevation_sigma_rad = d();
+  else if (name == "accel_noise_mps2")
+    o.accel_noise_mps2 = d();
+  else if (name == "gate_probability")
+    o.gate_probability = d();
+  else if (name == "confirm_hits")
+    o.confirm_hits = i();
+  else if (name == "confirm_window")
+    o.confirm_window = i();
+  else if (name == "max_coast_scans")
+    o.max_coast_scans = i();
+  else if (name == "max_position_sigma_m")
+    o.max_position_sigma_m = d();
+  else if (name == "initial_speed_sigma_mps")
+    o.initial_speed_sigma_mps = d();
+  else if (name == "max_speed_mps")
+    o.max_speed_mps = d();
+  else if (name == "max_tracks")
+    o.max_tracks = i();
+  else
+    throw py::type_error("TwsTracker: unknown option '" + name + "'");
 }
 
 py::dict SummaryDict(const engine::tws::ScanSummary& s) {
@@ -91,8 +105,7 @@ class PyTwsTracker {
   // Cartesian plots: positions (N, 3) m with covariances (N, 3, 3) m^2.
   py::dict ProcessCartesian(double time_s, const py::handle& positions_value, const py::handle& covariances_value) {
     const std::vector<engine::Vec3> positions = PositionsFrom(positions_value, "positions_m");
-    const auto covariances =
-        py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(covariances_value);
+    const auto covariances = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(covariances_value);
     if (!covariances) throw py::error_already_set();
     if (covariances.ndim() != 3 || covariances.shape(0) != static_cast<py::ssize_t>(positions.size()) ||
         covariances.shape(1) != 3 || covariances.shape(2) != 3) {
@@ -157,9 +170,8 @@ void RegisterTws(py::module_& m) {
                            "Track-while-scan multi-target tracker (engine::tws::TwsTracker): plots in, tracks "
                            "with stable ids out.")
       .def(py::init<const py::kwargs&>())
-      .def("process_scan", &PyTwsTracker::ProcessScan, py::arg("time_s"), py::arg("range_m"),
-           py::arg("bearing_rad"), py::arg("elevation_rad") = py::none(),
-           py::arg("sensor_position_m") = py::make_tuple(0.0, 0.0, 0.0))
+      .def("process_scan", &PyTwsTracker::ProcessScan, py::arg("time_s"), py::arg("range_m"), py::arg("bearing_rad"),
+           py::arg("elevation_rad") = py::none(), py::arg("sensor_position_m") = py::make_tuple(0.0, 0.0, 0.0))
       .def("process_cartesian", &PyTwsTracker::ProcessCartesian, py::arg("time_s"), py::arg("positions_m"),
            py::arg("covariances_m2"))
       .def("tracks", &PyTwsTracker::Tracks, py::arg("include_tentative") = true);
