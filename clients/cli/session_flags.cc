@@ -284,6 +284,20 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
     config.frame_samples = static_cast<int>(std::min(frame, double{1 << 20}));
     if (!hop_given) config.hop_samples = config.frame_samples / 2;
   }
+  if (runs == Runs::kOnServer) {
+    // The wire reads these zeros as "the server's default" (wire/config_wire.cc), so a 0 asked
+    // for here would silently become the default there: refused instead.
+    for (const auto& [flag, value] :
+         {std::pair<const char*, double>{"accel-noise", config.tracker.particle.accel_noise_mps2},
+          {"phat-beta", config.phat_beta},
+          {"outlier-probability", config.tracker.particle.outlier_probability}}) {
+      if (value == 0.0) {
+        return InvalidArgument(std::string("--") + flag +
+                               " 0 (or its array-file key) cannot be sent to a server: the " +
+                               "wire reads 0 as the server's default; give a small positive value, or run locally");
+      }
+    }
+  }
   engine::AudioSessionConfig check = config;
   if (runs == Runs::kOnServer) check.backend = engine::BackendChoice::kCpu;
   // Create, not just Validate: some limits (band edges against Nyquist, the backend) are

@@ -31,7 +31,7 @@ std::string ArrayText(const std::string& session, const std::string& more = "") 
 
 // The config `track` builds from `args` and the array file text, as cmd_track.cc does.
 StatusOr<engine::AudioSessionConfig> Build(const std::vector<std::string>& args, const std::string& array_text,
-                                           const std::set<std::string>& also_given = {}) {
+                                           const std::set<std::string>& also_given = {}, Runs runs = Runs::kLocally) {
   FlagSet flags("test", "test");
   SessionFlags f;
   RegisterTrackerFlags(flags, &f, "filter-seed");
@@ -40,7 +40,7 @@ StatusOr<engine::AudioSessionConfig> Build(const std::vector<std::string>& args,
   f.also_given = also_given;
   auto array = io::ParseArrayJson(array_text, "session.json", io::ArrayUse::kAuto);
   if (!array.ok()) return array.status();
-  return BuildSessionConfig(f, flags, *array, kRateHz, Runs::kLocally);
+  return BuildSessionConfig(f, flags, *array, kRateHz, runs);
 }
 
 std::string Num(double v) {
@@ -190,6 +190,23 @@ TEST(SessionFileFlags, AFrameInTheFileIsGivenForSessionsThatListSources) {
   EXPECT_EQ(from_file->frame_samples, 1024);
   EXPECT_EQ(from_file->hop_samples, 256);
   EXPECT_EQ(FieldsOf(from_file), FieldsOf(Build({"--frame", "1024", "--hop", "256"}, ArrayText("", direction))));
+}
+
+// The wire reads 0 as "the default" for these: a 0 asked for cannot reach a server as asked,
+// so it is refused for --server (locally it is what it says).
+TEST(SessionFileFlags, AZeroTheWireReadsAsTheDefaultIsRefusedForAServer) {
+  for (const std::vector<std::string>& args : {std::vector<std::string>{"--accel-noise", "0"},
+                                               {"--weighting", "phat-beta", "--phat-beta", "0"},
+                                               {"--likelihood", "mixture", "--outlier-probability", "0"}}) {
+    EXPECT_TRUE(Build(args, ArrayText("")).ok()) << args[0];
+    const auto remote = Build(args, ArrayText(""), {}, Runs::kOnServer);
+    ASSERT_FALSE(remote.ok()) << args[args.size() - 2];
+    EXPECT_EQ(remote.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(remote.status().message().find(args[args.size() - 2] + " 0"), std::string::npos)
+        << remote.status().message();
+  }
+  EXPECT_FALSE(Build({}, ArrayText(R"({"accel_noise_mps2": 0})"), {}, Runs::kOnServer).ok());
+  EXPECT_TRUE(Build({"--accel-noise", "1e-6"}, ArrayText(""), {}, Runs::kOnServer).ok());
 }
 
 TEST(SessionFileFlags, ABadFileNamesTheFileAndTheKey) {
