@@ -134,19 +134,21 @@ std::string FinishedSessionJson(const SessionHost& host, const v1::SessionInfo& 
 
 std::string SessionsJson(const std::vector<std::shared_ptr<SessionHost>>& hosts, Clock::time_point now, double ttl_s,
                          const std::vector<FinishedSession>& finished, size_t max_track_sessions) {
-  std::vector<std::pair<double, const SessionHost*>> by_age;  // (age_s, host), oldest first
+  // Each host's counters taken once (Info takes its lock), then oldest first.
+  std::vector<std::pair<v1::SessionInfo, const SessionHost*>> by_age;
   by_age.reserve(hosts.size());
   for (const auto& host : hosts) {
-    if (host) by_age.emplace_back(host->Info(now, ttl_s).age_s(), host.get());
+    if (host) by_age.emplace_back(host->Info(now, ttl_s), host.get());
   }
-  std::stable_sort(by_age.begin(), by_age.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::stable_sort(by_age.begin(), by_age.end(),
+                   [](const auto& a, const auto& b) { return a.first.age_s() > b.first.age_s(); });
   json doc;
   doc["version"] = kLocalizerVersion;
   doc["sessions_total"] = by_age.size();
   doc["track_sessions_max"] = max_track_sessions;
   json sessions = json::array();
   for (size_t i = 0; i < by_age.size(); ++i) {
-    sessions.push_back(SessionJson(*by_age[i].second, by_age[i].second->Info(now, ttl_s), i < max_track_sessions));
+    sessions.push_back(SessionJson(*by_age[i].second, by_age[i].first, i < max_track_sessions));
   }
   doc["sessions"] = std::move(sessions);
   std::string text = Dump(doc);
