@@ -10,7 +10,7 @@
 namespace localizer::engine {
 namespace {
 
-constexpr int kMaxComponents = 16;
+constexpr int kMaxComponents = ParticleSet::kMaxLabels;
 
 // Weight, mean and covariance per label, in the set's coordinates.
 struct LabelMoments {
@@ -76,21 +76,39 @@ void ParticleSet::SampleMixture(const std::vector<Component>& components) {
     first = end;
   }
   labels_ = k;
+  label_deficit_.fill(0.0f);
   DrawLevels();
   if (bounded_) ApplyBounds();
   SetEqualWeights();
+}
+
+void ParticleSet::ScoreLabels(float exponent) {
+  std::array<float, kMaxComponents> best;
+  best.fill(-INFINITY);
+  const float* ll = loglik_.data();
+  for (int i = 0; i < n_; ++i) {
+    float& b = best[label_[static_cast<size_t>(i)]];
+    b = std::max(b, ll[i]);
+  }
+  const float top = *std::max_element(best.begin(), best.end());
+  for (int c = 0; c < labels_; ++c) {
+    const float gap = std::isfinite(best[static_cast<size_t>(c)]) ? exponent * (top - best[static_cast<size_t>(c)]) : INFINITY;
+    float& d = label_deficit_[static_cast<size_t>(c)];
+    d = kContenderDecay * d + gap;
+  }
 }
 
 std::vector<WeightedBelief> ParticleSet::Modes(double min_weight) const {
   if (labels_ <= 1) return {WeightedBelief{1.0, MeanAndCovariance()}};
   const LabelMoments m = MomentsByLabel(
       n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()}, label_, w_);
+  const std::array<double, kMaxComponents> weight = ContenderShares(m.weight);
   std::vector<WeightedBelief> out;
   double kept = 0.0;
   for (size_t c = 0; c < kMaxComponents; ++c) {
-    if (!(m.weight[c] >= min_weight) || m.weight[c] <= 0.0) continue;
+    if (!(weight[c] >= min_weight) || weight[c] <= 0.0) continue;
     WeightedBelief b;
-    b.weight = m.weight[c];
+    b.weight = weight[c];
     b.belief.mean = m.mean[c];
     b.belief.mean.head<3>() += origin_m_;
     b.belief.covariance = m.cov[c];
@@ -102,6 +120,41 @@ std::vector<WeightedBelief> ParticleSet::Modes(double min_weight) const {
   std::sort(out.begin(), out.end(),
             [](const WeightedBelief& a, const WeightedBelief& b) { return a.weight > b.weight; });
   return out;
+}
+
+std::array<double, ParticleSet::kMaxLabels> ParticleSet::ContenderShares(const std::array<double, kMaxLabels>& weight,
+                                                                         std::array<bool, kMaxLabels>* raised) const {
+  // The heaviest few contenders below kContenderShare are raised to it; the other labels
+  // share the rest in proportion to their weights.
+  std::array<int, kMaxComponents> order;
+  for (int c = 0; c < kMaxComponents; ++c) order[static_cast<size_t>(c)] = c;
+  std::sort(order.begin(), order.end(),
+            [&weight](int a, int b) { return weight[static_cast<size_t>(a)] > weight[static_cast<size_t>(b)]; });
+  double total = 0.0;
+  for (double w : weight) total += std::max(w, 0.0);
+  std::array<double, kMaxComponents> share{};
+  std::array<bool, kMaxComponents> held{};
+  if (!(total > 0.0)) return share;
+  double held_total = 0.0, free_total = 0.0;
+  int contenders = 0;
+  for (int c : order) {
+    const size_t k = static_cast<size_t>(c);
+    if (!(weight[k] > 0.0) || !Contender(c) || contenders >= kMaxContenders) continue;
+    ++contenders;
+    if (weight[k] / total < kContenderShare) {
+      held[k] = true;
+      held_total += kContenderShare;
+    }
+  }
+  for (size_t c = 0; c < kMaxComponents; ++c) free_total += held[c] ? 0.0 : std::max(weight[c], 0.0);
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    if (held[c])
+      share[c] = kContenderShare;
+    else if (weight[c] > 0.0)
+      share[c] = free_total > 0.0 ? weight[c] * (1.0 - held_total) / free_total : 0.0;
+  }
+  if (raised != nullptr) *raised = held;
+  return share;
 }
 
 void ParticleSet::ResampleModes(double kernel_scale) {
@@ -120,6 +173,7 @@ void ParticleSet::ResampleModes(double kernel_scale) {
     l[c] = (h * CovarianceRoot(moments.cov[c])).cast<float>();
     shift[c] = ((1.0 - a) * moments.mean[c]).cast<float>();
   }
+  const std::array<double, kMaxComponents> share = HoldContenders(moments.weight);
   SystematicIndices();
   CarryLevels();
   DrawKernelNoise();
@@ -143,16 +197,67 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   std::swap(cur_, next_);
   std::swap(label_, next_label_);
   labels_ = static_cast<int>(std::count(alive.begin(), alive.end(), true));
-  if (labels_ == 1)
+  if (labels_ == 1) {
     std::fill(label_.begin(), label_.end(), 0);
-  else {
-    // Keep labels dense so the next pass stays within the live count.
-    std::array<int, kMaxComponents> remap{};
-    int next = 0;
-    for (int c = 0; c < kMaxComponents; ++c) remap[static_cast<size_t>(c)] = alive[static_cast<size_t>(c)] ? next++ : 0;
-    for (uint8_t& lab : label_) lab = static_cast<uint8_t>(remap[lab]);
+    SetEqualWeights();
+    return;
   }
-  SetEqualWeights();
+  // Keep labels dense so the next pass stays within the live count.
+  std::array<int, kMaxComponents> remap{};
+  std::array<float, kMaxComponents> deficit{};
+  std::array<double, kMaxComponents> weight{};
+  int next = 0;
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    if (!alive[c]) continue;
+    deficit[static_cast<size_t>(next)] = label_deficit_[c];
+    weight[static_cast<size_t>(next)] = share[c];
+    remap[c] = next++;
+  }
+  for (uint8_t& lab : label_) lab = static_cast<uint8_t>(remap[lab]);
+  label_deficit_ = deficit;
+  SetLabelWeights(weight);
+}
+
+std::array<double, ParticleSet::kMaxLabels> ParticleSet::HoldContenders(const std::array<double, kMaxLabels>& weight) {
+  std::array<bool, kMaxComponents> held{};
+  const std::array<double, kMaxComponents> slots = ContenderShares(weight, &held);
+  if (std::none_of(held.begin(), held.end(), [](bool h) { return h; })) return weight;
+  // Scale each particle so its label's total is its share of the slots.
+  std::array<float, kMaxComponents> scale{};
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    scale[c] = weight[c] > 0.0 ? static_cast<float>(slots[c] / weight[c]) : 0.0f;
+  }
+  for (int i = 0; i < n_; ++i) w_[static_cast<size_t>(i)] *= scale[label_[static_cast<size_t>(i)]];
+  // What each label carries out of resampling: its marginal weight, bounded below while it is
+  // held so that float underflow cannot end a hypothesis the data have not ruled out.
+  std::array<double, kMaxComponents> carried = weight;
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    if (held[c]) carried[c] = std::max(weight[c], kMinHeldWeight);
+  }
+  return carried;
+}
+
+void ParticleSet::SetLabelWeights(const std::array<double, kMaxLabels>& weight) {
+  // Each particle gets its label's weight over the label's count: the labels' totals are
+  // the given weights (normalised), whatever share of the particles each holds.
+  moments_valid_ = false;
+  std::array<int, kMaxComponents> count{};
+  for (int i = 0; i < n_; ++i) ++count[label_[static_cast<size_t>(i)]];
+  double total = 0.0;
+  for (size_t c = 0; c < kMaxComponents; ++c) total += count[c] > 0 ? weight[c] : 0.0;
+  if (!(total > 0.0)) {
+    SetEqualWeights();
+    return;
+  }
+  std::array<float, kMaxComponents> per{};
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    per[c] = count[c] > 0 ? static_cast<float>(weight[c] / total / count[c]) : 0.0f;
+  }
+  for (int i = 0; i < n_; ++i) {
+    const float wi = per[label_[static_cast<size_t>(i)]];
+    w_[static_cast<size_t>(i)] = wi;
+    logw_[static_cast<size_t>(i)] = std::log(wi);
+  }
 }
 
 void ParticleSet::SetBounds(const Vec3& min_m, const Vec3& max_m) {

@@ -271,6 +271,7 @@ void ParticleSet::CopyCloudFrom(const ParticleSet& other) {
   moments_valid_ = other.moments_valid_;
   label_ = other.label_;
   labels_ = other.labels_;
+  label_deficit_ = other.label_deficit_;
   gain_ = other.gain_;
 }
 
@@ -386,6 +387,7 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
   float* __restrict logw = logw_.data();
 #pragma omp simd
   for (int i = 0; i < n_; ++i) logw[i] += exponent * ll[i];
+  if (labels_ > 1) ScoreLabels(exponent);
 }
 
 double ParticleSet::NormaliseWeights() {

@@ -112,7 +112,23 @@ class ParticleSet {
   //     x' = a x + (1 - a) mean + h L z,   a = sqrt(1 - h^2),  L L^T = covariance,
   // z with zero mean and unit covariance (triangular draws from hash bytes, see the .cc)
   // h = kernel_scale * (4 / (N (d + 2)))^(1 / (d + 4)), d = 6 (Silverman's optimal bandwidth).
+  //
+  // While several labels live, a label the data have not ruled out (a contender: its best
+  // particle's log-likelihood, summed over recent updates with decay kContenderDecay, trails
+  // the best label's by less than kContenderMarginNats) keeps at least kContenderShare of the
+  // particles, with weights that keep its marginal share. Why: the marginal evidence of two
+  // exact TDOA solutions of a 4-sensor array differs only by how wide each one's predicted
+  // TDOAs are (white acceleration spreads the near solution's more), so resampling by it
+  // alone drifts towards the far solution, whichever is true, and removes the other before
+  // the motion can tell them apart.
   void ResampleSystematic(double kernel_scale);
+  static constexpr int kMaxLabels = 16;
+  static constexpr int kMaxContenders = 4;  // labels held up at once (heaviest first)
+  // A contender's least share of the particles, and of the weight Modes reports: at 0.1 the
+  // reported covariance puts the other solution within sqrt(1 / 0.1) = 3.2 sd.
+  static constexpr double kContenderShare = 0.1;
+  static constexpr float kContenderDecay = 0.9f;  // per update: about ten updates' memory
+  static constexpr float kContenderMarginNats = 6.0f;
   // Weighted mean and covariance (cached until the particles or weights change).
   TrackState MeanAndCovariance() const;
 
@@ -127,10 +143,13 @@ class ParticleSet {
     Mat6 root = Mat6::Zero();  // root root^T = covariance
   };
   // Particles split among the components in proportion to their weights (at least one
-  // each, at most 16 components); weights equal.
+  // each, at most kMaxLabels components); weights equal.
   void SampleMixture(const std::vector<Component>& components);
   // Per live label: its total weight, mean and covariance, heaviest first (labels whose weight
-  // is below min_weight left out). One entry (the whole cloud) when single-mode.
+  // is below min_weight left out). One entry (the whole cloud) when single-mode. A label the
+  // data have not ruled out (see ResampleSystematic) is reported with at least
+  // kContenderShare of the weight (after normalisation), however little the marginal
+  // evidence leaves it.
   std::vector<WeightedBelief> Modes(double min_weight) const;
   int labels() const { return labels_; }
   // Positions outside [min, max] (sides may be infinite) are impossible: after every
@@ -188,6 +207,19 @@ class ParticleSet {
   mutable bool moments_valid_ = false;
   std::vector<uint8_t> label_, next_label_;  // mixture component per particle
   int labels_ = 1;                           // components alive (1: single-mode)
+  // Per label: the decayed sum of (best log-likelihood of all) - (its best), per update.
+  std::array<float, kMaxLabels> label_deficit_{};
+  void ScoreLabels(float exponent);     // after Weigh while labels_ > 1
+  // Each label's share with the heaviest kMaxContenders contenders raised to kContenderShare
+  // and the others scaled down to make room (normalised); which were raised, if asked.
+  std::array<double, kMaxLabels> ContenderShares(const std::array<double, kMaxLabels>& weight,
+                                                 std::array<bool, kMaxLabels>* raised = nullptr) const;
+  // Before resampling with several labels: scales w_ so that contenders get their share of
+  // the slots; returns the weight each label carries out (its marginal weight).
+  std::array<double, kMaxLabels> HoldContenders(const std::array<double, kMaxLabels>& weight);
+  void SetLabelWeights(const std::array<double, kMaxLabels>& weight);  // after resampling
+  static constexpr double kMinHeldWeight = 1e-6;
+  bool Contender(int label) const { return label_deficit_[static_cast<size_t>(label)] < kContenderMarginNats; }
   bool bounded_ = false;
   Eigen::Vector3f bound_lo_, bound_hi_;  // relative to origin_m_
 };
