@@ -78,6 +78,7 @@ void PairNoise::Finish(const std::vector<InnovationMoments>& innovations, double
     const InnovationMoments& in = innovations[p];
     const double e2 = in.mean_s * in.mean_s;
     report->nis += e2 / (sigma_s * sigma_s + in.predicted_var_s2);
+    report->nis_terms.push_back({e2, sigma_s * sigma_s, in.predicted_var_s2});
     const double anchor_s = anchors_s_[p];
     if (fixed_sigma_s_ > 0.0) {
       anchored(p, in.mean_s, sigma_s * sigma_s + in.predicted_var_s2);

@@ -29,6 +29,15 @@ struct UpdateReport {
   // measurement distribution: sum_p (d_p - E[h_p])^2 / (sigma_p^2 + Var[h_p]).
   // ~ chi-square with `pair_count` degrees of freedom when the filter is consistent.
   double nis = 0.0;
+  // The NIS's terms per used pair (particle filter; empty from the Kalman filters): the
+  // squared innovation and its two variances, noise sigma_p^2 and the state's Var[h_p]
+  // (innovation_consistency.h splits the disagreement between them).
+  struct NisTerm {
+    double innovation2_s2 = 0.0;
+    double noise_var_s2 = 0.0;
+    double predicted_var_s2 = 0.0;
+  };
+  std::vector<NisTerm> nis_terms;
   // The same with each pair's noise anchored to its own peak (pair_noise.h), each pair's
   // term capped at 36 (6 sigma: one impulsive outlier cannot fill the divergence window): the
   // divergence test's input, which noise adaptation cannot inflate.

@@ -129,7 +129,7 @@ void Session::Impl::UpdateAndWatch(const TrackState& predicted, Estimate* e) {
   e->ess = report->ess;
   e->tdoa_sigma_s = report->tdoa_sigma_s;
   e->pairs_used = report->pair_count;
-  consistency.Add(report->nis, report->pair_count);
+  consistency.Add(report->nis, report->pair_count, report->nis_terms);
   if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count, report->anchored_z)) return;
   // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too),
   // and the track's own: the frame that tripped the test may itself hold the bad pair (a
