@@ -66,6 +66,12 @@ Status AttitudeFilterOptions::Validate() const {
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("mag_reference_s", mag_reference_s));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_norm_tolerance", mag_norm_tolerance));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_dip_tolerance_rad", mag_dip_tolerance_rad));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_calibration_s", mag_calibration_s));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_calibration_diversity", mag_calibration_diversity));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_calibration_residual", mag_calibration_residual));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_restart_s", mag_restart_s));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_heading_gate_rad", mag_heading_gate_rad));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("mag_consistency_s", mag_consistency_s));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("rest_gyro_rps", rest_gyro_rps));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("rest_accel_mps2", rest_accel_mps2));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("rest_min_s", rest_min_s));

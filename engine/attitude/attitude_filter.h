@@ -99,6 +99,21 @@ struct AttitudeFilterOptions {
   double mag_reference_s = 1.0;
   double mag_norm_tolerance = 0.08;
   double mag_dip_tolerance_rad = 0.07;
+  // Hard-iron calibration (quaternion filter): the offset is fitted over the recent past
+  // (time constant mag_calibration_s) and adopted, with the field's norm and dip as the new
+  // reference, whenever the fit is trusted: rotation diversity (the smallest eigenvalue of
+  // the information about the offset per sample, 0..1) >= mag_calibration_diversity and RMS
+  // misfit <= mag_calibration_residual of the field's norm. When no sample has been used for
+  // mag_restart_s, the fit restarts (the field has changed).
+  double mag_calibration_s = 20.0;
+  double mag_calibration_diversity = 0.1;
+  double mag_calibration_residual = 0.05;
+  double mag_restart_s = 1.0;
+  // Consistency with the gyro (quaternion filter): a sample is disturbed when the heading
+  // innovation, low-passed over 0.5 s, exceeds mag_heading_gate_rad plus 3 sd of the
+  // predicted heading, unless it has for mag_consistency_s (then the gyro has drifted).
+  double mag_heading_gate_rad = 0.05;
+  double mag_consistency_s = 10.0;
 
   // Rest detection (quaternion filter): when for rest_min_s every sample has
   // |gyro - bias| < rest_gyro_rps and its accelerometer within rest_accel_mps2 of both g and
@@ -131,6 +146,11 @@ struct AttitudeEstimate {
   bool accel_used = false;  // false: no update (motion) or not initialised
   bool mag_used = false;    // false: no mag, use_mag off, still learning, or disturbed
   bool at_rest = false;     // rest detected (bias refined)
+  // Magnetometer calibration (quaternion filter with use_mag; false and zero otherwise):
+  // whether a hard-iron offset has been found and is subtracted from each reading, and that
+  // offset (engine/attitude/hard_iron_estimator.h).
+  bool mag_calibrated = false;
+  Eigen::Vector3d mag_offset_uT = Eigen::Vector3d::Zero();
 };
 
 class AttitudeFilter {

@@ -42,6 +42,7 @@
 #include <Eigen/Geometry>
 
 #include "engine/attitude/attitude_filter.h"
+#include "engine/attitude/hard_iron_estimator.h"
 #include "engine/attitude/mag_reference.h"
 #include "engine/attitude/rest_detector.h"
 
@@ -60,6 +61,8 @@ class QuaternionEkf final : public AttitudeFilter {
 
   // The error-state covariance (dtheta in the body frame, then db).
   const Eigen::Matrix<double, 6, 6>& covariance() const { return p_; }
+  // The latest hard-iron fit (solved ten times a second while the magnetometer is in use).
+  const HardIronFit& hard_iron_fit() const { return last_fit_; }
 
  private:
   using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -68,11 +71,25 @@ class QuaternionEkf final : public AttitudeFilter {
   // Applies x <- x (+) dx.
   void Correct(const Eigen::Matrix<double, 6, 1>& dx);
   bool AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s);
-  bool MagUpdate(const Eigen::Vector3d& mag_uT, double t_s);
+  // matches_reference: whether the field's norm and dip agreed with the reference.
+  bool MagUpdate(const Eigen::Vector3d& mag_uT, double t_s, double dt_s, bool* matches_reference);
+  // Feeds the hard-iron estimator, adopts its fit when trusted, and returns whether the
+  // (offset-corrected) sample was used for heading.
+  bool MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt_s);
+  void AdoptCalibration(const HardIronFit& fit);
   void RestUpdate(const Eigen::Vector3d& gyro_rps);
 
   AttitudeFilterOptions options_;
   MagReference mag_reference_;
+  HardIronEstimator hard_iron_;
+  HardIronFit last_fit_;
+  Eigen::Vector3d mag_offset_uT_ = Eigen::Vector3d::Zero();  // subtracted from each reading
+  bool mag_calibrated_ = false;  // a trusted fit has been adopted since the start
+  double next_solve_t_s_ = 0.0;
+  double last_mag_used_t_s_ = 0.0;  // the last sample whose norm and dip matched
+  bool restarted_since_used_ = false;
+  double innovation_lowpass_rad_ = 0.0;  // heading innovation, low-passed (consistency gate)
+  double inconsistent_s_ = 0.0;          // how long it has been outside the gate
   RestDetector rest_;
   Eigen::Quaterniond q_ = Eigen::Quaterniond::Identity();
   Eigen::Vector3d bias_rps_ = Eigen::Vector3d::Zero();
