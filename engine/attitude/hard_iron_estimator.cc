@@ -9,6 +9,9 @@ namespace {
 
 // Fewer (weighted) samples than this and the fit says nothing: a fraction of a second.
 constexpr double kMinWeight = 50.0;
+// The attitude error the misfit allows for on top of the field's tolerance: an attitude off
+// by e rad misplaces R b by e |b|, so a large offset fits less well for the same attitude.
+constexpr double kAttitudeSdRad = 0.01;
 
 }  // namespace
 
@@ -37,7 +40,7 @@ HardIronFit HardIronEstimator::Solve(const Eigen::Matrix3d& body_to_world) const
     fit.heading_diversity = 1.0 / std::max(u.dot(a_inv * u), 1.0);
   }
   fit.trusted = fit.diversity >= min_diversity_ &&
-                fit.residual_uT <= max_residual_ * (fit.field_world_uT.norm() + fit.offset_uT.norm());
+                fit.residual_uT <= max_residual_ * fit.field_world_uT.norm() + kAttitudeSdRad * fit.offset_uT.norm();
   return fit;
 }
 
