@@ -40,8 +40,19 @@ HardIronFit HardIronEstimator::Solve(const Eigen::Matrix3d& body_to_world) const
     fit.heading_diversity = 1.0 / std::max(u.dot(a_inv * u), 1.0);
   }
   fit.trusted = fit.diversity >= min_diversity_ &&
-                fit.residual_uT <= max_residual_ * fit.field_world_uT.norm() + kAttitudeSdRad * fit.offset_uT.norm();
+                fit.residual_uT <= AllowedResidual(fit);
   return fit;
+}
+
+double HardIronEstimator::AllowedResidual(const HardIronFit& fit) const {
+  return max_residual_ * fit.field_world_uT.norm() + kAttitudeSdRad * fit.offset_uT.norm();
+}
+
+double HardIronEstimator::ResidualWith(const Eigen::Vector3d& offset_uT) const {
+  if (s0_ <= 0.0) return 0.0;
+  const Eigen::Vector3d world = FieldWith(offset_uT);
+  const double misfit = (smm_ - 2.0 * offset_uT.dot(sm_)) / s0_ + offset_uT.squaredNorm() - world.squaredNorm();
+  return std::sqrt(std::max(0.0, misfit));
 }
 
 }  // namespace localizer::engine

@@ -76,6 +76,16 @@ class HardIronEstimator {
   // current attitude `body_to_world`.
   HardIronFit Solve(const Eigen::Matrix3d& body_to_world) const;
 
+  // The RMS misfit over the same window of another offset (with the world field that suits
+  // it best): (Smm - 2 b . Sm + |b|^2 S0) / S0 - |Sy / S0 - M b|^2, square-rooted.
+  double ResidualWith(const Eigen::Vector3d& offset_uT) const;
+  // That best world field: (Sy - SR b) / S0.
+  Eigen::Vector3d FieldWith(const Eigen::Vector3d& offset_uT) const {
+    return s0_ > 0.0 ? Eigen::Vector3d((sy_ - sr_ * offset_uT) / s0_) : Eigen::Vector3d::Zero();
+  }
+  // The misfit a trusted fit may have: max_residual |m_w| + 0.01 |b|.
+  double AllowedResidual(const HardIronFit& fit) const;
+
   double weight() const { return s0_; }
 
  private:

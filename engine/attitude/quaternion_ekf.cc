@@ -16,6 +16,8 @@ constexpr double kInitialHeadingSdRad = 0.2;
 // Time constant of the low-passed heading innovation that the consistency gate tests: long
 // enough to average the azimuth's noise (degrees per sample), short against a disturbance.
 constexpr double kInnovationLowpass_s = 0.5;
+// How long the fits must agree on a new offset before it replaces the one in use.
+constexpr double kOffsetConfirm_s = 2.0;
 // How often the hard-iron fit is solved: its sums change little in a tenth of a second.
 constexpr double kSolveEvery_s = 0.1;
 
@@ -59,7 +61,6 @@ void QuaternionEkf::Initialise(const ImuSample& sample) {
   at_rest_ = false;
   if (mag) (void)mag_reference_.Observe(q_ * sample.mag_uT, sample.t_s);
   next_solve_t_s_ = sample.t_s + kSolveEvery_s;
-  last_mag_used_t_s_ = sample.t_s;
 }
 
 void QuaternionEkf::Propagate(const Eigen::Vector3d& rate_rps, double dt_s) {
@@ -148,19 +149,33 @@ bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& mag_uT, double t_s, double 
   return true;
 }
 
-void QuaternionEkf::AdoptCalibration(const HardIronFit& fit) {
-  const Eigen::Vector3d& m = fit.field_world_uT;
-  const double norm = m.norm();
-  // An offset within the norm gate's tolerance is left alone until one beyond it is found:
-  // a clean sensor's fit wanders by tenths of a µT, which would turn the heading by a degree.
-  if (!mag_calibrated_ && fit.offset_uT.norm() <= options_.mag_norm_tolerance * norm) {
-    mag_reference_.Set(norm, std::atan2(-m.z(), m.head<2>().norm()));
-    return;
+void QuaternionEkf::AdoptCalibration(const HardIronFit& fit, double t_s) {
+  // A new offset (beyond the norm gate's tolerance from the one in use) only when the one in
+  // use no longer explains the window and the fits have agreed on the new one for
+  // kOffsetConfirm_s: a fit with little rotation can trade offset for a passing disturbance
+  // for a moment. Before any change the offset stays 0: a clean sensor's fit wanders by
+  // tenths of a µT, a degree of heading.
+  const double tolerance_uT = options_.mag_norm_tolerance * fit.field_world_uT.norm();
+  const bool changed = (fit.offset_uT - mag_offset_uT_).norm() > tolerance_uT;
+  bool keep = !changed && !mag_calibrated_;
+  if (changed) {
+    if (hard_iron_.ResidualWith(mag_offset_uT_) <= hard_iron_.AllowedResidual(fit)) {
+      keep = true;
+      candidate_since_t_s_ = kNoCandidate;
+    } else if (candidate_since_t_s_ == kNoCandidate || (fit.offset_uT - candidate_uT_).norm() > tolerance_uT) {
+      keep = true;
+      candidate_uT_ = fit.offset_uT;
+      candidate_since_t_s_ = t_s;
+    } else {
+      keep = t_s - candidate_since_t_s_ < kOffsetConfirm_s;
+    }
   }
-  const bool changed = (fit.offset_uT - mag_offset_uT_).norm() > options_.mag_norm_tolerance * norm;
-  mag_offset_uT_ = fit.offset_uT;
-  mag_reference_.Set(norm, std::atan2(-m.z(), m.head<2>().norm()));
-  if (!changed) return;
+  if (!keep) mag_offset_uT_ = fit.offset_uT;
+  // The reference: the world field that best suits the offset in use.
+  const Eigen::Vector3d m = keep ? hard_iron_.FieldWith(mag_offset_uT_) : fit.field_world_uT;
+  mag_reference_.Set(m.norm(), std::atan2(-m.z(), m.head<2>().norm()));
+  if (keep || !changed) return;
+  candidate_since_t_s_ = kNoCandidate;
   // The first offset, or the first after the field changed: the heading so far came from a
   // field that carried another offset, or coasted on the gyro, so it is re-learnt from the
   // corrected field (its variance about Up raised to the initial prior), and the sums, taken
@@ -180,18 +195,24 @@ bool QuaternionEkf::MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt
   if (t_s >= next_solve_t_s_) {
     next_solve_t_s_ = t_s + kSolveEvery_s;
     last_fit_ = hard_iron_.Solve(r);
-    if (last_fit_.trusted) AdoptCalibration(last_fit_);
+    if (last_fit_.trusted) {
+      AdoptCalibration(last_fit_, t_s);
+    } else {
+      candidate_since_t_s_ = kNoCandidate;
+    }
   }
   bool matches_reference = false;
   const bool used = MagUpdate(mag_uT - mag_offset_uT_, t_s, dt_s, &matches_reference);
-  if (matches_reference) {
-    last_mag_used_t_s_ = t_s;
-    restarted_since_used_ = false;
-  } else if (!restarted_since_used_ && t_s - last_mag_used_t_s_ > options_.mag_restart_s) {
-    // The field's norm or dip has left the reference for a while (a magnet arrived, the
-    // surroundings changed): what the fit learnt before no longer describes it.
+  // The fraction of recent samples whose norm and dip match the reference (time constant
+  // mag_restart_s). Below one half the field has changed (a magnet arrived, the
+  // surroundings changed) and what the fit learnt before no longer describes it: the fit
+  // restarts, once, and again only after the field has matched again (above 0.9).
+  match_fraction_ += (dt_s / (options_.mag_restart_s + dt_s)) * ((matches_reference ? 1.0 : 0.0) - match_fraction_);
+  if (restart_armed_ && match_fraction_ < 0.5) {
     hard_iron_.Reset();
-    restarted_since_used_ = true;
+    restart_armed_ = false;
+  } else if (!restart_armed_ && match_fraction_ > 0.9) {
+    restart_armed_ = true;
   }
   return used;
 }

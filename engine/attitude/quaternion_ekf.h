@@ -76,7 +76,7 @@ class QuaternionEkf final : public AttitudeFilter {
   // Feeds the hard-iron estimator, adopts its fit when trusted, and returns whether the
   // (offset-corrected) sample was used for heading.
   bool MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt_s);
-  void AdoptCalibration(const HardIronFit& fit);
+  void AdoptCalibration(const HardIronFit& fit, double t_s);
   void RestUpdate(const Eigen::Vector3d& gyro_rps);
 
   AttitudeFilterOptions options_;
@@ -86,8 +86,11 @@ class QuaternionEkf final : public AttitudeFilter {
   Eigen::Vector3d mag_offset_uT_ = Eigen::Vector3d::Zero();  // subtracted from each reading
   bool mag_calibrated_ = false;  // a trusted fit has been adopted since the start
   double next_solve_t_s_ = 0.0;
-  double last_mag_used_t_s_ = 0.0;  // the last sample whose norm and dip matched
-  bool restarted_since_used_ = false;
+  static constexpr double kNoCandidate = -1e300;
+  Eigen::Vector3d candidate_uT_ = Eigen::Vector3d::Zero();  // a new offset being confirmed
+  double candidate_since_t_s_ = kNoCandidate;
+  double match_fraction_ = 1.0;  // recent samples whose norm and dip matched (low-passed)
+  bool restart_armed_ = true;
   double innovation_lowpass_rad_ = 0.0;  // heading innovation, low-passed (consistency gate)
   double inconsistent_s_ = 0.0;          // how long it has been outside the gate
   RestDetector rest_;
