@@ -53,6 +53,7 @@ Status AttitudeFilterOptions::Validate() const {
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("gravity_mps2", gravity_mps2));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("gyro_noise_rps_rthz", gyro_noise_rps_rthz));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("gyro_bias_walk_rps2_rthz", gyro_bias_walk_rps2_rthz));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("gyro_bias_walk_tilt_rps2_rthz", gyro_bias_walk_tilt_rps2_rthz));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("initial_bias_sd_rps", initial_bias_sd_rps));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("accel_tilt_sd_rad", accel_tilt_sd_rad));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("accel_reject_mps2", accel_reject_mps2));

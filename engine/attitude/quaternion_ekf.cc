@@ -79,8 +79,12 @@ void QuaternionEkf::Propagate(const Eigen::Vector3d& rate_rps, double dt_s) {
   p_.topLeftCorner<3, 3>() = new_ptt;
   p_.topRightCorner<3, 3>() = new_ptb;
   p_.bottomLeftCorner<3, 3>() = new_ptb.transpose();
-  p_.bottomRightCorner<3, 3>().diagonal().array() +=
-      options_.gyro_bias_walk_rps2_rthz * options_.gyro_bias_walk_rps2_rthz * dt_s;
+  // Bias walk: sigma_tilt^2 dt (I - h h^T) + sigma_up^2 dt h h^T, h the world's Up in the body.
+  const Eigen::Vector3d h = UpInBody(q_);
+  const double up_var = options_.gyro_bias_walk_rps2_rthz * options_.gyro_bias_walk_rps2_rthz * dt_s;
+  const double tilt_var = options_.gyro_bias_walk_tilt_rps2_rthz * options_.gyro_bias_walk_tilt_rps2_rthz * dt_s;
+  p_.bottomRightCorner<3, 3>() += (up_var - tilt_var) * h * h.transpose();
+  p_.bottomRightCorner<3, 3>().diagonal().array() += tilt_var;
 }
 
 void QuaternionEkf::Correct(const Eigen::Matrix<double, 6, 1>& dx) {

@@ -7,17 +7,27 @@
 // Propagation over dt = t_k - t_{k-1}, with the current gyro reading omega_m:
 //     omega = omega_m - b,   q <- q (x) exp(omega dt / 2)  (exact for a constant rate),
 //     F = [A  -I dt; 0  I],  A = exp(-[omega x] dt) = R(omega dt)^T,
-//     P <- F P F^T + diag(sigma_g^2 dt I, sigma_b^2 dt I)
-// (sigma_g = gyro_noise_rps_rthz, sigma_b = gyro_bias_walk_rps2_rthz), written block-wise
-// (no 6x6 product).
+//     P <- F P F^T + diag(sigma_g^2 dt I, Q_b),
+//     Q_b = sigma_tilt^2 dt (I - h h^T) + sigma_up^2 dt h h^T      (h = R^T e_up)
+// (sigma_g = gyro_noise_rps_rthz, sigma_up = gyro_bias_walk_rps2_rthz, sigma_tilt =
+// gyro_bias_walk_tilt_rps2_rthz: the bias about the level axes, which the accelerometer
+// observes, may move faster than the one about Up, on which heading coasts), written
+// block-wise (no 6x6 product).
 //
 // Accelerometer (tilt) update, when ||f| - g| <= accel_reject_mps2:
 //     z = f / |f|,  h = R^T e_up (the third row of R),  H = [[h x]  0],
 //     R_meas = sigma_a^2 I,  sigma_a = accel_tilt_sd_rad (1 + accel_noise_gain ||f| - g| / g).
 // Only tilt is observed: a body rotation about h leaves h unchanged, so heading is untouched.
 //
-// Magnetometer (heading-only) update, when use_mag, the sample has a finite field and
-// MagReference (mag_reference.h) does not flag it as disturbed:
+// Magnetometer. Each reading first feeds the hard-iron fit (hard_iron_estimator.h, solved
+// ten times a second); the offset in use (0 until a fit finds one) is subtracted, and the
+// corrected field is used for heading only when (1) MagReference (mag_reference.h) finds its
+// norm and dip at the reference — learnt in the first second, then set by each trusted fit —
+// and (2) the heading innovation, low-passed over 0.5 s, is within mag_heading_gate_rad + 3
+// sd of the predicted heading (or has stayed outside it for mag_consistency_s). Otherwise
+// heading coasts on the gyro. When a trusted fit replaces the offset, the heading variance
+// is raised to the initial prior, so the heading is re-learnt from the corrected field. See
+// AttitudeFilterOptions for the rules. The update:
 //     m = R m_body,  psi_m = atan2(m_east, m_north),
 //     nu = wrap(mag_declination_rad - psi_m),  H = [-e_up^T R  0] = [-h^T  0],
 //     R_meas = mag_heading_sd_rad^2.
@@ -34,8 +44,9 @@
 // b <- b + K_b nu), P <- P - K S K^T, symmetrised. The reset Jacobian of the error state
 // (I - [dtheta/2 x]) is taken as I: dtheta is a few milliradians per step.
 // Cost per update (6 error states, fixed-size Eigen, no heap, no sin/cos/sqrt in the
-// rotation-vector exponential below 0.1 rad): about 0.2 µs of CPU without the magnetometer,
-// 0.3 µs with it, on a 2.6 GHz core of a loaded 2-core VM (tests/bench/attitude_bench.cc).
+// rotation-vector exponential below 0.1 rad; the hard-iron sums add ~40 multiply-adds per
+// magnetometer sample and a 3x3 solve ten times a second): see BENCHMARKS.md
+// (tests/bench/attitude_bench.cc).
 #pragma once
 
 #include <Eigen/Core>

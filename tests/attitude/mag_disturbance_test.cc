@@ -108,6 +108,7 @@ Table Evaluate(AttitudeFilterOptions options) {
 std::map<std::string, double AttitudeFilterOptions::*> NumericOptions() {
   return {{"gyro_noise_rps_rthz", &AttitudeFilterOptions::gyro_noise_rps_rthz},
           {"gyro_bias_walk_rps2_rthz", &AttitudeFilterOptions::gyro_bias_walk_rps2_rthz},
+          {"gyro_bias_walk_tilt_rps2_rthz", &AttitudeFilterOptions::gyro_bias_walk_tilt_rps2_rthz},
           {"accel_tilt_sd_rad", &AttitudeFilterOptions::accel_tilt_sd_rad},
           {"accel_reject_mps2", &AttitudeFilterOptions::accel_reject_mps2},
           {"accel_noise_gain", &AttitudeFilterOptions::accel_noise_gain},
@@ -216,6 +217,37 @@ TEST(MagDisturbanceTest, DISABLED_Trace) {
                 total, e.mag_used, e.mag_calibrated, fit.diversity, fit.heading_diversity, fit.residual_uT, e.mag_offset_uT.x(),
                 e.mag_offset_uT.y(), e.mag_offset_uT.z(), samples[i].mag_uT.norm(),
                 (e.body_to_world * e.gyro_bias_rps).z());
+  }
+}
+
+}  // namespace
+}  // namespace localizer::engine
+
+namespace localizer::engine {
+namespace {
+
+// Not a test: 6D inclination RMSE per trial binned by the gyro's rate (where the error is).
+TEST(MagDisturbanceTest, DISABLED_InclinationByRate) {
+  const AttitudeFilterOptions options = OptionsFromEnvironment();
+  for (const std::string& path : testing::BroadTrialPaths()) {
+    const io::ImuRecording* trial = testing::BroadTrial(path);
+    ASSERT_NE(trial, nullptr);
+    auto filter = CreateAttitudeFilter(options);
+    ASSERT_TRUE(filter.ok());
+    const double edges[] = {0.5, 1.0, 2.0, 4.0, 1e9};
+    double sum[5] = {}, count[5] = {};
+    for (size_t i = 0; i < trial->samples.size(); ++i) {
+      ASSERT_TRUE((*filter)->Update(trial->samples[i]).ok());
+      if (!trial->movement[i] || !trial->truth[i].coeffs().allFinite()) continue;
+      const double e = AttitudeErrorOf((*filter)->estimate().body_to_world, trial->truth[i]).inclination_rad / kDeg;
+      int b = 0;
+      while (trial->samples[i].gyro_rps.norm() > edges[b]) ++b;
+      sum[b] += e * e;
+      count[b] += 1;
+    }
+    std::printf("%s", path.substr(path.rfind('/') + 1, 2).c_str());
+    for (int b = 0; b < 5; ++b) std::printf("  <%.1f: %.2f (%.0f%%)", edges[b], std::sqrt(sum[b] / std::max(count[b], 1.0)), 100.0 * count[b] / (count[0] + count[1] + count[2] + count[3] + count[4]));
+    std::printf("\n");
   }
 }
 
