@@ -70,7 +70,8 @@ const char* AttitudeFilterKindName(AttitudeFilterKind kind);
 //   mag_dip_tolerance_rad         0.07        rad           both
 //   mag_calibration_s             20          s             quaternion   memory of the hard-iron fit
 //   mag_calibration_diversity     0.1         1             quaternion   rotation needed to trust it
-//   mag_calibration_residual      0.05        1             quaternion   misfit allowed, of |field|
+//   mag_calibration_residual      0.1         1             quaternion   misfit allowed, of |field|
+//                                                                        (BROAD's noise alone: 0.03)
 //   mag_restart_s                 1.0         s             quaternion   how fast a changed field
 //                                                                        restarts the fit
 //   mag_heading_gate_rad          0.05        rad           quaternion   heading-consistency gate
@@ -133,7 +134,7 @@ struct AttitudeFilterOptions {
   // match the reference, the fit restarts: the field has changed.
   double mag_calibration_s = 20.0;
   double mag_calibration_diversity = 0.1;
-  double mag_calibration_residual = 0.05;
+  double mag_calibration_residual = 0.1;
   double mag_restart_s = 1.0;
   // Consistency with the gyro (quaternion filter): a sample is disturbed when the heading
   // innovation, low-passed over 0.5 s, exceeds mag_heading_gate_rad plus 3 sd of the

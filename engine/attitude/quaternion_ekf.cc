@@ -133,7 +133,10 @@ bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& mag_uT, double t_s, double 
   // (the gyro heading has drifted), and used again.
   innovation_lowpass_rad_ += (dt_s / (kInnovationLowpass_s + dt_s)) * (nu - innovation_lowpass_rad_);
   const double gate = options_.mag_heading_gate_rad + 3.0 * std::sqrt(heading_var);
-  if (std::abs(innovation_lowpass_rad_) > gate) {
+  if (relearning_heading_) {  // after a new offset: the gate waits until the heading has converged
+    relearning_heading_ = std::abs(innovation_lowpass_rad_) > options_.mag_heading_gate_rad;
+    inconsistent_s_ = 0.0;
+  } else if (std::abs(innovation_lowpass_rad_) > gate) {
     inconsistent_s_ += dt_s;
     if (inconsistent_s_ < options_.mag_consistency_s) return false;
   } else {
@@ -186,6 +189,7 @@ void QuaternionEkf::AdoptCalibration(const HardIronFit& fit, double t_s) {
   // in the old heading's frame, restart.
   mag_calibrated_ = true;
   inconsistent_s_ = 0.0;
+  relearning_heading_ = true;
   const Eigen::Vector3d h = UpInBody(q_);
   const double heading_var = h.dot(p_.topLeftCorner<3, 3>() * h);
   const double extra = std::max(0.0, kInitialHeadingSdRad * kInitialHeadingSdRad - heading_var);

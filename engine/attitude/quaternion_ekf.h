@@ -104,6 +104,7 @@ class QuaternionEkf final : public AttitudeFilter {
   bool restart_armed_ = true;
   double innovation_lowpass_rad_ = 0.0;  // heading innovation, low-passed (consistency gate)
   double inconsistent_s_ = 0.0;          // how long it has been outside the gate
+  bool relearning_heading_ = false;      // a new offset: no gate until the heading converges
   RestDetector rest_;
   Eigen::Quaterniond q_ = Eigen::Quaterniond::Identity();
   Eigen::Vector3d bias_rps_ = Eigen::Vector3d::Zero();
