@@ -116,8 +116,8 @@ bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) 
   return true;
 }
 
-bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& mag_uT, double t_s, double dt_s, bool* matches_reference) {
-  const Eigen::Vector3d field_world = q_ * mag_uT;
+bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& field_world, double t_s, double dt_s,
+                              bool* matches_reference) {
   *matches_reference = mag_reference_.Observe(field_world, t_s);
   if (!*matches_reference) return false;
   if (field_world.head<2>().squaredNorm() < 1e-6) return false;  // no horizontal part
@@ -210,7 +210,7 @@ bool QuaternionEkf::MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt
     }
   }
   bool matches_reference = false;
-  const bool used = MagUpdate(mag_uT - mag_offset_uT_, t_s, dt_s, &matches_reference);
+  const bool used = MagUpdate(r * (mag_uT - mag_offset_uT_), t_s, dt_s, &matches_reference);
   // The fraction of recent samples whose norm and dip match the reference (time constant
   // mag_restart_s). Below one half the field has changed (a magnet arrived, the
   // surroundings changed) and what the fit learnt before no longer describes it: the fit

@@ -82,8 +82,9 @@ class QuaternionEkf final : public AttitudeFilter {
   // Applies x <- x (+) dx.
   void Correct(const Eigen::Matrix<double, 6, 1>& dx);
   bool AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s);
-  // matches_reference: whether the field's norm and dip agreed with the reference.
-  bool MagUpdate(const Eigen::Vector3d& mag_uT, double t_s, double dt_s, bool* matches_reference);
+  // The heading update from the corrected field in the world frame; matches_reference:
+  // whether its norm and dip agreed with the reference.
+  bool MagUpdate(const Eigen::Vector3d& field_world_uT, double t_s, double dt_s, bool* matches_reference);
   // Feeds the hard-iron estimator, adopts its fit when trusted, and returns whether the
   // (offset-corrected) sample was used for heading.
   bool MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt_s);
