@@ -6,6 +6,7 @@
 //   magnet_mid    a magnet appears on the sensor 20 s into the movement: 60 µT hard iron in a
 //                 seeded random direction, soft iron within ±2 % (a magnet's own permeability
 //                 is near 1; iron parts would add more, which a hard-iron fit cannot remove);
+//                 magnet_mid_25uT: the same with 25 µT (inside the norm gate part of the time);
 //   magnet_start  a magnet rides on the sensor from the first sample (the initial rest and
 //                 heading see it too): 150 µT (far outside any norm gate) and 25 µT (inside
 //                 it part of the time), soft iron within ±2 %. Before the sensor has turned
@@ -33,14 +34,15 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-enum class Case { kClean, kMagnetMid, kMagnetStartLarge, kMagnetStartSmall, kObjects };
-constexpr Case kCases[] = {Case::kClean, Case::kMagnetMid, Case::kMagnetStartLarge, Case::kMagnetStartSmall,
-                           Case::kObjects};
+enum class Case { kClean, kMagnetMid, kMagnetStartLarge, kMagnetStartSmall, kObjects, kMagnetMidSmall };
+constexpr Case kCases[] = {Case::kClean,           Case::kMagnetMid, Case::kMagnetMidSmall, Case::kMagnetStartLarge,
+                           Case::kMagnetStartSmall, Case::kObjects};
 
 const char* CaseName(Case c) {
   switch (c) {
     case Case::kClean: return "clean";
     case Case::kMagnetMid: return "magnet_mid";
+    case Case::kMagnetMidSmall: return "magnet_mid_25uT";
     case Case::kMagnetStartLarge: return "magnet_start_150uT";
     case Case::kMagnetStartSmall: return "magnet_start_25uT";
     case Case::kObjects: return "objects";
@@ -56,6 +58,9 @@ std::vector<ImuSample> Disturbed(const io::ImuRecording& trial, Case c, uint64_t
       break;
     case Case::kMagnetMid:
       AddBodyFixedMagnet(RandomBodyFixedMagnet(60.0, 0.02, move_s + 20.0, seed), &samples);
+      break;
+    case Case::kMagnetMidSmall:
+      AddBodyFixedMagnet(RandomBodyFixedMagnet(25.0, 0.02, move_s + 20.0, seed + 400), &samples);
       break;
     case Case::kMagnetStartLarge:
       AddBodyFixedMagnet(RandomBodyFixedMagnet(150.0, 0.02, -1e9, seed + 100), &samples);
@@ -77,8 +82,8 @@ std::vector<ImuSample> Disturbed(const io::ImuRecording& trial, Case c, uint64_t
 // from 30 s into the movement, and the 6D inclination of the clean trials, with `options`
 // (use_mag is set here).
 struct Table {
-  double total_deg[5][3] = {};
-  double late_total_deg[5][3] = {};  // scored from 30 s into the movement
+  double total_deg[6][3] = {};
+  double late_total_deg[6][3] = {};  // scored from 30 s into the movement
   double inclination_6d_deg[3] = {};
 };
 
@@ -165,12 +170,12 @@ void Print(const char* title, const Table& table) {
 }
 
 // Bounds: about 1.5x what the defaults reach (and below what the filter without hard-iron
-// estimation and the heading-consistency gate reached: magnet_start from +30 s ~100 deg on
-// trial 02, objects 2.3-4.1 deg). magnet_start is asserted on trial 02 only: trials 16
+// estimation and the heading-consistency gate reached: magnet_mid_25uT 89 and 79 deg on
+// trials 02 and 25, magnet_start from +30 s ~100 deg on trial 02, objects 2.3-4.1 deg). magnet_start is asserted on trial 02 only: trials 16
 // (translation) and 25 (tapping) turn too little for any fit to separate an offset present
 // from the start from the Earth's field (rotation diversity 0.03 and 0.02 against 0.1
 // needed), so the heading they start from stays wrong — printed, not asserted. Trial 25's
-// magnet_mid coasts on the gyro for its last 95 s (too little rotation to calibrate) and
+// magnet_mid cases coast on the gyro for their last 95 s (too little rotation to calibrate) and
 // drifts by the gyro's bias in motion (about 0.05 deg/s there).
 TEST(MagDisturbanceTest, DefaultsSurviveTheDisturbances) {
   const Table table = Evaluate(AttitudeFilterOptions{});
@@ -178,6 +183,7 @@ TEST(MagDisturbanceTest, DefaultsSurviveTheDisturbances) {
   for (int t = 0; t < 3; ++t) {
     EXPECT_LT(table.total_deg[static_cast<int>(Case::kClean)][t], 2.0) << "trial " << t;
     EXPECT_LT(table.total_deg[static_cast<int>(Case::kMagnetMid)][t], t == 2 ? 6.0 : 3.0) << "trial " << t;
+    EXPECT_LT(table.total_deg[static_cast<int>(Case::kMagnetMidSmall)][t], t == 2 ? 7.0 : 3.0) << "trial " << t;
     EXPECT_LT(table.total_deg[static_cast<int>(Case::kObjects)][t], 2.7) << "trial " << t;
   }
   EXPECT_LT(table.late_total_deg[static_cast<int>(Case::kMagnetStartLarge)][0], 2.5);
