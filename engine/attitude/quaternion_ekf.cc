@@ -119,7 +119,10 @@ bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) 
 bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& field_world, double t_s, double dt_s,
                               bool* matches_reference) {
   *matches_reference = mag_reference_.Observe(field_world, t_s);
-  if (!*matches_reference) return false;
+  if (!*matches_reference) {
+    inconsistent_s_ = 0.0;  // "steadily" below means without a break
+    return false;
+  }
   if (field_world.head<2>().squaredNorm() < 1e-6) return false;  // no horizontal part
   const double nu = WrapAngle(options_.mag_declination_rad - AzimuthEastOfNorth(field_world));
   // H = [-h^T 0]: P H^T = -P.leftCols(3) h, S = H P H^T + r.
