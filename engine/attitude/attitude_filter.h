@@ -11,7 +11,10 @@
 // is relative to the heading at the first sample (yaw = 0 there, its std starting at 0 and
 // growing with the integrated gyro noise). With use_mag, yaw is measured against magnetic
 // North rotated by mag_declination_rad (default 0: the world's North IS magnetic North; set
-// the local declination, east positive, to get true North).
+// the local declination, east positive, to get true North). The quaternion filter also
+// estimates a body-fixed hard-iron offset online (a magnet riding on the sensor; it needs the
+// sensor to turn), and uses the field only while its norm, dip and heading agree with the
+// reference and the gyro; otherwise heading coasts on the gyro (options below).
 //
 // Implementations (both final, non-copyable; pick with AttitudeFilterOptions::kind):
 //   kQuaternion (default) — multiplicative EKF on the unit quaternion with gyro-bias states,
