@@ -39,8 +39,7 @@ HardIronFit HardIronEstimator::Solve(const Eigen::Matrix3d& body_to_world) const
     const Eigen::Vector3d u = body_to_world.transpose() * (across / across_norm);
     fit.heading_diversity = 1.0 / std::max(u.dot(a_inv * u), 1.0);
   }
-  fit.trusted = fit.diversity >= min_diversity_ &&
-                fit.residual_uT <= AllowedResidual(fit);
+  fit.trusted = fit.diversity >= min_diversity_ && fit.residual_uT <= AllowedResidual(fit);
   return fit;
 }
 

@@ -36,13 +36,13 @@
 namespace localizer::engine {
 
 struct HardIronFit {
-  Eigen::Vector3d offset_uT = Eigen::Vector3d::Zero();      // b, body frame
+  Eigen::Vector3d offset_uT = Eigen::Vector3d::Zero();       // b, body frame
   Eigen::Vector3d field_world_uT = Eigen::Vector3d::Zero();  // m_w, world frame (the filter's)
   double diversity = 0.0;                                    // smallest eigenvalue of A, [0, 1]
   // 1 / (u^T A^-1 u), u the heading-relevant axis at the current attitude (diagnostics: it
   // can be large at one attitude and small at the next).
   double heading_diversity = 0.0;
-  double residual_uT = 0.0;                                  // RMS misfit per sample
+  double residual_uT = 0.0;  // RMS misfit per sample
   bool trusted = false;
 };
 

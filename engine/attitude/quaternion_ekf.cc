@@ -116,8 +116,7 @@ bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) 
   return true;
 }
 
-bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& field_world, double t_s, double dt_s,
-                              bool* matches_reference) {
+bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& field_world, double t_s, double dt_s, bool* matches_reference) {
   *matches_reference = mag_reference_.Observe(field_world, t_s);
   if (!*matches_reference) {
     inconsistent_s_ = 0.0;  // "steadily" below means without a break

@@ -96,7 +96,8 @@ class QuaternionEkf final : public AttitudeFilter {
   HardIronEstimator hard_iron_;
   HardIronFit last_fit_;
   Eigen::Vector3d mag_offset_uT_ = Eigen::Vector3d::Zero();  // subtracted from each reading
-  bool mag_calibrated_ = false;  // a trusted fit has been adopted since the start
+  // An offset has been found and adopted since the start (until then the offset stays 0).
+  bool mag_calibrated_ = false;
   double next_solve_t_s_ = 0.0;
   static constexpr double kNoCandidate = -1e300;
   Eigen::Vector3d candidate_uT_ = Eigen::Vector3d::Zero();  // a new offset being confirmed

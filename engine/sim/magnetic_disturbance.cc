@@ -18,8 +18,7 @@ Eigen::Vector3d RandomDirection(std::mt19937_64& engine) {
 
 }  // namespace
 
-BodyFixedMagnet RandomBodyFixedMagnet(double offset_norm_uT, double soft_iron_fraction, double start_s,
-                                      uint64_t seed) {
+BodyFixedMagnet RandomBodyFixedMagnet(double offset_norm_uT, double soft_iron_fraction, double start_s, uint64_t seed) {
   std::mt19937_64 engine(seed);
   BodyFixedMagnet magnet;
   magnet.offset_uT = offset_norm_uT * RandomDirection(engine);

@@ -26,7 +26,7 @@
 namespace localizer::engine {
 
 struct BodyFixedMagnet {
-  Eigen::Vector3d offset_uT = Eigen::Vector3d::Zero();       // hard iron, body frame
+  Eigen::Vector3d offset_uT = Eigen::Vector3d::Zero();      // hard iron, body frame
   Eigen::Matrix3d soft_iron = Eigen::Matrix3d::Identity();  // applied before the offset
   double start_s = 0.0;                                     // from this sample time on
 };
@@ -39,8 +39,7 @@ struct PassingObject {
 
 // A magnet of `offset_norm_uT` in a direction drawn uniformly on the sphere, with a soft-iron
 // matrix I + E, E symmetric with entries uniform in [-soft_iron_fraction, soft_iron_fraction].
-BodyFixedMagnet RandomBodyFixedMagnet(double offset_norm_uT, double soft_iron_fraction, double start_s,
-                                      uint64_t seed);
+BodyFixedMagnet RandomBodyFixedMagnet(double offset_norm_uT, double soft_iron_fraction, double start_s, uint64_t seed);
 
 // An object whose field at the closest pass has norm `peak_norm_uT`, direction uniform on the
 // sphere.

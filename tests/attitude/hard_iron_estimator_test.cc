@@ -38,7 +38,8 @@ HardIronFit FitOver(const AttitudeTrajectory& truth, double seconds, const Eigen
     const double t_s = k / kRateHz;
     r = truth.At(t_s).toRotationMatrix();
     const Eigen::Vector3d field = t_s > 0.5 * seconds ? kEarthField_uT + disturbance_uT : kEarthField_uT;
-    const Eigen::Vector3d m = r.transpose() * field + kOffset_uT + Eigen::Vector3d(noise(engine), noise(engine), noise(engine));
+    const Eigen::Vector3d m =
+        r.transpose() * field + kOffset_uT + Eigen::Vector3d(noise(engine), noise(engine), noise(engine));
     estimator.Add(r, m, 1.0 / kRateHz);
   }
   return estimator.Solve(r);

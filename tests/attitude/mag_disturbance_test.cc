@@ -35,17 +35,24 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 
 enum class Case { kClean, kMagnetMid, kMagnetStartLarge, kMagnetStartSmall, kObjects, kMagnetMidSmall };
-constexpr Case kCases[] = {Case::kClean,           Case::kMagnetMid, Case::kMagnetMidSmall, Case::kMagnetStartLarge,
-                           Case::kMagnetStartSmall, Case::kObjects};
+constexpr Case kCases[] = {
+    Case::kClean,  Case::kMagnetMid, Case::kMagnetMidSmall, Case::kMagnetStartLarge, Case::kMagnetStartSmall,
+    Case::kObjects};
 
 const char* CaseName(Case c) {
   switch (c) {
-    case Case::kClean: return "clean";
-    case Case::kMagnetMid: return "magnet_mid";
-    case Case::kMagnetMidSmall: return "magnet_mid_25uT";
-    case Case::kMagnetStartLarge: return "magnet_start_150uT";
-    case Case::kMagnetStartSmall: return "magnet_start_25uT";
-    case Case::kObjects: return "objects";
+    case Case::kClean:
+      return "clean";
+    case Case::kMagnetMid:
+      return "magnet_mid";
+    case Case::kMagnetMidSmall:
+      return "magnet_mid_25uT";
+    case Case::kMagnetStartLarge:
+      return "magnet_start_150uT";
+    case Case::kMagnetStartSmall:
+      return "magnet_start_25uT";
+    case Case::kObjects:
+      return "objects";
   }
   return "?";
 }
@@ -100,7 +107,8 @@ Table Evaluate(AttitudeFilterOptions options, uint64_t seed_offset = 0) {
     options.use_mag = true;
     io::ImuRecording late = *trial;
     const double late_s = testing::FirstMovement_s(*trial) + 30.0;
-    for (size_t i = 0; i < late.samples.size(); ++i) late.movement[i] = late.movement[i] && late.samples[i].t_s >= late_s;
+    for (size_t i = 0; i < late.samples.size(); ++i)
+      late.movement[i] = late.movement[i] && late.samples[i].t_s >= late_s;
     for (const Case c : kCases) {
       const std::vector<ImuSample> samples = Disturbed(*trial, c, 1000 * (t + 1) + seed_offset);
       table.total_deg[static_cast<int>(c)][t] = testing::RunTrial(*trial, samples, options).score.total_rmse_rad / kDeg;
@@ -155,7 +163,8 @@ AttitudeFilterOptions OptionsFromEnvironment() {
 }
 
 void PrintRow(const std::string& name, const double* row) {
-  std::printf("%-30s %7.2f %7.2f %7.2f %7.2f\n", name.c_str(), row[0], row[1], row[2], (row[0] + row[1] + row[2]) / 3.0);
+  std::printf("%-30s %7.2f %7.2f %7.2f %7.2f\n", name.c_str(), row[0], row[1], row[2],
+              (row[0] + row[1] + row[2]) / 3.0);
 }
 
 void Print(const char* title, const Table& table) {
@@ -171,8 +180,8 @@ void Print(const char* title, const Table& table) {
 
 // Bounds: about 1.5x what the defaults reach (and below what the filter without hard-iron
 // estimation and the heading-consistency gate reached: magnet_mid_25uT 89 and 79 deg on
-// trials 02 and 25, magnet_start from +30 s ~100 deg on trial 02, objects 2.3-4.1 deg). magnet_start is asserted on trial 02 only: trials 16
-// (translation) and 25 (tapping) turn too little for any fit to separate an offset present
+// trials 02 and 25, magnet_start from +30 s ~100 deg on trial 02, objects 2.3-4.1 deg). magnet_start is asserted on
+// trial 02 only: trials 16 (translation) and 25 (tapping) turn too little for any fit to separate an offset present
 // from the start from the Earth's field (rotation diversity 0.03 and 0.02 against 0.1
 // needed), so the heading they start from stays wrong — printed, not asserted. Trial 25's
 // magnet_mid cases coast on the gyro for their last 95 s (too little rotation to calibrate) and
@@ -200,7 +209,7 @@ TEST(MagDisturbanceTest, DISABLED_Study) {
         Evaluate(OptionsFromEnvironment(), seed != nullptr ? std::strtoull(seed, nullptr, 10) : 0));
 }
 
-// Not a test: a trace of one trial and case (ATT_TRIAL = 0..2, ATT_CASE = 0..4) every 2 s,
+// Not a test: a trace of one trial and case (ATT_TRIAL = 0..2, ATT_CASE = 0..5 in kCases order) every 2 s,
 // for looking at what the calibration does. Run with --gtest_also_run_disabled_tests.
 TEST(MagDisturbanceTest, DISABLED_Trace) {
   const int t = std::getenv("ATT_TRIAL") ? std::atoi(std::getenv("ATT_TRIAL")) : 0;
@@ -224,10 +233,11 @@ TEST(MagDisturbanceTest, DISABLED_Trace) {
       if (d.w() < 0.0) d.coeffs() = -d.coeffs();
       total = std::copysign(AttitudeErrorOf(e.body_to_world, trial->truth[i]).total_rad / kDeg, d.z());
     }
-    std::printf("t %6.1f err %6.2f used %d cal %d div %.3f hdiv %.3f res %5.2f off %6.1f %6.1f %6.1f |m| %5.1f bz %.5f\n", samples[i].t_s,
-                total, e.mag_used, e.mag_calibrated, fit.diversity, fit.heading_diversity, fit.residual_uT, e.mag_offset_uT.x(),
-                e.mag_offset_uT.y(), e.mag_offset_uT.z(), samples[i].mag_uT.norm(),
-                (e.body_to_world * e.gyro_bias_rps).z());
+    std::printf(
+        "t %6.1f err %6.2f used %d cal %d div %.3f hdiv %.3f res %5.2f off %6.1f %6.1f %6.1f |m| %5.1f bz %.5f\n",
+        samples[i].t_s, total, e.mag_used, e.mag_calibrated, fit.diversity, fit.heading_diversity, fit.residual_uT,
+        e.mag_offset_uT.x(), e.mag_offset_uT.y(), e.mag_offset_uT.z(), samples[i].mag_uT.norm(),
+        (e.body_to_world * e.gyro_bias_rps).z());
   }
 }
 
@@ -257,7 +267,9 @@ TEST(MagDisturbanceTest, DISABLED_InclinationByRate) {
       count[b] += 1;
     }
     std::printf("%s", path.substr(path.rfind('/') + 1, 2).c_str());
-    for (int b = 0; b < 5; ++b) std::printf("  <%.1f: %.2f (%.0f%%)", edges[b], std::sqrt(sum[b] / std::max(count[b], 1.0)), 100.0 * count[b] / (count[0] + count[1] + count[2] + count[3] + count[4]));
+    for (int b = 0; b < 5; ++b)
+      std::printf("  <%.1f: %.2f (%.0f%%)", edges[b], std::sqrt(sum[b] / std::max(count[b], 1.0)),
+                  100.0 * count[b] / (count[0] + count[1] + count[2] + count[3] + count[4]));
     std::printf("\n");
   }
 }
