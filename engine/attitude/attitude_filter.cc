@@ -53,6 +53,7 @@ Status AttitudeFilterOptions::Validate() const {
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("gravity_mps2", gravity_mps2));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("gyro_noise_rps_rthz", gyro_noise_rps_rthz));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("gyro_bias_walk_rps2_rthz", gyro_bias_walk_rps2_rthz));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("gyro_bias_walk_tilt_rps2_rthz", gyro_bias_walk_tilt_rps2_rthz));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("initial_bias_sd_rps", initial_bias_sd_rps));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("accel_tilt_sd_rad", accel_tilt_sd_rad));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("accel_reject_mps2", accel_reject_mps2));
@@ -66,6 +67,12 @@ Status AttitudeFilterOptions::Validate() const {
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("mag_reference_s", mag_reference_s));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_norm_tolerance", mag_norm_tolerance));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_dip_tolerance_rad", mag_dip_tolerance_rad));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_calibration_s", mag_calibration_s));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_calibration_diversity", mag_calibration_diversity));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_calibration_residual", mag_calibration_residual));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_restart_s", mag_restart_s));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_heading_gate_rad", mag_heading_gate_rad));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("mag_consistency_s", mag_consistency_s));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("rest_gyro_rps", rest_gyro_rps));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("rest_accel_mps2", rest_accel_mps2));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("rest_min_s", rest_min_s));

@@ -11,7 +11,10 @@
 // is relative to the heading at the first sample (yaw = 0 there, its std starting at 0 and
 // growing with the integrated gyro noise). With use_mag, yaw is measured against magnetic
 // North rotated by mag_declination_rad (default 0: the world's North IS magnetic North; set
-// the local declination, east positive, to get true North).
+// the local declination, east positive, to get true North). The quaternion filter also
+// estimates a body-fixed hard-iron offset online (a magnet riding on the sensor; it needs the
+// sensor to turn), and uses the field only while its norm, dip and heading agree with the
+// reference and the gyro; otherwise heading coasts on the gyro (options below).
 //
 // Implementations (both final, non-copyable; pick with AttitudeFilterOptions::kind):
 //   kQuaternion (default) — multiplicative EKF on the unit quaternion with gyro-bias states,
@@ -43,23 +46,40 @@ enum class AttitudeFilterKind { kQuaternion, kEuler };
 StatusOr<AttitudeFilterKind> ParseAttitudeFilterKind(const std::string& name);
 const char* AttitudeFilterKindName(AttitudeFilterKind kind);
 
-// Every default is the one parameter set validated on the BROAD trials (tests/attitude).
-//   field                         default     unit          used by
+// Every default is the one parameter set validated on the BROAD trials and on the magnetic
+// disturbances added to them (tests/attitude/broad_test, mag_disturbance_test; ACCURACY.md
+// has the sensitivity of each new default to doubling and halving).
+//   field                         default     unit          used by      why this value
 //   kind                          kQuaternion               -
 //   use_mag                       false                     both
 //   gravity_mps2                  9.81        m/s^2         both
-//   gyro_noise_rps_rthz           0.003       rad/s/√Hz     both (process noise)
-//   gyro_bias_walk_rps2_rthz      2e-5        rad/s^2/√Hz   quaternion
+//   gyro_noise_rps_rthz           0.003       rad/s/√Hz     both         process noise
+//   gyro_bias_walk_rps2_rthz      2e-5        rad/s^2/√Hz   quaternion   the bias about Up:
+//                                                                        slow, heading coasts on it
+//   gyro_bias_walk_tilt_rps2_rthz 1e-4        rad/s^2/√Hz   quaternion   the bias about the level
+//                                                                        axes: the accelerometer sees
+//                                                                        it, so it follows the bias
+//                                                                        in motion (6D 0.51 -> 0.46)
 //   initial_bias_sd_rps           0.01        rad/s         quaternion
-//   accel_tilt_sd_rad             0.2         rad           both (per sample)
+//   accel_tilt_sd_rad             0.2         rad           both         per sample
 //   accel_reject_mps2             1.5         m/s^2         both
 //   accel_noise_gain              4.0         1             both
 //   accel_lowpass_s               2.0         s             quaternion
-//   mag_heading_sd_rad            0.2         rad           both (per sample)
+//   mag_heading_sd_rad            0.2         rad           both         per sample
 //   mag_declination_rad           0           rad           both
 //   mag_reference_s               1.0         s             both
-//   mag_norm_tolerance            0.08        1             both
+//   mag_norm_tolerance            0.08        1             both         also: the smallest offset
+//                                                                        change acted on
 //   mag_dip_tolerance_rad         0.07        rad           both
+//   mag_calibration_s             20          s             quaternion   memory of the hard-iron fit
+//   mag_calibration_diversity     0.1         1             quaternion   rotation needed to trust it
+//   mag_calibration_residual      0.1         1             quaternion   misfit allowed, of |field|
+//                                                                        (BROAD's noise alone: 0.03)
+//   mag_restart_s                 1.0         s             quaternion   how fast a changed field
+//                                                                        restarts the fit
+//   mag_heading_gate_rad          0.05        rad           quaternion   heading-consistency gate
+//   mag_consistency_s             10          s             quaternion   a steady field that
+//                                                                        disagrees is believed after
 //   rest_gyro_rps                 0.03        rad/s         quaternion
 //   rest_accel_mps2               0.25        m/s^2         quaternion
 //   rest_min_s                    0.3         s             quaternion
@@ -71,8 +91,13 @@ struct AttitudeFilterOptions {
   double gravity_mps2 = 9.81;  // |g|: the accelerometer's norm at rest
   // Gyro white noise as a density: the attitude random walk per sqrt(second).
   double gyro_noise_rps_rthz = 0.003;
-  // Gyro bias random walk (quaternion filter's bias states).
+  // Gyro bias random walk (quaternion filter's bias states), split by what observes it: the
+  // component about the world's Up (only the magnetometer or rest sees it; while the field
+  // is untrusted heading coasts on it, so it may change only slowly) and the components
+  // about the level axes (the accelerometer sees them: a faster walk lets the bias measured
+  // at rest move to the bias in motion, which differs by g-sensitivity and scale errors).
   double gyro_bias_walk_rps2_rthz = 2e-5;
+  double gyro_bias_walk_tilt_rps2_rthz = 1e-4;
   double initial_bias_sd_rps = 0.01;  // prior std of each bias component (bias starts at 0)
 
   // Accelerometer (tilt) update: the direction of the specific force is taken as "up" with
@@ -99,6 +124,29 @@ struct AttitudeFilterOptions {
   double mag_reference_s = 1.0;
   double mag_norm_tolerance = 0.08;
   double mag_dip_tolerance_rad = 0.07;
+  // Hard-iron calibration (quaternion filter; engine/attitude/hard_iron_estimator.h): a
+  // body-fixed offset (a magnet riding on the sensor) is fitted over the recent past (time
+  // constant mag_calibration_s). The fit is trusted when the rotation diversity (the
+  // smallest eigenvalue of the information about the offset per sample, 0..1) is at least
+  // mag_calibration_diversity and the RMS misfit at most mag_calibration_residual of the
+  // field's norm plus 0.01 of the offset's. A trusted fit sets the norm and dip reference
+  // (so a field that changed steadily is re-learnt); it replaces the offset in use when they
+  // differ by more than mag_norm_tolerance of the field, the one in use no longer explains
+  // the window and the fits have agreed for 2 s; the heading is then re-learnt from the
+  // corrected field. When fewer than half the recent samples (time constant mag_restart_s)
+  // match the reference, the fit restarts: the field has changed.
+  double mag_calibration_s = 20.0;
+  double mag_calibration_diversity = 0.1;
+  double mag_calibration_residual = 0.1;
+  double mag_restart_s = 1.0;
+  // Consistency with the gyro (quaternion filter): a sample is disturbed when the heading
+  // innovation, low-passed over 0.5 s, exceeds mag_heading_gate_rad plus 3 sd of the
+  // predicted heading (a field bending near iron turns faster than the gyro says), unless it
+  // has done so for mag_consistency_s with its norm and dip at the reference (then the
+  // gyro's heading has drifted and the field is believed again). While the field is
+  // untrusted, heading coasts on the gyro and its bias.
+  double mag_heading_gate_rad = 0.05;
+  double mag_consistency_s = 10.0;
 
   // Rest detection (quaternion filter): when for rest_min_s every sample has
   // |gyro - bias| < rest_gyro_rps and its accelerometer within rest_accel_mps2 of both g and
@@ -131,6 +179,11 @@ struct AttitudeEstimate {
   bool accel_used = false;  // false: no update (motion) or not initialised
   bool mag_used = false;    // false: no mag, use_mag off, still learning, or disturbed
   bool at_rest = false;     // rest detected (bias refined)
+  // Magnetometer calibration (quaternion filter with use_mag; false and zero otherwise):
+  // whether a hard-iron offset has been found and is subtracted from each reading, and that
+  // offset (engine/attitude/hard_iron_estimator.h).
+  bool mag_calibrated = false;
+  Eigen::Vector3d mag_offset_uT = Eigen::Vector3d::Zero();
 };
 
 class AttitudeFilter {

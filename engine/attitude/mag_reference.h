@@ -49,6 +49,17 @@ class MagReference {
     return cos_difference >= cos_tolerance_;
   }
 
+  // Replaces the reference (ends learning): the field of a trusted hard-iron fit
+  // (hard_iron_estimator.h), whose norm and dip describe the field with the offset removed.
+  void Set(double norm_uT, double dip_rad) {
+    learnt_ = true;
+    count_ = 1;
+    norm_sum_ = norm_uT;
+    dip_sum_ = dip_rad;
+    cos_dip_ref_ = std::cos(dip_rad);
+    sin_dip_ref_ = std::sin(dip_rad);
+  }
+
   bool learnt() const { return learnt_; }
   double norm_ref_uT() const { return count_ > 0 ? norm_sum_ / static_cast<double>(count_) : 0.0; }
   double dip_ref_rad() const { return count_ > 0 ? dip_sum_ / static_cast<double>(count_) : 0.0; }

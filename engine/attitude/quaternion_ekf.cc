@@ -1,5 +1,6 @@
 #include "engine/attitude/quaternion_ekf.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -12,6 +13,13 @@ namespace {
 // and of the heading taken from one magnetometer sample.
 constexpr double kInitialTiltSdRad = 0.1;
 constexpr double kInitialHeadingSdRad = 0.2;
+// Time constant of the low-passed heading innovation that the consistency gate tests: long
+// enough to average the azimuth's noise (degrees per sample), short against a disturbance.
+constexpr double kInnovationLowpass_s = 0.5;
+// How long the fits must agree on a new offset before it replaces the one in use.
+constexpr double kOffsetConfirm_s = 2.0;
+// How often the hard-iron fit is solved: its sums change little in a tenth of a second.
+constexpr double kSolveEvery_s = 0.1;
 
 // Third row of R(q): R^T e_up, the world's Up seen in the body frame.
 Eigen::Vector3d UpInBody(const Eigen::Quaterniond& q) {
@@ -24,6 +32,7 @@ Eigen::Vector3d UpInBody(const Eigen::Quaterniond& q) {
 QuaternionEkf::QuaternionEkf(const AttitudeFilterOptions& options)
     : options_(options),
       mag_reference_(options.mag_reference_s, options.mag_norm_tolerance, options.mag_dip_tolerance_rad),
+      hard_iron_(options.mag_calibration_s, options.mag_calibration_diversity, options.mag_calibration_residual),
       rest_(options.rest_gyro_rps, options.rest_accel_mps2, options.rest_min_s, options.gravity_mps2) {}
 
 void QuaternionEkf::Initialise(const ImuSample& sample) {
@@ -51,6 +60,7 @@ void QuaternionEkf::Initialise(const ImuSample& sample) {
   mag_used_ = mag;
   at_rest_ = false;
   if (mag) (void)mag_reference_.Observe(q_ * sample.mag_uT, sample.t_s);
+  next_solve_t_s_ = sample.t_s + kSolveEvery_s;
 }
 
 void QuaternionEkf::Propagate(const Eigen::Vector3d& rate_rps, double dt_s) {
@@ -69,8 +79,12 @@ void QuaternionEkf::Propagate(const Eigen::Vector3d& rate_rps, double dt_s) {
   p_.topLeftCorner<3, 3>() = new_ptt;
   p_.topRightCorner<3, 3>() = new_ptb;
   p_.bottomLeftCorner<3, 3>() = new_ptb.transpose();
-  p_.bottomRightCorner<3, 3>().diagonal().array() +=
-      options_.gyro_bias_walk_rps2_rthz * options_.gyro_bias_walk_rps2_rthz * dt_s;
+  // Bias walk: sigma_tilt^2 dt (I - h h^T) + sigma_up^2 dt h h^T, h the world's Up in the body.
+  const Eigen::Vector3d h = UpInBody(q_);
+  const double up_var = options_.gyro_bias_walk_rps2_rthz * options_.gyro_bias_walk_rps2_rthz * dt_s;
+  const double tilt_var = options_.gyro_bias_walk_tilt_rps2_rthz * options_.gyro_bias_walk_tilt_rps2_rthz * dt_s;
+  p_.bottomRightCorner<3, 3>() += (up_var - tilt_var) * h * h.transpose();
+  p_.bottomRightCorner<3, 3>().diagonal().array() += tilt_var;
 }
 
 void QuaternionEkf::Correct(const Eigen::Matrix<double, 6, 1>& dx) {
@@ -102,15 +116,35 @@ bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) 
   return true;
 }
 
-bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& mag_uT, double t_s) {
-  const Eigen::Vector3d field_world = q_ * mag_uT;
-  if (!mag_reference_.Observe(field_world, t_s)) return false;
+bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& field_world, double t_s, double dt_s, bool* matches_reference) {
+  *matches_reference = mag_reference_.Observe(field_world, t_s);
+  if (!*matches_reference) {
+    inconsistent_s_ = 0.0;  // "steadily" below means without a break
+    return false;
+  }
   if (field_world.head<2>().squaredNorm() < 1e-6) return false;  // no horizontal part
   const double nu = WrapAngle(options_.mag_declination_rad - AzimuthEastOfNorth(field_world));
   // H = [-h^T 0]: P H^T = -P.leftCols(3) h, S = H P H^T + r.
   const Eigen::Vector3d h = UpInBody(q_);
   const Eigen::Matrix<double, 6, 1> pht = -(p_.leftCols<3>() * h);
-  const double s = -h.dot(pht.head<3>()) + options_.mag_heading_sd_rad * options_.mag_heading_sd_rad;
+  const double heading_var = -h.dot(pht.head<3>());
+  // Consistency with the gyro: the innovation, low-passed (one sample's azimuth carries
+  // degrees of noise), must stay within the gate plus 3 sd of the predicted heading; a field
+  // that bends faster than the gyro turns is disturbed. A field that disagrees steadily
+  // for mag_consistency_s while its norm and dip stay at the reference is taken as right
+  // (the gyro heading has drifted), and used again.
+  innovation_lowpass_rad_ += (dt_s / (kInnovationLowpass_s + dt_s)) * (nu - innovation_lowpass_rad_);
+  const double gate = options_.mag_heading_gate_rad + 3.0 * std::sqrt(heading_var);
+  if (relearning_heading_) {  // after a new offset: the gate waits until the heading has converged
+    relearning_heading_ = std::abs(innovation_lowpass_rad_) > options_.mag_heading_gate_rad;
+    inconsistent_s_ = 0.0;
+  } else if (std::abs(innovation_lowpass_rad_) > gate) {
+    inconsistent_s_ += dt_s;
+    if (inconsistent_s_ < options_.mag_consistency_s) return false;
+  } else {
+    inconsistent_s_ = 0.0;
+  }
+  const double s = heading_var + options_.mag_heading_sd_rad * options_.mag_heading_sd_rad;
   // The Kalman gain with its attitude and bias parts projected on the world's Up axis (h in the
   // body), so the field can only turn the estimate about Up, never tilt it — even through
   // tilt-heading correlations in P, which a large disturbed innovation would otherwise
@@ -122,6 +156,75 @@ bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& mag_uT, double t_s) {
   Correct(k * nu);
   p_ += s * k * k.transpose() - k * pht.transpose() - pht * k.transpose();
   return true;
+}
+
+void QuaternionEkf::AdoptCalibration(const HardIronFit& fit, double t_s) {
+  // A new offset (beyond the norm gate's tolerance from the one in use) only when the one in
+  // use no longer explains the window and the fits have agreed on the new one for
+  // kOffsetConfirm_s: a fit with little rotation can trade offset for a passing disturbance
+  // for a moment. Before any change the offset stays 0: a clean sensor's fit wanders by
+  // tenths of a µT, a degree of heading.
+  const double tolerance_uT = options_.mag_norm_tolerance * fit.field_world_uT.norm();
+  const bool changed = (fit.offset_uT - mag_offset_uT_).norm() > tolerance_uT;
+  bool keep = !changed && !mag_calibrated_;
+  if (changed) {
+    if (hard_iron_.ResidualWith(mag_offset_uT_) <= hard_iron_.AllowedResidual(fit)) {
+      keep = true;
+      candidate_since_t_s_ = kNoCandidate;
+    } else if (candidate_since_t_s_ == kNoCandidate || (fit.offset_uT - candidate_uT_).norm() > tolerance_uT) {
+      keep = true;
+      candidate_uT_ = fit.offset_uT;
+      candidate_since_t_s_ = t_s;
+    } else {
+      keep = t_s - candidate_since_t_s_ < kOffsetConfirm_s;
+    }
+  }
+  if (!keep) mag_offset_uT_ = fit.offset_uT;
+  // The reference: the world field that best suits the offset in use.
+  const Eigen::Vector3d m = keep ? hard_iron_.FieldWith(mag_offset_uT_) : fit.field_world_uT;
+  mag_reference_.Set(m.norm(), std::atan2(-m.z(), m.head<2>().norm()));
+  if (keep || !changed) return;
+  candidate_since_t_s_ = kNoCandidate;
+  // The first offset, or the first after the field changed: the heading so far came from a
+  // field that carried another offset, or coasted on the gyro, so it is re-learnt from the
+  // corrected field (its variance about Up raised to the initial prior), and the sums, taken
+  // in the old heading's frame, restart.
+  mag_calibrated_ = true;
+  inconsistent_s_ = 0.0;
+  relearning_heading_ = true;
+  const Eigen::Vector3d h = UpInBody(q_);
+  const double heading_var = h.dot(p_.topLeftCorner<3, 3>() * h);
+  const double extra = std::max(0.0, kInitialHeadingSdRad * kInitialHeadingSdRad - heading_var);
+  p_.topLeftCorner<3, 3>() += extra * h * h.transpose();
+  hard_iron_.Reset();
+}
+
+bool QuaternionEkf::MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt_s) {
+  const Eigen::Matrix3d r = q_.toRotationMatrix();
+  hard_iron_.Add(r, mag_uT, dt_s);
+  if (t_s >= next_solve_t_s_) {
+    next_solve_t_s_ = t_s + kSolveEvery_s;
+    last_fit_ = hard_iron_.Solve(r);
+    if (last_fit_.trusted) {
+      AdoptCalibration(last_fit_, t_s);
+    } else {
+      candidate_since_t_s_ = kNoCandidate;
+    }
+  }
+  bool matches_reference = false;
+  const bool used = MagUpdate(r * (mag_uT - mag_offset_uT_), t_s, dt_s, &matches_reference);
+  // The fraction of recent samples whose norm and dip match the reference (time constant
+  // mag_restart_s). Below one half the field has changed (a magnet arrived, the
+  // surroundings changed) and what the fit learnt before no longer describes it: the fit
+  // restarts, once, and again only after the field has matched again (above 0.9).
+  match_fraction_ += (dt_s / (options_.mag_restart_s + dt_s)) * ((matches_reference ? 1.0 : 0.0) - match_fraction_);
+  if (restart_armed_ && match_fraction_ < 0.5) {
+    hard_iron_.Reset();
+    restart_armed_ = false;
+  } else if (!restart_armed_ && match_fraction_ > 0.9) {
+    restart_armed_ = true;
+  }
+  return used;
 }
 
 void QuaternionEkf::RestUpdate(const Eigen::Vector3d& gyro_rps) {
@@ -147,7 +250,7 @@ Status QuaternionEkf::Update(const ImuSample& sample) {
   at_rest_ = rest_.Update(rate_rps, sample.accel_mps2, dt_s);
   if (at_rest_) RestUpdate(sample.gyro_rps);
   accel_used_ = AccelUpdate(sample.accel_mps2, dt_s);
-  mag_used_ = options_.use_mag && sample.mag_uT.allFinite() && MagUpdate(sample.mag_uT, sample.t_s);
+  mag_used_ = options_.use_mag && sample.mag_uT.allFinite() && MagStep(sample.mag_uT, sample.t_s, dt_s);
   p_ = 0.5 * (p_ + p_.transpose()).eval();  // once per sample: rounding only, not per update
   return Status::Ok();
 }
@@ -167,6 +270,8 @@ AttitudeEstimate QuaternionEkf::estimate() const {
   e.accel_used = accel_used_;
   e.mag_used = mag_used_;
   e.at_rest = at_rest_;
+  e.mag_calibrated = mag_calibrated_;
+  e.mag_offset_uT = mag_offset_uT_;
   return e;
 }
 

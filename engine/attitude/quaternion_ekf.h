@@ -7,17 +7,27 @@
 // Propagation over dt = t_k - t_{k-1}, with the current gyro reading omega_m:
 //     omega = omega_m - b,   q <- q (x) exp(omega dt / 2)  (exact for a constant rate),
 //     F = [A  -I dt; 0  I],  A = exp(-[omega x] dt) = R(omega dt)^T,
-//     P <- F P F^T + diag(sigma_g^2 dt I, sigma_b^2 dt I)
-// (sigma_g = gyro_noise_rps_rthz, sigma_b = gyro_bias_walk_rps2_rthz), written block-wise
-// (no 6x6 product).
+//     P <- F P F^T + diag(sigma_g^2 dt I, Q_b),
+//     Q_b = sigma_tilt^2 dt (I - h h^T) + sigma_up^2 dt h h^T      (h = R^T e_up)
+// (sigma_g = gyro_noise_rps_rthz, sigma_up = gyro_bias_walk_rps2_rthz, sigma_tilt =
+// gyro_bias_walk_tilt_rps2_rthz: the bias about the level axes, which the accelerometer
+// observes, may move faster than the one about Up, on which heading coasts), written
+// block-wise (no 6x6 product).
 //
 // Accelerometer (tilt) update, when ||f| - g| <= accel_reject_mps2:
 //     z = f / |f|,  h = R^T e_up (the third row of R),  H = [[h x]  0],
 //     R_meas = sigma_a^2 I,  sigma_a = accel_tilt_sd_rad (1 + accel_noise_gain ||f| - g| / g).
 // Only tilt is observed: a body rotation about h leaves h unchanged, so heading is untouched.
 //
-// Magnetometer (heading-only) update, when use_mag, the sample has a finite field and
-// MagReference (mag_reference.h) does not flag it as disturbed:
+// Magnetometer. Each reading first feeds the hard-iron fit (hard_iron_estimator.h, solved
+// ten times a second); the offset in use (0 until a fit finds one) is subtracted, and the
+// corrected field is used for heading only when (1) MagReference (mag_reference.h) finds its
+// norm and dip at the reference — learnt in the first second, then set by each trusted fit —
+// and (2) the heading innovation, low-passed over 0.5 s, is within mag_heading_gate_rad + 3
+// sd of the predicted heading (or has stayed outside it for mag_consistency_s). Otherwise
+// heading coasts on the gyro. When a trusted fit replaces the offset, the heading variance
+// is raised to the initial prior, so the heading is re-learnt from the corrected field. See
+// AttitudeFilterOptions for the rules. The update:
 //     m = R m_body,  psi_m = atan2(m_east, m_north),
 //     nu = wrap(mag_declination_rad - psi_m),  H = [-e_up^T R  0] = [-h^T  0],
 //     R_meas = mag_heading_sd_rad^2.
@@ -34,14 +44,16 @@
 // b <- b + K_b nu), P <- P - K S K^T, symmetrised. The reset Jacobian of the error state
 // (I - [dtheta/2 x]) is taken as I: dtheta is a few milliradians per step.
 // Cost per update (6 error states, fixed-size Eigen, no heap, no sin/cos/sqrt in the
-// rotation-vector exponential below 0.1 rad): about 0.2 µs of CPU without the magnetometer,
-// 0.3 µs with it, on a 2.6 GHz core of a loaded 2-core VM (tests/bench/attitude_bench.cc).
+// rotation-vector exponential below 0.1 rad; the hard-iron sums add ~40 multiply-adds per
+// magnetometer sample and a 3x3 solve ten times a second): see BENCHMARKS.md
+// (tests/bench/attitude_bench.cc).
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
 #include "engine/attitude/attitude_filter.h"
+#include "engine/attitude/hard_iron_estimator.h"
 #include "engine/attitude/mag_reference.h"
 #include "engine/attitude/rest_detector.h"
 
@@ -60,6 +72,8 @@ class QuaternionEkf final : public AttitudeFilter {
 
   // The error-state covariance (dtheta in the body frame, then db).
   const Eigen::Matrix<double, 6, 6>& covariance() const { return p_; }
+  // The latest hard-iron fit (solved ten times a second while the magnetometer is in use).
+  const HardIronFit& hard_iron_fit() const { return last_fit_; }
 
  private:
   using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -68,11 +82,31 @@ class QuaternionEkf final : public AttitudeFilter {
   // Applies x <- x (+) dx.
   void Correct(const Eigen::Matrix<double, 6, 1>& dx);
   bool AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s);
-  bool MagUpdate(const Eigen::Vector3d& mag_uT, double t_s);
+  // The heading update from the corrected field in the world frame; matches_reference:
+  // whether its norm and dip agreed with the reference.
+  bool MagUpdate(const Eigen::Vector3d& field_world_uT, double t_s, double dt_s, bool* matches_reference);
+  // Feeds the hard-iron estimator, adopts its fit when trusted, and returns whether the
+  // (offset-corrected) sample was used for heading.
+  bool MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt_s);
+  void AdoptCalibration(const HardIronFit& fit, double t_s);
   void RestUpdate(const Eigen::Vector3d& gyro_rps);
 
   AttitudeFilterOptions options_;
   MagReference mag_reference_;
+  HardIronEstimator hard_iron_;
+  HardIronFit last_fit_;
+  Eigen::Vector3d mag_offset_uT_ = Eigen::Vector3d::Zero();  // subtracted from each reading
+  // An offset has been found and adopted since the start (until then the offset stays 0).
+  bool mag_calibrated_ = false;
+  double next_solve_t_s_ = 0.0;
+  static constexpr double kNoCandidate = -1e300;
+  Eigen::Vector3d candidate_uT_ = Eigen::Vector3d::Zero();  // a new offset being confirmed
+  double candidate_since_t_s_ = kNoCandidate;
+  double match_fraction_ = 1.0;  // recent samples whose norm and dip matched (low-passed)
+  bool restart_armed_ = true;
+  double innovation_lowpass_rad_ = 0.0;  // heading innovation, low-passed (consistency gate)
+  double inconsistent_s_ = 0.0;          // how long it has been outside the gate
+  bool relearning_heading_ = false;      // a new offset: no gate until the heading converges
   RestDetector rest_;
   Eigen::Quaterniond q_ = Eigen::Quaterniond::Identity();
   Eigen::Vector3d bias_rps_ = Eigen::Vector3d::Zero();

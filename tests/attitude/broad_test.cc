@@ -14,48 +14,21 @@
 #include <cmath>
 #include <cstdio>
 
-#include "clients/io/imu_csv.h"
-#include "engine/attitude/attitude_error.h"
-#include "engine/attitude/attitude_filter.h"
+#include "tests/attitude/broad_trials.h"
 
 namespace localizer::engine {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-
-struct TrialResult {
-  AttitudeScore score;
-  double mean_signed_heading_rad = 0.0;
-};
-
-TrialResult RunTrial(const io::ImuRecording& trial, const AttitudeFilterOptions& options) {
-  auto filter = CreateAttitudeFilter(options);
-  EXPECT_TRUE(filter.ok());
-  std::vector<Eigen::Quaterniond> estimates;
-  estimates.reserve(trial.samples.size());
-  double heading_sum = 0.0;
-  int heading_count = 0;
-  for (size_t i = 0; i < trial.samples.size(); ++i) {
-    const Status status = (*filter)->Update(trial.samples[i]);
-    EXPECT_TRUE(status.ok()) << status.ToString();
-    estimates.push_back((*filter)->estimate().body_to_world);
-    if (trial.movement[i] && trial.truth[i].coeffs().allFinite()) {
-      Eigen::Quaterniond e = estimates.back() * trial.truth[i].conjugate();
-      if (e.w() < 0.0) e.coeffs() = -e.coeffs();
-      heading_sum += 2.0 * std::atan2(e.z(), e.w());
-      ++heading_count;
-    }
-  }
-  auto score = ScoreAttitude(estimates, trial.truth, trial.movement);
-  EXPECT_TRUE(score.ok()) << score.status().ToString();
-  return {score.ok() ? *score : AttitudeScore{}, heading_sum / std::max(heading_count, 1)};
-}
+using testing::BroadTrialPaths;
+using testing::RunTrial;
+using testing::TrialResult;
 
 class BroadTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(BroadTest, MeetsTheGoalsWithDefaults) {
-  auto read = io::ReadImuCsv(GetParam(), /*need_mag=*/true, /*need_truth=*/true);
-  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  const io::ImuRecording* read = testing::BroadTrial(GetParam());
+  ASSERT_NE(read, nullptr);
   const io::ImuRecording& trial = *read;
   ASSERT_GT(trial.samples.size(), 10000u);
   const std::string name = GetParam().substr(GetParam().rfind('/') + 1);
@@ -78,12 +51,6 @@ TEST_P(BroadTest, MeetsTheGoalsWithDefaults) {
       EXPECT_LT(nine_d.score.total_rmse_rad, 4.5 * kDeg);
     }
   }
-}
-
-std::vector<std::string> BroadTrialPaths() {
-  const std::string dir = std::string(LOCALIZER_DATA_DIR) + "/broad-subset/";
-  return {dir + "02_undisturbed_slow_rotation_B.csv", dir + "16_undisturbed_fast_translation_B.csv",
-          dir + "25_disturbed_tapping_B.csv"};
 }
 
 INSTANTIATE_TEST_SUITE_P(Trials, BroadTest, ::testing::ValuesIn(BroadTrialPaths()),

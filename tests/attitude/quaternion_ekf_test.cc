@@ -169,6 +169,7 @@ TEST_P(MagDisturbanceTest, RejectsDisturbedField) {
   AttitudeFilterOptions trusting = Defaults(true);
   trusting.mag_norm_tolerance = 10.0;
   trusting.mag_dip_tolerance_rad = 10.0;
+  trusting.mag_heading_gate_rad = 10.0;  // and no heading-consistency gate (alone it keeps this to ~9 deg)
   const auto fooled = RunFilter(trusting, truth, samples, 2.0);
   EXPECT_GT(fooled.max_heading_rad, 10.0 * kDeg);
 }

@@ -1,0 +1,278 @@
+// Magnetic disturbances of our own on the three real BROAD trials (issue 22): the real
+// motion, gyro and accelerometer, and the real magnetometer with a synthetic disturbance
+// added (engine/sim/magnetic_disturbance.h), scored against the real optical truth over the
+// movement phase. One parameter set (the defaults) for every case. Cases, per trial:
+//   clean         the recording as it is (the reference);
+//   magnet_mid    a magnet appears on the sensor 20 s into the movement: 60 µT hard iron in a
+//                 seeded random direction, soft iron within ±2 % (a magnet's own permeability
+//                 is near 1; iron parts would add more, which a hard-iron fit cannot remove);
+//                 magnet_mid_25uT: the same with 25 µT (inside the norm gate part of the time);
+//   magnet_start  a magnet rides on the sensor from the first sample (the initial rest and
+//                 heading see it too): 150 µT (far outside any norm gate) and 25 µT (inside
+//                 it part of the time), soft iron within ±2 %. Before the sensor has turned
+//                 enough to separate the offset from the Earth's field, nothing can tell the
+//                 heading: these cases are also scored from 30 s into the movement;
+//   objects       the sensor passes three ferrous objects fixed in the world (20 s, 50 s and
+//                 80 s into the movement): 40 µT at the closest pass, Gaussian envelope of 2 s.
+// The directions are drawn from seeds fixed per trial and case, not chosen.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/attitude/quaternion_ekf.h"
+#include "engine/sim/magnetic_disturbance.h"
+#include "tests/attitude/broad_trials.h"
+
+namespace localizer::engine {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+enum class Case { kClean, kMagnetMid, kMagnetStartLarge, kMagnetStartSmall, kObjects, kMagnetMidSmall };
+constexpr Case kCases[] = {
+    Case::kClean,  Case::kMagnetMid, Case::kMagnetMidSmall, Case::kMagnetStartLarge, Case::kMagnetStartSmall,
+    Case::kObjects};
+
+const char* CaseName(Case c) {
+  switch (c) {
+    case Case::kClean:
+      return "clean";
+    case Case::kMagnetMid:
+      return "magnet_mid";
+    case Case::kMagnetMidSmall:
+      return "magnet_mid_25uT";
+    case Case::kMagnetStartLarge:
+      return "magnet_start_150uT";
+    case Case::kMagnetStartSmall:
+      return "magnet_start_25uT";
+    case Case::kObjects:
+      return "objects";
+  }
+  return "?";
+}
+
+std::vector<ImuSample> Disturbed(const io::ImuRecording& trial, Case c, uint64_t seed) {
+  std::vector<ImuSample> samples = trial.samples;
+  const double move_s = testing::FirstMovement_s(trial);
+  switch (c) {
+    case Case::kClean:
+      break;
+    case Case::kMagnetMid:
+      AddBodyFixedMagnet(RandomBodyFixedMagnet(60.0, 0.02, move_s + 20.0, seed), &samples);
+      break;
+    case Case::kMagnetMidSmall:
+      AddBodyFixedMagnet(RandomBodyFixedMagnet(25.0, 0.02, move_s + 20.0, seed + 400), &samples);
+      break;
+    case Case::kMagnetStartLarge:
+      AddBodyFixedMagnet(RandomBodyFixedMagnet(150.0, 0.02, -1e9, seed + 100), &samples);
+      break;
+    case Case::kMagnetStartSmall:
+      AddBodyFixedMagnet(RandomBodyFixedMagnet(25.0, 0.02, -1e9, seed + 200), &samples);
+      break;
+    case Case::kObjects:
+      for (int k = 0; k < 3; ++k) {
+        AddPassingObject(RandomPassingObject(40.0, move_s + 20.0 + 30.0 * k, 2.0, seed + 300 + k), trial.truth,
+                         &samples);
+      }
+      break;
+  }
+  return samples;
+}
+
+// Total RMSE with the magnetometer (9D) per case and trial, the magnet_start cases also
+// from 30 s into the movement, and the 6D inclination of the clean trials, with `options`
+// (use_mag is set here).
+struct Table {
+  double total_deg[6][3] = {};
+  double late_total_deg[6][3] = {};  // scored from 30 s into the movement
+  double inclination_6d_deg[3] = {};
+};
+
+// seed_offset moves every case's draw (the study's check that the defaults were not fitted
+// to one set of directions).
+Table Evaluate(AttitudeFilterOptions options, uint64_t seed_offset = 0) {
+  Table table;
+  const std::vector<std::string> paths = testing::BroadTrialPaths();
+  for (size_t t = 0; t < paths.size(); ++t) {
+    const io::ImuRecording* trial = testing::BroadTrial(paths[t]);
+    if (trial == nullptr) return table;
+    options.use_mag = false;
+    table.inclination_6d_deg[t] = testing::RunTrial(*trial, options).score.inclination_rmse_rad / kDeg;
+    options.use_mag = true;
+    io::ImuRecording late = *trial;
+    const double late_s = testing::FirstMovement_s(*trial) + 30.0;
+    for (size_t i = 0; i < late.samples.size(); ++i)
+      late.movement[i] = late.movement[i] && late.samples[i].t_s >= late_s;
+    for (const Case c : kCases) {
+      const std::vector<ImuSample> samples = Disturbed(*trial, c, 1000 * (t + 1) + seed_offset);
+      table.total_deg[static_cast<int>(c)][t] = testing::RunTrial(*trial, samples, options).score.total_rmse_rad / kDeg;
+      table.late_total_deg[static_cast<int>(c)][t] =
+          testing::RunTrial(late, samples, options).score.total_rmse_rad / kDeg;
+    }
+  }
+  return table;
+}
+
+// The numeric options by name, for the sensitivity study below.
+std::map<std::string, double AttitudeFilterOptions::*> NumericOptions() {
+  return {{"gyro_noise_rps_rthz", &AttitudeFilterOptions::gyro_noise_rps_rthz},
+          {"gyro_bias_walk_rps2_rthz", &AttitudeFilterOptions::gyro_bias_walk_rps2_rthz},
+          {"gyro_bias_walk_tilt_rps2_rthz", &AttitudeFilterOptions::gyro_bias_walk_tilt_rps2_rthz},
+          {"accel_tilt_sd_rad", &AttitudeFilterOptions::accel_tilt_sd_rad},
+          {"accel_reject_mps2", &AttitudeFilterOptions::accel_reject_mps2},
+          {"accel_noise_gain", &AttitudeFilterOptions::accel_noise_gain},
+          {"accel_lowpass_s", &AttitudeFilterOptions::accel_lowpass_s},
+          {"mag_heading_sd_rad", &AttitudeFilterOptions::mag_heading_sd_rad},
+          {"mag_norm_tolerance", &AttitudeFilterOptions::mag_norm_tolerance},
+          {"mag_dip_tolerance_rad", &AttitudeFilterOptions::mag_dip_tolerance_rad},
+          {"mag_calibration_s", &AttitudeFilterOptions::mag_calibration_s},
+          {"mag_calibration_diversity", &AttitudeFilterOptions::mag_calibration_diversity},
+          {"mag_calibration_residual", &AttitudeFilterOptions::mag_calibration_residual},
+          {"mag_restart_s", &AttitudeFilterOptions::mag_restart_s},
+          {"mag_heading_gate_rad", &AttitudeFilterOptions::mag_heading_gate_rad},
+          {"mag_consistency_s", &AttitudeFilterOptions::mag_consistency_s},
+          {"rest_min_s", &AttitudeFilterOptions::rest_min_s}};
+}
+
+// Options from ATT_OPT="name=value,name=value" over the defaults (the study's knob).
+AttitudeFilterOptions OptionsFromEnvironment() {
+  AttitudeFilterOptions options;
+  const char* text = std::getenv("ATT_OPT");
+  if (text == nullptr) return options;
+  const auto fields = NumericOptions();
+  std::string rest = text;
+  while (!rest.empty()) {
+    const size_t comma = rest.find(',');
+    const std::string item = rest.substr(0, comma);
+    rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
+    const size_t eq = item.find('=');
+    const auto it = fields.find(item.substr(0, eq));
+    if (eq == std::string::npos || it == fields.end()) {
+      ADD_FAILURE() << "ATT_OPT: unknown " << item;
+      continue;
+    }
+    options.*(it->second) = std::atof(item.c_str() + eq + 1);
+  }
+  return options;
+}
+
+void PrintRow(const std::string& name, const double* row) {
+  std::printf("%-30s %7.2f %7.2f %7.2f %7.2f\n", name.c_str(), row[0], row[1], row[2],
+              (row[0] + row[1] + row[2]) / 3.0);
+}
+
+void Print(const char* title, const Table& table) {
+  std::printf("%s\n%-30s %7s %7s %7s %7s\n", title, "case (9D total RMSE, deg)", "02", "16", "25", "mean");
+  for (const Case c : kCases) {
+    PrintRow(CaseName(c), table.total_deg[static_cast<int>(c)]);
+    if (c == Case::kMagnetStartLarge || c == Case::kMagnetStartSmall) {
+      PrintRow(std::string(CaseName(c)) + " from +30 s", table.late_total_deg[static_cast<int>(c)]);
+    }
+  }
+  PrintRow("6D inclination (clean)", table.inclination_6d_deg);
+}
+
+// Bounds: about 1.5x what the defaults reach (and below what the filter without hard-iron
+// estimation and the heading-consistency gate reached: magnet_mid_25uT 89 and 79 deg on
+// trials 02 and 25, magnet_start from +30 s ~100 deg on trial 02, objects 2.3-4.1 deg). magnet_start is asserted on
+// trial 02 only: trials 16 (translation) and 25 (tapping) turn too little for any fit to separate an offset present
+// from the start from the Earth's field (rotation diversity 0.03 and 0.02 against 0.1
+// needed), so the heading they start from stays wrong — printed, not asserted. Trial 25's
+// magnet_mid cases coast on the gyro for their last 95 s (too little rotation to calibrate) and
+// drifts by the gyro's bias in motion (about 0.05 deg/s there).
+TEST(MagDisturbanceTest, DefaultsSurviveTheDisturbances) {
+  const Table table = Evaluate(AttitudeFilterOptions{});
+  Print("quaternion MEKF, defaults", table);
+  for (int t = 0; t < 3; ++t) {
+    EXPECT_LT(table.total_deg[static_cast<int>(Case::kClean)][t], 2.0) << "trial " << t;
+    EXPECT_LT(table.total_deg[static_cast<int>(Case::kMagnetMid)][t], t == 2 ? 6.0 : 3.0) << "trial " << t;
+    EXPECT_LT(table.total_deg[static_cast<int>(Case::kMagnetMidSmall)][t], t == 2 ? 7.0 : 3.0) << "trial " << t;
+    EXPECT_LT(table.total_deg[static_cast<int>(Case::kObjects)][t], 2.7) << "trial " << t;
+  }
+  EXPECT_LT(table.late_total_deg[static_cast<int>(Case::kMagnetStartLarge)][0], 2.5);
+  EXPECT_LT(table.late_total_deg[static_cast<int>(Case::kMagnetStartSmall)][0], 2.7);
+}
+
+// Not a test: the table with the options in ATT_OPT="name=value,..." (the sensitivity
+// study in ACCURACY.md), the draws moved by ATT_SEED (default 0). Run with
+// --gtest_also_run_disabled_tests.
+TEST(MagDisturbanceTest, DISABLED_Study) {
+  const char* text = std::getenv("ATT_OPT");
+  const char* seed = std::getenv("ATT_SEED");
+  Print(text != nullptr ? text : "defaults",
+        Evaluate(OptionsFromEnvironment(), seed != nullptr ? std::strtoull(seed, nullptr, 10) : 0));
+}
+
+// Not a test: a trace of one trial and case (ATT_TRIAL = 0..2, ATT_CASE = 0..5 in kCases order) every 2 s,
+// for looking at what the calibration does. Run with --gtest_also_run_disabled_tests.
+TEST(MagDisturbanceTest, DISABLED_Trace) {
+  const int t = std::getenv("ATT_TRIAL") ? std::atoi(std::getenv("ATT_TRIAL")) : 0;
+  const int c = std::getenv("ATT_CASE") ? std::atoi(std::getenv("ATT_CASE")) : 0;
+  const io::ImuRecording* trial = testing::BroadTrial(testing::BroadTrialPaths()[t]);
+  ASSERT_NE(trial, nullptr);
+  const std::vector<ImuSample> samples = Disturbed(*trial, kCases[c], 1000 * (t + 1));
+  AttitudeFilterOptions options = OptionsFromEnvironment();
+  options.use_mag = std::getenv("ATT_NOMAG") == nullptr;
+  auto filter = std::make_unique<QuaternionEkf>(options);
+  double next_s = 0.0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    ASSERT_TRUE(filter->Update(samples[i]).ok());
+    if (samples[i].t_s < next_s) continue;
+    next_s += 2.0;
+    const AttitudeEstimate e = filter->estimate();
+    const HardIronFit& fit = filter->hard_iron_fit();
+    double total = NAN;
+    if (trial->truth[i].coeffs().allFinite()) {
+      Eigen::Quaterniond d = e.body_to_world * trial->truth[i].conjugate();
+      if (d.w() < 0.0) d.coeffs() = -d.coeffs();
+      total = std::copysign(AttitudeErrorOf(e.body_to_world, trial->truth[i]).total_rad / kDeg, d.z());
+    }
+    std::printf(
+        "t %6.1f err %6.2f used %d cal %d div %.3f hdiv %.3f res %5.2f off %6.1f %6.1f %6.1f |m| %5.1f bz %.5f\n",
+        samples[i].t_s, total, e.mag_used, e.mag_calibrated, fit.diversity, fit.heading_diversity, fit.residual_uT,
+        e.mag_offset_uT.x(), e.mag_offset_uT.y(), e.mag_offset_uT.z(), samples[i].mag_uT.norm(),
+        (e.body_to_world * e.gyro_bias_rps).z());
+  }
+}
+
+}  // namespace
+}  // namespace localizer::engine
+
+namespace localizer::engine {
+namespace {
+
+// Not a test: 6D inclination RMSE per trial binned by the gyro's rate (where the error is).
+TEST(MagDisturbanceTest, DISABLED_InclinationByRate) {
+  const AttitudeFilterOptions options = OptionsFromEnvironment();
+  for (const std::string& path : testing::BroadTrialPaths()) {
+    const io::ImuRecording* trial = testing::BroadTrial(path);
+    ASSERT_NE(trial, nullptr);
+    auto filter = CreateAttitudeFilter(options);
+    ASSERT_TRUE(filter.ok());
+    const double edges[] = {0.5, 1.0, 2.0, 4.0, 1e9};
+    double sum[5] = {}, count[5] = {};
+    for (size_t i = 0; i < trial->samples.size(); ++i) {
+      ASSERT_TRUE((*filter)->Update(trial->samples[i]).ok());
+      if (!trial->movement[i] || !trial->truth[i].coeffs().allFinite()) continue;
+      const double e = AttitudeErrorOf((*filter)->estimate().body_to_world, trial->truth[i]).inclination_rad / kDeg;
+      int b = 0;
+      while (trial->samples[i].gyro_rps.norm() > edges[b]) ++b;
+      sum[b] += e * e;
+      count[b] += 1;
+    }
+    std::printf("%s", path.substr(path.rfind('/') + 1, 2).c_str());
+    for (int b = 0; b < 5; ++b)
+      std::printf("  <%.1f: %.2f (%.0f%%)", edges[b], std::sqrt(sum[b] / std::max(count[b], 1.0)),
+                  100.0 * count[b] / (count[0] + count[1] + count[2] + count[3] + count[4]));
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+}  // namespace localizer::engine
