@@ -35,6 +35,8 @@
 #include <Eigen/Geometry>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "engine/core/imu.h"
 #include "engine/core/status.h"
@@ -197,6 +199,11 @@ class AttitudeFilter {
 
 // The filter `options.kind` names; INVALID_ARGUMENT when options.Validate() fails.
 StatusOr<std::unique_ptr<AttitudeFilter>> CreateAttitudeFilter(const AttitudeFilterOptions& options);
+
+// Every numeric option by its field's name, for callers that set options by name (the
+// Python module, studies).
+using AttitudeNumericOption = std::pair<const char*, double AttitudeFilterOptions::*>;
+const std::vector<AttitudeNumericOption>& AttitudeNumericOptions();
 
 // INVALID_ARGUMENT naming the field when t_s, gyro or accel has a non-finite entry, or when
 // t_s is not after previous_t_s (pass -infinity before the first sample).

@@ -119,33 +119,13 @@ Table Evaluate(AttitudeFilterOptions options, uint64_t seed_offset = 0) {
   return table;
 }
 
-// The numeric options by name, for the sensitivity study below.
-std::map<std::string, double AttitudeFilterOptions::*> NumericOptions() {
-  return {{"gyro_noise_rps_rthz", &AttitudeFilterOptions::gyro_noise_rps_rthz},
-          {"gyro_bias_walk_rps2_rthz", &AttitudeFilterOptions::gyro_bias_walk_rps2_rthz},
-          {"gyro_bias_walk_tilt_rps2_rthz", &AttitudeFilterOptions::gyro_bias_walk_tilt_rps2_rthz},
-          {"accel_tilt_sd_rad", &AttitudeFilterOptions::accel_tilt_sd_rad},
-          {"accel_reject_mps2", &AttitudeFilterOptions::accel_reject_mps2},
-          {"accel_noise_gain", &AttitudeFilterOptions::accel_noise_gain},
-          {"accel_lowpass_s", &AttitudeFilterOptions::accel_lowpass_s},
-          {"mag_heading_sd_rad", &AttitudeFilterOptions::mag_heading_sd_rad},
-          {"mag_norm_tolerance", &AttitudeFilterOptions::mag_norm_tolerance},
-          {"mag_dip_tolerance_rad", &AttitudeFilterOptions::mag_dip_tolerance_rad},
-          {"mag_calibration_s", &AttitudeFilterOptions::mag_calibration_s},
-          {"mag_calibration_diversity", &AttitudeFilterOptions::mag_calibration_diversity},
-          {"mag_calibration_residual", &AttitudeFilterOptions::mag_calibration_residual},
-          {"mag_restart_s", &AttitudeFilterOptions::mag_restart_s},
-          {"mag_heading_gate_rad", &AttitudeFilterOptions::mag_heading_gate_rad},
-          {"mag_consistency_s", &AttitudeFilterOptions::mag_consistency_s},
-          {"rest_min_s", &AttitudeFilterOptions::rest_min_s}};
-}
-
 // Options from ATT_OPT="name=value,name=value" over the defaults (the study's knob).
 AttitudeFilterOptions OptionsFromEnvironment() {
   AttitudeFilterOptions options;
   const char* text = std::getenv("ATT_OPT");
   if (text == nullptr) return options;
-  const auto fields = NumericOptions();
+  std::map<std::string, double AttitudeFilterOptions::*> fields;
+  for (const auto& [name, member] : AttitudeNumericOptions()) fields.emplace(name, member);
   std::string rest = text;
   while (!rest.empty()) {
     const size_t comma = rest.find(',');

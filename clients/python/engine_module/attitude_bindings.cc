@@ -20,37 +20,6 @@ namespace {
 
 using engine::AttitudeFilterOptions;
 
-// The numeric options, by their names in attitude_filter.h.
-const std::vector<std::pair<const char*, double AttitudeFilterOptions::*>>& DoubleOptions() {
-  static const std::vector<std::pair<const char*, double AttitudeFilterOptions::*>> options = {
-      {"gravity_mps2", &AttitudeFilterOptions::gravity_mps2},
-      {"gyro_noise_rps_rthz", &AttitudeFilterOptions::gyro_noise_rps_rthz},
-      {"gyro_bias_walk_rps2_rthz", &AttitudeFilterOptions::gyro_bias_walk_rps2_rthz},
-      {"gyro_bias_walk_tilt_rps2_rthz", &AttitudeFilterOptions::gyro_bias_walk_tilt_rps2_rthz},
-      {"initial_bias_sd_rps", &AttitudeFilterOptions::initial_bias_sd_rps},
-      {"accel_tilt_sd_rad", &AttitudeFilterOptions::accel_tilt_sd_rad},
-      {"accel_reject_mps2", &AttitudeFilterOptions::accel_reject_mps2},
-      {"accel_noise_gain", &AttitudeFilterOptions::accel_noise_gain},
-      {"accel_lowpass_s", &AttitudeFilterOptions::accel_lowpass_s},
-      {"mag_heading_sd_rad", &AttitudeFilterOptions::mag_heading_sd_rad},
-      {"mag_declination_rad", &AttitudeFilterOptions::mag_declination_rad},
-      {"mag_reference_s", &AttitudeFilterOptions::mag_reference_s},
-      {"mag_norm_tolerance", &AttitudeFilterOptions::mag_norm_tolerance},
-      {"mag_dip_tolerance_rad", &AttitudeFilterOptions::mag_dip_tolerance_rad},
-      {"mag_calibration_s", &AttitudeFilterOptions::mag_calibration_s},
-      {"mag_calibration_diversity", &AttitudeFilterOptions::mag_calibration_diversity},
-      {"mag_calibration_residual", &AttitudeFilterOptions::mag_calibration_residual},
-      {"mag_restart_s", &AttitudeFilterOptions::mag_restart_s},
-      {"mag_heading_gate_rad", &AttitudeFilterOptions::mag_heading_gate_rad},
-      {"mag_consistency_s", &AttitudeFilterOptions::mag_consistency_s},
-      {"rest_gyro_rps", &AttitudeFilterOptions::rest_gyro_rps},
-      {"rest_accel_mps2", &AttitudeFilterOptions::rest_accel_mps2},
-      {"rest_min_s", &AttitudeFilterOptions::rest_min_s},
-      {"rest_rate_sd_rps", &AttitudeFilterOptions::rest_rate_sd_rps},
-  };
-  return options;
-}
-
 // (N, 3) float64, C order.
 py::array_t<double, py::array::c_style | py::array::forcecast> Rows3(const py::handle& value, const std::string& name,
                                                                      py::ssize_t rows) {
@@ -70,7 +39,7 @@ class PyAttitudeFilter {
     for (const auto& [key, value] : options) {
       const std::string name = py::str(key);
       bool known = false;
-      for (const auto& [option, member] : DoubleOptions()) {
+      for (const auto& [option, member] : engine::AttitudeNumericOptions()) {
         if (name != option) continue;
         options_.*member = value.cast<double>();
         known = true;
