@@ -143,9 +143,8 @@ StatusOr<std::shared_ptr<grpc::Channel>> Connect(const std::string& target, cons
   if (!token.ok()) return token.status();
   std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>> interceptors;
   interceptors.push_back(std::make_unique<BearerTokenFactory>(*token));
-  return grpc::experimental::CreateCustomChannelWithInterceptors(target, credentials,
-                                                                 MessageSizeArgs(options.own_connection),
-                                                                 std::move(interceptors));
+  return grpc::experimental::CreateCustomChannelWithInterceptors(
+      target, credentials, MessageSizeArgs(options.own_connection), std::move(interceptors));
 }
 
 grpc::Status FromProxyReset(const grpc::Status& status) {
