@@ -18,6 +18,7 @@ const std::string& TrackMethod() {
   return name;
 }
 
+// How often the pacer looks at a session that waits for gRPC (closing, or at max rate).
 constexpr int64_t kClosingPollNs = 100'000'000;
 
 int64_t ToNs(double seconds) { return static_cast<int64_t>(std::llround(seconds * 1e9)); }
@@ -143,7 +144,8 @@ int64_t LoadSession::Tick(int64_t now_ns) {
           // With a write in flight, its completion sends what is due; look again later.
           next_ns = write_in_flight_ ? std::max(next_due_ns_, now_ns + period_ns_ / 2) : next_due_ns_;
         } else {
-          next_ns = std::min(now_ns + ToNs(0.1), end_ns_);  // max rate: writes chain themselves
+          // Max rate: writes chain themselves; look at the end time, then every 100 ms.
+          next_ns = now_ns < end_ns_ ? std::min(now_ns + kClosingPollNs, end_ns_) : now_ns + kClosingPollNs;
         }
         break;
       case Phase::kClosing:
