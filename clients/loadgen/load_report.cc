@@ -85,6 +85,8 @@ nlohmann::json ResultJson(const LoadOptions& o, const LoadStats& stats, const Ru
   r["estimates_received"] = estimates;
   r["estimates_per_s"] = PerSecond(estimates, first_send, stats.last_estimate_ns.load());
   r["estimates_unmatched"] = stats.unmatched.load();
+  r["estimates_initialised"] = stats.initialised.load();
+  r["estimates_source_present"] = stats.present.load();
   r["latency_ms"] = lat;
   r["late_blocks"] = stats.late_blocks.load();
   r["max_behind_schedule_ms"] = Round3(1e-6 * static_cast<double>(stats.behind_max_ns.load()));

@@ -30,6 +30,7 @@ std::string ProgressLine(double elapsed_s, const LoadOptions& options, const Loa
 //   backends {name: sessions}, duration_s, ramp_s, wall_s, interrupted,
 //   blocks_sent, blocks_per_s (first send -> last send), estimates_received,
 //   estimates_per_s (first send -> last estimate), estimates_unmatched,
+//   estimates_initialised and estimates_source_present (the engine tracked the source),
 //   latency_ms {p50, p95, p99, max, count} (null figures when no estimate arrived),
 //   late_blocks, max_behind_schedule_ms, errors, errors_by_code {code: n}, rejected,
 //   rejections {reason: n; "session_RESOURCE_EXHAUSTED": sessions refused}, gaps,

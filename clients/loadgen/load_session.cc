@@ -235,6 +235,9 @@ void LoadSession::Received(const v1::TrackResponse& response, int64_t now_ns) {
         }
       }
       stats.estimates.fetch_add(1, std::memory_order_relaxed);
+      // Whether the engine did the work of a tracked source: the same for both generators.
+      if (response.estimate().initialised()) stats.initialised.fetch_add(1, std::memory_order_relaxed);
+      if (response.estimate().source_present()) stats.present.fetch_add(1, std::memory_order_relaxed);
       stats.NoteEstimate(now_ns);
       if (sent_ns >= 0) {
         stats.latency.Add(1e-9 * static_cast<double>(now_ns - sent_ns));

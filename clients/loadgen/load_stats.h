@@ -26,6 +26,8 @@ class LoadStats {
   std::atomic<int64_t> blocks_sent{0};    // blocks handed to gRPC
   std::atomic<int64_t> estimates{0};      // estimates received
   std::atomic<int64_t> unmatched{0};      // estimates naming a block this run has no send time for
+  std::atomic<int64_t> initialised{0};    // estimates of a filter that has a fix (the engine tracks)
+  std::atomic<int64_t> present{0};        // estimates whose frame holds a source (source_present)
   std::atomic<int64_t> gaps{0};           // SequenceGap responses
   std::atomic<int64_t> late_blocks{0};    // realtime: handed to gRPC over one block period after due
   std::atomic<int64_t> behind_max_ns{0};  // realtime: the most a block was behind its due time
