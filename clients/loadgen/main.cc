@@ -4,7 +4,7 @@
 //
 // Output: a progress line each second on stderr; the result as one JSON object on stdout
 // (or in --json FILE), see load_report.h. Ctrl-C (SIGINT) or SIGTERM half-closes every
-// stream and ends the run early, marked "interrupted".
+// stream and ends the run early, marked "interrupted"; a second one ends the process at once.
 // Exit codes: 0 every session ended OK, nothing rejected and some estimates received;
 // 1 otherwise (or a runtime error before the run: "CODE: message"); 2 usage error.
 #include <csignal>
@@ -52,8 +52,10 @@ int main(int argc, char** argv) {
   if (!parsed.ok()) return UsageError(parsed.message());
   if (const Status valid = options.Validate(); !valid.ok()) return UsageError(valid.message());
 
+  // The first signal asks for a graceful end; a second one (SA_RESETHAND) ends the process.
   struct sigaction action {};
   action.sa_handler = RequestStop;
+  action.sa_flags = SA_RESETHAND;
   sigemptyset(&action.sa_mask);
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);

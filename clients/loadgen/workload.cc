@@ -5,7 +5,7 @@
 #include <random>
 
 #include "engine/core/block.h"
-#include "engine/sim/band_pass_fir.h"
+#include "engine/tdoa/fftw_util.h"
 #include "wire/block_wire.h"
 
 namespace localizer::loadgen {
@@ -37,26 +37,34 @@ std::vector<int> IntegerTdoas(const std::vector<double>& sensors_m, double sampl
   return tdoa;
 }
 
-// Band-limited white noise of std kAmplitude, periodic in n: the FIR runs over the signal
-// extended by its own wrap, so the result is the circular convolution.
+// Band-limited white noise of std kAmplitude, periodic in n, as loadtest.py makes it: the
+// spectrum of n white draws with the bins outside [kBandLowHz, band_high_hz] zeroed, back to
+// time (a circular operation, so the result wraps seamlessly).
 std::vector<double> PeriodicBroadband(int64_t n, double sample_rate_hz, double band_high_hz, std::mt19937_64& rng) {
   std::normal_distribution<double> normal;
-  std::vector<double> white(n);
-  for (double& v : white) v = normal(rng);
-  const engine::BandPassFir fir = engine::DesignBandPassFir(kBandLowHz, band_high_hz, sample_rate_hz);
-  const int64_t taps = static_cast<int64_t>(fir.taps.size());
-  const int64_t half = (taps - 1) / 2;
-  std::vector<double> extended(n + taps - 1);
-  for (int64_t i = 0; i < static_cast<int64_t>(extended.size()); ++i) {
-    extended[i] = white[((i - half) % n + n) % n];
+  engine::FftwFloats time = engine::AllocateFftwFloats(static_cast<size_t>(n));
+  engine::FftwFloats spectrum = engine::AllocateFftwFloats(2 * (static_cast<size_t>(n) / 2 + 1));
+  for (int64_t i = 0; i < n; ++i) time[i] = static_cast<float>(normal(rng));
+  {
+    // The planner's mutex is taken inside (fftw_util.h).
+    const engine::FftwPlan forward =
+        engine::PlanRealForward(static_cast<int>(n), time.get(), spectrum.get(), FFTW_ESTIMATE);
+    const engine::FftwPlan inverse =
+        engine::PlanRealInverse(static_cast<int>(n), spectrum.get(), time.get(), FFTW_ESTIMATE);
+    fftwf_execute(forward.get());
+    for (int64_t k = 0; k <= n / 2; ++k) {
+      const double f_hz = static_cast<double>(k) * sample_rate_hz / static_cast<double>(n);
+      if (f_hz < kBandLowHz || f_hz > band_high_hz) spectrum[2 * k] = spectrum[2 * k + 1] = 0.0f;
+    }
+    fftwf_execute(inverse.get());  // c2r destroys its input: done with the spectrum
   }
-  std::vector<double> source = engine::FilterValid(extended, fir.taps);
+  std::vector<double> source(time.get(), time.get() + n);
   double mean = 0.0, power = 0.0;
   for (double v : source) mean += v;
   mean /= static_cast<double>(n);
   for (double v : source) power += (v - mean) * (v - mean);
   const double scale = kAmplitude / std::sqrt(power / static_cast<double>(n));
-  for (double& v : source) v = (v - mean) * scale;
+  for (double& v : source) v *= scale;
   return source;
 }
 

@@ -6,11 +6,11 @@
 // recording lasts --signal-seconds (whole blocks) and is periodic in its length, so sessions
 // loop it block after block with every delay intact across the wrap.
 //
-// Source: Gaussian white noise (std::mt19937_64 seeded with --seed) band-limited by the
-// engine's windowed-sinc FIR (engine/sim/band_pass_fir.h) applied circularly, scaled to a
-// standard deviation of 0.1; channel k is the source delayed by its TDOA (circular shift)
-// plus independent white noise 20 dB below. Same seed, same samples; not the same draws as
-// loadtest.py's numpy generator, only the same kind of signal.
+// Source: Gaussian white noise (std::mt19937_64 seeded with --seed) band-limited as
+// loadtest.py does it, by zeroing the FFT bins outside the band (FFTW, engine/tdoa/fftw_util.h),
+// scaled to a standard deviation of 0.1; channel k is the source delayed by its TDOA (circular
+// shift) plus independent white noise 20 dB below. Same seed, same samples; not the same
+// draws as loadtest.py's numpy generator, only the same signal in distribution.
 //
 // Every block is serialised once: a block request on the wire is
 //   0x1a <length> 0x08 <sequence varint> <body k>
@@ -29,7 +29,7 @@ namespace localizer::loadgen {
 
 class Workload {
  public:
-  // Cost: the circular FIR, about signal samples x 1600 taps at 44.1 kHz (0.2 s for 4 s).
+  // Cost: two FFTs of the recording's length and the copies (tens of ms for 4 s).
   explicit Workload(const LoadOptions& options);
 
   // The serialised TrackRequest{open} of session `index` (seed + index, label "loadgen-INDEX").
