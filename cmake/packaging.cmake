@@ -39,7 +39,7 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/localizerConfig.cmake
 # The binaries link shared libraries from outside the system paths (the CUDA runtime and
 # cuFFT under /usr/local/cuda when built with CUDA); keep those directories in the installed
 # RUNPATH, as the build tree's binaries have them, instead of relying on ld.so.conf.
-foreach(binary localizer-server localizer-cli)
+foreach(binary localizer-server localizer-cli localizer-loadgen)
   if(TARGET ${binary})
     set_target_properties(${binary} PROPERTIES INSTALL_RPATH_USE_LINK_PATH TRUE)
     install(TARGETS ${binary} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

@@ -84,10 +84,11 @@ class BearerTokenFactory final : public grpc::experimental::ClientInterceptorFac
   const std::shared_ptr<const std::string> value_;
 };
 
-grpc::ChannelArguments MessageSizeArgs() {
+grpc::ChannelArguments MessageSizeArgs(bool own_connection = false) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(kMaxMessageBytes);
   args.SetMaxSendMessageSize(kMaxMessageBytes);
+  if (own_connection) args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
   return args;
 }
 
@@ -135,13 +136,15 @@ StatusOr<std::shared_ptr<grpc::Channel>> Connect(const std::string& target, cons
     }
     credentials = grpc::SslCredentials(ssl);
   }
-  if (options.auth_token_file.empty()) return grpc::CreateCustomChannel(target, credentials, MessageSizeArgs());
+  if (options.auth_token_file.empty()) {
+    return grpc::CreateCustomChannel(target, credentials, MessageSizeArgs(options.own_connection));
+  }
   auto token = ReadTokenFile(options.auth_token_file);
   if (!token.ok()) return token.status();
   std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>> interceptors;
   interceptors.push_back(std::make_unique<BearerTokenFactory>(*token));
-  return grpc::experimental::CreateCustomChannelWithInterceptors(target, credentials, MessageSizeArgs(),
-                                                                 std::move(interceptors));
+  return grpc::experimental::CreateCustomChannelWithInterceptors(
+      target, credentials, MessageSizeArgs(options.own_connection), std::move(interceptors));
 }
 
 grpc::Status FromProxyReset(const grpc::Status& status) {

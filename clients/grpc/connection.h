@@ -37,6 +37,10 @@ struct ConnectOptions {
   std::string auth_token_file;  // file with the bearer token: its first line that is not
                                 // blank or '#'; "ROLE TOKEN" (a line of the server's file)
                                 // also works, the last field is the token
+  // Not a flag: true gives the channel a TCP connection of its own (a local subchannel
+  // pool) instead of sharing one with every channel of the same target and arguments; load
+  // generators spread their streams over several connections this way.
+  bool own_connection = false;
   bool tls() const { return !tls_ca.empty() || !tls_cert.empty(); }
 };
 

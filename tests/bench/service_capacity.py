@@ -1,6 +1,7 @@
 #!/usr/bin/python3
-"""Service capacity and overhead on this machine: starts localizer-server, drives it with
-clients/python/loadtest.py and reads the server's own CPU time (/proc) and metrics.
+"""Service capacity and overhead on this machine: starts localizer-server, drives it with a
+load generator (clients/python/loadtest.py, or with --generator cpp build/clients/localizer-loadgen)
+and reads the server's own CPU time (/proc) and metrics.
 
 For each session count it prints one row: blocks/s, estimate latency p50/p95/p99, errors
 and rejections, and the server's CPU per block split into the engine (worker-thread CPU
@@ -12,6 +13,12 @@ inside Session::Process, localizer_engine_cpu_seconds_total) and everything else
   tests/bench/service_capacity.py --bare --sessions 200    # gRPC alone: the overhead's floor
 
   tests/bench/service_capacity.py --sessions 60 --security plain,tls,mtls-token   # TLS's cost
+  tests/bench/service_capacity.py --sessions 200,300 --generator cpp    # the C++ generator
+
+--generator: python (loadtest.py, the default) or cpp (localizer-loadgen: gRPC's callback API,
+many sessions per thread, --threads of them). Both get the same session parameters; each row
+also shows the generator's own CPU (getrusage of the finished child), per block and in cores,
+so that the two can be set side by side.
 
 --security runs every session count once per mode, side by side: plain (plaintext gRPC),
 tls (server certificate; the load generator verifies it), mtls-token (mutual TLS and a bearer
@@ -30,6 +37,7 @@ import re
 import signal
 import subprocess
 import sys
+import resource
 import tempfile
 import time
 import urllib.request
@@ -82,41 +90,78 @@ def security_flags(mode, pki):
     return server, client
 
 
+def generator_command(args, target, sessions, client_flags, json_path):
+    """The load generator's command line: the same session parameters for both."""
+    common = ["--target", target, "--sessions", str(sessions), "--duration", str(args.duration),
+              "--rate", args.rate, "--particles", str(args.particles), "--ramp", str(args.ramp),
+              "--encoding", args.encoding] + client_flags
+    if args.generator == "cpp":
+        return [args.loadgen] + common + ["--threads", str(args.threads), "--json", json_path]
+    return ["/usr/bin/python3", args.loadtest] + common + ["--processes", str(args.processes)]
+
+
+def generator_result(args, out, json_path):
+    """The generator's result, in one shape: loadtest.py's RESULT line (errors and rejections
+    as tallies) or localizer-loadgen's JSON (errors and rejected as counts)."""
+    if args.generator == "cpp":
+        if not os.path.exists(json_path):
+            sys.stderr.write(out.stdout + out.stderr)
+            raise RuntimeError("localizer-loadgen wrote no result")
+        with open(json_path) as f:
+            r = json.load(f)
+        os.unlink(json_path)
+        return {"blocks_per_s": r["blocks_per_s"], "blocks_sent": r["blocks_sent"], "latency_ms": r["latency_ms"],
+                "errors": r["errors"], "rejections": r["rejected"], "wall_s": r["wall_s"],
+                "run_us_per_block": r["generator_cpu_us_per_block"]}  # its own figure: the run only
+    result_line = [l for l in out.stdout.splitlines() if l.startswith("RESULT ")]
+    if not result_line:
+        sys.stderr.write(out.stdout + out.stderr)
+        raise RuntimeError("loadtest printed no RESULT line")
+    r = json.loads(result_line[0][len("RESULT "):])
+    return {"blocks_per_s": r["blocks_per_s"], "blocks_sent": r["blocks_sent"], "latency_ms": r["latency_ms"],
+            "errors": sum(r["errors"].values()), "rejections": sum(r["rejections"].values()),
+            "wall_s": r["wall_s"], "run_us_per_block": None}
+
+
+def children_cpu_s():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def run_row(args, sessions, mode="plain"):
     server_flags, client_flags = security_flags(mode, args.pki)
     proc, ports = start_server(args.server, args.bare, args.workers, args.server_arg + server_flags)
     no_metrics = {"engine_cpu_s": 0.0, "blocks": 0.0}
+    json_path = tempfile.mktemp(prefix="localizer-loadgen-", suffix=".json")
     try:
         before = scrape(ports["metrics_port"]) if not args.bare else no_metrics
         cpu0 = process_cpu_s(proc.pid)
-        cmd = ["/usr/bin/python3", args.loadtest, "--target", f"127.0.0.1:{ports['grpc_port']}",
-               "--sessions", str(sessions), "--duration", str(args.duration), "--rate", args.rate,
-               "--particles", str(args.particles), "--ramp", str(args.ramp), "--encoding", args.encoding,
-               "--processes", str(args.processes)] + client_flags
+        cmd = generator_command(args, f"127.0.0.1:{ports['grpc_port']}", sessions, client_flags, json_path)
+        gen0 = children_cpu_s()  # the server is not waited for yet: only the generator counts
         out = subprocess.run(cmd, capture_output=True, text=True)
+        gen_cpu = children_cpu_s() - gen0
         cpu1 = process_cpu_s(proc.pid)
         after = scrape(ports["metrics_port"]) if not args.bare else no_metrics
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)
-    result_line = [l for l in out.stdout.splitlines() if l.startswith("RESULT ")]
-    if not result_line:
-        sys.stderr.write(out.stdout + out.stderr)
-        raise RuntimeError("loadtest printed no RESULT line")
-    result = json.loads(result_line[0][len("RESULT "):])
+    result = generator_result(args, out, json_path)
     blocks = max(1.0, after["blocks"] - before["blocks"] if not args.bare else result["blocks_sent"])
     server_cpu = cpu1 - cpu0
     engine_cpu = after["engine_cpu_s"] - before["engine_cpu_s"]
     return {
-        "sessions": sessions, "security": mode,
+        "sessions": sessions, "security": mode, "generator": args.generator,
         "blocks_per_s": result["blocks_per_s"],
         "p50_ms": result["latency_ms"]["p50"], "p95_ms": result["latency_ms"]["p95"],
         "p99_ms": result["latency_ms"]["p99"],
-        "errors": sum(result["errors"].values()), "rejections": sum(result["rejections"].values()),
+        "errors": result["errors"], "rejections": result["rejections"],
         "server_cpu_cores": server_cpu / result["wall_s"],
         "server_us_per_block": 1e6 * server_cpu / blocks,
         "engine_us_per_block": 1e6 * engine_cpu / blocks,
         "outside_engine_us_per_block": 1e6 * (server_cpu - engine_cpu) / blocks,
+        "generator_cpu_cores": gen_cpu / result["wall_s"],
+        "generator_us_per_block": 1e6 * gen_cpu / max(1, result["blocks_sent"]),  # start-up included
+        "generator_run_us_per_block": result["run_us_per_block"],
     }
 
 
@@ -130,7 +175,10 @@ def main():
     p.add_argument("--rate", choices=["realtime", "max"], default="realtime")
     p.add_argument("--particles", type=int, default=4096)
     p.add_argument("--encoding", choices=["float", "pcm16"], default="float")
-    p.add_argument("--processes", type=int, default=1, help="load-generator processes")
+    p.add_argument("--generator", choices=["python", "cpp"], default="python",
+                   help="load generator: python (clients/python/loadtest.py) or cpp (localizer-loadgen)")
+    p.add_argument("--processes", type=int, default=1, help="load-generator processes (python)")
+    p.add_argument("--threads", type=int, default=1, help="load-generator pacing threads (cpp)")
     p.add_argument("--workers", type=int, default=0, help="server --workers (0: one per core)")
     p.add_argument("--server-arg", action="append", default=[], help="extra localizer-server flag (repeatable)")
     p.add_argument("--bare", action="store_true", help="drive bare_stream_server (gRPC alone) instead")
@@ -151,17 +199,20 @@ def main():
     args.server = (os.path.join(args.build, "tests", "bench", "bare_stream_server") if args.bare
                    else os.path.join(args.build, "server", "localizer-server"))
     args.loadtest = os.path.join(args.build, "clients", "python", "loadtest.py")
+    args.loadgen = os.path.join(args.build, "clients", "localizer-loadgen")
     print(f"# {args.rate}, {args.duration:g} s per row, {args.particles} particles, 4 ch 44.1 kHz, "
-          f"4096-sample blocks and frames, hop 2048, {args.encoding}; {os.cpu_count()} CPUs (load generator included)")
+          f"4096-sample blocks and frames, hop 2048, {args.encoding}; {os.cpu_count()} CPUs (load generator included); "
+          f"generator {args.generator}")
     print("sessions  security    blocks/s  p50_ms  p95_ms  p99_ms  errors  rejected  server_cores  us/block  engine_us  "
-          "outside_us")
+          "outside_us  gen_cores  gen_us/block")
     for n in [int(s) for s in args.sessions.split(",")]:
         for mode in modes:
             r = run_row(args, n, mode)
             print(f"{r['sessions']:8d}  {mode:10s}  {r['blocks_per_s']:8.1f}  {r['p50_ms']:6.1f}  {r['p95_ms']:6.1f}  "
                   f"{r['p99_ms']:6.1f}  {r['errors']:6d}  {r['rejections']:8d}  {r['server_cpu_cores']:12.2f}  "
                   f"{r['server_us_per_block']:8.0f}  {r['engine_us_per_block']:9.0f}  "
-                  f"{r['outside_engine_us_per_block']:10.0f}", flush=True)
+                  f"{r['outside_engine_us_per_block']:10.0f}  {r['generator_cpu_cores']:9.2f}  "
+                  f"{r['generator_us_per_block']:12.0f}", flush=True)
             print("RESULT " + json.dumps(r), file=sys.stderr)
 
 
