@@ -173,7 +173,7 @@ void ParticleSet::ResampleModes(double kernel_scale) {
     l[c] = (h * CovarianceRoot(moments.cov[c])).cast<float>();
     shift[c] = ((1.0 - a) * moments.mean[c]).cast<float>();
   }
-  const std::array<double, kMaxComponents> share = HoldContenders(moments.weight);
+  const std::array<double, kMaxComponents> carried = HoldContenders(moments.weight);
   SystematicIndices();
   CarryLevels();
   DrawKernelNoise();
@@ -210,7 +210,7 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   for (size_t c = 0; c < kMaxComponents; ++c) {
     if (!alive[c]) continue;
     deficit[static_cast<size_t>(next)] = label_deficit_[c];
-    weight[static_cast<size_t>(next)] = share[c];
+    weight[static_cast<size_t>(next)] = carried[c];
     remap[c] = next++;
   }
   for (uint8_t& lab : label_) lab = static_cast<uint8_t>(remap[lab]);

@@ -116,7 +116,8 @@ class ParticleSet {
   // While several labels live, a label the data have not ruled out (a contender: its best
   // particle's log-likelihood, summed over recent updates with decay kContenderDecay, trails
   // the best label's by less than kContenderMarginNats) keeps at least kContenderShare of the
-  // particles, with weights that keep its marginal share. Why: the marginal evidence of two
+  // particles, with weights that keep its marginal share (so with several labels the weights
+  // after resampling are equal within each label, not across them). Why: the marginal evidence of two
   // exact TDOA solutions of a 4-sensor array differs only by how wide each one's predicted
   // TDOAs are (white acceleration spreads the near solution's more), so resampling by it
   // alone drifts towards the far solution, whichever is true, and removes the other before

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/filters/divergence_monitor.h"
+
 namespace localizer::engine {
 
 void InnovationConsistency::Add(double nis, int pairs, const std::vector<UpdateReport::NisTerm>& terms) {
@@ -26,11 +28,8 @@ double InnovationConsistency::Inflation() const {
   }
   if (pairs <= 0) return 1.0;
   const double ratio = std::max(1.0, nis / pairs);
-  // The chi-square 0.99 quantile of `pairs` degrees of freedom (Wilson-Hilferty, z = 2.326).
   const double dof = pairs;
-  const double a = 2.0 / (9.0 * dof);
-  const double q99 = dof * std::pow(1.0 - a + 2.326 * std::sqrt(a), 3.0);
-  if (!with_terms || nis <= q99) return ratio;
+  if (!with_terms || nis <= ChiSquareQuantile(0.99, pairs)) return ratio;
   // sum e^2 / (noise + k state) falls with k: bisect on log k for the value `pairs`.
   const auto excess = [&](double k) {
     double sum = 0.0;
