@@ -26,6 +26,10 @@ constexpr double kSoftSolveEvery_s = 1.0;
 // The smallest change of the soft-iron correction acted on (largest entry of the difference):
 // 0.01 turns the heading by at most about 0.6 degrees.
 constexpr double kSoftIronChange = 0.01;
+// Once a correction is in use, the change at which a refinement replaces it: the fit keeps
+// improving as the window sees more attitudes, and a refinement turns the heading by a
+// fraction of a degree, which needs no re-learning.
+constexpr double kSoftIronRefine = 0.003;
 
 // Third row of R(q): R^T e_up, the world's Up seen in the body frame.
 Eigen::Vector3d UpInBody(const Eigen::Quaterniond& q) {
@@ -216,16 +220,18 @@ void QuaternionEkf::RelearnHeading(bool restart_sums) {
 }
 
 void QuaternionEkf::AdoptSoftIron(const SoftIronFit& fit) {
-  // Nothing to gain from a correction that turns the heading by less than kSoftIronChange
-  // from the one in use (a clean sensor's fit wanders by about that).
-  if ((fit.correction - mag_correction_).cwiseAbs().maxCoeff() < kSoftIronChange) {
+  // Nothing to gain from a first correction that turns the heading by less than
+  // kSoftIronChange (a clean sensor's fit wanders by about that), or from a refinement below
+  // kSoftIronRefine.
+  const double least = soft_iron_in_use_ ? kSoftIronRefine : kSoftIronChange;
+  if ((fit.correction - mag_correction_).cwiseAbs().maxCoeff() < least) {
     soft_candidate_valid_ = false;
     return;
   }
   // Two fits in a row (a second apart) must agree: one fit can trade distortion for a
   // passing disturbance for a moment.
   const bool confirmed =
-      soft_candidate_valid_ && (fit.correction - soft_candidate_).cwiseAbs().maxCoeff() < kSoftIronChange;
+      soft_candidate_valid_ && (fit.correction - soft_candidate_).cwiseAbs().maxCoeff() < least;
   soft_candidate_ = fit.correction;
   soft_candidate_valid_ = !confirmed;
   if (!confirmed) return;

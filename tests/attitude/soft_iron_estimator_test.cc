@@ -131,10 +131,11 @@ double RmsHeadingDeg(const AttitudeFilterOptions& options, const AttitudeTraject
 
 // A 40 µT magnet with ±5 % soft iron (RandomSoftIronMagnet, three seeded draws) on a tumbling
 // simulated sensor from the first sample, 120 s: from 60 s on the RMS heading error, mean of
-// the draws, is below 0.65 deg with the soft-iron fit (measured 0.52; clean sensor 0.28); with
-// hard iron only (mag_soft_iron_max = 0) the distortion stays in the heading and the bound
-// fails (measured 0.79). Not yet within 1.5x the clean sensor's: on one draw the first
-// correction adopted is off by about 0.01 and is not refined (0.82 against 0.98 hard only).
+// the draws, is below 0.6 deg with the soft-iron fit (measured 0.43, the clean sensor 0.28:
+// 1.5x the clean error, within rounding); with hard iron only (mag_soft_iron_max = 0) the
+// distortion stays in the heading and the bound fails (measured 0.79). Draw 10 is the worst
+// (0.72 against 0.98 hard only): its first correction comes from a window where the heading
+// was still following the distorted field.
 TEST(SoftIronEstimatorTest, FilterRemovesTheSoftIronHeadingError) {
   const AttitudeTrajectory truth = Tumbling();
   AttitudeFilterOptions options;
@@ -157,7 +158,7 @@ TEST(SoftIronEstimatorTest, FilterRemovesTheSoftIronHeadingError) {
     hard_deg += h / 3.0;
   }
   std::printf("means: clean %.2f deg, with the fit %.2f, hard iron only %.2f\n", clean_deg, fit_deg, hard_deg);
-  EXPECT_LT(fit_deg, 0.65);
+  EXPECT_LT(fit_deg, 0.6);
 }
 
 // The filter adopts the correction it finds (and says so in its estimate).
