@@ -43,10 +43,10 @@ namespace localizer::engine {
 // Exponentially weighted sums over the readings m_k and attitudes R_k (body -> world) of the
 // window, each sample with weight 1 when added and older ones down-weighted (see Add()).
 struct MagCalibrationSums {
-  double s0 = 0.0;                                  // sum w
-  Eigen::Matrix3d sr = Eigen::Matrix3d::Zero();     // sum w R_k
-  Eigen::Vector3d sm = Eigen::Vector3d::Zero();     // sum w m_k (µT)
-  Eigen::Matrix3d smm = Eigen::Matrix3d::Zero();    // sum w m_k m_k^T (µT^2)
+  double s0 = 0.0;                                // sum w
+  Eigen::Matrix3d sr = Eigen::Matrix3d::Zero();   // sum w R_k
+  Eigen::Vector3d sm = Eigen::Vector3d::Zero();   // sum w m_k (µT)
+  Eigen::Matrix3d smm = Eigen::Matrix3d::Zero();  // sum w m_k m_k^T (µT^2)
   Eigen::Matrix3d smr[3] = {Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero(),
                             Eigen::Matrix3d::Zero()};  // [i]: sum w m_k,i R_k (µT)
 

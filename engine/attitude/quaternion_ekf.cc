@@ -230,8 +230,7 @@ void QuaternionEkf::AdoptSoftIron(const SoftIronFit& fit) {
   }
   // Two fits in a row (a second apart) must agree: one fit can trade distortion for a
   // passing disturbance for a moment.
-  const bool confirmed =
-      soft_candidate_valid_ && (fit.correction - soft_candidate_).cwiseAbs().maxCoeff() < least;
+  const bool confirmed = soft_candidate_valid_ && (fit.correction - soft_candidate_).cwiseAbs().maxCoeff() < least;
   soft_candidate_ = fit.correction;
   soft_candidate_valid_ = !confirmed;
   if (!confirmed) return;
@@ -265,7 +264,8 @@ bool QuaternionEkf::MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt
   if (options_.mag_soft_iron_max > 0.0 && t_s >= next_soft_solve_t_s_) {
     next_soft_solve_t_s_ = t_s + kSoftSolveEvery_s;
     // Without the rotations that separate an offset from the world field there is nothing for
-    // the larger fit to find either (its diversity is never above the hard-iron fit's).
+    // the larger fit to find either (its diversity has been well below the hard-iron fit's wherever
+    // measured: 0.29 against 0.69 tumbling, 0.02 against 0.11 turning about the vertical).
     if (last_fit_.diversity >= options_.mag_calibration_diversity) {
       const SoftIronLimits limits{options_.mag_soft_iron_diversity, options_.mag_calibration_residual,
                                   options_.mag_soft_iron_max};

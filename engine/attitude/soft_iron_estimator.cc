@@ -69,13 +69,21 @@ SoftIronFit FitSoftIron(const MagCalibrationSums& sums, const SoftIronLimits& li
   SoftIronFit fit;
   if (sums.s0 < kMinWeight) return fit;
   const Matrix12d n = NormalMatrix(sums);
-  // theta = theta_0 + G phi, theta_0 = (1, 1, 1, 0, ...), G = blockdiag(T, I_6).
-  Eigen::Matrix<double, 12, 11> g = Eigen::Matrix<double, 12, 11>::Zero();
-  g.topLeftCorner<6, 5>() = TracelessBasis();
-  g.bottomRightCorner<6, 6>().setIdentity();
+  // theta = theta_0 + G phi, theta_0 = (1, 1, 1, 0, ...), G = blockdiag(T, I_6): H = G^T N G
+  // and G^T N theta_0 written per block (G's identity block costs nothing).
+  static const Eigen::Matrix<double, 6, 5> t = TracelessBasis();
   Vector12d theta0 = Vector12d::Zero();
   theta0.head<3>().setOnes();
-  const Matrix11d h = g.transpose() * n * g;
+  Matrix11d h;
+  const Eigen::Matrix<double, 6, 5> n_aa_t = n.topLeftCorner<6, 6>() * t;
+  h.topLeftCorner<5, 5>() = t.transpose() * n_aa_t;
+  h.bottomLeftCorner<6, 5>() = n.bottomLeftCorner<6, 6>() * t;
+  h.topRightCorner<5, 6>() = h.bottomLeftCorner<6, 5>().transpose();
+  h.bottomRightCorner<6, 6>() = n.bottomRightCorner<6, 6>();
+  const Vector12d n_theta0 = n.leftCols<3>().rowwise().sum();  // N theta_0
+  Vector11d gt_n_theta0;
+  gt_n_theta0.head<5>() = t.transpose() * n_theta0.head<6>();
+  gt_n_theta0.tail<6>() = n_theta0.tail<6>();
   // The offset and world-field block must be invertible (the hard-iron fit's condition).
   const Eigen::LLT<Eigen::Matrix<double, 6, 6>> rr(h.bottomRightCorner<6, 6>());
   if (rr.info() != Eigen::Success) return fit;
@@ -83,8 +91,10 @@ SoftIronFit FitSoftIron(const MagCalibrationSums& sums, const SoftIronLimits& li
   const Eigen::Matrix<double, 5, 5> d = h.topLeftCorner<5, 5>() - h.topRightCorner<5, 6>() * rr_re;
   const Eigen::LDLT<Matrix11d> ldlt(h);
   if (ldlt.info() != Eigen::Success) return fit;
-  const Vector11d phi = ldlt.solve(-(g.transpose() * (n * theta0)));
-  const Vector12d theta = theta0 + g * phi;
+  const Vector11d phi = ldlt.solve(-gt_n_theta0);
+  Vector12d theta = theta0;
+  theta.head<6>() += t * phi.head<5>();
+  theta.tail<6>() += phi.tail<6>();
   const Eigen::Matrix<double, 6, 1> a = theta.head<6>();
   fit.correction << a(0), a(3), a(4), a(3), a(1), a(5), a(4), a(5), a(2);
   fit.field_world_uT = theta.tail<3>();
@@ -99,8 +109,8 @@ SoftIronFit FitSoftIron(const MagCalibrationSums& sums, const SoftIronLimits& li
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 5, 5>> d_eigen(d, Eigen::EigenvaluesOnly);
   fit.diversity = std::max(0.0, 3.0 * d_eigen.eigenvalues()(0) / (sums.s0 * field2));
   const double allowed_uT = limits.max_residual * std::sqrt(field2) + kAttitudeSdRad * fit.offset_uT.norm();
-  fit.trusted = fit.diversity >= limits.min_diversity && fit.residual_uT <= allowed_uT &&
-                fit.distortion <= limits.max_distortion;
+  fit.trusted =
+      fit.diversity >= limits.min_diversity && fit.residual_uT <= allowed_uT && fit.distortion <= limits.max_distortion;
   return fit;
 }
 

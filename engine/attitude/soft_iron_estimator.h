@@ -36,7 +36,8 @@
 //
 // Cost: nothing per sample beyond the hard-iron sums; one Fit() builds N (about 1,000
 // multiply-adds), solves an 11x11 LDLT and a 6x6 inverse, and a 5x5 symmetric eigenvalue
-// problem (a few microseconds): meant to run about once a second.
+// problem (~6 µs on the 2-vCPU VM, tests/bench/attitude_bench BM_SoftIronFit, about half
+// of it the eigenvalues): meant to run about once a second.
 #pragma once
 
 #include <Eigen/Core>
@@ -49,8 +50,8 @@ struct SoftIronFit {
   Eigen::Matrix3d correction = Eigen::Matrix3d::Identity();  // A = S^-1, symmetric, trace 3
   Eigen::Vector3d offset_uT = Eigen::Vector3d::Zero();       // o, body frame
   Eigen::Vector3d field_world_uT = Eigen::Vector3d::Zero();  // m_w, world frame (the filter's)
-  double diversity = 0.0;   // normalised smallest information about the distortion, ~[0, 1]
-  double distortion = 0.0;  // largest |eigenvalue of A - 1|
+  double diversity = 0.0;    // normalised smallest information about the distortion, ~[0, 1]
+  double distortion = 0.0;   // largest |eigenvalue of A - 1|
   double residual_uT = 0.0;  // RMS misfit per sample
   bool trusted = false;
 };

@@ -35,8 +35,9 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 
 enum class Case { kClean, kMagnetMid, kMagnetStartLarge, kMagnetStartSmall, kObjects, kMagnetMidSmall, kSoftIron };
-constexpr Case kCases[] = {Case::kClean,   Case::kMagnetMid, Case::kMagnetMidSmall, Case::kMagnetStartLarge,
-                           Case::kMagnetStartSmall, Case::kObjects,   Case::kSoftIron};
+constexpr Case kCases[] = {
+    Case::kClean,   Case::kMagnetMid, Case::kMagnetMidSmall, Case::kMagnetStartLarge, Case::kMagnetStartSmall,
+    Case::kObjects, Case::kSoftIron};
 constexpr int kCaseCount = sizeof(kCases) / sizeof(kCases[0]);
 
 const char* CaseName(Case c) {
@@ -263,7 +264,8 @@ TEST(MagDisturbanceTest, DISABLED_Study) {
 }
 
 // Not a test: a trace of one trial and case (ATT_TRIAL = 0..2, ATT_CASE = 0..6 in kCases order) every 2 s,
-// draws moved by ATT_SEED as in the study, for looking at what the calibration does. Run with --gtest_also_run_disabled_tests.
+// draws moved by ATT_SEED as in the study, for looking at what the calibration does. Run with
+// --gtest_also_run_disabled_tests.
 TEST(MagDisturbanceTest, DISABLED_Trace) {
   const int t = std::getenv("ATT_TRIAL") ? std::atoi(std::getenv("ATT_TRIAL")) : 0;
   const int c = std::getenv("ATT_CASE") ? std::atoi(std::getenv("ATT_CASE")) : 0;

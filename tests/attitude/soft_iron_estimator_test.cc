@@ -71,11 +71,12 @@ double ShapeError(const Eigen::Matrix3d& correction, const Eigen::Matrix3d& soft
 // the offset to 0.3 µT, trusted; the hard-iron fit's residual shows what it leaves.
 TEST(SoftIronEstimatorTest, RecoversTheDistortionFromRotation) {
   const Fits fits = FitOver(Tumbling(), 30.0, FivePercentSoftIron());
-  std::printf("soft: diversity %.3f residual %.2f uT shape %.4f offset error %.3f uT | hard: diversity %.3f "
-              "residual %.2f uT offset error %.2f uT\n",
-              fits.soft.diversity, fits.soft.residual_uT, ShapeError(fits.soft.correction, FivePercentSoftIron()),
-              (fits.soft.offset_uT - kOffset_uT).norm(), fits.hard.diversity, fits.hard.residual_uT,
-              (fits.hard.offset_uT - kOffset_uT).norm());
+  std::printf(
+      "soft: diversity %.3f residual %.2f uT shape %.4f offset error %.3f uT | hard: diversity %.3f "
+      "residual %.2f uT offset error %.2f uT\n",
+      fits.soft.diversity, fits.soft.residual_uT, ShapeError(fits.soft.correction, FivePercentSoftIron()),
+      (fits.soft.offset_uT - kOffset_uT).norm(), fits.hard.diversity, fits.hard.residual_uT,
+      (fits.hard.offset_uT - kOffset_uT).norm());
   EXPECT_TRUE(fits.soft.trusted);
   EXPECT_LT(ShapeError(fits.soft.correction, FivePercentSoftIron()), 0.005);
   EXPECT_LT((fits.soft.offset_uT - kOffset_uT).norm(), 0.3);
@@ -93,8 +94,8 @@ TEST(SoftIronEstimatorTest, ACleanSensorFitsTheIdentity) {
 
 // Still: nothing separates a distortion, an offset and the world field.
 TEST(SoftIronEstimatorTest, NoRotationIsNotTrusted) {
-  const Fits fits = FitOver(AttitudeTrajectory::ConstantRate({0.1, 0.2, 0.3}, Eigen::Vector3d::Zero()), 30.0,
-                            FivePercentSoftIron());
+  const Fits fits =
+      FitOver(AttitudeTrajectory::ConstantRate({0.1, 0.2, 0.3}, Eigen::Vector3d::Zero()), 30.0, FivePercentSoftIron());
   EXPECT_FALSE(fits.soft.trusted);
   EXPECT_LT(fits.soft.diversity, 0.01);  // noise alone (measured 2e-4)
 }
@@ -150,9 +151,10 @@ TEST(SoftIronEstimatorTest, FilterRemovesTheSoftIronHeadingError) {
     const double c = RmsHeadingDeg(options, truth, clean, 60.0);
     const double f = RmsHeadingDeg(options, truth, samples, 60.0);
     const double h = RmsHeadingDeg(hard_only, truth, samples, 60.0);
-    std::printf("draw %lu: RMS heading error from 60 s: clean %.2f deg, with the soft-iron fit %.2f, hard iron "
-                "only %.2f\n",
-                static_cast<unsigned long>(seed), c, f, h);
+    std::printf(
+        "draw %lu: RMS heading error from 60 s: clean %.2f deg, with the soft-iron fit %.2f, hard iron "
+        "only %.2f\n",
+        static_cast<unsigned long>(seed), c, f, h);
     clean_deg += c / 3.0;
     fit_deg += f / 3.0;
     hard_deg += h / 3.0;
