@@ -70,6 +70,10 @@ Status AttitudeFilterOptions::Validate() const {
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_calibration_s", mag_calibration_s));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_calibration_diversity", mag_calibration_diversity));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_calibration_residual", mag_calibration_residual));
+  LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_soft_iron_diversity", mag_soft_iron_diversity));
+  if (!std::isfinite(mag_soft_iron_max) || mag_soft_iron_max < 0.0 || mag_soft_iron_max >= 1.0) {
+    return InvalidArgument("mag_soft_iron_max is " + FormatDouble(mag_soft_iron_max) + ", must be within [0, 1)");
+  }
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_restart_s", mag_restart_s));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_heading_gate_rad", mag_heading_gate_rad));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("mag_consistency_s", mag_consistency_s));
@@ -123,6 +127,8 @@ const std::vector<AttitudeNumericOption>& AttitudeNumericOptions() {
       {"mag_calibration_s", &AttitudeFilterOptions::mag_calibration_s},
       {"mag_calibration_diversity", &AttitudeFilterOptions::mag_calibration_diversity},
       {"mag_calibration_residual", &AttitudeFilterOptions::mag_calibration_residual},
+      {"mag_soft_iron_diversity", &AttitudeFilterOptions::mag_soft_iron_diversity},
+      {"mag_soft_iron_max", &AttitudeFilterOptions::mag_soft_iron_max},
       {"mag_restart_s", &AttitudeFilterOptions::mag_restart_s},
       {"mag_heading_gate_rad", &AttitudeFilterOptions::mag_heading_gate_rad},
       {"mag_consistency_s", &AttitudeFilterOptions::mag_consistency_s},

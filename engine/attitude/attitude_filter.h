@@ -77,6 +77,13 @@ const char* AttitudeFilterKindName(AttitudeFilterKind kind);
 //   mag_calibration_diversity     0.1         1             quaternion   rotation needed to trust it
 //   mag_calibration_residual      0.1         1             quaternion   misfit allowed, of |field|
 //                                                                        (BROAD's noise alone: 0.03)
+//   mag_soft_iron_diversity       0.2         1             quaternion   rotation needed to trust the
+//                                                                        soft-iron fit (its 5 extra
+//                                                                        parameters need more than
+//                                                                        the offset's 3)
+//   mag_soft_iron_max             0.25        1             quaternion   largest distortion believed
+//                                                                        (eigenvalue of A off 1);
+//                                                                        0 turns soft iron off
 //   mag_restart_s                 1.0         s             quaternion   how fast a changed field
 //                                                                        restarts the fit
 //   mag_heading_gate_rad          0.05        rad           quaternion   heading-consistency gate
@@ -140,6 +147,17 @@ struct AttitudeFilterOptions {
   double mag_calibration_s = 20.0;
   double mag_calibration_diversity = 0.1;
   double mag_calibration_residual = 0.1;
+  // Soft-iron calibration (quaternion filter; engine/attitude/soft_iron_estimator.h): from the
+  // same window, the offset and a symmetric correction A (trace 3) with the corrected field
+  // A (m - o), solved once a second while the hard-iron fit's diversity is at least
+  // mag_calibration_diversity. Trusted when its own diversity (the smallest information about
+  // the distortion, normalised to 1 for attitudes over the whole sphere) is at least
+  // mag_soft_iron_diversity, its misfit within the hard-iron fit's allowance and every
+  // eigenvalue of A within mag_soft_iron_max of 1. Adopted (correction and offset, the heading
+  // re-learnt) when two fits a second apart agree and it changes A by more than 0.01; dropped
+  // when the hard-iron fit adopts a new offset. mag_soft_iron_max = 0: hard iron only.
+  double mag_soft_iron_diversity = 0.2;
+  double mag_soft_iron_max = 0.25;
   double mag_restart_s = 1.0;
   // Consistency with the gyro (quaternion filter): a sample is disturbed when the heading
   // innovation, low-passed over 0.5 s, exceeds mag_heading_gate_rad plus 3 sd of the
@@ -186,6 +204,9 @@ struct AttitudeEstimate {
   // offset (engine/attitude/hard_iron_estimator.h).
   bool mag_calibrated = false;
   Eigen::Vector3d mag_offset_uT = Eigen::Vector3d::Zero();
+  // The soft-iron correction A applied after the offset, A (m - o) (symmetric, trace 3;
+  // identity until a soft-iron fit is adopted; engine/attitude/soft_iron_estimator.h).
+  Eigen::Matrix3d mag_correction = Eigen::Matrix3d::Identity();
 };
 
 class AttitudeFilter {

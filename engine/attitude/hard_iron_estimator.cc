@@ -17,10 +17,11 @@ constexpr double kAttitudeSdRad = 0.01;
 
 HardIronFit HardIronEstimator::Solve(const Eigen::Matrix3d& body_to_world) const {
   HardIronFit fit;
-  if (s0_ < kMinWeight) return fit;
-  const Eigen::Matrix3d m = sr_ / s0_;
-  const Eigen::Vector3d mean_y = sy_ / s0_;
-  const Eigen::Vector3d mean_m = sm_ / s0_;
+  const double s0 = sums_.s0;
+  if (s0 < kMinWeight) return fit;
+  const Eigen::Matrix3d m = sums_.sr / s0;
+  const Eigen::Vector3d mean_y = sums_.Sy() / s0;
+  const Eigen::Vector3d mean_m = sums_.sm / s0;
   const Eigen::Matrix3d a = Eigen::Matrix3d::Identity() - m.transpose() * m;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
   eigen.computeDirect(a, Eigen::EigenvaluesOnly);
@@ -29,7 +30,7 @@ HardIronFit HardIronEstimator::Solve(const Eigen::Matrix3d& body_to_world) const
   const Eigen::Matrix3d a_inv = a.inverse();
   fit.offset_uT = a_inv * (mean_m - m.transpose() * mean_y);
   fit.field_world_uT = mean_y - m * fit.offset_uT;
-  const double misfit = smm_ / s0_ - fit.field_world_uT.dot(mean_y) - fit.offset_uT.dot(mean_m);
+  const double misfit = sums_.smm.trace() / s0 - fit.field_world_uT.dot(mean_y) - fit.offset_uT.dot(mean_m);
   fit.residual_uT = std::sqrt(std::max(0.0, misfit));
   // The heading-relevant part: the world's horizontal axis across the field's horizontal
   // part, seen in the body at the current attitude.
@@ -48,9 +49,10 @@ double HardIronEstimator::AllowedResidual(const HardIronFit& fit) const {
 }
 
 double HardIronEstimator::ResidualWith(const Eigen::Vector3d& offset_uT) const {
-  if (s0_ <= 0.0) return 0.0;
+  if (sums_.s0 <= 0.0) return 0.0;
   const Eigen::Vector3d world = FieldWith(offset_uT);
-  const double misfit = (smm_ - 2.0 * offset_uT.dot(sm_)) / s0_ + offset_uT.squaredNorm() - world.squaredNorm();
+  const double misfit =
+      (sums_.smm.trace() - 2.0 * offset_uT.dot(sums_.sm)) / sums_.s0 + offset_uT.squaredNorm() - world.squaredNorm();
   return std::sqrt(std::max(0.0, misfit));
 }
 

@@ -27,13 +27,32 @@
 // by), a magnet that appears mid-window or soft iron beyond the tolerance leave a large
 // residual, and the fit is not trusted until the window has forgotten them.
 //
-// Cost: about 40 multiply-adds per Add(); Solve() (a 3x3 inverse and a 3x3 symmetric
-// eigenvalue problem in closed form) is meant to run a few times per second.
+// Sums. Add() keeps a superset of what the hard-iron fit needs (MagCalibrationSums: the
+// second moments of m_k and the products m_k,i R_k), so the soft-iron fit
+// (soft_iron_estimator.h) reads the same window without sums of its own.
+//
+// Cost: about 60 multiply-adds per Add() (the 27 products m_k,i R_k are most of it);
+// Solve() (a 3x3 inverse and a 3x3 symmetric eigenvalue problem in closed form) is meant to
+// run a few times per second.
 #pragma once
 
 #include <Eigen/Core>
 
 namespace localizer::engine {
+
+// Exponentially weighted sums over the readings m_k and attitudes R_k (body -> world) of the
+// window, each sample with weight 1 when added and older ones down-weighted (see Add()).
+struct MagCalibrationSums {
+  double s0 = 0.0;                                // sum w
+  Eigen::Matrix3d sr = Eigen::Matrix3d::Zero();   // sum w R_k
+  Eigen::Vector3d sm = Eigen::Vector3d::Zero();   // sum w m_k (µT)
+  Eigen::Matrix3d smm = Eigen::Matrix3d::Zero();  // sum w m_k m_k^T (µT^2)
+  Eigen::Matrix3d smr[3] = {Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero(),
+                            Eigen::Matrix3d::Zero()};  // [i]: sum w m_k,i R_k (µT)
+
+  // sum w R_k m_k = sum_i smr[i].col(i): the readings rotated into the world.
+  Eigen::Vector3d Sy() const { return smr[0].col(0) + smr[1].col(1) + smr[2].col(2); }
+};
 
 struct HardIronFit {
   Eigen::Vector3d offset_uT = Eigen::Vector3d::Zero();       // b, body frame
@@ -55,22 +74,15 @@ class HardIronEstimator {
   // after the previous one (older samples are down-weighted by 1 - dt_s / forget_s).
   void Add(const Eigen::Matrix3d& body_to_world, const Eigen::Vector3d& mag_uT, double dt_s) {
     const double keep = forget_s_ > dt_s ? 1.0 - dt_s / forget_s_ : 0.0;
-    s0_ = keep * s0_ + 1.0;
-    sr_ = keep * sr_ + body_to_world;
-    const Eigen::Vector3d y = body_to_world * mag_uT;
-    sy_ = keep * sy_ + y;
-    sm_ = keep * sm_ + mag_uT;
-    smm_ = keep * smm_ + mag_uT.squaredNorm();
+    sums_.s0 = keep * sums_.s0 + 1.0;
+    sums_.sr = keep * sums_.sr + body_to_world;
+    sums_.sm = keep * sums_.sm + mag_uT;
+    sums_.smm = keep * sums_.smm + mag_uT * mag_uT.transpose();
+    for (int i = 0; i < 3; ++i) sums_.smr[i] = keep * sums_.smr[i] + mag_uT(i) * body_to_world;
   }
 
   // Forgets every sample (after a change of the offset or the field, so the fit restarts).
-  void Reset() {
-    s0_ = 0.0;
-    sr_.setZero();
-    sy_.setZero();
-    sm_.setZero();
-    smm_ = 0.0;
-  }
+  void Reset() { sums_ = MagCalibrationSums{}; }
 
   // The fit over the samples added so far (not trusted with fewer than a few), judged for the
   // current attitude `body_to_world`.
@@ -81,22 +93,20 @@ class HardIronEstimator {
   double ResidualWith(const Eigen::Vector3d& offset_uT) const;
   // That best world field: (Sy - SR b) / S0.
   Eigen::Vector3d FieldWith(const Eigen::Vector3d& offset_uT) const {
-    return s0_ > 0.0 ? Eigen::Vector3d((sy_ - sr_ * offset_uT) / s0_) : Eigen::Vector3d::Zero();
+    return sums_.s0 > 0.0 ? Eigen::Vector3d((sums_.Sy() - sums_.sr * offset_uT) / sums_.s0) : Eigen::Vector3d::Zero();
   }
   // The misfit a trusted fit may have: max_residual |m_w| + 0.01 |b|.
   double AllowedResidual(const HardIronFit& fit) const;
 
-  double weight() const { return s0_; }
+  double weight() const { return sums_.s0; }
+  const MagCalibrationSums& sums() const { return sums_; }
+  double max_residual() const { return max_residual_; }
 
  private:
   double forget_s_;
   double min_diversity_;
   double max_residual_;
-  double s0_ = 0.0;
-  Eigen::Matrix3d sr_ = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d sy_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d sm_ = Eigen::Vector3d::Zero();
-  double smm_ = 0.0;
+  MagCalibrationSums sums_;
 };
 
 }  // namespace localizer::engine

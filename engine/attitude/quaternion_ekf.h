@@ -20,8 +20,11 @@
 // Only tilt is observed: a body rotation about h leaves h unchanged, so heading is untouched.
 //
 // Magnetometer. Each reading first feeds the hard-iron fit (hard_iron_estimator.h, solved
-// ten times a second); the offset in use (0 until a fit finds one) is subtracted, and the
-// corrected field is used for heading only when (1) MagReference (mag_reference.h) finds its
+// ten times a second) and, from the same sums, the soft-iron fit (soft_iron_estimator.h,
+// solved once a second while the hard-iron fit's diversity is enough); the offset o in use
+// (0 until a fit finds one) is subtracted and the correction A in use (I until a trusted
+// soft-iron fit is adopted) applied, A (m - o), and the corrected field is used for heading
+// only when (1) MagReference (mag_reference.h) finds its
 // norm and dip at the reference — learnt in the first second, then set by each trusted fit —
 // and (2) the heading innovation, low-passed over 0.5 s, is within mag_heading_gate_rad + 3
 // sd of the predicted heading (or has stayed outside it for mag_consistency_s). Otherwise
@@ -44,8 +47,9 @@
 // b <- b + K_b nu), P <- P - K S K^T, symmetrised. The reset Jacobian of the error state
 // (I - [dtheta/2 x]) is taken as I: dtheta is a few milliradians per step.
 // Cost per update (6 error states, fixed-size Eigen, no heap, no sin/cos/sqrt in the
-// rotation-vector exponential below 0.1 rad; the hard-iron sums add ~40 multiply-adds per
-// magnetometer sample and a 3x3 solve ten times a second): see BENCHMARKS.md
+// rotation-vector exponential below 0.1 rad; the calibration sums add ~60 multiply-adds and
+// the correction ~10 per magnetometer sample, plus a 3x3 solve ten times a second and the
+// soft-iron fit, a few microseconds, once a second): see BENCHMARKS.md
 // (tests/bench/attitude_bench.cc).
 #pragma once
 
@@ -56,6 +60,7 @@
 #include "engine/attitude/hard_iron_estimator.h"
 #include "engine/attitude/mag_reference.h"
 #include "engine/attitude/rest_detector.h"
+#include "engine/attitude/soft_iron_estimator.h"
 
 namespace localizer::engine {
 
@@ -74,6 +79,9 @@ class QuaternionEkf final : public AttitudeFilter {
   const Eigen::Matrix<double, 6, 6>& covariance() const { return p_; }
   // The latest hard-iron fit (solved ten times a second while the magnetometer is in use).
   const HardIronFit& hard_iron_fit() const { return last_fit_; }
+  // The latest soft-iron fit (solved once a second while the hard-iron fit's rotation
+  // diversity is enough and mag_soft_iron_max > 0).
+  const SoftIronFit& soft_iron_fit() const { return last_soft_fit_; }
 
  private:
   using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -89,6 +97,13 @@ class QuaternionEkf final : public AttitudeFilter {
   // (offset-corrected) sample was used for heading.
   bool MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt_s);
   void AdoptCalibration(const HardIronFit& fit, double t_s);
+  // Adopts a trusted soft-iron fit (correction matrix and offset) once two fits in a row
+  // agree and it differs from the one in use by enough to turn the heading.
+  void AdoptSoftIron(const SoftIronFit& fit);
+  // Raises the heading variance to the initial prior and lets the heading re-learn from the
+  // corrected field (without the consistency gate until it has converged); restart_sums:
+  // the calibration sums restart too (a new offset: what they hold carried the old one).
+  void RelearnHeading(bool restart_sums);
   void RestUpdate(const Eigen::Vector3d& gyro_rps);
 
   AttitudeFilterOptions options_;
@@ -96,6 +111,14 @@ class QuaternionEkf final : public AttitudeFilter {
   HardIronEstimator hard_iron_;
   HardIronFit last_fit_;
   Eigen::Vector3d mag_offset_uT_ = Eigen::Vector3d::Zero();  // subtracted from each reading
+  // Soft iron: the correction A applied after the offset (A (m - o)); I until a trusted
+  // soft-iron fit is adopted, and again whenever the hard-iron fit adopts a new offset.
+  SoftIronFit last_soft_fit_;
+  Eigen::Matrix3d mag_correction_ = Eigen::Matrix3d::Identity();
+  bool soft_iron_in_use_ = false;
+  Eigen::Matrix3d soft_candidate_ = Eigen::Matrix3d::Identity();  // the previous trusted fit's A
+  bool soft_candidate_valid_ = false;
+  double next_soft_solve_t_s_ = 0.0;
   // An offset has been found and adopted since the start (until then the offset stays 0).
   bool mag_calibrated_ = false;
   double next_solve_t_s_ = 0.0;

@@ -34,6 +34,25 @@ BodyFixedMagnet RandomBodyFixedMagnet(double offset_norm_uT, double soft_iron_fr
   return magnet;
 }
 
+BodyFixedMagnet RandomSoftIronMagnet(double offset_norm_uT, double gain_fraction, double start_s, uint64_t seed) {
+  std::mt19937_64 engine(seed);
+  BodyFixedMagnet magnet;
+  magnet.offset_uT = offset_norm_uT * RandomDirection(engine);
+  // A rotation uniform over SO(3): a normalised standard normal quaternion.
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::Quaterniond q;
+  do {
+    q.coeffs() << normal(engine), normal(engine), normal(engine), normal(engine);
+  } while (q.coeffs().norm() < 1e-6);
+  const Eigen::Matrix3d axes = q.normalized().toRotationMatrix();
+  std::uniform_real_distribution<double> uniform(-gain_fraction, gain_fraction);
+  Eigen::Vector3d gains;
+  for (int i = 0; i < 3; ++i) gains(i) = 1.0 + uniform(engine);
+  magnet.soft_iron = axes * gains.asDiagonal() * axes.transpose();
+  magnet.start_s = start_s;
+  return magnet;
+}
+
 PassingObject RandomPassingObject(double peak_norm_uT, double centre_s, double width_s, uint64_t seed) {
   std::mt19937_64 engine(seed);
   PassingObject object;

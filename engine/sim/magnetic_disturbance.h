@@ -41,6 +41,14 @@ struct PassingObject {
 // matrix I + E, E symmetric with entries uniform in [-soft_iron_fraction, soft_iron_fraction].
 BodyFixedMagnet RandomBodyFixedMagnet(double offset_norm_uT, double soft_iron_fraction, double start_s, uint64_t seed);
 
+// Iron riding on the sensor with a magnet: a soft-iron matrix S = Q diag(1 + d) Q^T with
+// principal gains d_i uniform in [-gain_fraction, gain_fraction] along principal axes Q drawn
+// uniformly over the rotations (gain_fraction 0.05: "±5 % soft iron"), and a hard-iron offset of
+// `offset_norm_uT` in a direction uniform on the sphere. Unlike RandomBodyFixedMagnet, whose
+// entries are drawn independently, the departure from the identity is bounded by gain_fraction
+// along every axis, so the case says how large a distortion it is.
+BodyFixedMagnet RandomSoftIronMagnet(double offset_norm_uT, double gain_fraction, double start_s, uint64_t seed);
+
 // An object whose field at the closest pass has norm `peak_norm_uT`, direction uniform on the
 // sphere.
 PassingObject RandomPassingObject(double peak_norm_uT, double centre_s, double width_s, uint64_t seed);

@@ -34,10 +34,11 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-enum class Case { kClean, kMagnetMid, kMagnetStartLarge, kMagnetStartSmall, kObjects, kMagnetMidSmall };
+enum class Case { kClean, kMagnetMid, kMagnetStartLarge, kMagnetStartSmall, kObjects, kMagnetMidSmall, kSoftIron };
 constexpr Case kCases[] = {
-    Case::kClean,  Case::kMagnetMid, Case::kMagnetMidSmall, Case::kMagnetStartLarge, Case::kMagnetStartSmall,
-    Case::kObjects};
+    Case::kClean,   Case::kMagnetMid, Case::kMagnetMidSmall, Case::kMagnetStartLarge, Case::kMagnetStartSmall,
+    Case::kObjects, Case::kSoftIron};
+constexpr int kCaseCount = sizeof(kCases) / sizeof(kCases[0]);
 
 const char* CaseName(Case c) {
   switch (c) {
@@ -53,6 +54,8 @@ const char* CaseName(Case c) {
       return "magnet_start_25uT";
     case Case::kObjects:
       return "objects";
+    case Case::kSoftIron:
+      return "soft_iron_5pct";
   }
   return "?";
 }
@@ -75,6 +78,9 @@ std::vector<ImuSample> Disturbed(const io::ImuRecording& trial, Case c, uint64_t
     case Case::kMagnetStartSmall:
       AddBodyFixedMagnet(RandomBodyFixedMagnet(25.0, 0.02, -1e9, seed + 200), &samples);
       break;
+    case Case::kSoftIron:
+      AddBodyFixedMagnet(RandomSoftIronMagnet(40.0, 0.05, -1e9, seed + 500), &samples);
+      break;
     case Case::kObjects:
       for (int k = 0; k < 3; ++k) {
         AddPassingObject(RandomPassingObject(40.0, move_s + 20.0 + 30.0 * k, 2.0, seed + 300 + k), trial.truth,
@@ -89,8 +95,8 @@ std::vector<ImuSample> Disturbed(const io::ImuRecording& trial, Case c, uint64_t
 // from 30 s into the movement, and the 6D inclination of the clean trials, with `options`
 // (use_mag is set here).
 struct Table {
-  double total_deg[6][3] = {};
-  double late_total_deg[6][3] = {};  // scored from 30 s into the movement
+  double total_deg[kCaseCount][3] = {};
+  double late_total_deg[kCaseCount][3] = {};  // scored from 30 s into the movement
   double inclination_6d_deg[3] = {};
 };
 
@@ -151,7 +157,7 @@ void Print(const char* title, const Table& table) {
   std::printf("%s\n%-30s %7s %7s %7s %7s\n", title, "case (9D total RMSE, deg)", "02", "16", "25", "mean");
   for (const Case c : kCases) {
     PrintRow(CaseName(c), table.total_deg[static_cast<int>(c)]);
-    if (c == Case::kMagnetStartLarge || c == Case::kMagnetStartSmall) {
+    if (c == Case::kMagnetStartLarge || c == Case::kMagnetStartSmall || c == Case::kSoftIron) {
       PrintRow(std::string(CaseName(c)) + " from +30 s", table.late_total_deg[static_cast<int>(c)]);
     }
   }
@@ -179,6 +185,74 @@ TEST(MagDisturbanceTest, DefaultsSurviveTheDisturbances) {
   EXPECT_LT(table.late_total_deg[static_cast<int>(Case::kMagnetStartSmall)][0], 2.7);
 }
 
+// The estimates of a fresh filter with `options` over `samples`.
+std::vector<Eigen::Quaterniond> Estimates(const std::vector<ImuSample>& samples, const AttitudeFilterOptions& options) {
+  std::vector<Eigen::Quaterniond> estimates;
+  auto filter = CreateAttitudeFilter(options);
+  EXPECT_TRUE(filter.ok());
+  if (!filter.ok()) return estimates;
+  estimates.reserve(samples.size());
+  for (const ImuSample& s : samples) {
+    EXPECT_TRUE((*filter)->Update(s).ok());
+    estimates.push_back((*filter)->estimate().body_to_world);
+  }
+  return estimates;
+}
+
+// What a disturbance costs: the RMS total angle between the estimates on the disturbed
+// recording and on the clean one (same options), over the scored samples from `from_s` on.
+// Unlike the error against the truth it does not contain the truth's own heading offset (about
+// -1.3 deg on trials 02 and 25), which a distortion can happen to cancel or add to.
+double AddedErrorDeg(const io::ImuRecording& trial, const std::vector<Eigen::Quaterniond>& disturbed,
+                     const std::vector<Eigen::Quaterniond>& clean, double from_s) {
+  double sum = 0.0;
+  long count = 0;
+  for (size_t i = 0; i < trial.samples.size() && i < disturbed.size() && i < clean.size(); ++i) {
+    if (!trial.movement[i] || !trial.truth[i].coeffs().allFinite() || trial.samples[i].t_s < from_s) continue;
+    const double e = AttitudeErrorOf(disturbed[i], clean[i]).total_rad;
+    sum += e * e;
+    ++count;
+  }
+  return std::sqrt(sum / std::max(count, 1L)) / kDeg;
+}
+
+// ±5 % soft iron with a 40 µT magnet on the sensor from the first sample (soft_iron_5pct),
+// three draws per trial: the error it adds from 30 s into the movement (against the clean
+// run), with the soft-iron fit (defaults) and with hard iron only (mag_soft_iron_max = 0).
+TEST(MagDisturbanceTest, SoftIronFit) {
+  AttitudeFilterOptions options;
+  options.use_mag = true;
+  AttitudeFilterOptions hard_only = options;
+  hard_only.mag_soft_iron_max = 0.0;
+  const std::vector<std::string> paths = testing::BroadTrialPaths();
+  double with_fit_deg[3] = {}, hard_only_deg[3] = {};
+  const uint64_t kDraws[] = {0, 7, 13};
+  for (size_t t = 0; t < paths.size(); ++t) {
+    const io::ImuRecording* trial = testing::BroadTrial(paths[t]);
+    ASSERT_NE(trial, nullptr);
+    const double from_s = testing::FirstMovement_s(*trial) + 30.0;
+    const std::vector<Eigen::Quaterniond> clean = Estimates(trial->samples, options);
+    for (const uint64_t draw : kDraws) {
+      const std::vector<ImuSample> samples = Disturbed(*trial, Case::kSoftIron, 1000 * (t + 1) + draw);
+      const double fit = AddedErrorDeg(*trial, Estimates(samples, options), clean, from_s);
+      const double hard = AddedErrorDeg(*trial, Estimates(samples, hard_only), clean, from_s);
+      std::printf("trial %zu draw %2lu: added error from +30 s %.2f deg with the soft-iron fit, %.2f hard iron only\n",
+                  t, static_cast<unsigned long>(draw), fit, hard);
+      with_fit_deg[t] += fit / 3.0;
+      hard_only_deg[t] += hard / 3.0;
+    }
+  }
+  std::printf("mean of the draws: with the fit %.2f %.2f %.2f deg, hard iron only %.2f %.2f %.2f deg\n",
+              with_fit_deg[0], with_fit_deg[1], with_fit_deg[2], hard_only_deg[0], hard_only_deg[1], hard_only_deg[2]);
+  // Trial 02 (slow rotation): measured 1.35 with the fit, 1.43 hard iron only. The fit is
+  // trusted only from ~108 s (of 186) there, so most of the window is hard iron either way;
+  // this bound is not one hard iron alone fails (soft_iron_estimator_test has that one).
+  EXPECT_LT(with_fit_deg[0], 1.6);
+  // Trials 16 and 25 barely rotate: the soft-iron fit is never trusted and changes nothing
+  // (their large figures are the magnet present from the start, which no fit can separate).
+  for (int t = 1; t < 3; ++t) EXPECT_LE(with_fit_deg[t], hard_only_deg[t] + 0.05) << "trial " << t;
+}
+
 // Not a test: the table with the options in ATT_OPT="name=value,..." (the sensitivity
 // study in ACCURACY.md), the draws moved by ATT_SEED (default 0). Run with
 // --gtest_also_run_disabled_tests.
@@ -189,14 +263,16 @@ TEST(MagDisturbanceTest, DISABLED_Study) {
         Evaluate(OptionsFromEnvironment(), seed != nullptr ? std::strtoull(seed, nullptr, 10) : 0));
 }
 
-// Not a test: a trace of one trial and case (ATT_TRIAL = 0..2, ATT_CASE = 0..5 in kCases order) every 2 s,
-// for looking at what the calibration does. Run with --gtest_also_run_disabled_tests.
+// Not a test: a trace of one trial and case (ATT_TRIAL = 0..2, ATT_CASE = 0..6 in kCases order) every 2 s,
+// draws moved by ATT_SEED as in the study, for looking at what the calibration does. Run with
+// --gtest_also_run_disabled_tests.
 TEST(MagDisturbanceTest, DISABLED_Trace) {
   const int t = std::getenv("ATT_TRIAL") ? std::atoi(std::getenv("ATT_TRIAL")) : 0;
   const int c = std::getenv("ATT_CASE") ? std::atoi(std::getenv("ATT_CASE")) : 0;
   const io::ImuRecording* trial = testing::BroadTrial(testing::BroadTrialPaths()[t]);
   ASSERT_NE(trial, nullptr);
-  const std::vector<ImuSample> samples = Disturbed(*trial, kCases[c], 1000 * (t + 1));
+  const uint64_t seed_offset = std::getenv("ATT_SEED") ? std::strtoull(std::getenv("ATT_SEED"), nullptr, 10) : 0;
+  const std::vector<ImuSample> samples = Disturbed(*trial, kCases[c], 1000 * (t + 1) + seed_offset);
   AttitudeFilterOptions options = OptionsFromEnvironment();
   options.use_mag = std::getenv("ATT_NOMAG") == nullptr;
   auto filter = std::make_unique<QuaternionEkf>(options);
@@ -207,6 +283,7 @@ TEST(MagDisturbanceTest, DISABLED_Trace) {
     next_s += 2.0;
     const AttitudeEstimate e = filter->estimate();
     const HardIronFit& fit = filter->hard_iron_fit();
+    const SoftIronFit& soft = filter->soft_iron_fit();
     double total = NAN;
     if (trial->truth[i].coeffs().allFinite()) {
       Eigen::Quaterniond d = e.body_to_world * trial->truth[i].conjugate();
@@ -214,10 +291,12 @@ TEST(MagDisturbanceTest, DISABLED_Trace) {
       total = std::copysign(AttitudeErrorOf(e.body_to_world, trial->truth[i]).total_rad / kDeg, d.z());
     }
     std::printf(
-        "t %6.1f err %6.2f used %d cal %d div %.3f hdiv %.3f res %5.2f off %6.1f %6.1f %6.1f |m| %5.1f bz %.5f\n",
+        "t %6.1f err %6.2f used %d cal %d div %.3f hdiv %.3f res %5.2f off %6.1f %6.1f %6.1f |m| %5.1f bz %.5f "
+        "soft div %.3f res %5.2f dist %.3f ok %d A-I %.3f\n",
         samples[i].t_s, total, e.mag_used, e.mag_calibrated, fit.diversity, fit.heading_diversity, fit.residual_uT,
         e.mag_offset_uT.x(), e.mag_offset_uT.y(), e.mag_offset_uT.z(), samples[i].mag_uT.norm(),
-        (e.body_to_world * e.gyro_bias_rps).z());
+        (e.body_to_world * e.gyro_bias_rps).z(), soft.diversity, soft.residual_uT, soft.distortion, soft.trusted,
+        (e.mag_correction - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff());
   }
 }
 

@@ -6,6 +6,8 @@
 //                                    like noise, seed 1), kind 0 quaternion, 1 euler; mag 0/1.
 //   BM_AttitudeUpdateAndEstimate/... the same plus estimate() (Euler angles and their stds),
 //                                    what the CLI does per sample.
+//   BM_SoftIronFit                   one FitSoftIron() over 30 s of sums (the quaternion filter
+//                                    solves it once a second with the magnetometer in use).
 // Time per iteration = per update. Run:
 //   build/tests/bench/attitude_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "engine/attitude/attitude_filter.h"
+#include "engine/attitude/soft_iron_estimator.h"
 #include "engine/sim/platform_motion.h"
 
 namespace localizer::engine {
@@ -74,7 +77,25 @@ void RunUpdates(benchmark::State& state) {
 void BM_AttitudeUpdate(benchmark::State& state) { RunUpdates<false>(state); }
 void BM_AttitudeUpdateAndEstimate(benchmark::State& state) { RunUpdates<true>(state); }
 
+void BM_SoftIronFit(benchmark::State& state) {
+  AttitudeTrajectoryOptions motion;
+  motion.amplitude_rad = {1.2, 0.9, 2.5};
+  motion.frequency_hz = {0.13, 0.07, 0.05};
+  const AttitudeTrajectory truth(motion);
+  HardIronEstimator sums(20.0, 0.1, 0.1);
+  for (int k = 0; k < 30 * 285; ++k) {
+    const Eigen::Matrix3d r = truth.At(k / kRateHz).toRotationMatrix();
+    sums.Add(r, 1.03 * (r.transpose() * Eigen::Vector3d(0.0, 17.0, -46.0)) + Eigen::Vector3d(30.0, -45.0, 12.0),
+             1.0 / kRateHz);
+  }
+  for (auto _ : state) {
+    const SoftIronFit fit = FitSoftIron(sums.sums(), SoftIronLimits{});
+    benchmark::DoNotOptimize(fit.correction.data());
+  }
+}
+
 BENCHMARK(BM_AttitudeUpdate)->ArgsProduct({{0, 1}, {0, 1}});
+BENCHMARK(BM_SoftIronFit);
 BENCHMARK(BM_AttitudeUpdateAndEstimate)->ArgsProduct({{0, 1}, {0, 1}});
 
 }  // namespace
