@@ -1,5 +1,6 @@
 # What `cmake --install build [--prefix DIR]` puts under the prefix:
-#   bin/localizer-server, bin/localizer-cli
+#   bin/localizer-server, bin/localizer-cli (offline commands) and bin/localizer-cli-full
+#   (every command; localizer-cli execs it from its own directory: clients/cli/full_cli.h)
 #   lib/liblocalizer_<stage>.a                     one static library per engine stage
 #   include/localizer/engine/<stage>/*.h           the engine's headers, paths as the code uses them
 #   lib/cmake/localizer/localizerConfig.cmake      find_package(localizer CONFIG), with the
@@ -39,7 +40,7 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/localizerConfig.cmake
 # The binaries link shared libraries from outside the system paths (the CUDA runtime and
 # cuFFT under /usr/local/cuda when built with CUDA); keep those directories in the installed
 # RUNPATH, as the build tree's binaries have them, instead of relying on ld.so.conf.
-foreach(binary localizer-server localizer-cli localizer-loadgen)
+foreach(binary localizer-server localizer-cli localizer-cli-full localizer-loadgen)
   if(TARGET ${binary})
     set_target_properties(${binary} PROPERTIES INSTALL_RPATH_USE_LINK_PATH TRUE)
     install(TARGETS ${binary} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

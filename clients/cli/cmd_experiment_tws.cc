@@ -13,12 +13,16 @@
 #include "clients/cli/commands.h"
 #include "clients/cli/experiment_commands.h"
 #include "clients/cli/server_flags.h"
-#include "clients/grpc/connection.h"
-#include "clients/grpc/remote_scan_session.h"
 #include "engine/sim/radar_scan.h"
 #include "engine/tws/ospa.h"
 #include "engine/tws/track_scoring.h"
 #include "engine/tws/tws_tracker.h"
+#ifdef LOCALIZER_CLI_OFFLINE
+#include "clients/cli/full_cli.h"
+#else
+#include "clients/grpc/connection.h"
+#include "clients/grpc/remote_scan_session.h"
+#endif
 
 namespace localizer::cli {
 namespace {
@@ -124,13 +128,19 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
       f.initiation == "one-point" ? engine::tws::Initiation::kOnePoint : engine::tws::Initiation::kTwoPoint;
   // One scan through the tracker: the confirmed (and coasting) tracks after it.
   std::unique_ptr<engine::tws::TwsTracker> tracker;
-  std::unique_ptr<client::RemoteScanSession> remote;
-  std::vector<double> round_trip_s, server_total_s;
   if (f.server.empty()) {
     auto made = engine::tws::TwsTracker::Create(options);
     if (!made.ok()) return UsageError(kCommand, made.status().message());
     tracker = std::move(made).value();
-  } else {
+  }
+#ifdef LOCALIZER_CLI_OFFLINE
+  // The rest of this function runs the scans locally; through a server, localizer-cli-full
+  // runs them (main sent the command there already: NeedsFullCli).
+  if (!tracker) return ExecFullCli("experiment tws --server");
+#else
+  std::unique_ptr<client::RemoteScanSession> remote;
+  std::vector<double> round_trip_s, server_total_s;
+  if (!tracker) {
     engine::DetectionSessionConfig config;
     config.tws = options;
     auto channel = client::Connect(f.server, f.connect);
@@ -141,6 +151,7 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
     remote = std::move(made).value();
   }
   engine::ScanResult remote_result;
+#endif
   const auto process = [&](const engine::Scan& scan, engine::tws::ScanSummary* summary,
                            std::vector<engine::tws::TrackReport>* confirmed) -> Status {
     if (tracker) {
@@ -148,6 +159,9 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
       tracker->Tracks(confirmed, /*include_tentative=*/false);
       return Status::Ok();
     }
+#ifdef LOCALIZER_CLI_OFFLINE
+    return Internal("no tracker");  // unreachable: the scans ran locally or in localizer-cli-full
+#else
     LOCALIZER_RETURN_IF_ERROR(remote->Process(scan, &remote_result));
     round_trip_s.push_back(remote->last_round_trip_s());
     server_total_s.push_back(remote->last_server_total_s());
@@ -157,6 +171,7 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
       if (t.status != engine::tws::TrackStatus::kTentative) confirmed->push_back(t);
     }
     return Status::Ok();
+#endif
   };
 
   engine::tws::TrackScoring scoring(f.ospa_cutoff_m);
@@ -209,6 +224,7 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
   std::printf("confirmed_tracks     %zu (mean %.1f)\n", tracks.size(),
               confirmed_sum / static_cast<double>(ospa.size()));
   std::printf("plots_per_scan       %.1f\n", static_cast<double>(plots) / f.scans);
+#ifndef LOCALIZER_CLI_OFFLINE
   if (remote) {
     // Through the server: the scans' round trips (tentative tracks included in the count).
     std::printf("server               %s (session %s)\n", f.server.c_str(), remote->opened().session_id().c_str());
@@ -220,6 +236,7 @@ int RunTwsExperiment(const std::vector<std::string>& args) {
     if (const Status closed = remote->Close(); !closed.ok()) return RuntimeError(kCommand, closed);
     return kExitOk;
   }
+#endif
   std::printf("track_updates        %lld\n", static_cast<long long>(updates));
   std::printf("tracker_wall_s       %.4f\n", tracker_s);
   std::printf("track_updates_per_s  %.3g\n", tracker_s > 0.0 ? static_cast<double>(updates) / tracker_s : 0.0);

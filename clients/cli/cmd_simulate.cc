@@ -8,9 +8,6 @@
 #include "clients/cli/commands.h"
 #include "clients/cli/server_flags.h"
 #include "clients/cli/session_flags.h"
-#include "clients/grpc/connection.h"
-#include "clients/grpc/remote_track.h"
-#include "clients/grpc/streamer.h"
 #include "clients/io/array_json.h"
 #include "clients/io/room_scene_files.h"
 #include "clients/io/score.h"
@@ -18,6 +15,14 @@
 #include "clients/io/track_runner.h"
 #include "engine/sim/random_scene.h"
 #include "engine/sim/simulator.h"
+#ifdef LOCALIZER_CLI_OFFLINE
+#include "clients/cli/full_cli.h"
+#else
+#include "clients/cli/server_stream.h"
+#include "clients/grpc/connection.h"
+#include "clients/grpc/remote_track.h"
+#include "clients/grpc/streamer.h"
+#endif
 
 namespace localizer::cli {
 
@@ -64,8 +69,6 @@ bool IsScenario(const std::string& name) {
   return std::find(names.begin(), names.end(), name) != names.end();
 }
 
-// The array file simulate writes (simulation_files.h), so that the live session is
-// configured exactly as `track` would be on the written files.
 // A random scene (engine/sim/random_scene.h) simulated as the named scenarios are.
 StatusOr<io::SimulationRun> SimulateRandomScene(uint64_t seed, std::optional<double> duration_s) {
   engine::RandomSceneOptions options;
@@ -83,6 +86,10 @@ StatusOr<io::SimulationRun> SimulateRandomScene(uint64_t seed, std::optional<dou
   return run;
 }
 
+// What only --server needs (localizer-cli-full).
+#ifndef LOCALIZER_CLI_OFFLINE
+// The array file simulate writes (simulation_files.h), so that the live session is
+// configured exactly as `track` would be on the written files.
 io::ArrayFile ArrayFileOf(const io::SimulationRun& run) {
   io::ArrayFile array;
   array.sensors_m = run.scenario.sensors_m;
@@ -185,6 +192,7 @@ int RunOnServer(const SimulateFlags& f, const FlagSet& flags, const io::Simulati
   if (!status.ok()) return RuntimeError(kCommand, status);
   return kExitOk;
 }
+#endif
 
 // --room: the scene rendered for the array, written to --out.
 int RunRoomScene(const SimulateFlags& f) {
@@ -249,6 +257,9 @@ int RunSimulate(const std::vector<std::string>& args) {
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   if (f.list) return ListScenarios();
   const bool remote = !f.stream.server.empty();
+#ifdef LOCALIZER_CLI_OFFLINE
+  if (remote) return ExecFullCli("simulate --server");  // main sent it there already (NeedsFullCli)
+#endif
   const bool random = flags.seen("random");
   if (!f.room_path.empty()) {
     if (random || !f.scenario_name.empty()) return UsageError(kCommand, "--room excludes --scenario and --random");
@@ -281,7 +292,9 @@ int RunSimulate(const std::vector<std::string>& args) {
   auto run = random ? SimulateRandomScene(f.random_seed, f.duration_s)
                     : io::SimulateScenario(f.scenario_name, f.seed, f.duration_s);
   if (!run.ok()) return RuntimeError(kCommand, run.status());
+#ifndef LOCALIZER_CLI_OFFLINE
   if (remote) return RunOnServer(f, flags, *run);
+#endif
   auto files = io::WriteSimulationFiles(f.out_dir, *run);
   if (!files.ok()) return RuntimeError(kCommand, files.status());
   const engine::SimResult& r = run->result;

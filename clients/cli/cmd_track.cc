@@ -14,14 +14,19 @@
 #include "clients/cli/server_flags.h"
 #include "clients/cli/session_flags.h"
 #include "clients/cli/track_input.h"
-#include "clients/grpc/connection.h"
-#include "clients/grpc/remote_track.h"
 #include "clients/io/alsa_capture.h"
 #include "clients/io/array_json.h"
 #include "clients/io/raw_pcm.h"
 #include "clients/io/track_runner.h"
 #include "clients/io/wav_io.h"
 #include "engine/pipeline/session.h"
+#ifdef LOCALIZER_CLI_OFFLINE
+#include "clients/cli/full_cli.h"
+#else
+#include "clients/cli/server_stream.h"
+#include "clients/grpc/connection.h"
+#include "clients/grpc/remote_track.h"
+#endif
 
 namespace localizer::cli {
 
@@ -111,6 +116,20 @@ void PrintSummary(const io::TrackSummary& s, const std::string& out_path) {
       s.audio_s(), s.wall_s, speed, s.mean_tdoa_s * 1e3, s.mean_filter_s * 1e3, out_path.c_str());
 }
 
+io::TrackCallbacks MakeCallbacks(int print_every, bool sources, ProgressReporter* progress) {
+  io::TrackCallbacks callbacks;
+  callbacks.on_warning = [](const std::string& message) { Warning(kCommand, message); };
+  if (print_every > 0) {
+    callbacks.on_estimate = [print_every, sources](const engine::Estimate& e) {
+      if (e.frame_index % static_cast<uint64_t>(print_every) == 0) PrintEstimate(e, sources);
+    };
+  }
+  callbacks.on_progress = [progress](const io::TrackProgress& p) { progress->Update(p); };
+  return callbacks;
+}
+
+// What only a server run needs (localizer-cli-full).
+#ifndef LOCALIZER_CLI_OFFLINE
 // The local run's summary, from what a server stream delivered.
 io::TrackSummary SummaryOf(const client::RemoteTrackResult& r, int channel_count) {
   io::TrackSummary s;
@@ -135,18 +154,6 @@ io::TrackSummary SummaryOf(const client::RemoteTrackResult& r, int channel_count
   return s;
 }
 
-io::TrackCallbacks MakeCallbacks(int print_every, bool sources, ProgressReporter* progress) {
-  io::TrackCallbacks callbacks;
-  callbacks.on_warning = [](const std::string& message) { Warning(kCommand, message); };
-  if (print_every > 0) {
-    callbacks.on_estimate = [print_every, sources](const engine::Estimate& e) {
-      if (e.frame_index % static_cast<uint64_t>(print_every) == 0) PrintEstimate(e, sources);
-    };
-  }
-  callbacks.on_progress = [progress](const io::TrackProgress& p) { progress->Update(p); };
-  return callbacks;
-}
-
 client::StreamCallbacks RejectionWarnings() {
   client::StreamCallbacks callbacks;
   callbacks.on_rejected = [](const client::BlockRejection& r) {
@@ -159,6 +166,7 @@ client::StreamCallbacks RejectionWarnings() {
   };
   return callbacks;
 }
+#endif
 
 // The capture's own figures: what the device delivered, lost and why it ended.
 void PrintCaptureSummary(const io::TrackSummary& s, double duration_s) {
@@ -192,6 +200,7 @@ int RunLocal(const TrackFlags& f, const io::TrackJob& job, bool sources) {
   return kExitOk;
 }
 
+#ifndef LOCALIZER_CLI_OFFLINE
 int RunOnServer(const TrackFlags& f, const io::TrackJob& job, bool sources, client::RemoteTrackOptions options) {
   options.on_opened = PrintOpened;
   ProgressReporter progress;
@@ -207,6 +216,7 @@ int RunOnServer(const TrackFlags& f, const io::TrackJob& job, bool sources, clie
   if (!status.ok()) return RuntimeError(kCommand, status);
   return kExitOk;
 }
+#endif
 
 }  // namespace
 
@@ -260,6 +270,9 @@ int RunTrack(const std::vector<std::string>& args) {
   const auto format = io::ParseEstimatesFormat(f.format);
   if (!format.ok()) return UsageError(kCommand, "--format: " + format.status().message());
   const bool remote = !f.stream.server.empty();
+#ifdef LOCALIZER_CLI_OFFLINE
+  if (remote) return ExecFullCli("track --server");  // main sent it there already (NeedsFullCli)
+#endif
   if (!remote) {
     for (const std::string& name : StreamFlagNames()) {
       if (flags.seen(name)) return UsageError(kCommand, "--" + name + " needs --server");
@@ -267,12 +280,14 @@ int RunTrack(const std::vector<std::string>& args) {
   } else if (flags.seen("block")) {
     return UsageError(kCommand, "--block is for local tracking; with --server use --block-samples");
   }
+#ifndef LOCALIZER_CLI_OFFLINE
   client::RemoteTrackOptions options;
   if (remote) {
     auto parsed = ParseStreamFlags(f.stream);
     if (!parsed.ok()) return UsageError(kCommand, parsed.status().message());
     options = std::move(*parsed);
   }
+#endif
 
   auto input = ParseTrackInput(flags, f.input);
   if (!input.ok()) return UsageError(kCommand, input.status().message());
@@ -328,7 +343,11 @@ int RunTrack(const std::vector<std::string>& args) {
   job.block_s = f.block_s;
   auto sources = engine::ReportsSources(job.config);  // BuildSessionConfig checked it
   if (!sources.ok()) return UsageError(kCommand, sources.status().message());
+#ifdef LOCALIZER_CLI_OFFLINE
+  return RunLocal(f, job, *sources);
+#else
   return remote ? RunOnServer(f, job, *sources, std::move(options)) : RunLocal(f, job, *sources);
+#endif
 }
 
 }  // namespace localizer::cli

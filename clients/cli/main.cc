@@ -1,6 +1,9 @@
 // localizer-cli: simulate a scenario to files, track a recording, score a track; or do the
 // same through a localizer-server (--server), locate one block, list and close sessions.
 // See commands.h for the exit codes; `localizer-cli CMD --help` for each command's flags.
+// Compiled twice (full_cli.h): as localizer-cli-full, every command with gRPC and the GPU
+// backend; with LOCALIZER_CLI_OFFLINE as localizer-cli, which runs the offline commands
+// itself and execs localizer-cli-full for the others.
 #include <iostream>
 #include <string>
 #include <vector>
@@ -8,7 +11,11 @@
 #include "clients/cli/commands.h"
 #include "engine/core/version.h"
 #include "engine/pipeline/backend.h"
+#ifdef LOCALIZER_CLI_OFFLINE
+#include "clients/cli/full_cli.h"
+#else
 #include "gpu/backend/gpu_backend.h"
+#endif
 
 namespace localizer::cli {
 namespace {
@@ -34,9 +41,15 @@ constexpr Command kCommands[] = {
      RunDoa},
     {"score", "compare an estimates CSV with a truth CSV (rmse, median, p95, max error)", RunScore},
     {"plot", "draw an estimates CSV against its truth and sensors as an SVG picture", RunPlot},
+#ifdef LOCALIZER_CLI_OFFLINE
+    {"locate", "one block of a recording through the server's one-shot Locate: pairs and fix", RunInFullCli},
+    {"list", "the sessions a server holds, one line each", RunInFullCli},
+    {"close", "end a server session (needs its resume token)", RunInFullCli},
+#else
     {"locate", "one block of a recording through the server's one-shot Locate: pairs and fix", RunLocate},
     {"list", "the sessions a server holds, one line each", RunList},
     {"close", "end a server session (needs its resume token)", RunClose},
+#endif
     {"experiment",
      "reproduce a reference experiment and print its table\n"
      "            (pf-vs-ekf-2d, fwl, tws)",
@@ -96,6 +109,9 @@ int UnknownCommand(const std::string& name) {
 }
 
 int Main(int argc, char** argv) {
+#ifdef LOCALIZER_CLI_OFFLINE
+  SetProcessArguments(argc, argv);
+#endif
   if (argc < 2) {
     std::cerr << GlobalUsage();
     return kExitUsage;
@@ -115,12 +131,20 @@ int Main(int argc, char** argv) {
   }
   const Command* command = FindCommand(name);
   if (command == nullptr) return UnknownCommand(name);
+  std::vector<std::string> args(argv + 2, argv + argc);
+#ifdef LOCALIZER_CLI_OFFLINE
+  // A server or the GPU: localizer-cli-full runs the command (full_cli.h).
+  if (const std::string why = NeedsFullCli(name, args); !why.empty()) return ExecFullCli(why);
+  // A session that asks for the GPU anyway (an array file's backend) execs it then.
+  engine::SetGpuProvider(MakeFullCliGpuProvider());
+#else
   // Local sessions (--backend gpu|auto without --server) use the GPU when there is one.
   if (const Status gpu = gpu::RegisterGpuBackend(); !gpu.ok()) {
     std::cerr << "localizer-cli: " << gpu.message() << "\n";
     return kExitRuntimeError;
   }
-  const int code = command->run(std::vector<std::string>(argv + 2, argv + argc));
+#endif
+  const int code = command->run(args);
   engine::SetGpuProvider(nullptr);  // stop the GPU dispatchers before static destruction
   return code;
 }

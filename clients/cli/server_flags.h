@@ -1,13 +1,13 @@
 // Flags of the commands that talk to a localizer server (--server and the streaming
-// options of `track --server` and `simulate --server`), and how their output is printed.
+// options of `track --server` and `simulate --server`). Registering them needs no gRPC, so
+// the offline localizer-cli (full_cli.h) lists and checks them as localizer-cli-full does;
+// parsing them into client options and printing a stream's output is server_stream.h's.
 #pragma once
 
 #include <string>
+#include <vector>
 
-#include "clients/grpc/connection.h"
-#include "clients/grpc/remote_track.h"
-#include "clients/grpc/streamer.h"
-#include "clients/io/presence_summary.h"
+#include "clients/grpc/connect_options.h"
 #include "engine/core/flags.h"
 #include "engine/core/status.h"
 
@@ -31,18 +31,5 @@ void RegisterStreamFlags(FlagSet& flags, StreamFlags* f, const std::string& defa
 // The names of the flags RegisterStreamFlags adds and the credential flags, for "only with
 // --server" checks.
 const std::vector<std::string>& StreamFlagNames();
-
-// The streaming options, or INVALID_ARGUMENT naming the flag.
-StatusOr<client::RemoteTrackOptions> ParseStreamFlags(const StreamFlags& f);
-
-// Stream output shared by track --server and simulate --server, on stdout:
-//   "session=ID token=T backend=cpu resumed=0 ttl_s=60"      (when opened; the token
-//                                                             is what `close` needs)
-//   "latency_ms p50=... p95=... p99=... max=... (n=...)  rejections=R gaps=G"  (at the end)
-//   "no source found in N frames (presence statistic max X, threshold Y)"   (then, when the
-//                                                             server tested presence and no
-//                                                             frame held a source)
-void PrintOpened(const v1::SessionOpened& opened);
-void PrintStreamTotals(const client::StreamResult& result);
 
 }  // namespace localizer::cli

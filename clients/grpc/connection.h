@@ -13,6 +13,7 @@
 #include <memory>
 #include <string>
 
+#include "clients/grpc/connect_options.h"
 #include "engine/core/status.h"
 
 namespace localizer::client {
@@ -27,22 +28,6 @@ inline constexpr const char* kSessionKeyMetadata = "x-localizer-session-key";
 // fails here: connection errors surface on the first call as UNAVAILABLE.
 std::shared_ptr<grpc::Channel> Connect(const std::string& target);
 
-// How to reach a server that wants credentials; the CLI flags of the same names
-// (--tls-ca, --tls-cert, --tls-key, --auth-token-file) fill it. All empty: plaintext.
-struct ConnectOptions {
-  std::string tls_ca;           // PEM CA file the server's certificate must chain to; set
-                                // (or tls_cert set): TLS. "" with TLS: the system's roots
-  std::string tls_cert;         // PEM client certificate chain (mutual TLS); with tls_key
-  std::string tls_key;          // PEM private key of tls_cert
-  std::string auth_token_file;  // file with the bearer token: its first line that is not
-                                // blank or '#'; "ROLE TOKEN" (a line of the server's file)
-                                // also works, the last field is the token
-  // Not a flag: true gives the channel a TCP connection of its own (a local subchannel
-  // pool) instead of sharing one with every channel of the same target and arguments; load
-  // generators spread their streams over several connections this way.
-  bool own_connection = false;
-  bool tls() const { return !tls_ca.empty() || !tls_cert.empty(); }
-};
 
 // A channel with `options`' credentials; the token goes out as "authorization: Bearer
 // TOKEN" on every call (also over plaintext, for a TLS-terminating proxy in front: keep such

@@ -11,6 +11,33 @@ std::mutex& FftwPlannerMutex() {
   return mutex;
 }
 
+namespace {
+
+// Generated at build time (engine/CMakeLists.txt, wisdom_gen/fftw_wisdom_gen.cc); "" without.
+constexpr const char kBuiltinWisdom[] =
+#include "engine/tdoa/fftw_builtin_wisdom.inc"
+    ;
+
+// The planner mutex must be held.
+bool ImportBuiltinWisdomLocked() {
+  return kBuiltinWisdom[0] != '\0' && fftwf_import_wisdom_from_string(kBuiltinWisdom) != 0;
+}
+
+// Before the first plan; the planner mutex must be held.
+void ImportBuiltinWisdomOnce() {
+  static bool imported = false;  // GUARDED_BY(FftwPlannerMutex())
+  if (imported) return;
+  imported = true;
+  ImportBuiltinWisdomLocked();
+}
+
+}  // namespace
+
+bool ImportBuiltinFftwWisdom() {
+  std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  return ImportBuiltinWisdomLocked();
+}
+
 FftwFloats AllocateFftwFloats(std::size_t count) {
   auto* p = static_cast<float*>(fftwf_malloc(count * sizeof(float)));
   if (p == nullptr) std::abort();  // out of memory, as operator new would report it
@@ -36,11 +63,13 @@ void FftwPlan::Reset() {
 
 FftwPlan PlanRealForward(int n, float* in, float* out_interleaved, unsigned flags) {
   std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  ImportBuiltinWisdomOnce();
   return FftwPlan(fftwf_plan_dft_r2c_1d(n, in, AsComplex(out_interleaved), flags));
 }
 
 FftwPlan PlanRealInverse(int n, float* in_interleaved, float* out, unsigned flags) {
   std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  ImportBuiltinWisdomOnce();
   return FftwPlan(fftwf_plan_dft_c2r_1d(n, AsComplex(in_interleaved), out, flags));
 }
 

@@ -7,6 +7,17 @@
 //
 // Buffers come from fftwf_malloc (SIMD-aligned) and are zero-filled on allocation. Complex
 // data is stored interleaved (re, im) as floats, bit-compatible with fftwf_complex.
+//
+// Built-in wisdom: before the process's first plan, PlanRealForward/Inverse import FFTW wisdom
+// generated at build time (engine/tdoa/wisdom_gen) for the FFTW_ESTIMATE plans of every size
+// NextFastFftSize returns from 64 to 2^21. FFTW then takes a plan from it in about 0.1 ms
+// instead of estimating one (2-10 ms per size, the larger part of `localizer-cli track`'s
+// start-up after library loading); the import costs about 1.5 ms once. The plans are the
+// ones FFTW_ESTIMATE picks without wisdom on the build machine (tests/tdoa/fftw_wisdom_test),
+// so results do not change. Wisdom FFTW cannot use (another FFTW version, a solver the CPU
+// lacks) is refused or ignored by FFTW, which then estimates as before. Every engine user in
+// the process (CLI, server, Python bindings) plans from the same wisdom, so their results stay
+// bit-identical. FFTW_MEASURE requests are not satisfied by it and are measured as before.
 #pragma once
 
 #include <fftw3.h>
@@ -47,6 +58,11 @@ class FftwPlan {
   void Reset();
   fftwf_plan plan_ = nullptr;
 };
+
+// Imports the built-in wisdom now (it is also imported once, lazily, by the first plan).
+// Returns false when this build has none (LOCALIZER_FFTW_WISDOM off, or cross-compiled) or
+// FFTW refused it. For tests, after fftwf_forget_wisdom.
+bool ImportBuiltinFftwWisdom();
 
 // Real-to-complex and complex-to-real plans of size n (unnormalised, as FFTW defines them).
 // The arrays must not overlap. Planning with FFTW_MEASURE overwrites them.

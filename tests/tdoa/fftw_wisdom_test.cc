@@ -1,0 +1,78 @@
+// The built-in FFTW wisdom (engine/tdoa/fftw_util.h) changes how long planning takes, never
+// which plan is made: for every size it covers, a plan made from it is the plan FFTW_ESTIMATE
+// makes without any wisdom (compared as fftwf_sprint_plan's text), so estimates do not move;
+// and it does cover the problems the engine plans (FFTW_WISDOM_ONLY finds a plan).
+#include <fftw3.h>
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "engine/tdoa/fftw_util.h"
+
+namespace localizer::engine {
+namespace {
+
+// fftwf_sprint_plan's description of a plan, "" for none.
+std::string Describe(const FftwPlan& plan) {
+  if (!plan) return "";
+  char* text = fftwf_sprint_plan(plan.get());
+  std::string out = text != nullptr ? text : "";
+  std::free(text);
+  return out;
+}
+
+struct Plans {
+  std::string forward, inverse;
+};
+
+// Forgets all wisdom, then (with_wisdom) imports the built-in one, and plans size n as the
+// engine does (fftwf_malloc'd arrays, out of place, FFTW_ESTIMATE).
+Plans PlanFresh(int n, bool with_wisdom) {
+  {
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    fftwf_forget_wisdom();
+  }
+  if (with_wisdom) ImportBuiltinFftwWisdom();
+  FftwFloats real = AllocateFftwFloats(n);
+  FftwFloats complex = AllocateFftwFloats(2 * (n / 2 + 1));
+  return {Describe(PlanRealForward(n, real.get(), complex.get(), FFTW_ESTIMATE)),
+          Describe(PlanRealInverse(n, complex.get(), real.get(), FFTW_ESTIMATE))};
+}
+
+std::vector<int> CoveredSizes() {
+  std::vector<int> sizes;
+  for (int base : {1, 3, 5}) {
+    int n = base;
+    while (n < 64) n *= 2;
+    for (; n <= (1 << 16); n *= 2) sizes.push_back(n);  // the frames sessions use; 2^17..2^21 take long to plan
+  }
+  return sizes;
+}
+
+TEST(BuiltinFftwWisdom, GivesThePlansEstimateMakesWithoutIt) {
+  if (!ImportBuiltinFftwWisdom()) GTEST_SKIP() << "built without LOCALIZER_FFTW_WISDOM (or FFTW refused it)";
+  for (int n : CoveredSizes()) {
+    const Plans estimated = PlanFresh(n, /*with_wisdom=*/false);
+    const Plans from_wisdom = PlanFresh(n, /*with_wisdom=*/true);
+    ASSERT_FALSE(estimated.forward.empty()) << n;
+    EXPECT_EQ(from_wisdom.forward, estimated.forward) << "r2c of size " << n;
+    EXPECT_EQ(from_wisdom.inverse, estimated.inverse) << "c2r of size " << n;
+    // Wisdom alone plans it: the engine's problems (alignment, out of place) are the covered ones.
+    FftwFloats real = AllocateFftwFloats(n);
+    FftwFloats complex = AllocateFftwFloats(2 * (n / 2 + 1));
+    EXPECT_TRUE(PlanRealForward(n, real.get(), complex.get(), FFTW_ESTIMATE | FFTW_WISDOM_ONLY)) << n;
+    EXPECT_TRUE(PlanRealInverse(n, complex.get(), real.get(), FFTW_ESTIMATE | FFTW_WISDOM_ONLY)) << n;
+  }
+  ImportBuiltinFftwWisdom();  // leave the process as the engine would
+}
+
+TEST(BuiltinFftwWisdom, ASizeItDoesNotCoverIsStillPlanned) {
+  const int n = 7 * 64;  // NextFastFftSize never returns it
+  EXPECT_FALSE(PlanFresh(n, /*with_wisdom=*/true).forward.empty());
+  EXPECT_EQ(NextFastFftSize(n), 512);
+}
+
+}  // namespace
+}  // namespace localizer::engine
