@@ -41,20 +41,12 @@ std::string ExecFailure(const std::string& why, const std::string& reason) {
 }
 
 // Consulted only for backend gpu or auto; see MakeFullCliGpuProvider.
-class FullCliGpuProvider final : public engine::BackendProvider {
+class FullCliGpuProvider final : public engine::UnavailableBackendProvider {
  public:
   std::string UnavailableReason() const override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (failure_.empty()) failure_ = ExecFailure("the GPU backend", TryExecFullCli());
     return failure_;
-  }
-  StatusOr<std::unique_ptr<engine::TdoaEstimator>> MakeEstimator(const engine::ArrayGeometry&,
-                                                                 const engine::GccOptions&) override {
-    return FailedPrecondition(UnavailableReason());
-  }
-  StatusOr<std::unique_ptr<engine::Tracker>> MakeTracker(const engine::ArrayGeometry&,
-                                                         const engine::ParticleFilterOptions&) override {
-    return FailedPrecondition(UnavailableReason());
   }
 
  private:

@@ -52,6 +52,19 @@ class BackendProvider {
                                                          const ParticleFilterOptions& options) = 0;
 };
 
+// A provider that never builds anything: each Make* fails with FAILED_PRECONDITION naming
+// UnavailableReason(), which the subclass says (a build without CUDA, a CLI that hands GPU
+// sessions to another executable).
+class UnavailableBackendProvider : public BackendProvider {
+ public:
+  StatusOr<std::unique_ptr<TdoaEstimator>> MakeEstimator(const ArrayGeometry&, const GccOptions&) final {
+    return FailedPrecondition(UnavailableReason());
+  }
+  StatusOr<std::unique_ptr<Tracker>> MakeTracker(const ArrayGeometry&, const ParticleFilterOptions&) final {
+    return FailedPrecondition(UnavailableReason());
+  }
+};
+
 // Installs the provider "gpu" and "auto" consult (nullptr removes it). Process-wide; call
 // before sessions are created. Returns the provider it replaced.
 std::shared_ptr<BackendProvider> SetGpuProvider(std::shared_ptr<BackendProvider> provider);

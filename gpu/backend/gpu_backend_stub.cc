@@ -8,18 +8,10 @@
 namespace localizer::gpu {
 namespace {
 
-class NoCudaProvider final : public engine::BackendProvider {
+class NoCudaProvider final : public engine::UnavailableBackendProvider {
  public:
   std::string UnavailableReason() const override {
     return "this build has no CUDA backend (nvcc was not found when it was configured)";
-  }
-  StatusOr<std::unique_ptr<engine::TdoaEstimator>> MakeEstimator(const engine::ArrayGeometry&,
-                                                                 const engine::GccOptions&) override {
-    return FailedPrecondition(UnavailableReason());
-  }
-  StatusOr<std::unique_ptr<engine::Tracker>> MakeTracker(const engine::ArrayGeometry&,
-                                                         const engine::ParticleFilterOptions&) override {
-    return FailedPrecondition(UnavailableReason());
   }
 };
 

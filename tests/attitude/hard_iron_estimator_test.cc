@@ -10,6 +10,7 @@
 #include "engine/attitude/quaternion_ekf.h"
 #include "engine/sim/magnetic_disturbance.h"
 #include "tests/attitude/attitude_test_util.h"
+#include "tests/attitude/iron_fixtures.h"
 
 namespace localizer::engine {
 namespace {
@@ -17,16 +18,10 @@ namespace {
 using testing::ConsumerImuNoise;
 using testing::kDeg;
 
-const Eigen::Vector3d kEarthField_uT(0.0, 17.0, -46.0);
-const Eigen::Vector3d kOffset_uT(30.0, -45.0, 12.0);
-constexpr double kRateHz = 100.0;
-
-AttitudeTrajectory Tumbling() {
-  AttitudeTrajectoryOptions motion;
-  motion.amplitude_rad = {1.2, 0.9, 2.5};
-  motion.frequency_hz = {0.13, 0.07, 0.05};
-  return AttitudeTrajectory(motion);
-}
+using testing::kEarthField_uT;
+using testing::kOffset_uT;
+using testing::kRateHz;
+using testing::Tumbling;
 
 // Feeds `seconds` of readings m = R^T m_w + b + noise (0.5 µT) at the true attitude.
 HardIronFit FitOver(const AttitudeTrajectory& truth, double seconds, const Eigen::Vector3d& disturbance_uT) {
