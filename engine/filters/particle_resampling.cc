@@ -27,17 +27,17 @@ Mat6 CovarianceRoot(const Mat6& covariance) {
 
 namespace {
 
-// dst[m] = a src[index[m]] + shift + sum_{k <= kRow} l_row[k * stride] z_k[m]: one state
-// column resampled and moved by the kernel in one pass (particle_math.h LiuWestRow).
-template <int kRow>
-void MoveRow(int n, const int* __restrict index, const float* __restrict src, float* __restrict dst, float a,
-             float shift, const float* l_row, Eigen::Index stride, const std::array<const float*, 6>& z) {
-  float coeff[kRow + 1];
-  for (int k = 0; k <= kRow; ++k) coeff[k] = l_row[k * stride];
-#pragma omp simd
-  for (int m = 0; m < n; ++m) {
-    dst[m] = LiuWestRow(a, src[index[m]], shift, coeff, kRow, [&z, m](int k) { return z[k][m]; });
-  }
+// Two unit-variance kernel draws from one 32-bit hash of (key, counter): each the sum of
+// two of its bytes, centred and scaled (a triangular kernel, |z| <= 2.44), at a fraction of
+// the cost of an exact normal; the kernel's shape matters little (Epanechnikov's is the
+// optimum). Draw k of particle m (k = 0 .. 5) is half (k % 2) of counter (k - k % 2) N + m.
+inline void KernelDrawPair(uint32_t key, uint32_t counter, float* za, float* zb) {
+  constexpr float kTwoBytesToUnitVariance = 1.0f / 104.5f;  // sqrt(2 * (256^2 - 1) / 12)
+  const uint32_t bits = HashMix32(counter * 0x9e3779b9U + key);
+  const uint32_t low = (bits & 0xffU) + ((bits >> 8) & 0xffU);
+  const uint32_t high = ((bits >> 16) & 0xffU) + (bits >> 24);
+  *za = (static_cast<float>(static_cast<int32_t>(low)) - 255.0f) * kTwoBytesToUnitVariance;
+  *zb = (static_cast<float>(static_cast<int32_t>(high)) - 255.0f) * kTwoBytesToUnitVariance;
 }
 
 }  // namespace
@@ -73,14 +73,51 @@ void ParticleSet::ResampleSystematic(double kernel_scale) {
   centre.head<3>() -= origin_m_;
   const Eigen::Matrix<float, 6, 1> shift = ((1.0 - a) * centre).cast<float>();
   const float fa = static_cast<float>(a);
-  DrawKernelNoise();
-  const std::array<const float*, 6> z = {noise_[0].data(), noise_[1].data(), noise_[2].data(),
-                                         noise_[3].data(), noise_[4].data(), noise_[5].data()};
+  // One pass over the slots: each reads its parent's six values once (one index load, six
+  // gathers), draws its six kernel values from three hashes (the draws DrawKernelNoise
+  // would store, without the 6 stores and 21 loads per particle) and writes six values.
   // The root is lower triangular: row r reads z_0 .. z_r only (21 terms, not 36).
-  [&]<int... kRow>(std::integer_sequence<int, kRow...>) {
-    (MoveRow<kRow>(n, index, from[kRow], to[kRow], fa, shift(kRow), l.row(kRow).data(), l.rows(), z), ...);
+  float root[21];
+  for (int r = 0, t = 0; r < 6; ++r) {
+    for (int k = 0; k <= r; ++k) root[t++] = l(r, k);
   }
-  (std::make_integer_sequence<int, 6>{});
+  const float* __restrict l0 = root;
+  const float* __restrict l1 = root + 1;
+  const float* __restrict l2 = root + 3;
+  const float* __restrict l3 = root + 6;
+  const float* __restrict l4 = root + 10;
+  const float* __restrict l5 = root + 15;
+  const float s0 = shift(0), s1 = shift(1), s2 = shift(2), s3 = shift(3), s4 = shift(4), s5 = shift(5);
+  const float* __restrict x0 = from[0];
+  const float* __restrict x1 = from[1];
+  const float* __restrict x2 = from[2];
+  const float* __restrict x3 = from[3];
+  const float* __restrict x4 = from[4];
+  const float* __restrict x5 = from[5];
+  float* __restrict y0 = to[0];
+  float* __restrict y1 = to[1];
+  float* __restrict y2 = to[2];
+  float* __restrict y3 = to[3];
+  float* __restrict y4 = to[4];
+  float* __restrict y5 = to[5];
+  const uint32_t key = NextKey();
+  const uint32_t un = static_cast<uint32_t>(n);
+#pragma omp simd
+  for (int m = 0; m < n; ++m) {
+    float z0, z1, z2, z3, z4, z5;  // scalars, not an array: an array costs the loop its vector form
+    const uint32_t c = static_cast<uint32_t>(m);
+    KernelDrawPair(key, c, &z0, &z1);
+    KernelDrawPair(key, 2u * un + c, &z2, &z3);
+    KernelDrawPair(key, 4u * un + c, &z4, &z5);
+    const auto draw = [=](int k) { return k == 0 ? z0 : k == 1 ? z1 : k == 2 ? z2 : k == 3 ? z3 : k == 4 ? z4 : z5; };
+    const int j = index[m];
+    y0[m] = LiuWestRow(fa, x0[j], s0, l0, 0, draw);
+    y1[m] = LiuWestRow(fa, x1[j], s1, l1, 1, draw);
+    y2[m] = LiuWestRow(fa, x2[j], s2, l2, 2, draw);
+    y3[m] = LiuWestRow(fa, x3[j], s3, l3, 3, draw);
+    y4[m] = LiuWestRow(fa, x4[j], s4, l4, 4, draw);
+    y5[m] = LiuWestRow(fa, x5[j], s5, l5, 5, draw);
+  }
   std::swap(cur_, next_);
   SetEqualWeights();
   // Shrinkage and kernel keep the mean and covariance (Liu & West): the moments computed
@@ -139,10 +176,7 @@ void ParticleSet::SystematicIndices() {
 }
 
 void ParticleSet::DrawKernelNoise() {
-  // Each 32-bit hash gives two draws, each the sum of two of its bytes scaled to unit
-  // variance: a triangular kernel, |z| <= 2.44, at a fraction of the cost of an exact
-  // normal; the kernel's shape matters little (Epanechnikov's is the optimum).
-  constexpr float kTwoBytesToUnitVariance = 1.0f / 104.5f;  // sqrt(2 * (256^2 - 1) / 12)
+  // The same draws as ResampleSystematic's fused pass (KernelDrawPair), stored per column.
   const uint32_t key = NextKey();
   const int n = n_;
   for (int k = 0; k < 6; k += 2) {
@@ -150,13 +184,7 @@ void ParticleSet::DrawKernelNoise() {
     float* __restrict zb = noise_[k + 1].data();
     const uint32_t offset = static_cast<uint32_t>(k) * static_cast<uint32_t>(n);
 #pragma omp simd
-    for (int i = 0; i < n; ++i) {
-      const uint32_t bits = HashMix32((offset + static_cast<uint32_t>(i)) * 0x9e3779b9U + key);
-      const uint32_t low = (bits & 0xffU) + ((bits >> 8) & 0xffU);
-      const uint32_t high = ((bits >> 16) & 0xffU) + (bits >> 24);
-      za[i] = (static_cast<float>(static_cast<int32_t>(low)) - 255.0f) * kTwoBytesToUnitVariance;
-      zb[i] = (static_cast<float>(static_cast<int32_t>(high)) - 255.0f) * kTwoBytesToUnitVariance;
-    }
+    for (int i = 0; i < n; ++i) KernelDrawPair(key, offset + static_cast<uint32_t>(i), &za[i], &zb[i]);
   }
 }
 

@@ -394,9 +394,20 @@ double ParticleSet::NormaliseWeights() {
   moments_valid_ = false;
   float* __restrict logw = logw_.data();
   float* __restrict w = w_.data();
+  // The largest log-weight, from kLanes running maxima (GCC 12 leaves this file's
+  // `omp simd reduction(max)` scalar: one 4-cycle vmaxss chain per particle).
+  constexpr int kLanes = 16;
+  float lane_max[kLanes];
+  for (float& m : lane_max) m = -INFINITY;
+  const int n = n_;
+  int block = 0;
+  for (; block + kLanes <= n; block += kLanes) {
+#pragma omp simd
+    for (int k = 0; k < kLanes; ++k) lane_max[k] = logw[block + k] > lane_max[k] ? logw[block + k] : lane_max[k];
+  }
   float max_logw = -INFINITY;
-#pragma omp simd reduction(max : max_logw)
-  for (int i = 0; i < n_; ++i) max_logw = std::max(max_logw, logw[i]);
+  for (const float m : lane_max) max_logw = std::max(max_logw, m);
+  for (; block < n; ++block) max_logw = std::max(max_logw, logw[block]);
   float sum = 0.0f;
 #pragma omp simd reduction(+ : sum)
   for (int i = 0; i < n_; ++i) {
