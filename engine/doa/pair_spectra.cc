@@ -95,8 +95,11 @@ void PairSpectra::FindSignalShare() {
   signal_share_.assign(n, 1.0);
   // A frame whose power is flat (white sources, or noise alone) keeps every bin whole: the
   // floor is then the signal, not the noise.
-  if (!(floor > 0.0) || sorted_power_[n - 1 - rank] < kFlatSpread * floor) return;
-  for (size_t b = 0; b < n; ++b) signal_share_[b] = std::max(0.0, 1.0 - kNoiseOverFloor * floor / smoothed_power_[b]);
+  if (floor > 0.0 && !(sorted_power_[n - 1 - rank] < kFlatSpread * floor)) {
+    for (size_t b = 0; b < n; ++b) signal_share_[b] = std::max(0.0, 1.0 - kNoiseOverFloor * floor / smoothed_power_[b]);
+  }
+  share_norm_ = 0.0;
+  for (size_t b = 0; b < n; ++b) share_norm_ += signal_share_[b] * signal_share_[b];
 }
 
 Status PairSpectra::Analyse(const float* frame, Measurement* field) {
@@ -162,26 +165,80 @@ void PairSpectra::FillField(int p, PairMeasurement* out) {
   out->peak_snr = 1.0;
 }
 
+void PairSpectra::Phasors(double lag_samples) {
+  // e^(i step (first + b) l) for every in-band bin b, over kLanes interleaved chains (each
+  // advanced by the rotation of kLanes bins): one chain is a serial dependency of complex
+  // products, and std::complex's product checks for infinities (Evaluate does the same).
+  constexpr int kLanes = 4;
+  const double step = 2.0 * std::numbers::pi / fft_size_;
+  const auto n = static_cast<int>(bins_.size());
+  const int first = bins_.front();  // the in-band bins are consecutive
+  phasor_re_.resize(static_cast<size_t>(n));
+  phasor_im_.resize(static_cast<size_t>(n));
+  const double stride = step * lag_samples * kLanes;
+  const double cr = std::cos(stride), ci = std::sin(stride);
+  double pr[kLanes], pi[kLanes];
+  for (int j = 0; j < kLanes; ++j) {
+    pr[j] = std::cos(step * lag_samples * (first + j));
+    pi[j] = std::sin(step * lag_samples * (first + j));
+  }
+  double* re = phasor_re_.data();
+  double* im = phasor_im_.data();
+  int b = 0;
+  for (; b + kLanes <= n; b += kLanes) {
+    for (int j = 0; j < kLanes; ++j) {
+      re[b + j] = pr[j];
+      im[b + j] = pi[j];
+      const double next_r = pr[j] * cr - pi[j] * ci;
+      pi[j] = pr[j] * ci + pi[j] * cr;
+      pr[j] = next_r;
+    }
+  }
+  for (int j = 0; b < n; ++b, ++j) {  // the last < kLanes bins: lane j holds bin b's phasor
+    re[b] = pr[j];
+    im[b] = pi[j];
+  }
+}
+
 void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::complex<double>>* taken) {
   std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
-  const double step = 2.0 * std::numbers::pi / fft_size_;
-  const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
-  const std::complex<double> start = std::polar(1.0, step * lag_samples * bins_.front());
   if (!share_ready_) FindSignalShare();
+  Phasors(lag_samples);
   // The weighted least-squares pure delay: c minimising sum_k |G_p(k) - c w_k e^(-i w k l)|^2,
-  // w_k the bin's share of signal (FindOccupiedBand), subtracted with those weights.
-  std::complex<double> phasor = start, amplitude = 0.0;
-  double norm = 0.0;
-  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) {
-    amplitude += signal_share_[b] * g[b] * phasor;
-    norm += signal_share_[b] * signal_share_[b];
+  // w_k the bin's share of signal (FindSignalShare), subtracted with those weights. Real
+  // arithmetic over kLanes partial sums.
+  constexpr size_t kLanes = 4;
+  const size_t n = g.size();
+  const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
+  const double* w = signal_share_.data();
+  const double* re = phasor_re_.data();
+  const double* im = phasor_im_.data();
+  double ar[kLanes] = {}, ai[kLanes] = {};
+  size_t b = 0;
+  for (; b + kLanes <= n; b += kLanes) {
+    for (size_t j = 0; j < kLanes; ++j) {
+      const double gr = gv[2 * (b + j)], gi = gv[2 * (b + j) + 1];
+      ar[j] += w[b + j] * (gr * re[b + j] - gi * im[b + j]);
+      ai[j] += w[b + j] * (gr * im[b + j] + gi * re[b + j]);
+    }
   }
-  amplitude /= std::max(norm, 1e-12);
-  taken->assign(g.size(), 0.0);
-  phasor = start;
-  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) {
-    (*taken)[b] = amplitude * signal_share_[b];
-    g[b] -= (*taken)[b] * std::conj(phasor);
+  for (size_t j = 0; b < n; ++b, ++j) {
+    const double gr = gv[2 * b], gi = gv[2 * b + 1];
+    ar[j] += w[b] * (gr * re[b] - gi * im[b]);
+    ai[j] += w[b] * (gr * im[b] + gi * re[b]);
+  }
+  const double norm = std::max(share_norm_, 1e-12);
+  const double cr = ((ar[0] + ar[1]) + (ar[2] + ar[3])) / norm;
+  const double ci = ((ai[0] + ai[1]) + (ai[2] + ai[3])) / norm;
+  taken->resize(n);  // allocates only the first time a vector is used
+  double* tv = reinterpret_cast<double*>(taken->data());
+  double* gw = reinterpret_cast<double*>(g.data());
+  for (b = 0; b < n; ++b) {  // G -= c w_k conj(phasor)
+    const double tr = cr * w[b], ti = ci * w[b];
+    tv[2 * b] = tr;
+    tv[2 * b + 1] = ti;
+    gw[2 * b] -= tr * re[b] + ti * im[b];
+    gw[2 * b + 1] -= ti * re[b] - tr * im[b];
   }
 }
 
@@ -191,10 +248,17 @@ void PairSpectra::FillFields(Measurement* field) {
 
 void PairSpectra::RestoreDelay(int p, double lag_samples, const std::vector<std::complex<double>>& taken) {
   std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
-  const double step = 2.0 * std::numbers::pi / fft_size_;
-  const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
-  std::complex<double> phasor = std::polar(1.0, step * lag_samples * bins_.front());
-  for (size_t b = 0; b < g.size() && b < taken.size(); ++b, phasor *= rotate) g[b] += taken[b] * std::conj(phasor);
+  Phasors(lag_samples);
+  const size_t n = std::min(g.size(), taken.size());
+  const double* tv = reinterpret_cast<const double*>(taken.data());
+  double* gw = reinterpret_cast<double*>(g.data());
+  const double* re = phasor_re_.data();
+  const double* im = phasor_im_.data();
+  for (size_t b = 0; b < n; ++b) {  // G += taken conj(phasor)
+    const double tr = tv[2 * b], ti = tv[2 * b + 1];
+    gw[2 * b] += tr * re[b] + ti * im[b];
+    gw[2 * b + 1] += ti * re[b] - tr * im[b];
+  }
 }
 
 double PairSpectra::WholeAt(int p, double lag_samples, bool previous) const {

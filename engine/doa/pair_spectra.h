@@ -109,8 +109,12 @@ class PairSpectra {
   std::vector<std::vector<std::complex<double>>> g_;  // per pair, per in-band bin
   // Per in-band bin, its share of signal this frame (RemoveDelay), and scratch.
   std::vector<double> signal_share_, bin_power_, smoothed_power_, sorted_power_;
-  bool share_ready_ = false;  // signal_share_ is this frame's
+  double share_norm_ = 0.0;   // sum of signal_share_^2
+  bool share_ready_ = false;  // signal_share_ and share_norm_ are this frame's
   void FindSignalShare();
+  // phasor_re_, phasor_im_ = e^(2 pi i k l / M) for every in-band bin k (RemoveDelay's scratch).
+  void Phasors(double lag_samples);
+  std::vector<double> phasor_re_, phasor_im_;
   // g_ before any removal, for the last rise_lag_frames + 1 frames (a ring; newest_ is this frame's)
   std::vector<std::vector<std::vector<std::complex<double>>>> history_;
   size_t newest_ = 0;
