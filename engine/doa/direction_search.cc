@@ -22,11 +22,13 @@ bool SrpPhat::Search(Cell* best) const {
   const std::vector<Cell>& roots = roots_;
   if (!roots.empty() && Leaf(roots.front())) {  // a plain grid: every root is a leaf
     double best_value = -std::numeric_limits<double>::infinity();
-    for (const Cell& c : roots) {
-      const double value = Centre(c);
+    // Every pair usable (PairSpectra's fields always are): the precomputed taps, else LagField::At.
+    const bool taps = !grid_taps_.empty() && field_.usable_pairs() == pair_count();
+    for (size_t r = 0; r < roots.size(); ++r) {
+      const double value = taps ? GridCentre(r) : Centre(roots[r]);
       if (value > best_value) {
         best_value = value;
-        *best = c;
+        *best = roots[r];
       }
     }
     return !roots.empty();

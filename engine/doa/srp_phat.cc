@@ -100,6 +100,26 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
     srp.root_radius_rad_ = kRootCoverage * 2.0 / std::sqrt(static_cast<double>(srp.root_count_));
   }
   srp.roots_ = srp.Roots();
+  if (!srp.roots_.empty() && srp.Leaf(srp.roots_.front())) {
+    // LagField::At's reading of each root's lags, for a window of lags -max_lag..max_lag.
+    const int window = 2 * po.max_lag_samples + 1;
+    for (const Cell& c : srp.roots_) {
+      for (int p = 0; p < srp.pair_count(); ++p) {
+        const double x = srp.Lag(p, c) + po.max_lag_samples;
+        GridTap tap;  // outside the window: 0
+        if (x >= 0.0 && x <= static_cast<double>(window - 1)) {
+          const auto i = static_cast<int>(x);
+          if (i + 1 >= window) {
+            tap = {window - 1, window - 1, 1.0, 0.0};
+          } else {
+            const double f = x - static_cast<double>(i);
+            tap = {i, i + 1, 1.0 - f, f};
+          }
+        }
+        srp.grid_taps_.push_back(tap);
+      }
+    }
+  }
   return srp;
 }
 
@@ -122,6 +142,16 @@ double SrpPhat::Bound(const Cell& cell) const {
 double SrpPhat::Centre(const Cell& cell) const {
   double sum = 0.0;
   for (int p = 0; p < pair_count(); ++p) sum += field_.At(p, Lag(p, cell));
+  return sum / std::sqrt(static_cast<double>(pair_count()));
+}
+
+double SrpPhat::GridCentre(size_t root) const {
+  const GridTap* tap = grid_taps_.data() + root * static_cast<size_t>(pair_count());
+  double sum = 0.0;
+  for (int p = 0; p < pair_count(); ++p, ++tap) {
+    const float* g = field_.values(p).data();
+    sum += tap->w0 * g[tap->i0] + tap->w1 * g[tap->i1];
+  }
   return sum / std::sqrt(static_cast<double>(pair_count()));
 }
 

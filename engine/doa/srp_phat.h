@@ -171,6 +171,8 @@ class SrpPhat {
   double Spread(int p, double radius_rad) const;  // g_p r
   double Bound(const Cell& cell) const;
   double Centre(const Cell& cell) const;  // z at the centre, from the field
+  // Centre(roots_[root]) from grid_taps_ (when every pair is usable): the same value.
+  double GridCentre(size_t root) const;
   std::vector<Cell> Roots() const;        // computed once, into roots_
   void Split(const Cell& cell, std::vector<Cell>* children) const;
   bool Leaf(const Cell& cell) const;
@@ -199,6 +201,13 @@ class SrpPhat {
   double leaf_radius_rad_ = 0.0;
   int root_count_ = 0;
   std::vector<Cell> roots_;
+  // A plain grid (roots are leaves): per root and pair, the two field samples LagField::At
+  // reads at the root's lag and their weights (fixed: the lags and the pairs' windows are).
+  struct GridTap {
+    int i0 = 0, i1 = 0;
+    double w0 = 0.0, w1 = 0.0;
+  };
+  std::vector<GridTap> grid_taps_;
   double root_radius_rad_ = 0.0;
   double threshold_ = 0.0;
   double interpolation_margin_ = 1.0;  // continuous GCC maximum / sampled maximum, at most (above)
