@@ -264,7 +264,8 @@ void PairSpectra::RestoreDelay(int p, double lag_samples, const std::vector<std:
 double PairSpectra::WholeAt(int p, double lag_samples, bool previous) const {
   const size_t back = previous ? history_.size() - 1 : 0;
   if (frames_analysed_ <= static_cast<int64_t>(back)) return 0.0;
-  return Evaluate(history_[(newest_ + history_.size() - back) % history_.size()][static_cast<size_t>(p)], lag_samples)
+  return Evaluate<false>(history_[(newest_ + history_.size() - back) % history_.size()][static_cast<size_t>(p)],
+                        lag_samples)
       .r;
 }
 
@@ -277,6 +278,7 @@ PairSpectra::Value PairSpectra::At(int p, double lag_samples) const {
   return Evaluate(g_[static_cast<size_t>(p)], lag_samples);
 }
 
+template <bool kDerivatives>
 PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>& g, double lag_samples) const {
   // sum_b G(b) exp(i w_b l), w_b = step (first + b), in real arithmetic over kLanes
   // interleaved phasor chains (each advanced by rotate^kLanes): one chain is a serial
@@ -298,10 +300,12 @@ PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>
     for (int j = 0; j < kLanes; ++j) {
       const double gr = gv[2 * (b + j)], gi = gv[2 * (b + j) + 1];
       const double tr = gr * pr[j] - gi * pi[j], ti = gr * pi[j] + gi * pr[j];
-      const double w = step * (first + b + j);
       r[j] += tr;
-      dr[j] -= w * ti;
-      d2r[j] -= w * w * tr;
+      if constexpr (kDerivatives) {
+        const double w = step * (first + b + j);
+        dr[j] -= w * ti;
+        d2r[j] -= w * w * tr;
+      }
       const double next_r = pr[j] * cr - pi[j] * ci;
       pi[j] = pr[j] * ci + pi[j] * cr;
       pr[j] = next_r;
@@ -310,10 +314,12 @@ PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>
   for (int j = 0; b < n; ++b, ++j) {  // the last < kLanes bins: lane j holds bin b's phasor
     const double gr = gv[2 * b], gi = gv[2 * b + 1];
     const double tr = gr * pr[j] - gi * pi[j], ti = gr * pi[j] + gi * pr[j];
-    const double w = step * (first + b);
     r[j] += tr;
-    dr[j] -= w * ti;
-    d2r[j] -= w * w * tr;
+    if constexpr (kDerivatives) {
+      const double w = step * (first + b);
+      dr[j] -= w * ti;
+      d2r[j] -= w * w * tr;
+    }
   }
   Value v;
   const double inv_b = 1.0 / static_cast<double>(n);

@@ -99,6 +99,8 @@ class PairSpectra {
  private:
   PairSpectra() = default;
   void FillField(int p, PairMeasurement* out);
+  // kDerivatives false: only r (the same value), dr = d2r = 0.
+  template <bool kDerivatives = true>
   Value Evaluate(const std::vector<std::complex<double>>& g, double lag_samples) const;
   PairSpectraOptions options_;
   int fft_size_ = 0;

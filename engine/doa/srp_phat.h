@@ -185,13 +185,15 @@ class SrpPhat {
   };
   Probe ProbeAt(const Cell& cell) const;
   Cell Moved(const Cell& cell, const Probe& probe, const Eigen::Vector2d& step) const;
-  Cell Refine(Cell cell) const;
+  // Newton's method on the exact spectrum from `cell`; *statistic = Exact(the result).
+  Cell Refine(Cell cell, double* statistic) const;
   double Exact(const Cell& cell) const;                 // z from the exact (residual) spectrum
   double Whole(const Cell& cell, bool previous) const;  // z from a whole spectrum (PairSpectra::WholeAt)
   // The residual field's largest possible z anywhere: every pair's largest sample, summed
   // over pairs / sqrt(P), times interpolation_margin_.
   double FieldCeiling() const;
-  DirectionPeak Describe(const Cell& cell, double statistic) const;
+  // statistic_is_whole: the statistic is Whole(cell, false) (not recomputed).
+  DirectionPeak Describe(const Cell& cell, double statistic, bool statistic_is_whole) const;
 
   ArrayShapeInfo shape_;
   SrpOptions options_;
