@@ -1,6 +1,8 @@
 #include "engine/doa/pair_spectra.h"
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -68,15 +70,6 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
 void PairSpectra::FindSignalShare() {
   share_ready_ = true;
   const size_t n = bins_.size();
-  const size_t spectrum_stride = Stride(2 * (fft_size_ / 2 + 1));
-  bin_power_.assign(n, 0.0);
-  for (int c = 0; c < options_.sensors; ++c) {
-    const float* x = spectra_.get() + static_cast<size_t>(c) * spectrum_stride;
-    for (size_t b = 0; b < n; ++b) {
-      const float* z = x + 2 * static_cast<size_t>(bins_[b]);
-      bin_power_[b] += static_cast<double>(z[0]) * z[0] + static_cast<double>(z[1]) * z[1];
-    }
-  }
   smoothed_power_.assign(n, 0.0);
   const size_t half = kShareWindowBins / 2;
   double sum = 0.0;
@@ -108,21 +101,35 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
   for (int c = 0; c < options_.sensors; ++c) {
     const float* in = frame + static_cast<size_t>(c) * n;
     float* t = time_.get() + static_cast<size_t>(c) * time_stride;
+    uint32_t non_finite = 0;  // an all-ones exponent: inf or NaN (integer ops, so the loop vectorises)
     for (int i = 0; i < n; ++i) {
-      if (!std::isfinite(in[i])) return InvalidArgument("sensor " + std::to_string(c) + " has a non-finite sample");
       t[i] = in[i];
+      non_finite |= static_cast<uint32_t>((std::bit_cast<uint32_t>(in[i]) & 0x7f800000u) == 0x7f800000u);
     }
+    if (non_finite != 0) return InvalidArgument("sensor " + std::to_string(c) + " has a non-finite sample");
     std::fill(t + n, t + m, 0.0f);
     fftwf_execute_dft_r2c(forward_.get(), t, AsComplex(spectra_.get() + static_cast<size_t>(c) * spectrum_stride));
   }
-  auto bin = [&](int c, int k) {
-    const float* x = spectra_.get() + static_cast<size_t>(c) * spectrum_stride + 2 * static_cast<size_t>(k);
-    return std::complex<double>(x[0], x[1]);
-  };
+  // The in-band bins of every channel as doubles (re, im apart), their powers summed over
+  // the channels (FindSignalShare) and the band's mean power, in one pass.
+  const size_t nb = bins_.size(), first = static_cast<size_t>(bins_.front());  // consecutive bins
+  bin_re_.resize(static_cast<size_t>(options_.sensors) * nb);
+  bin_im_.resize(bin_re_.size());
+  bin_power_.assign(nb, 0.0);
   double mean_power = 0.0;
-  for (int c = 0; c < options_.sensors; ++c)
-    for (int k : bins_) mean_power += std::norm(bin(c, k));
-  mean_power /= static_cast<double>(options_.sensors) * static_cast<double>(bins_.size());
+  for (int c = 0; c < options_.sensors; ++c) {
+    const float* x = spectra_.get() + static_cast<size_t>(c) * spectrum_stride + 2 * first;
+    double* re = bin_re_.data() + static_cast<size_t>(c) * nb;
+    double* im = bin_im_.data() + static_cast<size_t>(c) * nb;
+    for (size_t b = 0; b < nb; ++b) {
+      re[b] = x[2 * b];
+      im[b] = x[2 * b + 1];
+      const double power = re[b] * re[b] + im[b] * im[b];  // float products: exact in double
+      mean_power += power;
+      bin_power_[b] += power;
+    }
+  }
+  mean_power /= static_cast<double>(options_.sensors) * static_cast<double>(nb);
   band_power_ = mean_power;
   const double floor = kRelativeFloor * mean_power;
   share_ready_ = false;  // RemoveDelay finds the signal share when a frame needs it
@@ -131,10 +138,19 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
   field->pairs.resize(pairs_.size());
   newest_ = (newest_ + 1) % history_.size();  // overwrites the oldest whole spectrum
   for (size_t p = 0; p < pairs_.size(); ++p) {
-    for (size_t b = 0; b < bins_.size(); ++b) {
-      const std::complex<double> c = bin(pairs_[p].first, bins_[b]) * std::conj(bin(pairs_[p].second, bins_[b]));
-      const double magnitude = std::sqrt(std::norm(c));  // std::abs calls hypot: 3x slower here
-      g_[p][b] = magnitude > floor && magnitude > 0.0 ? c / magnitude : 0.0;
+    const double* ar = bin_re_.data() + static_cast<size_t>(pairs_[p].first) * nb;
+    const double* ai = bin_im_.data() + static_cast<size_t>(pairs_[p].first) * nb;
+    const double* br = bin_re_.data() + static_cast<size_t>(pairs_[p].second) * nb;
+    const double* bi = bin_im_.data() + static_cast<size_t>(pairs_[p].second) * nb;
+    double* g = reinterpret_cast<double*>(g_[p].data());  // (re, im) pairs
+    for (size_t b = 0; b < nb; ++b) {
+      // X_i conj(X_j) / |X_i conj(X_j)|, 0 where either channel is silent. The products of
+      // floats are exact in double, so the sums are rounded once.
+      const double cr = ar[b] * br[b] + ai[b] * bi[b], ci = ai[b] * br[b] - ar[b] * bi[b];
+      const double magnitude = std::sqrt(cr * cr + ci * ci);  // std::abs calls hypot: 3x slower here
+      const bool kept = magnitude > floor && magnitude > 0.0;
+      g[2 * b] = kept ? cr / magnitude : 0.0;
+      g[2 * b + 1] = kept ? ci / magnitude : 0.0;
     }
     history_[newest_][p] = g_[p];
     FillField(static_cast<int>(p), &field->pairs[p]);

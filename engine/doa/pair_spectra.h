@@ -110,7 +110,9 @@ class PairSpectra {
   std::vector<int> bins_;                             // in-band bin indices
   std::vector<std::vector<std::complex<double>>> g_;  // per pair, per in-band bin
   // Per in-band bin, its share of signal this frame (RemoveDelay), and scratch.
+  // bin_power_: the bin's power summed over the sensors (Analyse fills it).
   std::vector<double> signal_share_, bin_power_, smoothed_power_, sorted_power_;
+  std::vector<double> bin_re_, bin_im_;  // per sensor, per in-band bin: the last frame's spectrum
   double share_norm_ = 0.0;   // sum of signal_share_^2
   bool share_ready_ = false;  // signal_share_ and share_norm_ are this frame's
   void FindSignalShare();
