@@ -212,15 +212,16 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   std::vector<DirectionPeak> peaks;
   struct Found {
     Cell cell;
-    std::vector<std::vector<std::complex<double>>> amplitudes;  // per pair and bin, what RemoveDelay took
+    size_t slot = 0;  // removed_[slot]: per pair and bin, what RemoveDelay took
     double statistic = 0.0;
     bool whole = false;  // statistic is Whole(cell, false): found with nothing removed, not re-refined
   };
   std::vector<Found> found;
   auto remove = [&](Found* f) {
-    f->amplitudes.resize(static_cast<size_t>(pair_count()));
-    for (int p = 0; p < pair_count(); ++p)
-      spectra_.RemoveDelay(p, Lag(p, f->cell), &f->amplitudes[static_cast<size_t>(p)]);
+    if (removed_.size() <= f->slot) removed_.resize(f->slot + 1);
+    std::vector<std::vector<std::complex<double>>>& taken = removed_[f->slot];
+    taken.resize(static_cast<size_t>(pair_count()));
+    for (int p = 0; p < pair_count(); ++p) spectra_.RemoveDelay(p, Lag(p, f->cell), &taken[static_cast<size_t>(p)]);
   };
   while (static_cast<int>(found.size()) < options_.max_sources) {
     if (!found.empty()) spectra_.FillFields(&field_input_);  // the residual, for the search
@@ -232,7 +233,7 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
     best = Refine(best, &statistic);
     if (!(statistic >= threshold_)) break;
     if (!found.empty() && statistic < options_.min_relative_statistic * found.front().statistic) break;
-    found.push_back({best, {}, statistic, found.empty()});
+    found.push_back({best, found.size(), statistic, found.empty()});
     if (static_cast<int>(found.size()) == options_.max_sources) break;
     remove(&found.back());
     // Each earlier source was refined with this one in its spectrum, which biased it: put it
@@ -241,7 +242,7 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
     for (int pass = 0; pass < kReestimations && found.size() > 1; ++pass) {
       for (Found& f : found) {
         for (int p = 0; p < pair_count(); ++p)
-          spectra_.RestoreDelay(p, Lag(p, f.cell), f.amplitudes[static_cast<size_t>(p)]);
+          spectra_.RestoreDelay(p, Lag(p, f.cell), removed_[f.slot][static_cast<size_t>(p)]);
         f.cell = Refine(f.cell, &f.statistic);
         f.whole = false;
         remove(&f);

@@ -62,6 +62,7 @@
 // thread-safe.
 #pragma once
 
+#include <complex>
 #include <limits>
 #include <vector>
 
@@ -213,6 +214,9 @@ class SrpPhat {
   double root_radius_rad_ = 0.0;
   double threshold_ = 0.0;
   double interpolation_margin_ = 1.0;  // continuous GCC maximum / sampled maximum, at most (above)
+  // Per source found in a frame (in the order found), per pair and in-band bin: what
+  // RemoveDelay took. Kept across frames, so that a frame allocates nothing for it.
+  std::vector<std::vector<std::vector<std::complex<double>>>> removed_;
   Measurement field_input_;
   Measurement whole_field_;  // field_input_ as Analyse left it (keep_whole_field only)
   LagField field_;
