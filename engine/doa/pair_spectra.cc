@@ -23,6 +23,27 @@ constexpr double kFlatSpread = 4.0;
 // Floats per channel, rounded up so every channel starts SIMD-aligned (FFTW's new-array
 // execute needs the alignment the plan was made with).
 int Stride(int floats) { return (floats + 15) / 16 * 16; }
+
+// Phasor chains over the in-band bins: lane j starts at bin first + j and is advanced by the
+// rotation of kLanes bins. One chain is a serial dependency of complex products (and
+// std::complex's product checks for infinities); kLanes chains in real arithmetic keep the
+// vector units busy.
+constexpr int kLanes = 8;
+// Lanes' starts e^(i a (first + j)) and the rotation e^(i a kLanes) (a: radians per bin):
+// lanes 4-7 and the rotation from lanes 0-3 and e^(4 i a), five sincos in all.
+void StartPhasors(double a, int first, double* pr, double* pi, double* cr, double* ci) {
+  for (int j = 0; j < 4; ++j) {
+    pr[j] = std::cos(a * (first + j));
+    pi[j] = std::sin(a * (first + j));
+  }
+  const double r4 = std::cos(4.0 * a), i4 = std::sin(4.0 * a);
+  for (int j = 0; j < 4; ++j) {
+    pr[j + 4] = pr[j] * r4 - pi[j] * i4;
+    pi[j + 4] = pr[j] * i4 + pi[j] * r4;
+  }
+  *cr = r4 * r4 - i4 * i4;
+  *ci = 2.0 * r4 * i4;
+}
 }  // namespace
 
 StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
@@ -49,6 +70,10 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
     if (f_hz >= o.band_low_hz && f_hz <= high_hz) s.bins_.push_back(k);
   }
   if (s.bins_.empty()) return InvalidArgument("the band holds no FFT bin");
+  for (int k : s.bins_) {
+    s.omega_.push_back(2.0 * std::numbers::pi / s.fft_size_ * k);
+    s.omega_squared_.push_back(s.omega_.back() * s.omega_.back());
+  }
   s.noise_sigma_ =
       std::sqrt(static_cast<double>(s.fft_size_) / o.frame_samples / (2.0 * static_cast<double>(s.bins_.size())));
   for (int i = 0; i < o.sensors; ++i)
@@ -182,22 +207,13 @@ void PairSpectra::FillField(int p, PairMeasurement* out) {
 }
 
 void PairSpectra::Phasors(double lag_samples) {
-  // e^(i step (first + b) l) for every in-band bin b, over kLanes interleaved chains (each
-  // advanced by the rotation of kLanes bins): one chain is a serial dependency of complex
-  // products, and std::complex's product checks for infinities (Evaluate does the same).
-  constexpr int kLanes = 4;
+  // e^(i step (first + b) l) for every in-band bin b, over kLanes chains.
   const double step = 2.0 * std::numbers::pi / fft_size_;
   const auto n = static_cast<int>(bins_.size());
-  const int first = bins_.front();  // the in-band bins are consecutive
   phasor_re_.resize(static_cast<size_t>(n));
   phasor_im_.resize(static_cast<size_t>(n));
-  const double stride = step * lag_samples * kLanes;
-  const double cr = std::cos(stride), ci = std::sin(stride);
-  double pr[kLanes], pi[kLanes];
-  for (int j = 0; j < kLanes; ++j) {
-    pr[j] = std::cos(step * lag_samples * (first + j));
-    pi[j] = std::sin(step * lag_samples * (first + j));
-  }
+  double pr[kLanes], pi[kLanes], cr = 0.0, ci = 0.0;
+  StartPhasors(step * lag_samples, bins_.front(), pr, pi, &cr, &ci);  // the in-band bins are consecutive
   double* re = phasor_re_.data();
   double* im = phasor_im_.data();
   int b = 0;
@@ -222,17 +238,17 @@ void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::comple
   Phasors(lag_samples);
   // The weighted least-squares pure delay: c minimising sum_k |G_p(k) - c w_k e^(-i w k l)|^2,
   // w_k the bin's share of signal (FindSignalShare), subtracted with those weights. Real
-  // arithmetic over kLanes partial sums.
-  constexpr size_t kLanes = 4;
+  // arithmetic over kSums partial sums.
+  constexpr size_t kSums = 4;
   const size_t n = g.size();
   const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
   const double* w = signal_share_.data();
   const double* re = phasor_re_.data();
   const double* im = phasor_im_.data();
-  double ar[kLanes] = {}, ai[kLanes] = {};
+  double ar[kSums] = {}, ai[kSums] = {};
   size_t b = 0;
-  for (; b + kLanes <= n; b += kLanes) {
-    for (size_t j = 0; j < kLanes; ++j) {
+  for (; b + kSums <= n; b += kSums) {
+    for (size_t j = 0; j < kSums; ++j) {
       const double gr = gv[2 * (b + j)], gi = gv[2 * (b + j) + 1];
       ar[j] += w[b + j] * (gr * re[b + j] - gi * im[b + j]);
       ai[j] += w[b + j] * (gr * im[b + j] + gi * re[b + j]);
@@ -296,21 +312,14 @@ PairSpectra::Value PairSpectra::At(int p, double lag_samples) const {
 
 template <bool kDerivatives>
 PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>& g, double lag_samples) const {
-  // sum_b G(b) exp(i w_b l), w_b = step (first + b), in real arithmetic over kLanes
-  // interleaved phasor chains (each advanced by rotate^kLanes): one chain is a serial
-  // dependency of complex products, and std::complex's product checks for infinities.
-  constexpr int kLanes = 4;
+  // sum_b G(b) exp(i w_b l), w_b = step (first + b), over kLanes phasor chains.
   const double step = 2.0 * std::numbers::pi / fft_size_;  // radians per bin per sample of lag
   const auto n = static_cast<int>(g.size());
-  const int first = bins_.front();  // the in-band bins are consecutive
-  const double stride = step * lag_samples * kLanes;
-  const double cr = std::cos(stride), ci = std::sin(stride);
-  double pr[kLanes], pi[kLanes], r[kLanes] = {}, dr[kLanes] = {}, d2r[kLanes] = {};
-  for (int j = 0; j < kLanes; ++j) {
-    pr[j] = std::cos(step * lag_samples * (first + j));
-    pi[j] = std::sin(step * lag_samples * (first + j));
-  }
+  double pr[kLanes], pi[kLanes], cr = 0.0, ci = 0.0, r[kLanes] = {}, dr[kLanes] = {}, d2r[kLanes] = {};
+  StartPhasors(step * lag_samples, bins_.front(), pr, pi, &cr, &ci);  // the in-band bins are consecutive
   const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
+  const double* w = omega_.data();
+  const double* w2 = omega_squared_.data();
   int b = 0;
   for (; b + kLanes <= n; b += kLanes) {
     for (int j = 0; j < kLanes; ++j) {
@@ -318,9 +327,8 @@ PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>
       const double tr = gr * pr[j] - gi * pi[j], ti = gr * pi[j] + gi * pr[j];
       r[j] += tr;
       if constexpr (kDerivatives) {
-        const double w = step * (first + b + j);
-        dr[j] -= w * ti;
-        d2r[j] -= w * w * tr;
+        dr[j] -= w[b + j] * ti;
+        d2r[j] -= w2[b + j] * tr;
       }
       const double next_r = pr[j] * cr - pi[j] * ci;
       pi[j] = pr[j] * ci + pi[j] * cr;
@@ -332,9 +340,8 @@ PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>
     const double tr = gr * pr[j] - gi * pi[j], ti = gr * pi[j] + gi * pr[j];
     r[j] += tr;
     if constexpr (kDerivatives) {
-      const double w = step * (first + b);
-      dr[j] -= w * ti;
-      d2r[j] -= w * w * tr;
+      dr[j] -= w[b] * ti;
+      d2r[j] -= w2[b] * tr;
     }
   }
   Value v;

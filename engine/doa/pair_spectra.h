@@ -108,6 +108,7 @@ class PairSpectra {
   double band_power_ = 0.0;
   std::vector<std::pair<int, int>> pairs_;
   std::vector<int> bins_;                             // in-band bin indices
+  std::vector<double> omega_, omega_squared_;         // per in-band bin k: 2 pi k / M, its square
   std::vector<std::vector<std::complex<double>>> g_;  // per pair, per in-band bin
   // Per in-band bin, its share of signal this frame (RemoveDelay), and scratch.
   // bin_power_: the bin's power summed over the sensors (Analyse fills it).
