@@ -235,34 +235,47 @@ void PairSpectra::Phasors(double lag_samples) {
 void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::complex<double>>* taken) {
   std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
   if (!share_ready_) FindSignalShare();
-  Phasors(lag_samples);
   // The weighted least-squares pure delay: c minimising sum_k |G_p(k) - c w_k e^(-i w k l)|^2,
-  // w_k the bin's share of signal (FindSignalShare), subtracted with those weights. Real
-  // arithmetic over kSums partial sums.
-  constexpr size_t kSums = 4;
-  const size_t n = g.size();
+  // w_k the bin's share of signal (FindSignalShare), subtracted with those weights. One pass
+  // over kLanes phasor chains sums c's numerator and keeps the phasors for the subtraction.
+  const double step = 2.0 * std::numbers::pi / fft_size_;
+  const auto n = static_cast<int>(g.size());
+  phasor_re_.resize(static_cast<size_t>(n));
+  phasor_im_.resize(static_cast<size_t>(n));
+  double pr[kLanes], pi[kLanes], rr = 0.0, ri = 0.0, ar[kLanes] = {}, ai[kLanes] = {};
+  StartPhasors(step * lag_samples, bins_.front(), pr, pi, &rr, &ri);
   const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
   const double* w = signal_share_.data();
-  const double* re = phasor_re_.data();
-  const double* im = phasor_im_.data();
-  double ar[kSums] = {}, ai[kSums] = {};
-  size_t b = 0;
-  for (; b + kSums <= n; b += kSums) {
-    for (size_t j = 0; j < kSums; ++j) {
+  double* re = phasor_re_.data();
+  double* im = phasor_im_.data();
+  int b = 0;
+  for (; b + kLanes <= n; b += kLanes) {
+    for (int j = 0; j < kLanes; ++j) {
       const double gr = gv[2 * (b + j)], gi = gv[2 * (b + j) + 1];
-      ar[j] += w[b + j] * (gr * re[b + j] - gi * im[b + j]);
-      ai[j] += w[b + j] * (gr * im[b + j] + gi * re[b + j]);
+      re[b + j] = pr[j];
+      im[b + j] = pi[j];
+      ar[j] += w[b + j] * (gr * pr[j] - gi * pi[j]);
+      ai[j] += w[b + j] * (gr * pi[j] + gi * pr[j]);
+      const double next_r = pr[j] * rr - pi[j] * ri;
+      pi[j] = pr[j] * ri + pi[j] * rr;
+      pr[j] = next_r;
     }
   }
-  for (size_t j = 0; b < n; ++b, ++j) {
+  for (int j = 0; b < n; ++b, ++j) {  // the last < kLanes bins: lane j holds bin b's phasor
     const double gr = gv[2 * b], gi = gv[2 * b + 1];
-    ar[j] += w[b] * (gr * re[b] - gi * im[b]);
-    ai[j] += w[b] * (gr * im[b] + gi * re[b]);
+    re[b] = pr[j];
+    im[b] = pi[j];
+    ar[j] += w[b] * (gr * pr[j] - gi * pi[j]);
+    ai[j] += w[b] * (gr * pi[j] + gi * pr[j]);
+  }
+  double sum_r = 0.0, sum_i = 0.0;
+  for (int j = 0; j < kLanes; ++j) {
+    sum_r += ar[j];
+    sum_i += ai[j];
   }
   const double norm = std::max(share_norm_, 1e-12);
-  const double cr = ((ar[0] + ar[1]) + (ar[2] + ar[3])) / norm;
-  const double ci = ((ai[0] + ai[1]) + (ai[2] + ai[3])) / norm;
-  taken->resize(n);  // allocates only the first time a vector is used
+  const double cr = sum_r / norm, ci = sum_i / norm;
+  taken->resize(static_cast<size_t>(n));  // allocates only the first time a vector is used
   double* tv = reinterpret_cast<double*>(taken->data());
   double* gw = reinterpret_cast<double*>(g.data());
   for (b = 0; b < n; ++b) {  // G -= c w_k conj(phasor)
