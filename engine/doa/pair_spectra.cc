@@ -28,18 +28,24 @@ int Stride(int floats) { return (floats + 15) / 16 * 16; }
 // rotation of kLanes bins. One chain is a serial dependency of complex products (and
 // std::complex's product checks for infinities); kLanes chains in real arithmetic keep the
 // vector units busy.
-constexpr int kLanes = 8;
-// Lanes' starts e^(i a (first + j)) and the rotation e^(i a kLanes) (a: radians per bin):
-// lanes 4-7 and the rotation from lanes 0-3 and e^(4 i a), five sincos in all.
+constexpr int kLanes = 8;  // StartPhasors fills exactly 8
+// Lanes' starts e^(i a (first + j)) and the rotation e^(i a kLanes) (a: radians per bin),
+// from two sincos: e^(i a first) and e^(i a), whose powers 2, 4 and 8 are products.
 void StartPhasors(double a, int first, double* pr, double* pi, double* cr, double* ci) {
-  for (int j = 0; j < 4; ++j) {
-    pr[j] = std::cos(a * (first + j));
-    pi[j] = std::sin(a * (first + j));
+  const double r1 = std::cos(a), i1 = std::sin(a);
+  const double r2 = r1 * r1 - i1 * i1, i2 = 2.0 * r1 * i1;
+  const double r4 = r2 * r2 - i2 * i2, i4 = 2.0 * r2 * i2;
+  pr[0] = std::cos(a * first);
+  pi[0] = std::sin(a * first);
+  pr[1] = pr[0] * r1 - pi[0] * i1;
+  pi[1] = pr[0] * i1 + pi[0] * r1;
+  for (int j = 2; j < 4; ++j) {
+    pr[j] = pr[j - 2] * r2 - pi[j - 2] * i2;
+    pi[j] = pr[j - 2] * i2 + pi[j - 2] * r2;
   }
-  const double r4 = std::cos(4.0 * a), i4 = std::sin(4.0 * a);
-  for (int j = 0; j < 4; ++j) {
-    pr[j + 4] = pr[j] * r4 - pi[j] * i4;
-    pi[j + 4] = pr[j] * i4 + pi[j] * r4;
+  for (int j = 4; j < 8; ++j) {
+    pr[j] = pr[j - 4] * r4 - pi[j - 4] * i4;
+    pi[j] = pr[j - 4] * i4 + pi[j - 4] * r4;
   }
   *cr = r4 * r4 - i4 * i4;
   *ci = 2.0 * r4 * i4;
