@@ -18,14 +18,15 @@ constexpr int kReestimations = 2;
 
 }  // namespace
 
-bool SrpPhat::Search(Cell* best) const {
+bool SrpPhat::Search(Cell* best) {
   const std::vector<Cell>& roots = roots_;
   if (!roots.empty() && Leaf(roots.front())) {  // a plain grid: every root is a leaf
     double best_value = -std::numeric_limits<double>::infinity();
     // Every pair usable (PairSpectra's fields always are): the precomputed taps, else LagField::At.
-    const bool taps = !grid_taps_.empty() && field_.usable_pairs() == pair_count();
+    const bool taps = field_.usable_pairs() == pair_count() && GridCentres();
+    const double root_pairs = std::sqrt(static_cast<double>(pair_count()));
     for (size_t r = 0; r < roots.size(); ++r) {
-      const double value = taps ? GridCentre(r) : Centre(roots[r]);
+      const double value = taps ? grid_sums_[r] / root_pairs : Centre(roots[r]);
       if (value > best_value) {
         best_value = value;
         *best = roots[r];

@@ -172,12 +172,13 @@ class SrpPhat {
   double Spread(int p, double radius_rad) const;  // g_p r
   double Bound(const Cell& cell) const;
   double Centre(const Cell& cell) const;  // z at the centre, from the field
-  // Centre(roots_[root]) from grid_taps_ (when every pair is usable): the same value.
-  double GridCentre(size_t root) const;
+  // Centre(roots_[r]) for every root into grid_sums_ (times sqrt(P)) from the grid's taps,
+  // when every pair is usable: the same values. False when the grid has no taps.
+  bool GridCentres();
   std::vector<Cell> Roots() const;        // computed once, into roots_
   void Split(const Cell& cell, std::vector<Cell>* children) const;
   bool Leaf(const Cell& cell) const;
-  bool Search(Cell* best) const;
+  bool Search(Cell* best);
   struct Probe {
     double value = 0.0;  // sum_p R_p at the centre
     Eigen::Vector2d gradient = Eigen::Vector2d::Zero();
@@ -204,13 +205,13 @@ class SrpPhat {
   double leaf_radius_rad_ = 0.0;
   int root_count_ = 0;
   std::vector<Cell> roots_;
-  // A plain grid (roots are leaves): per root and pair, the two field samples LagField::At
-  // reads at the root's lag and their weights (fixed: the lags and the pairs' windows are).
-  struct GridTap {
-    int i0 = 0, i1 = 0;
-    double w0 = 0.0, w1 = 0.0;
-  };
-  std::vector<GridTap> grid_taps_;
+  // A plain grid (roots are leaves): per pair and root (pair-major), LagField::At's reading
+  // of the root's lag as w0 n_p[i0] + w1 n_p[i0 + 1] over the pair's samples padded with a 0
+  // (fixed: the lags and the pairs' windows are). Outside the window w0 = w1 = 0; at its last
+  // sample w1 = 0.
+  std::vector<int> grid_index_;
+  std::vector<double> grid_w0_, grid_w1_;
+  std::vector<double> grid_samples_, grid_sums_;  // per frame: the padded samples, the roots' sums
   double root_radius_rad_ = 0.0;
   double threshold_ = 0.0;
   double interpolation_margin_ = 1.0;  // continuous GCC maximum / sampled maximum, at most (above)
