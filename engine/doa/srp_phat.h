@@ -58,8 +58,8 @@
 // few hundred cells of P lookups each and one refinement of a few probes of P x B complex
 // multiplies (B in-band bins), plus the re-estimations when a frame holds several sources
 // (2 passes over the sources found) and P inverse FFTs per search after the first. Measured
-// in BENCHMARKS.md (doa_bench): 119 us for one source on a 4-microphone board. Not
-// thread-safe.
+// in BENCHMARKS.md (doa_bench): 46-53 us for one source on a 4-microphone board (a 2-vCPU
+// VM, 2026-12-03). Not thread-safe.
 #pragma once
 
 #include <complex>
