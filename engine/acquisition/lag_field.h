@@ -36,6 +36,9 @@ class LagField {
   // Normalised GCC of pair p at a fractional lag (samples), linear between integer lags;
   // 0 outside the pair's window or when unusable.
   double At(int p, double lag_samples) const;
+  // Pair p's normalised GCC at its integer lags first_lag(p)..last_lag(p) (one value, 0, when
+  // unusable): what At interpolates.
+  const std::vector<float>& values(int p) const { return pairs_[p].levels[0]; }
   // Upper bound of the normalised GCC over [lag - half_width, lag + half_width] (samples).
   double MaxAround(int p, double lag_samples, double half_width_samples) const;
   // The lag (samples, refined by a parabola through the integer maximum and its neighbours)

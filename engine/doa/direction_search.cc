@@ -18,15 +18,18 @@ constexpr int kReestimations = 2;
 
 }  // namespace
 
-bool SrpPhat::Search(Cell* best) const {
+bool SrpPhat::Search(Cell* best) {
   const std::vector<Cell>& roots = roots_;
   if (!roots.empty() && Leaf(roots.front())) {  // a plain grid: every root is a leaf
     double best_value = -std::numeric_limits<double>::infinity();
-    for (const Cell& c : roots) {
-      const double value = Centre(c);
+    // Every pair usable (PairSpectra's fields always are): the precomputed taps, else LagField::At.
+    const bool taps = field_.usable_pairs() == pair_count() && GridCentres();
+    const double root_pairs = std::sqrt(static_cast<double>(pair_count()));
+    for (size_t r = 0; r < roots.size(); ++r) {
+      const double value = taps ? grid_sums_[r] / root_pairs : Centre(roots[r]);
       if (value > best_value) {
         best_value = value;
-        *best = c;
+        *best = roots[r];
       }
     }
     return !roots.empty();
@@ -144,7 +147,7 @@ SrpPhat::Cell SrpPhat::Moved(const Cell& cell, const Probe& probe, const Eigen::
   return next;
 }
 
-SrpPhat::Cell SrpPhat::Refine(Cell cell) const {
+SrpPhat::Cell SrpPhat::Refine(Cell cell, double* statistic) const {
   const double max_step = 2.0 * leaf_radius_rad_;
   Probe probe = ProbeAt(cell);
   for (int iteration = 0; iteration < kRefineIterations; ++iteration) {
@@ -169,14 +172,16 @@ SrpPhat::Cell SrpPhat::Refine(Cell cell) const {
     }
     if (!improved || step.norm() < kConverged_rad) break;
   }
+  // Exact(cell): the probe's value is the same sum over pairs of the same R_p.
+  *statistic = probe.value / spectra_.noise_sigma() / std::sqrt(static_cast<double>(pair_count()));
   return cell;
 }
 
-DirectionPeak SrpPhat::Describe(const Cell& cell, double statistic) const {
+DirectionPeak SrpPhat::Describe(const Cell& cell, double statistic, bool statistic_is_whole) const {
   DirectionPeak peak;
   peak.statistic = statistic;
   peak.previous_statistic = Whole(cell, true);
-  peak.rise = Whole(cell, false) - peak.previous_statistic;
+  peak.rise = (statistic_is_whole ? statistic : Whole(cell, false)) - peak.previous_statistic;
   peak.threshold = threshold_;
   peak.power_db = 20.0 * std::log10(std::max(statistic, 1e-9) / std::sqrt(static_cast<double>(pair_count())));
   if (linear()) {
@@ -208,14 +213,16 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   std::vector<DirectionPeak> peaks;
   struct Found {
     Cell cell;
-    std::vector<std::vector<std::complex<double>>> amplitudes;  // per pair and bin, what RemoveDelay took
+    size_t slot = 0;  // removed_[slot]: per pair and bin, what RemoveDelay took
     double statistic = 0.0;
+    bool whole = false;  // statistic is Whole(cell, false): found with nothing removed, not re-refined
   };
   std::vector<Found> found;
   auto remove = [&](Found* f) {
-    f->amplitudes.resize(static_cast<size_t>(pair_count()));
-    for (int p = 0; p < pair_count(); ++p)
-      spectra_.RemoveDelay(p, Lag(p, f->cell), &f->amplitudes[static_cast<size_t>(p)]);
+    if (removed_.size() <= f->slot) removed_.resize(f->slot + 1);
+    std::vector<std::vector<std::complex<double>>>& taken = removed_[f->slot];
+    taken.resize(static_cast<size_t>(pair_count()));
+    for (int p = 0; p < pair_count(); ++p) spectra_.RemoveDelay(p, Lag(p, f->cell), &taken[static_cast<size_t>(p)]);
   };
   while (static_cast<int>(found.size()) < options_.max_sources) {
     if (!found.empty()) spectra_.FillFields(&field_input_);  // the residual, for the search
@@ -223,11 +230,11 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
     if (!found.empty() && FieldCeiling() < threshold_) break;  // nothing left can reach it
     Cell best;
     if (!Search(&best)) break;
-    best = Refine(best);
-    const double statistic = Exact(best);
+    double statistic = 0.0;
+    best = Refine(best, &statistic);
     if (!(statistic >= threshold_)) break;
     if (!found.empty() && statistic < options_.min_relative_statistic * found.front().statistic) break;
-    found.push_back({best, {}, statistic});
+    found.push_back({best, found.size(), statistic, found.empty()});
     if (static_cast<int>(found.size()) == options_.max_sources) break;
     remove(&found.back());
     // Each earlier source was refined with this one in its spectrum, which biased it: put it
@@ -236,9 +243,9 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
     for (int pass = 0; pass < kReestimations && found.size() > 1; ++pass) {
       for (Found& f : found) {
         for (int p = 0; p < pair_count(); ++p)
-          spectra_.RestoreDelay(p, Lag(p, f.cell), f.amplitudes[static_cast<size_t>(p)]);
-        f.cell = Refine(f.cell);
-        f.statistic = Exact(f.cell);
+          spectra_.RestoreDelay(p, Lag(p, f.cell), removed_[f.slot][static_cast<size_t>(p)]);
+        f.cell = Refine(f.cell, &f.statistic);
+        f.whole = false;
         remove(&f);
       }
     }
@@ -248,7 +255,7 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   std::erase_if(found, [this](const Found& f) { return !(f.statistic >= threshold_); });
   std::stable_sort(found.begin(), found.end(),
                    [](const Found& a, const Found& b) { return a.statistic > b.statistic; });
-  for (const Found& f : found) peaks.push_back(Describe(f.cell, f.statistic));
+  for (const Found& f : found) peaks.push_back(Describe(f.cell, f.statistic, f.whole));
   return peaks;
 }
 

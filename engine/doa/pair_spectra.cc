@@ -1,6 +1,8 @@
 #include "engine/doa/pair_spectra.h"
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -21,6 +23,33 @@ constexpr double kFlatSpread = 4.0;
 // Floats per channel, rounded up so every channel starts SIMD-aligned (FFTW's new-array
 // execute needs the alignment the plan was made with).
 int Stride(int floats) { return (floats + 15) / 16 * 16; }
+
+// Phasor chains over the in-band bins: lane j starts at bin first + j and is advanced by the
+// rotation of kLanes bins. One chain is a serial dependency of complex products (and
+// std::complex's product checks for infinities); kLanes chains in real arithmetic keep the
+// vector units busy.
+constexpr int kLanes = 8;  // StartPhasors fills exactly 8
+// Lanes' starts e^(i a (first + j)) and the rotation e^(i a kLanes) (a: radians per bin),
+// from two sincos: e^(i a first) and e^(i a), whose powers 2, 4 and 8 are products.
+void StartPhasors(double a, int first, double* pr, double* pi, double* cr, double* ci) {
+  const double r1 = std::cos(a), i1 = std::sin(a);
+  const double r2 = r1 * r1 - i1 * i1, i2 = 2.0 * r1 * i1;
+  const double r4 = r2 * r2 - i2 * i2, i4 = 2.0 * r2 * i2;
+  pr[0] = std::cos(a * first);
+  pi[0] = std::sin(a * first);
+  pr[1] = pr[0] * r1 - pi[0] * i1;
+  pi[1] = pr[0] * i1 + pi[0] * r1;
+  for (int j = 2; j < 4; ++j) {
+    pr[j] = pr[j - 2] * r2 - pi[j - 2] * i2;
+    pi[j] = pr[j - 2] * i2 + pi[j - 2] * r2;
+  }
+  for (int j = 4; j < 8; ++j) {
+    pr[j] = pr[j - 4] * r4 - pi[j - 4] * i4;
+    pi[j] = pr[j - 4] * i4 + pi[j - 4] * r4;
+  }
+  *cr = r4 * r4 - i4 * i4;
+  *ci = 2.0 * r4 * i4;
+}
 }  // namespace
 
 StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
@@ -47,6 +76,10 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
     if (f_hz >= o.band_low_hz && f_hz <= high_hz) s.bins_.push_back(k);
   }
   if (s.bins_.empty()) return InvalidArgument("the band holds no FFT bin");
+  for (int k : s.bins_) {
+    s.omega_.push_back(2.0 * std::numbers::pi / s.fft_size_ * k);
+    s.omega_squared_.push_back(s.omega_.back() * s.omega_.back());
+  }
   s.noise_sigma_ =
       std::sqrt(static_cast<double>(s.fft_size_) / o.frame_samples / (2.0 * static_cast<double>(s.bins_.size())));
   for (int i = 0; i < o.sensors; ++i)
@@ -68,15 +101,6 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
 void PairSpectra::FindSignalShare() {
   share_ready_ = true;
   const size_t n = bins_.size();
-  const size_t spectrum_stride = Stride(2 * (fft_size_ / 2 + 1));
-  bin_power_.assign(n, 0.0);
-  for (int c = 0; c < options_.sensors; ++c) {
-    const float* x = spectra_.get() + static_cast<size_t>(c) * spectrum_stride;
-    for (size_t b = 0; b < n; ++b) {
-      const float* z = x + 2 * static_cast<size_t>(bins_[b]);
-      bin_power_[b] += static_cast<double>(z[0]) * z[0] + static_cast<double>(z[1]) * z[1];
-    }
-  }
   smoothed_power_.assign(n, 0.0);
   const size_t half = kShareWindowBins / 2;
   double sum = 0.0;
@@ -95,8 +119,11 @@ void PairSpectra::FindSignalShare() {
   signal_share_.assign(n, 1.0);
   // A frame whose power is flat (white sources, or noise alone) keeps every bin whole: the
   // floor is then the signal, not the noise.
-  if (!(floor > 0.0) || sorted_power_[n - 1 - rank] < kFlatSpread * floor) return;
-  for (size_t b = 0; b < n; ++b) signal_share_[b] = std::max(0.0, 1.0 - kNoiseOverFloor * floor / smoothed_power_[b]);
+  if (floor > 0.0 && !(sorted_power_[n - 1 - rank] < kFlatSpread * floor)) {
+    for (size_t b = 0; b < n; ++b) signal_share_[b] = std::max(0.0, 1.0 - kNoiseOverFloor * floor / smoothed_power_[b]);
+  }
+  share_norm_ = 0.0;
+  for (size_t b = 0; b < n; ++b) share_norm_ += signal_share_[b] * signal_share_[b];
 }
 
 Status PairSpectra::Analyse(const float* frame, Measurement* field) {
@@ -105,21 +132,35 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
   for (int c = 0; c < options_.sensors; ++c) {
     const float* in = frame + static_cast<size_t>(c) * n;
     float* t = time_.get() + static_cast<size_t>(c) * time_stride;
+    uint32_t non_finite = 0;  // an all-ones exponent: inf or NaN (integer ops, so the loop vectorises)
     for (int i = 0; i < n; ++i) {
-      if (!std::isfinite(in[i])) return InvalidArgument("sensor " + std::to_string(c) + " has a non-finite sample");
       t[i] = in[i];
+      non_finite |= static_cast<uint32_t>((std::bit_cast<uint32_t>(in[i]) & 0x7f800000u) == 0x7f800000u);
     }
+    if (non_finite != 0) return InvalidArgument("sensor " + std::to_string(c) + " has a non-finite sample");
     std::fill(t + n, t + m, 0.0f);
     fftwf_execute_dft_r2c(forward_.get(), t, AsComplex(spectra_.get() + static_cast<size_t>(c) * spectrum_stride));
   }
-  auto bin = [&](int c, int k) {
-    const float* x = spectra_.get() + static_cast<size_t>(c) * spectrum_stride + 2 * static_cast<size_t>(k);
-    return std::complex<double>(x[0], x[1]);
-  };
+  // The in-band bins of every channel as doubles (re, im apart), their powers summed over
+  // the channels (FindSignalShare) and the band's mean power, in one pass.
+  const size_t nb = bins_.size(), first = static_cast<size_t>(bins_.front());  // consecutive bins
+  bin_re_.resize(static_cast<size_t>(options_.sensors) * nb);
+  bin_im_.resize(bin_re_.size());
+  bin_power_.assign(nb, 0.0);
   double mean_power = 0.0;
-  for (int c = 0; c < options_.sensors; ++c)
-    for (int k : bins_) mean_power += std::norm(bin(c, k));
-  mean_power /= static_cast<double>(options_.sensors) * static_cast<double>(bins_.size());
+  for (int c = 0; c < options_.sensors; ++c) {
+    const float* x = spectra_.get() + static_cast<size_t>(c) * spectrum_stride + 2 * first;
+    double* re = bin_re_.data() + static_cast<size_t>(c) * nb;
+    double* im = bin_im_.data() + static_cast<size_t>(c) * nb;
+    for (size_t b = 0; b < nb; ++b) {
+      re[b] = x[2 * b];
+      im[b] = x[2 * b + 1];
+      const double power = re[b] * re[b] + im[b] * im[b];  // float products: exact in double
+      mean_power += power;
+      bin_power_[b] += power;
+    }
+  }
+  mean_power /= static_cast<double>(options_.sensors) * static_cast<double>(nb);
   band_power_ = mean_power;
   const double floor = kRelativeFloor * mean_power;
   share_ready_ = false;  // RemoveDelay finds the signal share when a frame needs it
@@ -128,10 +169,19 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
   field->pairs.resize(pairs_.size());
   newest_ = (newest_ + 1) % history_.size();  // overwrites the oldest whole spectrum
   for (size_t p = 0; p < pairs_.size(); ++p) {
-    for (size_t b = 0; b < bins_.size(); ++b) {
-      const std::complex<double> c = bin(pairs_[p].first, bins_[b]) * std::conj(bin(pairs_[p].second, bins_[b]));
-      const double magnitude = std::sqrt(std::norm(c));  // std::abs calls hypot: 3x slower here
-      g_[p][b] = magnitude > floor && magnitude > 0.0 ? c / magnitude : 0.0;
+    const double* ar = bin_re_.data() + static_cast<size_t>(pairs_[p].first) * nb;
+    const double* ai = bin_im_.data() + static_cast<size_t>(pairs_[p].first) * nb;
+    const double* br = bin_re_.data() + static_cast<size_t>(pairs_[p].second) * nb;
+    const double* bi = bin_im_.data() + static_cast<size_t>(pairs_[p].second) * nb;
+    double* g = reinterpret_cast<double*>(g_[p].data());  // (re, im) pairs
+    for (size_t b = 0; b < nb; ++b) {
+      // X_i conj(X_j) / |X_i conj(X_j)|, 0 where either channel is silent. The products of
+      // floats are exact in double, so the sums are rounded once.
+      const double cr = ar[b] * br[b] + ai[b] * bi[b], ci = ai[b] * br[b] - ar[b] * bi[b];
+      const double magnitude = std::sqrt(cr * cr + ci * ci);  // std::abs calls hypot: 3x slower here
+      const bool kept = magnitude > floor && magnitude > 0.0;
+      g[2 * b] = kept ? cr / magnitude : 0.0;
+      g[2 * b + 1] = kept ? ci / magnitude : 0.0;
     }
     history_[newest_][p] = g_[p];
     FillField(static_cast<int>(p), &field->pairs[p]);
@@ -162,26 +212,84 @@ void PairSpectra::FillField(int p, PairMeasurement* out) {
   out->peak_snr = 1.0;
 }
 
+void PairSpectra::Phasors(double lag_samples) {
+  // e^(i step (first + b) l) for every in-band bin b, over kLanes chains.
+  const double step = 2.0 * std::numbers::pi / fft_size_;
+  const auto n = static_cast<int>(bins_.size());
+  phasor_re_.resize(static_cast<size_t>(n));
+  phasor_im_.resize(static_cast<size_t>(n));
+  double pr[kLanes], pi[kLanes], cr = 0.0, ci = 0.0;
+  StartPhasors(step * lag_samples, bins_.front(), pr, pi, &cr, &ci);  // the in-band bins are consecutive
+  double* re = phasor_re_.data();
+  double* im = phasor_im_.data();
+  int b = 0;
+  for (; b + kLanes <= n; b += kLanes) {
+    for (int j = 0; j < kLanes; ++j) {
+      re[b + j] = pr[j];
+      im[b + j] = pi[j];
+      const double next_r = pr[j] * cr - pi[j] * ci;
+      pi[j] = pr[j] * ci + pi[j] * cr;
+      pr[j] = next_r;
+    }
+  }
+  for (int j = 0; b < n; ++b, ++j) {  // the last < kLanes bins: lane j holds bin b's phasor
+    re[b] = pr[j];
+    im[b] = pi[j];
+  }
+}
+
 void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::complex<double>>* taken) {
   std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
-  const double step = 2.0 * std::numbers::pi / fft_size_;
-  const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
-  const std::complex<double> start = std::polar(1.0, step * lag_samples * bins_.front());
   if (!share_ready_) FindSignalShare();
   // The weighted least-squares pure delay: c minimising sum_k |G_p(k) - c w_k e^(-i w k l)|^2,
-  // w_k the bin's share of signal (FindOccupiedBand), subtracted with those weights.
-  std::complex<double> phasor = start, amplitude = 0.0;
-  double norm = 0.0;
-  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) {
-    amplitude += signal_share_[b] * g[b] * phasor;
-    norm += signal_share_[b] * signal_share_[b];
+  // w_k the bin's share of signal (FindSignalShare), subtracted with those weights. One pass
+  // over kLanes phasor chains sums c's numerator and keeps the phasors for the subtraction.
+  const double step = 2.0 * std::numbers::pi / fft_size_;
+  const auto n = static_cast<int>(g.size());
+  phasor_re_.resize(static_cast<size_t>(n));
+  phasor_im_.resize(static_cast<size_t>(n));
+  double pr[kLanes], pi[kLanes], rr = 0.0, ri = 0.0, ar[kLanes] = {}, ai[kLanes] = {};
+  StartPhasors(step * lag_samples, bins_.front(), pr, pi, &rr, &ri);
+  const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
+  const double* w = signal_share_.data();
+  double* re = phasor_re_.data();
+  double* im = phasor_im_.data();
+  int b = 0;
+  for (; b + kLanes <= n; b += kLanes) {
+    for (int j = 0; j < kLanes; ++j) {
+      const double gr = gv[2 * (b + j)], gi = gv[2 * (b + j) + 1];
+      re[b + j] = pr[j];
+      im[b + j] = pi[j];
+      ar[j] += w[b + j] * (gr * pr[j] - gi * pi[j]);
+      ai[j] += w[b + j] * (gr * pi[j] + gi * pr[j]);
+      const double next_r = pr[j] * rr - pi[j] * ri;
+      pi[j] = pr[j] * ri + pi[j] * rr;
+      pr[j] = next_r;
+    }
   }
-  amplitude /= std::max(norm, 1e-12);
-  taken->assign(g.size(), 0.0);
-  phasor = start;
-  for (size_t b = 0; b < g.size(); ++b, phasor *= rotate) {
-    (*taken)[b] = amplitude * signal_share_[b];
-    g[b] -= (*taken)[b] * std::conj(phasor);
+  for (int j = 0; b < n; ++b, ++j) {  // the last < kLanes bins: lane j holds bin b's phasor
+    const double gr = gv[2 * b], gi = gv[2 * b + 1];
+    re[b] = pr[j];
+    im[b] = pi[j];
+    ar[j] += w[b] * (gr * pr[j] - gi * pi[j]);
+    ai[j] += w[b] * (gr * pi[j] + gi * pr[j]);
+  }
+  double sum_r = 0.0, sum_i = 0.0;
+  for (int j = 0; j < kLanes; ++j) {
+    sum_r += ar[j];
+    sum_i += ai[j];
+  }
+  const double norm = std::max(share_norm_, 1e-12);
+  const double cr = sum_r / norm, ci = sum_i / norm;
+  taken->resize(static_cast<size_t>(n));  // allocates only the first time a vector is used
+  double* tv = reinterpret_cast<double*>(taken->data());
+  double* gw = reinterpret_cast<double*>(g.data());
+  for (b = 0; b < n; ++b) {  // G -= c w_k conj(phasor)
+    const double tr = cr * w[b], ti = ci * w[b];
+    tv[2 * b] = tr;
+    tv[2 * b + 1] = ti;
+    gw[2 * b] -= tr * re[b] + ti * im[b];
+    gw[2 * b + 1] -= ti * re[b] - tr * im[b];
   }
 }
 
@@ -191,16 +299,24 @@ void PairSpectra::FillFields(Measurement* field) {
 
 void PairSpectra::RestoreDelay(int p, double lag_samples, const std::vector<std::complex<double>>& taken) {
   std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
-  const double step = 2.0 * std::numbers::pi / fft_size_;
-  const std::complex<double> rotate = std::polar(1.0, step * lag_samples);
-  std::complex<double> phasor = std::polar(1.0, step * lag_samples * bins_.front());
-  for (size_t b = 0; b < g.size() && b < taken.size(); ++b, phasor *= rotate) g[b] += taken[b] * std::conj(phasor);
+  Phasors(lag_samples);
+  const size_t n = std::min(g.size(), taken.size());
+  const double* tv = reinterpret_cast<const double*>(taken.data());
+  double* gw = reinterpret_cast<double*>(g.data());
+  const double* re = phasor_re_.data();
+  const double* im = phasor_im_.data();
+  for (size_t b = 0; b < n; ++b) {  // G += taken conj(phasor)
+    const double tr = tv[2 * b], ti = tv[2 * b + 1];
+    gw[2 * b] += tr * re[b] + ti * im[b];
+    gw[2 * b + 1] += ti * re[b] - tr * im[b];
+  }
 }
 
 double PairSpectra::WholeAt(int p, double lag_samples, bool previous) const {
   const size_t back = previous ? history_.size() - 1 : 0;
   if (frames_analysed_ <= static_cast<int64_t>(back)) return 0.0;
-  return Evaluate(history_[(newest_ + history_.size() - back) % history_.size()][static_cast<size_t>(p)], lag_samples)
+  return Evaluate<false>(history_[(newest_ + history_.size() - back) % history_.size()][static_cast<size_t>(p)],
+                        lag_samples)
       .r;
 }
 
@@ -213,31 +329,26 @@ PairSpectra::Value PairSpectra::At(int p, double lag_samples) const {
   return Evaluate(g_[static_cast<size_t>(p)], lag_samples);
 }
 
+template <bool kDerivatives>
 PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>& g, double lag_samples) const {
-  // sum_b G(b) exp(i w_b l), w_b = step (first + b), in real arithmetic over kLanes
-  // interleaved phasor chains (each advanced by rotate^kLanes): one chain is a serial
-  // dependency of complex products, and std::complex's product checks for infinities.
-  constexpr int kLanes = 4;
+  // sum_b G(b) exp(i w_b l), w_b = step (first + b), over kLanes phasor chains.
   const double step = 2.0 * std::numbers::pi / fft_size_;  // radians per bin per sample of lag
   const auto n = static_cast<int>(g.size());
-  const int first = bins_.front();  // the in-band bins are consecutive
-  const double stride = step * lag_samples * kLanes;
-  const double cr = std::cos(stride), ci = std::sin(stride);
-  double pr[kLanes], pi[kLanes], r[kLanes] = {}, dr[kLanes] = {}, d2r[kLanes] = {};
-  for (int j = 0; j < kLanes; ++j) {
-    pr[j] = std::cos(step * lag_samples * (first + j));
-    pi[j] = std::sin(step * lag_samples * (first + j));
-  }
+  double pr[kLanes], pi[kLanes], cr = 0.0, ci = 0.0, r[kLanes] = {}, dr[kLanes] = {}, d2r[kLanes] = {};
+  StartPhasors(step * lag_samples, bins_.front(), pr, pi, &cr, &ci);  // the in-band bins are consecutive
   const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
+  const double* w = omega_.data();
+  const double* w2 = omega_squared_.data();
   int b = 0;
   for (; b + kLanes <= n; b += kLanes) {
     for (int j = 0; j < kLanes; ++j) {
       const double gr = gv[2 * (b + j)], gi = gv[2 * (b + j) + 1];
       const double tr = gr * pr[j] - gi * pi[j], ti = gr * pi[j] + gi * pr[j];
-      const double w = step * (first + b + j);
       r[j] += tr;
-      dr[j] -= w * ti;
-      d2r[j] -= w * w * tr;
+      if constexpr (kDerivatives) {
+        dr[j] -= w[b + j] * ti;
+        d2r[j] -= w2[b + j] * tr;
+      }
       const double next_r = pr[j] * cr - pi[j] * ci;
       pi[j] = pr[j] * ci + pi[j] * cr;
       pr[j] = next_r;
@@ -246,10 +357,11 @@ PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>
   for (int j = 0; b < n; ++b, ++j) {  // the last < kLanes bins: lane j holds bin b's phasor
     const double gr = gv[2 * b], gi = gv[2 * b + 1];
     const double tr = gr * pr[j] - gi * pi[j], ti = gr * pi[j] + gi * pr[j];
-    const double w = step * (first + b);
     r[j] += tr;
-    dr[j] -= w * ti;
-    d2r[j] -= w * w * tr;
+    if constexpr (kDerivatives) {
+      dr[j] -= w[b] * ti;
+      d2r[j] -= w2[b] * tr;
+    }
   }
   Value v;
   const double inv_b = 1.0 / static_cast<double>(n);

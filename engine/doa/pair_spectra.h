@@ -99,6 +99,8 @@ class PairSpectra {
  private:
   PairSpectra() = default;
   void FillField(int p, PairMeasurement* out);
+  // kDerivatives false: only r (the same value), dr = d2r = 0.
+  template <bool kDerivatives = true>
   Value Evaluate(const std::vector<std::complex<double>>& g, double lag_samples) const;
   PairSpectraOptions options_;
   int fft_size_ = 0;
@@ -106,11 +108,18 @@ class PairSpectra {
   double band_power_ = 0.0;
   std::vector<std::pair<int, int>> pairs_;
   std::vector<int> bins_;                             // in-band bin indices
+  std::vector<double> omega_, omega_squared_;         // per in-band bin k: 2 pi k / M, its square
   std::vector<std::vector<std::complex<double>>> g_;  // per pair, per in-band bin
   // Per in-band bin, its share of signal this frame (RemoveDelay), and scratch.
+  // bin_power_: the bin's power summed over the sensors (Analyse fills it).
   std::vector<double> signal_share_, bin_power_, smoothed_power_, sorted_power_;
-  bool share_ready_ = false;  // signal_share_ is this frame's
+  std::vector<double> bin_re_, bin_im_;  // per sensor, per in-band bin: the last frame's spectrum
+  double share_norm_ = 0.0;   // sum of signal_share_^2
+  bool share_ready_ = false;  // signal_share_ and share_norm_ are this frame's
   void FindSignalShare();
+  // phasor_re_, phasor_im_ = e^(2 pi i k l / M) for every in-band bin k (RemoveDelay's scratch).
+  void Phasors(double lag_samples);
+  std::vector<double> phasor_re_, phasor_im_;
   // g_ before any removal, for the last rise_lag_frames + 1 frames (a ring; newest_ is this frame's)
   std::vector<std::vector<std::vector<std::complex<double>>>> history_;
   size_t newest_ = 0;

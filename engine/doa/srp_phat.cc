@@ -100,6 +100,32 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
     srp.root_radius_rad_ = kRootCoverage * 2.0 / std::sqrt(static_cast<double>(srp.root_count_));
   }
   srp.roots_ = srp.Roots();
+  if (!srp.roots_.empty() && srp.Leaf(srp.roots_.front())) {
+    // LagField::At's reading of each root's lags, for a window of lags -max_lag..max_lag.
+    const int window = 2 * po.max_lag_samples + 1;
+    for (int p = 0; p < srp.pair_count(); ++p) {
+      for (const Cell& c : srp.roots_) {
+        const double x = srp.Lag(p, c) + po.max_lag_samples;
+        int i0 = 0;
+        double w0 = 0.0, w1 = 0.0;  // outside the window: 0
+        if (x >= 0.0 && x <= static_cast<double>(window - 1)) {
+          const auto i = static_cast<int>(x);
+          if (i + 1 >= window) {
+            i0 = window - 1;
+            w0 = 1.0;
+          } else {
+            const double f = x - static_cast<double>(i);
+            i0 = i;
+            w0 = 1.0 - f;
+            w1 = f;
+          }
+        }
+        srp.grid_index_.push_back(i0);
+        srp.grid_w0_.push_back(w0);
+        srp.grid_w1_.push_back(w1);
+      }
+    }
+  }
   return srp;
 }
 
@@ -123,6 +149,24 @@ double SrpPhat::Centre(const Cell& cell) const {
   double sum = 0.0;
   for (int p = 0; p < pair_count(); ++p) sum += field_.At(p, Lag(p, cell));
   return sum / std::sqrt(static_cast<double>(pair_count()));
+}
+
+bool SrpPhat::GridCentres() {
+  if (grid_index_.empty()) return false;
+  const size_t roots = roots_.size(), pairs = static_cast<size_t>(pair_count());
+  grid_sums_.assign(roots, 0.0);
+  for (size_t p = 0; p < pairs; ++p) {
+    const std::vector<float>& values = field_.values(static_cast<int>(p));
+    grid_samples_.assign(values.begin(), values.end());
+    grid_samples_.push_back(0.0);  // w1 = 0 reads it at the window's last sample
+    const double* __restrict g = grid_samples_.data();
+    const int* __restrict index = grid_index_.data() + p * roots;
+    const double* __restrict w0 = grid_w0_.data() + p * roots;
+    const double* __restrict w1 = grid_w1_.data() + p * roots;
+    double* __restrict sum = grid_sums_.data();
+    for (size_t r = 0; r < roots; ++r) sum[r] += w0[r] * g[index[r]] + w1[r] * g[index[r] + 1];
+  }
+  return true;
 }
 
 bool SrpPhat::Leaf(const Cell& cell) const { return max_spread_ * cell.radius_rad <= 0.5 + 1e-9; }

@@ -58,10 +58,11 @@
 // few hundred cells of P lookups each and one refinement of a few probes of P x B complex
 // multiplies (B in-band bins), plus the re-estimations when a frame holds several sources
 // (2 passes over the sources found) and P inverse FFTs per search after the first. Measured
-// in BENCHMARKS.md (doa_bench): 119 us for one source on a 4-microphone board. Not
-// thread-safe.
+// in BENCHMARKS.md (doa_bench): 46-53 us for one source on a 4-microphone board (a 2-vCPU
+// VM, 2026-12-03). Not thread-safe.
 #pragma once
 
+#include <complex>
 #include <limits>
 #include <vector>
 
@@ -171,10 +172,13 @@ class SrpPhat {
   double Spread(int p, double radius_rad) const;  // g_p r
   double Bound(const Cell& cell) const;
   double Centre(const Cell& cell) const;  // z at the centre, from the field
+  // Centre(roots_[r]) for every root into grid_sums_ (times sqrt(P)) from the grid's taps,
+  // when every pair is usable: the same values. False when the grid has no taps.
+  bool GridCentres();
   std::vector<Cell> Roots() const;        // computed once, into roots_
   void Split(const Cell& cell, std::vector<Cell>* children) const;
   bool Leaf(const Cell& cell) const;
-  bool Search(Cell* best) const;
+  bool Search(Cell* best);
   struct Probe {
     double value = 0.0;  // sum_p R_p at the centre
     Eigen::Vector2d gradient = Eigen::Vector2d::Zero();
@@ -183,13 +187,15 @@ class SrpPhat {
   };
   Probe ProbeAt(const Cell& cell) const;
   Cell Moved(const Cell& cell, const Probe& probe, const Eigen::Vector2d& step) const;
-  Cell Refine(Cell cell) const;
+  // Newton's method on the exact spectrum from `cell`; *statistic = Exact(the result).
+  Cell Refine(Cell cell, double* statistic) const;
   double Exact(const Cell& cell) const;                 // z from the exact (residual) spectrum
   double Whole(const Cell& cell, bool previous) const;  // z from a whole spectrum (PairSpectra::WholeAt)
   // The residual field's largest possible z anywhere: every pair's largest sample, summed
   // over pairs / sqrt(P), times interpolation_margin_.
   double FieldCeiling() const;
-  DirectionPeak Describe(const Cell& cell, double statistic) const;
+  // statistic_is_whole: the statistic is Whole(cell, false) (not recomputed).
+  DirectionPeak Describe(const Cell& cell, double statistic, bool statistic_is_whole) const;
 
   ArrayShapeInfo shape_;
   SrpOptions options_;
@@ -199,9 +205,19 @@ class SrpPhat {
   double leaf_radius_rad_ = 0.0;
   int root_count_ = 0;
   std::vector<Cell> roots_;
+  // A plain grid (roots are leaves): per pair and root (pair-major), LagField::At's reading
+  // of the root's lag as w0 n_p[i0] + w1 n_p[i0 + 1] over the pair's samples padded with a 0
+  // (fixed: the lags and the pairs' windows are). Outside the window w0 = w1 = 0; at its last
+  // sample w1 = 0.
+  std::vector<int> grid_index_;
+  std::vector<double> grid_w0_, grid_w1_;
+  std::vector<double> grid_samples_, grid_sums_;  // per frame: the padded samples, the roots' sums
   double root_radius_rad_ = 0.0;
   double threshold_ = 0.0;
   double interpolation_margin_ = 1.0;  // continuous GCC maximum / sampled maximum, at most (above)
+  // Per source found in a frame (in the order found), per pair and in-band bin: what
+  // RemoveDelay took. Kept across frames, so that a frame allocates nothing for it.
+  std::vector<std::vector<std::vector<std::complex<double>>>> removed_;
   Measurement field_input_;
   Measurement whole_field_;  // field_input_ as Analyse left it (keep_whole_field only)
   LagField field_;
