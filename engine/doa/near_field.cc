@@ -176,6 +176,11 @@ NearFieldFix NearFieldLocator::Bound(const PairSpectra& spectra, const Probe& fi
   }
   if (used < free_ || !(fix.range_m > 0.0)) return fix;
   Pin(&fisher, 1.0);
+  // A plane wave carries no range information: the Fisher matrix is then singular along the
+  // line of sight up to rounding, and whether LDLT calls it positive turned on the last bits
+  // of the spectrum's sums. A prior worth 1e-12 of its trace keeps the solve defined, so such a
+  // frame reports a huge range sd (far field) rather than NaN.
+  fisher.diagonal().array() += 1e-12 * fisher.trace();
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(fisher);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return fix;
   Eigen::Matrix3d covariance_free = ldlt.solve(Eigen::Matrix3d::Identity());
