@@ -68,6 +68,15 @@ void LoadSession::Skip() {
   shared_.stats->finished.fetch_add(1, std::memory_order_relaxed);
 }
 
+int64_t LoadSession::CancelPast(int64_t deadline_ns, int64_t now_ns, int64_t poll_ns, const char* error,
+                                Action* action) {
+  if (now_ns < deadline_ns) return std::min(now_ns + poll_ns, deadline_ns);
+  cancelled_ = true;
+  action->cancel = true;
+  shared_.stats->CountError(error);
+  return -1;
+}
+
 LoadSession::Action LoadSession::Decide(int64_t now_ns) {
   Action action;
   if (phase_ != Phase::kStreaming || write_in_flight_) return action;
@@ -128,13 +137,7 @@ int64_t LoadSession::Tick(int64_t now_ns) {
     std::lock_guard<std::mutex> lock(mutex_);
     switch (phase_) {
       case Phase::kOpening:
-        if (now_ns >= start_ns_ + drain_ns_) {
-          cancelled_ = true;
-          action.cancel = true;
-          shared_.stats->CountError("OPEN_TIMEOUT");
-        } else {
-          next_ns = std::min(now_ns + period_ns_, start_ns_ + drain_ns_);
-        }
+        next_ns = CancelPast(start_ns_ + drain_ns_, now_ns, period_ns_, "OPEN_TIMEOUT", &action);
         break;
       case Phase::kStreaming:
         action = Decide(now_ns);
@@ -149,14 +152,8 @@ int64_t LoadSession::Tick(int64_t now_ns) {
         }
         break;
       case Phase::kClosing:
-        if (now_ns >= closing_ns_ + drain_ns_) {
-          cancelled_ = true;
-          action.cancel = true;
-          shared_.stats->CountError("DRAIN_TIMEOUT");
-        } else {
-          // Looked at again soon: the pacer is done with the session once it has ended.
-          next_ns = std::min(now_ns + kClosingPollNs, closing_ns_ + drain_ns_);
-        }
+        // Looked at again soon: the pacer is done with the session once it has ended.
+        next_ns = CancelPast(closing_ns_ + drain_ns_, now_ns, kClosingPollNs, "DRAIN_TIMEOUT", &action);
         break;
       case Phase::kWaiting:  // Open comes first; nothing to do
       case Phase::kEnded:    // the stream is over; OnDone follows

@@ -100,6 +100,9 @@ class LoadSession final : public grpc::ClientBidiReactor<grpc::ByteBuffer, v1::T
 
   // Under mutex_: the next write or the half-close, if one is due at `now_ns`.
   Action Decide(int64_t now_ns);
+  // Under mutex_: past `deadline_ns`, cancels the call (counting `error`) and returns -1;
+  // before it, the next look: now + poll_ns, at most the deadline.
+  int64_t CancelPast(int64_t deadline_ns, int64_t now_ns, int64_t poll_ns, const char* error, Action* action);
   // Under mutex_: release the hold once no more operations will be started.
   void ReleaseIfQuiet(Action* action);
   void Perform(const Action& action, int64_t now_ns);
