@@ -18,6 +18,8 @@ namespace localizer::gpu {
 namespace {
 
 constexpr int kMaxSessions = 1 << 20;
+// The map's launch has a block row per 256 directions, at most 65535 rows.
+constexpr int kMaxDirections = 1 << 22;
 
 bool AllFinite(const float* v, size_t n) {
   uint32_t non_finite = 0;  // an all-ones exponent: inf or NaN (integer ops, so the loop vectorises)
@@ -88,7 +90,9 @@ StatusOr<std::unique_ptr<SrpBatch>> SrpBatch::Create(std::vector<SrpArrayConfig>
     const std::string name = "array " + std::to_string(a) + ": ";
     StatusOr<SrpArrayModel> model = MakeSrpArrayModel(config.sensors_m, config.options);
     if (!model.ok()) return InvalidArgument(name + model.status().message());
-    if (config.directions.empty()) return InvalidArgument(name + "the direction grid is empty");
+    if (config.directions.empty() || config.directions.size() > static_cast<size_t>(kMaxDirections))
+      return InvalidArgument(name + "the direction grid must hold 1 to " + std::to_string(kMaxDirections) +
+                             " directions, not " + std::to_string(config.directions.size()));
     std::vector<engine::Vec3> grid;
     for (size_t d = 0; d < config.directions.size(); ++d) {
       const engine::Vec3& u = config.directions[d];

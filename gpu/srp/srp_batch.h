@@ -114,8 +114,8 @@ class SrpBatch {
   };
 
   // Device buffers, pinned staging and a stream for up to max_sessions jobs a Run.
-  // INVALID_ARGUMENT for no array, an array engine::SrpPhat::Create refuses, an empty grid or a
-  // non-finite direction, max_sessions outside [1, 1 << 20], or a session's spectra beyond the
+  // INVALID_ARGUMENT for no array, an array engine::SrpPhat::Create refuses, a grid empty or of
+  // more than 2^22 directions, a non-finite direction, max_sessions outside [1, 1 << 20], or a session's spectra beyond the
   // device's shared memory; RESOURCE_EXHAUSTED when memory runs out; FAILED_PRECONDITION
   // without a usable device.
   static StatusOr<std::unique_ptr<SrpBatch>> Create(std::vector<SrpArrayConfig> arrays, int max_sessions,

@@ -132,8 +132,10 @@ Status PrepareSrpMap(int shared_bytes) {
                            " bytes of shared memory per block for one session's spectra, more than the device's " +
                            std::to_string(limit) + " (fewer pairs or a narrower band)");
   }
+  // The kernel's limit is process-wide: raise it to the device's whole opt-in, never to one
+  // batch's need, so that creating a batch of smaller arrays cannot break a larger one's launches.
   LOCALIZER_CUDA_RETURN_IF_ERROR(
-      cudaFuncSetAttribute(SrpMapKernel, cudaFuncAttributeMaxDynamicSharedMemorySize, shared_bytes),
+      cudaFuncSetAttribute(SrpMapKernel, cudaFuncAttributeMaxDynamicSharedMemorySize, limit),
       "cudaFuncSetAttribute(SrpMapKernel)");
   return Status::Ok();
 }

@@ -67,8 +67,8 @@ struct SrpMapArgs {
 // beyond 48 KiB, which srp_batch.cc makes at Create through SrpMapSharedBytes/PrepareSrpMap).
 constexpr int kSrpMapThreads = 256;
 Status LaunchSrpMap(const SrpMapArgs& args, cudaStream_t stream);
-// The shared memory a map launch needs, and raising the kernel's limit to it (INVALID_ARGUMENT
-// when the device cannot give that much).
+// The shared memory a map launch needs, and raising the kernel's limit to the device's opt-in
+// maximum (INVALID_ARGUMENT when even that is less than shared_bytes).
 int SrpMapSharedBytes(int max_spectrum_floats, int max_pairs);
 Status PrepareSrpMap(int shared_bytes);
 
