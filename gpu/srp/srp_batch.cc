@@ -66,7 +66,6 @@ struct SrpBatch::Impl {
     for (cudaEvent_t e : events)
       if (e != nullptr) cudaEventDestroy(e);
   }
-  SrpPeak Describe(int array, const SrpSessionResult& r) const;
 };
 
 SrpBatch::SrpBatch(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -170,8 +169,7 @@ StatusOr<std::unique_ptr<SrpBatch>> SrpBatch::Create(std::vector<SrpArrayConfig>
   return std::unique_ptr<SrpBatch>(new SrpBatch(std::move(impl)));
 }
 
-SrpPeak SrpBatch::Impl::Describe(int a, const SrpSessionResult& r) const {
-  const SrpArrayModel& model = arrays[static_cast<size_t>(a)];
+SrpPeak DescribeSrpResult(const SrpArrayModel& model, const SrpSessionResult& r) {
   SrpPeak peak;
   peak.grid_index = r.grid_index;
   peak.grid_z = r.grid_z;
@@ -283,7 +281,7 @@ Status SrpBatch::Run(std::span<const SrpJob> jobs) {
   }
   for (size_t j = 0; j < jobs.size(); ++j) {
     const SrpJob& job = jobs[j];
-    *job.out = m.Describe(job.array, m.h_results.data()[j]);
+    *job.out = DescribeSrpResult(m.arrays[static_cast<size_t>(job.array)], m.h_results.data()[j]);
     if (job.map_z != nullptr) {
       const SrpSessionTask& task = m.h_tasks.data()[j];
       const float* values = m.h_map.data() + task.map_offset;

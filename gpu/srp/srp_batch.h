@@ -103,6 +103,12 @@ struct SrpJob {
 };
 
 
+// What Run reports for one kernel result (srp_kernels.h) of an array: SrpPhat::Describe's
+// rules (planar arrays: the source_side's side, or the normal's with the mirror as the other
+// candidate; linear arrays: the cone angle alone). Public so that the host tests check it.
+struct SrpSessionResult;
+SrpPeak DescribeSrpResult(const SrpArrayModel& model, const SrpSessionResult& result);
+
 class SrpBatch {
  public:
   // Event timings of the last Run, milliseconds of device time (0 unless created with

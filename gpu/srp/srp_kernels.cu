@@ -91,10 +91,7 @@ __global__ void __launch_bounds__(kPeakThreads) SrpPeakKernel(SrpPeakArgs a) {
   const float* u = a.directions + 3 * (array.directions_offset + best.index);
   result.grid_index = best.index;
   result.grid_z = best.value;
-  srp::RefineCell cell;
-  cell.u = {u[0], u[1], u[2]};
-  const srp::Dir3& axis = array.geometry.axis;
-  cell.theta_rad = acos(fmin(1.0, fmax(-1.0, srp::Dot(cell.u, axis))));
+  const srp::RefineCell cell = srp::StartCell(u, array.geometry.axis);
   result.ux = cell.u.x;
   result.uy = cell.u.y;
   result.uz = cell.u.z;

@@ -159,6 +159,15 @@ struct RefineCell {
   double theta_rad = 0.0;
 };
 
+// The refinement's start at a grid direction as the grid is stored (3 floats): u, and its cone
+// angle to the axis (linear arrays; meaningless but harmless for the others).
+LOCALIZER_HOST_DEVICE_INLINE RefineCell StartCell(const float* grid_u, const Dir3& axis) {
+  RefineCell cell;
+  cell.u = {grid_u[0], grid_u[1], grid_u[2]};
+  cell.theta_rad = acos(engine::hd::Clamp(Dot(cell.u, axis), -1.0, 1.0));
+  return cell;
+}
+
 struct RefineProbe {
   double value = 0.0;                   // sum_p R_p at the cell
   double g0 = 0.0, g1 = 0.0;            // gradient in the step's axes

@@ -33,6 +33,7 @@
 #include "gpu/srp/srp_array.h"
 #include "gpu/srp/srp_batch.h"
 #include "gpu/srp/srp_grid.h"
+#include "gpu/srp/srp_kernels.h"
 #include "gpu/srp/srp_math.cuh"
 #include "tests/gpu/srp_test_scenes.h"
 
@@ -327,6 +328,77 @@ TEST(SrpMath, RefinementReachesTheCpusPeak) {
   std::printf("refined from the float map's arg-max vs the CPU's Analyse: max angle %.3g rad, max relative z %.3g "
               "over %d frames; 32-lane split vs whole sums: max %.3g rad\n",
               worst_rad, worst_z, compared, worst_lanes_rad);
+}
+
+// SrpPeakKernel's path on the host: the grid stored in float, the first maximum of the float
+// map by BetterMapPeak, the start cell, the refinement split over 32 lanes, then the batch's
+// description of the result: what Run reports equals the CPU's DirectionPeak (direction or
+// cone angle, mirror candidate, statistic, threshold), planar arrays with and without a
+// source side.
+TEST(SrpMath, PeakKernelPathDescribesTheCpusPeak) {
+  std::mt19937_64 rng(55);
+  struct Case {
+    NamedArray array;
+    Vec3 source_side;
+  };
+  const std::vector<Case> cases = {{Arrays()[0], Vec3::Zero()},     {Arrays()[0], Vec3(0.1, 0.0, -1.0)},
+                                   {Arrays()[1], Vec3::Zero()},     {Arrays()[2], Vec3(0.0, 0.3, 1.0)},
+                                   {Arrays()[3], Vec3::Zero()},     {Arrays()[5], Vec3::Zero()}};
+  for (const Case& c : cases) {
+    for (int trial = 0; trial < 3; ++trial) {
+      engine::SrpOptions o = testing::FrameOptions();
+      o.source_side = c.source_side;
+      StatusOr<engine::SrpPhat> cpu = engine::SrpPhat::Create(c.array.sensors, o);
+      StatusOr<SrpArrayModel> model = MakeSrpArrayModel(c.array.sensors, o);
+      ASSERT_TRUE(cpu.ok() && model.ok());
+      const std::vector<float> samples = testing::PlaneWave(c.array.sensors, o, RandomDirection(rng), 2.0, 40 + trial);
+      StatusOr<std::vector<engine::DirectionPeak>> want = cpu->Analyse(samples.data());
+      ASSERT_TRUE(want.ok() && want->size() == 1u) << c.array.name;
+      std::vector<float> g, lags, grid;
+      for (const std::complex<float>& v : testing::AsFloat(testing::RecoveredSpectra(*cpu, *model))) {
+        g.push_back(v.real());
+        g.push_back(v.imag());
+      }
+      for (double d : model->lag_per_direction) lags.push_back(static_cast<float>(d));
+      for (const Vec3& u : CpuLikeGrid(*model))
+        grid.insert(grid.end(), {static_cast<float>(u.x()), static_cast<float>(u.y()), static_cast<float>(u.z())});
+      const int directions = static_cast<int>(grid.size() / 3);
+      srp::MapPeak best = srp::NoMapPeak();
+      for (int d = 0; d < directions; ++d) {
+        const float* u = grid.data() + 3 * d;
+        const float z = srp::SteeredPower<float>(g.data(), lags.data(), model->pairs, model->band, u[0], u[1], u[2]) *
+                        static_cast<float>(model->z_per_power);
+        best = srp::BetterMapPeak(best, {z, d});
+      }
+      const srp::RefineGeometry geo = model->Geometry();
+      HostPairSums lanes{&g, model->band, 32};
+      const srp::RefineResult r =
+          srp::RefineDirection(geo, srp::StartCell(grid.data() + 3 * best.index, geo.axis), lanes);
+      SrpSessionResult result;
+      result.grid_index = best.index;
+      result.grid_z = best.value;
+      result.ux = r.cell.u.x;
+      result.uy = r.cell.u.y;
+      result.uz = r.cell.u.z;
+      result.theta_rad = r.cell.theta_rad;
+      result.z = r.value * model->band.bins * model->z_per_power;
+      result.iterations = r.iterations;
+      const SrpPeak got = DescribeSrpResult(*model, result);
+      const engine::DirectionPeak& w = (*want)[0];
+      const std::string where = c.array.name + " trial " + std::to_string(trial);
+      EXPECT_NEAR(got.statistic, w.statistic, kSrpStatisticToleranceRelative * w.statistic) << where;
+      EXPECT_EQ(got.threshold, w.threshold) << where;
+      EXPECT_EQ(got.mirror_ambiguous, w.mirror_ambiguous) << where;
+      if (model->shape.shape == engine::ArrayShape::kLinear) {
+        EXPECT_NEAR(got.cone_angle_rad, w.cone_angle_rad, kSrpDirectionToleranceRad) << where;
+        EXPECT_TRUE(std::isnan(got.direction.x())) << where;
+        continue;
+      }
+      EXPECT_LT(AngleRad(got.direction, w.direction), kSrpDirectionToleranceRad) << where;
+      if (w.mirror_ambiguous) EXPECT_LT(AngleRad(got.mirror_direction, w.mirror_direction), kSrpDirectionToleranceRad) << where;
+      if (c.source_side.norm() > 0.0) EXPECT_GT(got.direction.dot(c.source_side), 0.0) << where;
+    }
+  }
 }
 
 TEST(SrpMath, MapPeakOrderIsTotal) {
