@@ -1,7 +1,7 @@
 // The batched GPU SRP-PHAT (gpu/srp/srp_batch.h) against the CPU's engine::SrpPhat on the same
 // frames: the device map equals SrpPhat::Statistic at every grid direction within
 // kSrpMapToleranceZ, the arg-max and the refined peak are the CPU's, for sessions of several
-// arrays in one batch. Tests that need a device skip with the reason where there is none; the
+// arrays in one batch (and for spectra that need the map kernel's opt-in shared memory). Tests that need a device skip with the reason where there is none; the
 // configuration checks run everywhere.
 #include "gpu/srp/srp_batch.h"
 
@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "gpu/srp/srp_grid.h"
+#include "gpu/srp/srp_kernels.h"
 #include "tests/gpu/gpu_test_util.h"
 #include "tests/gpu/srp_test_scenes.h"
 
@@ -22,14 +23,13 @@ namespace {
 
 using engine::Vec3;
 
-SrpArrayConfig ConfigFor(const std::vector<Vec3>& sensors, bool refine = true) {
+SrpArrayConfig ConfigFor(const std::vector<Vec3>& sensors, int frame_samples = 256) {
   SrpArrayConfig c;
   c.sensors_m = sensors;
-  c.options = testing::FrameOptions();
+  c.options = testing::FrameOptions(frame_samples);
   StatusOr<SrpArrayModel> model = MakeSrpArrayModel(sensors, c.options);
   EXPECT_TRUE(model.ok()) << model.status().ToString();
   c.directions = CpuLikeGrid(*model);
-  c.refine = refine;
   return c;
 }
 
@@ -90,13 +90,12 @@ std::vector<Session> MakeSessions(const std::vector<SrpArrayConfig>& arrays, int
   return sessions;
 }
 
-TEST(SrpBatch, DeviceMapAndPeakEqualTheCpuForSessionsOfThreeArrays) {
-  LOCALIZER_SKIP_WITHOUT_GPU();
-  const std::vector<SrpArrayConfig> arrays = {ConfigFor(testing::Respeaker4()), ConfigFor(testing::Tetra4()),
-                                              ConfigFor(testing::Line8()), ConfigFor(testing::RandomArray(6, 0.1, 66))};
+// Runs `count` sessions over `arrays` in one batch and holds every map value, arg-max and peak
+// to the CPU's.
+void ExpectTheCpusMapsAndPeaks(const std::vector<SrpArrayConfig>& arrays, int count, uint64_t seed) {
   auto batch = SrpBatch::Create(arrays, 64);
   ASSERT_TRUE(batch.ok()) << batch.status().ToString();
-  std::vector<Session> sessions = MakeSessions(arrays, 24, 3);
+  std::vector<Session> sessions = MakeSessions(arrays, count, seed);
   std::vector<SrpPeak> peaks(sessions.size());
   std::vector<std::vector<float>> maps(sessions.size());
   std::vector<SrpJob> jobs;
@@ -133,6 +132,24 @@ TEST(SrpBatch, DeviceMapAndPeakEqualTheCpuForSessionsOfThreeArrays) {
   }
   std::printf("device map vs SrpPhat::Statistic: max |dz| %.3g (tolerance %.1g); refined vs CPU Analyse: max %.3g rad\n",
               worst_z, kSrpMapToleranceZ, worst_rad);
+}
+
+TEST(SrpBatch, DeviceMapAndPeakEqualTheCpuForSessionsOfFourArrays) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  ExpectTheCpusMapsAndPeaks({ConfigFor(testing::Respeaker4()), ConfigFor(testing::Tetra4()),
+                             ConfigFor(testing::Line8()), ConfigFor(testing::RandomArray(6, 0.1, 66))},
+                            24, 3);
+}
+
+// 28 pairs of 1024-sample frames: ~100 KiB of spectra per session, past the 48 KiB a block gets
+// without opting in (PrepareSrpMap raises the map kernel's limit).
+TEST(SrpBatch, SpectraBeyond48KiBPerSessionUseTheOptInSharedMemory) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  const SrpArrayConfig line = ConfigFor(testing::Line8(), 1024), cube = ConfigFor(testing::RandomArray(8, 0.1, 88), 1024);
+  StatusOr<SrpArrayModel> model = MakeSrpArrayModel(line.sensors_m, line.options);
+  ASSERT_TRUE(model.ok());
+  EXPECT_GT(SrpMapSharedBytes(model->spectrum_floats(), model->pairs), 48 * 1024);
+  ExpectTheCpusMapsAndPeaks({line, cube}, 8, 4);
 }
 
 TEST(SrpBatch, ASessionsResultDoesNotDependOnItsBatch) {

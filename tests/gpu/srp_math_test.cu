@@ -89,8 +89,9 @@ struct Frame {
   std::vector<float> lags_float;     // D_p as the map kernel reads them
 };
 
-Frame Analysed(const std::vector<Vec3>& sensors, const Vec3& direction, double snr, uint64_t seed) {
-  const engine::SrpOptions o = testing::FrameOptions();
+Frame Analysed(const std::vector<Vec3>& sensors, const Vec3& direction, double snr, uint64_t seed,
+               int frame_samples = 256) {
+  const engine::SrpOptions o = testing::FrameOptions(frame_samples);
   StatusOr<engine::SrpPhat> cpu = engine::SrpPhat::Create(sensors, o);
   EXPECT_TRUE(cpu.ok()) << cpu.status().ToString();
   StatusOr<SrpArrayModel> model = MakeSrpArrayModel(sensors, o);
@@ -212,10 +213,16 @@ TEST(SrpMath, FloatMapEqualsCpuStatisticAndHasTheCpusArgMax) {
   std::mt19937_64 rng(21);
   double worst = 0.0;
   int frames = 0, same_index = 0;
-  for (const NamedArray& a : Arrays()) {
+  // Frames of 256 on every array, and of 1024 (about 450 bins: longer sums) on the line and a cube
+  // of 8.
+  std::vector<std::pair<NamedArray, int>> cases;
+  for (const NamedArray& a : Arrays()) cases.emplace_back(a, 256);
+  cases.emplace_back(NamedArray{"line8/1024", testing::Line8()}, 1024);
+  cases.emplace_back(NamedArray{"random8/1024", testing::RandomArray(8, 0.1, 88)}, 1024);
+  for (const auto& [a, frame_samples] : cases) {
     for (int trial = 0; trial < 4; ++trial) {
       const double snr = trial == 3 ? 0.0 : 0.3 * (trial + 1);  // the last: noise alone
-      const Frame f = Analysed(a.sensors, RandomDirection(rng), snr, 100 * trial + 17);
+      const Frame f = Analysed(a.sensors, RandomDirection(rng), snr, 100 * trial + 17, frame_samples);
       const std::vector<Vec3> grid = CpuLikeGrid(f.model);
       const std::vector<float> map = FloatMap(f, grid);
       std::vector<double> cpu;
@@ -296,9 +303,15 @@ TEST(SrpMath, RefinementReachesTheCpusPeak) {
   std::mt19937_64 rng(44);
   double worst_rad = 0.0, worst_z = 0.0, worst_lanes_rad = 0.0;
   int compared = 0;
-  for (const NamedArray& a : Arrays()) {
+  // Frames of 256 on every array, and of 1024 on the line and an 8-microphone cube (the
+  // device test's opt-in shared-memory case).
+  std::vector<std::pair<NamedArray, int>> cases;
+  for (const NamedArray& a : Arrays()) cases.emplace_back(a, 256);
+  cases.emplace_back(NamedArray{"line8/1024", testing::Line8()}, 1024);
+  cases.emplace_back(NamedArray{"random8/1024", testing::RandomArray(8, 0.1, 88)}, 1024);
+  for (const auto& [a, frame_samples] : cases) {
     for (int trial = 0; trial < 5; ++trial) {
-      const Frame f = Analysed(a.sensors, RandomDirection(rng), 0.5 + trial, 900 + trial);
+      const Frame f = Analysed(a.sensors, RandomDirection(rng), 0.5 + trial, 900 + trial, frame_samples);
       ASSERT_EQ(f.peaks.size(), 1u) << a.name << " trial " << trial << ": the CPU found no source";
       const std::vector<Vec3> grid = CpuLikeGrid(f.model);
       const std::vector<float> map = FloatMap(f, grid);
