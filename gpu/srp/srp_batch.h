@@ -34,8 +34,9 @@
 // Cost per session frame: the map, D x P x B complex multiply-adds in float (plus one
 // sincos per pair, direction and 32 bins): 2562 x 6 x 139 ~ 2.1 M (~13 M float operations;
 // the CPU-like grid of that board is 291 directions, 0.24 M); the refinement, 1 + up to 24
-// probes of P x B double multiply-adds with derivatives (typically ~10 probes, 8 k).
-// The bus carries 8 P B bytes in and ~64 bytes out per session (plus 4 D with the map).
+// probes of P x B double multiply-adds with derivatives (4.5 probes on average, at most 6, on
+// the host test's plane waves: ~4 k).
+// The bus carries 8 P B bytes in and 56 bytes out per session (plus 4 D with the map).
 //
 // Not thread-safe: one thread runs a batch at a time. Run blocks until the results are on the
 // host.

@@ -302,7 +302,7 @@ double DirectionError(const SrpArrayModel& model, const srp::RefineResult& r, co
 TEST(SrpMath, RefinementReachesTheCpusPeak) {
   std::mt19937_64 rng(44);
   double worst_rad = 0.0, worst_z = 0.0, worst_lanes_rad = 0.0;
-  int compared = 0;
+  int compared = 0, probes = 0, most_probes = 0;
   // Frames of 256 on every array, and of 1024 on the line and an 8-microphone cube (the
   // device test's opt-in shared-memory case).
   std::vector<std::pair<NamedArray, int>> cases;
@@ -336,11 +336,13 @@ TEST(SrpMath, RefinementReachesTheCpusPeak) {
       EXPECT_LE(split_rad, kSrpDirectionToleranceRad) << a.name << " trial " << trial;
       worst_lanes_rad = std::max(worst_lanes_rad, split_rad);
       ++compared;
+      probes += r.probes;
+      most_probes = std::max(most_probes, r.probes);
     }
   }
   std::printf("refined from the float map's arg-max vs the CPU's Analyse: max angle %.3g rad, max relative z %.3g "
-              "over %d frames; 32-lane split vs whole sums: max %.3g rad\n",
-              worst_rad, worst_z, compared, worst_lanes_rad);
+              "over %d frames; 32-lane split vs whole sums: max %.3g rad; probes per refinement: mean %.1f, max %d\n",
+              worst_rad, worst_z, compared, worst_lanes_rad, static_cast<double>(probes) / compared, most_probes);
 }
 
 // SrpPeakKernel's path on the host: the grid stored in float, the first maximum of the float
