@@ -124,7 +124,7 @@ StatusOr<std::unique_ptr<SrpBatch>> SrpBatch::Create(std::vector<SrpArrayConfig>
 
   if (const std::string& reason = DeviceUnavailableReason(); !reason.empty())
     return FailedPrecondition("no usable GPU for the SRP batch: " + reason);
-  LOCALIZER_GPU_CHECK_IMPL_(PrepareSrpMap(SrpMapSharedBytes(impl->max_spectrum_floats, impl->max_pairs)));
+  LOCALIZER_RETURN_IF_ERROR(PrepareSrpMap(SrpMapSharedBytes(impl->max_spectrum_floats, impl->max_pairs)));
   auto stream = CudaStream::Create();
   if (!stream.ok()) return stream.status();
   impl->stream = std::move(*stream);
@@ -165,7 +165,7 @@ StatusOr<std::unique_ptr<SrpBatch>> SrpBatch::Create(std::vector<SrpArrayConfig>
   if (collect_timing) {
     for (cudaEvent_t& e : impl->events) LOCALIZER_CUDA_RETURN_IF_ERROR(cudaEventCreate(&e), "cudaEventCreate(SRP)");
   }
-  LOCALIZER_GPU_CHECK_IMPL_(impl->stream.Synchronize());  // the uploads above
+  LOCALIZER_RETURN_IF_ERROR(impl->stream.Synchronize());  // the uploads above
   return std::unique_ptr<SrpBatch>(new SrpBatch(std::move(impl)));
 }
 
@@ -250,7 +250,7 @@ Status SrpBatch::Run(std::span<const SrpJob> jobs) {
   map.max_directions = m.max_directions;
   map.max_spectrum_floats = m.max_spectrum_floats;
   map.max_pairs = m.max_pairs;
-  LOCALIZER_GPU_CHECK_IMPL_(LaunchSrpMap(map, s));
+  LOCALIZER_RETURN_IF_ERROR(LaunchSrpMap(map, s));
   SrpPeakArgs peak;
   peak.arrays = m.d_arrays.data();
   peak.tasks = m.d_tasks.data();
@@ -259,7 +259,7 @@ Status SrpBatch::Run(std::span<const SrpJob> jobs) {
   peak.map = m.d_map.data();
   peak.results = m.d_results.data();
   peak.sessions = sessions;
-  LOCALIZER_GPU_CHECK_IMPL_(LaunchSrpPeak(peak, s));
+  LOCALIZER_RETURN_IF_ERROR(LaunchSrpPeak(peak, s));
   if (m.collect_timing) LOCALIZER_CUDA_RETURN_IF_ERROR(cudaEventRecord(m.events[2], s), "cudaEventRecord");
   LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(m.h_results.data(), m.d_results.data(),
                                                  sizeof(SrpSessionResult) * static_cast<size_t>(sessions),
@@ -272,7 +272,7 @@ Status SrpBatch::Run(std::span<const SrpJob> jobs) {
                                    "cudaMemcpyAsync(SRP map)");
   }
   if (m.collect_timing) LOCALIZER_CUDA_RETURN_IF_ERROR(cudaEventRecord(m.events[3], s), "cudaEventRecord");
-  LOCALIZER_GPU_CHECK_IMPL_(m.stream.Synchronize());
+  LOCALIZER_RETURN_IF_ERROR(m.stream.Synchronize());
   if (m.collect_timing) {
     LOCALIZER_CUDA_RETURN_IF_ERROR(cudaEventElapsedTime(&m.last.total_ms, m.events[0], m.events[3]),
                                    "cudaEventElapsedTime");
