@@ -5,17 +5,20 @@
 # libraries (cudart, cuFFT, cuRAND) are left to the machine's toolkit.
 #
 #   cmake --build build --target gpu_backend_test gcc_batch_test particle_bank_test \
-#       gpu_gcc_bench gpu_pf_bench gpu_sessions_bench
+#       srp_batch_test srp_math_test gpu_gcc_bench gpu_pf_bench gpu_srp_bench gpu_sessions_bench
 #   tests/gpu/pack_for_device.sh build
 # then on the device (carry [".device"]): bash .device/run.sh   (writes logs under $OUT)
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 out="$root/.device"
-grep -qx '/.device/' "$root/.git/info/exclude" 2>/dev/null || echo '/.device/' >>"$root/.git/info/exclude"
+# The exclude file git reads (in a worktree, .git is a file and the file lies in the common dir).
+exclude=$(git -C "$root" rev-parse --path-format=absolute --git-path info/exclude)
+mkdir -p "$(dirname "$exclude")"
+grep -qx '/.device/' "$exclude" 2>/dev/null || echo '/.device/' >>"$exclude"
 rm -rf "$out" && mkdir -p "$out/bin" "$out/lib"
 for name in gpu_backend_test gcc_batch_test particle_bank_test gcc_math_test pf_math_test batch_queue_test \
-            gpu_gcc_bench gpu_pf_bench gpu_sessions_bench; do
+            srp_batch_test srp_math_test gpu_gcc_bench gpu_pf_bench gpu_srp_bench gpu_sessions_bench; do
   for dir in "$build/tests" "$build/tests/bench"; do
     [[ -x "$dir/$name" ]] && cp "$dir/$name" "$out/bin/"
   done
