@@ -43,8 +43,7 @@ LOCALIZER_HOST_DEVICE inline int32_t FrameFirst(int64_t frame, int32_t hop_sampl
 
 // Whether the frame of `frame_samples` starting at stream sample `start` lies whole in a ring
 // of `capacity` after `total` samples.
-LOCALIZER_HOST_DEVICE inline bool FrameReadable(int64_t start, int32_t frame_samples, int64_t total,
-                                                int32_t capacity) {
+LOCALIZER_HOST_DEVICE inline bool FrameReadable(int64_t start, int32_t frame_samples, int64_t total, int32_t capacity) {
   return start >= 0 && start >= total - capacity && start + frame_samples <= total;
 }
 

@@ -4,8 +4,8 @@
 # CUDA toolkit and driver but none of our Debian packages (gRPC, FFTW, ...). CUDA's own
 # libraries (cudart, cuFFT, cuRAND) are left to the machine's toolkit.
 #
-#   cmake --build build --target gpu_backend_test gcc_batch_test particle_bank_test \
-#       gpu_gcc_bench gpu_pf_bench gpu_sessions_bench
+#   cmake --build build --target gpu_backend_test gcc_batch_test gcc_ring_test particle_bank_test \
+#       sample_ring_test gpu_gcc_bench gpu_pf_bench gpu_sessions_bench
 #   tests/gpu/pack_for_device.sh build
 # then on the device (carry [".device"]): bash .device/run.sh   (writes logs under $OUT)
 set -euo pipefail
@@ -14,8 +14,8 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 out="$root/.device"
 grep -qx '/.device/' "$root/.git/info/exclude" 2>/dev/null || echo '/.device/' >>"$root/.git/info/exclude"
 rm -rf "$out" && mkdir -p "$out/bin" "$out/lib"
-for name in gpu_backend_test gcc_batch_test particle_bank_test gcc_math_test pf_math_test batch_queue_test \
-            gpu_gcc_bench gpu_pf_bench gpu_sessions_bench; do
+for name in gpu_backend_test gcc_batch_test gcc_ring_test particle_bank_test gcc_math_test pf_math_test \
+            batch_queue_test sample_ring_test gpu_gcc_bench gpu_pf_bench gpu_sessions_bench; do
   for dir in "$build/tests" "$build/tests/bench"; do
     [[ -x "$dir/$name" ]] && cp "$dir/$name" "$out/bin/"
   done

@@ -23,7 +23,10 @@ namespace {
 class Model {
  public:
   Model(int channels, int32_t capacity)
-      : channels_(channels), capacity_(capacity), stream_(channels), ring_(static_cast<std::size_t>(channels) * capacity) {}
+      : channels_(channels),
+        capacity_(capacity),
+        stream_(channels),
+        ring_(static_cast<std::size_t>(channels) * capacity) {}
 
   // Appends block (channel-major, `n` samples per channel) to both, the ring as the append
   // kernel does: block sample source_first + i to row index Wrap(write_first, i, capacity).
@@ -265,7 +268,8 @@ TEST(SampleRing, EstimatorJobsReadBackEveryFrameBitForBit) {
 std::vector<float> Frames(const std::vector<float>& stream_row, int channels, int start, int frame_samples) {
   std::vector<float> frame;
   for (int c = 0; c < channels; ++c) {
-    frame.insert(frame.end(), stream_row.begin() + start + c * 1000, stream_row.begin() + start + c * 1000 + frame_samples);
+    frame.insert(frame.end(), stream_row.begin() + start + c * 1000,
+                 stream_row.begin() + start + c * 1000 + frame_samples);
   }
   return frame;
 }
