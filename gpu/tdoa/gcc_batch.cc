@@ -17,9 +17,9 @@
 #include "gpu/core/device.h"
 #include "gpu/core/device_buffer.h"
 #include "gpu/tdoa/cuda_handles.h"
+#include "gpu/tdoa/frame_sources.cuh"
 #include "gpu/tdoa/gcc_kernels.h"
 #include "gpu/tdoa/gcc_math.cuh"
-#include "gpu/tdoa/sample_ring.cuh"
 
 namespace localizer::gpu {
 namespace {
@@ -233,21 +233,17 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
     const float* host = job.frame;
     if (!job.frame_pinned) {
       float* staged = staged_frames.data() + j * frame_floats;
-      for (int c = 0; c < channels; ++c) {
-        const std::size_t tail = static_cast<std::size_t>(c) * key.frame_samples + (key.frame_samples - fresh);
-        std::memcpy(staged + tail, job.frame + tail, sizeof(float) * fresh);
-      }
+      StageNewSamples(job.frame, staged, channels, key.frame_samples, fresh);
       host = staged;
     }
     frame_bytes_over_bus += sizeof(float) * static_cast<std::size_t>(channels) * fresh;
     if (job.ring == nullptr) {
-      staged_sources.data()[j] = {host, key.frame_samples, 0};
+      staged_sources.data()[j] = WholeFrameSource(host, key.frame_samples);
     } else {
       const SampleRing& r = *job.ring;
-      const ring::RingJobPlan p = ring::PlanRingJob(r.total(), r.capacity(), key.frame_samples, fresh);
-      staged_appends.data()[append_count++] = {
-          host, r.data(), key.frame_samples, p.append.source_first, r.capacity(), p.append.write_first, p.append.count};
-      staged_sources.data()[j] = {r.data(), r.capacity(), p.frame_first};
+      const RingJobDescriptors d = DescribeRingJob(host, r.data(), r.capacity(), r.total(), key.frame_samples, fresh);
+      staged_appends.data()[append_count++] = d.append;
+      staged_sources.data()[j] = d.source;
     }
     const engine::GccOptions& options = plan.options();
     const engine::GccLayout& layout = plan.layout();

@@ -11,9 +11,9 @@
 #include <cub/block/block_reduce.cuh>
 
 #include "gpu/core/cuda_status.h"
+#include "gpu/tdoa/frame_sources.cuh"
 #include "gpu/tdoa/gcc_kernels.h"
 #include "gpu/tdoa/gcc_math.cuh"
-#include "gpu/tdoa/sample_ring.cuh"
 
 namespace localizer::gpu {
 namespace {
@@ -31,11 +31,11 @@ __global__ void __launch_bounds__(kPackThreads) GccPackKernel(GccPackArgs a) {
   // Rows past the live ones are the bucket's padding frames: zeros, and no frame to read.
   GccFrameSource source;
   if (live) source = a.sources[row / a.channels];
-  const float* in = live ? source.samples + static_cast<std::size_t>(row % a.channels) * source.row_samples : nullptr;
+  const int channel = row % a.channels;
   float* out = a.signal + static_cast<std::size_t>(row) * a.fft_size;
   double energy = 0.0;
   for (int i = threadIdx.x; i < a.fft_size; i += kPackThreads) {
-    const float v = (live && i < a.frame_samples) ? in[ring::Wrap(source.first, i, source.row_samples)] : 0.0f;
+    const float v = (live && i < a.frame_samples) ? *FrameSample(source, channel, i) : 0.0f;
     out[i] = v;
     energy += static_cast<double>(v) * v;
   }
@@ -46,9 +46,7 @@ __global__ void __launch_bounds__(kPackThreads) GccPackKernel(GccPackArgs a) {
 __global__ void __launch_bounds__(kAppendThreads) GccRingAppendKernel(GccAppendArgs a) {
   const GccRingAppend p = a.appends[blockIdx.x / a.channels];
   const int channel = blockIdx.x % a.channels;
-  const float* in = p.source + static_cast<std::size_t>(channel) * p.source_row_samples + p.source_first;
-  float* out = p.ring + static_cast<std::size_t>(channel) * p.capacity;
-  for (int i = threadIdx.x; i < p.count; i += kAppendThreads) out[ring::Wrap(p.write_first, i, p.capacity)] = in[i];
+  for (int i = threadIdx.x; i < p.count; i += kAppendThreads) *AppendTo(p, channel, i) = *AppendFrom(p, channel, i);
 }
 
 __global__ void __launch_bounds__(kWeighThreads) GccWeighKernel(GccWeighArgs a) {

@@ -5,7 +5,7 @@
 # libraries (cudart, cuFFT, cuRAND) are left to the machine's toolkit.
 #
 #   cmake --build build --target gpu_backend_test gcc_batch_test gcc_ring_test particle_bank_test \
-#       particle_bank_init_test sample_ring_test pf_init_builder_test gcc_math_test pf_math_test \
+#       particle_bank_init_test sample_ring_test gcc_ring_plan_test pf_init_builder_test gcc_math_test pf_math_test \
 #       batch_queue_test gpu_gcc_bench gpu_pf_bench gpu_sessions_bench
 #   tests/gpu/pack_for_device.sh build
 # then on the device (carry [".device"]): bash .device/run.sh   (writes logs under $OUT)
@@ -19,7 +19,7 @@ mkdir -p "$(dirname "$exclude")"
 grep -qx '/.device/' "$exclude" 2>/dev/null || echo '/.device/' >>"$exclude"
 rm -rf "$out" && mkdir -p "$out/bin" "$out/lib"
 for name in gpu_backend_test gcc_batch_test gcc_ring_test particle_bank_test particle_bank_init_test \
-            gcc_math_test pf_math_test pf_init_builder_test batch_queue_test sample_ring_test \
+            gcc_math_test gcc_ring_plan_test pf_math_test pf_init_builder_test batch_queue_test sample_ring_test \
             gpu_gcc_bench gpu_pf_bench gpu_sessions_bench; do
   missing=1
   for dir in "$build/tests" "$build/tests/bench"; do
