@@ -218,7 +218,11 @@ Status ParticleBank::Initialise(std::span<const InitRequest> requests, std::span
 
   const Status launch = b.LaunchInit();
   if (!launch.ok()) {
-    for (std::size_t q : b.init_launched) results[q].status = launch;
+    (void)b.stream.Synchronize();  // whatever was enqueued finishes before the staging is reused
+    for (std::size_t q : b.init_launched) {
+      results[q].status = launch;
+      b.Find(requests[q].slot)->initialised = false;  // its particles may be half written
+    }
     return launch;
   }
   // The moments of every initialised slot: one predict-only Step over all of them, queued

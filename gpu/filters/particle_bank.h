@@ -94,7 +94,8 @@ class ParticleBank {
   // per-particle maths). results.size() must equal requests.size() (else INVALID_ARGUMENT,
   // nothing runs). A request with a slot not open, a slot already named by an earlier
   // request, or bad values (the one-slot calls' messages) gets that status and is left out;
-  // the others run. A CUDA error is returned and set in the result of every request that ran.
+  // the others run. A CUDA error is returned and set in the result of every request that ran
+  // (their slots' particles are then undefined: re-initialise or close them).
   struct InitRequest {
     int slot = -1;
     bool region = false;  // false: Gaussian (mean, root); true: region (min_m, max_m, speed)
