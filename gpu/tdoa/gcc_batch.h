@@ -9,9 +9,9 @@
 //      the frames stay in page-locked host memory (the job's own when frame_pinned, else
 //      the batch's staging, into which the host copies what the device will read)
 //   2. append (ring jobs, see GccJob::ring): each channel's new samples read in place over
-//      the bus into the session's device ring
-//   2'. pack: each channel read in place over the bus (or from its ring on the device), zero
-//      padded to N, its energy (sum of squares, double)
+//      the bus into the session's device ring; then pack: each channel read in place over
+//      the bus (a ring job's from its ring, on the device), zero padded to N, its energy
+//      (sum of squares, double). frame_sources.cuh holds both kernels' index maths.
 //   3. R2C of N over M x C rows (cuFFT, batched)
 //   4. weigh, per (frame, pair): G = W X_k conj(X_r) B with the CPU's weighting and floors,
 //      and S = sum of |G| over the full spectrum
@@ -45,7 +45,7 @@
 // already; e.g. C = 4, F = 4096, N = 5120:
 // ~290 KiB device + 64 KiB pinned per frame of capacity (1024 frames: ~290 MiB + 64 MiB),
 // plus the cuFFT work area. GCC window buffers (device and pinned) grow to the largest
-// batch's windows.
+// batch's windows. Rings are the sessions' own (sample_ring.h), not the batch's.
 //
 // Not thread-safe: one thread runs a batch at a time (a dispatcher owns it). Run blocks the
 // calling thread until the results are on the host.
