@@ -5,11 +5,14 @@
 //   - GCC-PHAT (GpuTdoaEstimator): each session's frame is queued; a dispatcher thread
 //     collects frames from many sessions (for at most batch_window_s, or until
 //     max_batch_frames wait), and runs them as one launch sequence per frame shape
-//     (gpu/tdoa/gcc_batch.h: one batched cuFFT over every channel of every frame).
+//     (gpu/tdoa/gcc_batch.h: one batched cuFFT over every channel of every frame). Each
+//     session's newest frame stays on the device (gpu/tdoa/sample_ring.h), so a frame that
+//     overlaps the previous one brings only its new samples over the bus.
 //   - Particle filter (GpuParticleFilter): particles of every session live in one device
 //     bank (gpu/filters/particle_bank.h) between frames; a second dispatcher collects
-//     sessions' updates the same way and steps them all in one launch sequence. Only the
-//     TDOAs/GCC windows go in and the estimate comes out per frame.
+//     sessions' updates the same way and steps them all in one launch sequence; sessions
+//     that start or restart together initialise in one launch. Only the TDOAs/GCC windows
+//     go in and the estimate comes out per frame.
 // A session's thread blocks while its frame is in a batch, so a server using this backend
 // wants more worker threads than cores (localizer-server sizes them).
 // Results do not depend on which other sessions share a batch: every reduction is per

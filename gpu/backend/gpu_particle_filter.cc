@@ -34,10 +34,14 @@ GpuParticleFilter::~GpuParticleFilter() {
   runtime_->bank().Close(slot_);
 }
 
-Status GpuParticleFilter::RefreshMoments() {
-  auto moments = runtime_->bank().Moments(slot_);
-  if (!moments.ok()) return moments.status();
-  state_ = *moments;
+Status GpuParticleFilter::RunInitialisation(const ParticleBank::InitRequest& request) {
+  FilterQueueJob job;
+  job.initialise = true;
+  job.init = request;
+  job.init.slot = slot_;
+  runtime_->StepFilter(&job);
+  if (!job.init_result.status.ok()) return job.init_result.status;
+  state_ = job.init_result.state;
   pending_dt_s_ = 0.0;
   initialised_ = true;
   ess_ = options_.particles;
@@ -47,15 +51,21 @@ Status GpuParticleFilter::RefreshMoments() {
 Status GpuParticleFilter::Initialise(const engine::TrackState& belief) {
   const auto root = engine::BeliefRoot(belief);
   if (!root.ok()) return root.status();
-  LOCALIZER_RETURN_IF_ERROR(runtime_->bank().InitialiseGaussian(slot_, belief.mean, *root));
-  return RefreshMoments();
+  ParticleBank::InitRequest request;
+  request.mean = belief.mean;
+  request.root = *root;
+  return RunInitialisation(request);
 }
 
 Status GpuParticleFilter::InitialiseRegion(const engine::Vec3& min_m, const engine::Vec3& max_m,
                                            double speed_sigma_mps) {
   LOCALIZER_RETURN_IF_ERROR(engine::ValidateRegion(min_m, max_m, speed_sigma_mps));
-  LOCALIZER_RETURN_IF_ERROR(runtime_->bank().InitialiseRegion(slot_, min_m, max_m, speed_sigma_mps));
-  return RefreshMoments();
+  ParticleBank::InitRequest request;
+  request.region = true;
+  request.min_m = min_m;
+  request.max_m = max_m;
+  request.speed_sigma_mps = speed_sigma_mps;
+  return RunInitialisation(request);
 }
 
 void GpuParticleFilter::Predict(double dt_s) {

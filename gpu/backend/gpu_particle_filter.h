@@ -2,9 +2,11 @@
 // its particles resident in the shared device bank between frames (one slot per session).
 // Predict only records the time step; Update sends the step (predict, likelihood, weights,
 // resampling) through the shared filter dispatcher, so many sessions' updates run as one
-// launch sequence; State() returns the weighted moments the last step brought back (a
-// Predict not yet followed by an Update is applied first). Pair selection, the adaptive
-// TDOA noise and the NIS are the CPU filter's (engine/filters/pair_noise.h).
+// launch sequence; Initialise and InitialiseRegion go through the same dispatcher, so
+// sessions that start or restart together initialise in one launch. State() returns the
+// weighted moments the last step (or initialisation) brought back (a Predict not yet
+// followed by an Update is applied first). Pair selection, the adaptive TDOA noise and the
+// NIS are the CPU filter's (engine/filters/pair_noise.h).
 // Internal to gpu/backend.
 #pragma once
 
@@ -37,7 +39,9 @@ class GpuParticleFilter final : public engine::Tracker {
   GpuParticleFilter(std::shared_ptr<GpuRuntime> runtime, int slot, int pairs, const engine::ParticleFilterOptions& o);
   // Runs one step through the dispatcher (measurement nullptr: predict only).
   Status Step(const engine::Measurement* measurement, ParticleBank::StepResult* result) const;
-  Status RefreshMoments();
+  // Initialises the slot through the filter dispatcher, so that sessions starting together
+  // share one launch (ParticleBank::Initialise), and keeps the moments it brings back.
+  Status RunInitialisation(const ParticleBank::InitRequest& request);
 
   std::shared_ptr<GpuRuntime> runtime_;
   int slot_;

@@ -98,14 +98,30 @@ void GpuRuntime::RunGccBatch(std::span<GccQueueJob* const> jobs) {
 }
 
 void GpuRuntime::RunFilterBatch(std::span<FilterQueueJob* const> jobs) {
+  // A session has at most one job in a batch (it waits for it), so the order between its
+  // initialisation and others' steps does not matter: initialisations first, in one launch.
+  std::vector<FilterQueueJob*> inits, steps;
+  for (FilterQueueJob* job : jobs) (job->initialise ? inits : steps).push_back(job);
+  if (!inits.empty()) {
+    std::vector<ParticleBank::InitRequest> requests;
+    std::vector<ParticleBank::InitResult> results(inits.size());
+    requests.reserve(inits.size());
+    for (FilterQueueJob* job : inits) requests.push_back(job->init);
+    const Status status = bank_->Initialise(requests, results);
+    for (size_t i = 0; i < inits.size(); ++i) {
+      inits[i]->init_result = std::move(results[i]);
+      if (!status.ok()) inits[i]->init_result.status = status;
+    }
+  }
+  if (steps.empty()) return;
   std::vector<ParticleBank::StepRequest> requests;
-  std::vector<ParticleBank::StepResult> results(jobs.size());
-  requests.reserve(jobs.size());
-  for (FilterQueueJob* job : jobs) requests.push_back(job->request);
+  std::vector<ParticleBank::StepResult> results(steps.size());
+  requests.reserve(steps.size());
+  for (FilterQueueJob* job : steps) requests.push_back(job->request);
   const Status status = bank_->Step(requests, results);
-  for (size_t i = 0; i < jobs.size(); ++i) {
-    jobs[i]->result = std::move(results[i]);
-    if (!status.ok()) jobs[i]->result.status = status;
+  for (size_t i = 0; i < steps.size(); ++i) {
+    steps[i]->result = std::move(results[i]);
+    if (!status.ok()) steps[i]->result.status = status;
   }
 }
 

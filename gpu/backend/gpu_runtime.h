@@ -22,10 +22,15 @@ struct GccQueueJob {
   Status status;
 };
 
-// One session's filter step on its way through the particle-filter dispatcher.
+// One session's filter step, or its (re)initialisation, on its way through the
+// particle-filter dispatcher: the initialisations of a batch run as one launch
+// (ParticleBank::Initialise) before its steps run as another.
 struct FilterQueueJob {
+  bool initialise = false;  // true: `init` and `init_result`; false: `request` and `result`
   ParticleBank::StepRequest request;
   ParticleBank::StepResult result;
+  ParticleBank::InitRequest init;
+  ParticleBank::InitResult init_result;
 };
 
 class GpuRuntime {

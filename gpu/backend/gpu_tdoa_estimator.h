@@ -4,6 +4,15 @@
 // Estimate copies the frame into the estimator's own pinned buffer (on the session's thread,
 // so many sessions' copies run in parallel and the device reads the frame in place), then
 // blocks until its batch ran. Internal to gpu/backend.
+//
+// Each sample crosses the bus once: the session's newest frame also lives in a device ring
+// (gpu/tdoa/sample_ring.h), and Estimate finds how many samples at the end of the new frame
+// are new (gpu/tdoa/frame_overlap.h: the previous frame, still in the pinned buffer, is
+// compared bit for bit with the new one's start), so the job appends only those and the
+// frame is read from the ring. With the session's 50 % hop that halves the bytes per frame;
+// a frame that does not continue the previous one (the first, one after a gap or after
+// despiking changed the overlap, one after a device error) is sent whole. The frame the
+// kernels read is the given frame bit for bit either way, so results do not change.
 #pragma once
 
 #include <memory>
@@ -12,6 +21,7 @@
 #include "engine/tdoa/gcc_phat.h"
 #include "gpu/backend/gpu_runtime.h"
 #include "gpu/core/device_buffer.h"
+#include "gpu/tdoa/sample_ring.h"
 
 namespace localizer::gpu {
 
@@ -27,10 +37,12 @@ class GpuTdoaEstimator final : public engine::TdoaEstimator {
   ~GpuTdoaEstimator() override;
 
  private:
-  GpuTdoaEstimator(std::shared_ptr<GpuRuntime> runtime, GccPlan plan, PinnedBuffer<float> staging);
+  GpuTdoaEstimator(std::shared_ptr<GpuRuntime> runtime, GccPlan plan, PinnedBuffer<float> staging, SampleRing ring);
   std::shared_ptr<GpuRuntime> runtime_;
   GccPlan plan_;
-  PinnedBuffer<float> staging_;  // channels * frame_samples: this session's frame
+  PinnedBuffer<float> staging_;  // channels * frame_samples: this session's (last) frame
+  SampleRing ring_;              // the same frame on the device (capacity frame_samples)
+  int hop_hint_ = 0;             // the last overlap found: the framer's hop
 };
 
 }  // namespace localizer::gpu

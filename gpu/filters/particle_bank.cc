@@ -12,6 +12,7 @@
 #include "gpu/core/cuda_status.h"
 #include "gpu/core/device.h"
 #include "gpu/core/device_buffer.h"
+#include "gpu/filters/init_builder.h"
 #include "gpu/filters/pf_kernels.h"
 #include "gpu/filters/slot_layout.h"
 #include "gpu/filters/step_builder.h"
@@ -64,6 +65,14 @@ struct ParticleBank::Impl {
   std::vector<float> gcc;
   std::vector<std::size_t> launched;  // request index of each descriptor
   std::vector<char> seen;
+  // Batched initialisation staging (its own: a Step runs right after it on the stream).
+  pf::InitPlan init_plan;
+  PinnedBuffer<unsigned char> init_host;
+  DeviceBuffer<unsigned char> init_device;
+  std::vector<std::size_t> init_launched;  // request index of each task
+  std::vector<char> init_seen;
+  std::vector<StepRequest> moment_requests;
+  std::vector<StepResult> moment_results;
 
   Slot* Find(int slot) const {
     if (slot < 0 || slot >= static_cast<int>(slots.size())) return nullptr;
@@ -71,6 +80,7 @@ struct ParticleBank::Impl {
   }
   Status StepLocked(std::span<const StepRequest> requests, std::span<StepResult> results);
   Status Launch();
+  Status LaunchInit();
 };
 
 ParticleBank::ParticleBank(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -136,12 +146,8 @@ Status ParticleBank::InitialiseGaussian(int slot, const engine::Vec6& mean, cons
   Slot* s = b.Find(slot);
   if (s == nullptr) return InvalidArgument("particle bank: slot " + std::to_string(slot) + " is not open");
   pf::GaussianInit init{};
-  for (int r = 0; r < 6; ++r) {
-    init.mean[r] = static_cast<float>(mean(r) - (r < 3 ? s->config.origin_m[r] : 0.0));
-    for (int c = 0; c < 6; ++c) init.root[r * 6 + c] = static_cast<float>(root(r, c));
-  }
-  init.seed = s->config.options.seed;
-  init.draw = ++s->draws;
+  LOCALIZER_RETURN_IF_ERROR(pf::MakeGaussianInit(s->config, mean, root, s->draws + 1, &init));
+  ++s->draws;
   cudaGetLastError();  // errors of earlier calls were reported by those calls
   LOCALIZER_RETURN_IF_ERROR(pf::LaunchInitialiseGaussian(s->View(), init, b.stream.get()));
   LOCALIZER_RETURN_IF_ERROR(b.stream.Synchronize());
@@ -161,19 +167,81 @@ Status ParticleBank::InitialiseRegion(int slot, const engine::Vec3& min_m, const
   Slot* s = b.Find(slot);
   if (s == nullptr) return InvalidArgument("particle bank: slot " + std::to_string(slot) + " is not open");
   pf::RegionInit init{};
-  for (int a = 0; a < 3; ++a) {
-    init.lo[a] = static_cast<float>(min_m(a) - s->config.origin_m[a]);
-    init.span[a] = static_cast<float>(max_m(a) - min_m(a));
-  }
-  init.speed_sigma = static_cast<float>(speed_sigma_mps);
-  init.seed = s->config.options.seed;
-  init.draw = ++s->draws;
+  LOCALIZER_RETURN_IF_ERROR(pf::MakeRegionInit(s->config, min_m, max_m, speed_sigma_mps, s->draws + 1, &init));
+  ++s->draws;
   cudaGetLastError();
   LOCALIZER_RETURN_IF_ERROR(pf::LaunchInitialiseRegion(s->View(), init, b.stream.get()));
   LOCALIZER_RETURN_IF_ERROR(b.stream.Synchronize());
   s->initialised = true;
   s->ess = s->config.options.particles;
   return Status::Ok();
+}
+
+Status ParticleBank::Initialise(std::span<const InitRequest> requests, std::span<InitResult> results) {
+  if (requests.size() != results.size()) {
+    return InvalidArgument("particle bank Initialise: " + std::to_string(requests.size()) + " requests but " +
+                           std::to_string(results.size()) + " results");
+  }
+  Impl& b = *impl_;
+  std::lock_guard<std::mutex> lock(b.mutex);
+  b.init_plan.Clear();
+  b.init_launched.clear();
+  b.init_seen.assign(b.slots.size(), 0);
+  for (std::size_t q = 0; q < requests.size(); ++q) {
+    const InitRequest& rq = requests[q];
+    InitResult& res = results[q];
+    res = InitResult{};
+    Slot* s = b.Find(rq.slot);
+    if (s == nullptr) {
+      res.status = InvalidArgument("particle bank: slot " + std::to_string(rq.slot) + " is not open");
+      continue;
+    }
+    if (b.init_seen[static_cast<std::size_t>(rq.slot)]) {
+      res.status =
+          InvalidArgument("particle bank: slot " + std::to_string(rq.slot) + " appears twice in one Initialise");
+      continue;
+    }
+    pf::InitTask task;
+    task.slot = s->View();
+    task.kind = rq.region ? pf::kInitRegion : pf::kInitGaussian;
+    // The slot's next Philox window, as the one-slot calls take it.
+    res.status = rq.region
+                     ? pf::MakeRegionInit(s->config, rq.min_m, rq.max_m, rq.speed_sigma_mps, s->draws + 1, &task.region)
+                     : pf::MakeGaussianInit(s->config, rq.mean, rq.root, s->draws + 1, &task.gaussian);
+    if (!res.status.ok()) continue;
+    ++s->draws;
+    b.init_seen[static_cast<std::size_t>(rq.slot)] = 1;
+    b.init_plan.Add(task);
+    b.init_launched.push_back(q);
+  }
+  if (b.init_launched.empty()) return Status::Ok();
+
+  const Status launch = b.LaunchInit();
+  if (!launch.ok()) {
+    (void)b.stream.Synchronize();  // whatever was enqueued finishes before the staging is reused
+    for (std::size_t q : b.init_launched) {
+      results[q].status = launch;
+      b.Find(requests[q].slot)->initialised = false;  // its particles may be half written
+    }
+    return launch;
+  }
+  // The moments of every initialised slot: one predict-only Step over all of them, queued
+  // behind the initialisation on the same stream (its synchronisation waits for both).
+  b.moment_requests.clear();
+  for (std::size_t q : b.init_launched) {
+    Slot& s = *b.Find(requests[q].slot);
+    s.initialised = true;
+    s.ess = s.config.options.particles;
+    b.moment_requests.push_back({requests[q].slot, 0.0, nullptr, nullptr, nullptr});
+  }
+  b.moment_results.resize(b.moment_requests.size());
+  const Status moments = b.StepLocked(b.moment_requests, b.moment_results);
+  for (std::size_t k = 0; k < b.init_launched.size(); ++k) {
+    InitResult& res = results[b.init_launched[k]];
+    res.status = moments.ok() ? b.moment_results[k].status : moments;
+    res.state = b.moment_results[k].state;
+  }
+  return moments;
 }
 
 Status ParticleBank::Step(std::span<const StepRequest> requests, std::span<StepResult> results) {
@@ -283,6 +351,28 @@ Status ParticleBank::Impl::StepLocked(std::span<const StepRequest> requests, std
     if (res.resampled) slot.current ^= 1;
   }
   return Status::Ok();
+}
+
+// Copies the plan's tasks and block table in (one H2D) and enqueues the batched
+// initialisation; does not wait (the moments' Step that follows on the stream does).
+Status ParticleBank::Impl::LaunchInit() {
+  const std::size_t tasks = init_plan.tasks.size();
+  const std::size_t blocks_at = AlignUp(tasks * sizeof(pf::InitTask));
+  const std::size_t bytes = blocks_at + init_plan.block_task.size() * sizeof(int);
+  LOCALIZER_RETURN_IF_ERROR(Grow(init_host, bytes));
+  LOCALIZER_RETURN_IF_ERROR(Grow(init_device, bytes));
+  unsigned char* in = init_host.data();
+  std::memcpy(in, init_plan.tasks.data(), tasks * sizeof(pf::InitTask));
+  std::memcpy(in + blocks_at, init_plan.block_task.data(), init_plan.block_task.size() * sizeof(int));
+  cudaGetLastError();  // errors of earlier calls were reported by those calls
+  const cudaStream_t s = stream.get();
+  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(init_device.data(), in, bytes, cudaMemcpyHostToDevice, s),
+                                 "cudaMemcpyAsync(particle bank initialisation)");
+  pf::InitLaunch launch;
+  launch.tasks = reinterpret_cast<const pf::InitTask*>(init_device.data());
+  launch.block_task = reinterpret_cast<const int*>(init_device.data() + blocks_at);
+  launch.blocks = init_plan.blocks();
+  return pf::LaunchInitialiseBatch(launch, s);
 }
 
 // Copies the descriptors, block table and GCC windows in (one H2D), runs the kernels, copies

@@ -85,6 +85,32 @@ class ParticleBank {
   // Position uniform in [min_m, max_m], velocity ~ N(0, speed_sigma_mps^2 I3); weights equal.
   Status InitialiseRegion(int slot, const engine::Vec3& min_m, const engine::Vec3& max_m, double speed_sigma_mps);
 
+  // Batched (re)initialisation: every request's slot is initialised in ONE launch (one
+  // kernel over all their particles, pf_kernels.h LaunchInitialiseBatch) and its moments
+  // come back from one predict-only Step over all of them: two launch sequences and one
+  // synchronisation for any number of sessions, instead of a launch and a wait for each
+  // (what a burst of session starts did). Each slot gets exactly what InitialiseGaussian /
+  // InitialiseRegion followed by Moments give it alone (same Philox window, same
+  // per-particle maths). results.size() must equal requests.size() (else INVALID_ARGUMENT,
+  // nothing runs). A request with a slot not open, a slot already named by an earlier
+  // request, or bad values (the one-slot calls' messages) gets that status and is left out;
+  // the others run. A CUDA error is returned and set in the result of every request that ran
+  // (their slots' particles are then undefined: re-initialise or close them).
+  struct InitRequest {
+    int slot = -1;
+    bool region = false;  // false: Gaussian (mean, root); true: region (min_m, max_m, speed)
+    engine::Vec6 mean = engine::Vec6::Zero();
+    engine::Mat6 root = engine::Mat6::Zero();
+    engine::Vec3 min_m = engine::Vec3::Zero();
+    engine::Vec3 max_m = engine::Vec3::Zero();
+    double speed_sigma_mps = 0.0;
+  };
+  struct InitResult {
+    Status status;
+    engine::TrackState state;  // the slot's weighted moments after initialisation (as Moments)
+  };
+  Status Initialise(std::span<const InitRequest> requests, std::span<InitResult> results);
+
   struct StepRequest {
     int slot = -1;
     double dt_s = 0.0;                                 // predict by this first (<= 0: no predict)

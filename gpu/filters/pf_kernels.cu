@@ -365,39 +365,55 @@ __global__ void __launch_bounds__(kBlockThreads)
   s.slot.w[i] = 1.0f / static_cast<float>(n);
 }
 
-__global__ void __launch_bounds__(kBlockThreads) InitialiseGaussianKernel(SlotView slot, GaussianInit init) {
-  const int i = static_cast<int>(blockIdx.x) * kBlockThreads + static_cast<int>(threadIdx.x);
-  if (i >= slot.particles) return;
+// Particle i of a slot: one Philox window's first values, the shared maths, equal weights.
+__device__ __forceinline__ void InitialiseGaussianParticle(const SlotView& slot, const GaussianInit& init, int i) {
   curandStatePhilox4_32_10_t state;
   curand_init(init.seed, static_cast<unsigned long long>(i), init.draw * kDrawWindow, &state);
   const float4 a = curand_normal4(&state), b = curand_normal4(&state);
   const float z[6] = {a.x, a.y, a.z, a.w, b.x, b.y};
+  float x[6];
+  GaussianParticle(init.mean, init.root, z, x);
 #pragma unroll
-  for (int r = 0; r < 6; ++r) {
-    float v = init.mean[r];
-#pragma unroll
-    for (int k = 0; k < 6; ++k) v += init.root[r * 6 + k] * z[k];
-    slot.state[r][i] = v;
-  }
+  for (int r = 0; r < 6; ++r) slot.state[r][i] = x[r];
   slot.logw[i] = -logf(static_cast<float>(slot.particles));
   slot.w[i] = 1.0f / static_cast<float>(slot.particles);
 }
 
-__global__ void __launch_bounds__(kBlockThreads) InitialiseRegionKernel(SlotView slot, RegionInit init) {
-  const int i = static_cast<int>(blockIdx.x) * kBlockThreads + static_cast<int>(threadIdx.x);
-  if (i >= slot.particles) return;
+__device__ __forceinline__ void InitialiseRegionParticle(const SlotView& slot, const RegionInit& init, int i) {
   curandStatePhilox4_32_10_t state;
   curand_init(init.seed, static_cast<unsigned long long>(i), init.draw * kDrawWindow, &state);
   const float4 u = curand_uniform4(&state);  // (0, 1]
   const float4 v = curand_normal4(&state);
-  slot.state[0][i] = init.lo[0] + init.span[0] * u.x;
-  slot.state[1][i] = init.lo[1] + init.span[1] * u.y;
-  slot.state[2][i] = init.lo[2] + init.span[2] * u.z;
-  slot.state[3][i] = init.speed_sigma * v.x;
-  slot.state[4][i] = init.speed_sigma * v.y;
-  slot.state[5][i] = init.speed_sigma * v.z;
+  const float uu[3] = {u.x, u.y, u.z}, vv[3] = {v.x, v.y, v.z};
+  float x[6];
+  RegionParticle(init.lo, init.span, init.speed_sigma, uu, vv, x);
+#pragma unroll
+  for (int r = 0; r < 6; ++r) slot.state[r][i] = x[r];
   slot.logw[i] = -logf(static_cast<float>(slot.particles));
   slot.w[i] = 1.0f / static_cast<float>(slot.particles);
+}
+
+__global__ void __launch_bounds__(kBlockThreads) InitialiseGaussianKernel(SlotView slot, GaussianInit init) {
+  const int i = static_cast<int>(blockIdx.x) * kBlockThreads + static_cast<int>(threadIdx.x);
+  if (i < slot.particles) InitialiseGaussianParticle(slot, init, i);
+}
+
+__global__ void __launch_bounds__(kBlockThreads) InitialiseRegionKernel(SlotView slot, RegionInit init) {
+  const int i = static_cast<int>(blockIdx.x) * kBlockThreads + static_cast<int>(threadIdx.x);
+  if (i < slot.particles) InitialiseRegionParticle(slot, init, i);
+}
+
+// Every block belongs to one slot (block_task), particle index from the slot's first block.
+__global__ void __launch_bounds__(kBlockThreads)
+    InitialiseBatchKernel(const InitTask* __restrict__ tasks, const int* __restrict__ block_task) {
+  const InitTask& t = tasks[block_task[blockIdx.x]];
+  const int i = (static_cast<int>(blockIdx.x) - t.first_block) * kBlockThreads + static_cast<int>(threadIdx.x);
+  if (i >= t.slot.particles) return;
+  if (t.kind == kInitGaussian) {
+    InitialiseGaussianParticle(t.slot, t.gaussian, i);
+  } else {
+    InitialiseRegionParticle(t.slot, t.region, i);
+  }
 }
 
 }  // namespace
@@ -429,6 +445,13 @@ Status LaunchInitialiseRegion(const SlotView& slot, const RegionInit& init, cuda
   if (slot.particles <= 0) return Status::Ok();
   InitialiseRegionKernel<<<slot.blocks, kBlockThreads, 0, stream>>>(slot, init);
   LOCALIZER_LAUNCH_RETURN_IF_ERROR("InitialiseRegionKernel");
+  return Status::Ok();
+}
+
+Status LaunchInitialiseBatch(const InitLaunch& launch, cudaStream_t stream) {
+  if (launch.blocks <= 0) return Status::Ok();
+  InitialiseBatchKernel<<<launch.blocks, kBlockThreads, 0, stream>>>(launch.tasks, launch.block_task);
+  LOCALIZER_LAUNCH_RETURN_IF_ERROR("InitialiseBatchKernel");
   return Status::Ok();
 }
 

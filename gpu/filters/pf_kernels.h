@@ -156,4 +156,23 @@ struct RegionInit {
 };
 Status LaunchInitialiseRegion(const SlotView& slot, const RegionInit& init, cudaStream_t stream);
 
+// Batched (re)initialisation: many slots, each by its own kind and parameters, in ONE launch
+// whose grid tiles every slot's particles by blocks (as a Step's does); a slot's particles
+// get exactly what LaunchInitialiseGaussian / LaunchInitialiseRegion give them alone (the
+// same per-particle functions, pf_math.cuh, and the same Philox keys). init_builder.h plans it.
+enum InitKind : int32_t { kInitGaussian = 0, kInitRegion = 1 };
+struct InitTask {
+  SlotView slot;
+  int32_t kind = kInitGaussian;
+  int32_t first_block = 0;  // the slot's first block in the launch's grid
+  GaussianInit gaussian{};  // read when kind == kInitGaussian
+  RegionInit region{};      // read when kind == kInitRegion
+};
+struct InitLaunch {
+  const InitTask* tasks = nullptr;  // device, one per slot
+  const int* block_task = nullptr;  // device, one per grid block: its task
+  int blocks = 0;
+};
+Status LaunchInitialiseBatch(const InitLaunch& launch, cudaStream_t stream);
+
 }  // namespace localizer::gpu::pf

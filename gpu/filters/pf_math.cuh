@@ -58,6 +58,30 @@ LOCALIZER_HOST_DEVICE_INLINE float StudentTLogLikelihood(float e, float inv_dof,
 
 // The GCC likelihood's read (engine::GccFineLag, engine::CatmullRomRead) is the engine's.
 
+// ---- Initialisation -----------------------------------------------------------------------
+
+// A Gaussian belief's particle: x = mean + root z, root row-major 6x6, z ~ N(0, I6) (the
+// first six Philox normals of the slot's draw window). Summed over k in order, as the
+// one-slot and the batched initialisation kernels both do.
+LOCALIZER_HOST_DEVICE_INLINE void GaussianParticle(const float mean[6], const float root[36], const float z[6],
+                                                   float x[6]) {
+  for (int r = 0; r < 6; ++r) {
+    float v = mean[r];
+    for (int k = 0; k < 6; ++k) v += root[r * 6 + k] * z[k];
+    x[r] = v;
+  }
+}
+
+// A region's particle: position lo + span u (u in (0, 1], curand's uniforms), velocity
+// speed_sigma v (v ~ N(0, I3)).
+LOCALIZER_HOST_DEVICE_INLINE void RegionParticle(const float lo[3], const float span[3], float speed_sigma,
+                                                 const float u[3], const float v[3], float x[6]) {
+  for (int a = 0; a < 3; ++a) {
+    x[a] = lo[a] + span[a] * u[a];
+    x[3 + a] = speed_sigma * v[a];
+  }
+}
+
 // ---- Systematic resampling ----------------------------------------------------------------
 
 // The particle that output slot m (0 <= m < n) copies under systematic resampling with

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <map>
 #include <string>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "gpu/core/device.h"
 #include "gpu/core/device_buffer.h"
 #include "gpu/tdoa/cuda_handles.h"
+#include "gpu/tdoa/frame_sources.cuh"
 #include "gpu/tdoa/gcc_kernels.h"
 #include "gpu/tdoa/gcc_math.cuh"
 
@@ -63,6 +65,30 @@ Status ReservePair(std::size_t count, DeviceBuffer<T>* device, PinnedBuffer<T>* 
   return host->Reserve(count);
 }
 
+// A ring job's ring and count against GccJob::ring's contract; `rings` collects the rings
+// seen so far in the Run.
+Status CheckRingJob(const GccJob& job, const GccBatchKey& key, const std::string& which,
+                    std::unordered_set<const SampleRing*>* rings) {
+  const SampleRing& r = *job.ring;
+  const int fresh = job.ring_new_samples;
+  if (r.data() == nullptr || r.channels() != key.channels || r.capacity() < key.frame_samples) {
+    return InvalidArgument(which + "'s ring has " + std::to_string(r.channels()) + " channels x " +
+                           std::to_string(r.capacity()) + " samples; the batch needs " + std::to_string(key.channels) +
+                           " channels x at least " + std::to_string(key.frame_samples));
+  }
+  if (fresh < 1 || fresh > key.frame_samples) {
+    return InvalidArgument(which + " brings " + std::to_string(fresh) + " new ring samples; must be in [1, " +
+                           std::to_string(key.frame_samples) + "]");
+  }
+  if (r.total() + fresh < key.frame_samples) {
+    return InvalidArgument(which + " brings " + std::to_string(fresh) + " new samples to a ring holding " +
+                           std::to_string(r.total()) + (r.valid() ? "" : " (not valid)") + "; a frame needs " +
+                           std::to_string(key.frame_samples));
+  }
+  if (!rings->insert(&r).second) return InvalidArgument(which + "'s ring is already used by another job of the batch");
+  return Status::Ok();
+}
+
 }  // namespace
 
 struct GccBatch::Impl {
@@ -87,12 +113,14 @@ struct GccBatch::Impl {
   int bins = 0;
 
   CudaStream stream;
-  PinnedBuffer<float> staged_frames;             // max_frames * channels * frame_samples
-  PinnedBuffer<const float*> staged_frame_ptrs;  // max_frames: where each frame lies
+  PinnedBuffer<float> staged_frames;            // max_frames * channels * frame_samples
+  PinnedBuffer<GccFrameSource> staged_sources;  // max_frames: where each frame lies
+  PinnedBuffer<GccRingAppend> staged_appends;   // max_frames: the ring jobs' appends
   PinnedBuffer<GccPairTask> staged_tasks;
   PinnedBuffer<GccPairResult> staged_results;
   PinnedBuffer<float> staged_gcc;  // grows to the largest batch's windows
-  DeviceBuffer<const float*> frame_ptrs;
+  DeviceBuffer<GccFrameSource> sources;
+  DeviceBuffer<GccRingAppend> appends;
   DeviceBuffer<GccPairTask> tasks;
   DeviceBuffer<double> energy;          // max_frames * channels
   DeviceBuffer<float> signal;           // max_frames * channels * N
@@ -105,6 +133,7 @@ struct GccBatch::Impl {
   std::map<int, FftPlans> plans;  // by bucket
   std::vector<CudaEvent> marks;   // kMarks events with collect_timing, else none
   Timing timing;
+  std::size_t frame_bytes_over_bus = 0;  // of the last Run
 };
 
 Status GccBatch::Impl::Init() {
@@ -120,8 +149,10 @@ Status GccBatch::Impl::Init() {
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows * key.frame_samples, &staged_frames));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &staged_tasks));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &staged_results));
-  LOCALIZER_RETURN_IF_ERROR(AllocateInto(frames_max, &staged_frame_ptrs));
-  LOCALIZER_RETURN_IF_ERROR(AllocateInto(frames_max, &frame_ptrs));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(frames_max, &staged_sources));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(frames_max, &staged_appends));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(frames_max, &sources));
+  LOCALIZER_RETURN_IF_ERROR(AllocateInto(frames_max, &appends));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(pair_rows, &tasks));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows, &energy));
   LOCALIZER_RETURN_IF_ERROR(AllocateInto(rows * key.fft_size, &signal));
@@ -192,15 +223,27 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
   LOCALIZER_RETURN_IF_ERROR(ReservePair(gcc_floats, &gcc, &staged_gcc));
 
   std::int64_t gcc_offset = 0;
+  int append_count = 0;
+  frame_bytes_over_bus = 0;
   for (int j = 0; j < count; ++j) {
     const GccJob& job = jobs[j];
     const GccPlan& plan = *job.plan;
-    if (job.frame_pinned) {
-      staged_frame_ptrs.data()[j] = job.frame;
-    } else {
+    // What the device reads from the host: each channel's last `fresh` samples.
+    const int fresh = job.ring != nullptr ? job.ring_new_samples : key.frame_samples;
+    const float* host = job.frame;
+    if (!job.frame_pinned) {
       float* staged = staged_frames.data() + j * frame_floats;
-      std::memcpy(staged, job.frame, sizeof(float) * frame_floats);
-      staged_frame_ptrs.data()[j] = staged;
+      StageNewSamples(job.frame, staged, channels, key.frame_samples, fresh);
+      host = staged;
+    }
+    frame_bytes_over_bus += sizeof(float) * static_cast<std::size_t>(channels) * fresh;
+    if (job.ring == nullptr) {
+      staged_sources.data()[j] = WholeFrameSource(host, key.frame_samples);
+    } else {
+      const SampleRing& r = *job.ring;
+      const RingJobDescriptors d = DescribeRingJob(host, r.data(), r.capacity(), r.total(), key.frame_samples, fresh);
+      staged_appends.data()[append_count++] = d.append;
+      staged_sources.data()[j] = d.source;
     }
     const engine::GccOptions& options = plan.options();
     const engine::GccLayout& layout = plan.layout();
@@ -221,16 +264,27 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
 
   cudaStream_t s = stream.get();
   LOCALIZER_RETURN_IF_ERROR(Record(kStart));
-  LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(frame_ptrs.data(), staged_frame_ptrs.data(),
-                                                 sizeof(const float*) * count, cudaMemcpyHostToDevice, s),
-                                 "cudaMemcpyAsync(frame pointers)");
+  LOCALIZER_CUDA_RETURN_IF_ERROR(
+      cudaMemcpyAsync(sources.data(), staged_sources.data(), sizeof(GccFrameSource) * count, cudaMemcpyHostToDevice, s),
+      "cudaMemcpyAsync(frame sources)");
+  if (append_count > 0) {
+    LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(appends.data(), staged_appends.data(),
+                                                   sizeof(GccRingAppend) * append_count, cudaMemcpyHostToDevice, s),
+                                   "cudaMemcpyAsync(ring appends)");
+  }
   LOCALIZER_CUDA_RETURN_IF_ERROR(
       cudaMemcpyAsync(tasks.data(), staged_tasks.data(), sizeof(GccPairTask) * task_count, cudaMemcpyHostToDevice, s),
       "cudaMemcpyAsync(tasks)");
   LOCALIZER_RETURN_IF_ERROR(Record(kCopiedIn));
 
+  GccAppendArgs append;
+  append.appends = appends.data();
+  append.append_count = append_count;
+  append.channels = channels;
+  LOCALIZER_RETURN_IF_ERROR(LaunchGccRingAppend(append, s));
+
   GccPackArgs pack;
-  pack.frames = frame_ptrs.data();
+  pack.sources = sources.data();
   pack.signal = signal.data();
   pack.energy = energy.data();
   pack.live_rows = count * channels;
@@ -383,6 +437,7 @@ Status GccBatch::Run(std::span<const GccJob> jobs) {
                            std::to_string(s.max_frames));
   }
   std::size_t gcc_floats = 0;
+  std::unordered_set<const SampleRing*> rings;
   for (std::size_t j = 0; j < jobs.size(); ++j) {
     const GccJob& job = jobs[j];
     const std::string which = "GCC batch job " + std::to_string(j);
@@ -393,15 +448,31 @@ Status GccBatch::Run(std::span<const GccJob> jobs) {
       return InvalidArgument(which + " has key " + job.plan->key().ToString() + "; the batch's is " + s.key.ToString());
     }
     gcc_floats += job.plan->gcc_floats();
+    if (job.ring != nullptr) LOCALIZER_RETURN_IF_ERROR(CheckRingJob(job, s.key, which, &rings));
   }
   const int count = static_cast<int>(jobs.size());
+  // The rings' contents are unknown once the device failed after their appends may have run.
+  const auto invalidate_rings = [&] {
+    for (const GccJob& job : jobs) {
+      if (job.ring != nullptr) job.ring->Invalidate();
+    }
+  };
   const Status enqueued = s.Enqueue(jobs, BucketFor(count, s.max_frames), gcc_floats);
   if (!enqueued.ok()) {
     // Whatever was enqueued must finish before the staging buffers are written again.
     (void)s.stream.Synchronize();
+    invalidate_rings();
     return enqueued;
   }
-  LOCALIZER_RETURN_IF_ERROR(s.stream.Synchronize());
+  if (Status done = s.stream.Synchronize(); !done.ok()) {
+    invalidate_rings();
+    return done;
+  }
+  // Every append ran (a frame with a non-finite sample is appended too: the ring mirrors the
+  // stream, whatever its job's outcome).
+  for (const GccJob& job : jobs) {
+    if (job.ring != nullptr) job.ring->Advance(job.ring_new_samples);
+  }
   LOCALIZER_RETURN_IF_ERROR(s.ReadTiming());
   Status first_error;
   for (int j = 0; j < count; ++j) s.Fill(jobs[j], j, &first_error);
@@ -409,6 +480,7 @@ Status GccBatch::Run(std::span<const GccJob> jobs) {
 }
 
 GccBatch::Timing GccBatch::last_timing() const { return impl_->timing; }
+std::size_t GccBatch::last_frame_bytes_over_bus() const { return impl_->frame_bytes_over_bus; }
 const GccPlan::BatchKey& GccBatch::key() const { return impl_->key; }
 int GccBatch::max_frames() const { return impl_->max_frames; }
 

@@ -4,12 +4,14 @@
 // engine::GccPhatEstimator::Estimate gives for each frame alone (see gcc_phat.h for the maths).
 //
 // The sequence on the batch's own stream, for M frames of C channels (P = C - 1 pairs):
-//   1. one small descriptor per (frame, pair) (weighting, band, L_p, interpolation, ...)
-//      and one pointer per frame go to the device in two small copies; the frames stay in
-//      page-locked host memory (the job's own when frame_pinned, else the batch's staging,
-//      into which the host copies them)
-//   2. pack: each channel read in place over the bus, zero padded to N, its energy (sum of
-//      squares, double)
+//   1. one small descriptor per (frame, pair) (weighting, band, L_p, interpolation, ...),
+//      one source per frame and one append per ring job go to the device in small copies;
+//      the frames stay in page-locked host memory (the job's own when frame_pinned, else
+//      the batch's staging, into which the host copies what the device will read)
+//   2. append (ring jobs, see GccJob::ring): each channel's new samples read in place over
+//      the bus into the session's device ring; then pack: each channel read in place over
+//      the bus (a ring job's from its ring, on the device), zero padded to N, its energy
+//      (sum of squares, double). frame_sources.cuh holds both kernels' index maths.
 //   3. R2C of N over M x C rows (cuFFT, batched)
 //   4. weigh, per (frame, pair): G = W X_k conj(X_r) B with the CPU's weighting and floors,
 //      and S = sum of |G| over the full spectrum
@@ -34,12 +36,16 @@
 // made per call once each bucket has been seen. The plans share one cuFFT work area, sized
 // to the largest of them.
 //
+// Bytes over the bus: a plain job brings channels * frame_samples floats; a ring job only its
+// new samples (a 50 % hop halves the stage's input traffic), and the frame it reads back is
+// bit-identical to the job's frame, so every result is the same either way.
+//
 // Memory (device), about max_frames * (C (2N + 2) + P (2N + 2)) * 4 bytes, plus pinned host
 // max_frames * C * F * 4 bytes (F = frame_samples) for staging frames that are not pinned
 // already; e.g. C = 4, F = 4096, N = 5120:
 // ~290 KiB device + 64 KiB pinned per frame of capacity (1024 frames: ~290 MiB + 64 MiB),
 // plus the cuFFT work area. GCC window buffers (device and pinned) grow to the largest
-// batch's windows.
+// batch's windows. Rings are the sessions' own (sample_ring.h), not the batch's.
 //
 // Not thread-safe: one thread runs a batch at a time (a dispatcher owns it). Run blocks the
 // calling thread until the results are on the host.
@@ -51,6 +57,7 @@
 #include "engine/core/measurement.h"
 #include "engine/core/status.h"
 #include "gpu/tdoa/gcc_plan.h"
+#include "gpu/tdoa/sample_ring.h"
 
 namespace localizer::gpu {
 
@@ -67,6 +74,17 @@ struct GccJob {
   // unchanged until Run returns: the device reads it in place and the batch skips its own
   // host copy (a session that stages its frame itself takes that copy off the dispatcher).
   bool frame_pinned = false;
+  // Optional: the session's device ring (sample_ring.h). The job first appends the last
+  // ring_new_samples of each channel of `frame` to the ring, then the frame is read from
+  // the ring: only those samples cross the bus. The caller guarantees that the ring's
+  // newest frame_samples - ring_new_samples samples equal the frame's first ones (bit for
+  // bit; frame_overlap.h finds that count), so the frame read back is `frame` exactly.
+  // ring_new_samples must be in [1, frame_samples], and frame_samples when the ring is not
+  // valid; the ring needs the batch's channel count and a capacity >= frame_samples; no two
+  // jobs of one Run may share a ring. Run advances the ring by ring_new_samples once the
+  // launch completed, or invalidates it when the device failed.
+  SampleRing* ring = nullptr;
+  int ring_new_samples = 0;
 };
 
 class GccBatch {
@@ -92,17 +110,21 @@ class GccBatch {
   GccBatch& operator=(const GccBatch&) = delete;
 
   // Measures every job's frame. INVALID_ARGUMENT, before any work, when jobs is empty or
-  // longer than max_frames, or a job has a null plan/frame/out or a plan of another key.
+  // longer than max_frames, or a job has a null plan/frame/out, a plan of another key, or a
+  // ring it cannot use (see GccJob::ring).
   // A CUDA or cuFFT failure returns its Status (outputs untouched). A job whose frame holds a
   // non-finite sample gets INVALID_ARGUMENT in *job.status and keeps its *out; without a
   // status pointer, Run returns that error ("job j: channel c ...") after filling the other
-  // jobs. Cost: the host copies each frame that is not pinned once into pinned memory; the
-  // device reads every frame once over the bus; the device work grows
+  // jobs. Cost: the host copies each frame that is not pinned (a ring job: its new samples)
+  // once into pinned memory; the device reads that much once over the bus; the device work grows
   // with the bucket (see above). Allocates only when a new bucket's plans are made or the
   // GCC windows outgrow their buffers.
   Status Run(std::span<const GccJob> jobs);
 
   Timing last_timing() const;
+  // Frame samples the device read from host memory in the last Run (plain jobs: the whole
+  // frame; ring jobs: the new samples), in bytes: the figure the ring exists to shrink.
+  std::size_t last_frame_bytes_over_bus() const;
   const GccPlan::BatchKey& key() const;
   int max_frames() const;
 

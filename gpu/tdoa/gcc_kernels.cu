@@ -11,6 +11,7 @@
 #include <cub/block/block_reduce.cuh>
 
 #include "gpu/core/cuda_status.h"
+#include "gpu/tdoa/frame_sources.cuh"
 #include "gpu/tdoa/gcc_kernels.h"
 #include "gpu/tdoa/gcc_math.cuh"
 
@@ -18,6 +19,7 @@ namespace localizer::gpu {
 namespace {
 
 constexpr int kPackThreads = 256;
+constexpr int kAppendThreads = 256;
 constexpr int kWeighThreads = 256;
 constexpr int kPeakThreads = 128;  // windows are a few hundred lags; 4 warps read them
 
@@ -27,17 +29,24 @@ __global__ void __launch_bounds__(kPackThreads) GccPackKernel(GccPackArgs a) {
   const int row = blockIdx.x;
   const bool live = row < a.live_rows;
   // Rows past the live ones are the bucket's padding frames: zeros, and no frame to read.
-  const float* in =
-      live ? a.frames[row / a.channels] + static_cast<std::size_t>(row % a.channels) * a.frame_samples : nullptr;
+  GccFrameSource source;
+  if (live) source = a.sources[row / a.channels];
+  const int channel = row % a.channels;
   float* out = a.signal + static_cast<std::size_t>(row) * a.fft_size;
   double energy = 0.0;
   for (int i = threadIdx.x; i < a.fft_size; i += kPackThreads) {
-    const float v = (live && i < a.frame_samples) ? in[i] : 0.0f;
+    const float v = (live && i < a.frame_samples) ? *FrameSample(source, channel, i) : 0.0f;
     out[i] = v;
     energy += static_cast<double>(v) * v;
   }
   energy = Reduce(scratch).Sum(energy);
   if (threadIdx.x == 0) a.energy[row] = energy;
+}
+
+__global__ void __launch_bounds__(kAppendThreads) GccRingAppendKernel(GccAppendArgs a) {
+  const GccRingAppend p = a.appends[blockIdx.x / a.channels];
+  const int channel = blockIdx.x % a.channels;
+  for (int i = threadIdx.x; i < p.count; i += kAppendThreads) *AppendTo(p, channel, i) = *AppendFrom(p, channel, i);
 }
 
 __global__ void __launch_bounds__(kWeighThreads) GccWeighKernel(GccWeighArgs a) {
@@ -191,6 +200,13 @@ Status LaunchGccPack(const GccPackArgs& args, cudaStream_t stream) {
   if (args.rows == 0) return Status::Ok();
   GccPackKernel<<<args.rows, kPackThreads, 0, stream>>>(args);
   LOCALIZER_LAUNCH_RETURN_IF_ERROR("GccPackKernel");
+  return Status::Ok();
+}
+
+Status LaunchGccRingAppend(const GccAppendArgs& args, cudaStream_t stream) {
+  if (args.append_count == 0) return Status::Ok();
+  GccRingAppendKernel<<<args.append_count * args.channels, kAppendThreads, 0, stream>>>(args);
+  LOCALIZER_LAUNCH_RETURN_IF_ERROR("GccRingAppendKernel");
   return Status::Ok();
 }
 

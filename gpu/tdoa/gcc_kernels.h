@@ -1,7 +1,8 @@
 // Launchers for the three kernels of the batched GCC-PHAT stage (gcc_kernels.cu), around the
 // two batched cuFFT executions that gcc_batch.cc makes:
 //
-//   frames ──LaunchGccPack──▶ signal, energy ──R2C──▶ spectra ──LaunchGccWeigh──▶ cross, S
+//   new samples ──LaunchGccRingAppend──▶ session rings (sample_ring.cuh)
+//   frames or rings ──LaunchGccPack──▶ signal, energy ──R2C──▶ spectra ──LaunchGccWeigh──▶ cross, S
 //          ──C2R──▶ corr ──LaunchGccPeak──▶ results, gcc windows
 //
 // Plain C++ (no Eigen, no engine headers with Eigen): the descriptors are POD structs that
@@ -45,14 +46,25 @@ struct GccPairResult {
   int32_t peak_lag = 0;     // integer lag of the peak, samples
 };
 
+// Where one frame's samples are: channel c's row starts at samples + c * row_samples and the
+// frame's i-th sample is at row index ring::Wrap(first, i, row_samples). A frame in host
+// memory: row_samples = frame_samples, first = 0 (never wraps). A frame in a session's device
+// ring: row_samples = the ring's capacity, first = where the frame starts in it.
+struct GccFrameSource {
+  const float* samples = nullptr;
+  int32_t row_samples = 0;
+  int32_t first = 0;
+};
+
 // rows = padded_frames * channels rows of fft_size floats: row r < live_rows gets frame row
 // r (frame_samples floats) then zeros; rows >= live_rows get zeros. energy[r] = sum of
-// squares of row r in double, by a fixed-order block reduction.
+// squares of row r in double, by a fixed-order block reduction. The values, hence every
+// result, are the same whether a frame is read from the host or from a ring.
 struct GccPackArgs {
-  // Per live frame, its channel-major samples (channels * frame_samples) in page-locked host
-  // memory that the device reads in place (cudaMallocHost: mapped at the same address under
-  // unified addressing), so no separate host-to-device copy of the frames is needed.
-  const float* const* frames = nullptr;
+  // Per live frame, where it lies: page-locked host memory that the device reads in place
+  // (cudaMallocHost: mapped at the same address under unified addressing, so no separate
+  // host-to-device copy of the frame is needed), or a session's device ring.
+  const GccFrameSource* sources = nullptr;
   float* signal = nullptr;   // rows * fft_size
   double* energy = nullptr;  // rows
   int live_rows = 0;         // live frames * channels
@@ -62,6 +74,28 @@ struct GccPackArgs {
   int fft_size = 0;
 };
 Status LaunchGccPack(const GccPackArgs& args, cudaStream_t stream);
+
+// One session's append to its ring: per channel c, source sample source_first + i of the
+// channel's row (row length source_row_samples, page-locked host memory read in place) goes
+// to ring row index ring::Wrap(write_first, i, capacity), i in [0, count): a
+// ring::RingJobPlan's append. Runs before the pack of the same batch.
+struct GccRingAppend {
+  const float* source = nullptr;  // host, channel-major
+  float* ring = nullptr;          // device, channels rows of capacity
+  int32_t source_row_samples = 0;
+  int32_t source_first = 0;
+  int32_t capacity = 0;
+  int32_t write_first = 0;
+  int32_t count = 0;
+};
+
+// One block per (append, channel).
+struct GccAppendArgs {
+  const GccRingAppend* appends = nullptr;  // device, append_count
+  int append_count = 0;
+  int channels = 0;
+};
+Status LaunchGccRingAppend(const GccAppendArgs& args, cudaStream_t stream);
 
 // Per task t: cross row t = G over bins 0..N/2 (zero outside the band), results[t].norm = S,
 // results[t].energy_* from energy[]. One block per task.

@@ -10,6 +10,10 @@
 //          host memory over the bus), total = first H2D start .. last D2H end
 //   pinned the same on frames already in pinned memory (frame_pinned: as GpuTdoaEstimator
 //          stages them on each session's own thread), host wall time
+//   ring   the same on pinned frames sent through each job's own device sample ring
+//          (GccJob::ring) at a 50 % hop: only the new half of each channel crosses the bus.
+//          Each channel of these frames repeats its first half, so the same frame is a
+//          valid next frame of its stream every round (the tests check what rings read back)
 //   bare   one R2C over frames x 4 rows and one C2R over frames x 3 rows of N on device
 //          buffers (cuFFT plans made once), timed by events: the floor for the stage
 // and prints medians, per-frame time, and the ratios run/bare, pinned/bare (the goal is
@@ -17,7 +21,9 @@
 // bring 64 KiB per frame in and the GCC windows out). The CPU estimator's time per frame on
 // one core is printed for scale.
 //
-// Without a usable device it prints why and exits 0. Run:
+// The frame bytes over the bus per frame, whole and through the ring, are host arithmetic and
+// printed first, with or without a device (GccBatch::last_frame_bytes_over_bus confirms them
+// on the device). Without a usable device it then prints why and exits 0. Run:
 //   build/tests/bench/gpu_gcc_bench [repetitions, default 30]
 
 // Eigen's CUDA support is for device code; this file uses Eigen on the host only.
@@ -41,6 +47,7 @@
 #include "gpu/core/cuda_status.h"
 #include "gpu/core/device.h"
 #include "gpu/tdoa/gcc_batch.h"
+#include "gpu/tdoa/sample_ring.h"
 #include "tests/tdoa/tdoa_test_signals.h"
 
 namespace localizer::gpu {
@@ -49,7 +56,10 @@ namespace {
 constexpr int kChannels = 4;
 constexpr int kFrameSamples = 4096;
 constexpr double kSampleRateHz = 44100.0;
-constexpr int kDistinctFrames = 16;  // cycled through larger batches
+constexpr int kDistinctFrames = 16;      // cycled through larger batches
+constexpr int kHop = kFrameSamples / 2;  // the ring's 50 % hop
+constexpr std::size_t kWholeFrameBytes = sizeof(float) * kChannels * kFrameSamples;
+constexpr std::size_t kRingFrameBytes = sizeof(float) * kChannels * kHop;
 
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -123,6 +133,9 @@ struct Row {
   double run_fft_ms = 0.0;
   double bare_ms = 0.0;
   double pinned_wall_ms = 0.0;
+  double ring_wall_ms = 0.0;
+  double ring_total_ms = 0.0;
+  double ring_bytes_per_frame = 0.0;
 };
 
 int Fail(const Status& status) {
@@ -131,6 +144,12 @@ int Fail(const Status& status) {
 }
 
 int Main(int repetitions) {
+  std::printf(
+      "Frame bytes over the bus per frame (%d channels x %d float samples): whole %zu, ring at a 50 %% hop "
+      "%zu (x%.2f); 1024 frames: %.1f MiB -> %.1f MiB\n",
+      kChannels, kFrameSamples, kWholeFrameBytes, kRingFrameBytes,
+      static_cast<double>(kRingFrameBytes) / kWholeFrameBytes, 1024.0 * kWholeFrameBytes / (1 << 20),
+      1024.0 * kRingFrameBytes / (1 << 20));
   if (const std::string& reason = DeviceUnavailableReason(); !reason.empty()) {
     std::printf("gpu_gcc_bench: no usable GPU (%s); nothing measured.\n", reason.c_str());
     return 0;
@@ -190,8 +209,32 @@ int Main(int repetitions) {
       pinned_jobs.push_back({&*plan, pinned + j * frame_floats, 0.0, &out[j]});
       pinned_jobs.back().frame_pinned = true;
     }
+    // The ring jobs: pinned frames whose channels repeat their first half, one ring each;
+    // the first Run (a warm-up round) fills the rings with whole frames.
+    float* periodic = nullptr;
+    if (const Status s = FromCuda(cudaMallocHost(&periodic, sizeof(float) * frame_floats * count), "cudaMallocHost");
+        !s.ok()) {
+      return Fail(s);
+    }
+    std::unique_ptr<float, cudaError_t (*)(void*)> periodic_owner(periodic, cudaFreeHost);
+    std::vector<SampleRing> rings;
+    std::vector<GccJob> ring_jobs;
+    for (int j = 0; j < count; ++j) {
+      float* frame = periodic + j * frame_floats;
+      for (int c = 0; c < kChannels; ++c) {
+        const float* half = frames[j % kDistinctFrames].data() + static_cast<std::size_t>(c) * kFrameSamples;
+        std::copy_n(half, kHop, frame + c * kFrameSamples);
+        std::copy_n(half, kHop, frame + c * kFrameSamples + kHop);
+      }
+      auto ring = SampleRing::Create(kChannels, kFrameSamples);
+      if (!ring.ok()) return Fail(ring.status());
+      rings.push_back(std::move(ring).value());
+      ring_jobs.push_back({&*plan, frame, 0.0, &out[j]});
+      ring_jobs.back().frame_pinned = true;
+    }
 
-    std::vector<double> wall, total, device, fft, bare_ms, pinned_wall;
+    std::vector<double> wall, total, device, fft, bare_ms, pinned_wall, ring_wall, ring_total;
+    std::size_t ring_bytes = 0;
     for (int r = -3; r < repetitions; ++r) {  // 3 warm-up rounds
       const auto t0 = std::chrono::steady_clock::now();
       const Status s = (*batch)->Run(jobs);
@@ -203,17 +246,31 @@ int Main(int repetitions) {
       const Status sp = (*batch)->Run(pinned_jobs);
       const auto t3 = std::chrono::steady_clock::now();
       if (!sp.ok()) return Fail(sp);
-      if (r < 0) continue;
-      pinned_wall.push_back(std::chrono::duration<double, std::milli>(t3 - t2).count());
+      // The events of the last Run before reading them: the pinned one's (as before the ring
+      // columns were added; the header's "its CUDA event times" of `run` says otherwise).
       const GccBatch::Timing t = (*batch)->last_timing();
+      for (int j = 0; j < count; ++j) {
+        ring_jobs[j].ring = &rings[j];
+        ring_jobs[j].ring_new_samples = rings[j].valid() ? kHop : kFrameSamples;
+      }
+      const auto t4 = std::chrono::steady_clock::now();
+      const Status sr = (*batch)->Run(ring_jobs);
+      const auto t5 = std::chrono::steady_clock::now();
+      if (!sr.ok()) return Fail(sr);
+      if (r < 0) continue;
+      ring_wall.push_back(std::chrono::duration<double, std::milli>(t5 - t4).count());
+      ring_total.push_back((*batch)->last_timing().total_ms);
+      ring_bytes = (*batch)->last_frame_bytes_over_bus();
+      pinned_wall.push_back(std::chrono::duration<double, std::milli>(t3 - t2).count());
       wall.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
       total.push_back(t.total_ms);
       device.push_back(t.device_ms);
       fft.push_back(t.fft_ms);
       bare_ms.push_back(*b);
     }
-    rows.push_back(
-        {count, Median(wall), Median(total), Median(device), Median(fft), Median(bare_ms), Median(pinned_wall)});
+    rows.push_back({count, Median(wall), Median(total), Median(device), Median(fft), Median(bare_ms),
+                    Median(pinned_wall), Median(ring_wall), Median(ring_total),
+                    static_cast<double>(ring_bytes) / count});
   }
 
   std::printf("GPU GCC-PHAT batch, %s; %d channels x %d samples at %.0f Hz, N = %d; medians of %d\n",
@@ -225,6 +282,13 @@ int Main(int repetitions) {
     std::printf("%7d %10.3f %10.2f %10.3f %10.3f %10.3f %10.3f %10.3f %9.2f %11.2f %11.2f\n", r.frames, r.run_wall_ms,
                 1000.0 * r.run_wall_ms / r.frames, r.pinned_wall_ms, r.run_total_ms, r.run_device_ms, r.run_fft_ms,
                 r.bare_ms, r.run_wall_ms / r.bare_ms, r.pinned_wall_ms / r.bare_ms, r.run_device_ms / r.bare_ms);
+  }
+  std::printf("\nThrough the device rings (50 %% hop, pinned frames; goal ring/bare <= 1.5):\n");
+  std::printf("%7s %14s %10s %10s %10s %9s %12s\n", "frames", "bytes/frame", "ring ms", "pinned ms", "events ms",
+              "ring/bare", "ring/pinned");
+  for (const Row& r : rows) {
+    std::printf("%7d %14.0f %10.3f %10.3f %10.3f %9.2f %12.2f\n", r.frames, r.ring_bytes_per_frame, r.ring_wall_ms,
+                r.pinned_wall_ms, r.ring_total_ms, r.ring_wall_ms / r.bare_ms, r.ring_wall_ms / r.pinned_wall_ms);
   }
   return 0;
 }

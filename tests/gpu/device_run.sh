@@ -25,7 +25,7 @@ if [[ $what == all || $what == tests ]]; then
 fi
 if [[ $what == all || $what == sanitize ]]; then
   sanitizer=$(command -v compute-sanitizer || ls /usr/local/cuda/bin/compute-sanitizer 2>/dev/null)
-  for t in gcc_batch_test particle_bank_test gpu_backend_test srp_batch_test; do
+  for t in gcc_batch_test gcc_ring_test particle_bank_test particle_bank_init_test gpu_backend_test srp_batch_test; do
     [[ -x "$here/bin/$t" && -n "$sanitizer" ]] || continue
     timeout 150 "$sanitizer" --tool memcheck --leak-check no --error-exitcode 3 \
       "$here/bin/$t" --gtest_brief=1 >"$out/memcheck_$t.log" 2>&1 || status=1

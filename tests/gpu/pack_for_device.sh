@@ -4,8 +4,9 @@
 # CUDA toolkit and driver but none of our Debian packages (gRPC, FFTW, ...). CUDA's own
 # libraries (cudart, cuFFT, cuRAND) are left to the machine's toolkit.
 #
-#   cmake --build build --target gpu_backend_test gcc_batch_test particle_bank_test \
-#       srp_batch_test srp_math_test gpu_gcc_bench gpu_pf_bench gpu_srp_bench gpu_sessions_bench
+#   cmake --build build --target gpu_backend_test gcc_batch_test gcc_ring_test particle_bank_test \
+#       particle_bank_init_test sample_ring_test gcc_ring_plan_test pf_init_builder_test gcc_math_test pf_math_test \
+#       batch_queue_test srp_batch_test srp_math_test gpu_gcc_bench gpu_pf_bench gpu_srp_bench gpu_sessions_bench
 #   tests/gpu/pack_for_device.sh build
 # then on the device (carry [".device"]): bash .device/run.sh   (writes logs under $OUT)
 set -euo pipefail
@@ -17,11 +18,15 @@ exclude=$(git -C "$root" rev-parse --path-format=absolute --git-path info/exclud
 mkdir -p "$(dirname "$exclude")"
 grep -qx '/.device/' "$exclude" 2>/dev/null || echo '/.device/' >>"$exclude"
 rm -rf "$out" && mkdir -p "$out/bin" "$out/lib"
-for name in gpu_backend_test gcc_batch_test particle_bank_test gcc_math_test pf_math_test batch_queue_test \
+for name in gpu_backend_test gcc_batch_test gcc_ring_test particle_bank_test particle_bank_init_test \
+            gcc_math_test gcc_ring_plan_test pf_math_test pf_init_builder_test batch_queue_test sample_ring_test \
             srp_batch_test srp_math_test gpu_gcc_bench gpu_pf_bench gpu_srp_bench gpu_sessions_bench; do
+  missing=1
   for dir in "$build/tests" "$build/tests/bench"; do
-    [[ -x "$dir/$name" ]] && cp "$dir/$name" "$out/bin/"
+    [[ -x "$dir/$name" ]] && cp "$dir/$name" "$out/bin/" && missing=0
   done
+  # A program not built would silently drop its tests from the device run.
+  [[ $missing == 0 ]] || { echo "pack_for_device: $name is not built in $build" >&2; exit 1; }
 done
 # Shared libraries from Debian's packages (not libc's, not CUDA's).
 for bin in "$out"/bin/*; do

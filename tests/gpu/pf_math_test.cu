@@ -22,6 +22,47 @@ void RandomState(std::mt19937& rng, float s[6]) {
   for (int k = 3; k < 6; ++k) s[k] = Uniform(rng, -5.0f, 5.0f);
 }
 
+// The initialisation kernels' per-particle maths (one slot or batched): mean + root z, in
+// float, summed in k order, against the same sum in double; and a region's box.
+TEST(PfMath, GaussianParticleIsMeanPlusRootTimesZ) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 200; ++trial) {
+    float mean[6], root[36], z[6], x[6];
+    for (float& m : mean) m = Uniform(rng, -50.0f, 50.0f);
+    for (float& r : root) r = Uniform(rng, -2.0f, 2.0f);
+    for (float& v : z) v = Uniform(rng, -4.0f, 4.0f);
+    GaussianParticle(mean, root, z, x);
+    for (int r = 0; r < 6; ++r) {
+      double exact = mean[r];
+      for (int k = 0; k < 6; ++k) exact += static_cast<double>(root[r * 6 + k]) * z[k];
+      EXPECT_NEAR(x[r], exact, 1e-5 * (std::abs(mean[r]) + 50.0)) << r;
+    }
+  }
+  const float mean[6] = {1, 2, 3, 4, 5, 6}, zero_root[36] = {}, z[6] = {9, 9, 9, 9, 9, 9};
+  float x[6];
+  GaussianParticle(mean, zero_root, z, x);
+  for (int r = 0; r < 6; ++r) EXPECT_EQ(x[r], mean[r]);  // a point belief is exact
+}
+
+TEST(PfMath, RegionParticleSpansTheBoxAndScalesTheVelocity) {
+  const float lo[3] = {-2.0f, 10.0f, 0.5f}, span[3] = {4.0f, 0.0f, 1.5f};
+  const float top[3] = {1.0f, 1.0f, 1.0f}, v[3] = {1.0f, -2.0f, 0.5f};
+  float x[6];
+  RegionParticle(lo, span, 0.25f, top, v, x);  // u = 1: the box's far corner
+  EXPECT_EQ(x[0], 2.0f);
+  EXPECT_EQ(x[1], 10.0f);
+  EXPECT_EQ(x[2], 2.0f);
+  EXPECT_EQ(x[3], 0.25f);
+  EXPECT_EQ(x[4], -0.5f);
+  EXPECT_EQ(x[5], 0.125f);
+  const float tiny[3] = {1e-7f, 1e-7f, 1e-7f};
+  RegionParticle(lo, span, 0.0f, tiny, v, x);  // u just above 0: at the near corner, at rest
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(x[a], lo[a], 1e-6f);
+    EXPECT_EQ(x[3 + a], 0.0f);
+  }
+}
+
 TEST(PfMath, PredictIsTheCpuStep) {
   std::mt19937 rng(1);
   for (int trial = 0; trial < 1000; ++trial) {
