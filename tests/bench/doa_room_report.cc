@@ -212,7 +212,7 @@ int main(int argc, char** argv) {
   double relative = 0.0;
   std::string dump;
   localizer::engine::DirectionTrackerOptions tracking;
-  bool start_anywhere = false;
+  bool start_anywhere = false, no_continue = false;
   localizer::FlagSet flags("doa_room_report [flags]",
                            "Two talkers with pauses around a 4-microphone board in rooms of RT60 0.2, 0.4 and\n"
                            "0.6 s, through SrpPhat and DirectionTracker; one line of figures per RT60.");
@@ -232,6 +232,9 @@ int main(int argc, char** argv) {
   flags.Double("rate-sigma", &tracking.initial_rate_sigma_radps, "S", "rad/s",
                "DirectionTrackerOptions::initial_rate_sigma_radps");
   flags.Double("max-coast", &tracking.max_coast_s, "S", "s", "DirectionTrackerOptions::max_coast_s");
+  flags.Bool("no-continue", &no_continue,
+             "every track keeps its own identity (DirectionTrackerOptions::continue_identities false)");
+  flags.Int("steady-hits", &tracking.steady_hits, "N", "", "DirectionTrackerOptions::steady_hits");
   flags.String("dump", &dump, "PATH", "CSV of every frame's peaks and tracks (for analysis)");
   const localizer::Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
   if (flags.help_requested()) return std::printf("%s", flags.Usage().c_str()), 0;
@@ -243,5 +246,6 @@ int main(int argc, char** argv) {
   if (!(relative >= 0.0 && relative < 1.0))
     return std::fprintf(stderr, "doa_room_report: --relative must be in [0, 1)\n"), 2;
   tracking.start_at_onsets_only = !start_anywhere;
+  tracking.continue_identities = !no_continue;
   return localizer::engine::Run(seconds, seed, max_sources, relative, dump, tracking);
 }
