@@ -136,7 +136,8 @@ class DirectionTracker {
 
   // One frame's peaks at time t_s (after the previous frame's) and its in-band power
   // (SrpPhat::band_power, for onsets). Fills `out` with the confirmed and coasting tracks
-  // (tentative ones too when asked), in order of id.
+  // (tentative ones too when asked), in order of id. A tentative track shows its own id; once
+  // confirmed it may show another's (continue_identities).
   Status Update(double t_s, const std::vector<DirectionPeak>& peaks, double band_power, std::vector<SourceTrack>* out,
                 bool include_tentative = false);
   bool last_frame_onset() const { return onset_.onset(); }
