@@ -7,6 +7,9 @@ namespace localizer::engine {
 namespace {
 constexpr double kRadialShare = 0.1;  // the radial sigma, as a share of the tangential one
 constexpr double kMaxSigmaRad = 0.5;  // a track more uncertain than this is deleted
+// Two directions are one source's when SameSourceD2 is below this: the chi^2_3 quantile at
+// 0.9995, the tracker's gate (tws_options.h), so within about 4.2 x sqrt(2) peak sigmas.
+constexpr double kSameSourceGate = 17.73;
 }  // namespace
 
 Status DirectionTrackerOptions::Validate() const {
@@ -24,6 +27,7 @@ Status DirectionTrackerOptions::Validate() const {
     return InvalidArgument("resume_after_s must be >= 0 (and at most 1e6 frames)");
   if (!(lost_source_after_s >= 0.0) || !std::isfinite(lost_source_after_s))
     return InvalidArgument("lost_source_after_s must be >= 0");
+  if (steady_hits < 1) return InvalidArgument("steady_hits must be >= 1");
   return Status::Ok();  // confirm_hits / confirm_window: TwsOptions::Validate names them
 }
 
@@ -69,6 +73,78 @@ Mat3 DirectionTracker::PeakCovariance(const Vec3& u) const {
   const Mat3 step = Mat3::Identity() - n * in_plane.transpose() / z_eff;
   const Mat3 plane = Mat3::Identity() - n * n.transpose();
   return s2 * step * plane * step.transpose() + radial_part;
+}
+
+double DirectionTracker::SameSourceD2(const Vec3& a, const Vec3& b) const {
+  Vec3 pa = a, pb = b;
+  // A planar array compares azimuths: near its plane it sees elevation through cos(elevation),
+  // and a room's peaks scatter by 5-15 degrees in elevation (PeakCovariance). The 3-D
+  // Mahalanobis distance with that covariance was tried: its nearly exact radial part made
+  // any elevation difference of ten degrees or more a different source.
+  if (shape_.shape == ArrayShape::kPlanar) {
+    pa -= pa.dot(shape_.axis) * shape_.axis;
+    pb -= pb.dot(shape_.axis) * shape_.axis;
+  }
+  if (!(pa.norm() > 0.0) || !(pb.norm() > 0.0)) return 1e300;
+  const double angle = std::acos(std::clamp(pa.normalized().dot(pb.normalized()), -1.0, 1.0));
+  return angle * angle / (2.0 * options_.peak_sigma_rad * options_.peak_sigma_rad);
+}
+
+void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
+  for (auto it = lineage_.begin(); it != lineage_.end();) {  // forget the deleted tracks
+    const uint64_t id = it->first;
+    const bool alive =
+        std::any_of(reports_.begin(), reports_.end(), [&](const tws::TrackReport& r) { return r.id == id; });
+    it = alive ? std::next(it) : lineage_.erase(it);
+  }
+  const bool linear = shape_.shape == ArrayShape::kLinear;
+  const Vec3 riser_u = !riser ? Vec3::Zero()
+                       : linear ? Vec3(std::cos(riser->cone_angle_rad), std::sin(riser->cone_angle_rad), 0.0)
+                                : riser->direction;
+  uint64_t riser_track = 0;
+  double riser_d2 = kSameSourceGate;
+  for (const tws::TrackReport& r : reports_) {
+    Lineage& l = lineage_[r.id];
+    const bool born = l.reported_id == 0;
+    if (born) l.reported_id = r.id;
+    const bool hit = r.consecutive_misses == 0;
+    l.run = hit ? l.run + 1 : 0;
+    if (!(r.position_m.norm() > 0.0)) continue;
+    const Vec3 u = r.position_m.normalized();
+    if (born || l.run >= options_.steady_hits) l.anchor = u, l.anchor_s = t_s;
+    if (riser && hit) {  // the track that heard the frame's rising peak: its source (re)started there
+      const double d2 = SameSourceD2(u, riser_u);
+      if (d2 < riser_d2) riser_d2 = d2, riser_track = r.id;
+    }
+  }
+  if (riser_track != 0) lineage_[riser_track].anchor = riser_u, lineage_[riser_track].anchor_s = t_s;
+  // A track confirmed now, where another's source was last heard, is that source resuming:
+  // it joins that track's identity.
+  for (const tws::TrackReport& r : reports_) {
+    Lineage& l = lineage_[r.id];
+    if (r.status == tws::TrackStatus::kTentative || l.confirmed) continue;
+    l.confirmed = true;
+    if (!options_.continue_identities || !(r.position_m.norm() > 0.0)) continue;
+    const Vec3 u = r.position_m.normalized();
+    const Lineage* best = nullptr;
+    double best_d2 = kSameSourceGate;
+    for (const tws::TrackReport& o : reports_) {
+      const Lineage& lo = lineage_[o.id];
+      if (o.id == r.id || !lo.confirmed || !lo.anchor.allFinite()) continue;
+      const double d2 = SameSourceD2(lo.anchor, u);
+      if (d2 < best_d2) best_d2 = d2, best = &lo;
+    }
+    if (best) l.reported_id = best->reported_id;
+  }
+  // One track speaks for each identity: the one whose source was heard last (the newer on a
+  // tie).
+  for (auto& [id, l] : lineage_) {
+    l.shown = true;
+    for (const auto& [other, lo] : lineage_) {
+      if (other == id || lo.reported_id != l.reported_id) continue;
+      if (lo.anchor_s > l.anchor_s || (lo.anchor_s == l.anchor_s && other > id)) l.shown = false;
+    }
+  }
 }
 
 Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& peaks, double band_power,
@@ -119,14 +195,17 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     plots_.push_back(plot);
   }
   LOCALIZER_RETURN_IF_ERROR(tracker_->ProcessCartesian(t_s, plots_));
-  tracker_->Tracks(&reports_, include_tentative);
-  const bool heard = std::any_of(reports_.begin(), reports_.end(),
-                                 [](const tws::TrackReport& r) { return r.status == tws::TrackStatus::kConfirmed; });
-  unheard_s_ = heard ? 0.0 : unheard_s_ + options_.frame_period_s;
+  tracker_->Tracks(&reports_, true);
+  UpdateLineages(t_s, riser && riser->rise >= riser->threshold ? riser : nullptr);
+  bool heard = false;
   out->clear();
   for (const tws::TrackReport& r : reports_) {
+    const Lineage& l = lineage_[r.id];
+    if (!l.shown) continue;
+    heard |= r.status == tws::TrackStatus::kConfirmed;
+    if (r.status == tws::TrackStatus::kTentative && !include_tentative) continue;
     SourceTrack track;
-    track.id = r.id;
+    track.id = l.reported_id;
     track.status = r.status;
     const Vec3 p = r.position_m;
     const double norm = p.norm();
@@ -144,6 +223,8 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     }
     out->push_back(track);
   }
+  unheard_s_ = heard ? 0.0 : unheard_s_ + options_.frame_period_s;
+  std::sort(out->begin(), out->end(), [](const SourceTrack& a, const SourceTrack& b) { return a.id < b.id; });
   return Status::Ok();
 }
 

@@ -51,6 +51,21 @@
 // CartesianPlot::may_resume_track); it is taken after the tracks heard lately have taken
 // theirs.
 //
+// Identities. A paused talker's track does not always survive its pause: it coasts on its
+// rate estimate (about 0.2-0.5 rad/s in a room, from the peaks' scatter), or it takes stray
+// peaks it may still take before resume_after_s (reflections of the other talker, 10-20
+// degrees from it at RT60 0.4-0.6 s), and is carried away. When the talker resumes its rising
+// peak is outside that track's gate and starts a new track, while the old one lingers up to
+// max_coast_s away from every source: in tests/bench/doa_room_report most of the false-track
+// time left after the rules above, and most identity switches, were this. So each track keeps
+// where its source was last heard (its anchor: its first plot, the latest rising peak it
+// took, or its position after steady_hits hits in a row); a track confirmed within the
+// tracker's gate of another's anchor (azimuths, for planar arrays) is that source resuming and
+// takes its identity; of the tracks that share an identity only the one whose source was
+// heard last is reported (the others stay in the tracker, and speak for it again if heard
+// again). Cost: a new source starting within the gate (about 17 degrees with the default
+// sigma) of where a track's source was heard, while that track lives, takes its identity.
+//
 // Defaults suit talkers around a board: sigma 0.05 rad (3 degrees, about a small board's
 // frame-by-frame spread in a reverberant room), angular acceleration 2 rad/s^2, 3 of 5
 // frames to confirm, deletion after max_coast_s of silence (1 s: pauses in speech keep their
@@ -59,6 +74,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -92,13 +108,18 @@ struct DirectionTrackerOptions {
   // A track silent this long (0: off) is resumed only by a peak that rose past the threshold
   // (see "Resuming" above).
   double resume_after_s = 0.25;
+  // A track confirmed where another track's source was last heard takes that track's identity
+  // (see "Identities" above; false: every track keeps its own).
+  bool continue_identities = true;
+  // Hits in a row after which a track's position is where its source is heard (>= 1).
+  int steady_hits = 5;
 
   Status Validate() const;
 };
 
 struct SourceTrack {
   static constexpr double kNan = DirectionPeak::kNan;
-  uint64_t id = 0;  // 1, 2, 3, ... never reused
+  uint64_t id = 0;  // 1, 2, 3, ... never reused for another source (see "Identities"); gaps possible
   tws::TrackStatus status = tws::TrackStatus::kTentative;
   Vec3 direction = Vec3::Constant(kNan);  // unit; NaN for linear arrays
   double azimuth_rad = kNan;
@@ -115,7 +136,8 @@ class DirectionTracker {
 
   // One frame's peaks at time t_s (after the previous frame's) and its in-band power
   // (SrpPhat::band_power, for onsets). Fills `out` with the confirmed and coasting tracks
-  // (tentative ones too when asked), in order of id.
+  // (tentative ones too when asked), in order of id. A tentative track shows its own id; once
+  // confirmed it may show another's (continue_identities).
   Status Update(double t_s, const std::vector<DirectionPeak>& peaks, double band_power, std::vector<SourceTrack>* out,
                 bool include_tentative = false);
   bool last_frame_onset() const { return onset_.onset(); }
@@ -125,13 +147,31 @@ class DirectionTracker {
                    std::unique_ptr<tws::TwsTracker> tracker, OnsetDetector onset)
       : shape_(shape), options_(options), tracker_(std::move(tracker)), onset_(std::move(onset)) {}
   Mat3 PeakCovariance(const Vec3& u) const;  // 3-D shapes, rad^2
+  // Squared angular distance of two directions over 2 peak_sigma_rad^2 (azimuths for planar
+  // arrays): one source's when below the tracker's gate.
+  double SameSourceD2(const Vec3& a, const Vec3& b) const;
+  // After a scan (reports_ holds every track, tentative too): anchors, and identities
+  // continued. `riser`: the frame's peak that rose past the threshold most, or null.
+  void UpdateLineages(double t_s, const DirectionPeak* riser);
   ArrayShapeInfo shape_;
   DirectionTrackerOptions options_;
   std::unique_ptr<tws::TwsTracker> tracker_;
   OnsetDetector onset_;
   double echo_until_s_ = -1e300;
   double echo_statistic_ = 0.0;
-  double unheard_s_ = 1e300;  // since a confirmed track last took a peak (none yet: forever)
+  double unheard_s_ = 1e300;  // since a reported confirmed track last took a peak (none yet: forever)
+  // Per track of the tws tracker (by its id).
+  struct Lineage {
+    uint64_t reported_id = 0;  // the identity it reports: its own, or the one it continues
+    bool confirmed = false;    // has been confirmed
+    bool shown = true;         // it speaks for its identity (of those that share it, the one heard last)
+    int run = 0;  // hits in a row
+    // Where its source was last heard: its first plot, the latest rising peak it took, or
+    // its position after steady_hits hits in a row. NaN before the first.
+    Vec3 anchor = Vec3::Constant(DirectionPeak::kNan);
+    double anchor_s = -1e300;  // when it was set
+  };
+  std::map<uint64_t, Lineage> lineage_;
   std::vector<tws::CartesianPlot> plots_;
   std::vector<tws::TrackReport> reports_;
 };

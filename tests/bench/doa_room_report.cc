@@ -14,10 +14,11 @@
 // user of the tracks sees) and that track's median azimuth error; seconds
 // of confirmed or coasting track per minute further than 20 degrees from both talkers (false;
 // two such tracks at once count twice); identity switches (the track nearest a sounding
-// talker changes id).
+// talker changes id); seconds of duplicate track per minute (tracks within 20 degrees of a
+// talker, nearest to it, beyond the first: one talker reported under two ids).
 //
 //   build/tests/bench/doa_room_report [--seconds 20] [--seed 1] [--max-sources 4] [--relative 0]
-//                                     [--dump peaks_and_tracks.csv]
+//                                     [--dump peaks_and_tracks.csv] (--help: the tracker's options)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -54,7 +55,7 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
   const auto samples = static_cast<int64_t>(seconds * kFs);
   std::printf(
       "RT60 | peak azimuth error median / p90 (deg) | detected by a peak | by a track / its error median (deg) | "
-      "false track s/min | id switches\n");
+      "false track s/min | id switches | duplicate track s/min\n");
   for (const double rt60_s : {0.2, 0.4, 0.6}) {
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> normal;
@@ -113,7 +114,7 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
     if (!tracker.ok()) return std::fprintf(stderr, "setup failed\n"), 1;
     std::vector<double> errors_deg, track_errors_deg;
     int tracked = 0;
-    int sounding = 0, detected = 0, false_frames = 0, frames = 0, switches = 0;
+    int sounding = 0, detected = 0, false_frames = 0, frames = 0, switches = 0, duplicate_frames = 0;
     std::map<int, uint64_t> last_id;
     std::vector<float> frame(4 * kFrame);
     std::vector<SourceTrack> tracks;
@@ -178,6 +179,15 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
                   20.0 * std::numbers::pi / 180;
         false_frames += !near;
       }
+      for (int k = 0; k < 2; ++k) {  // tracks near a talker beyond its nearest one (two ids for one talker)
+        int near = 0;
+        for (const SourceTrack& tr : tracks) {
+          const double d0 = std::abs(Wrap(tr.azimuth_rad - talkers[0].azimuth_rad));
+          const double d1 = std::abs(Wrap(tr.azimuth_rad - talkers[1].azimuth_rad));
+          near += (k == 0 ? d0 <= d1 : d1 < d0) && std::min(d0, d1) < 20.0 * std::numbers::pi / 180;
+        }
+        duplicate_frames += std::max(0, near - 1);
+      }
     }
     std::sort(errors_deg.begin(), errors_deg.end());
     const double median = errors_deg.empty() ? NAN : errors_deg[errors_deg.size() / 2];
@@ -185,9 +195,9 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
     std::sort(track_errors_deg.begin(), track_errors_deg.end());
     const double track_median = track_errors_deg.empty() ? NAN : track_errors_deg[track_errors_deg.size() / 2];
     const double minutes = static_cast<double>(frames) * kHop / kFs / 60.0;
-    std::printf("%.1f s | %.1f / %.1f | %.1f %% of %d | %.1f %% / %.1f | %.1f | %d\n", rt60_s, median, p90,
+    std::printf("%.1f s | %.1f / %.1f | %.1f %% of %d | %.1f %% / %.1f | %.1f | %d | %.1f\n", rt60_s, median, p90,
                 100.0 * detected / std::max(1, sounding), sounding, 100.0 * tracked / std::max(1, sounding),
-                track_median, false_frames * kHop / kFs / minutes, switches);
+                track_median, false_frames * kHop / kFs / minutes, switches, duplicate_frames * kHop / kFs / minutes);
   }
   return 0;
 }
@@ -202,7 +212,7 @@ int main(int argc, char** argv) {
   double relative = 0.0;
   std::string dump;
   localizer::engine::DirectionTrackerOptions tracking;
-  bool start_anywhere = false;
+  bool start_anywhere = false, no_continue = false;
   localizer::FlagSet flags("doa_room_report [flags]",
                            "Two talkers with pauses around a 4-microphone board in rooms of RT60 0.2, 0.4 and\n"
                            "0.6 s, through SrpPhat and DirectionTracker; one line of figures per RT60.");
@@ -217,6 +227,14 @@ int main(int argc, char** argv) {
   flags.Double("resume-after", &tracking.resume_after_s, "S", "s",
                "DirectionTrackerOptions::resume_after_s: a track silent this long resumes only on a rising peak (0: "
                "off)");
+  flags.Double("accel", &tracking.angular_accel_noise_radps2, "A", "rad/s^2",
+               "DirectionTrackerOptions::angular_accel_noise_radps2");
+  flags.Double("rate-sigma", &tracking.initial_rate_sigma_radps, "S", "rad/s",
+               "DirectionTrackerOptions::initial_rate_sigma_radps");
+  flags.Double("max-coast", &tracking.max_coast_s, "S", "s", "DirectionTrackerOptions::max_coast_s");
+  flags.Bool("no-continue", &no_continue,
+             "every track keeps its own identity (DirectionTrackerOptions::continue_identities false)");
+  flags.Int("steady-hits", &tracking.steady_hits, "N", "", "DirectionTrackerOptions::steady_hits");
   flags.String("dump", &dump, "PATH", "CSV of every frame's peaks and tracks (for analysis)");
   const localizer::Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
   if (flags.help_requested()) return std::printf("%s", flags.Usage().c_str()), 0;
@@ -228,5 +246,6 @@ int main(int argc, char** argv) {
   if (!(relative >= 0.0 && relative < 1.0))
     return std::fprintf(stderr, "doa_room_report: --relative must be in [0, 1)\n"), 2;
   tracking.start_at_onsets_only = !start_anywhere;
+  tracking.continue_identities = !no_continue;
   return localizer::engine::Run(seconds, seed, max_sources, relative, dump, tracking);
 }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -208,6 +209,90 @@ TEST(DirectionTracker, ASteadySourceWithoutOnsetsIsStartedOnlyByTheLostSourceRul
       EXPECT_EQ(b_confirmed, -1);
     }
   }
+}
+
+// Identities continued (direction_tracker.h, "Identities"). A talker's track, drawn off
+// during the talker's pause by stray peaks it may still take (a room's reflections of another
+// talker, about 0.55 rad away by the end), no longer covers the talker when it resumes: the
+// talker's rising peak starts a new track. With continue_identities that track takes the old
+// identity and the drawn-off one is no longer reported: one id for the whole run, never two
+// tracks at once. Without it, a second id, and the old track reported away from the talker
+// meanwhile.
+TEST(DirectionTracker, ATalkerResumingWhereItWasHeardKeepsItsIdentity) {
+  const auto peak_at = [](double azimuth_rad, double rise) {
+    DirectionPeak peak;
+    peak.direction = FromAzimuthElevation(azimuth_rad, 0.3);
+    peak.azimuth_rad = azimuth_rad;
+    peak.elevation_rad = 0.3;
+    peak.statistic = 20.0;
+    peak.threshold = 4.3;
+    peak.rise = rise;
+    return peak;
+  };
+  const double talker = 0.4;
+  for (const bool continued : {true, false}) {
+    DirectionTrackerOptions options;
+    options.frame_period_s = kHop_s;
+    options.continue_identities = continued;
+    auto tracker = DirectionTracker::Create(Board(), options);
+    ASSERT_TRUE(tracker.ok());
+    std::vector<SourceTrack> tracks;
+    std::map<uint64_t, int> frames_of;
+    int most_at_once = 0, away_frames = 0;
+    for (int f = 0; f < 120; ++f) {
+      std::vector<DirectionPeak> peaks;
+      if (f < 40) peaks.push_back(peak_at(talker, f == 0 ? 20.0 : 0.0));  // talks
+      else if (f < 75 && f % 2 == 0) peaks.push_back(peak_at(talker + 0.016 * (f - 40), 0.0));  // stray peaks
+      else if (f >= 80) peaks.push_back(peak_at(talker, f == 80 ? 20.0 : 0.0));  // resumes
+      ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
+      most_at_once = std::max(most_at_once, static_cast<int>(tracks.size()));
+      for (const SourceTrack& t : tracks) {
+        ++frames_of[t.id];
+        if (f >= 84 && std::abs(std::remainder(t.azimuth_rad - talker, 2 * std::numbers::pi)) > 0.35) ++away_frames;
+      }
+    }
+    if (continued) {
+      EXPECT_EQ(frames_of.size(), 1u);
+      EXPECT_EQ(most_at_once, 1);
+      EXPECT_EQ(away_frames, 0);
+    } else {  // the behaviour this replaces
+      EXPECT_EQ(frames_of.size(), 2u);
+      EXPECT_EQ(most_at_once, 2);
+      EXPECT_GT(away_frames, 10);
+    }
+  }
+}
+
+// And a second talker is not taken for the first: starting 0.6 rad (34 degrees) from where a
+// paused talker was heard, while its track coasts, it gets an identity of its own.
+TEST(DirectionTracker, ASecondTalkerBesideAPausedOneGetsItsOwnIdentity) {
+  const auto peak_at = [](double azimuth_rad, double rise) {
+    DirectionPeak peak;
+    peak.direction = FromAzimuthElevation(azimuth_rad, 0.3);
+    peak.azimuth_rad = azimuth_rad;
+    peak.elevation_rad = 0.3;
+    peak.statistic = 20.0;
+    peak.threshold = 4.3;
+    peak.rise = rise;
+    return peak;
+  };
+  DirectionTrackerOptions options;
+  options.frame_period_s = kHop_s;
+  auto tracker = DirectionTracker::Create(Board(), options);
+  ASSERT_TRUE(tracker.ok());
+  std::vector<SourceTrack> tracks;
+  std::map<uint64_t, int> frames_of;
+  int both = 0;
+  for (int f = 0; f < 80; ++f) {
+    std::vector<DirectionPeak> peaks;
+    if (f < 30) peaks.push_back(peak_at(0.4, f == 0 ? 20.0 : 0.0));
+    if (f >= 40) peaks.push_back(peak_at(1.0, f == 40 ? 20.0 : 0.0));
+    ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
+    for (const SourceTrack& t : tracks) ++frames_of[t.id];
+    both += tracks.size() == 2 && tracks[0].id != tracks[1].id;
+  }
+  EXPECT_EQ(frames_of.size(), 2u);
+  EXPECT_GT(both, 20);  // the first coasts on (max_coast_s 1 s) beside the second
 }
 
 TEST(DirectionTracker, BadOptionsAndPeaksAreNamed) {
