@@ -43,7 +43,7 @@ struct PlatformAttitude {
 
 struct SourceEstimate {
   static constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
-  uint64_t source_id = 0;  // 1, 2, 3, ... never reused within a session
+  uint64_t source_id = 0;  // 1, 2, 3, ...: kept by a source through its pauses, never given to another (gaps possible)
   TrackStatus status = TrackStatus::kTentative;
   Vec3 direction = Vec3::Constant(kNan);  // unit, array -> source
   double azimuth_rad = kNan;
