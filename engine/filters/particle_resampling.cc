@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "engine/core/fast_math.h"
+#include "engine/filters/lane_sums.h"
 #include "engine/filters/particle_set.h"
 
 namespace localizer::engine {
@@ -144,10 +145,11 @@ void ParticleSet::SystematicIndices() {
   double before = 0.0;
   for (int k = 0; k < kChains; ++k) {
     acc[k] = before;
-    double run = 0.0;
-#pragma omp simd reduction(+ : run)
-    for (int i = k * len; i < (k + 1) * len; ++i) run += w[i];
-    before += run;
+    double run[1];
+    LaneSums<double, 1>(
+        k * len, (k + 1) * len, {0.0}, [&](int i, int lane, double(*sum)[kSumLanes<double>]) { sum[0][lane] += w[i]; },
+        run);
+    before += run[0];
   }
   const double scale = n;
   for (int j = 0; j < len; ++j) {
