@@ -7,8 +7,12 @@
 #include <algorithm>
 #include <cmath>
 #include <utility>
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 #include "engine/core/fast_math.h"
+#include "engine/filters/lane_sums.h"
 #include "engine/filters/particle_set.h"
 
 namespace localizer::engine {
@@ -38,6 +42,34 @@ inline void KernelDrawPair(uint32_t key, uint32_t counter, float* za, float* zb)
   const uint32_t high = ((bits >> 16) & 0xffU) + (bits >> 24);
   *za = (static_cast<float>(static_cast<int32_t>(low)) - 255.0f) * kTwoBytesToUnitVariance;
   *zb = (static_cast<float>(static_cast<int32_t>(high)) - 255.0f) * kTwoBytesToUnitVariance;
+}
+
+// index[m] <- max(index[0 .. m]) for values >= 0. The scalar loop is one max per slot in a
+// chain; with AVX-512, 16 slots at a time: a prefix maximum within the vector in four shifted
+// steps (zeros shifted in), then the maximum carried from the slots before.
+void RunningMax(int* __restrict index, int n) {
+  int m = 0;
+  int running = 0;
+#if defined(__AVX512F__)
+  const __m512i zero = _mm512_setzero_si512();
+  const __m512i last = _mm512_set1_epi32(15);
+  __m512i carry = zero;
+  for (; m + 16 <= n; m += 16) {
+    __m512i v = _mm512_loadu_si512(index + m);
+    v = _mm512_max_epi32(v, _mm512_alignr_epi32(v, zero, 15));  // lane k also sees lane k - 1
+    v = _mm512_max_epi32(v, _mm512_alignr_epi32(v, zero, 14));  // ... k - 2 .. k - 3
+    v = _mm512_max_epi32(v, _mm512_alignr_epi32(v, zero, 12));  // ... k - 4 .. k - 7
+    v = _mm512_max_epi32(v, _mm512_alignr_epi32(v, zero, 8));   // ... k - 8 .. k - 15
+    v = _mm512_max_epi32(v, carry);
+    _mm512_storeu_si512(index + m, v);
+    carry = _mm512_permutexvar_epi32(last, v);
+  }
+  if (m > 0) running = index[m - 1];
+#endif
+  for (; m < n; ++m) {
+    running = std::max(running, index[m]);
+    index[m] = running;
+  }
 }
 
 }  // namespace
@@ -144,10 +176,11 @@ void ParticleSet::SystematicIndices() {
   double before = 0.0;
   for (int k = 0; k < kChains; ++k) {
     acc[k] = before;
-    double run = 0.0;
-#pragma omp simd reduction(+ : run)
-    for (int i = k * len; i < (k + 1) * len; ++i) run += w[i];
-    before += run;
+    double run[1];
+    LaneSums<double, 1>(
+        k * len, (k + 1) * len, {0.0}, [&](int i, int lane, double(*sum)[kSumLanes<double>]) { sum[0][lane] += w[i]; },
+        run);
+    before += run[0];
   }
   const double scale = n;
   for (int j = 0; j < len; ++j) {
@@ -168,11 +201,7 @@ void ParticleSet::SystematicIndices() {
     const int start = first_slot[i - 1];
     if (start < n) index[start] = i;
   }
-  int running = 0;
-  for (int m = 0; m < n; ++m) {
-    running = std::max(running, index[m]);
-    index[m] = running;
-  }
+  RunningMax(index, n);
 }
 
 void ParticleSet::DrawKernelNoise() {

@@ -6,6 +6,7 @@
 
 #include "engine/core/fast_math.h"
 #include "engine/filters/gcc_upsampling.h"
+#include "engine/filters/lane_sums.h"
 
 namespace localizer::engine {
 
@@ -350,15 +351,25 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
         use_gcc ? static_cast<float>(GccGain(fine_gcc_, sigma_s * m.sample_rate_hz * kGccUpsampling, gcc_sharpness))
                 : 0.0f;
     float* __restrict hk = delay_.data();
-#pragma omp simd reduction(+ : sum_e, sum_e2)
+#pragma omp simd
     for (int i = 0; i < n_; ++i) {
       const RangeRate sensor = RangeAndRate(x[i] - sx, y[i] - sy, z[i] - sz, vx[i], vy[i], vz[i]);
       // Delay at the instant the pair describes: d/2 before the frame centre (first order).
-      const float h = PairDelay(sensor.r, sensor.vr, r_ref[i], vr_ref[i], half_d, inv_c);
-      hk[i] = h;
-      const float e = (d - h) * inv_sigma;
-      sum_e += w[i] * e;
-      sum_e2 += w[i] * e * e;
+      hk[i] = PairDelay(sensor.r, sensor.vr, r_ref[i], vr_ref[i], half_d, inv_c);
+    }
+    {
+      float sums[2];
+      LaneSums<float, 2>(
+          0, n_, {0.0f, 0.0f},
+          [&](int i, int lane, float(*acc)[kSumLanes<float>]) {
+            const float e = (d - hk[i]) * inv_sigma;
+            const float we = w[i] * e;
+            acc[0][lane] += we;
+            acc[1][lane] = FusedMulAdd(we, e, acc[1][lane]);
+          },
+          sums);
+      sum_e = sums[0];
+      sum_e2 = sums[1];
     }
     if (gcc) {
 #pragma omp simd
@@ -408,22 +419,24 @@ double ParticleSet::NormaliseWeights() {
   float max_logw = -INFINITY;
   for (const float m : lane_max) max_logw = std::max(max_logw, m);
   for (; block < n; ++block) max_logw = std::max(max_logw, logw[block]);
-  float sum = 0.0f;
-#pragma omp simd reduction(+ : sum)
-  for (int i = 0; i < n_; ++i) {
-    w[i] = FastExp(logw[i] - max_logw);
-    sum += w[i];
-  }
-  const float inv_sum = 1.0f / sum;
-  const float log_sum = std::log(sum);
-  float sum_w2 = 0.0f;
-#pragma omp simd reduction(+ : sum_w2)
-  for (int i = 0; i < n_; ++i) {
+#pragma omp simd
+  for (int i = 0; i < n; ++i) w[i] = FastExp(logw[i] - max_logw);
+  float sum[1];
+  LaneSums<float, 1>(
+      0, n, {0.0f}, [&](int i, int lane, float(*acc)[kSumLanes<float>]) { acc[0][lane] += w[i]; }, sum);
+  const float inv_sum = 1.0f / sum[0];
+  const float log_sum = std::log(sum[0]);
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
     w[i] *= inv_sum;
     logw[i] -= max_logw + log_sum;
-    sum_w2 += w[i] * w[i];
   }
-  return 1.0 / static_cast<double>(sum_w2);
+  float sum_w2[1];
+  LaneSums<float, 1>(
+      0, n, {0.0f},
+      [&](int i, int lane, float(*acc)[kSumLanes<float>]) { acc[0][lane] = FusedMulAdd(w[i], w[i], acc[0][lane]); },
+      sum_w2);
+  return 1.0 / static_cast<double>(sum_w2[0]);
 }
 
 TrackState ParticleSet::MeanAndCovariance() const {
@@ -438,22 +451,47 @@ TrackState ParticleSet::MeanAndCovariance() const {
   const float* __restrict vz = cur_.vz.data();
   const float* __restrict w = w_.data();
   const float s0 = x[0], s1 = y[0], s2 = z[0], s3 = vx[0], s4 = vy[0], s5 = vz[0];
-  float m0 = 0, m1 = 0, m2 = 0, m3 = 0, m4 = 0, m5 = 0;
-  float c00 = 0, c01 = 0, c02 = 0, c03 = 0, c04 = 0, c05 = 0, c11 = 0, c12 = 0, c13 = 0, c14 = 0, c15 = 0;
-  float c22 = 0, c23 = 0, c24 = 0, c25 = 0, c33 = 0, c34 = 0, c35 = 0, c44 = 0, c45 = 0, c55 = 0;
-#pragma omp simd reduction(+ : m0, m1, m2, m3, m4, m5, c00, c01, c02, c03, c04, c05, c11, c12, c13, c14, \
-                               c15, c22, c23, c24, c25, c33, c34, c35, c44, c45, c55)
-  for (int i = 0; i < n_; ++i) {
-    const float wi = w[i];
-    const float d0 = x[i] - s0, d1 = y[i] - s1, d2 = z[i] - s2, d3 = vx[i] - s3, d4 = vy[i] - s4, d5 = vz[i] - s5;
-    const float w0 = wi * d0, w1 = wi * d1, w2 = wi * d2, w3 = wi * d3, w4 = wi * d4;
-    m0 += w0, m1 += w1, m2 += w2, m3 += w3, m4 += w4, m5 += wi * d5;
-    c00 += w0 * d0, c01 += w0 * d1, c02 += w0 * d2, c03 += w0 * d3, c04 += w0 * d4, c05 += w0 * d5;
-    c11 += w1 * d1, c12 += w1 * d2, c13 += w1 * d3, c14 += w1 * d4, c15 += w1 * d5;
-    c22 += w2 * d2, c23 += w2 * d3, c24 += w2 * d4, c25 += w2 * d5;
-    c33 += w3 * d3, c34 += w3 * d4, c35 += w3 * d5;
-    c44 += w4 * d4, c45 += w4 * d5, c55 += wi * d5 * d5;
-  }
+  // The 27 sums: 6 means, then the upper triangle of the second moments row by row.
+  float sums[27];
+  float zeros[27] = {};
+  LaneSums<float, 27>(
+      0, n_, zeros,
+      [&](int i, int lane, float(*acc)[kSumLanes<float>]) {
+        const float wi = w[i];
+        const float d0 = x[i] - s0, d1 = y[i] - s1, d2 = z[i] - s2, d3 = vx[i] - s3, d4 = vy[i] - s4, d5 = vz[i] - s5;
+        const float w0 = wi * d0, w1 = wi * d1, w2 = wi * d2, w3 = wi * d3, w4 = wi * d4;
+        const float w5 = wi * d5;
+        acc[0][lane] += w0, acc[1][lane] += w1, acc[2][lane] += w2, acc[3][lane] += w3, acc[4][lane] += w4;
+        acc[5][lane] += w5;
+        // The second moments fused, as the reduction loop had them (lane_sums.h).
+        acc[6][lane] = FusedMulAdd(w0, d0, acc[6][lane]);
+        acc[7][lane] = FusedMulAdd(w0, d1, acc[7][lane]);
+        acc[8][lane] = FusedMulAdd(w0, d2, acc[8][lane]);
+        acc[9][lane] = FusedMulAdd(w0, d3, acc[9][lane]);
+        acc[10][lane] = FusedMulAdd(w0, d4, acc[10][lane]);
+        acc[11][lane] = FusedMulAdd(w0, d5, acc[11][lane]);
+        acc[12][lane] = FusedMulAdd(w1, d1, acc[12][lane]);
+        acc[13][lane] = FusedMulAdd(w1, d2, acc[13][lane]);
+        acc[14][lane] = FusedMulAdd(w1, d3, acc[14][lane]);
+        acc[15][lane] = FusedMulAdd(w1, d4, acc[15][lane]);
+        acc[16][lane] = FusedMulAdd(w1, d5, acc[16][lane]);
+        acc[17][lane] = FusedMulAdd(w2, d2, acc[17][lane]);
+        acc[18][lane] = FusedMulAdd(w2, d3, acc[18][lane]);
+        acc[19][lane] = FusedMulAdd(w2, d4, acc[19][lane]);
+        acc[20][lane] = FusedMulAdd(w2, d5, acc[20][lane]);
+        acc[21][lane] = FusedMulAdd(w3, d3, acc[21][lane]);
+        acc[22][lane] = FusedMulAdd(w3, d4, acc[22][lane]);
+        acc[23][lane] = FusedMulAdd(w3, d5, acc[23][lane]);
+        acc[24][lane] = FusedMulAdd(w4, d4, acc[24][lane]);
+        acc[25][lane] = FusedMulAdd(w4, d5, acc[25][lane]);
+        acc[26][lane] = FusedMulAdd(w5, d5, acc[26][lane]);
+      },
+      sums);
+  const float m0 = sums[0], m1 = sums[1], m2 = sums[2], m3 = sums[3], m4 = sums[4], m5 = sums[5];
+  const float c00 = sums[6], c01 = sums[7], c02 = sums[8], c03 = sums[9], c04 = sums[10], c05 = sums[11];
+  const float c11 = sums[12], c12 = sums[13], c13 = sums[14], c14 = sums[15], c15 = sums[16];
+  const float c22 = sums[17], c23 = sums[18], c24 = sums[19], c25 = sums[20];
+  const float c33 = sums[21], c34 = sums[22], c35 = sums[23], c44 = sums[24], c45 = sums[25], c55 = sums[26];
   const Vec6 m(m0, m1, m2, m3, m4, m5);
   Mat6 c;
   c << c00, c01, c02, c03, c04, c05, c01, c11, c12, c13, c14, c15, c02, c12, c22, c23, c24, c25, c03, c13, c23, c33,

@@ -3,8 +3,9 @@
 // Positions are stored relative to the array centroid (`origin`), so float32 keeps
 // micrometre resolution tens of metres away. The per-particle loops run over contiguous
 // arrays without branches and are written to vectorise (see -fopenmp-simd in CMakeLists.txt);
-// random numbers are counter-based (fast_math.h), keyed by (seed, draw number), so results
-// do not depend on how the loops are vectorised. Internal to engine/filters.
+// random numbers are counter-based (fast_math.h), keyed by (seed, draw number), and the float
+// sums over the particles keep a fixed 8-lane order (lane_sums.h), so results do not depend on
+// how the loops are vectorised (256- or 512-bit). Internal to engine/filters.
 #pragma once
 
 #include <array>
