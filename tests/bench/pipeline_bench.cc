@@ -8,6 +8,7 @@
 #include "engine/pipeline/range_observability.h"
 #include "engine/pipeline/session.h"
 #include "engine/sim/simulator.h"
+#include "tests/bench/session_blocks.h"
 
 namespace localizer::engine {
 namespace {
@@ -39,38 +40,21 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   config.tracker.particle.likelihood = state.range(1) == 0 ? Likelihood::kPeak : Likelihood::kGcc;
   // 0.1 s blocks, as a streaming client would send them.
   const int64_t block = 4410;
-  std::vector<std::vector<float>> blocks;
-  for (int64_t at = 0; at + block <= sim.samples_per_channel; at += block) {
-    std::vector<float> b(static_cast<size_t>(block * sim.channel_count));
-    for (int c = 0; c < sim.channel_count; ++c) {
-      std::copy_n(sim.samples.begin() + c * sim.samples_per_channel + at, block, b.begin() + c * block);
-    }
-    blocks.push_back(std::move(b));
-  }
+  const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
   const double audio_s = static_cast<double>(blocks.size() * block) / sim.sample_rate_hz;
   std::vector<Estimate> out;
-  double tdoa_s = 0.0, filter_s = 0.0;
-  size_t frames = 0;
+  bench::StageTotals totals;
   for (auto _ : state) {
     state.PauseTiming();  // session set-up (FFT planning, allocation) is not per-audio work
     auto session = std::move(*Session::Create(config));
-    out.clear();
     state.ResumeTiming();
-    uint64_t seq = 1;
-    for (const auto& b : blocks) {
-      (void)session->Process({seq++, sim.channel_count, block, b.data()}, &out);
-    }
-    for (const Estimate& e : out) {
-      tdoa_s += e.timings.tdoa_s;
-      filter_s += e.timings.filter_s;
-    }
-    frames += out.size();
+    bench::RunBlocks(*session, blocks, sim.channel_count, block, &out, &totals);
   }
   const double runs = static_cast<double>(state.iterations());
   state.counters["ms_per_audio_s"] =
       benchmark::Counter(runs * audio_s * 1e-3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["tdoa_us_per_frame"] = 1e6 * tdoa_s / static_cast<double>(frames);
-  state.counters["filter_us_per_frame"] = 1e6 * filter_s / static_cast<double>(frames);
+  state.counters["tdoa_us_per_frame"] = 1e6 * totals.tdoa_s / static_cast<double>(totals.frames);
+  state.counters["filter_us_per_frame"] = 1e6 * totals.filter_s / static_cast<double>(totals.frames);
   state.SetLabel(LikelihoodName(config.tracker.particle.likelihood));
 }
 BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}})->Unit(benchmark::kMillisecond);

@@ -53,6 +53,19 @@ Pipeline Make(const PlaneWaveScene& scene) {
   return {std::move(srp), std::move(tracker)};
 }
 
+// A talker's peak at elevation 0.3 rad, statistic 20 against a threshold of 4.3, with the
+// given rise (past the threshold: an onset).
+DirectionPeak TalkerPeak(double azimuth_rad, double rise) {
+  DirectionPeak peak;
+  peak.direction = FromAzimuthElevation(azimuth_rad, 0.3);
+  peak.azimuth_rad = azimuth_rad;
+  peak.elevation_rad = 0.3;
+  peak.statistic = 20.0;
+  peak.threshold = 4.3;
+  peak.rise = rise;
+  return peak;
+}
+
 // Per frame: the truths (empty direction = silent), and the confirmed tracks' ids nearest
 // each truth (0: none within 0.15 rad). Counts identity switches and false-track frames.
 struct Score {
@@ -219,16 +232,6 @@ TEST(DirectionTracker, ASteadySourceWithoutOnsetsIsStartedOnlyByTheLostSourceRul
 // tracks at once. Without it, a second id, and the old track reported away from the talker
 // meanwhile.
 TEST(DirectionTracker, ATalkerResumingWhereItWasHeardKeepsItsIdentity) {
-  const auto peak_at = [](double azimuth_rad, double rise) {
-    DirectionPeak peak;
-    peak.direction = FromAzimuthElevation(azimuth_rad, 0.3);
-    peak.azimuth_rad = azimuth_rad;
-    peak.elevation_rad = 0.3;
-    peak.statistic = 20.0;
-    peak.threshold = 4.3;
-    peak.rise = rise;
-    return peak;
-  };
   const double talker = 0.4;
   for (const bool continued : {true, false}) {
     DirectionTrackerOptions options;
@@ -241,9 +244,9 @@ TEST(DirectionTracker, ATalkerResumingWhereItWasHeardKeepsItsIdentity) {
     int most_at_once = 0, away_frames = 0;
     for (int f = 0; f < 120; ++f) {
       std::vector<DirectionPeak> peaks;
-      if (f < 40) peaks.push_back(peak_at(talker, f == 0 ? 20.0 : 0.0));  // talks
-      else if (f < 75 && f % 2 == 0) peaks.push_back(peak_at(talker + 0.016 * (f - 40), 0.0));  // stray peaks
-      else if (f >= 80) peaks.push_back(peak_at(talker, f == 80 ? 20.0 : 0.0));  // resumes
+      if (f < 40) peaks.push_back(TalkerPeak(talker, f == 0 ? 20.0 : 0.0));  // talks
+      else if (f < 75 && f % 2 == 0) peaks.push_back(TalkerPeak(talker + 0.016 * (f - 40), 0.0));  // stray peaks
+      else if (f >= 80) peaks.push_back(TalkerPeak(talker, f == 80 ? 20.0 : 0.0));  // resumes
       ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
       most_at_once = std::max(most_at_once, static_cast<int>(tracks.size()));
       for (const SourceTrack& t : tracks) {
@@ -266,16 +269,6 @@ TEST(DirectionTracker, ATalkerResumingWhereItWasHeardKeepsItsIdentity) {
 // And a second talker is not taken for the first: starting 0.6 rad (34 degrees) from where a
 // paused talker was heard, while its track coasts, it gets an identity of its own.
 TEST(DirectionTracker, ASecondTalkerBesideAPausedOneGetsItsOwnIdentity) {
-  const auto peak_at = [](double azimuth_rad, double rise) {
-    DirectionPeak peak;
-    peak.direction = FromAzimuthElevation(azimuth_rad, 0.3);
-    peak.azimuth_rad = azimuth_rad;
-    peak.elevation_rad = 0.3;
-    peak.statistic = 20.0;
-    peak.threshold = 4.3;
-    peak.rise = rise;
-    return peak;
-  };
   DirectionTrackerOptions options;
   options.frame_period_s = kHop_s;
   auto tracker = DirectionTracker::Create(Board(), options);
@@ -285,8 +278,8 @@ TEST(DirectionTracker, ASecondTalkerBesideAPausedOneGetsItsOwnIdentity) {
   int both = 0;
   for (int f = 0; f < 80; ++f) {
     std::vector<DirectionPeak> peaks;
-    if (f < 30) peaks.push_back(peak_at(0.4, f == 0 ? 20.0 : 0.0));
-    if (f >= 40) peaks.push_back(peak_at(1.0, f == 40 ? 20.0 : 0.0));
+    if (f < 30) peaks.push_back(TalkerPeak(0.4, f == 0 ? 20.0 : 0.0));
+    if (f >= 40) peaks.push_back(TalkerPeak(1.0, f == 40 ? 20.0 : 0.0));
     ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
     for (const SourceTrack& t : tracks) ++frames_of[t.id];
     both += tracks.size() == 2 && tracks[0].id != tracks[1].id;
