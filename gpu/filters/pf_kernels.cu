@@ -5,6 +5,9 @@
 // per-session passes walk only that session's blocks, in a fixed order. Random numbers are
 // Philox, keyed by (seed, particle index, draw window): a session's results depend only on
 // its own inputs and history.
+// nvcc's front end flags engine/core/status.h's assignment of a [[nodiscard]] Status to a
+// member as "ignoring return value" (g++ does not), as in gcc_kernels.cu.
+#pragma nv_diag_suppress 2810
 #include <curand_kernel.h>
 #include <math_constants.h>
 
