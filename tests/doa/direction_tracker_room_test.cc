@@ -115,7 +115,7 @@ RoomScore RunRoom(bool start_at_onsets_only, uint64_t seed, double resume_after_
 // written: 52 s of false track per minute and 92.7 % of sounding talker-frames tracked with
 // it, 377 s and 99.5 % without; since the removal weighted by each bin's signal share
 // (pair_spectra.h): 62.5 s and 88.5 % with it, 375.5 s and 99.5 % without; with identities
-continued (the default since): 54.6 s and 88.5 %, 394.2 s and 99.5 %. Asserted: with it at
+// continued (the default since): 54.6 s and 88.5 %, 394.2 s and 99.5 %. Asserted: with it at
 // most 100 s per minute and at most a quarter of the figure without it, at least 88 %
 // tracked; without it over 200 s per minute (the reflections are there to be taken). The
 // issue's goal (1 s per minute) is not met; see ACCURACY.md.
