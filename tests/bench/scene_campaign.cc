@@ -45,11 +45,18 @@ struct Args {
   double outlier_probability = -1.0;   // < 0: the session default
   double kernel_scale = -1.0;          // < 0: the session default
   double level_floor = -1.0, level_ceiling = -1.0, level_switch_hz = -1.0;  // < 0: the default
+  bool band_hint = false;              // --band-hint: the session gets the scene's true band
   bool help = false;                   // --help: print the usage and exit 0
 };
 
-// The flags' changes to the campaign's default session config.
-void Adjust(const Args& a, AudioSessionConfig* c) {
+// The flags' changes to the campaign's default session config (`scene`: the one it runs).
+void Adjust(const Args& a, const RandomSceneOptions& scene_options, AudioSessionConfig* c) {
+  if (a.band_hint) {  // an oracle: what a perfect band estimate would give (c->seed is the scene's)
+    if (auto scene = DrawRandomScene(c->seed, scene_options); scene.ok()) {
+      c->band_low_hz = scene->scenario.sim.band_low_hz;
+      c->band_high_hz = scene->scenario.sim.band_high_hz;
+    }
+  }
   if (a.weighting) c->weighting = *a.weighting;
   if (a.filter) c->tracker.kind = *a.filter;
   if (a.particles > 0) c->tracker.particle.particles = a.particles;
@@ -78,7 +85,7 @@ void Usage(FILE* out) {
       "                      [--filter pf|ekf|ukf|mmpf|imm] [--particles N] [--accel-noise MPS2]\n"
       "                      [--manoeuvre-share P] [--manoeuvre-scale K] [--tempered-updates N]\n"
       "                      [--likelihood peak|gcc|mixture] [--outlier-probability EPS]\n"
-      "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--trace SEED]\n"
+      "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--band-hint] [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
       "within 3 x CRLB to the end), RMSE/CRLB and median NEES/dim after acquisition, lost frames\n"
@@ -95,6 +102,8 @@ void Usage(FILE* out) {
       "likelihood's eps), --kernel-scale (the particle filter's regularisation) and\n"
       "--accel-levels (its acceleration levels, e.g. 0.003,3,1; particle_filter.h) override the\n"
       "session's defaults.\n"
+      "--band-hint gives each session its scene's true source band (an oracle: what a perfect band\n"
+      "estimate from the data would give; the campaign's default gives none).\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
       "initialised, present, ambiguous, far field, true range, range error, error, CRLB, error/CRLB, bearing error/its CRLB, reported sd,\n"
       "position NEES.\n"
@@ -107,6 +116,10 @@ bool ParseArgs(int argc, char** argv, Args* a) {
     if (flag == "--help" || flag == "-h") {
       a->help = true;
       return true;
+    }
+    if (flag == "--band-hint") {  // takes no value
+      a->band_hint = true;
+      continue;
     }
     if (i + 1 >= argc) {
       std::fprintf(stderr, "scene_campaign: %s needs a value\n", flag.c_str());
@@ -298,7 +311,7 @@ void PrintClass(const char* name, const ClassSummary& c) {
 }
 
 int Trace(uint64_t seed, const RandomSceneOptions& scene_options, const Args& a) {
-  const SceneRow row = RunRandomScene(seed, scene_options, {}, true, [&](AudioSessionConfig* c) { Adjust(a, c); });
+  const SceneRow row = RunRandomScene(seed, scene_options, {}, true, [&](AudioSessionConfig* c) { Adjust(a, scene_options, c); });
   if (!row.error.empty()) {
     std::fprintf(stderr, "scene_campaign: scene %" PRIu64 ": %s\n", seed, row.error.c_str());
     return 1;
@@ -348,7 +361,7 @@ int main(int argc, char** argv) {
     for (int i = next++; i < a.scenes; i = next++) {
       const uint64_t seed = a.seed * 1000000ULL + static_cast<uint64_t>(i);
       rows[static_cast<size_t>(i)] =
-          RunRandomScene(seed, scene_options, {}, false, [&](AudioSessionConfig* c) { Adjust(a, c); });
+          RunRandomScene(seed, scene_options, {}, false, [&](AudioSessionConfig* c) { Adjust(a, scene_options, c); });
       const std::lock_guard<std::mutex> lock(print_mutex);
       std::fprintf(stderr, "[%d/%d] ", ++done, a.scenes);
       PrintRow(stderr, rows[static_cast<size_t>(i)]);
