@@ -16,7 +16,6 @@ namespace localizer::engine {
 namespace {
 
 using testing::Channel;
-using testing::Clicks;
 using testing::CrossCorrelation;
 using testing::kFs;
 using testing::kSoundSpeed;

@@ -15,12 +15,7 @@
 namespace localizer::engine {
 namespace {
 
-using testing::Channel;
-using testing::Clicks;
-using testing::CrossCorrelation;
 using testing::kFs;
-using testing::kSoundSpeed;
-using testing::MeanPower;
 using testing::MustSimulate;
 using testing::Stationary;
 using testing::Tetrahedron;

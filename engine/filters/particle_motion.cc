@@ -1,0 +1,168 @@
+// ParticleSet's motion: the prediction step (constant velocity, mean-reverting velocity and
+// the coordinated turn), the white acceleration's normals, and the per-particle acceleration
+// levels and manoeuvre gains that scale them (particle_set.h). Built with the same 512-bit
+// vector option as particle_set.cc (engine/CMakeLists.txt): the draws are compute-bound.
+#include <algorithm>
+#include <cmath>
+
+#include "engine/core/fast_math.h"
+#include "engine/filters/particle_set.h"
+
+namespace localizer::engine {
+
+void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_time_constant_s) {
+  const double tau = velocity_time_constant_s;
+  const double decay = tau > 0.0 ? std::exp(-dt_s / tau) : 1.0;
+  const float dt = static_cast<float>(tau > 0.0 ? tau * (1.0 - decay) : dt_s);  // the velocity's reach
+  const float d = static_cast<float>(decay);
+  const float a_to_v = static_cast<float>(accel_sigma_mps2 * dt_s);
+  const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
+  DrawAccelNormals(NextKey(), SwitchProbability(dt_s));  // axis k of particle i reads accel_[k * N + i]
+  moments_valid_ = false;
+  const int n = n_;
+  const float* __restrict ax = accel_.data();
+  const float* __restrict ay = accel_.data() + n;
+  const float* __restrict az = accel_.data() + 2 * n;
+  float* __restrict x = cur_.x.data();
+  float* __restrict y = cur_.y.data();
+  float* __restrict z = cur_.z.data();
+  float* __restrict vx = cur_.vx.data();
+  float* __restrict vy = cur_.vy.data();
+  float* __restrict vz = cur_.vz.data();
+  if (d == 1.0f) {  // constant velocity: the GPU filter's step (particle_math.h)
+#pragma omp simd
+    for (int i = 0; i < n; ++i) {
+      PredictAxis(x[i], vx[i], dt, a_to_p, a_to_v, ax[i]);
+      PredictAxis(y[i], vy[i], dt, a_to_p, a_to_v, ay[i]);
+      PredictAxis(z[i], vz[i], dt, a_to_p, a_to_v, az[i]);
+    }
+  } else {
+#pragma omp simd
+    for (int i = 0; i < n; ++i) {
+      PredictAxisReverting(x[i], vx[i], dt, d, a_to_p, a_to_v, ax[i]);
+      PredictAxisReverting(y[i], vy[i], dt, d, a_to_p, a_to_v, ay[i]);
+      PredictAxisReverting(z[i], vz[i], dt, d, a_to_p, a_to_v, az[i]);
+    }
+  }
+  if (bounded_) ApplyBounds();
+}
+
+float ParticleSet::SwitchProbability(double dt_s) const {
+  return static_cast<float>(-std::expm1(-level_switch_rate_hz_ * std::max(0.0, dt_s)));
+}
+
+void ParticleSet::SetAccelLevels(double floor, double ceiling, double switch_rate_hz) {
+  log_level_floor_ = static_cast<float>(std::log(floor));
+  log_level_ceiling_ = static_cast<float>(std::log(ceiling));
+  level_switch_rate_hz_ = switch_rate_hz;
+  if (floor == 1.0 && ceiling == 1.0) {  // off (ParticleFilterOptions::accel_levels)
+    gain_.clear();
+    next_gain_.clear();
+    return;
+  }
+  gain_.assign(n_, 1.0f);
+  next_gain_.assign(n_, 1.0f);
+  DrawLevels();
+}
+
+void ParticleSet::DrawLevels() {
+  if (gain_.empty()) return;  // off: no key drawn, so the random stream is as before
+  const uint32_t key = NextKey();
+  const float lo = log_level_floor_, span = log_level_ceiling_ - log_level_floor_;
+  for (int i = 0; i < n_; ++i) gain_[i] = std::exp(lo + span * UniformFromCounter(key, static_cast<uint32_t>(i)));
+}
+
+void ParticleSet::CarryLevels() {
+  if (gain_.empty()) return;
+  for (int m = 0; m < n_; ++m) next_gain_[m] = gain_[index_[m]];
+  std::swap(gain_, next_gain_);
+}
+
+void ParticleSet::DrawAccelNormals(uint32_t key, float switch_probability) {
+  // 3N standard normals, two per Box–Muller draw: accel_[j] and accel_[half + j] come from
+  // uniforms 2j and 2j + 1.
+  const int half = static_cast<int>(accel_.size() / 2);
+  float* __restrict first = accel_.data();
+  float* __restrict second = accel_.data() + half;
+#pragma omp simd
+  for (int j = 0; j < half; ++j) {
+    const uint32_t c = 2u * static_cast<uint32_t>(j);
+    NormalPairFromUniforms(UniformFromCounter(key, c), UniformFromCounter(key, c + 1), &first[j], &second[j]);
+  }
+  if (!gain_.empty()) {
+    // Particle i's level jumps when its uniform (counters past the normals') is below the
+    // switch probability; the new gain takes the next counter. Then its normals scale.
+    const int n = n_;
+    const uint32_t base = static_cast<uint32_t>(accel_.size());
+    const float lo = log_level_floor_, span = log_level_ceiling_ - log_level_floor_;
+    float* __restrict a = accel_.data();
+    float* __restrict g = gain_.data();
+    for (int i = 0; i < n; ++i) {
+      const uint32_t c = base + 2u * static_cast<uint32_t>(i);
+      if (UniformFromCounter(key, c) < switch_probability) g[i] = std::exp(lo + span * UniformFromCounter(key, c + 1));
+      a[i] *= g[i];
+      a[n + i] *= g[i];
+      a[2 * n + i] *= g[i];
+    }
+  }
+  if (manoeuvre_share_ <= 0.0f) return;
+  // Particle i manoeuvres this step when its uniform (counters past the normals') is below
+  // the share: its three axes' normals take the manoeuvre gain, the others the quiet gain.
+  const int n = n_;
+  const uint32_t base = static_cast<uint32_t>(accel_.size() + 2 * gain_.size());
+  const float share = manoeuvre_share_, quiet = quiet_gain_, loud = manoeuvre_gain_;
+  float* __restrict a = accel_.data();
+  for (int i = 0; i < n; ++i) {
+    const float g = UniformFromCounter(key, base + static_cast<uint32_t>(i)) < share ? loud : quiet;
+    a[i] *= g;
+    a[n + i] *= g;
+    a[2 * n + i] *= g;
+  }
+}
+
+void ParticleSet::SetManoeuvre(double share, double scale) {
+  const ManoeuvreGains gains = ManoeuvreGainsFor(share, scale);
+  manoeuvre_share_ = static_cast<float>(share);
+  quiet_gain_ = static_cast<float>(gains.quiet);
+  manoeuvre_gain_ = static_cast<float>(gains.manoeuvre);
+}
+
+ManoeuvreGains ManoeuvreGainsFor(double share, double scale) {
+  const double quiet = 1.0 / std::sqrt(1.0 - share + share * scale * scale);
+  return {quiet, scale * quiet};
+}
+
+void ParticleSet::PredictTurn(double dt_s, double turn_rate_radps, double accel_sigma_mps2, uint32_t key) {
+  // The turn's coefficients in double, once.
+  const double w = turn_rate_radps, wt = w * dt_s;
+  const float s = static_cast<float>(std::sin(wt)), c = static_cast<float>(std::cos(wt));
+  const float a = static_cast<float>(w == 0.0 ? dt_s : std::sin(wt) / w);
+  const float b = static_cast<float>(w == 0.0 ? 0.0 : 2.0 * std::sin(0.5 * wt) * std::sin(0.5 * wt) / w);
+  const float dt = static_cast<float>(dt_s);
+  const float a_to_v = static_cast<float>(accel_sigma_mps2 * dt_s);
+  const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
+  DrawAccelNormals(key, SwitchProbability(dt_s));
+  moments_valid_ = false;
+  const int n = n_;
+  const float* __restrict ax = accel_.data();
+  const float* __restrict ay = accel_.data() + n;
+  const float* __restrict az = accel_.data() + 2 * n;
+  float* __restrict x = cur_.x.data();
+  float* __restrict y = cur_.y.data();
+  float* __restrict z = cur_.z.data();
+  float* __restrict vx = cur_.vx.data();
+  float* __restrict vy = cur_.vy.data();
+  float* __restrict vz = cur_.vz.data();
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
+    const float ux = vx[i], uy = vy[i];
+    x[i] += a * ux - b * uy + a_to_p * ax[i];
+    y[i] += b * ux + a * uy + a_to_p * ay[i];
+    z[i] += vz[i] * dt + a_to_p * az[i];
+    vx[i] = c * ux - s * uy + a_to_v * ax[i];
+    vy[i] = s * ux + c * uy + a_to_v * ay[i];
+    vz[i] += a_to_v * az[i];
+  }
+}
+
+}  // namespace localizer::engine
