@@ -8,7 +8,7 @@
 // changes with the vector width (8 floats at 256 bits, 16 at 512). LaneSums spells out that
 // order for a fixed lane count: with kLanes = 8 for float (4 for double) it is bit for bit what
 // the 256-bit build's reductions computed, and it stays so when the file is compiled for
-// 512-bit vectors (particle_set.cc and particle_resampling.cc are; engine/CMakeLists.txt).
+// 512-bit vectors (particle_set.cc, particle_motion.cc and particle_resampling.cc are; engine/CMakeLists.txt).
 //
 // Write each term's multiply-add as the reduction loop's compiled code did it: GCC contracts
 // `s += a * b` into one fused multiply-add only where every use of a * b can fuse, and that

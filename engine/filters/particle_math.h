@@ -1,5 +1,5 @@
 // The particle filter's per-particle formulas, written once for the CPU's vectorised loops
-// over structure-of-arrays columns (particle_set.cc, particle_resampling.cc) and the GPU's
+// over structure-of-arrays columns (particle_set.cc, particle_motion.cc, particle_resampling.cc) and the GPU's
 // kernels (gpu/filters/pf_kernels.cu, through the state-array adapters of pf_math.cuh):
 // host_device.h. Each is the model of particle_filter.h for one particle, in float, in the
 // order of operations the results depend on. Positions are relative to the array centroid.
