@@ -67,6 +67,9 @@ Status ParticleFilterOptions::Validate() const {
     return InvalidArgument("velocity_time_constant_s must be in [0, 1e6], got " +
                            std::to_string(velocity_time_constant_s));
   }
+  if (!(tempering_ess_fraction >= 0.0 && tempering_ess_fraction <= 1.0)) {
+    return InvalidArgument("tempering_ess_fraction must be in [0, 1], got " + std::to_string(tempering_ess_fraction));
+  }
   if (!(kernel_scale >= 0.0 && kernel_scale <= 2.0)) {
     return InvalidArgument("kernel_scale must be in [0, 2], got " + std::to_string(kernel_scale));
   }
@@ -91,6 +94,12 @@ struct ParticleFilter::Impl {
 };
 
 constexpr int kTemperedStages = 4;
+// Adaptive tempering (AdaptiveUpdate): at most this many stages per update, each keeping
+// the ESS near kStageEssFraction x N and taking at least kMinStageShare of what is left.
+constexpr int kAdaptiveStages = 6;
+constexpr double kStageEssFraction = 0.2;
+constexpr float kMinStageShare = 1.0f / 16.0f;
+constexpr int kBisectionSteps = 8;
 
 ParticleFilter::ParticleFilter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ParticleFilter::~ParticleFilter() = default;
@@ -186,8 +195,15 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
   // (a fix's position and an unknown velocity against TDOAs precise to centimetres) is
   // narrowed gradually instead of collapsing onto the few particles that happened to land
   // near the peak (Oudjane & Musso 2000).
-  const int stages = s.tempered_updates_left > 0 ? kTemperedStages : 1;
-  if (s.tempered_updates_left > 0) --s.tempered_updates_left;
+  if (s.tempered_updates_left == 0) {
+    report.ess = AdaptiveUpdate(m, &report.likelihood_stages);
+    s.noise.Finish(s.innovations, m.sample_rate_hz, &report);
+    impl_->ess = report.ess;
+    return report;
+  }
+  const int stages = kTemperedStages;
+  report.likelihood_stages = stages;
+  --s.tempered_updates_left;
   for (int stage = 0; stage < stages; ++stage) {
     std::vector<InnovationMoments>* innovations = stage == 0 ? &s.innovations : &s.later_innovations;
     s.set.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness, innovations,
@@ -199,6 +215,46 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
   s.noise.Finish(s.innovations, m.sample_rate_hz, &report);  // the prior's innovations
   impl_->ess = report.ess;
   return report;
+}
+
+// One update, split only when it would collapse the cloud: the whole likelihood is applied;
+// if the ESS falls below tempering_ess_fraction x N, the largest share b of it that keeps
+// the ESS at kStageEssFraction x N is kept (found by bisection on the log-likelihoods
+// Weigh left), the cloud is resampled and moved, and what is left of the likelihood is
+// applied again to the moved particles, up to kAdaptiveStages times. A likelihood far
+// narrower than the predicted cloud (a near source on a small array with a sharp front end:
+// millimetre fixes against centimetres of white-acceleration spread) would otherwise land on
+// the few particles that happen to lie near its peak, or on none, while a wider mode (the
+// far exact solution of a 4-sensor array, whose TDOAs barely change along range) keeps
+// many; the wide mode then wins on sampling luck, not evidence.
+double ParticleFilter::AdaptiveUpdate(const Measurement& m, int* stages) {
+  Impl& s = *impl_;
+  const ParticleFilterOptions& o = s.options;
+  const double n = o.particles;
+  float left = 1.0f;
+  double ess = 0.0;
+  for (int stage = 0;; ++stage) {
+    std::vector<InnovationMoments>* innovations = stage == 0 ? &s.innovations : &s.later_innovations;
+    s.set.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness, innovations, left);
+    ess = s.set.NormaliseWeights();
+    *stages = stage + 1;
+    // While several labels live, resampling keeps each contender's share (particle_set.h)
+    // and more resamplings per frame would wear the weaker one down: one stage then.
+    const bool split = ess < o.tempering_ess_fraction * n && stage + 1 < kAdaptiveStages && s.set.labels() <= 1;
+    if (!split) {
+      if (ess < o.resample_threshold * n) s.set.ResampleSystematic(o.kernel_scale);
+      return ess;
+    }
+    float lo = 0.0f, hi = left;  // ESS(lo) >= target > ESS(hi)
+    for (int k = 0; k < kBisectionSteps; ++k) {
+      const float mid = 0.5f * (lo + hi);
+      (s.set.EssIfUntempered(left - mid) >= kStageEssFraction * n ? lo : hi) = mid;
+    }
+    const float kept = std::max(lo, left * kMinStageShare);
+    s.set.Untemper(left - kept);
+    s.set.ResampleSystematic(o.kernel_scale);
+    left -= kept;
+  }
 }
 
 TrackState ParticleFilter::State() const { return impl_->set.MeanAndCovariance(); }

@@ -284,6 +284,37 @@ double ParticleSet::NormaliseWeights() {
   return 1.0 / static_cast<double>(sum_w2[0]);
 }
 
+double ParticleSet::EssIfUntempered(float r) const {
+  const float* __restrict logw = logw_.data();
+  const float* __restrict ll = loglik_.data();
+  float max_lw = -INFINITY;
+  for (int i = 0; i < n_; ++i) max_lw = std::max(max_lw, logw[i] - r * ll[i]);
+  float sums[2];
+  LaneSums<float, 2>(
+      0, n_, {0.0f, 0.0f},
+      [&](int i, int lane, float(*acc)[kSumLanes<float>]) {
+        const float w = FastExp(logw[i] - r * ll[i] - max_lw);
+        acc[0][lane] += w;
+        acc[1][lane] = FusedMulAdd(w, w, acc[1][lane]);
+      },
+      sums);
+  return static_cast<double>(sums[0]) * sums[0] / static_cast<double>(sums[1]);
+}
+
+double ParticleSet::Untemper(float r) {
+  float* __restrict logw = logw_.data();
+  const float* __restrict ll = loglik_.data();
+#pragma omp simd
+  for (int i = 0; i < n_; ++i) logw[i] -= r * ll[i];
+  if (labels_ > 1) {
+    for (int c = 0; c < labels_; ++c) {
+      const float gap = label_gap_[static_cast<size_t>(c)];
+      if (std::isfinite(gap)) label_deficit_[static_cast<size_t>(c)] -= r * gap;
+    }
+  }
+  return NormaliseWeights();
+}
+
 TrackState ParticleSet::MeanAndCovariance() const {
   if (moments_valid_) return moments_;
   // One pass, accumulating about a shift point near the cloud (particle 0) so float sums

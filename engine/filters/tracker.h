@@ -47,6 +47,7 @@ struct UpdateReport {
   std::vector<double> anchored_z;
   int pair_count = 0;         // pairs used (those that heard a source); 0: the update did nothing
   double ess = 0.0;           // effective sample size after the update (0 for non-particle filters)
+  int likelihood_stages = 1;  // particle filter: stages the likelihood was applied in (tempering)
   double tdoa_sigma_s = 0.0;  // TDOA noise std the update assumed
   // The gate refused the frame (Kalman filters): the state is unchanged, but nis and
   // pair_count still describe it, so a run of refused frames trips the divergence test.

@@ -40,6 +40,7 @@ struct Args {
   double accel_noise_mps2 = -1.0;      // < 0: the session default
   double manoeuvre_share = -1.0;       // < 0: the session default
   int tempered_updates = -1;           // < 0: the session default
+  double tempering_ess = -1.0;         // < 0: the session default
   double manoeuvre_scale = 0.0;        // < 1: the session default
   std::optional<Likelihood> likelihood;  // unset: the session default
   double outlier_probability = -1.0;   // < 0: the session default
@@ -63,6 +64,7 @@ void Adjust(const Args& a, const RandomSceneOptions& scene_options, AudioSession
   if (a.manoeuvre_share >= 0.0) c->tracker.particle.manoeuvre_share = a.manoeuvre_share;
   if (a.manoeuvre_scale >= 1.0) c->tracker.particle.manoeuvre_scale = a.manoeuvre_scale;
   if (a.tempered_updates >= 0) c->tracker.particle.tempered_updates = a.tempered_updates;
+  if (a.tempering_ess >= 0.0) c->tracker.particle.tempering_ess_fraction = a.tempering_ess;
   if (a.likelihood) c->tracker.particle.likelihood = *a.likelihood;
   if (a.outlier_probability >= 0.0) c->tracker.particle.outlier_probability = a.outlier_probability;
   if (a.kernel_scale >= 0.0) c->tracker.particle.kernel_scale = a.kernel_scale;
@@ -84,6 +86,7 @@ void Usage(FILE* out) {
       "                      [--duration SECONDS] [--jobs J] [--weighting phat|phat-coherence|...]\n"
       "                      [--filter pf|ekf|ukf|mmpf|imm] [--particles N] [--accel-noise MPS2]\n"
       "                      [--manoeuvre-share P] [--manoeuvre-scale K] [--tempered-updates N]\n"
+      "                      [--tempering-ess F]\n"
       "                      [--likelihood peak|gcc|mixture] [--outlier-probability EPS]\n"
       "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--band-hint] [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
@@ -98,7 +101,9 @@ void Usage(FILE* out) {
       "--weighting, --filter, --particles, --accel-noise (the motion model's white acceleration\n"
       "std, m/s^2) and --manoeuvre-share/--manoeuvre-scale (particle filter: the share of particles\n"
       "whose acceleration std is scaled each step) and --tempered-updates (particle filter: updates\n"
-      "after each (re)start tempered in stages), --likelihood, --outlier-probability (the mixture\n"
+      "after each (re)start tempered in stages), --tempering-ess (particle filter: an update whose\n"
+      "ESS would fall below this fraction of N is split into stages), --likelihood,\n"
+      "--outlier-probability (the mixture\n"
       "likelihood's eps), --kernel-scale (the particle filter's regularisation) and\n"
       "--accel-levels (its acceleration levels, e.g. 0.003,3,1; particle_filter.h) override the\n"
       "session's defaults.\n"
@@ -173,6 +178,10 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->tempered_updates = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->tempered_updates < 0 || a->tempered_updates > 100)
         return std::fprintf(stderr, "scene_campaign: --tempered-updates must be in [0, 100]\n"), false;
+    } else if (flag == "--tempering-ess") {
+      a->tempering_ess = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(a->tempering_ess >= 0.0 && a->tempering_ess <= 1.0))
+        return std::fprintf(stderr, "scene_campaign: --tempering-ess must be in [0, 1]\n"), false;
     } else if (flag == "--trace") {
       a->trace_seed = std::strtoull(value.c_str(), &end, 10);
       if (*end != '\0') return std::fprintf(stderr, "scene_campaign: --trace must be a scene seed\n"), false;

@@ -56,6 +56,7 @@ inline engine::ParticleFilterOptions CvOptions(int particles = 4096, uint64_t se
   o.seed = seed;
   o.tempered_updates = 0;  // the device filter has no progressive correction yet: compare like with like
   o.accel_level_floor = o.accel_level_ceiling = 1.0;  // nor acceleration levels
+  o.tempering_ess_fraction = 0.0;                     // nor adaptive tempering
   return o;
 }
 
