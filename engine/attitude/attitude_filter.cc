@@ -77,6 +77,7 @@ Status AttitudeFilterOptions::Validate() const {
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_restart_s", mag_restart_s));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_heading_gate_rad", mag_heading_gate_rad));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("mag_consistency_s", mag_consistency_s));
+  LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("mag_consistency_rate_rps", mag_consistency_rate_rps));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("rest_gyro_rps", rest_gyro_rps));
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("rest_accel_mps2", rest_accel_mps2));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("rest_min_s", rest_min_s));
@@ -132,6 +133,7 @@ const std::vector<AttitudeNumericOption>& AttitudeNumericOptions() {
       {"mag_restart_s", &AttitudeFilterOptions::mag_restart_s},
       {"mag_heading_gate_rad", &AttitudeFilterOptions::mag_heading_gate_rad},
       {"mag_consistency_s", &AttitudeFilterOptions::mag_consistency_s},
+      {"mag_consistency_rate_rps", &AttitudeFilterOptions::mag_consistency_rate_rps},
       {"rest_gyro_rps", &AttitudeFilterOptions::rest_gyro_rps},
       {"rest_accel_mps2", &AttitudeFilterOptions::rest_accel_mps2},
       {"rest_min_s", &AttitudeFilterOptions::rest_min_s},

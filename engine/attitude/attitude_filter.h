@@ -89,6 +89,12 @@ const char* AttitudeFilterKindName(AttitudeFilterKind kind);
 //   mag_heading_gate_rad          0.05        rad           quaternion   heading-consistency gate
 //   mag_consistency_s             10          s             quaternion   a steady field that
 //                                                                        disagrees is believed after
+//                                                                        (counted while turning)
+//   mag_consistency_rate_rps      0.35        rad/s         quaternion   20 deg/s: the turn rate at
+//                                                                        which that time counts; a
+//                                                                        magnet on the sensor turns
+//                                                                        with it, the Earth's field
+//                                                                        does not
 //   rest_gyro_rps                 0.03        rad/s         quaternion
 //   rest_accel_mps2               0.25        m/s^2         quaternion
 //   rest_min_s                    0.3         s             quaternion
@@ -163,10 +169,18 @@ struct AttitudeFilterOptions {
   // innovation, low-passed over 0.5 s, exceeds mag_heading_gate_rad plus 3 sd of the
   // predicted heading (a field bending near iron turns faster than the gyro says), unless it
   // has done so for mag_consistency_s with its norm and dip at the reference (then the
-  // gyro's heading has drifted and the field is believed again). While the field is
-  // untrusted, heading coasts on the gyro and its bias.
+  // gyro's heading has drifted and the field is believed again: the heading is re-learnt
+  // from it, its variance raised to the initial prior). That time counts only over
+  // samples whose bias-corrected rate is at least mag_consistency_rate_rps (the idea of
+  // VQF's acceptance of a new field, Laidig & Seel 2023): a field that keeps its norm and dip
+  // while the sensor turns is fixed in the world, whereas a magnet riding on the sensor turns
+  // with it and changes them; without rotation nothing tells the two apart (a 6 µT magnet
+  // across the field's horizontal part stays inside the norm and dip gates and turns the
+  // heading by 19 deg), so the timer holds and heading keeps coasting. 0: time always counts
+  // (the rule before). While the field is untrusted, heading coasts on the gyro and its bias.
   double mag_heading_gate_rad = 0.05;
   double mag_consistency_s = 10.0;
+  double mag_consistency_rate_rps = 0.35;
 
   // Rest detection (quaternion filter): when for rest_min_s every sample has
   // |gyro - bias| < rest_gyro_rps and its accelerometer within rest_accel_mps2 of both g and

@@ -127,7 +127,8 @@ bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) 
   return true;
 }
 
-bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& field_world, double t_s, double dt_s, bool* matches_reference) {
+bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& field_world, double t_s, double dt_s, bool turning,
+                              bool* matches_reference) {
   *matches_reference = mag_reference_.Observe(field_world, t_s);
   if (!*matches_reference) {
     inconsistent_s_ = 0.0;  // "steadily" below means without a break
@@ -137,21 +138,34 @@ bool QuaternionEkf::MagUpdate(const Eigen::Vector3d& field_world, double t_s, do
   const double nu = WrapAngle(options_.mag_declination_rad - AzimuthEastOfNorth(field_world));
   // H = [-h^T 0]: P H^T = -P.leftCols(3) h, S = H P H^T + r.
   const Eigen::Vector3d h = UpInBody(q_);
-  const Eigen::Matrix<double, 6, 1> pht = -(p_.leftCols<3>() * h);
-  const double heading_var = -h.dot(pht.head<3>());
+  Eigen::Matrix<double, 6, 1> pht = -(p_.leftCols<3>() * h);
+  double heading_var = -h.dot(pht.head<3>());
   // Consistency with the gyro: the innovation, low-passed (one sample's azimuth carries
   // degrees of noise), must stay within the gate plus 3 sd of the predicted heading; a field
   // that bends faster than the gyro turns is disturbed. A field that disagrees steadily
   // for mag_consistency_s while its norm and dip stay at the reference is taken as right
-  // (the gyro heading has drifted), and used again.
+  // (the gyro heading has drifted), and used again — but that time counts only while the
+  // sensor turns faster than mag_consistency_rate_rps: a field that keeps its norm and dip
+  // while the body turns is fixed in the world (Earth-like), whereas a magnet riding on the
+  // sensor turns with it and changes both. Without rotation the two are the same thing to the
+  // data (a magnet whose field happens to sit inside the gates would be believed after
+  // mag_consistency_s and turn the heading), so the timer holds and heading keeps coasting.
   innovation_lowpass_rad_ += (dt_s / (kInnovationLowpass_s + dt_s)) * (nu - innovation_lowpass_rad_);
   const double gate = options_.mag_heading_gate_rad + 3.0 * std::sqrt(heading_var);
   if (relearning_heading_) {  // after a new offset: the gate waits until the heading has converged
     relearning_heading_ = std::abs(innovation_lowpass_rad_) > options_.mag_heading_gate_rad;
     inconsistent_s_ = 0.0;
   } else if (std::abs(innovation_lowpass_rad_) > gate) {
-    inconsistent_s_ += dt_s;
+    if (turning) inconsistent_s_ += dt_s;
     if (inconsistent_s_ < options_.mag_consistency_s) return false;
+    // Believed: the heading is off by more than its variance said, so that variance is raised
+    // and the heading re-learnt from the field, as after a new offset. With the variance as it
+    // was, the gain would put much of a large innovation into the bias about Up through the
+    // heading-bias covariance built up while coasting (simulated: 19 deg of heading moved that
+    // bias by 0.017 rad/s, which turned the heading away again at 1 deg/s).
+    RelearnHeading(/*restart_sums=*/false);
+    pht = -(p_.leftCols<3>() * h);
+    heading_var = -h.dot(pht.head<3>());
   } else {
     inconsistent_s_ = 0.0;
   }
@@ -249,7 +263,9 @@ void QuaternionEkf::AdoptSoftIron(const SoftIronFit& fit) {
   if (first) RelearnHeading(/*restart_sums=*/false);
 }
 
-bool QuaternionEkf::MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt_s) {
+bool QuaternionEkf::MagStep(const Eigen::Vector3d& mag_uT, const Eigen::Vector3d& rate_rps, double t_s, double dt_s) {
+  // Whether the sensor turns fast enough for the steady-disagreement timer (MagUpdate) to count.
+  const bool turning = rate_rps.squaredNorm() >= options_.mag_consistency_rate_rps * options_.mag_consistency_rate_rps;
   const Eigen::Matrix3d r = q_.toRotationMatrix();
   hard_iron_.Add(r, mag_uT, dt_s);
   if (t_s >= next_solve_t_s_) {
@@ -278,7 +294,8 @@ bool QuaternionEkf::MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt
     }
   }
   bool matches_reference = false;
-  const bool used = MagUpdate(r * (mag_correction_ * (mag_uT - mag_offset_uT_)), t_s, dt_s, &matches_reference);
+  const bool used =
+      MagUpdate(r * (mag_correction_ * (mag_uT - mag_offset_uT_)), t_s, dt_s, turning, &matches_reference);
   // The fraction of recent samples whose norm and dip match the reference (time constant
   // mag_restart_s). Below one half the field has changed (a magnet arrived, the
   // surroundings changed) and what the fit learnt before no longer describes it: the fit
@@ -316,7 +333,7 @@ Status QuaternionEkf::Update(const ImuSample& sample) {
   at_rest_ = rest_.Update(rate_rps, sample.accel_mps2, dt_s);
   if (at_rest_) RestUpdate(sample.gyro_rps);
   accel_used_ = AccelUpdate(sample.accel_mps2, dt_s);
-  mag_used_ = options_.use_mag && sample.mag_uT.allFinite() && MagStep(sample.mag_uT, sample.t_s, dt_s);
+  mag_used_ = options_.use_mag && sample.mag_uT.allFinite() && MagStep(sample.mag_uT, rate_rps, sample.t_s, dt_s);
   p_ = 0.5 * (p_ + p_.transpose()).eval();  // once per sample: rounding only, not per update
   return Status::Ok();
 }

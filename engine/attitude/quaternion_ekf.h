@@ -27,9 +27,11 @@
 // only when (1) MagReference (mag_reference.h) finds its
 // norm and dip at the reference — learnt in the first second, then set by each trusted fit —
 // and (2) the heading innovation, low-passed over 0.5 s, is within mag_heading_gate_rad + 3
-// sd of the predicted heading (or has stayed outside it for mag_consistency_s). Otherwise
-// heading coasts on the gyro. When a trusted fit replaces the offset, the heading variance
-// is raised to the initial prior, so the heading is re-learnt from the corrected field. See
+// sd of the predicted heading (or has stayed outside it for mag_consistency_s of turning
+// faster than mag_consistency_rate_rps, with its norm and dip at the reference). Otherwise
+// heading coasts on the gyro. When a trusted fit replaces the offset, or a steady
+// disagreement is believed, the heading variance is raised to the initial prior, so the
+// heading is re-learnt from the corrected field (and the bias about Up is left alone). See
 // AttitudeFilterOptions for the rules. The update:
 //     m = R m_body,  psi_m = atan2(m_east, m_north),
 //     nu = wrap(mag_declination_rad - psi_m),  H = [-e_up^T R  0] = [-h^T  0],
@@ -90,12 +92,14 @@ class QuaternionEkf final : public AttitudeFilter {
   // Applies x <- x (+) dx.
   void Correct(const Eigen::Matrix<double, 6, 1>& dx);
   bool AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s);
-  // The heading update from the corrected field in the world frame; matches_reference:
-  // whether its norm and dip agreed with the reference.
-  bool MagUpdate(const Eigen::Vector3d& field_world_uT, double t_s, double dt_s, bool* matches_reference);
+  // The heading update from the corrected field in the world frame; turning: the
+  // bias-corrected rate is at least mag_consistency_rate_rps (only then does a steady
+  // disagreement with the gyro count towards being believed); matches_reference: whether its
+  // norm and dip agreed with the reference.
+  bool MagUpdate(const Eigen::Vector3d& field_world_uT, double t_s, double dt_s, bool turning, bool* matches_reference);
   // Feeds the hard-iron estimator, adopts its fit when trusted, and returns whether the
-  // (offset-corrected) sample was used for heading.
-  bool MagStep(const Eigen::Vector3d& mag_uT, double t_s, double dt_s);
+  // (offset-corrected) sample was used for heading; rate_rps: the bias-corrected gyro.
+  bool MagStep(const Eigen::Vector3d& mag_uT, const Eigen::Vector3d& rate_rps, double t_s, double dt_s);
   void AdoptCalibration(const HardIronFit& fit, double t_s);
   // Adopts a trusted soft-iron fit (correction matrix and offset) once two fits in a row
   // agree and it differs from the one in use by enough to turn the heading.
@@ -128,8 +132,8 @@ class QuaternionEkf final : public AttitudeFilter {
   double match_fraction_ = 1.0;  // recent samples whose norm and dip matched (low-passed)
   bool restart_armed_ = true;
   double innovation_lowpass_rad_ = 0.0;  // heading innovation, low-passed (consistency gate)
-  double inconsistent_s_ = 0.0;          // how long it has been outside the gate
-  bool relearning_heading_ = false;      // a new offset: no gate until the heading converges
+  double inconsistent_s_ = 0.0;          // how long it has been outside the gate, while turning
+  bool relearning_heading_ = false;      // a new offset or a believed field: no gate until converged
   RestDetector rest_;
   Eigen::Quaterniond q_ = Eigen::Quaterniond::Identity();
   Eigen::Vector3d bias_rps_ = Eigen::Vector3d::Zero();
