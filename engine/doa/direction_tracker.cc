@@ -28,6 +28,8 @@ Status DirectionTrackerOptions::Validate() const {
   if (!(lost_source_after_s >= 0.0) || !std::isfinite(lost_source_after_s))
     return InvalidArgument("lost_source_after_s must be >= 0");
   if (steady_hits < 1) return InvalidArgument("steady_hits must be >= 1");
+  if (!(coast_rate_decay_s >= 0.0) || !std::isfinite(coast_rate_decay_s))
+    return InvalidArgument("coast_rate_decay_s must be finite and >= 0");
   return Status::Ok();  // confirm_hits / confirm_window: TwsOptions::Validate names them
 }
 
@@ -45,6 +47,7 @@ StatusOr<DirectionTracker> DirectionTracker::Create(const ArrayShapeInfo& shape,
   tws.max_position_sigma_m = kMaxSigmaRad;
   tws.initial_speed_sigma_mps = options.initial_rate_sigma_radps;
   tws.max_tracks = 64;
+  tws.coast_velocity_decay_s = options.coast_rate_decay_s;
   if (options.start_at_onsets_only) tws.max_initiations_per_scan = 1;
   if (options.resume_after_s > 0.0)
     tws.resume_misses = std::max(1, static_cast<int>(std::ceil(options.resume_after_s / options.frame_period_s)));

@@ -44,6 +44,8 @@ Status TwsOptions::Validate() const {
   if (max_initiations_per_scan < 0)
     return BadCount("max_initiations_per_scan", max_initiations_per_scan, "must be >= 0");
   if (resume_misses < 0) return BadCount("resume_misses", resume_misses, "must be >= 0");
+  if (!(coast_velocity_decay_s >= 0.0) || !std::isfinite(coast_velocity_decay_s))
+    return Bad("coast_velocity_decay_s", coast_velocity_decay_s, "must be finite and >= 0");
   if (max_plots_per_scan < 1) return BadCount("max_plots_per_scan", max_plots_per_scan, "must be >= 1");
   if (gate_search_budget < 1) return BadCount("gate_search_budget", gate_search_budget, "must be >= 1");
   if (max_assignment_cells < 4) return BadCount("max_assignment_cells", max_assignment_cells, "must be >= 4");

@@ -25,6 +25,14 @@
 //   resume_misses              0          scans  a track that missed this many scans in a row
 //                                                takes only plots that may resume a track
 //                                                (CartesianPlot::may_resume_track); 0: any
+//   coast_velocity_decay_s     0          s      a track that misses a scan has its velocity
+//                                                scaled by exp(-dt / this) (and its velocity
+//                                                covariance to match), so a coasting track
+//                                                comes to rest within about velocity x this;
+//                                                0: off (constant velocity while coasting,
+//                                                the radar case). For targets that stop when
+//                                                they fall silent (talkers), whose velocity
+//                                                estimate is mostly the plots' scatter
 //   max_tracks                 10000      -      a scan that would exceed it initiates fewer
 //                                                (a TrackList of 10^4 tracks is ~3.6 MB)
 // Bounds on one scan's work, so that no scan (adversarial or cluttered) costs more than
@@ -68,6 +76,7 @@ struct TwsOptions {
   int max_tracks = 10000;
   int max_initiations_per_scan = 10000;
   int resume_misses = 0;
+  double coast_velocity_decay_s = 0.0;
   int max_plots_per_scan = 65536;
   int64_t gate_search_budget = 64;
   int64_t max_assignment_cells = 65536;

@@ -149,6 +149,7 @@ class TrackerImpl final : public TwsTracker {
         ++s.assigned;
       } else {
         updater_.Miss(tr.filter);
+        if (coast_decay_ && dt > 0.0) Decay(tr.filter, std::exp(-dt / options_.coast_velocity_decay_s));
       }
     }
     Delete(s);
@@ -157,6 +158,16 @@ class TrackerImpl final : public TwsTracker {
     last_time_ = t;
     have_time_ = true;
     if (summary) *summary = s;
+  }
+
+  // A coasting track's velocity v -> a v: the state's linear map diag(I, a I) applied to the
+  // mean and the covariance (P_vv a^2, P_pv a), with no noise added. It also ends the
+  // steady-state gain (Miss already did).
+  static void Decay(FilterState<D>& f, double a) {
+    f.x.template tail<D>() *= a;
+    f.p.template bottomRightCorner<D, D>() *= a * a;
+    f.p.template topRightCorner<D, D>() *= a;
+    f.p.template bottomLeftCorner<D, D>() *= a;
   }
 
   // Which association stage a track joins: confirmed ones that heard a plot lately (0),
@@ -227,6 +238,7 @@ class TrackerImpl final : public TwsTracker {
   }
 
   const TwsOptions options_;
+  const bool coast_decay_ = options_.coast_velocity_decay_s > 0.0;
   const KalmanUpdater<D> updater_;
   GnnAssociator<D> associator_;
   Initiator<D> initiator_;

@@ -22,7 +22,8 @@
 //     always preferred to a miss, and the total of d^2 over the scan is minimal);
 //  4. tentative tracks do the same with the plots left over (a clutter-born tentative track
 //     never takes a confirmed track's plot);
-//  5. tracks with a plot update; the others coast;
+//  5. tracks with a plot update; the others coast (with coast_velocity_decay_s > 0 their
+//     velocity, and its covariance, decays by exp(-dt / coast_velocity_decay_s) per miss);
 //  6. status: tentative -> confirmed with M hits of the last N scans; a tentative track
 //     that can no longer reach M is deleted; a confirmed track is deleted after
 //     max_coast_scans misses in a row; any track whose position variance exceeds

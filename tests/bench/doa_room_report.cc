@@ -18,7 +18,8 @@
 // talker, nearest to it, beyond the first: one talker reported under two ids).
 //
 //   build/tests/bench/doa_room_report [--seconds 20] [--seed 1] [--max-sources 4] [--relative 0]
-//                                     [--dump peaks_and_tracks.csv] (--help: the tracker's options)
+//                                     [--coast-decay 0.2] [--dump peaks_and_tracks.csv]
+//                                     (--help: the tracker's options; --coast-decay 0: no decay, as before)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -235,6 +236,9 @@ int main(int argc, char** argv) {
   flags.Bool("no-continue", &no_continue,
              "every track keeps its own identity (DirectionTrackerOptions::continue_identities false)");
   flags.Int("steady-hits", &tracking.steady_hits, "N", "", "DirectionTrackerOptions::steady_hits");
+  flags.Double("coast-decay", &tracking.coast_rate_decay_s, "S", "s",
+               "DirectionTrackerOptions::coast_rate_decay_s: a coasting track's rate decays with this time "
+               "constant (0: off, constant rate)");
   flags.String("dump", &dump, "PATH", "CSV of every frame's peaks and tracks (for analysis)");
   const localizer::Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
   if (flags.help_requested()) return std::printf("%s", flags.Usage().c_str()), 0;
