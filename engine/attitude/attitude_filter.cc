@@ -59,6 +59,9 @@ Status AttitudeFilterOptions::Validate() const {
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("accel_reject_mps2", accel_reject_mps2));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("accel_noise_gain", accel_noise_gain));
   LOCALIZER_RETURN_IF_ERROR(CheckNonNegative("accel_lowpass_s", accel_lowpass_s));
+  if (!(accel_lowpass_order == 1.0 || accel_lowpass_order == 2.0)) {
+    return InvalidArgument("accel_lowpass_order is " + FormatDouble(accel_lowpass_order) + ", must be 1 or 2");
+  }
   LOCALIZER_RETURN_IF_ERROR(CheckPositive("mag_heading_sd_rad", mag_heading_sd_rad));
   if (!std::isfinite(mag_declination_rad) || std::abs(mag_declination_rad) > M_PI) {
     return InvalidArgument("mag_declination_rad is " + FormatDouble(mag_declination_rad) +
@@ -120,6 +123,7 @@ const std::vector<AttitudeNumericOption>& AttitudeNumericOptions() {
       {"accel_reject_mps2", &AttitudeFilterOptions::accel_reject_mps2},
       {"accel_noise_gain", &AttitudeFilterOptions::accel_noise_gain},
       {"accel_lowpass_s", &AttitudeFilterOptions::accel_lowpass_s},
+      {"accel_lowpass_order", &AttitudeFilterOptions::accel_lowpass_order},
       {"mag_heading_sd_rad", &AttitudeFilterOptions::mag_heading_sd_rad},
       {"mag_declination_rad", &AttitudeFilterOptions::mag_declination_rad},
       {"mag_reference_s", &AttitudeFilterOptions::mag_reference_s},

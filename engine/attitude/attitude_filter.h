@@ -66,7 +66,13 @@ const char* AttitudeFilterKindName(AttitudeFilterKind kind);
 //   accel_tilt_sd_rad             0.2         rad           both         per sample
 //   accel_reject_mps2             1.5         m/s^2         both
 //   accel_noise_gain              4.0         1             both
-//   accel_lowpass_s               2.0         s             quaternion
+//   accel_lowpass_s               2.0         s             quaternion   delay of the world-frame
+//                                                                        low-pass (both orders)
+//   accel_lowpass_order           2           1             quaternion   1 or 2 stages of tau/order:
+//                                                                        linear acceleration at
+//                                                                        0.5-2 Hz falls with f^-2,
+//                                                                        not f^-1 (trial 16 6D
+//                                                                        0.58 -> 0.50 deg)
 //   mag_heading_sd_rad            0.2         rad           both         per sample
 //   mag_declination_rad           0           rad           both
 //   mag_reference_s               1.0         s             both
@@ -127,7 +133,14 @@ struct AttitudeFilterOptions {
   // step's rotation, then moved towards the new sample), so linear accelerations that average
   // out over a few seconds cancel while gravity, fixed in the world, passes undelayed.
   // 0: each raw sample is the measurement (as the Euler EKF always does).
+  // accel_lowpass_order (1 or 2): the number of such first-order stages in cascade, each with
+  // time constant accel_lowpass_s / order, so the delay a slow change sees (accel_lowpass_s)
+  // is the same while a linear acceleration at frequency f >> 1 / accel_lowpass_s is
+  // attenuated by (2 pi f tau)^-order instead of (2 pi f accel_lowpass_s)^-1: at 1 Hz,
+  // 0.025 against 0.08 (a hand-held sensor's translation, BROAD trial 16; VQF low-passes
+  // with a second-order filter in the same frame, Laidig & Seel 2023).
   double accel_lowpass_s = 2.0;
+  double accel_lowpass_order = 2.0;
 
   // Magnetometer (heading) update: the azimuth of the field's horizontal part, std per sample.
   double mag_heading_sd_rad = 0.2;

@@ -56,6 +56,7 @@ void QuaternionEkf::Initialise(const ImuSample& sample) {
   q_ = QuaternionFromEuler({tilt.x(), tilt.y(), yaw});
   bias_rps_.setZero();
   accel_lowpass_mps2_ = sample.accel_mps2;
+  accel_stage1_mps2_ = sample.accel_mps2;
   // Tilt and heading prior as a world-frame covariance, turned into the body frame.
   const Eigen::Matrix3d r = q_.toRotationMatrix();
   const double heading_sd = mag ? kInitialHeadingSdRad : 0.0;
@@ -80,6 +81,7 @@ void QuaternionEkf::Propagate(const Eigen::Vector3d& rate_rps, double dt_s) {
   const Eigen::Matrix3d a = dq.toRotationMatrix().transpose();
   // A vector fixed in the world, seen from the body, turns by R(omega dt)^T = A.
   accel_lowpass_mps2_ = a * accel_lowpass_mps2_;
+  if (options_.accel_lowpass_order > 1.0) accel_stage1_mps2_ = a * accel_stage1_mps2_;
   // F P F^T with F = [A B; 0 I], B = -dt I, written out per 3x3 block.
   const Eigen::Matrix3d ptt = p_.topLeftCorner<3, 3>();
   const Eigen::Matrix3d ptb = p_.topRightCorner<3, 3>();
@@ -104,7 +106,14 @@ void QuaternionEkf::Correct(const Eigen::Matrix<double, 6, 1>& dx) {
 }
 
 bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) {
-  if (options_.accel_lowpass_s > 0.0) {
+  if (options_.accel_lowpass_s > 0.0 && options_.accel_lowpass_order > 1.0) {
+    // Two stages of half the time constant: the same delay for slow changes, a second-order
+    // roll-off for linear accelerations.
+    const double tau = options_.accel_lowpass_s / options_.accel_lowpass_order;
+    const double alpha = dt_s / (tau + dt_s);
+    accel_stage1_mps2_ += alpha * (accel_mps2 - accel_stage1_mps2_);
+    accel_lowpass_mps2_ += alpha * (accel_stage1_mps2_ - accel_lowpass_mps2_);
+  } else if (options_.accel_lowpass_s > 0.0) {
     accel_lowpass_mps2_ += (dt_s / (options_.accel_lowpass_s + dt_s)) * (accel_mps2 - accel_lowpass_mps2_);
   } else {
     accel_lowpass_mps2_ = accel_mps2;

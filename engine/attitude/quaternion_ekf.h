@@ -14,7 +14,9 @@
 // observes, may move faster than the one about Up, on which heading coasts), written
 // block-wise (no 6x6 product).
 //
-// Accelerometer (tilt) update, when ||f| - g| <= accel_reject_mps2:
+// Accelerometer (tilt) update, on f = the accelerometer low-passed in the gyro-tracked world
+// frame (accel_lowpass_order first-order stages of time constant accel_lowpass_s / order,
+// each turned by every step's rotation), when ||f| - g| <= accel_reject_mps2:
 //     z = f / |f|,  h = R^T e_up (the third row of R),  H = [[h x]  0],
 //     R_meas = sigma_a^2 I,  sigma_a = accel_tilt_sd_rad (1 + accel_noise_gain ||f| - g| / g).
 // Only tilt is observed: a body rotation about h leaves h unchanged, so heading is untouched.
@@ -137,8 +139,10 @@ class QuaternionEkf final : public AttitudeFilter {
   RestDetector rest_;
   Eigen::Quaterniond q_ = Eigen::Quaterniond::Identity();
   Eigen::Vector3d bias_rps_ = Eigen::Vector3d::Zero();
-  // The accelerometer low-passed in the (gyro-tracked) world frame, held in body axes.
+  // The accelerometer low-passed in the (gyro-tracked) world frame, held in body axes: the
+  // output, and with accel_lowpass_order 2 the first stage that feeds it.
   Eigen::Vector3d accel_lowpass_mps2_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_stage1_mps2_ = Eigen::Vector3d::Zero();
   Matrix6d p_ = Matrix6d::Zero();
   double t_s_ = 0.0;
   bool initialised_ = false;

@@ -104,7 +104,11 @@ TEST(QuaternionEkfTest, RecoversGyroBiasAtRest) {
 
 // The platform shakes (world-frame linear acceleration of 4 m/s^2 on East and Up at
 // 0.7 Hz) while level and still in attitude: the raw accelerometer direction swings by up
-// to ~20 degrees. Defaults stay within a degree; a filter that believes every sample does not.
+// to ~20 degrees. Defaults stay within a degree once the start has passed; a filter that
+// believes every sample does not. The shaking starts at t = 0 as sin(0), which is a velocity
+// step of 0.9 m/s: the world-frame low-pass carries that step for a few seconds. With two
+// stages (accel_lowpass_order 2, the default since issue 22) the largest error is 1.68 deg
+// from 2 s (one stage: 1.33) and 0.92 deg from 5 s (one stage: 1.26).
 TEST(QuaternionEkfTest, RejectsLinearAcceleration) {
   AttitudeTrajectoryOptions motion;
   motion.amplitude_rad = {0.2, 0.1, 0.0};
@@ -117,8 +121,8 @@ TEST(QuaternionEkfTest, RejectsLinearAcceleration) {
   noise.accel_noise_sd_mps2 = 0.05;
   noise.with_mag = false;
   const auto samples = SynthesiseImu(truth, 200.0, 30.0, noise, 6);
-  const auto robust = RunFilter(Defaults(false), truth, samples, 2.0);
-  EXPECT_LT(robust.max_inclination_rad, 1.5 * kDeg);
+  EXPECT_LT(RunFilter(Defaults(false), truth, samples, 2.0).max_inclination_rad, 2.0 * kDeg);
+  EXPECT_LT(RunFilter(Defaults(false), truth, samples, 5.0).max_inclination_rad, 1.0 * kDeg);
   AttitudeFilterOptions naive = Defaults(false);
   naive.accel_lowpass_s = 0.0;
   naive.accel_reject_mps2 = 1e3;
