@@ -65,27 +65,21 @@ bool SessionHost::Attach(StreamSink* sink, bool resumed, const ResumePoint& resu
 bool SessionHost::Offer(StreamSink* sink, const v1::TrackRequest& request, Clock::time_point received,
                         wire::DecodedBlock* scratch) {
   WorkItem item = runner_->Decode(request, received, scratch);  // outside the lock: the reader's work
-  bool submit = false;
-  bool room = false;
-  {
-    MutexLock lock(&mutex_);
-    // Ended, replaced, draining or closed: blocks are no longer accepted.
-    if (closed_ || sink_ != sink || stream_ended_ || input_done_) return false;
-    const Inbox::Offered offered = inbox_.Offer(std::move(item), &scratch->samples);
-    if (const Rejection* rejected = offered.rejected) {
-      Bump(metrics_->rejections(rejected->reason));
-      if (rejected->request == RequestKind::kBlock) {
-        LogEvent("debug", "block_rejected",
-                 {{"session", id_}, {"sequence", std::to_string(rejected->sequence)}, {"reason", rejected->reason}});
-      }
+  MutexLock lock(&mutex_);
+  // Ended, replaced, draining or closed: blocks are no longer accepted.
+  if (closed_ || sink_ != sink || stream_ended_ || input_done_) return false;
+  const Inbox::Offered offered = inbox_.Offer(std::move(item), &scratch->samples);
+  if (const Rejection* rejected = offered.rejected) {
+    Bump(metrics_->rejections(rejected->reason));
+    if (rejected->request == RequestKind::kBlock) {
+      LogEvent("debug", "block_rejected",
+               {{"session", id_}, {"sequence", std::to_string(rejected->sequence)}, {"reason", rejected->reason}});
     }
-    if (offered.gap) Bump(metrics_->gaps);
-    submit = ScheduleLocked();
-    input_paused_ = !offered.room;
-    room = offered.room;
   }
-  if (submit) SubmitTurn();
-  return room;
+  if (offered.gap) Bump(metrics_->gaps);
+  ScheduleLocked();
+  input_paused_ = !offered.room;
+  return offered.room;
 }
 
 void SessionHost::InputDone(StreamSink* sink) {
@@ -96,21 +90,17 @@ void SessionHost::InputDone(StreamSink* sink) {
 }
 
 void SessionHost::WriteDone(StreamSink* sink, bool ok) {
-  bool submit = false;
-  {
-    MutexLock lock(&mutex_);
-    // Replaced by a resume (which writes the response again) or closed: nothing to settle.
-    if (sink_ != sink || !outbox_.writing()) return;
-    if (!ok) {  // the stream broke: keep the response for a resume
-      outbox_.Failed();
-      EndStreamLocked(grpc::Status(grpc::StatusCode::CANCELLED, "write failed: stream broken"));
-      return;
-    }
-    outbox_.Written();
-    submit = ScheduleLocked();  // the outbox shrank: processing may have paused on it
-    PumpLocked();
+  MutexLock lock(&mutex_);
+  // Replaced by a resume (which writes the response again) or closed: nothing to settle.
+  if (sink_ != sink || !outbox_.writing()) return;
+  if (!ok) {  // the stream broke: keep the response for a resume
+    outbox_.Failed();
+    EndStreamLocked(grpc::Status(grpc::StatusCode::CANCELLED, "write failed: stream broken"));
+    return;
   }
-  if (submit) SubmitTurn();
+  outbox_.Written();
+  ScheduleLocked();  // the outbox shrank: processing may have paused on it
+  PumpLocked();
 }
 
 void SessionHost::EndStream(StreamSink* sink, const grpc::Status& status) {
@@ -134,18 +124,10 @@ void SessionHost::EndStreamLocked(const grpc::Status& status) {
   sink_->End(status);
 }
 
-bool SessionHost::ScheduleLocked() {
-  if (scheduled_ || closed_ || inbox_.empty() || outbox_.waiting() >= limits_.max_outbox) return false;
+void SessionHost::ScheduleLocked() {
+  if (scheduled_ || closed_ || inbox_.empty() || outbox_.waiting() >= limits_.max_outbox) return;
   scheduled_ = true;
-  return true;
-}
-
-void SessionHost::SubmitTurn() {
-  // Outside the lock: the woken worker's first step is to take it. Nothing else submits a
-  // turn meanwhile (scheduled_ is set), and the pool refuses only when it is shutting down.
-  if (pool_->Submit([self = shared_from_this()] { self->RunTurn(); })) return;
-  MutexLock lock(&mutex_);
-  scheduled_ = false;
+  if (!pool_->Submit([self = shared_from_this()] { self->RunTurn(); })) scheduled_ = false;
 }
 
 void SessionHost::PumpLocked() {
@@ -173,32 +155,16 @@ void SessionHost::PumpLocked() {
   CloseLocked(grpc::Status::OK);
 }
 
-std::optional<WorkItem> SessionHost::TakeLocked() {
-  if (closed_ || outbox_.waiting() >= limits_.max_outbox) return std::nullopt;
-  std::optional<WorkItem> item = inbox_.Take();
-  if (item) running_ = true;
-  return item;
-}
-
-bool SessionHost::EndTurnLocked() {
-  scheduled_ = false;
-  const bool submit = ScheduleLocked();
-  if (IdleLocked()) PumpLocked();
-  return submit;
-}
-
 void SessionHost::RunTurn() {
-  // One critical section per item after the first: it settles the item, starts the stream's
-  // next write and takes the next item (or ends the turn). A write started here wakes a gRPC
-  // thread whose first step is this lock, so the worker does not come back for it.
-  bool submit = false;
-  std::optional<WorkItem> item;
-  {
-    MutexLock lock(&mutex_);
-    item = TakeLocked();
-    if (!item) submit = EndTurnLocked();
-  }
-  for (int n = 1; item; ++n) {
+  for (int n = 0; n < kItemsPerTurn; ++n) {
+    std::optional<WorkItem> item;
+    {
+      MutexLock lock(&mutex_);
+      if (closed_ || outbox_.waiting() >= limits_.max_outbox) break;
+      item = inbox_.Take();
+      if (!item) break;
+      running_ = true;
+    }
     std::vector<ResponsePtr> responses;
     if (const auto* rejected = std::get_if<Rejection>(&item->work)) {
       responses.push_back(RejectionResponse(*rejected));
@@ -214,11 +180,11 @@ void SessionHost::RunTurn() {
       if (!stream_ended_) sink_->ReadMore();
     }
     PumpLocked();
-    item.reset();
-    if (n < kItemsPerTurn) item = TakeLocked();
-    if (!item) submit = EndTurnLocked();
   }
-  if (submit) SubmitTurn();
+  MutexLock lock(&mutex_);
+  scheduled_ = false;
+  ScheduleLocked();
+  if (IdleLocked()) PumpLocked();
 }
 
 void SessionHost::Close(const grpc::Status& status) {

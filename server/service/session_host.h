@@ -133,17 +133,8 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   void RunTurn() EXCLUDES(mutex_);
 
  private:
-  // Marks a turn scheduled unless one is pending or nothing can be processed now; true when
-  // it did: the caller then hands the turn to the pool (SubmitTurn) after releasing the
-  // lock, so that the worker it wakes does not find the lock held (a second sleep and wake).
-  [[nodiscard]] bool ScheduleLocked() REQUIRES(mutex_);
-  void SubmitTurn() EXCLUDES(mutex_);
-  // The next item for this turn (running_ set), unless closed, the outbox is full or the
-  // inbox is empty.
-  std::optional<WorkItem> TakeLocked() REQUIRES(mutex_);
-  // The turn is over: schedules another if items remain (true: SubmitTurn), and finishes the
-  // stream if everything is answered.
-  [[nodiscard]] bool EndTurnLocked() REQUIRES(mutex_);
+  // Submits a turn unless one is pending or nothing can be processed now.
+  void ScheduleLocked() REQUIRES(mutex_);
   // Hands the stream its next response, or finishes the stream when all is done.
   void PumpLocked() REQUIRES(mutex_);
   void EndStreamLocked(const grpc::Status& status) REQUIRES(mutex_);
