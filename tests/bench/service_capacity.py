@@ -28,6 +28,14 @@ a temporary directory.
 --bare drives build/tests/bench/bare_stream_server instead: the same Track protocol with no
 engine, no worker pool and no sessions (two small estimates per block, written from the
 gRPC thread), so its CPU per block is what gRPC and the kernel cost by themselves.
+Wake-ups: vcs/block and ivcs/block are the server's voluntary context switches (a thread
+slept and was woken: the hand-offs) and involuntary ones (preempted) per block over the
+generator's run, summed over its threads from /proc/<pid>/task/*/status (perf is not
+permitted on every machine); the RESULT line also splits the voluntary ones by thread name
+(nexting_thread: gRPC's callback threads; the binary's name: the worker pool).
+--server BINARY runs another build of localizer-server, so that two builds can be run
+alternately in the same minutes (issue 20).
+
 A fresh server is started for every row. Exit 0 unless a run failed to start.
 """
 import argparse
@@ -123,6 +131,37 @@ def generator_result(args, out, json_path):
             "wall_s": r["wall_s"], "run_us_per_block": None}
 
 
+def thread_switches(pid):
+    """{tid: (name, voluntary, involuntary)} context switches of every thread of `pid` now
+    (/proc/<pid>/task/*/status; /proc/<pid>/status alone counts the main thread only)."""
+    out = {}
+    for tid in os.listdir(f"/proc/{pid}/task"):
+        try:
+            with open(f"/proc/{pid}/task/{tid}/status") as f:
+                text = f.read()
+        except OSError:
+            continue  # the thread ended meanwhile
+        name = re.search(r"^Name:\s*(.*)$", text, re.M).group(1)
+        vol = int(re.search(r"^voluntary_ctxt_switches:\s*(\d+)", text, re.M).group(1))
+        invol = int(re.search(r"^nonvoluntary_ctxt_switches:\s*(\d+)", text, re.M).group(1))
+        out[tid] = (name, vol, invol)
+    return out
+
+
+def switches_between(before, after):
+    """Context switches between two thread_switches() snapshots: (voluntary, involuntary,
+    {thread name: voluntary}). Threads that ended in between are not counted (gRPC's and
+    ours live as long as the server)."""
+    vol = invol = 0
+    by_name = {}
+    for tid, (name, v, i) in after.items():
+        _, v0, i0 = before.get(tid, (name, 0, 0))
+        vol += v - v0
+        invol += i - i0
+        by_name[name] = by_name.get(name, 0) + (v - v0)
+    return vol, invol, by_name
+
+
 def children_cpu_s():
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
@@ -136,11 +175,13 @@ def run_row(args, sessions, mode="plain"):
     try:
         before = scrape(ports["metrics_port"]) if not args.bare else no_metrics
         cpu0 = process_cpu_s(proc.pid)
+        sw0 = thread_switches(proc.pid)
         cmd = generator_command(args, f"127.0.0.1:{ports['grpc_port']}", sessions, client_flags, json_path)
         gen0 = children_cpu_s()  # the server is not waited for yet: only the generator counts
         out = subprocess.run(cmd, capture_output=True, text=True)
         gen_cpu = children_cpu_s() - gen0
         cpu1 = process_cpu_s(proc.pid)
+        sw1 = thread_switches(proc.pid)
         after = scrape(ports["metrics_port"]) if not args.bare else no_metrics
     finally:
         proc.send_signal(signal.SIGTERM)
@@ -149,6 +190,7 @@ def run_row(args, sessions, mode="plain"):
     blocks = max(1.0, after["blocks"] - before["blocks"] if not args.bare else result["blocks_sent"])
     server_cpu = cpu1 - cpu0
     engine_cpu = after["engine_cpu_s"] - before["engine_cpu_s"]
+    vol, invol, by_name = switches_between(sw0, sw1)
     return {
         "sessions": sessions, "security": mode, "generator": args.generator,
         "blocks_per_s": result["blocks_per_s"],
@@ -162,6 +204,10 @@ def run_row(args, sessions, mode="plain"):
         "generator_cpu_cores": gen_cpu / result["wall_s"],
         "generator_us_per_block": 1e6 * gen_cpu / max(1, result["blocks_sent"]),  # start-up included
         "generator_run_us_per_block": result["run_us_per_block"],
+        # The server's wake-ups: voluntary context switches (a thread blocked and was woken)
+        # and involuntary ones (preempted), per block, over the generator's run.
+        "server_vcs_per_block": vol / blocks, "server_ivcs_per_block": invol / blocks,
+        "server_vcs_per_block_by_thread": {k: round(v / blocks, 3) for k, v in sorted(by_name.items()) if v},
     }
 
 
@@ -181,6 +227,9 @@ def main():
     p.add_argument("--threads", type=int, default=1, help="load-generator pacing threads (cpp)")
     p.add_argument("--workers", type=int, default=0, help="server --workers (0: one per core)")
     p.add_argument("--server-arg", action="append", default=[], help="extra localizer-server flag (repeatable)")
+    p.add_argument("--server", default=None,
+                   help="localizer-server binary (default: <build>/server/localizer-server); to set two builds "
+                        "side by side")
     p.add_argument("--bare", action="store_true", help="drive bare_stream_server (gRPC alone) instead")
     p.add_argument("--security", default="plain",
                    help="comma-separated modes, each row run once per mode: plain, tls, mtls-token")
@@ -196,15 +245,16 @@ def main():
         args.pki = tempfile.mkdtemp(prefix="localizer-bench-pki-")
         subprocess.run(["bash", os.path.join(here, "..", "..", "deploy", "tls", "make_test_certs.sh"), args.pki],
                        check=True, capture_output=True)
-    args.server = (os.path.join(args.build, "tests", "bench", "bare_stream_server") if args.bare
-                   else os.path.join(args.build, "server", "localizer-server"))
+    if args.server is None:
+        args.server = (os.path.join(args.build, "tests", "bench", "bare_stream_server") if args.bare
+                       else os.path.join(args.build, "server", "localizer-server"))
     args.loadtest = os.path.join(args.build, "clients", "python", "loadtest.py")
     args.loadgen = os.path.join(args.build, "clients", "localizer-loadgen")
     print(f"# {args.rate}, {args.duration:g} s per row, {args.particles} particles, 4 ch 44.1 kHz, "
           f"4096-sample blocks and frames, hop 2048, {args.encoding}; {os.cpu_count()} CPUs (load generator included); "
           f"generator {args.generator}")
     print("sessions  security    blocks/s  p50_ms  p95_ms  p99_ms  errors  rejected  server_cores  us/block  engine_us  "
-          "outside_us  gen_cores  gen_us/block")
+          "outside_us  gen_cores  gen_us/block  vcs/block  ivcs/block")
     for n in [int(s) for s in args.sessions.split(",")]:
         for mode in modes:
             r = run_row(args, n, mode)
@@ -212,7 +262,8 @@ def main():
                   f"{r['p99_ms']:6.1f}  {r['errors']:6d}  {r['rejections']:8d}  {r['server_cpu_cores']:12.2f}  "
                   f"{r['server_us_per_block']:8.0f}  {r['engine_us_per_block']:9.0f}  "
                   f"{r['outside_engine_us_per_block']:10.0f}  {r['generator_cpu_cores']:9.2f}  "
-                  f"{r['generator_us_per_block']:12.0f}", flush=True)
+                  f"{r['generator_us_per_block']:12.0f}  {r['server_vcs_per_block']:9.2f}  "
+                  f"{r['server_ivcs_per_block']:10.2f}", flush=True)
             print("RESULT " + json.dumps(r), file=sys.stderr)
 
 
