@@ -25,6 +25,7 @@
 #include "engine/attitude/attitude_error.h"
 #include "engine/attitude/attitude_filter.h"
 #include "tests/attitude/broad_trials.h"
+#include "tests/attitude/options_from_environment.h"
 
 namespace localizer::engine {
 namespace {
@@ -163,34 +164,12 @@ TEST(FastMotionTest, LowpassOrderIsValidated) {
   EXPECT_TRUE(CreateAttitudeFilter(options).ok());
 }
 
-// Options from ATT_OPT="name=value,name=value" over the defaults.
-AttitudeFilterOptions OptionsFromEnvironment() {
-  AttitudeFilterOptions options;
-  const char* text = std::getenv("ATT_OPT");
-  if (text == nullptr) return options;
-  std::map<std::string, double AttitudeFilterOptions::*> fields;
-  for (const auto& [name, member] : AttitudeNumericOptions()) fields.emplace(name, member);
-  std::string rest = text;
-  while (!rest.empty()) {
-    const size_t comma = rest.find(',');
-    const std::string item = rest.substr(0, comma);
-    rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
-    const size_t eq = item.find('=');
-    const auto it = fields.find(item.substr(0, eq));
-    if (eq == std::string::npos || it == fields.end()) {
-      ADD_FAILURE() << "ATT_OPT: unknown " << item;
-      continue;
-    }
-    options.*(it->second) = std::atof(item.c_str() + eq + 1);
-  }
-  return options;
-}
 
 // Not a test: the simulated cases (five seeds each; both bands at half, once and twice the
 // amplitudes) and the three BROAD trials with the options in ATT_OPT. Run with
 //   build/tests/fast_motion_test --gtest_also_run_disabled_tests --gtest_filter='*Study'
 TEST(FastMotionTest, DISABLED_Study) {
-  const AttitudeFilterOptions options = OptionsFromEnvironment();
+  const AttitudeFilterOptions options = testing::OptionsFromEnvironment();
   const double bands[2][2] = {{2.0, 5.0}, {0.5, 1.5}};
   for (const auto& band : bands) {
     for (const double scale : {0.5, 1.0, 2.0}) {
@@ -230,7 +209,7 @@ TEST(FastMotionTest, DISABLED_Trace) {
   const int t = std::getenv("ATT_TRIAL") ? std::atoi(std::getenv("ATT_TRIAL")) : 1;
   const io::ImuRecording* trial = testing::BroadTrial(testing::BroadTrialPaths()[t]);
   ASSERT_NE(trial, nullptr);
-  const AttitudeFilterOptions options = OptionsFromEnvironment();
+  const AttitudeFilterOptions options = testing::OptionsFromEnvironment();
   auto filter = CreateAttitudeFilter(options);
   ASSERT_TRUE(filter.ok());
   constexpr int kBins = 6;

@@ -31,6 +31,7 @@
 #include "engine/sim/magnetic_disturbance.h"
 #include "tests/attitude/attitude_test_util.h"
 #include "tests/attitude/broad_trials.h"
+#include "tests/attitude/options_from_environment.h"
 #include "tests/attitude/iron_fixtures.h"
 
 namespace localizer::engine {
@@ -129,28 +130,6 @@ Table Evaluate(AttitudeFilterOptions options, uint64_t seed_offset = 0) {
   return table;
 }
 
-// Options from ATT_OPT="name=value,name=value" over the defaults (the study's knob).
-AttitudeFilterOptions OptionsFromEnvironment() {
-  AttitudeFilterOptions options;
-  const char* text = std::getenv("ATT_OPT");
-  if (text == nullptr) return options;
-  std::map<std::string, double AttitudeFilterOptions::*> fields;
-  for (const auto& [name, member] : AttitudeNumericOptions()) fields.emplace(name, member);
-  std::string rest = text;
-  while (!rest.empty()) {
-    const size_t comma = rest.find(',');
-    const std::string item = rest.substr(0, comma);
-    rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
-    const size_t eq = item.find('=');
-    const auto it = fields.find(item.substr(0, eq));
-    if (eq == std::string::npos || it == fields.end()) {
-      ADD_FAILURE() << "ATT_OPT: unknown " << item;
-      continue;
-    }
-    options.*(it->second) = std::atof(item.c_str() + eq + 1);
-  }
-  return options;
-}
 
 void PrintRow(const std::string& name, const double* row) {
   std::printf("%-30s %7.2f %7.2f %7.2f %7.2f\n", name.c_str(), row[0], row[1], row[2],
@@ -264,7 +243,7 @@ TEST(MagDisturbanceTest, DISABLED_Study) {
   const char* text = std::getenv("ATT_OPT");
   const char* seed = std::getenv("ATT_SEED");
   Print(text != nullptr ? text : "defaults",
-        Evaluate(OptionsFromEnvironment(), seed != nullptr ? std::strtoull(seed, nullptr, 10) : 0));
+        Evaluate(testing::OptionsFromEnvironment(), seed != nullptr ? std::strtoull(seed, nullptr, 10) : 0));
 }
 
 // Not a test: a trace of one trial and case (ATT_TRIAL = 0..2, ATT_CASE = 0..6 in kCases order) every 2 s,
@@ -277,7 +256,7 @@ TEST(MagDisturbanceTest, DISABLED_Trace) {
   ASSERT_NE(trial, nullptr);
   const uint64_t seed_offset = std::getenv("ATT_SEED") ? std::strtoull(std::getenv("ATT_SEED"), nullptr, 10) : 0;
   const std::vector<ImuSample> samples = Disturbed(*trial, kCases[c], 1000 * (t + 1) + seed_offset);
-  AttitudeFilterOptions options = OptionsFromEnvironment();
+  AttitudeFilterOptions options = testing::OptionsFromEnvironment();
   options.use_mag = std::getenv("ATT_NOMAG") == nullptr;
   auto filter = std::make_unique<QuaternionEkf>(options);
   double next_s = 0.0;
@@ -312,7 +291,7 @@ namespace {
 
 // Not a test: 6D inclination RMSE per trial binned by the gyro's rate (where the error is).
 TEST(MagDisturbanceTest, DISABLED_InclinationByRate) {
-  const AttitudeFilterOptions options = OptionsFromEnvironment();
+  const AttitudeFilterOptions options = testing::OptionsFromEnvironment();
   for (const std::string& path : testing::BroadTrialPaths()) {
     const io::ImuRecording* trial = testing::BroadTrial(path);
     ASSERT_NE(trial, nullptr);
