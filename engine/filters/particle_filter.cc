@@ -197,20 +197,17 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
   // near the peak (Oudjane & Musso 2000).
   if (s.tempered_updates_left == 0) {
     report.ess = AdaptiveUpdate(m, &report.likelihood_stages);
-    s.noise.Finish(s.innovations, m.sample_rate_hz, &report);
-    impl_->ess = report.ess;
-    return report;
-  }
-  const int stages = kTemperedStages;
-  report.likelihood_stages = stages;
-  --s.tempered_updates_left;
-  for (int stage = 0; stage < stages; ++stage) {
-    std::vector<InnovationMoments>* innovations = stage == 0 ? &s.innovations : &s.later_innovations;
-    s.set.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness, innovations,
-                1.0f / static_cast<float>(stages));
-    report.ess = impl_->set.NormaliseWeights();
-    const bool last = stage + 1 == stages;
-    if (!last || report.ess < o.resample_threshold * o.particles) impl_->set.ResampleSystematic(o.kernel_scale);
+  } else {
+    --s.tempered_updates_left;
+    report.likelihood_stages = kTemperedStages;
+    for (int stage = 0; stage < kTemperedStages; ++stage) {
+      std::vector<InnovationMoments>* innovations = stage == 0 ? &s.innovations : &s.later_innovations;
+      s.set.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness, innovations,
+                  1.0f / static_cast<float>(kTemperedStages));
+      report.ess = s.set.NormaliseWeights();
+      const bool last = stage + 1 == kTemperedStages;
+      if (!last || report.ess < o.resample_threshold * o.particles) s.set.ResampleSystematic(o.kernel_scale);
+    }
   }
   s.noise.Finish(s.innovations, m.sample_rate_hz, &report);  // the prior's innovations
   impl_->ess = report.ess;

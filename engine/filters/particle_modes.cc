@@ -92,10 +92,9 @@ void ParticleSet::ScoreLabels(float exponent) {
   }
   const float top = *std::max_element(best.begin(), best.end());
   for (int c = 0; c < labels_; ++c) {
-    const float raw = std::isfinite(best[static_cast<size_t>(c)]) ? top - best[static_cast<size_t>(c)] : INFINITY;
-    label_gap_[static_cast<size_t>(c)] = raw;
+    const float gap = std::isfinite(best[static_cast<size_t>(c)]) ? exponent * (top - best[static_cast<size_t>(c)]) : INFINITY;
     float& d = label_deficit_[static_cast<size_t>(c)];
-    d = kContenderDecay * d + (std::isfinite(raw) ? exponent * raw : INFINITY);
+    d = kContenderDecay * d + gap;
   }
 }
 

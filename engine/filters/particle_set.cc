@@ -306,12 +306,6 @@ double ParticleSet::Untemper(float r) {
   const float* __restrict ll = loglik_.data();
 #pragma omp simd
   for (int i = 0; i < n_; ++i) logw[i] -= r * ll[i];
-  if (labels_ > 1) {
-    for (int c = 0; c < labels_; ++c) {
-      const float gap = label_gap_[static_cast<size_t>(c)];
-      if (std::isfinite(gap)) label_deficit_[static_cast<size_t>(c)] -= r * gap;
-    }
-  }
   return NormaliseWeights();
 }
 

@@ -108,9 +108,10 @@ class ParticleSet {
   double NormaliseWeights();
   // Adaptive tempering of the last Weigh (its log-likelihoods are kept until the next one):
   // EssIfUntempered(r) is the ESS the weights would have with r x that log-likelihood taken
-  // back out, without changing anything; Untemper(r) takes it out (the labels' evidence too)
-  // and normalises, returning the ESS. So after Weigh(exponent e), Untemper(e - b) leaves
-  // the prior's weights times likelihood^b. r in [0, e].
+  // back out, without changing anything; Untemper(r) takes it out and normalises, returning
+  // the ESS. So after Weigh(exponent e), Untemper(e - b) leaves the prior's weights times
+  // likelihood^b. r in [0, e]. Single label only (labels() <= 1): the labels' evidence
+  // (ScoreLabels) is not taken back.
   double EssIfUntempered(float r) const;
   double Untemper(float r);
   // Systematic resampling (one uniform offset, N evenly spaced pointers); weights equal.
@@ -218,7 +219,6 @@ class ParticleSet {
   int labels_ = 1;                           // components alive (1: single-mode)
   // Per label: the decayed sum of (best log-likelihood of all) - (its best), per update.
   std::array<float, kMaxLabels> label_deficit_{};
-  std::array<float, kMaxLabels> label_gap_{};  // the last Weigh's per-label gap (nats, untempered)
   void ScoreLabels(float exponent);     // after Weigh while labels_ > 1
   // Each label's share with the heaviest kMaxContenders contenders raised to kContenderShare
   // and the others scaled down to make room (normalised); which were raised, if asked.

@@ -54,18 +54,20 @@ Pipeline Make(const PlaneWaveScene& scene) {
   return {std::move(srp), std::move(tracker)};
 }
 
-// A talker's peak at elevation 0.3 rad, statistic 20 against a threshold of 4.3, with the
-// given rise (past the threshold: an onset).
-DirectionPeak TalkerPeak(double azimuth_rad, double rise) {
+// A peak against a threshold of 4.3 with the given rise (past the threshold: an onset).
+DirectionPeak PeakAt(double azimuth_rad, double elevation_rad, double statistic, double rise) {
   DirectionPeak peak;
-  peak.direction = FromAzimuthElevation(azimuth_rad, 0.3);
+  peak.direction = FromAzimuthElevation(azimuth_rad, elevation_rad);
   peak.azimuth_rad = azimuth_rad;
-  peak.elevation_rad = 0.3;
-  peak.statistic = 20.0;
+  peak.elevation_rad = elevation_rad;
+  peak.statistic = statistic;
   peak.threshold = 4.3;
   peak.rise = rise;
   return peak;
 }
+
+// A talker's peak at elevation 0.3 rad, statistic 20.
+DirectionPeak TalkerPeak(double azimuth_rad, double rise) { return PeakAt(azimuth_rad, 0.3, 20.0, rise); }
 
 // Per frame: the truths (empty direction = silent), and the confirmed tracks' ids nearest
 // each truth (0: none within 0.15 rad). Counts identity switches and false-track frames.
@@ -186,16 +188,8 @@ TEST(DirectionTracker, NoiseAloneConfirmsNothing) {
 // at frame 40 it jumps 1 rad (the track cannot follow: it coasts, unheard), and the new
 // direction gets a track once 0.25 s have passed. With the rule off neither is ever started.
 TEST(DirectionTracker, ASteadySourceWithoutOnsetsIsStartedOnlyByTheLostSourceRule) {
-  const auto steady = [](double azimuth_rad) {
-    DirectionPeak peak;
-    peak.direction = FromAzimuthElevation(azimuth_rad, 0.4);
-    peak.azimuth_rad = azimuth_rad;
-    peak.elevation_rad = 0.4;
-    peak.statistic = 40.0;
-    peak.threshold = 4.3;
-    peak.rise = 0.5;  // below the threshold: no onset anywhere
-    return peak;
-  };
+  // rise 0.5: below the threshold, no onset anywhere.
+  const auto steady = [](double azimuth_rad) { return PeakAt(azimuth_rad, 0.4, 40.0, 0.5); };
   const DirectionPeak a = steady(0.3), b = steady(1.3);
   for (double lost_after_s : {0.25, 0.0}) {
     DirectionTrackerOptions options;
