@@ -18,7 +18,8 @@
 // talker, nearest to it, beyond the first: one talker reported under two ids).
 //
 //   build/tests/bench/doa_room_report [--seconds 20] [--seed 1] [--max-sources 4] [--relative 0]
-//                                     [--coast-decay 0.2] [--dump peaks_and_tracks.csv]
+//                                     [--coast-decay 0.2] [--resume-rise 0.3]
+//                                     [--dump peaks_and_tracks.csv]
 //                                     (--help: the tracker's options; --coast-decay 0: no decay, as before)
 #include <algorithm>
 #include <cmath>
@@ -48,7 +49,7 @@ double Wrap(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, const std::string& dump_path,
         const DirectionTrackerOptions& tracking_flags) {
   FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
-  if (dump) std::fprintf(dump, "kind,rt60,frame,on0,on1,energy,onset,rank,id,status,az,el,stat,rise,dist0,dist1\n");
+  if (dump) std::fprintf(dump, "kind,rt60,frame,on0,on1,energy,onset,rank,id,status,az,el,stat,rise,dist0,dist1,threshold\n");
   const Vec3 centre(2.2, 1.9, 1.0);
   const double a = 0.0405;
   std::vector<Vec3> board, relative{Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
@@ -137,12 +138,12 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
         };
         for (size_t r = 0; r < peaks->size(); ++r) {
           const DirectionPeak& p = (*peaks)[r];
-          std::fprintf(dump, "p,%.1f,%d,%d,%d,%.6g,%d,%zu,0,0,%.4f,%.4f,%.3f,%.3f,%.2f,%.2f\n", rt60_s, frames,
+          std::fprintf(dump, "p,%.1f,%d,%d,%d,%.6g,%d,%zu,0,0,%.4f,%.4f,%.3f,%.3f,%.2f,%.2f,%.3f\n", rt60_s, frames,
                        on_of(0), on_of(1), energy, int(tracker->last_frame_onset()), r, p.azimuth_rad, p.elevation_rad,
-                       p.statistic, p.rise, dist(p.azimuth_rad, 0), dist(p.azimuth_rad, 1));
+                       p.statistic, p.rise, dist(p.azimuth_rad, 0), dist(p.azimuth_rad, 1), p.threshold);
         }
         for (const SourceTrack& tr : tracks)
-          std::fprintf(dump, "t,%.1f,%d,%d,%d,%.6g,%d,0,%llu,%d,%.4f,%.4f,0,0,%.2f,%.2f\n", rt60_s, frames, on_of(0),
+          std::fprintf(dump, "t,%.1f,%d,%d,%d,%.6g,%d,0,%llu,%d,%.4f,%.4f,0,0,%.2f,%.2f,0\n", rt60_s, frames, on_of(0),
                        on_of(1), energy, int(tracker->last_frame_onset()), static_cast<unsigned long long>(tr.id),
                        static_cast<int>(tr.status), tr.azimuth_rad, tr.elevation_rad, dist(tr.azimuth_rad, 0),
                        dist(tr.azimuth_rad, 1));
@@ -228,6 +229,9 @@ int main(int argc, char** argv) {
   flags.Double("resume-after", &tracking.resume_after_s, "S", "s",
                "DirectionTrackerOptions::resume_after_s: a track silent this long resumes only on a rising peak (0: "
                "off)");
+  flags.Double("resume-rise", &tracking.resume_rise_share, "R", "",
+               "DirectionTrackerOptions::resume_rise_share: a silent track also resumes on a peak near where a "
+               "source was last heard that rose R x the threshold (1: off, only rises past the threshold)");
   flags.Double("accel", &tracking.angular_accel_noise_radps2, "A", "rad/s^2",
                "DirectionTrackerOptions::angular_accel_noise_radps2");
   flags.Double("rate-sigma", &tracking.initial_rate_sigma_radps, "S", "rad/s",
