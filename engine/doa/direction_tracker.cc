@@ -10,9 +10,6 @@ constexpr double kMaxSigmaRad = 0.5;  // a track more uncertain than this is del
 // Two directions are one source's when SameSourceD2 is below this: the chi^2_3 quantile at
 // 0.9995, the tracker's gate (tws_options.h), so within about 4.2 x sqrt(2) peak sigmas.
 constexpr double kSameSourceGate = 17.73;
-// A weak onset resumes a silent track only near the anchor of a track that has taken its
-// frame's strongest peak this many times (direction_tracker.h, "Resuming").
-constexpr int kLeadHitsToResumeWeakly = 5;
 }  // namespace
 
 Status DirectionTrackerOptions::Validate() const {
@@ -30,8 +27,6 @@ Status DirectionTrackerOptions::Validate() const {
     return InvalidArgument("resume_after_s must be >= 0 (and at most 1e6 frames)");
   if (!(lost_source_after_s >= 0.0) || !std::isfinite(lost_source_after_s))
     return InvalidArgument("lost_source_after_s must be >= 0");
-  if (!(resume_rise_share >= 0.0) || resume_rise_share > 1.0)
-    return InvalidArgument("resume_rise_share must be in [0, 1]");
   if (steady_hits < 1) return InvalidArgument("steady_hits must be >= 1");
   if (!(coast_rate_decay_s >= 0.0) || !std::isfinite(coast_rate_decay_s))
     return InvalidArgument("coast_rate_decay_s must be finite and >= 0");
@@ -98,7 +93,7 @@ double DirectionTracker::SameSourceD2(const Vec3& a, const Vec3& b) const {
   return angle * angle / (2.0 * options_.peak_sigma_rad * options_.peak_sigma_rad);
 }
 
-void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser, const DirectionPeak* strongest) {
+void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
   for (auto it = lineage_.begin(); it != lineage_.end();) {  // forget the deleted tracks
     const uint64_t id = it->first;
     const bool alive =
@@ -106,13 +101,11 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser, co
     it = alive ? std::next(it) : lineage_.erase(it);
   }
   const bool linear = shape_.shape == ArrayShape::kLinear;
-  const auto unit = [&](const DirectionPeak& p) {
-    return linear ? Vec3(std::cos(p.cone_angle_rad), std::sin(p.cone_angle_rad), 0.0) : p.direction;
-  };
-  const Vec3 riser_u = riser ? unit(*riser) : Vec3::Zero();
-  const Vec3 strongest_u = strongest ? unit(*strongest) : Vec3::Zero();
-  uint64_t riser_track = 0, strongest_track = 0;
-  double riser_d2 = kSameSourceGate, strongest_d2 = kSameSourceGate;
+  const Vec3 riser_u = !riser ? Vec3::Zero()
+                       : linear ? Vec3(std::cos(riser->cone_angle_rad), std::sin(riser->cone_angle_rad), 0.0)
+                                : riser->direction;
+  uint64_t riser_track = 0;
+  double riser_d2 = kSameSourceGate;
   for (const tws::TrackReport& r : reports_) {
     Lineage& l = lineage_[r.id];
     const bool born = l.reported_id == 0;
@@ -126,13 +119,8 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser, co
       const double d2 = SameSourceD2(u, riser_u);
       if (d2 < riser_d2) riser_d2 = d2, riser_track = r.id;
     }
-    if (strongest && hit) {  // the track that took the frame's strongest peak (as far as one can tell)
-      const double d2 = SameSourceD2(u, strongest_u);
-      if (d2 < strongest_d2) strongest_d2 = d2, strongest_track = r.id;
-    }
   }
   if (riser_track != 0) lineage_[riser_track].anchor = riser_u, lineage_[riser_track].anchor_s = t_s;
-  if (strongest_track != 0) ++lineage_[strongest_track].lead_hits;
   // A track confirmed now, where another's source was last heard, is that source resuming:
   // it joins that track's identity.
   for (const tws::TrackReport& r : reports_) {
@@ -185,15 +173,6 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     echo_statistic_ = open ? std::max(echo_statistic_, riser->statistic) : riser->statistic;
     echo_until_s_ = t_s + options_.echo_window_s;
   }
-  // Where the confirmed tracks' sources were last heard (weak onsets, see "Resuming").
-  const auto near_anchor = [&](const Vec3& u) {
-    return std::any_of(lineage_.begin(), lineage_.end(), [&](const auto& entry) {
-      const Lineage& l = entry.second;
-      return l.confirmed && l.lead_hits >= kLeadHitsToResumeWeakly && l.anchor.allFinite() &&
-             SameSourceD2(u, l.anchor) < kSameSourceGate;
-    });
-  };
-  const bool echo_open = t_s <= echo_until_s_;
   plots_.clear();
   for (const DirectionPeak& peak : peaks) {
     const Vec3 u = linear ? Vec3(std::cos(peak.cone_angle_rad), std::sin(peak.cone_angle_rad), 0.0) : peak.direction;
@@ -208,10 +187,7 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     plot.may_start_track =
         !options_.start_at_onsets_only ||
         (may_start && ((!echo_blocks && &peak == riser && peak.rise >= peak.threshold) || strongest));
-    // A weak onset near where a confirmed track's source was last heard (see "Resuming").
-    const bool weak_onset = peak.rise >= options_.resume_rise_share * peak.threshold && may_start &&
-                            !(echo_open && peak.statistic < echo_statistic_) && near_anchor(u);
-    plot.may_resume_track = peak.rise >= peak.threshold || weak_onset;  // used only when resume_after_s > 0
+    plot.may_resume_track = peak.rise >= peak.threshold;  // used only when resume_after_s > 0
     if (linear) {
       const Mat3 radial = u * u.transpose();
       plot.covariance_m2 = s2 * (Mat3::Identity() - radial) + kRadialShare * kRadialShare * s2 * radial;
@@ -223,7 +199,7 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   }
   LOCALIZER_RETURN_IF_ERROR(tracker_->ProcessCartesian(t_s, plots_));
   tracker_->Tracks(&reports_, true);
-  UpdateLineages(t_s, riser && riser->rise >= riser->threshold ? riser : nullptr, peaks.empty() ? nullptr : &peaks.front());
+  UpdateLineages(t_s, riser && riser->rise >= riser->threshold ? riser : nullptr);
   bool heard = false;
   out->clear();
   for (const tws::TrackReport& r : reports_) {

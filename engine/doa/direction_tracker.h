@@ -49,26 +49,13 @@
 // sounding is not. So a track silent for resume_after_s or more is updated only by a peak
 // whose rise passes the threshold (TwsOptions::resume_misses,
 // CartesianPlot::may_resume_track); it is taken after the tracks heard lately have taken
-// theirs. A talker that resumes while another talks on, though, often rises by less: its
-// direct sound adds to a field the other's reverberation already fills (in
-// tests/bench/doa_room_report, seed 18 at RT60 0.4 s: rises of 1.8-3.5 against a threshold
-// of 4.3 in the first frames, while its track rested 7 degrees from it; the track was deleted
-// after max_coast_s, and with the other talker heard nothing started on it again for a
-// second). So a peak whose
-// rise is at least resume_rise_share (0.3) of the threshold may resume a silent track too
-// (a weak onset), when
-//   - it lies within the tracker's gate of where a confirmed track's source was last heard
-//     (its anchor, below), and that track has taken its frame's strongest peak at least 5
-//     times: a source is the strongest whenever it sounds alone, a reflection never while its
-//     source sounds, so a track born on a reflection (0-1 such frames in the room study; a
-//     talker's track hundreds) is not kept alive by its reflection's weak rises;
-//   - the frame's power did not fall, and no stronger source rose within echo_window_s.
-// Without the anchor test seed 4 at 0.2 s rose from 4.9 to 7.5 s of false track per minute;
-// without the strongest-peak test a track born on a reflection lived twice as long on seed
-// 14 at 0.4 s (12.5 -> 26.8 s per minute). Shares 0.2-0.4 gave the same detection on seeds
-// 1-6, 0.5 and 0.7 less; asking for the weak rise in two frames in a row kept less
-// (ACCURACY.md). Cost: a source that never sounded alone (or loudest) resumes only on a rise
-// past the threshold, as before.
+// theirs. Cost: a talker that resumes while another talks on often rises by less (its direct
+// sound adds to a room the other's reverberation fills: 1.8-3.5 against a threshold of 4.3 in
+// tests/bench/doa_room_report, seed 18 at RT60 0.4 s); its track is deleted after max_coast_s
+// and, with the other talker heard, nothing starts on it again until a clear onset. Letting
+// weaker rises (0.3 x the threshold) near where a track's source was heard resume it raised
+// detection by up to 18 points but also kept tracks on reflections 15-25 degrees from a talker
+// alive (more false and duplicate track time on unseen seeds): tried, not kept (ACCURACY.md).
 //
 // Identities. A paused talker's track does not always survive its pause: it coasts on its
 // rate estimate (about 0.2-0.5 rad/s in a room, from the peaks' scatter), or it takes stray
@@ -144,11 +131,6 @@ struct DirectionTrackerOptions {
   // A track silent this long (0: off) is resumed only by a peak that rose past the threshold
   // (see "Resuming" above).
   double resume_after_s = 0.25;
-  // A weak onset may resume a silent track too (see "Resuming"; 1: off): a peak whose rise is
-  // at least this share of the threshold, within the tracker's gate of where a confirmed
-  // track's source was last heard, on a frame whose power did not fall, and not weaker than a
-  // source that rose within echo_window_s.
-  double resume_rise_share = 0.3;
   // A track confirmed where another track's source was last heard takes that track's identity
   // (see "Identities" above; false: every track keeps its own).
   bool continue_identities = true;
@@ -195,24 +177,21 @@ class DirectionTracker {
   // arrays): one source's when below the tracker's gate.
   double SameSourceD2(const Vec3& a, const Vec3& b) const;
   // After a scan (reports_ holds every track, tentative too): anchors, and identities
-  // continued. `riser`: the frame's peak that rose past the threshold most, or null;
-  // `strongest`: the frame's strongest peak, or null.
-  void UpdateLineages(double t_s, const DirectionPeak* riser, const DirectionPeak* strongest);
+  // continued. `riser`: the frame's peak that rose past the threshold most, or null.
+  void UpdateLineages(double t_s, const DirectionPeak* riser);
   ArrayShapeInfo shape_;
   DirectionTrackerOptions options_;
   std::unique_ptr<tws::TwsTracker> tracker_;
   OnsetDetector onset_;
   double echo_until_s_ = -1e300;
   double echo_statistic_ = 0.0;
-  double unheard_s_ = 1e300;
-  std::vector<Vec3> weak_risers_;  // the last frame's peaks that rose slow_rise_share x threshold  // since a reported confirmed track last took a peak (none yet: forever)
+  double unheard_s_ = 1e300;  // since a reported confirmed track last took a peak (none yet: forever)
   // Per track of the tws tracker (by its id).
   struct Lineage {
     uint64_t reported_id = 0;  // the identity it reports: its own, or the one it continues
     bool confirmed = false;    // has been confirmed
     bool shown = true;         // it speaks for its identity (of those that share it, the one heard last)
     int run = 0;  // hits in a row
-    int lead_hits = 0;  // frames in which it took the frame's strongest peak
     // Where its source was last heard: its first plot, the latest rising peak it took, or
     // its position after steady_hits hits in a row. NaN before the first.
     Vec3 anchor = Vec3::Constant(DirectionPeak::kNan);

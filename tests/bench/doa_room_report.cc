@@ -18,8 +18,7 @@
 // talker, nearest to it, beyond the first: one talker reported under two ids).
 //
 //   build/tests/bench/doa_room_report [--seconds 20] [--seed 1] [--max-sources 4] [--relative 0]
-//                                     [--coast-decay 0.2] [--resume-rise 0.3]
-//                                     [--dump peaks_and_tracks.csv]
+//                                     [--coast-decay 0.2] [--dump peaks_and_tracks.csv]
 //                                     (--help: the tracker's options; --coast-decay 0: no decay, as before)
 #include <algorithm>
 #include <cmath>
@@ -49,7 +48,8 @@ double Wrap(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, const std::string& dump_path,
         const DirectionTrackerOptions& tracking_flags) {
   FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
-  if (dump) std::fprintf(dump, "kind,rt60,frame,on0,on1,energy,onset,rank,id,status,az,el,stat,rise,dist0,dist1,threshold\n");
+  if (dump)  // threshold: the peak's (SrpPhat's t, what its rise is held to); 0 on track rows
+    std::fprintf(dump, "kind,rt60,frame,on0,on1,energy,onset,rank,id,status,az,el,stat,rise,dist0,dist1,threshold\n");
   const Vec3 centre(2.2, 1.9, 1.0);
   const double a = 0.0405;
   std::vector<Vec3> board, relative{Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
@@ -229,9 +229,6 @@ int main(int argc, char** argv) {
   flags.Double("resume-after", &tracking.resume_after_s, "S", "s",
                "DirectionTrackerOptions::resume_after_s: a track silent this long resumes only on a rising peak (0: "
                "off)");
-  flags.Double("resume-rise", &tracking.resume_rise_share, "R", "",
-               "DirectionTrackerOptions::resume_rise_share: a silent track also resumes on a peak near where a "
-               "source was last heard that rose R x the threshold (1: off, only rises past the threshold)");
   flags.Double("accel", &tracking.angular_accel_noise_radps2, "A", "rad/s^2",
                "DirectionTrackerOptions::angular_accel_noise_radps2");
   flags.Double("rate-sigma", &tracking.initial_rate_sigma_radps, "S", "rad/s",
