@@ -49,7 +49,13 @@
 // sounding is not. So a track silent for resume_after_s or more is updated only by a peak
 // whose rise passes the threshold (TwsOptions::resume_misses,
 // CartesianPlot::may_resume_track); it is taken after the tracks heard lately have taken
-// theirs.
+// theirs. Cost: a talker that resumes while another talks on often rises by less (its direct
+// sound adds to a room the other's reverberation fills: 1.8-3.5 against a threshold of 4.3 in
+// tests/bench/doa_room_report, seed 18 at RT60 0.4 s); its track is deleted after max_coast_s
+// and, with the other talker heard, nothing starts on it again until a clear onset. Letting
+// weaker rises (0.3 x the threshold) near where a track's source was heard resume it raised
+// detection by up to 18 points but also kept tracks on reflections 15-25 degrees from a talker
+// alive (more false and duplicate track time on unseen seeds): tried, not kept (ACCURACY.md).
 //
 // Identities. A paused talker's track does not always survive its pause: it coasts on its
 // rate estimate (about 0.2-0.5 rad/s in a room, from the peaks' scatter), or it takes stray

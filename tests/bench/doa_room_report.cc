@@ -48,7 +48,8 @@ double Wrap(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, const std::string& dump_path,
         const DirectionTrackerOptions& tracking_flags) {
   FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
-  if (dump) std::fprintf(dump, "kind,rt60,frame,on0,on1,energy,onset,rank,id,status,az,el,stat,rise,dist0,dist1\n");
+  if (dump)  // threshold: the peak's (SrpPhat's t, what its rise is held to); 0 on track rows
+    std::fprintf(dump, "kind,rt60,frame,on0,on1,energy,onset,rank,id,status,az,el,stat,rise,dist0,dist1,threshold\n");
   const Vec3 centre(2.2, 1.9, 1.0);
   const double a = 0.0405;
   std::vector<Vec3> board, relative{Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
@@ -137,12 +138,12 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
         };
         for (size_t r = 0; r < peaks->size(); ++r) {
           const DirectionPeak& p = (*peaks)[r];
-          std::fprintf(dump, "p,%.1f,%d,%d,%d,%.6g,%d,%zu,0,0,%.4f,%.4f,%.3f,%.3f,%.2f,%.2f\n", rt60_s, frames,
+          std::fprintf(dump, "p,%.1f,%d,%d,%d,%.6g,%d,%zu,0,0,%.4f,%.4f,%.3f,%.3f,%.2f,%.2f,%.3f\n", rt60_s, frames,
                        on_of(0), on_of(1), energy, int(tracker->last_frame_onset()), r, p.azimuth_rad, p.elevation_rad,
-                       p.statistic, p.rise, dist(p.azimuth_rad, 0), dist(p.azimuth_rad, 1));
+                       p.statistic, p.rise, dist(p.azimuth_rad, 0), dist(p.azimuth_rad, 1), p.threshold);
         }
         for (const SourceTrack& tr : tracks)
-          std::fprintf(dump, "t,%.1f,%d,%d,%d,%.6g,%d,0,%llu,%d,%.4f,%.4f,0,0,%.2f,%.2f\n", rt60_s, frames, on_of(0),
+          std::fprintf(dump, "t,%.1f,%d,%d,%d,%.6g,%d,0,%llu,%d,%.4f,%.4f,0,0,%.2f,%.2f,0\n", rt60_s, frames, on_of(0),
                        on_of(1), energy, int(tracker->last_frame_onset()), static_cast<unsigned long long>(tr.id),
                        static_cast<int>(tr.status), tr.azimuth_rad, tr.elevation_rad, dist(tr.azimuth_rad, 0),
                        dist(tr.azimuth_rad, 1));
