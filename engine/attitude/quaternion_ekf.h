@@ -111,6 +111,7 @@ class QuaternionEkf final : public AttitudeFilter {
   // the calibration sums restart too (a new offset: what they hold carried the old one).
   void RelearnHeading(bool restart_sums);
   void RestUpdate(const Eigen::Vector3d& gyro_rps);
+  void Symmetrise();
 
   AttitudeFilterOptions options_;
   MagReference mag_reference_;
