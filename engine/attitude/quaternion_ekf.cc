@@ -132,7 +132,7 @@ bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) 
   const Eigen::Matrix3d s_inv = s.inverse();
   const Eigen::Matrix<double, 6, 3> k = pht * s_inv;
   Correct(k * (f / norm - h));
-  p_.noalias() -= k * pht.transpose();  // no 6x6 temporary
+  p_ -= k * pht.transpose();
   return true;
 }
 
@@ -329,7 +329,7 @@ void QuaternionEkf::RestUpdate(const Eigen::Vector3d& gyro_rps) {
   s.diagonal().array() += options_.rest_rate_sd_rps * options_.rest_rate_sd_rps;
   const Eigen::Matrix<double, 6, 3> k = pht * s.inverse();
   Correct(k * (gyro_rps - bias_rps_));
-  p_.noalias() -= k * pht.transpose();
+  p_ -= k * pht.transpose();
 }
 
 void QuaternionEkf::Symmetrise() {
