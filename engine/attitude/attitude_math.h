@@ -19,6 +19,8 @@ namespace localizer::engine {
 
 // Wraps an angle into (-pi, pi].
 inline double WrapAngle(double angle_rad) {
+  // Inside (-pi, pi) remainder returns the angle itself: skip its libm call (most calls).
+  if (std::abs(angle_rad) < M_PI) return angle_rad;
   angle_rad = std::remainder(angle_rad, 2.0 * M_PI);
   return angle_rad <= -M_PI ? angle_rad + 2.0 * M_PI : angle_rad;
 }

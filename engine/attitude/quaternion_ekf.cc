@@ -43,7 +43,8 @@ QuaternionEkf::QuaternionEkf(const AttitudeFilterOptions& options)
     : options_(options),
       mag_reference_(options.mag_reference_s, options.mag_norm_tolerance, options.mag_dip_tolerance_rad),
       hard_iron_(options.mag_calibration_s, options.mag_calibration_diversity, options.mag_calibration_residual),
-      rest_(options.rest_gyro_rps, options.rest_accel_mps2, options.rest_min_s, options.gravity_mps2) {}
+      rest_(options.rest_gyro_rps, options.rest_accel_mps2, options.rest_min_s, options.gravity_mps2),
+      accel_stage_tau_s_(options.accel_lowpass_s / options.accel_lowpass_order) {}
 
 void QuaternionEkf::Initialise(const ImuSample& sample) {
   const Eigen::Vector2d tilt = TiltFromAccelerometer(sample.accel_mps2);
@@ -109,8 +110,7 @@ bool QuaternionEkf::AccelUpdate(const Eigen::Vector3d& accel_mps2, double dt_s) 
   if (options_.accel_lowpass_s > 0.0 && options_.accel_lowpass_order > 1.0) {
     // Two stages of half the time constant: the same delay for slow changes, a second-order
     // roll-off for linear accelerations.
-    const double tau = options_.accel_lowpass_s / options_.accel_lowpass_order;
-    const double alpha = dt_s / (tau + dt_s);
+    const double alpha = dt_s / (accel_stage_tau_s_ + dt_s);
     accel_stage1_mps2_ += alpha * (accel_mps2 - accel_stage1_mps2_);
     accel_lowpass_mps2_ += alpha * (accel_stage1_mps2_ - accel_lowpass_mps2_);
   } else if (options_.accel_lowpass_s > 0.0) {
@@ -303,8 +303,11 @@ bool QuaternionEkf::MagStep(const Eigen::Vector3d& mag_uT, const Eigen::Vector3d
     }
   }
   bool matches_reference = false;
-  const bool used =
-      MagUpdate(r * (mag_correction_ * (mag_uT - mag_offset_uT_)), t_s, dt_s, turning, &matches_reference);
+  // The correction is the identity until a soft-iron fit is adopted: multiplying by it
+  // changes no bit, so it is skipped.
+  const Eigen::Vector3d corrected_uT =
+      soft_iron_in_use_ ? Eigen::Vector3d(mag_correction_ * (mag_uT - mag_offset_uT_)) : mag_uT - mag_offset_uT_;
+  const bool used = MagUpdate(r * corrected_uT, t_s, dt_s, turning, &matches_reference);
   // The fraction of recent samples whose norm and dip match the reference (time constant
   // mag_restart_s). Below one half the field has changed (a magnet arrived, the
   // surroundings changed) and what the fit learnt before no longer describes it: the fit
@@ -329,8 +332,24 @@ void QuaternionEkf::RestUpdate(const Eigen::Vector3d& gyro_rps) {
   p_ -= k * pht.transpose();
 }
 
+void QuaternionEkf::Symmetrise() {
+  // 0.5 (P + P^T) over one triangle, mirrored: the same numbers (a + b == b + a and
+  // 0.5 (a + a) == a), less than half the work.
+#pragma GCC unroll 6
+  for (int j = 1; j < 6; ++j) {
+#pragma GCC unroll 6
+    for (int i = 0; i < j; ++i) p_(i, j) = p_(j, i) = 0.5 * (p_(i, j) + p_(j, i));
+  }
+}
+
 Status QuaternionEkf::Update(const ImuSample& sample) {
-  LOCALIZER_RETURN_IF_ERROR(ValidateImuSample(sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
+  // The common case tested inline: ValidateImuSample builds a Status per check, which cost
+  // about a tenth of an update; it runs only to name what is wrong.
+  const bool plain = initialised_ && sample.t_s > t_s_ && std::isfinite(sample.t_s) && sample.gyro_rps.allFinite() &&
+                     sample.accel_mps2.allFinite();
+  if (!plain) {
+    LOCALIZER_RETURN_IF_ERROR(ValidateImuSample(sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
+  }
   if (!initialised_) {
     Initialise(sample);
     return Status::Ok();
@@ -343,7 +362,7 @@ Status QuaternionEkf::Update(const ImuSample& sample) {
   if (at_rest_) RestUpdate(sample.gyro_rps);
   accel_used_ = AccelUpdate(sample.accel_mps2, dt_s);
   mag_used_ = options_.use_mag && sample.mag_uT.allFinite() && MagStep(sample.mag_uT, rate_rps, sample.t_s, dt_s);
-  p_ = 0.5 * (p_ + p_.transpose()).eval();  // once per sample: rounding only, not per update
+  Symmetrise();  // once per sample: rounding only, not per update
   return Status::Ok();
 }
 

@@ -111,6 +111,7 @@ class QuaternionEkf final : public AttitudeFilter {
   // the calibration sums restart too (a new offset: what they hold carried the old one).
   void RelearnHeading(bool restart_sums);
   void RestUpdate(const Eigen::Vector3d& gyro_rps);
+  void Symmetrise();
 
   AttitudeFilterOptions options_;
   MagReference mag_reference_;
@@ -137,6 +138,7 @@ class QuaternionEkf final : public AttitudeFilter {
   double inconsistent_s_ = 0.0;          // how long it has been outside the gate, while turning
   bool relearning_heading_ = false;      // a new offset or a believed field: no gate until converged
   RestDetector rest_;
+  double accel_stage_tau_s_;  // each low-pass stage's time constant: accel_lowpass_s / order
   Eigen::Quaterniond q_ = Eigen::Quaterniond::Identity();
   Eigen::Vector3d bias_rps_ = Eigen::Vector3d::Zero();
   // The accelerometer low-passed in the (gyro-tracked) world frame, held in body axes: the

@@ -11,6 +11,7 @@
 #include "engine/attitude/attitude_error.h"
 #include "engine/attitude/attitude_filter.h"
 #include "engine/sim/platform_motion.h"
+#include "tests/attitude/estimate_dump.h"
 
 namespace localizer::engine::testing {
 
@@ -31,8 +32,10 @@ inline RunErrors RunFilter(const AttitudeFilterOptions& options, const AttitudeT
   for (const ImuSample& s : samples) {
     const Status status = (*filter)->Update(s);
     EXPECT_TRUE(status.ok()) << status.ToString();
+    const AttitudeEstimate estimate = (*filter)->estimate();
+    DumpEstimate(estimate);
     if (s.t_s < from_s) continue;
-    const AttitudeError e = AttitudeErrorOf((*filter)->estimate().body_to_world, truth.At(s.t_s));
+    const AttitudeError e = AttitudeErrorOf(estimate.body_to_world, truth.At(s.t_s));
     errors.max_total_rad = std::max(errors.max_total_rad, e.total_rad);
     errors.max_heading_rad = std::max(errors.max_heading_rad, e.heading_rad);
     errors.max_inclination_rad = std::max(errors.max_inclination_rad, e.inclination_rad);

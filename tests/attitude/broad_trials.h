@@ -13,6 +13,7 @@
 #include "clients/io/imu_csv.h"
 #include "engine/attitude/attitude_error.h"
 #include "engine/attitude/attitude_filter.h"
+#include "tests/attitude/estimate_dump.h"
 
 namespace localizer::engine::testing {
 
@@ -63,7 +64,9 @@ inline TrialResult RunTrial(const io::ImuRecording& trial, const std::vector<Imu
   for (size_t i = 0; i < samples.size(); ++i) {
     const Status status = (*filter)->Update(samples[i]);
     EXPECT_TRUE(status.ok()) << status.ToString();
-    estimates.push_back((*filter)->estimate().body_to_world);
+    const AttitudeEstimate estimate = (*filter)->estimate();
+    DumpEstimate(estimate);
+    estimates.push_back(estimate.body_to_world);
     if (trial.movement[i] && trial.truth[i].coeffs().allFinite()) {
       Eigen::Quaterniond e = estimates.back() * trial.truth[i].conjugate();
       if (e.w() < 0.0) e.coeffs() = -e.coeffs();

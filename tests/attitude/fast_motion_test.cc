@@ -25,6 +25,7 @@
 #include "engine/attitude/attitude_error.h"
 #include "engine/attitude/attitude_filter.h"
 #include "tests/attitude/broad_trials.h"
+#include "tests/attitude/estimate_dump.h"
 #include "tests/attitude/options_from_environment.h"
 
 namespace localizer::engine {
@@ -126,7 +127,9 @@ double InclinationRmsDeg(const FastCase& c, const AttitudeFilterOptions& options
   for (size_t i = 0; i < c.samples.size(); ++i) {
     const ImuSample& s = c.samples[i];
     EXPECT_TRUE((*filter)->Update(s).ok());
-    const double e = AttitudeErrorOf((*filter)->estimate().body_to_world, c.truth[i]).inclination_rad;
+    const AttitudeEstimate estimate = (*filter)->estimate();
+    testing::DumpEstimate(estimate);
+    const double e = AttitudeErrorOf(estimate.body_to_world, c.truth[i]).inclination_rad;
     if (s.t_s < from_s) continue;
     sum += e * e;
     ++count;
