@@ -88,7 +88,7 @@ void QuaternionEkf::Propagate(const Eigen::Vector3d& rate_rps, double dt_s) {
   const Eigen::Matrix3d ptb = p_.topRightCorner<3, 3>();
   const Eigen::Matrix3d pbb = p_.bottomRightCorner<3, 3>();
   const Eigen::Matrix3d new_ptb = a * ptb - dt_s * pbb;
-  Eigen::Matrix3d new_ptt = (a * ptt - dt_s * ptb.transpose()) * a.transpose() - dt_s * new_ptb.transpose();
+  Eigen::Matrix3d new_ptt = (a * ptt - dt_s * ptb.transpose()) * a.transpose() - dt_s * new_ptb;
   new_ptt.diagonal().array() += options_.gyro_noise_rps_rthz * options_.gyro_noise_rps_rthz * dt_s;
   p_.topLeftCorner<3, 3>() = new_ptt;
   p_.topRightCorner<3, 3>() = new_ptb;
