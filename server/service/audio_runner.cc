@@ -92,7 +92,7 @@ void AudioRunner::ProcessBlock(const BlockWork& block, Clock::time_point receive
   Bump(metrics_->samples, static_cast<double>(block.samples_per_channel));
   const Clock::time_point done = Clock::now();
   for (const engine::Estimate& e : estimates_) {
-    auto response = std::make_shared<v1::TrackResponse>();
+    std::shared_ptr<v1::TrackResponse> response = estimate_pool().TakeEstimate();  // reused once the history is full
     v1::Estimate* wire_estimate = response->mutable_estimate();
     wire::EstimateToProto(e, session_->config().reference_sensor, session_->backend(), wire_estimate);
     wire_estimate->mutable_latency()->set_queue_s(Seconds(started - received));

@@ -5,7 +5,38 @@
 
 namespace localizer::server {
 
-Outbox::Outbox(size_t history_capacity) : history_capacity_(history_capacity) {}
+void EstimatePool::Put(ResponsePtr response) {
+  // use_count is exact here: every other holder of an outbox's response is the outbox itself
+  // (a replay queues its history again) or its caller under the same host lock.
+  if (response == nullptr || response.use_count() != 1 || !response->has_estimate()) return;
+  MutexLock lock(&mutex_);
+  if (spare_.size() < kCapacity) spare_.push_back(std::const_pointer_cast<v1::TrackResponse>(std::move(response)));
+}
+
+std::shared_ptr<v1::TrackResponse> EstimatePool::TakeEstimate() {
+  std::shared_ptr<v1::TrackResponse> response;
+  {
+    MutexLock lock(&mutex_);
+    if (!spare_.empty()) {
+      response = std::move(spare_.back());
+      spare_.pop_back();
+    }
+  }
+  if (response == nullptr) {
+    response = std::make_shared<v1::TrackResponse>();
+    response->mutable_estimate();
+  } else {
+    response->mutable_estimate()->Clear();  // the kind stays `estimate`; its storage stays
+  }
+  return response;
+}
+
+size_t EstimatePool::size() const {
+  MutexLock lock(&mutex_);
+  return spare_.size();
+}
+
+Outbox::Outbox(size_t history_capacity, EstimatePool* pool) : history_capacity_(history_capacity), pool_(pool) {}
 
 void Outbox::Push(ResponsePtr response) {
   if (response->has_estimate() || response->has_tracks()) ++frames_;
@@ -23,7 +54,10 @@ void Outbox::Written() {
   if (!in_flight_) return;
   if (in_flight_->has_estimate()) {
     history_.push_back(std::move(in_flight_));
-    if (history_.size() > history_capacity_) history_.pop_front();
+    if (history_.size() > history_capacity_) {
+      if (pool_ != nullptr) pool_->Put(std::move(history_.front()));
+      history_.pop_front();
+    }
   }
   in_flight_.reset();
 }

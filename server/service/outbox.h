@@ -13,6 +13,8 @@
 // (frame <= it) leave the waiting queue and the history's later ones are queued again before
 // it; with neither only what was never written is sent. The new stream's SessionOpened goes
 // first of all.
+// An estimate the history lets go goes to the session's EstimatePool (when one is given and
+// nothing else holds it), for the runner to fill again.
 // Not thread-safe: the session host guards its outbox with its own lock.
 #pragma once
 
@@ -21,8 +23,10 @@
 #include <deque>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "localizer/v1/localizer.pb.h"
+#include "server/sync/mutex.h"
 
 namespace localizer::server {
 
@@ -34,11 +38,37 @@ struct ResumePoint {
   bool received_none = false;
 };
 
+// Estimate responses kept for reuse. The outbox hands back each estimate its history lets go
+// (Put: only when nothing else holds it), the session's runner fills one again (TakeEstimate)
+// instead of building a new one. A TrackResponse keeps its Estimate, and the Estimate its
+// sub-messages, repeated fields and strings, through Clear; so once a session's history is
+// full (256 estimates, ~12 s of real-time blocks) an estimate allocates nothing: no malloc per
+// sub-message on the worker, no free of them on the gRPC thread that wrote it (which handed
+// the chunks back to the worker's malloc arena, or kept them in its own cache, so that the
+// worker's heap grew again whenever the sessions' share of the two workers shifted).
+// Thread-safe: Put runs with the session host's lock held, TakeEstimate on the worker without
+// it; its own lock is held for a push or a pop only (lock order: host -> pool).
+class EstimatePool final {
+ public:
+  static constexpr size_t kCapacity = 8;  // two estimates a block come and go: a few suffice
+
+  // Keeps `response` if it is an estimate nothing else holds and there is room; else drops it.
+  void Put(ResponsePtr response) EXCLUDES(mutex_);
+  // A response whose estimate is set and empty (as a new one's): a recycled one, or new.
+  std::shared_ptr<v1::TrackResponse> TakeEstimate() EXCLUDES(mutex_);
+  size_t size() const EXCLUDES(mutex_);
+
+ private:
+  mutable Mutex mutex_;
+  std::vector<std::shared_ptr<v1::TrackResponse>> spare_ GUARDED_BY(mutex_);
+};
+
 class Outbox final {
  public:
   static constexpr size_t kHistoryEstimates = 256;
 
-  explicit Outbox(size_t history_capacity = kHistoryEstimates);
+  // `pool` (may be null) receives the estimates the history lets go; it must outlive the outbox.
+  explicit Outbox(size_t history_capacity = kHistoryEstimates, EstimatePool* pool = nullptr);
   Outbox(const Outbox&) = delete;
   Outbox& operator=(const Outbox&) = delete;
 
@@ -62,6 +92,7 @@ class Outbox final {
 
  private:
   const size_t history_capacity_;
+  EstimatePool* const pool_;
   std::deque<ResponsePtr> waiting_;
   ResponsePtr in_flight_;
   std::deque<ResponsePtr> history_;  // estimates written, oldest first

@@ -23,6 +23,7 @@ SessionHost::SessionHost(std::string id, std::string token, std::string label, s
       on_finished_(std::move(on_finished)),
       created_(Clock::now()),
       inbox_(static_cast<size_t>(std::max(1, limits.max_queued_requests)), metrics->queue_depth, created_),
+      outbox_(Outbox::kHistoryEstimates, &runner_->estimate_pool()),
       stream_changed_at_(created_) {}
 
 bool SessionHost::TokenMatches(const std::string& token) const { return ConstantTimeEquals(token, token_); }
@@ -165,7 +166,7 @@ void SessionHost::RunTurn() {
       if (!item) break;
       running_ = true;
     }
-    std::vector<ResponsePtr> responses;
+    std::vector<ResponsePtr>& responses = turn_responses_;  // empty: moved out below
     if (const auto* rejected = std::get_if<Rejection>(&item->work)) {
       responses.push_back(RejectionResponse(*rejected));
     } else {
@@ -175,6 +176,7 @@ void SessionHost::RunTurn() {
     running_ = false;
     inbox_.Done(*item);
     for (ResponsePtr& r : responses) outbox_.Push(std::move(r));
+    responses.clear();  // keeps its capacity for the next item
     if (sink_ != nullptr && input_paused_ && inbox_.has_room()) {
       input_paused_ = false;
       if (!stream_ended_) sink_->ReadMore();

@@ -157,6 +157,9 @@ class SessionHost final : public std::enable_shared_from_this<SessionHost> {
   const std::function<void(const v1::SessionInfo&)> on_finished_;
   const Clock::time_point created_;
   TrackHistory track_;  // appended by the runner; has its own lock
+  // RunTurn's responses of the item in hand, by the scheduled worker only (like runner_'s
+  // Process); kept so that an item allocates no vector.
+  std::vector<ResponsePtr> turn_responses_;
 
   mutable Mutex mutex_;
   Inbox inbox_ GUARDED_BY(mutex_);

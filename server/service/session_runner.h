@@ -75,6 +75,13 @@ class SessionRunner {
   // `track` is the session's live-view history.
   virtual void Process(WorkItem& item, Clock::time_point started, TrackHistory* track,
                        std::vector<ResponsePtr>* out) = 0;
+
+  // Estimate responses to fill again (outbox.h): the session host's outbox puts back what its
+  // history lets go; a runner that answers with estimates takes them from here.
+  EstimatePool& estimate_pool() { return estimate_pool_; }
+
+ private:
+  EstimatePool estimate_pool_;
 };
 
 // The runner for `config`'s kind (FFT plans, particles: the engine session is built here).

@@ -33,6 +33,8 @@ slept and was woken: the hand-offs) and involuntary ones (preempted) per block o
 generator's run, summed over its threads from /proc/<pid>/task/*/status (perf is not
 permitted on every machine); the RESULT line also splits the voluntary ones by thread name
 (nexting_thread: gRPC's callback threads; the binary's name: the worker pool).
+--warmup S starts the server's figures S seconds into the generator's run (heap warm-up
+excluded: minflt/block, the server's minor page faults per block, shows the heap still growing).
 --server BINARY runs another build of localizer-server, so that two builds can be run
 alternately in the same minutes (issue 20).
 
@@ -56,6 +58,13 @@ def process_cpu_s(pid):
         fields = f.read().rsplit(")", 1)[1].split()
     ticks = int(fields[11]) + int(fields[12])  # utime + stime
     return ticks / os.sysconf("SC_CLK_TCK")
+
+
+def process_minor_faults(pid):
+    """Minor page faults of the whole process so far: a heap that grows touches new pages
+    (one fault per 4 KiB first touched), so faults per block falls to ~0 once it stops."""
+    with open(f"/proc/{pid}/stat") as f:
+        return int(f.read().rsplit(")", 1)[1].split()[7])
 
 
 def scrape(port):
@@ -173,21 +182,32 @@ def run_row(args, sessions, mode="plain"):
     no_metrics = {"engine_cpu_s": 0.0, "blocks": 0.0}
     json_path = tempfile.mktemp(prefix="localizer-loadgen-", suffix=".json")
     try:
-        before = scrape(ports["metrics_port"]) if not args.bare else no_metrics
-        cpu0 = process_cpu_s(proc.pid)
-        sw0 = thread_switches(proc.pid)
         cmd = generator_command(args, f"127.0.0.1:{ports['grpc_port']}", sessions, client_flags, json_path)
         gen0 = children_cpu_s()  # the server is not waited for yet: only the generator counts
-        out = subprocess.run(cmd, capture_output=True, text=True)
+        gen = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        if args.warmup > 0:  # the server's figures from here on; the generator's stay whole-run
+            time.sleep(args.warmup)
+        before = scrape(ports["metrics_port"]) if not args.bare else no_metrics
+        cpu0 = process_cpu_s(proc.pid)
+        flt0 = process_minor_faults(proc.pid)
+        sw0 = thread_switches(proc.pid)
+        t0 = time.time()
+        stdout, stderr = gen.communicate()
+        out = subprocess.CompletedProcess(cmd, gen.returncode, stdout, stderr)
+        window_s = time.time() - t0
         gen_cpu = children_cpu_s() - gen0
         cpu1 = process_cpu_s(proc.pid)
+        flt1 = process_minor_faults(proc.pid)
         sw1 = thread_switches(proc.pid)
         after = scrape(ports["metrics_port"]) if not args.bare else no_metrics
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)
     result = generator_result(args, out, json_path)
-    blocks = max(1.0, after["blocks"] - before["blocks"] if not args.bare else result["blocks_sent"])
+    if args.bare and args.warmup > 0:  # no metrics: the window's share of the blocks sent
+        blocks = max(1.0, result["blocks_sent"] * window_s / result["wall_s"])
+    else:
+        blocks = max(1.0, after["blocks"] - before["blocks"] if not args.bare else result["blocks_sent"])
     server_cpu = cpu1 - cpu0
     engine_cpu = after["engine_cpu_s"] - before["engine_cpu_s"]
     vol, invol, by_name = switches_between(sw0, sw1)
@@ -197,7 +217,7 @@ def run_row(args, sessions, mode="plain"):
         "p50_ms": result["latency_ms"]["p50"], "p95_ms": result["latency_ms"]["p95"],
         "p99_ms": result["latency_ms"]["p99"],
         "errors": result["errors"], "rejections": result["rejections"],
-        "server_cpu_cores": server_cpu / result["wall_s"],
+        "server_cpu_cores": server_cpu / (window_s if args.warmup > 0 else result["wall_s"]),
         "server_us_per_block": 1e6 * server_cpu / blocks,
         "engine_us_per_block": 1e6 * engine_cpu / blocks,
         "outside_engine_us_per_block": 1e6 * (server_cpu - engine_cpu) / blocks,
@@ -207,6 +227,8 @@ def run_row(args, sessions, mode="plain"):
         # The server's wake-ups: voluntary context switches (a thread blocked and was woken)
         # and involuntary ones (preempted), per block, over the generator's run.
         "server_vcs_per_block": vol / blocks, "server_ivcs_per_block": invol / blocks,
+        # Heap growth: minor page faults per block (0 once the server's memory stops growing).
+        "server_minflt_per_block": (flt1 - flt0) / blocks, "warmup_s": args.warmup,
         "server_vcs_per_block_by_thread": {k: round(v / blocks, 3) for k, v in sorted(by_name.items()) if v},
     }
 
@@ -218,6 +240,10 @@ def main():
     p.add_argument("--sessions", default="100,200,300", help="comma-separated session counts, one row each")
     p.add_argument("--duration", type=float, default=20.0, help="seconds of streaming per row")
     p.add_argument("--ramp", type=float, default=2.0, help="seconds over which sessions start")
+    p.add_argument("--warmup", type=float, default=0.0,
+                   help="seconds of the generator's run before the server's figures (CPU, switches, faults per "
+                        "block) start counting; 0: the whole run (each session's resume history of 256 estimates "
+                        "takes ~12 s of real-time blocks to fill, the live view's 600 points ~28 s)")
     p.add_argument("--rate", choices=["realtime", "max"], default="realtime")
     p.add_argument("--particles", type=int, default=4096)
     p.add_argument("--encoding", choices=["float", "pcm16"], default="float")
@@ -234,6 +260,8 @@ def main():
     p.add_argument("--security", default="plain",
                    help="comma-separated modes, each row run once per mode: plain, tls, mtls-token")
     args = p.parse_args()
+    if args.warmup > 0 and args.warmup >= args.duration:
+        p.error("--warmup must be shorter than --duration")
     modes = args.security.split(",")
     for mode in modes:
         if mode not in ("plain", "tls", "mtls-token"):
@@ -254,7 +282,7 @@ def main():
           f"4096-sample blocks and frames, hop 2048, {args.encoding}; {os.cpu_count()} CPUs (load generator included); "
           f"generator {args.generator}")
     print("sessions  security    blocks/s  p50_ms  p95_ms  p99_ms  errors  rejected  server_cores  us/block  engine_us  "
-          "outside_us  gen_cores  gen_us/block  vcs/block  ivcs/block")
+          "outside_us  gen_cores  gen_us/block  vcs/block  ivcs/block  minflt/block")
     for n in [int(s) for s in args.sessions.split(",")]:
         for mode in modes:
             r = run_row(args, n, mode)
@@ -263,7 +291,7 @@ def main():
                   f"{r['server_us_per_block']:8.0f}  {r['engine_us_per_block']:9.0f}  "
                   f"{r['outside_engine_us_per_block']:10.0f}  {r['generator_cpu_cores']:9.2f}  "
                   f"{r['generator_us_per_block']:12.0f}  {r['server_vcs_per_block']:9.2f}  "
-                  f"{r['server_ivcs_per_block']:10.2f}", flush=True)
+                  f"{r['server_ivcs_per_block']:10.2f}  {r['server_minflt_per_block']:12.2f}", flush=True)
             print("RESULT " + json.dumps(r), file=sys.stderr)
 
 

@@ -1,7 +1,9 @@
 // A session streamed through the service gives exactly what the engine gives offline,
-// concurrent sessions do not disturb each other, and a finished stream closes its session.
+// also once its estimates are reused past the resume history, concurrent sessions do not
+// disturb each other, and a finished stream closes its session.
 #include <cmath>
 
+#include "server/service/outbox.h"
 #include "tests/server/service_fixture.h"
 
 namespace localizer::server::testing {
@@ -43,6 +45,26 @@ TEST_F(ServiceTest, StreamedScenarioEqualsOfflineTracking) {
   v1::ListSessionsResponse list;
   ASSERT_TRUE(stub_->ListSessions(&context, {}, &list).ok());
   EXPECT_EQ(list.sessions_size(), 0);
+}
+
+// Past the resume history's capacity the outbox hands the estimates it lets go back to the
+// runner, which fills them again (EstimatePool): what the client reads must not change.
+TEST_F(ServiceTest, EstimatesReusedPastTheResumeHistoryStillEqualOfflineTracking) {
+  const Scenario s = MakeScenario("tetra-water", 64.0, 2, kBlock);  // ~340 frames at this scene's rate
+  ASSERT_GT(s.offline.size(), Outbox::kHistoryEstimates + 32);
+  TestStream stream(stub_.get());
+  ASSERT_TRUE(stream.Send(s.OpenRequest()));
+  for (int64_t k = 1; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(stream.Send(s.BlockRequest(k, kBlock)));
+  const grpc::Status status = stream.Close();
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  const auto estimates = stream.estimates();
+  ASSERT_EQ(estimates.size(), s.offline.size());
+  for (size_t i = 0; i < estimates.size(); ++i) {
+    SCOPED_TRACE(i);
+    ExpectSameEstimate(s.offline[i], estimates[i]);
+    EXPECT_EQ(estimates[i].backend(), "cpu");
+    EXPECT_EQ(estimates[i].pairs_size(), estimates[0].pairs_size());
+  }
 }
 
 TEST_F(ServiceTest, Pcm16BlocksTrackTheSource) {
