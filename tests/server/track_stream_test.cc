@@ -11,14 +11,29 @@ namespace {
 
 constexpr int64_t kBlock = 2048;
 
+// Opens `s` on `stream`, sends every block and half-closes; the stream must end OK.
+void StreamWhole(const Scenario& s, TestStream* stream) {
+  ASSERT_TRUE(stream->Send(s.OpenRequest()));
+  for (int64_t k = 1; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(stream->Send(s.BlockRequest(k, kBlock)));
+  const grpc::Status status = stream->Close();
+  ASSERT_TRUE(status.ok()) << status.error_message();
+}
+
+// Every streamed estimate is the offline run's, from the CPU backend.
+void ExpectOfflineEstimates(const Scenario& s, const std::vector<v1::Estimate>& estimates) {
+  ASSERT_EQ(estimates.size(), s.offline.size());
+  for (size_t i = 0; i < estimates.size(); ++i) {
+    SCOPED_TRACE(i);
+    ExpectSameEstimate(s.offline[i], estimates[i]);
+    EXPECT_EQ(estimates[i].backend(), "cpu");
+  }
+}
+
 TEST_F(ServiceTest, StreamedScenarioEqualsOfflineTracking) {
   const Scenario s = MakeScenario("tetra-water", 4.0, 1, kBlock);
   ASSERT_GT(s.offline.size(), 10u);
   TestStream stream(stub_.get());
-  ASSERT_TRUE(stream.Send(s.OpenRequest()));
-  for (int64_t k = 1; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(stream.Send(s.BlockRequest(k, kBlock)));
-  const grpc::Status status = stream.Close();
-  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_NO_FATAL_FAILURE(StreamWhole(s, &stream));
 
   const auto responses = stream.responses();
   ASSERT_FALSE(responses.empty());
@@ -32,13 +47,10 @@ TEST_F(ServiceTest, StreamedScenarioEqualsOfflineTracking) {
   EXPECT_EQ(opened.effective_config().filter().particles(), 1024u);
 
   const auto estimates = stream.estimates();
-  ASSERT_EQ(estimates.size(), s.offline.size());
-  for (size_t i = 0; i < estimates.size(); ++i) {
-    SCOPED_TRACE(i);
-    ExpectSameEstimate(s.offline[i], estimates[i]);
-    EXPECT_EQ(estimates[i].backend(), "cpu");
-    EXPECT_GT(estimates[i].latency().tdoa_s(), 0.0);
-    EXPECT_GE(estimates[i].latency().total_s(), estimates[i].latency().queue_s());
+  ASSERT_NO_FATAL_FAILURE(ExpectOfflineEstimates(s, estimates));
+  for (const v1::Estimate& e : estimates) {
+    EXPECT_GT(e.latency().tdoa_s(), 0.0);
+    EXPECT_GE(e.latency().total_s(), e.latency().queue_s());
   }
   // Half-close means finished: the session is gone.
   grpc::ClientContext context;
@@ -53,18 +65,10 @@ TEST_F(ServiceTest, EstimatesReusedPastTheResumeHistoryStillEqualOfflineTracking
   const Scenario s = MakeScenario("tetra-water", 64.0, 2, kBlock);  // ~340 frames at this scene's rate
   ASSERT_GT(s.offline.size(), Outbox::kHistoryEstimates + 32);
   TestStream stream(stub_.get());
-  ASSERT_TRUE(stream.Send(s.OpenRequest()));
-  for (int64_t k = 1; k <= s.BlockCount(kBlock); ++k) ASSERT_TRUE(stream.Send(s.BlockRequest(k, kBlock)));
-  const grpc::Status status = stream.Close();
-  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_NO_FATAL_FAILURE(StreamWhole(s, &stream));
   const auto estimates = stream.estimates();
-  ASSERT_EQ(estimates.size(), s.offline.size());
-  for (size_t i = 0; i < estimates.size(); ++i) {
-    SCOPED_TRACE(i);
-    ExpectSameEstimate(s.offline[i], estimates[i]);
-    EXPECT_EQ(estimates[i].backend(), "cpu");
-    EXPECT_EQ(estimates[i].pairs_size(), estimates[0].pairs_size());
-  }
+  ASSERT_NO_FATAL_FAILURE(ExpectOfflineEstimates(s, estimates));
+  for (const v1::Estimate& e : estimates) EXPECT_EQ(e.pairs_size(), estimates[0].pairs_size());
 }
 
 TEST_F(ServiceTest, Pcm16BlocksTrackTheSource) {
