@@ -348,7 +348,8 @@ Status QuaternionEkf::Update(const ImuSample& sample) {
   const bool plain = initialised_ && sample.t_s > t_s_ && std::isfinite(sample.t_s) && sample.gyro_rps.allFinite() &&
                      sample.accel_mps2.allFinite();
   if (!plain) {
-    LOCALIZER_RETURN_IF_ERROR(ValidateImuSample(sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
+    LOCALIZER_RETURN_IF_ERROR(
+        ValidateImuSample(sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
   }
   if (!initialised_) {
     Initialise(sample);

@@ -1,11 +1,12 @@
 // The memory the server has promised, against a budget (--memory-budget-mib): admission by
 // cost. A session is charged what its engine state will hold (engine/pipeline/
-// session_memory.h: particles, frames, FFT plans, tracks) when it opens, and a Locate call
+// session_memory.h: particles, frames, FFT plans, tracks) and the estimates the server keeps
+// for its resume (session_charge.h) when it opens, and a Locate call
 // what its one large frame needs, for as long as it runs; what does not fit is refused
 // RESOURCE_EXHAUSTED naming the cost, the use and the budget, before anything is allocated.
 // A charge is returned when its Charge is destroyed (the session closed, the call finished).
 //
-// The budget bounds what the engine holds, not the transport: gRPC's own buffers are bounded
+// The budget bounds what the sessions hold, not the transport: gRPC's own buffers are bounded
 // by its resource quota (transport_limits.h), queued blocks by --max-queue-blocks.
 // Thread-safe.
 #pragma once

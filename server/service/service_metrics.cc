@@ -69,9 +69,10 @@ StatusOr<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(metrics::Regist
   if (!sessions.ok()) return sessions.status();
   m->attached = Series(*sessions, {"attached"});
   m->detached = Series(*sessions, {"detached"});
-  auto budget =
-      r->AddGauge("localizer_memory_budget_bytes",
-                  "Engine memory charged to sessions and Locate calls (used), and the budget (limit).", {"state"});
+  auto budget = r->AddGauge("localizer_memory_budget_bytes",
+                            "Memory charged to sessions (engine state and resume history) and Locate calls (used), "
+                            "and the budget (limit).",
+                            {"state"});
   if (!budget.ok()) return budget.status();
   m->budget_used = Series(*budget, {"used"});
   m->budget_limit = Series(*budget, {"limit"});

@@ -11,7 +11,7 @@
 //   localizer_sessions{state}                sessions held now: attached | detached
 //   localizer_sessions_opened_total{how}     open | resume
 //   localizer_sessions_closed_total{reason}  finished | closed | expired | idle | replaced | shutdown
-//   localizer_memory_budget_bytes{state}     used | limit: engine memory charged to sessions
+//   localizer_memory_budget_bytes{state}     used | limit: memory charged to sessions
 //                                            and Locate calls, and the budget (memory_budget.h)
 //   localizer_queue_depth_blocks             blocks waiting for a worker, all sessions
 //   localizer_engine_cpu_seconds_total       worker-thread CPU inside Session::Process (the

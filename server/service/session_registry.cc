@@ -12,6 +12,7 @@
 #include "engine/pipeline/session_memory.h"
 #include "server/service/log.h"
 #include "server/service/secure_random.h"
+#include "server/service/session_charge.h"
 
 namespace localizer::server {
 namespace {
@@ -60,7 +61,7 @@ StatusOr<std::shared_ptr<SessionHost>> SessionRegistry::Open(const v1::SessionCo
   if (!engine_config.ok()) return engine_config.status();
   MemoryBudget::Charge charge;
   if (budget_ != nullptr) {
-    auto charged = budget_->Reserve(engine::SessionMemoryBytes(*engine_config), "a session of this config");
+    auto charged = budget_->Reserve(SessionChargeBytes(*engine_config), "a session of this config");
     if (!charged.ok()) return charged.status();
     charge = std::move(charged).value();
   }

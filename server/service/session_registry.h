@@ -46,8 +46,8 @@ struct RegistryOptions {
 
 class SessionRegistry final {
  public:
-  // `budget` (may be null: nothing charged) is charged each session's engine memory
-  // (engine/pipeline/session_memory.h) for as long as the session lives.
+  // `budget` (may be null: nothing charged) is charged each session's engine memory and
+  // resume history (session_charge.h) for as long as the session lives.
   SessionRegistry(RegistryOptions options, WorkerPool* pool, ServiceMetrics* metrics, MemoryBudget* budget = nullptr);
   ~SessionRegistry();  // stops the sweep; closes every session
   SessionRegistry(const SessionRegistry&) = delete;

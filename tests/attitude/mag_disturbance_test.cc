@@ -31,8 +31,8 @@
 #include "engine/sim/magnetic_disturbance.h"
 #include "tests/attitude/attitude_test_util.h"
 #include "tests/attitude/broad_trials.h"
-#include "tests/attitude/options_from_environment.h"
 #include "tests/attitude/iron_fixtures.h"
+#include "tests/attitude/options_from_environment.h"
 
 namespace localizer::engine {
 namespace {
@@ -130,7 +130,6 @@ Table Evaluate(AttitudeFilterOptions options, uint64_t seed_offset = 0) {
   return table;
 }
 
-
 void PrintRow(const std::string& name, const double* row) {
   std::printf("%-30s %7.2f %7.2f %7.2f %7.2f\n", name.c_str(), row[0], row[1], row[2],
               (row[0] + row[1] + row[2]) / 3.0);
@@ -196,7 +195,7 @@ double AddedErrorDeg(const io::ImuRecording& trial, const std::vector<Eigen::Qua
     sum += e * e;
     ++count;
   }
-  return std::sqrt(sum / std::max(count, 1L)) / kDeg;
+  return std::sqrt(sum / static_cast<double>(std::max(count, 1L))) / kDeg;
 }
 
 // ±5 % soft iron with a 40 µT magnet on the sensor from the first sample (soft_iron_5pct),

@@ -1,13 +1,19 @@
-// Admission by cost: each session is charged its engine memory (SessionMemoryBytes) against
+// Admission by cost: each session is charged its engine memory and resume history
+// (SessionChargeBytes: SessionMemoryBytes and the estimates kept for a resume) against
 // --memory-budget-mib before it is built, and a config that does not fit is refused
 // RESOURCE_EXHAUSTED naming the flag, while smaller sessions still open and a closed
 // session's share comes back; Locate calls beyond --max-concurrent-locate are refused at
 // once instead of queueing their requests' memory.
+#include <algorithm>
+#include <cstdio>
 #include <future>
 #include <vector>
 
 #include "engine/pipeline/session_memory.h"
+#include "server/service/outbox.h"
+#include "server/service/session_charge.h"
 #include "tests/server/service_fixture.h"
+#include "wire/estimate_wire.h"
 
 namespace localizer::server::testing {
 namespace {
@@ -42,7 +48,7 @@ TEST_F(AdmissionTest, ASessionThatDoesNotFitTheBudgetIsRefusedAndAClosedOneGives
   medium.mutable_open()->mutable_filter()->set_particles(1 << 17);
   auto config = wire::AudioConfigFromProto(medium.open(), wire::ConfigPolicy{});
   ASSERT_TRUE(config.ok());
-  const int64_t each = engine::SessionMemoryBytes(*config);
+  const int64_t each = SessionChargeBytes(engine::SessionConfig(*config));
   ASSERT_GT(3 * each, int64_t{56} << 20);
   ASSERT_LE(2 * each, int64_t{56} << 20);
   TestStream a(stub_.get()), b(stub_.get());
@@ -69,6 +75,31 @@ TEST_F(AdmissionTest, ASessionThatDoesNotFitTheBudgetIsRefusedAndAClosedOneGives
   }
   EXPECT_TRUE(opened);
   ASSERT_TRUE(b.Close().ok());
+}
+
+// The resume history's share is sized from one fully populated response of the session's
+// shape: it must hold every estimate the session really sends (with the latencies the server
+// adds), and not overcharge wildly.
+TEST(SessionCharge, TheHistorysEstimateSizeBoundsEveryEstimateTheSessionSends) {
+  const Scenario s = MakeScenario("tetra-water", 4.0, 1, kBlock);
+  ASSERT_GT(s.offline.size(), 10u);
+  const int64_t bound = EstimateResponseBytes(s.config);
+  int64_t largest = 0;
+  for (const engine::Estimate& e : s.offline) {
+    v1::TrackResponse response;
+    wire::EstimateToProto(e, s.config.reference_sensor, "cpu", response.mutable_estimate());
+    response.mutable_estimate()->mutable_latency()->set_queue_s(1e-3);
+    response.mutable_estimate()->mutable_latency()->set_total_s(2e-3);
+    largest = std::max(largest, static_cast<int64_t>(response.SpaceUsedLong()));
+  }
+  const int64_t engine_bytes = engine::SessionMemoryBytes(engine::SessionConfig(s.config));
+  const int64_t charge = SessionChargeBytes(engine::SessionConfig(s.config));
+  std::printf("estimate response: largest sent %lld B, charged %lld B; session: engine %lld B, charge %lld B\n",
+              static_cast<long long>(largest), static_cast<long long>(bound), static_cast<long long>(engine_bytes),
+              static_cast<long long>(charge));
+  EXPECT_GE(bound, largest);
+  EXPECT_LT(bound, 2 * largest);
+  EXPECT_EQ(charge - engine_bytes, static_cast<int64_t>(Outbox::kHistoryEstimates + EstimatePool::kCapacity) * bound);
 }
 
 TEST_F(AdmissionTest, LocateCallsBeyondTheConcurrencyLimitAreRefusedAtOnce) {

@@ -47,9 +47,9 @@ TEST(RoomScene, TheDirectPathsDelayBetweenSensorsIsTheGeometrys) {
   const std::vector<Vec3> sensors = {Vec3(1.0, 1.0, 1.0), Vec3(1.6, 1.0, 1.0)};
   auto rendered = RenderRoomScene(scene, sensors, 3);
   ASSERT_TRUE(rendered.ok()) << rendered.status().message();
-  const double delay_samples = ((scene.sources[0].position_m - sensors[1]).norm() -
-                                (scene.sources[0].position_m - sensors[0]).norm()) /
-                               343.0 * 16000.0;
+  const double delay_samples =
+      ((scene.sources[0].position_m - sensors[1]).norm() - (scene.sources[0].position_m - sensors[0]).norm()) / 343.0 *
+      16000.0;
   EXPECT_NEAR(MeasuredLag(rendered->samples, rendered->samples_per_channel, 40), delay_samples, 0.6);
 }
 
@@ -89,7 +89,8 @@ TEST(RoomScene, BurstsSoundOnlyInTheirIntervalsAndASeedReplays) {
   }
   ASSERT_GT(on_n, 0);
   ASSERT_GT(off_n, 0);
-  EXPECT_GT(10.0 * std::log10((on / on_n) / (off / off_n)), 20.0);  // noise 40 dB down at 1 m; the source ~3 m off
+  EXPECT_GT(10.0 * std::log10((on / static_cast<double>(on_n)) / (off / static_cast<double>(off_n))),
+            20.0);  // noise 40 dB down at 1 m; the source ~3 m off
   auto again = RenderRoomScene(scene, sensors, 5);
   ASSERT_TRUE(again.ok());
   EXPECT_EQ(again->samples, a->samples);
@@ -129,8 +130,7 @@ TEST(RoomScene, BadScenesAreRefusedNamingTheField) {
   bad.duration_s = 600.0;
   bad.sample_rate_hz = 192000.0;
   EXPECT_NE(bad.Validate(std::vector<Vec3>(4, Vec3(1, 1, 1))).message().find("2e8 samples"), std::string::npos);
-  EXPECT_NE(scene.Validate({Vec3(-1.0, 1.0, 1.0)}).message().find("sensor 0 lies outside the room"),
-            std::string::npos);
+  EXPECT_NE(scene.Validate({Vec3(-1.0, 1.0, 1.0)}).message().find("sensor 0 lies outside the room"), std::string::npos);
   EXPECT_EQ(ParseRoomSignal("speech", "signal").status().code(), StatusCode::kInvalidArgument);
 }
 
