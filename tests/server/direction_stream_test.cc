@@ -4,6 +4,10 @@
 // frame per hop, a talker moving in azimuth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+
+#include "server/service/session_charge.h"
 #include "tests/doa/near_field_scene.h"
 #include "tests/doa/plane_wave.h"
 #include "tests/server/service_fixture.h"
@@ -70,6 +74,16 @@ TEST_F(ServiceTest, ADirectionSessionStreamsTheSameSourcesAsOffline) {
   const auto estimates = stream.estimates();
   ASSERT_EQ(estimates.size(), s.offline.size());
   for (size_t i = 0; i < estimates.size(); ++i) ExpectSameEstimate(s.offline[i], estimates[i]);
+  // Admission's size of this session's estimates (session_charge.h: max_sources sources with
+  // positions) covers every response it sent.
+  const int64_t charged = EstimateResponseBytes(s.config);
+  int64_t largest = 0;
+  for (const v1::TrackResponse& r : responses) {
+    if (r.has_estimate()) largest = std::max(largest, static_cast<int64_t>(r.SpaceUsedLong()));
+  }
+  std::printf("direction estimate response: largest sent %lld B, charged %lld B\n", static_cast<long long>(largest),
+              static_cast<long long>(charged));
+  EXPECT_LE(largest, charged);
 }
 
 // Positions from a line in a stated plane (issue 18): the config's source_plane crosses the
