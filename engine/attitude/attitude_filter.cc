@@ -100,6 +100,12 @@ StatusOr<std::unique_ptr<AttitudeFilter>> CreateAttitudeFilter(const AttitudeFil
 }
 
 Status ValidateImuSample(const ImuSample& sample, double previous_t_s) {
+  // The common case in one test: the checks below build a Status each, which cost about a
+  // tenth of a quaternion update (attitude_bench); they run only to name what is wrong.
+  if (std::isfinite(sample.t_s) && sample.t_s > previous_t_s && sample.gyro_rps.allFinite() &&
+      sample.accel_mps2.allFinite()) {
+    return Status::Ok();
+  }
   if (!std::isfinite(sample.t_s)) {
     return InvalidArgument("IMU sample t_s is " + FormatDouble(sample.t_s) + ", must be finite");
   }

@@ -343,14 +343,7 @@ void QuaternionEkf::Symmetrise() {
 }
 
 Status QuaternionEkf::Update(const ImuSample& sample) {
-  // The common case tested inline: ValidateImuSample builds a Status per check, which cost
-  // about a tenth of an update; it runs only to name what is wrong.
-  const bool plain = initialised_ && sample.t_s > t_s_ && std::isfinite(sample.t_s) && sample.gyro_rps.allFinite() &&
-                     sample.accel_mps2.allFinite();
-  if (!plain) {
-    LOCALIZER_RETURN_IF_ERROR(
-        ValidateImuSample(sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
-  }
+  LOCALIZER_RETURN_IF_ERROR(ValidateImuSample(sample, initialised_ ? t_s_ : -std::numeric_limits<double>::infinity()));
   if (!initialised_) {
     Initialise(sample);
     return Status::Ok();

@@ -127,18 +127,16 @@ Status Despike(const DespikeOptions& options, float* frame, int channels, int sa
         const double share = static_cast<double>(buffers.outliers_before[stride * o + samples]) / samples;
         chance *= 1.0 - std::pow(1.0 - share, span);
       }
+      const int outliers = buffers.outliers_before[stride * c + samples];
+      if (outliers == 0) continue;
       const float* x = frame + static_cast<std::size_t>(c) * samples;
-      int outliers = 0, together = 0;
-      for (int i = 0; i < samples; ++i) {
-        if (!(std::abs(x[i]) > limits[c])) continue;
-        ++outliers;
-        together += coincident(c, i);
-      }
+      int together = 0;
+      for (int i = 0; i < samples; ++i) together += std::abs(x[i]) > limits[c] && coincident(c, i);
       // More than chance by three binomial standard deviations (the test's null: no source),
       // and a majority: where impulses outnumber the source, keeping them costs more.
       const double n = outliers;
       const double expected = chance * n + 3.0 * std::sqrt(n * chance * (1.0 - chance));
-      gated[c] = outliers > 0 && together > std::max(0.5 * n, expected);
+      gated[c] = together > std::max(0.5 * n, expected);
     }
   }
   int clipped = 0;

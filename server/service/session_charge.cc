@@ -4,7 +4,7 @@
 #include <memory>
 #include <variant>
 
-#include "engine/doa/array_shape.h"
+#include "engine/pipeline/session.h"
 #include "engine/pipeline/session_memory.h"
 #include "server/service/outbox.h"
 #include "wire/estimate_wire.h"
@@ -28,12 +28,10 @@ int64_t EstimateResponseBytes(const engine::AudioSessionConfig& config) {
     for (int k = 0; k < kModelProbabilities; ++k) e.model_probabilities.push_back({"ct-right", 0.25});
   }
   if (config.array_in_body_frame) e.platform = engine::PlatformAttitude{};
-  // Sources, where the session follows directions: asked for, or auto on a planar or linear
-  // array (engine/pipeline/session_config.h); they may carry positions.
-  const auto shape = engine::ClassifyArray(config.sensors_m);
-  const bool volumetric = shape.ok() && shape->shape == engine::ArrayShape::kVolumetric;
-  if (config.localization == engine::Localization::kDirection ||
-      (config.localization == engine::Localization::kAuto && !volumetric)) {
+  // Sources, where the session's estimates list them (they may carry positions); a config the
+  // session will refuse is charged as if it did.
+  const StatusOr<bool> reports_sources = engine::ReportsSources(config);
+  if (!reports_sources.ok() || *reports_sources) {
     engine::SourceEstimate source;
     source.direction = engine::Vec3::UnitX();
     source.position_m = engine::Vec3::Zero();

@@ -11,7 +11,7 @@
 //
 // An estimate's size is measured, not guessed: one response of the session's shape is built
 // fully populated (a delay and a quality for every pair; max_sources sources with positions
-// where the session follows directions; the model probabilities of a multiple-model filter;
+// where its estimates list sources, engine::ReportsSources; the model probabilities of a multiple-model filter;
 // a moving array's pose) and asked for its heap (SpaceUsedLong), plus an allowance for the
 // shared pointer and the history's slot. The test holds it between every estimate a session
 // sends and twice the largest.
