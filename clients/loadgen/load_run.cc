@@ -76,7 +76,7 @@ StatusOr<nlohmann::json> RunLoad(const LoadOptions& options, const std::atomic<b
   // is seen within that.
   LatencyCounts previous = stats.latency.Snapshot();
   int64_t next_print_ns = t0_ns + 1'000'000'000;
-  while (stats.finished.load() < options.sessions) {
+  while (stats.finished.load(std::memory_order_acquire) < options.sessions) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     const int64_t now_ns = NowNs();
     if (now_ns >= next_print_ns) {

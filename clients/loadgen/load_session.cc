@@ -7,6 +7,7 @@
 
 #include "clients/grpc/connection.h"
 #include "wire/status_wire.h"
+#include "wire/tsan_annotations.h"
 
 namespace localizer::loadgen {
 
@@ -56,7 +57,12 @@ void LoadSession::Open() {
   stub_->PrepareBidiStreamingCall(&context_, TrackMethod(), grpc::StubOptions(), this);
   AddHold();  // released once no more writes will be started (ReleaseIfQuiet)
   StartWrite(&open_buffer_);
-  StartRead(&response_);
+  StartRead(&read_buffer_);
+  // Before StartCall, which starts what the two calls above only noted (tsan_annotations.h):
+  // one address per path, the write path's (open, then blocks), the read path's and OnDone's.
+  wire::TsanRelease(&write_buffer_);
+  wire::TsanRelease(&read_buffer_);
+  wire::TsanRelease(this);
   StartCall();
 }
 
@@ -65,7 +71,7 @@ void LoadSession::Skip() {
     std::lock_guard<std::mutex> lock(mutex_);
     phase_ = Phase::kDone;
   }
-  shared_.stats->finished.fetch_add(1, std::memory_order_relaxed);
+  shared_.stats->finished.fetch_add(1, std::memory_order_release);  // the runner may free us now
 }
 
 int64_t LoadSession::CancelPast(int64_t deadline_ns, int64_t now_ns, int64_t poll_ns, const char* error,
@@ -123,8 +129,11 @@ void LoadSession::Perform(const Action& action, int64_t now_ns) {
       stats.NoteBehind(action.behind_ns);
       if (action.behind_ns > period_ns_) stats.late_blocks.fetch_add(1, std::memory_order_relaxed);
     }
+    wire::TsanRelease(&write_buffer_);
     StartWrite(&write_buffer_);
   }
+  // What this thread did comes before OnDone, which any of these may bring on.
+  if (action.writes_done || action.release_hold || action.cancel) wire::TsanRelease(this);
   if (action.writes_done) StartWritesDone();
   if (action.release_hold) RemoveHold();
   if (action.cancel) context_.TryCancel();
@@ -166,6 +175,7 @@ int64_t LoadSession::Tick(int64_t now_ns) {
 }
 
 void LoadSession::OnWriteDone(bool ok) {
+  wire::TsanAcquire(&write_buffer_);
   const int64_t now_ns = NowNs();
   Action action;
   {
@@ -179,6 +189,7 @@ void LoadSession::OnWriteDone(bool ok) {
 }
 
 void LoadSession::OnReadDone(bool ok) {
+  wire::TsanAcquire(&read_buffer_);
   const int64_t now_ns = NowNs();
   if (!ok) {  // the stream is over; OnDone brings its status
     Action action;
@@ -190,8 +201,15 @@ void LoadSession::OnReadDone(bool ok) {
     Perform(action, now_ns);
     return;
   }
-  Received(response_, now_ns);
-  StartRead(&response_);
+  const grpc::Status parsed = grpc::SerializationTraits<v1::TrackResponse>::Deserialize(&read_buffer_, &response_);
+  read_buffer_.Clear();
+  if (parsed.ok()) {
+    Received(response_, now_ns);
+  } else {
+    shared_.stats->CountError("PROTOCOL");  // bytes that are no TrackResponse
+  }
+  wire::TsanRelease(&read_buffer_);
+  StartRead(&read_buffer_);
 }
 
 void LoadSession::Received(const v1::TrackResponse& response, int64_t now_ns) {
@@ -258,6 +276,9 @@ void LoadSession::Received(const v1::TrackResponse& response, int64_t now_ns) {
 }
 
 void LoadSession::OnDone(const grpc::Status& status) {
+  wire::TsanAcquire(this);
+  wire::TsanAcquire(&read_buffer_);
+  wire::TsanAcquire(&write_buffer_);
   bool cancelled, opened;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -277,7 +298,9 @@ void LoadSession::OnDone(const grpc::Status& status) {
     stats.CountError("NO_OPENED");  // the stream ended OK without `opened`
   }
   if (opened) stats.live.fetch_sub(1, std::memory_order_relaxed);
-  stats.finished.fetch_add(1, std::memory_order_relaxed);  // last: the runner may free us now
+  // Last, and a release: the runner's acquire load of `finished` then orders everything this
+  // session did before its destruction.
+  stats.finished.fetch_add(1, std::memory_order_release);
 }
 
 }  // namespace localizer::loadgen

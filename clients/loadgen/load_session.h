@@ -19,8 +19,8 @@
 //              its start) is cancelled and counted as DRAIN_TIMEOUT (OPEN_TIMEOUT).
 //   OnDone     the final status: errors by status code (CANCELLED of our own cancel is
 //              not one), a session refused with RESOURCE_EXHAUSTED counts as rejected;
-//              stats.finished goes up last (the runner polls it), and nothing of the
-//              session is touched after that.
+//              stats.finished goes up last (a release; the runner polls it with acquire),
+//              and nothing of the session is touched after that.
 //
 // Latency of an estimate: received - the moment the block it names (Estimate.sequence, the
 // block that completed its frame) was handed to StartWrite, on the steady clock. Send times
@@ -49,8 +49,10 @@
 
 namespace localizer::loadgen {
 
-// Track's requests go out as ready bytes; its responses are parsed by protobuf.
-using TrackStub = grpc::TemplatedGenericStub<grpc::ByteBuffer, v1::TrackResponse>;
+// Track's requests go out as ready bytes; its responses come in as bytes too and are parsed
+// in OnReadDone, after the read path's TSan acquire (wire/tsan_annotations.h): a protobuf
+// response type would be parsed by gRPC's inline code before any reaction of ours runs.
+using TrackStub = grpc::TemplatedGenericStub<grpc::ByteBuffer, grpc::ByteBuffer>;
 
 // Nanoseconds on the steady clock.
 int64_t NowNs();
@@ -63,7 +65,7 @@ struct SessionShared {
   const std::atomic<bool>* stop = nullptr;  // Ctrl-C: half-close now
 };
 
-class LoadSession final : public grpc::ClientBidiReactor<grpc::ByteBuffer, v1::TrackResponse> {
+class LoadSession final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
  public:
   static constexpr int kSendRing = 1024;
 
@@ -120,7 +122,8 @@ class LoadSession final : public grpc::ClientBidiReactor<grpc::ByteBuffer, v1::T
   grpc::ClientContext context_;
   grpc::ByteBuffer open_buffer_;
   grpc::ByteBuffer write_buffer_;  // the block in flight (its body is the workload's)
-  v1::TrackResponse response_;     // the read in flight
+  grpc::ByteBuffer read_buffer_;   // the read in flight
+  v1::TrackResponse response_;     // the last response read, parsed from read_buffer_
 
   std::mutex mutex_;
   Phase phase_ = Phase::kWaiting;                    // guarded by mutex_

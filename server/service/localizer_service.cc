@@ -4,7 +4,7 @@
 #include "engine/pipeline/session_memory.h"
 #include "server/service/log.h"
 #include "server/service/track_reactor.h"
-#include "server/sync/tsan_annotations.h"
+#include "wire/tsan_annotations.h"
 #include "wire/locate_wire.h"
 #include "wire/status_wire.h"
 
@@ -20,10 +20,10 @@ class RefusedStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grp
     // gRPC (not built with TSan) orders Finish before OnDone; TSan learns it here
     // (tsan_annotations.h). After Finish: in the constructor gRPC only notes the status and
     // finishes once the reactor is bound, after this returns.
-    TsanRelease(this);
+    wire::TsanRelease(this);
   }
   void OnDone() override {
-    TsanAcquire(this);
+    wire::TsanAcquire(this);
     delete this;
   }
 };

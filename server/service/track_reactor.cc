@@ -1,7 +1,7 @@
 #include "server/service/track_reactor.h"
 
 #include "server/service/log.h"
-#include "server/sync/tsan_annotations.h"
+#include "wire/tsan_annotations.h"
 #include "wire/status_wire.h"
 
 namespace localizer::server {
@@ -17,22 +17,22 @@ TrackReactor::TrackReactor(grpc::CallbackServerContext* context, SessionRegistry
   // Elsewhere the release comes before the Start (its reaction may run before it returns);
   // here after: in the constructor gRPC only notes the read, and starts it once the reactor
   // is bound, after this returns.
-  TsanRelease(this);
-  TsanRelease(&read_buffer_);
+  wire::TsanRelease(this);
+  wire::TsanRelease(&read_buffer_);
 }
 
 void TrackReactor::FinishOnce(const grpc::Status& status) {
   MutexLock lock(&mutex_);
   if (finished_) return;
   finished_ = true;
-  TsanRelease(this);
+  wire::TsanRelease(this);
   Finish(status);
 }
 
 void TrackReactor::ReadNext() {
   MutexLock lock(&mutex_);
   if (finished_) return;
-  TsanRelease(&read_buffer_);
+  wire::TsanRelease(&read_buffer_);
   StartRead(&read_buffer_);
 }
 
@@ -53,7 +53,7 @@ void TrackReactor::ParseFailed(size_t bytes) {
 }
 
 void TrackReactor::OnReadDone(bool ok) {
-  TsanAcquire(&read_buffer_);
+  wire::TsanAcquire(&read_buffer_);
   if (!ok) {  // the client half-closed, or the stream broke (a parse failure is handled below)
     SessionHost* host = Host();
     if (!host) return FinishOnce(grpc::Status::OK);
@@ -159,7 +159,7 @@ grpc::Status TrackReactor::Write(const v1::TrackResponse& response, bool more_wa
   // More already waiting: let gRPC hold this one and send them in one flush.
   grpc::WriteOptions options;
   if (more_waiting) options.set_buffer_hint();
-  TsanRelease(&write_buffer_);
+  wire::TsanRelease(&write_buffer_);
   StartWrite(&write_buffer_, options);
   return grpc::Status::OK;
 }
@@ -169,12 +169,12 @@ void TrackReactor::ReadMore() { ReadNext(); }
 void TrackReactor::End(const grpc::Status& status) { FinishOnce(status); }
 
 void TrackReactor::OnWriteDone(bool ok) {
-  TsanAcquire(&write_buffer_);
+  wire::TsanAcquire(&write_buffer_);
   if (SessionHost* host = Host()) host->WriteDone(this, ok);
 }
 
 void TrackReactor::OnCancel() {
-  TsanAcquire(this);
+  wire::TsanAcquire(this);
   SessionHost* host = Host();
   if (host == nullptr) return;  // OnDone follows; nothing attached
   EndStream(grpc::Status(grpc::StatusCode::CANCELLED, "stream cancelled"));
@@ -182,9 +182,9 @@ void TrackReactor::OnCancel() {
 
 void TrackReactor::OnDone() {
   // After Finish and after every other reaction returned.
-  TsanAcquire(this);
-  TsanAcquire(&read_buffer_);
-  TsanAcquire(&write_buffer_);
+  wire::TsanAcquire(this);
+  wire::TsanAcquire(&read_buffer_);
+  wire::TsanAcquire(&write_buffer_);
   {
     MutexLock lock(&mutex_);  // waits for a FinishOnce still inside the lock on another thread
   }

@@ -8,7 +8,7 @@
 #include <future>
 #include <regex>
 
-#include "server/sync/tsan_annotations.h"
+#include "wire/tsan_annotations.h"
 #include "tests/server/http_client.h"
 #include "tests/server/run_shell.h"
 #include "tests/server/service_fixture.h"
@@ -36,10 +36,10 @@ int HealthStatus(const std::shared_ptr<grpc::Channel>& channel, grpc::Status* rp
   std::promise<grpc::Status> done;
   // The callback runs on a gRPC thread once the call completed: gRPC (not built with TSan)
   // orders it after this thread's writes, and TSan learns so here (tsan_annotations.h).
-  TsanRelease(&done);
+  wire::TsanRelease(&done);
   stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
                  [&done](const grpc::Status& s) {
-                   TsanAcquire(&done);
+                   wire::TsanAcquire(&done);
                    done.set_value(s);
                  });
   *rpc_status = done.get_future().get();

@@ -1,4 +1,5 @@
-// Happens-before annotations for ThreadSanitizer at the gRPC callback API's boundaries.
+// Happens-before annotations for ThreadSanitizer at the gRPC callback API's boundaries, for the
+// server's reactors and the clients' (the load generator's) alike.
 //
 // Debian's libgrpc is not built with TSan, so TSan does not see the synchronisation that
 // gRPC's completion queue provides between the thread that starts an operation (StartRead,
@@ -37,7 +38,7 @@ void __tsan_release(void* addr);
 }
 #endif
 
-namespace localizer::server {
+namespace localizer::wire {
 
 // Everything this thread did so far happens before a later TsanAcquire(addr) on any thread.
 inline void TsanRelease([[maybe_unused]] const void* addr) {
@@ -53,4 +54,4 @@ inline void TsanAcquire([[maybe_unused]] const void* addr) {
 #endif
 }
 
-}  // namespace localizer::server
+}  // namespace localizer::wire
