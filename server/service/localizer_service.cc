@@ -4,9 +4,9 @@
 #include "engine/pipeline/session_memory.h"
 #include "server/service/log.h"
 #include "server/service/track_reactor.h"
-#include "wire/tsan_annotations.h"
 #include "wire/locate_wire.h"
 #include "wire/status_wire.h"
+#include "wire/tsan_annotations.h"
 
 namespace localizer::server {
 

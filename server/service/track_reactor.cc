@@ -1,8 +1,8 @@
 #include "server/service/track_reactor.h"
 
 #include "server/service/log.h"
-#include "wire/tsan_annotations.h"
 #include "wire/status_wire.h"
+#include "wire/tsan_annotations.h"
 
 namespace localizer::server {
 

@@ -8,10 +8,10 @@
 #include <future>
 #include <regex>
 
-#include "wire/tsan_annotations.h"
 #include "tests/server/http_client.h"
 #include "tests/server/run_shell.h"
 #include "tests/server/service_fixture.h"
+#include "wire/tsan_annotations.h"
 
 namespace localizer::server::testing {
 namespace {
