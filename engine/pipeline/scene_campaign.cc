@@ -230,11 +230,10 @@ SceneScore ScoreScene(const ArrayGeometry& array, const SimResult& sim, const st
   // does not cover the error.
   const double hop_s = HopSeconds(estimates);
   for (int i = 0; i < n; ++i) {
-    const FrameScore& f = score.per_frame[i];
+    FrameScore& f = score.per_frame[i];
     if (!judged(f) || estimates[i].ambiguous) continue;
-    if (f.error_m > options.lost_crlb_multiple * f.crlb_m && f.nees_position > options.silent_nees) {
-      score.silent_failure_s += hop_s;
-    }
+    f.silent = f.error_m > options.lost_crlb_multiple * f.crlb_m && f.nees_position > options.silent_nees;
+    if (f.silent) score.silent_failure_s += hop_s;
   }
   score.silent_failure = score.silent_failure_s > options.silent_min_s;
 

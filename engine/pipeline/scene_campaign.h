@@ -84,6 +84,7 @@ struct FrameScore {
   double sd_m = std::numeric_limits<double>::quiet_NaN();
   bool present = false;
   bool ambiguous = false;
+  bool silent = false;  // adds to SceneScore::silent_failure_s (the rule above)
   int pairs_used = 0;
   double nis = 0.0;
   double tdoa_sigma_s = 0.0;         // the TDOA noise std the tracker assumed

@@ -110,8 +110,8 @@ void Usage(FILE* out) {
       "--band-hint gives each session its scene's true source band (an oracle: what a perfect band\n"
       "estimate from the data would give; the campaign's default gives none).\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
-      "initialised, present, ambiguous, far field, true range, range error, error, CRLB, error/CRLB, bearing error/its CRLB, reported sd,\n"
-      "position NEES.\n"
+      "initialised, present, ambiguous, far field, silent (the frame adds to silent_failure_s), true range,\n"
+      "range error, error, CRLB, error/CRLB, bearing error/its CRLB, reported sd, position NEES.\n"
       "Defaults: --scenes 200 --seed 1 --class all --duration 12 --jobs 1.\n");
 }
 
@@ -328,12 +328,12 @@ int Trace(uint64_t seed, const RandomSceneOptions& scene_options, const Args& a)
   const std::vector<double>& sigma_s = row.score.tdoa_sigma_robust_s;
   std::printf("%s\nrobust TDOA sigma per pair (us):", row.description.c_str());
   for (double s : sigma_s) std::printf(" %.3g", 1e6 * s);
-  std::printf("\n%8s %4s %4s %4s %4s %8s %9s %10s %10s %9s %9s %10s %10s %5s %7s %9s  %s\n", "t_s", "init", "pres",
-              "amb", "far", "range_m", "r_err_m", "error_m", "crlb_m", "err/crlb", "brg/crlb", "sd_m", "nees", "pairs", "nis", "sigma_us",
+  std::printf("\n%8s %4s %4s %4s %4s %6s %8s %9s %10s %10s %9s %9s %10s %10s %5s %7s %9s  %s\n", "t_s", "init",
+              "pres", "amb", "far", "silent", "range_m", "r_err_m", "error_m", "crlb_m", "err/crlb", "brg/crlb", "sd_m", "nees", "pairs", "nis", "sigma_us",
               "per pair (measured - true) / sigma");
   for (const FrameScore& f : row.score.per_frame) {
-    std::printf("%8.3f %4d %4d %4d %4d %8s %9s %10s %10s %9s %9s %10s %10s %5d %7.3g %9.3g ", f.t_s, f.initialised,
-                f.present, f.ambiguous, f.far_field, Num(f.range_m, "%.4g").c_str(), Num(f.range_error_m, "%.3g").c_str(),
+    std::printf("%8.3f %4d %4d %4d %4d %6d %8s %9s %10s %10s %9s %9s %10s %10s %5d %7.3g %9.3g ", f.t_s, f.initialised,
+                f.present, f.ambiguous, f.far_field, f.silent, Num(f.range_m, "%.4g").c_str(), Num(f.range_error_m, "%.3g").c_str(),
                 Num(f.error_m, "%.4g").c_str(), Num(f.crlb_m, "%.4g").c_str(),
                 Num(f.error_m / f.crlb_m).c_str(), Num(f.bearing_error_rad / f.bearing_crlb_rad).c_str(),
                 Num(f.sd_m, "%.4g").c_str(), Num(f.nees_position).c_str(), f.pairs_used, f.nis, 1e6 * f.tdoa_sigma_s);
