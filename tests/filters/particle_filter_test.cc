@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -427,6 +428,54 @@ TEST(ParticleFilter, AccelerationLevelsAverageAStillSourceAndFollowItWhenItMoves
   }
   EXPECT_LT(ratio_still, 0.8) << "levels should cut a still source's error";
   EXPECT_LT(std::sqrt(moving_on2), 1.3 * std::sqrt(moving_off2)) << "levels should take up the start";
+}
+
+TEST(ParticleFilter, ResamplingGivesEverySlotItsParentMovedOnlyByTheKernel) {
+  // Particles spread over a 10 m box; weights (through TakeParticles' log-weights) either
+  // concentrated on a run of neighbours (a block of 16 slots draws from a few consecutive
+  // particles: the vectorised path's loads and permute) or on every 37th particle (parents
+  // too far apart for that: its gather). With a tiny kernel each slot must sit on the
+  // particle resample_index() names; a wrong lane or offset lands metres away. Particle
+  // counts with and without a remainder of 16.
+  const ArrayGeometry array = Tetrahedron(2.0, Vec3::Zero(), 343.0);
+  for (int n : {4096, 4099, 45}) {
+    ParticleFilterOptions o = Options();
+    o.particles = n;
+    ParticleSet spread(array, o);
+    spread.SampleUniformBox(Vec3(-5.0, -5.0, -5.0), Vec3(5.0, 5.0, 5.0), 1.0);
+    for (const bool sparse : {false, true}) {
+      std::vector<float> log_weights(static_cast<size_t>(n));
+      for (int i = 0; i < n; ++i) {
+        const double u = (i - 0.4 * n) / (0.05 * n + 1.0);
+        log_weights[static_cast<size_t>(i)] = sparse ? (i % 37 == 0 ? 0.0f : -80.0f) : static_cast<float>(-0.5 * u * u);
+      }
+      ParticleSet set(array, o);
+      set.TakeParticles({&spread}, std::vector<uint8_t>(static_cast<size_t>(n), 0), log_weights);
+      std::array<std::vector<float>, 6> before;
+      for (size_t r = 0; r < 6; ++r) before[r].assign(set.columns()[r], set.columns()[r] + n);
+      set.ResampleSystematic(1e-4);
+      const std::vector<int>& parent = set.resample_index();
+      int distinct = 1;
+      for (int m = 0; m < n; ++m) {
+        const int j = parent[static_cast<size_t>(m)];
+        ASSERT_TRUE(j >= 0 && j < n) << "slot " << m;
+        if (m > 0) {
+          ASSERT_GE(j, parent[static_cast<size_t>(m - 1)]) << "systematic resampling keeps the order";
+          distinct += j != parent[static_cast<size_t>(m - 1)];
+        }
+        if (sparse) {
+          ASSERT_EQ(j % 37, 0) << "slot " << m << " copied a particle of no weight";
+        }
+        double moved2 = 0.0;
+        for (size_t r = 0; r < 3; ++r) {
+          const double d = set.columns()[r][m] - before[r][static_cast<size_t>(j)];
+          moved2 += d * d;
+        }
+        ASSERT_LT(std::sqrt(moved2), 0.01) << "n " << n << (sparse ? " sparse" : " concentrated") << ", slot " << m;
+      }
+      std::printf("n %d, %s weights: %d distinct parents\n", n, sparse ? "sparse" : "concentrated", distinct);
+    }
+  }
 }
 
 }  // namespace
