@@ -17,9 +17,15 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_
   const float d = static_cast<float>(decay);
   const float a_to_v = static_cast<float>(accel_sigma_mps2 * dt_s);
   const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
-  DrawAccelNormals(NextKey(), SwitchProbability(dt_s));  // axis k of particle i reads accel_[k * N + i]
+  const uint32_t key = NextKey();
   moments_valid_ = false;
   const int n = n_;
+  if (d == 1.0f && gain_.empty() && manoeuvre_share_ <= 0.0f && n % 2 == 0) {
+    PredictConstantVelocity(key, dt, a_to_p, a_to_v);
+    if (bounded_) ApplyBounds();
+    return;
+  }
+  DrawAccelNormals(key, SwitchProbability(dt_s));  // axis k of particle i reads accel_[k * N + i]
   const float* __restrict ax = accel_.data();
   const float* __restrict ay = accel_.data() + n;
   const float* __restrict az = accel_.data() + 2 * n;
@@ -45,6 +51,42 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_
     }
   }
   if (bounded_) ApplyBounds();
+}
+
+void ParticleSet::PredictConstantVelocity(uint32_t key, float dt, float a_to_p, float a_to_v) {
+  // DrawAccelNormals' draws without storing them: Box-Muller pair j gives accel_[j] and
+  // accel_[3N/2 + j] (uniforms 2j and 2j + 1), and axis k of particle i reads accel_[k N + i].
+  // So particles i and i + N/2 take their six normals from pairs i, N + i and N/2 + i:
+  //   pair i:       x of i,  y of i + N/2;
+  //   pair N + i:   y of i,  z of i + N/2;
+  //   pair N/2 + i: x of i + N/2,  z of i.
+  // The same values as the stored path, without its 3N stores and loads (N even).
+  const int half = n_ / 2;
+  const uint32_t un = static_cast<uint32_t>(n_), uhalf = static_cast<uint32_t>(half);
+  float* __restrict x = cur_.x.data();
+  float* __restrict y = cur_.y.data();
+  float* __restrict z = cur_.z.data();
+  float* __restrict vx = cur_.vx.data();
+  float* __restrict vy = cur_.vy.data();
+  float* __restrict vz = cur_.vz.data();
+  const auto pair = [key](uint32_t j, float* first, float* second) {
+    NormalPairFromUniforms(UniformFromCounter(key, 2u * j), UniformFromCounter(key, 2u * j + 1), first, second);
+  };
+#pragma omp simd
+  for (int i = 0; i < half; ++i) {
+    const uint32_t u = static_cast<uint32_t>(i);
+    float ax, ay, az, bx, by, bz;  // particle i's and particle i + N/2's normals
+    pair(u, &ax, &by);
+    pair(un + u, &ay, &bz);
+    pair(uhalf + u, &bx, &az);
+    const int k = i + half;
+    PredictAxis(x[i], vx[i], dt, a_to_p, a_to_v, ax);
+    PredictAxis(y[i], vy[i], dt, a_to_p, a_to_v, ay);
+    PredictAxis(z[i], vz[i], dt, a_to_p, a_to_v, az);
+    PredictAxis(x[k], vx[k], dt, a_to_p, a_to_v, bx);
+    PredictAxis(y[k], vy[k], dt, a_to_p, a_to_v, by);
+    PredictAxis(z[k], vz[k], dt, a_to_p, a_to_v, bz);
+  }
 }
 
 float ParticleSet::SwitchProbability(double dt_s) const {

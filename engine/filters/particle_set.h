@@ -177,6 +177,9 @@ class ParticleSet {
   // Fills accel_ with 3N standard normals (see SetManoeuvre), each particle's scaled by its
   // level gain (SetAccelLevels; the levels first jump with probability switch_probability).
   void DrawAccelNormals(uint32_t key, float switch_probability = 0.0f);
+  // Predict's constant-velocity step with its normals drawn in the same pass (no levels, no
+  // manoeuvres, N even): the same values as DrawAccelNormals then the stored-normals loop.
+  void PredictConstantVelocity(uint32_t key, float dt, float a_to_p, float a_to_v);
   void DrawLevels();  // every particle's gain afresh (after sampling)
   void CarryLevels();             // gain_[m] <- gain_[index_[m]] (after SystematicIndices)
   float SwitchProbability(double dt_s) const;  // 1 - exp(-rate dt)
