@@ -180,8 +180,8 @@ class ParticleSet {
   // Predict's constant-velocity step with its normals drawn in the same pass (no levels, no
   // manoeuvres, N even): the same values as DrawAccelNormals then the stored-normals loop.
   void PredictConstantVelocity(uint32_t key, float dt, float a_to_p, float a_to_v);
-  void DrawLevels();  // every particle's gain afresh (after sampling)
-  void CarryLevels();             // gain_[m] <- gain_[index_[m]] (after SystematicIndices)
+  void DrawLevels();                           // every particle's gain afresh (after sampling)
+  void CarryLevels();                          // gain_[m] <- gain_[index_[m]] (after SystematicIndices)
   float SwitchProbability(double dt_s) const;  // 1 - exp(-rate dt)
   // Particles [first, end) ~ N(mean, root root^T), normals keyed by (key, 6 i + k).
   void SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32_t key, int first, int end);
@@ -222,7 +222,7 @@ class ParticleSet {
   int labels_ = 1;                           // components alive (1: single-mode)
   // Per label: the decayed sum of (best log-likelihood of all) - (its best), per update.
   std::array<float, kMaxLabels> label_deficit_{};
-  void ScoreLabels(float exponent);     // after Weigh while labels_ > 1
+  void ScoreLabels(float exponent);  // after Weigh while labels_ > 1
   // Each label's share with the heaviest kMaxContenders contenders raised to kContenderShare
   // and the others scaled down to make room (normalised); which were raised, if asked.
   std::array<double, kMaxLabels> ContenderShares(const std::array<double, kMaxLabels>& weight,
