@@ -101,7 +101,7 @@ void MultiModelParticleFilter::Impl::Restart() {
 
 Eigen::VectorXd MultiModelParticleFilter::Impl::LabelMasses(const std::vector<uint8_t>& labels) const {
   Eigen::VectorXd mass = Eigen::VectorXd::Zero(count());
-  const std::vector<float>& w = base.weights();
+  const AlignedVector<float>& w = base.weights();
   for (int i = 0; i < particles(); ++i) mass(labels[i]) += w[i];
   return mass / mass.sum();
 }
@@ -188,7 +188,7 @@ void MultiModelParticleFilter::Impl::ResampleIfNeeded(double ess_now) {
   const ParticleFilterOptions& o = options.particle;
   if (ess_now >= o.resample_threshold * o.particles) return;
   base.ResampleSystematic(o.kernel_scale);
-  const std::vector<int>& index = base.resample_index();
+  const AlignedVector<int>& index = base.resample_index();
   prior_label = label;  // scratch: the labels before the copies
   for (int m = 0; m < particles(); ++m) label[m] = prior_label[index[m]];
 }

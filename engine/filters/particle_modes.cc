@@ -20,7 +20,7 @@ struct LabelMoments {
 };
 
 LabelMoments MomentsByLabel(int n, const std::array<const float*, 6>& cols, const std::vector<uint8_t>& label,
-                            const std::vector<float>& w) {
+                            const float* w) {
   LabelMoments out;
   std::array<Vec6, kMaxComponents> sum;
   for (int c = 0; c < kMaxComponents; ++c) {
@@ -101,7 +101,7 @@ void ParticleSet::ScoreLabels(float exponent) {
 std::vector<WeightedBelief> ParticleSet::Modes(double min_weight) const {
   if (labels_ <= 1) return {WeightedBelief{1.0, MeanAndCovariance()}};
   const LabelMoments m = MomentsByLabel(
-      n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()}, label_, w_);
+      n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()}, label_, w_.data());
   const std::array<double, kMaxComponents> weight = ContenderShares(m.weight);
   std::vector<WeightedBelief> out;
   double kept = 0.0;
@@ -164,7 +164,7 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   const double h = KernelBandwidth(kernel_scale, n_);
   const double a = kernel_scale > 0.0 ? KernelShrinkage(h) : 1.0;
   const LabelMoments moments = MomentsByLabel(
-      n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()}, label_, w_);
+      n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()}, label_, w_.data());
   for (size_t c = 0; c < kMaxComponents; ++c) {
     l[c].setZero();
     shift[c].setZero();

@@ -122,7 +122,7 @@ void ParticleSet::CopyCloudFrom(const ParticleSet& other) {
 }
 
 double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candidates, const std::vector<uint8_t>& choice,
-                                  const std::vector<float>& log_weights) {
+                                  std::span<const float> log_weights) {
   moments_valid_ = false;
   for (int i = 0; i < n_; ++i) {
     const Columns& from = candidates[choice[i]]->cur_;
@@ -133,7 +133,7 @@ double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candida
     cur_.vy[i] = from.vy[i];
     cur_.vz[i] = from.vz[i];
   }
-  logw_ = log_weights;
+  if (log_weights.data() != logw_.data()) logw_.assign(log_weights.begin(), log_weights.end());  // may be its own
   labels_ = 1;  // the multiple-model filter starts single-mode and keeps no labels
   return NormaliseWeights();
 }

@@ -5,14 +5,17 @@
 // arrays without branches and are written to vectorise (see -fopenmp-simd in CMakeLists.txt);
 // random numbers are counter-based (fast_math.h), keyed by (seed, draw number), and the float
 // sums over the particles keep a fixed 8-lane order (lane_sums.h), so results do not depend on
-// how the loops are vectorised (256- or 512-bit). Internal to engine/filters.
+// how the loops are vectorised (256- or 512-bit). Every per-particle array starts on a cache
+// line (aligned_vector.h). Internal to engine/filters.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "engine/array/array_geometry.h"
+#include "engine/core/aligned_vector.h"
 #include "engine/core/measurement.h"
 #include "engine/filters/pair_noise.h"
 #include "engine/filters/particle_filter.h"
@@ -85,18 +88,18 @@ class ParticleSet {
   // (the multiple-model filter's per-particle pick among its hypotheses' predictions);
   // then the weights are normalised and the ESS returned, as NormaliseWeights.
   double TakeParticles(const std::vector<const ParticleSet*>& candidates, const std::vector<uint8_t>& choice,
-                       const std::vector<float>& log_weights);
+                       std::span<const float> log_weights);
   // Log-weights as last left (normalised after NormaliseWeights), one per particle.
-  const std::vector<float>& log_weights() const { return logw_; }
+  const AlignedVector<float>& log_weights() const { return logw_; }
   // Normalised linear weights as of the last NormaliseWeights (or sampling, resampling).
-  const std::vector<float>& weights() const { return w_; }
+  const AlignedVector<float>& weights() const { return w_; }
   // The particles' state, one column per component (x, y, z relative to the set's origin,
   // then vx, vy, vz), n values each: for diagnostics and tests.
   std::array<const float*, 6> columns() const {
     return {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()};
   }
   // After ResampleSystematic: slot m now holds a copy of particle resample_index()[m].
-  const std::vector<int>& resample_index() const { return index_; }
+  const AlignedVector<int>& resample_index() const { return index_; }
   // Adds each particle's log-likelihood of `m` to its log-weight (see particle_filter.h) and
   // reports, per pair, the innovation of the peak delay against the prior predicted delays.
   // sigmas_s holds one TDOA noise std per pair; pairs with used[p] == 0 are skipped.
@@ -169,7 +172,7 @@ class ParticleSet {
 
  private:
   struct Columns {
-    std::vector<float> x, y, z, vx, vy, vz;
+    AlignedVector<float> x, y, z, vx, vy, vz;
     void Resize(int n);
     // The six columns in state order (x, y, z, vx, vy, vz).
     std::array<float*, 6> Pointers() { return {x.data(), y.data(), z.data(), vx.data(), vy.data(), vz.data()}; }
@@ -202,12 +205,12 @@ class ParticleSet {
   float outlier_probability_;
   float inv_c_;
   Columns cur_, next_;
-  std::vector<float> logw_, w_;                         // log-weights; normalised linear weights
-  std::vector<float> r_ref_, vr_ref_, loglik_, delay_;  // scratch for Weigh
-  std::array<std::vector<float>, 6> noise_;             // scratch: kernel draws
-  std::vector<float> accel_;                            // scratch: 3N process-noise normals
-  std::vector<float> fine_gcc_;                         // scratch: a pair's GCC upsampled
-  std::vector<int> index_, first_slot_;                 // scratch for ResampleSystematic
+  AlignedVector<float> logw_, w_;                         // log-weights; normalised linear weights
+  AlignedVector<float> r_ref_, vr_ref_, loglik_, delay_;  // scratch for Weigh
+  std::array<AlignedVector<float>, 6> noise_;             // scratch: kernel draws
+  AlignedVector<float> accel_;                            // scratch: 3N process-noise normals
+  std::vector<float> fine_gcc_;                           // scratch: a pair's GCC upsampled
+  AlignedVector<int> index_, first_slot_;                 // scratch for ResampleSystematic
   // SetManoeuvre: the share of particles that manoeuvre each step, and both gains.
   float manoeuvre_share_ = 0.0f, quiet_gain_ = 1.0f, manoeuvre_gain_ = 1.0f;
   // SetAccelLevels: ln floor, ln ceiling, switch rate; gain_ empty while off.

@@ -454,7 +454,7 @@ TEST(ParticleFilter, ResamplingGivesEverySlotItsParentMovedOnlyByTheKernel) {
       std::array<std::vector<float>, 6> before;
       for (size_t r = 0; r < 6; ++r) before[r].assign(set.columns()[r], set.columns()[r] + n);
       set.ResampleSystematic(1e-4);
-      const std::vector<int>& parent = set.resample_index();
+      const AlignedVector<int>& parent = set.resample_index();
       int distinct = 1;
       for (int m = 0; m < n; ++m) {
         const int j = parent[static_cast<size_t>(m)];
