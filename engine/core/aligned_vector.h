@@ -24,9 +24,7 @@ struct AlignedAllocator {
   AlignedAllocator() = default;
   template <typename U>
   explicit AlignedAllocator(const AlignedAllocator<U, kAlignBytes>&) {}
-  T* allocate(std::size_t n) {
-    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(kAlignBytes)));
-  }
+  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(kAlignBytes))); }
   void deallocate(T* p, std::size_t) { ::operator delete(p, std::align_val_t(kAlignBytes)); }
   template <typename U>
   bool operator==(const AlignedAllocator<U, kAlignBytes>&) const {
