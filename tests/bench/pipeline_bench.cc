@@ -31,17 +31,24 @@ const SimResult& Audio(double fs, Scenario* scenario_out) {
   return sim;
 }
 
-void BM_PipelinePerAudioSecond(benchmark::State& state) {
-  Scenario scenario;
-  const SimResult& sim = Audio(44100.0, &scenario);
+// The benchmarks' session: the scenario's array, frames of 4096 with hop 2048.
+AudioSessionConfig BenchConfig(const Scenario& scenario, const SimResult& sim, int particles, Likelihood likelihood) {
   AudioSessionConfig config;
   config.sensors_m = scenario.sensors_m;
   config.sound_speed_mps = scenario.sound_speed_mps;
   config.sample_rate_hz = sim.sample_rate_hz;
   config.frame_samples = 4096;
   config.hop_samples = 2048;
-  config.tracker.particle.particles = static_cast<int>(state.range(0));
-  config.tracker.particle.likelihood = state.range(1) == 0 ? Likelihood::kPeak : Likelihood::kGcc;
+  config.tracker.particle.particles = particles;
+  config.tracker.particle.likelihood = likelihood;
+  return config;
+}
+
+void BM_PipelinePerAudioSecond(benchmark::State& state) {
+  Scenario scenario;
+  const SimResult& sim = Audio(44100.0, &scenario);
+  const AudioSessionConfig config = BenchConfig(scenario, sim, static_cast<int>(state.range(0)),
+                                                state.range(1) == 0 ? Likelihood::kPeak : Likelihood::kGcc);
   // 0.1 s blocks, as a streaming client would send them.
   const int64_t block = 4410;
   const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
@@ -71,14 +78,7 @@ void BM_PipelineInterleavedSessions(benchmark::State& state) {
   const int sessions = static_cast<int>(state.range(0));
   Scenario scenario;
   const SimResult& sim = Audio(44100.0, &scenario);
-  AudioSessionConfig config;
-  config.sensors_m = scenario.sensors_m;
-  config.sound_speed_mps = scenario.sound_speed_mps;
-  config.sample_rate_hz = sim.sample_rate_hz;
-  config.frame_samples = 4096;
-  config.hop_samples = 2048;
-  config.tracker.particle.particles = 4096;
-  config.tracker.particle.likelihood = Likelihood::kPeak;
+  const AudioSessionConfig config = BenchConfig(scenario, sim, 4096, Likelihood::kPeak);
   const int64_t block = 4096;
   const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
   const double audio_s = static_cast<double>(blocks.size() * block) / sim.sample_rate_hz;
