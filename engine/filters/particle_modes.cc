@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 #include "engine/core/fast_math.h"
 #include "engine/filters/particle_set.h"
@@ -19,31 +23,100 @@ struct LabelMoments {
   std::array<Mat6, kMaxComponents> cov;
 };
 
+// a * b rounded to a double before it is added anywhere: Eigen's outer product, which the sums
+// below reproduce, adds the rounded products (no fused multiply-add), so the covariances keep
+// their last bits.
+inline double RoundedProduct(double a, double b) {
+  double p = a * b;
+#if defined(__x86_64__) || defined(__i386__)
+  asm("" : "+x"(p));  // an opaque value: the compiler cannot fuse it into the add
+#else
+  volatile double opaque = p;
+  p = opaque;
+#endif
+  return p;
+}
+
 LabelMoments MomentsByLabel(int n, const std::array<const float*, 6>& cols, const std::vector<uint8_t>& label,
                             const float* w) {
+  // One label at a time over its own particles (a counting sort keeps each label's in index
+  // order), so that its sums stay in registers: indexed by each particle's label they went
+  // through memory, ~60 % of a 16384-particle session's frame while several labels live.
+  // Each sum adds the same products in the same order as one pass over all particles would.
   LabelMoments out;
-  std::array<Vec6, kMaxComponents> sum;
-  for (int c = 0; c < kMaxComponents; ++c) {
-    sum[static_cast<size_t>(c)].setZero();
-    out.cov[static_cast<size_t>(c)].setZero();
+  std::array<int, kMaxComponents + 1> first{};
+  for (int i = 0; i < n; ++i) ++first[label[static_cast<size_t>(i)] + 1u];
+  for (size_t c = 0; c < kMaxComponents; ++c) first[c + 1] += first[c];
+  std::vector<int> order(static_cast<size_t>(n));
+  {
+    std::array<int, kMaxComponents> next{};
+    for (size_t c = 0; c < kMaxComponents; ++c) next[c] = first[c];
+    for (int i = 0; i < n; ++i) order[static_cast<size_t>(next[label[static_cast<size_t>(i)]]++)] = i;
   }
-  for (int i = 0; i < n; ++i) {
-    const size_t c = label[static_cast<size_t>(i)];
-    const double wi = w[static_cast<size_t>(i)];
-    out.weight[c] += wi;
-    for (int r = 0; r < 6; ++r) sum[c](r) += wi * cols[static_cast<size_t>(r)][i];
-  }
+  const float* x0 = cols[0];
+  const float* x1 = cols[1];
+  const float* x2 = cols[2];
+  const float* x3 = cols[3];
+  const float* x4 = cols[4];
+  const float* x5 = cols[5];
   for (size_t c = 0; c < kMaxComponents; ++c) {
-    out.mean[c] = out.weight[c] > 0.0 ? Vec6(sum[c] / out.weight[c]) : Vec6::Zero();
-  }
-  for (int i = 0; i < n; ++i) {
-    const size_t c = label[static_cast<size_t>(i)];
-    Vec6 d;
-    for (int r = 0; r < 6; ++r) d(r) = cols[static_cast<size_t>(r)][i] - out.mean[c](r);
-    out.cov[c] += w[static_cast<size_t>(i)] * d * d.transpose();
-  }
-  for (size_t c = 0; c < kMaxComponents; ++c) {
-    if (out.weight[c] > 0.0) out.cov[c] /= out.weight[c];
+    out.cov[c].setZero();
+    out.mean[c].setZero();
+    const int begin = first[c], end = first[c + 1];
+    double weight = 0.0;
+    double sum[6] = {};
+    for (int t = begin; t < end; ++t) {
+      const int i = order[static_cast<size_t>(t)];
+      const double wi = w[i];
+      weight += wi;
+      sum[0] += wi * x0[i];
+      sum[1] += wi * x1[i];
+      sum[2] += wi * x2[i];
+      sum[3] += wi * x3[i];
+      sum[4] += wi * x4[i];
+      sum[5] += wi * x5[i];
+    }
+    out.weight[c] = weight;
+    if (!(weight > 0.0)) continue;
+    const Vec6 mean = Vec6(sum[0], sum[1], sum[2], sum[3], sum[4], sum[5]) / weight;
+    out.mean[c] = mean;
+    double cov[6][6] = {};  // [column][row]: column k adds d_k (w d)
+#if defined(__AVX512F__)
+    // The same products and additions, one column of six rows per vector.
+    {
+      const __m512d centre = _mm512_maskz_loadu_pd(0x3f, mean.data());
+      __m512d column[6];
+      for (__m512d& v : column) v = _mm512_setzero_pd();
+      for (int t = begin; t < end; ++t) {
+        const int i = order[static_cast<size_t>(t)];
+        const double d[6] = {x0[i] - mean(0), x1[i] - mean(1), x2[i] - mean(2),
+                             x3[i] - mean(3), x4[i] - mean(4), x5[i] - mean(5)};
+        const __m512d x = _mm512_setr_pd(x0[i], x1[i], x2[i], x3[i], x4[i], x5[i], 0.0, 0.0);
+        const __m512d wd = _mm512_mul_pd(_mm512_set1_pd(w[i]), _mm512_sub_pd(x, centre));
+        for (int k = 0; k < 6; ++k) {
+          __m512d product = _mm512_mul_pd(_mm512_set1_pd(d[k]), wd);
+          asm("" : "+v"(product));  // rounded before the add, as RoundedProduct
+          column[k] = _mm512_add_pd(column[k], product);
+        }
+      }
+      for (int k = 0; k < 6; ++k) _mm512_mask_storeu_pd(cov[k], 0x3f, column[k]);
+    }
+#else
+    for (int t = begin; t < end; ++t) {
+      const int i = order[static_cast<size_t>(t)];
+      const double d[6] = {x0[i] - mean(0), x1[i] - mean(1), x2[i] - mean(2),
+                           x3[i] - mean(3), x4[i] - mean(4), x5[i] - mean(5)};
+      const double wi = w[i];
+      double wd[6];
+      for (int r = 0; r < 6; ++r) wd[r] = wi * d[r];
+      for (int k = 0; k < 6; ++k) {
+        for (int r = 0; r < 6; ++r) cov[k][r] += RoundedProduct(d[k], wd[r]);
+      }
+    }
+#endif
+    for (int k = 0; k < 6; ++k) {
+      for (int r = 0; r < 6; ++r) out.cov[c](r, k) = cov[k][r] / weight;
+    }
   }
   return out;
 }
@@ -92,7 +165,8 @@ void ParticleSet::ScoreLabels(float exponent) {
   }
   const float top = *std::max_element(best.begin(), best.end());
   for (int c = 0; c < labels_; ++c) {
-    const float gap = std::isfinite(best[static_cast<size_t>(c)]) ? exponent * (top - best[static_cast<size_t>(c)]) : INFINITY;
+    const float gap =
+        std::isfinite(best[static_cast<size_t>(c)]) ? exponent * (top - best[static_cast<size_t>(c)]) : INFINITY;
     float& d = label_deficit_[static_cast<size_t>(c)];
     d = kContenderDecay * d + gap;
   }
@@ -100,8 +174,9 @@ void ParticleSet::ScoreLabels(float exponent) {
 
 std::vector<WeightedBelief> ParticleSet::Modes(double min_weight) const {
   if (labels_ <= 1) return {WeightedBelief{1.0, MeanAndCovariance()}};
-  const LabelMoments m = MomentsByLabel(
-      n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()}, label_, w_.data());
+  const LabelMoments m =
+      MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()},
+                     label_, w_.data());
   const std::array<double, kMaxComponents> weight = ContenderShares(m.weight);
   std::vector<WeightedBelief> out;
   double kept = 0.0;
@@ -163,8 +238,9 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   std::array<Eigen::Matrix<float, 6, 1>, kMaxComponents> shift;
   const double h = KernelBandwidth(kernel_scale, n_);
   const double a = kernel_scale > 0.0 ? KernelShrinkage(h) : 1.0;
-  const LabelMoments moments = MomentsByLabel(
-      n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()}, label_, w_.data());
+  const LabelMoments moments =
+      MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()},
+                     label_, w_.data());
   for (size_t c = 0; c < kMaxComponents; ++c) {
     l[c].setZero();
     shift[c].setZero();
