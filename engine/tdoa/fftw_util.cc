@@ -1,8 +1,10 @@
 #include "engine/tdoa/fftw_util.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 
 namespace localizer::engine {
 
@@ -13,29 +15,63 @@ std::mutex& FftwPlannerMutex() {
 
 namespace {
 
-// Generated at build time (engine/CMakeLists.txt, wisdom_gen/fftw_wisdom_gen.cc); "" without.
-constexpr const char kBuiltinWisdom[] =
-#include "engine/tdoa/fftw_builtin_wisdom.inc"
-    ;
+// One size's wisdom: everything FFTW needs to plan that size's r2c and c2r transforms.
+struct SizeWisdom {
+  int n;
+  const char* wisdom;
+};
 
-// The planner mutex must be held.
-bool ImportBuiltinWisdomLocked() {
-  return kBuiltinWisdom[0] != '\0' && fftwf_import_wisdom_from_string(kBuiltinWisdom) != 0;
+// Generated at build time (engine/CMakeLists.txt, wisdom_gen/fftw_wisdom_gen.cc); a single
+// {0, ""} without.
+constexpr SizeWisdom kBuiltinWisdom[] = {
+#include "engine/tdoa/fftw_builtin_wisdom.inc"
+};
+constexpr std::size_t kBuiltinSizes = std::size(kBuiltinWisdom);
+
+// Which sizes' wisdom has been imported (or is not to be: after ForgetFftwWisdom).
+// GUARDED_BY(FftwPlannerMutex())
+std::array<bool, kBuiltinSizes>& Imported() {
+  static std::array<bool, kBuiltinSizes> imported{};
+  return imported;
 }
 
-// Before the first plan; the planner mutex must be held.
-void ImportBuiltinWisdomOnce() {
-  static bool imported = false;  // GUARDED_BY(FftwPlannerMutex())
-  if (imported) return;
-  imported = true;
-  ImportBuiltinWisdomLocked();
+// The planner mutex must be held. False when FFTW refused the entry or it is empty.
+bool ImportEntryLocked(std::size_t k) {
+  Imported()[k] = true;
+  const SizeWisdom& entry = kBuiltinWisdom[k];
+  return entry.wisdom[0] != '\0' && fftwf_import_wisdom_from_string(entry.wisdom) != 0;
+}
+
+// Before size n's first plan; the planner mutex must be held.
+void ImportSizeOnceLocked(int n) {
+  for (std::size_t k = 0; k < kBuiltinSizes; ++k) {
+    if (kBuiltinWisdom[k].n != n) continue;
+    if (!Imported()[k]) ImportEntryLocked(k);
+    return;
+  }
 }
 
 }  // namespace
 
 bool ImportBuiltinFftwWisdom() {
   std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-  return ImportBuiltinWisdomLocked();
+  bool all = true;
+  for (std::size_t k = 0; k < kBuiltinSizes; ++k) all = ImportEntryLocked(k) && all;
+  return all;
+}
+
+bool ImportBuiltinFftwWisdom(int n) {
+  std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  for (std::size_t k = 0; k < kBuiltinSizes; ++k) {
+    if (kBuiltinWisdom[k].n == n) return ImportEntryLocked(k);
+  }
+  return false;
+}
+
+void ForgetFftwWisdom() {
+  std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  fftwf_forget_wisdom();
+  Imported().fill(true);
 }
 
 FftwFloats AllocateFftwFloats(std::size_t count) {
@@ -63,13 +99,13 @@ void FftwPlan::Reset() {
 
 FftwPlan PlanRealForward(int n, float* in, float* out_interleaved, unsigned flags) {
   std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-  ImportBuiltinWisdomOnce();
+  ImportSizeOnceLocked(n);
   return FftwPlan(fftwf_plan_dft_r2c_1d(n, in, AsComplex(out_interleaved), flags));
 }
 
 FftwPlan PlanRealInverse(int n, float* in_interleaved, float* out, unsigned flags) {
   std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-  ImportBuiltinWisdomOnce();
+  ImportSizeOnceLocked(n);
   return FftwPlan(fftwf_plan_dft_c2r_1d(n, AsComplex(in_interleaved), out, flags));
 }
 

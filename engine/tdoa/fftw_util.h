@@ -8,11 +8,12 @@
 // Buffers come from fftwf_malloc (SIMD-aligned) and are zero-filled on allocation. Complex
 // data is stored interleaved (re, im) as floats, bit-compatible with fftwf_complex.
 //
-// Built-in wisdom: before the process's first plan, PlanRealForward/Inverse import FFTW wisdom
-// generated at build time (engine/tdoa/wisdom_gen) for the FFTW_ESTIMATE plans of every size
-// NextFastFftSize returns from 64 to 2^21. FFTW then takes a plan from it in about 0.1 ms
-// instead of estimating one (2-10 ms per size, the larger part of `localizer-cli track`'s
-// start-up after library loading); the import costs about 1.5 ms once. The plans are the
+// Built-in wisdom: before a size's first plan in the process, PlanRealForward/Inverse import
+// that size's FFTW wisdom, generated at build time (engine/tdoa/wisdom_gen) for the
+// FFTW_ESTIMATE plans of every size NextFastFftSize returns from 64 to 2^21, one entry per
+// size. FFTW then takes a plan from it in about 0.1 ms instead of estimating one (2-10 ms per
+// size, the larger part of `localizer-cli track`'s start-up after library loading); importing
+// one size's entry costs about 0.1 ms (all of them at once: about 3 ms). The plans are the
 // ones FFTW_ESTIMATE picks without wisdom on the build machine (tests/tdoa/fftw_wisdom_test),
 // so results do not change. Wisdom FFTW cannot use (another FFTW version, a solver the CPU
 // lacks) is refused or ignored by FFTW, which then estimates as before. Every engine user in
@@ -59,10 +60,16 @@ class FftwPlan {
   fftwf_plan plan_ = nullptr;
 };
 
-// Imports the built-in wisdom now (it is also imported once, lazily, by the first plan).
-// Returns false when this build has none (LOCALIZER_FFTW_WISDOM off, or cross-compiled) or
-// FFTW refused it. For tests, after fftwf_forget_wisdom.
+// Imports the built-in wisdom of every size now (each size's is otherwise imported lazily by
+// its first plan). Returns false when this build has none (LOCALIZER_FFTW_WISDOM off, or
+// cross-compiled) or FFTW refused an entry. For tests, after ForgetFftwWisdom.
 bool ImportBuiltinFftwWisdom();
+// Imports size n's built-in wisdom alone; false when there is none for n or FFTW refused it.
+bool ImportBuiltinFftwWisdom(int n);
+// Forgets all of FFTW's wisdom, and no size's built-in wisdom is imported lazily any more:
+// later plans are estimated until ImportBuiltinFftwWisdom. For tests that compare plans made
+// with and without it.
+void ForgetFftwWisdom();
 
 // Real-to-complex and complex-to-real plans of size n (unnormalised, as FFTW defines them).
 // The arrays must not overlap. Planning with FFTW_MEASURE overwrites them.

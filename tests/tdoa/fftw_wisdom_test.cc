@@ -1,7 +1,8 @@
 // The built-in FFTW wisdom (engine/tdoa/fftw_util.h) changes how long planning takes, never
-// which plan is made: for every size it covers, a plan made from it is the plan FFTW_ESTIMATE
-// makes without any wisdom (compared as fftwf_sprint_plan's text), so estimates do not move;
-// and it does cover the problems the engine plans (FFTW_WISDOM_ONLY finds a plan).
+// which plan is made: for every size it covers, a plan made from that size's entry alone is
+// the plan FFTW_ESTIMATE makes without any wisdom (compared as fftwf_sprint_plan's text), so
+// estimates do not move; and the entry does cover the problems the engine plans
+// (FFTW_WISDOM_ONLY finds a plan).
 #include <fftw3.h>
 #include <gtest/gtest.h>
 
@@ -27,14 +28,13 @@ struct Plans {
   std::string forward, inverse;
 };
 
-// Forgets all wisdom, then (with_wisdom) imports the built-in one, and plans size n as the
-// engine does (fftwf_malloc'd arrays, out of place, FFTW_ESTIMATE).
+// Forgets all wisdom, then (with_wisdom) imports size n's built-in entry alone, and plans
+// size n as the engine does (fftwf_malloc'd arrays, out of place, FFTW_ESTIMATE).
 Plans PlanFresh(int n, bool with_wisdom) {
-  {
-    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    fftwf_forget_wisdom();
+  ForgetFftwWisdom();
+  if (with_wisdom) {
+    EXPECT_TRUE(ImportBuiltinFftwWisdom(n)) << n;
   }
-  if (with_wisdom) ImportBuiltinFftwWisdom();
   FftwFloats real = AllocateFftwFloats(n);
   FftwFloats complex = AllocateFftwFloats(2 * (n / 2 + 1));
   return {Describe(PlanRealForward(n, real.get(), complex.get(), FFTW_ESTIMATE)),
@@ -59,7 +59,10 @@ TEST(BuiltinFftwWisdom, GivesThePlansEstimateMakesWithoutIt) {
     ASSERT_FALSE(estimated.forward.empty()) << n;
     EXPECT_EQ(from_wisdom.forward, estimated.forward) << "r2c of size " << n;
     EXPECT_EQ(from_wisdom.inverse, estimated.inverse) << "c2r of size " << n;
-    // Wisdom alone plans it: the engine's problems (alignment, out of place) are the covered ones.
+    // The size's entry alone plans it: the engine's problems (alignment, out of place) are
+    // the covered ones.
+    ForgetFftwWisdom();
+    ASSERT_TRUE(ImportBuiltinFftwWisdom(n)) << n;
     FftwFloats real = AllocateFftwFloats(n);
     FftwFloats complex = AllocateFftwFloats(2 * (n / 2 + 1));
     EXPECT_TRUE(PlanRealForward(n, real.get(), complex.get(), FFTW_ESTIMATE | FFTW_WISDOM_ONLY)) << n;
@@ -70,8 +73,22 @@ TEST(BuiltinFftwWisdom, GivesThePlansEstimateMakesWithoutIt) {
 
 TEST(BuiltinFftwWisdom, ASizeItDoesNotCoverIsStillPlanned) {
   const int n = 7 * 64;  // NextFastFftSize never returns it
-  EXPECT_FALSE(PlanFresh(n, /*with_wisdom=*/true).forward.empty());
+  EXPECT_FALSE(ImportBuiltinFftwWisdom(n));
+  EXPECT_FALSE(PlanFresh(n, /*with_wisdom=*/false).forward.empty());
   EXPECT_EQ(NextFastFftSize(n), 512);
+  ImportBuiltinFftwWisdom();
+}
+
+// Without the built-in wisdom FFTW_WISDOM_ONLY plans nothing, so the test above is not
+// vacuous: ForgetFftwWisdom leaves no wisdom and stops the lazy import.
+TEST(BuiltinFftwWisdom, ForgettingLeavesNothingToPlanFrom) {
+  if (!ImportBuiltinFftwWisdom()) GTEST_SKIP() << "built without LOCALIZER_FFTW_WISDOM (or FFTW refused it)";
+  ForgetFftwWisdom();
+  FftwFloats real = AllocateFftwFloats(4096);
+  FftwFloats complex = AllocateFftwFloats(2 * (4096 / 2 + 1));
+  EXPECT_FALSE(PlanRealForward(4096, real.get(), complex.get(), FFTW_ESTIMATE | FFTW_WISDOM_ONLY));
+  ImportBuiltinFftwWisdom();
+  EXPECT_TRUE(PlanRealForward(4096, real.get(), complex.get(), FFTW_ESTIMATE | FFTW_WISDOM_ONLY));
 }
 
 }  // namespace
