@@ -12,6 +12,38 @@ namespace localizer::io {
 
 namespace {
 
+// Interleaved frames to channel-major. With the channel count known at compile time the
+// loop vectorises (the runtime-count loop ran one scalar load and store per sample: ~4 % of
+// `localizer-cli track`'s CPU on a 4-channel file).
+template <int kChannels>
+void DeinterleaveFixed(const float* __restrict in, int64_t frames, float* __restrict out) {
+  for (int64_t n = 0; n < frames; ++n) {
+    for (int c = 0; c < kChannels; ++c) out[c * frames + n] = in[n * kChannels + c];
+  }
+}
+
+void Deinterleave(const float* in, int64_t frames, int channels, float* out) {
+  switch (channels) {
+    case 1:
+      return DeinterleaveFixed<1>(in, frames, out);
+    case 2:
+      return DeinterleaveFixed<2>(in, frames, out);
+    case 3:
+      return DeinterleaveFixed<3>(in, frames, out);
+    case 4:
+      return DeinterleaveFixed<4>(in, frames, out);
+    case 6:
+      return DeinterleaveFixed<6>(in, frames, out);
+    case 8:
+      return DeinterleaveFixed<8>(in, frames, out);
+    default:
+      break;
+  }
+  for (int64_t n = 0; n < frames; ++n) {
+    for (int c = 0; c < channels; ++c) out[c * frames + n] = in[n * channels + c];
+  }
+}
+
 struct SndfileCloser {
   void operator()(SNDFILE* file) const { sf_close(file); }
 };
@@ -141,12 +173,7 @@ Status WavStream::ReadInterleaved(int64_t frames, std::vector<float>* channel_ma
   if (got != frames) {
     return ShortRead(file.path, file.handle.get(), got, frames, frames_read_);
   }
-  float* out = channel_major->data();
-  for (int64_t n = 0; n < frames; ++n) {
-    for (int c = 0; c < channel_count_; ++c) {
-      out[c * frames + n] = interleaved_[n * channel_count_ + c];
-    }
-  }
+  Deinterleave(interleaved_.data(), frames, channel_count_, channel_major->data());
   return Status::Ok();
 }
 

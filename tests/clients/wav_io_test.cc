@@ -52,6 +52,20 @@ TEST(WavIo, FloatMultichannelRoundTripIsExact) {
   EXPECT_EQ(read->samples, written.samples);  // float32 stored as float32: bit exact
 }
 
+// Every channel count reads back into its own channel: the counts the reader unrolls
+// (1-4, 6, 8) and the ones it loops over (5, 7, 9, 16), with an odd frame count.
+TEST(WavIo, EveryChannelCountDeinterleavesToItsChannel) {
+  TempDir dir;
+  for (int channels : {1, 2, 3, 4, 5, 6, 7, 8, 9, 16}) {
+    const Recording written = Noise(channels, 1001, 8000.0, 11 + static_cast<uint32_t>(channels));
+    ASSERT_TRUE(WriteWavFloat(dir.File("c.wav"), written).ok());
+    auto read = ReadWav(dir.File("c.wav"));
+    ASSERT_TRUE(read.ok()) << read.status().ToString();
+    ASSERT_EQ(read->channel_count, channels);
+    EXPECT_EQ(read->samples, written.samples) << channels << " channels";
+  }
+}
+
 // Integer PCM reads as code / 2^(bits-1). Tolerance: 1 LSB of the format, but not below
 // float32's own resolution near full scale (2^-24), which int32 codes exceed.
 void ExpectPcmScaling(int format, int bits) {
