@@ -6,6 +6,7 @@
 #include <csignal>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <optional>
 
 #include "clients/cli/capture_signals.h"
@@ -176,7 +177,8 @@ void PrintCaptureSummary(const io::TrackSummary& s, double duration_s) {
               static_cast<long long>(s.frames_lost), stopped);
 }
 
-int RunLocal(const TrackFlags& f, const io::TrackJob& job, bool sources) {
+// `checked`: the session BuildSessionConfig built from job.config, run instead of a second.
+int RunLocal(const TrackFlags& f, const io::TrackJob& job, bool sources, std::unique_ptr<engine::Session> checked) {
   ProgressReporter progress;
   io::TrackCallbacks callbacks = MakeCallbacks(f.print_every, sources, &progress);
   if (job.alsa) {
@@ -190,7 +192,7 @@ int RunLocal(const TrackFlags& f, const io::TrackJob& job, bool sources) {
                    static_cast<long long>(alsa->buffer_frames()));
     };
   }
-  auto summary = io::RunTrack(job, callbacks);
+  auto summary = io::RunTrack(job, callbacks, std::move(checked));
   progress.Finish();
   if (!summary.ok()) return RuntimeError(kCommand, summary.status());
   PrintSummary(*summary, f.out_path);
@@ -327,7 +329,9 @@ int RunTrack(const std::vector<std::string>& args) {
     if (!stream.ok()) return RuntimeError(kCommand, stream.status());
     sample_rate_hz = stream->sample_rate_hz();
   }
-  auto config = BuildSessionConfig(f.session, flags, *array, sample_rate_hz, remote ? Runs::kOnServer : Runs::kLocally);
+  std::unique_ptr<engine::Session> checked;
+  auto config =
+      BuildSessionConfig(f.session, flags, *array, sample_rate_hz, remote ? Runs::kOnServer : Runs::kLocally, &checked);
   if (!config.ok()) return UsageError(kCommand, config.status().message());
 
   io::TrackJob job;
@@ -344,9 +348,9 @@ int RunTrack(const std::vector<std::string>& args) {
   auto sources = engine::ReportsSources(job.config);  // BuildSessionConfig checked it
   if (!sources.ok()) return UsageError(kCommand, sources.status().message());
 #ifdef LOCALIZER_CLI_OFFLINE
-  return RunLocal(f, job, *sources);
+  return RunLocal(f, job, *sources, std::move(checked));
 #else
-  return remote ? RunOnServer(f, job, *sources, std::move(options)) : RunLocal(f, job, *sources);
+  return remote ? RunOnServer(f, job, *sources, std::move(options)) : RunLocal(f, job, *sources, std::move(checked));
 #endif
 }
 

@@ -192,7 +192,8 @@ std::string FlagOfSessionKey(const std::string& key) {
 }
 
 StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, const FlagSet& flags,
-                                                        const io::ArrayFile& array, double sample_rate_hz, Runs runs) {
+                                                        const io::ArrayFile& array, double sample_rate_hz, Runs runs,
+                                                        std::unique_ptr<engine::Session>* checked) {
   const auto given = [&](const std::string& flag) { return flags.seen(flag) || f.also_given.contains(flag); };
   engine::AudioSessionConfig base = f.config;
   auto weighting = engine::ParseWeighting(f.weighting);
@@ -304,6 +305,7 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   // only checked when the stages are built, and a bad flag should fail here as a usage error.
   auto session = engine::Session::Create(check);
   if (!session.ok()) return session.status();
+  if (checked != nullptr && runs == Runs::kLocally) *checked = std::move(*session);
   return config;
 }
 

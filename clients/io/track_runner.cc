@@ -128,14 +128,19 @@ class TrackRun {
 };
 
 // The second half of RunTrack: the session and the writer for a prepared input, and the run.
-StatusOr<TrackSummary> RunPrepared(PreparedTrack prepared, const TrackJob& job, const TrackCallbacks& callbacks) {
+// `built`, when not null, was built from job.config; it serves when the input left the
+// config as it was (ConfigForStream sets only the sample rate).
+StatusOr<TrackSummary> RunPrepared(PreparedTrack prepared, const TrackJob& job, const TrackCallbacks& callbacks,
+                                   std::unique_ptr<engine::Session> built = nullptr) {
   if (callbacks.on_opened) callbacks.on_opened(*prepared.stream);
-  auto session = engine::Session::Create(prepared.config);
-  if (!session.ok()) return session.status();
-  auto writer =
-      OpenEstimatesWriter(job.estimates_path, job.estimates_format, (*session)->geometry(), job.geodetic_origin);
+  if (built == nullptr || built->config().sample_rate_hz != prepared.config.sample_rate_hz) {
+    auto session = engine::Session::Create(prepared.config);
+    if (!session.ok()) return session.status();
+    built = std::move(*session);
+  }
+  auto writer = OpenEstimatesWriter(job.estimates_path, job.estimates_format, built->geometry(), job.geodetic_origin);
   if (!writer.ok()) return writer.status();
-  TrackRun run(std::move(prepared.stream), std::move(*session), std::move(*writer), callbacks);
+  TrackRun run(std::move(prepared.stream), std::move(built), std::move(*writer), callbacks);
   return run.Run(job.block_s);
 }
 
@@ -148,11 +153,12 @@ Status CheckBlock(const TrackJob& job) {
 
 }  // namespace
 
-StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks) {
+StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks,
+                                std::unique_ptr<engine::Session> session) {
   LOCALIZER_RETURN_IF_ERROR(CheckBlock(job));
   auto prepared = PrepareTrack(job, callbacks);
   if (!prepared.ok()) return prepared.status();
-  return RunPrepared(std::move(*prepared), job, callbacks);
+  return RunPrepared(std::move(*prepared), job, callbacks, std::move(session));
 }
 
 StatusOr<TrackSummary> RunTrackOn(std::unique_ptr<SampleStream> stream, const TrackJob& job,

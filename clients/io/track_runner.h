@@ -84,7 +84,11 @@ struct TrackCallbacks {
   std::function<void(const TrackProgress&)> on_progress;     // after every block
 };
 
-StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks = {});
+// `session`, when not null, is a Session already built from job.config (a caller's check of
+// the config, e.g. the CLI's): used instead of building a second one when its sample rate is
+// the input's (the only field the input sets), else replaced by one built for the input.
+StatusOr<TrackSummary> RunTrack(const TrackJob& job, const TrackCallbacks& callbacks = {},
+                                std::unique_ptr<engine::Session> session = nullptr);
 // RunTrack on an input opened elsewhere (the job's wav_paths, raw and alsa are not used):
 // an input kind the job cannot name, or a test's stand-in for a device that loses samples.
 StatusOr<TrackSummary> RunTrackOn(std::unique_ptr<SampleStream> stream, const TrackJob& job,
