@@ -9,6 +9,7 @@
 #endif
 
 #include "engine/core/fast_math.h"
+#include "engine/filters/particle_gather.h"
 #include "engine/filters/particle_set.h"
 
 namespace localizer::engine {
@@ -256,7 +257,47 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   const std::array<float*, 6> from = cur_.Pointers(), to = next_.Pointers();
   const float fa = static_cast<float>(a);
   std::array<bool, kMaxComponents> alive{};
-  for (int m = 0; m < n_; ++m) {
+  int first = 0;
+#if defined(__AVX512F__)
+  // Whole blocks of 16 slots: parents read by GatherParents16, each slot's label's shift and
+  // root picked by a permute from a vector that holds one label per lane, and the same fused
+  // multiply-adds in the same order as the scalar loop below (GCC contracts its `v = fa * x +
+  // s` and `v += l * z` into fused ones), so every value is the same bit for bit.
+  static_assert(kMaxComponents == 16, "one lane per label");
+  alignas(64) float shift_by_label[6][16];
+  alignas(64) float root_by_label[21][16];  // row r's terms k = 0 .. r at r (r + 1) / 2 + k
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    for (int r = 0, t = 0; r < 6; ++r) {
+      shift_by_label[r][c] = shift[c](r);
+      for (int k = 0; k <= r; ++k) root_by_label[t++][c] = l[c](r, k);
+    }
+  }
+  alignas(64) float parent[6][16];
+  alignas(64) int slot_label[16];
+  const __m512 va = _mm512_set1_ps(fa);
+  for (; first + 16 <= n_; first += 16) {
+    for (int k = 0; k < 16; ++k) {
+      const int c = label_[static_cast<size_t>(index_[static_cast<size_t>(first + k)])];
+      slot_label[k] = c;
+      alive[static_cast<size_t>(c)] = true;
+      next_label_[static_cast<size_t>(first + k)] = static_cast<uint8_t>(c);
+    }
+    const __m512i labels = _mm512_load_si512(slot_label);
+    GatherParents16(from, index_.data() + first, n_, parent);
+    for (int r = 0; r < 6; ++r) {
+      __m512 v = _mm512_fmadd_ps(va, _mm512_load_ps(parent[r]),
+                                 _mm512_permutexvar_ps(labels, _mm512_load_ps(shift_by_label[r])));
+      if (kernel_scale > 0.0) {
+        for (int k = 0; k <= r; ++k) {
+          const __m512 root = _mm512_permutexvar_ps(labels, _mm512_load_ps(root_by_label[r * (r + 1) / 2 + k]));
+          v = _mm512_fmadd_ps(root, _mm512_loadu_ps(noise_[static_cast<size_t>(k)].data() + first), v);
+        }
+      }
+      _mm512_storeu_ps(to[static_cast<size_t>(r)] + first, v);
+    }
+  }
+#endif
+  for (int m = first; m < n_; ++m) {
     const int src = index_[static_cast<size_t>(m)];
     const int c = label_[static_cast<size_t>(src)];
     alive[static_cast<size_t>(c)] = true;

@@ -13,6 +13,7 @@
 
 #include "engine/core/fast_math.h"
 #include "engine/filters/lane_sums.h"
+#include "engine/filters/particle_gather.h"
 #include "engine/filters/particle_set.h"
 
 namespace localizer::engine {
@@ -72,12 +73,9 @@ void RunningMax(int* __restrict index, int n) {
   }
 }
 
+}  // namespace
+
 #if defined(__AVX512F__)
-// parent[r][k] = column r of particle index[k], k = 0 .. 15. Systematic resampling's
-// indices are non-decreasing and advance about one particle per slot, so the 16 parents
-// nearly always lie within 32 consecutive particles: then two loads and one permute per
-// column replace a 16-way gather (which costs Zen and Intel cores about one load per lane).
-// Either way the same values.
 void GatherParents16(const std::array<float*, 6>& from, const int* index, int n, float (*parent)[16]) {
   const __m512i slots = _mm512_loadu_si512(index);
   const int lo = index[0];
@@ -92,7 +90,6 @@ void GatherParents16(const std::array<float*, 6>& from, const int* index, int n,
   for (int r = 0; r < 6; ++r) _mm512_store_ps(parent[r], _mm512_i32gather_ps(slots, from[r], 4));
 }
 #endif
-}  // namespace
 
 void ParticleSet::ResampleSystematic(double kernel_scale) {
   if (labels_ > 1) {

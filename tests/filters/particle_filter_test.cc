@@ -375,7 +375,9 @@ StillThenMovingResult RunStillThenMoving(bool levels, uint64_t noise_seed) {
   const double fs = 11025.0, hop_s = 2048.0 / fs, sigma_s = 8e-6, start_s = 6.0;
   ParticleFilterOptions o = Options();
   o.accel_noise_mps2 = 1.0;
-  if (levels) std::tie(o.accel_level_floor, o.accel_level_ceiling, o.accel_level_switch_hz) = std::tuple(0.003, 3.0, 1.0);
+  if (levels) {
+    std::tie(o.accel_level_floor, o.accel_level_ceiling, o.accel_level_switch_hz) = std::tuple(0.003, 3.0, 1.0);
+  }
   auto pf = ParticleFilter::Create(array, o);
   EXPECT_TRUE(pf.ok());
   TrackState belief;
@@ -474,6 +476,47 @@ TEST(ParticleFilter, ResamplingGivesEverySlotItsParentMovedOnlyByTheKernel) {
         ASSERT_LT(std::sqrt(moved2), 0.01) << "n " << n << (sparse ? " sparse" : " concentrated") << ", slot " << m;
       }
       std::printf("n %d, %s weights: %d distinct parents\n", n, sparse ? "sparse" : "concentrated", distinct);
+    }
+  }
+}
+
+TEST(ParticleFilter, ResamplingSeveralLabelsMovesEachWithItsOwnKernel) {
+  // Five hypotheses 20 m apart, each with its own spread (5 to 25 cm), equal weights. The
+  // per-label kernel move (Liu & West with each label's own mean and covariance) keeps every
+  // label's mean and spread; a slot given another label's root or shift (a wrong lane of the
+  // vectorised path) would land with a spread up to 5 times off, or metres away. A wide
+  // kernel (h = 0.88: 78 % of each label's variance is the kernel's draw after the move) so
+  // that a wrong root shows. Particle counts with and without a remainder of 16.
+  const ArrayGeometry array = Tetrahedron(2.0, Vec3::Zero(), 343.0);
+  for (int n : {16384, 16387}) {
+    ParticleFilterOptions o = Options();
+    o.particles = n;
+    ParticleSet set(array, o);
+    std::vector<ParticleSet::Component> components;
+    for (int c = 0; c < 5; ++c) {
+      ParticleSet::Component component;
+      component.mean.head<3>() = Vec3(20.0 * c, 5.0, -3.0);
+      component.root = Mat6::Identity() * 0.05 * (c + 1);
+      components.push_back(component);
+    }
+    set.SampleMixture(components);
+    ASSERT_EQ(set.labels(), 5);
+    set.ResampleSystematic(2.5);
+    ASSERT_EQ(set.labels(), 5);
+    const std::vector<WeightedBelief> modes = set.Modes(0.0);
+    ASSERT_EQ(modes.size(), 5u);
+    for (const WeightedBelief& mode : modes) {
+      const int c = static_cast<int>(std::lround(mode.belief.mean.x() / 20.0));
+      ASSERT_TRUE(c >= 0 && c < 5) << mode.belief.mean.transpose();
+      const double sd = 0.05 * (c + 1);
+      // ~3300 particles per label: the mean within a few standard errors, the spread within 10 %
+      // (label 0's root in every lane would leave label 4's spread 50 % short).
+      EXPECT_LT((mode.belief.mean.head<3>() - components[static_cast<size_t>(c)].mean.head<3>()).norm(), 0.5 * sd)
+          << "n " << n << ", label at x = " << 20 * c;
+      for (int axis = 0; axis < 6; ++axis) {
+        EXPECT_NEAR(std::sqrt(mode.belief.covariance(axis, axis)), sd, 0.1 * sd)
+            << "n " << n << ", label at x = " << 20 * c << ", axis " << axis;
+      }
     }
   }
 }
