@@ -111,7 +111,7 @@ def generator_command(args, target, sessions, client_flags, json_path):
     """The load generator's command line: the same session parameters for both."""
     common = ["--target", target, "--sessions", str(sessions), "--duration", str(args.duration),
               "--rate", args.rate, "--particles", str(args.particles), "--ramp", str(args.ramp),
-              "--encoding", args.encoding] + client_flags
+              "--encoding", args.encoding] + client_flags + args.generator_arg
     if args.generator == "cpp":
         return [args.loadgen] + common + ["--threads", str(args.threads), "--json", json_path]
     return ["/usr/bin/python3", args.loadtest] + common + ["--processes", str(args.processes)]
@@ -253,6 +253,8 @@ def main():
     p.add_argument("--threads", type=int, default=1, help="load-generator pacing threads (cpp)")
     p.add_argument("--workers", type=int, default=0, help="server --workers (0: one per core)")
     p.add_argument("--server-arg", action="append", default=[], help="extra localizer-server flag (repeatable)")
+    p.add_argument("--generator-arg", action="append", default=[],
+                   help="extra load-generator flag (repeatable), e.g. --generator-arg=--hop=4096")
     p.add_argument("--server", default=None,
                    help="localizer-server binary (default: <build>/server/localizer-server); to set two builds "
                         "side by side")
