@@ -36,7 +36,9 @@ permitted on every machine); the RESULT line also splits the voluntary ones by t
 --warmup S starts the server's figures S seconds into the generator's run (heap warm-up
 excluded: minflt/block, the server's minor page faults per block, shows the heap still growing).
 --server BINARY runs another build of localizer-server, so that two builds can be run
-alternately in the same minutes (issue 20).
+alternately in the same minutes (issue 20). --server-arg and --generator-arg pass one more
+flag to the server or the load generator (repeatable), e.g. --generator-arg=--hop=4096: one
+frame, so one estimate, per 4096-sample block.
 
 A fresh server is started for every row. Exit 0 unless a run failed to start.
 """
