@@ -42,13 +42,17 @@ bool ImportEntryLocked(std::size_t k) {
   return entry.wisdom[0] != '\0' && fftwf_import_wisdom_from_string(entry.wisdom) != 0;
 }
 
+// The entry for size n, or kBuiltinSizes when the table has none.
+std::size_t EntryOf(int n) {
+  std::size_t k = 0;
+  while (k < kBuiltinSizes && kBuiltinWisdom[k].n != n) ++k;
+  return k;
+}
+
 // Before size n's first plan; the planner mutex must be held.
 void ImportSizeOnceLocked(int n) {
-  for (std::size_t k = 0; k < kBuiltinSizes; ++k) {
-    if (kBuiltinWisdom[k].n != n) continue;
-    if (!Imported()[k]) ImportEntryLocked(k);
-    return;
-  }
+  const std::size_t k = EntryOf(n);
+  if (k < kBuiltinSizes && !Imported()[k]) ImportEntryLocked(k);
 }
 
 }  // namespace
@@ -62,10 +66,8 @@ bool ImportBuiltinFftwWisdom() {
 
 bool ImportBuiltinFftwWisdom(int n) {
   std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-  for (std::size_t k = 0; k < kBuiltinSizes; ++k) {
-    if (kBuiltinWisdom[k].n == n) return ImportEntryLocked(k);
-  }
-  return false;
+  const std::size_t k = EntryOf(n);
+  return k < kBuiltinSizes && ImportEntryLocked(k);
 }
 
 void ForgetFftwWisdom() {
