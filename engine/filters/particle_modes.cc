@@ -166,8 +166,11 @@ void ParticleSet::ScoreLabels(float exponent) {
   }
   const float top = *std::max_element(best.begin(), best.end());
   for (int c = 0; c < labels_; ++c) {
-    const float gap =
-        std::isfinite(best[static_cast<size_t>(c)]) ? exponent * (top - best[static_cast<size_t>(c)]) : INFINITY;
+    // One update adds at most kContenderStepNats: a single frame (an impulse, an echo on
+    // two pairs) cannot end a contender that the frames before and after cannot tell apart.
+    const float gap = std::isfinite(best[static_cast<size_t>(c)])
+                          ? exponent * std::min(top - best[static_cast<size_t>(c)], kContenderStepNats)
+                          : INFINITY;
     float& d = label_deficit_[static_cast<size_t>(c)];
     d = kContenderDecay * d + gap;
   }

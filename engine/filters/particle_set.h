@@ -142,6 +142,7 @@ class ParticleSet {
   static constexpr double kContenderShare = 0.1;
   static constexpr float kContenderDecay = 0.9f;  // per update: about ten updates' memory
   static constexpr float kContenderMarginNats = 6.0f;
+  static constexpr float kContenderStepNats = 2.0f;  // the most one update adds to a label's deficit
   // Weighted mean and covariance (cached until the particles or weights change).
   TrackState MeanAndCovariance() const;
 

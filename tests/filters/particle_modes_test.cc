@@ -98,6 +98,37 @@ TEST(ParticleModes, AnExactSecondSolutionIsHeldAndReportedWhileTheDataCannotSepa
   }
 }
 
+// One frame heard at a wrong position (an echo, an impulse: here the TDOAs of a point 8 m
+// beside the truth, which a second label holds) sets the truth's label back by far more than
+// the contender margin. One update adds at most kContenderStepNats to a label's deficit, so
+// the truth stays a contender through that frame, and the frames after, heard at the truth,
+// end the wrong label within a few updates instead. (Without the step cap the truth's label
+// was dropped on that single frame and the wrong one kept: 8 m off from then on.)
+TEST(ParticleModes, OneFrameHeardAtAWrongModeDoesNotEndTheTruth) {
+  const GhostScene s = FindGhostScene();
+  const Vec3 beside = s.truth_m + 8.0 * s.truth_m.cross(Vec3::UnitZ()).normalized();
+  auto pf = MakeFilter(s.array, {Around(s.array, s.truth_m), Around(s.array, beside)});
+  std::mt19937_64 rng(7);
+  int single_from = -1;
+  for (int f = 0; f < 12; ++f) {
+    if (f > 0) pf->Predict(kHopS);
+    const Vec3& heard = f == 0 ? beside : s.truth_m;
+    ASSERT_TRUE(pf->Update(MakeMeasurement(s.array, heard, Vec3::Zero(), f * kHopS, kSigmaS, kSampleRateHz, rng)).ok());
+    const std::vector<WeightedBelief> h = pf->Hypotheses();
+    if (f == 0) {
+      ASSERT_EQ(h.size(), 2u) << "the truth's label ended on one frame";
+    } else if (h.size() == 1 && single_from < 0) {
+      single_from = f;
+    }
+  }
+  // The step cap holds a label for at least ceil(margin / step) updates of steady evidence.
+  EXPECT_GE(single_from, 3);
+  EXPECT_LE(single_from, 8);
+  const std::vector<WeightedBelief> h = pf->Hypotheses();
+  ASSERT_EQ(h.size(), 1u);
+  EXPECT_LT((h.front().belief.mean.head<3>() - s.truth_m).norm(), 1.0);
+}
+
 // A second mode 8 m beside the truth that no TDOA solution supports: its best particle
 // trails the truth's by many nats every frame, so it is no contender and goes.
 TEST(ParticleModes, AModeTheDataRuleOutIsDropped) {
