@@ -12,6 +12,7 @@
 #include "engine/pipeline/backend.h"
 #include "engine/pipeline/framer.h"
 #include "engine/pipeline/innovation_consistency.h"
+#include "engine/pipeline/mirror_watch.h"
 #include "engine/pipeline/platform_pose.h"
 #include "engine/pipeline/range_observability.h"
 #include "engine/pipeline/session.h"
@@ -29,7 +30,8 @@ struct Session::Impl {
         components(std::move(parts)),
         acquisition(std::move(acq)),
         framer(array.sensor_count(), config.frame_samples, config.hop_samples),
-        monitor(config.divergence_window) {
+        monitor(config.divergence_window),
+        mirror(config.tracker.particle.accel_noise_mps2) {
     despike.despike_k = config.despike_k;
     // A coherent impulse reaches every sensor within the aperture's travel time.
     despike.coincidence_samples =
@@ -52,6 +54,8 @@ struct Session::Impl {
   // kOutscoredAudits audits in a row, restarts the track from the modes and the track
   // itself. Catches a track that locked on a wrong position while every test near it passes.
   void Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e);
+  // After an updated frame: follows the track's mirror (4-sensor arrays, mirror_watch.h).
+  void WatchMirror(double t_s, double fallback_sigma_s);
   // Conditions the tracker on this frame, fills e's filter fields, and restarts the tracker
   // through acquisition when the divergence test fires: from the frame's modes and the
   // track's own prediction (`predicted`), equally weighted.
@@ -85,8 +89,9 @@ struct Session::Impl {
   DespikeScratch despike_scratch;
   std::vector<float> despiked;  // the frame as the estimator sees it, when despiking
   DivergenceMonitor monitor;
-  PairSigmaHistory pair_sigmas;  // the recent frames' delay sigmas, for Estimate::far_field
+  PairSigmaHistory pair_sigmas;       // the recent frames' delay sigmas, for Estimate::far_field
   InnovationConsistency consistency;  // the recent frames' NIS, for Estimate::covariance
+  MirrorWatch mirror;                 // 4-sensor arrays: the track's other exact solution
   Measurement measurement;
   Eigen::VectorXd delays;
   bool have_sequence = false;

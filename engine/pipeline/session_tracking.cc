@@ -14,6 +14,10 @@ constexpr double kAssociationGate = 3.0;
 constexpr double kAuditMargin = 3.0;  // x sqrt(P): the acquisition's mode margin
 constexpr int kAuditSpacingFrames = 8;
 constexpr int kOutscoredAudits = 2;
+// A live mirror's weight in the reported covariance (mirror_watch.h): the heaviest mode's own
+// is 1, so a mirror at d from the track is covered at about d / sqrt(kMirrorWeight) sds, as a
+// contender of the particle filter is (particle_set.h, kContenderShare).
+constexpr double kMirrorWeight = 0.1;
 
 // The mode lies within the track's and its own uncertainty (Mahalanobis distance < 4).
 bool NearTrack(const TrackState& predicted, const PositionMode& mode) {
@@ -115,6 +119,7 @@ bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
   silent_s = 0.0;
   heard_elsewhere = 0;
   outscored = 0;
+  mirror.Reset();
   frames_since_audit = 0;
   monitor.Reset();
   consistency.Reset();
@@ -130,12 +135,31 @@ void Session::Impl::UpdateAndWatch(const TrackState& predicted, Estimate* e) {
   e->tdoa_sigma_s = report->tdoa_sigma_s;
   e->pairs_used = report->pair_count;
   consistency.Add(report->nis, report->pair_count, report->nis_terms);
-  if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count, report->anchored_z)) return;
+  if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count, report->anchored_z)) {
+    if (report->pair_count > 0) WatchMirror(e->t_s, report->tdoa_sigma_s);
+    return;
+  }
   // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too),
   // and the track's own: the frame that tripped the test may itself hold the bad pair (a
   // 4-sensor array's three pairs always have an exact, wrong, solution with one pair off).
   const AcquisitionResult found = acquisition.Search(measurement);
   if (found.presence.present) e->reinitialised = StartFromModes(WithOwnTrack(found.modes, predicted));
+}
+
+void Session::Impl::WatchMirror(double t_s, double fallback_sigma_s) {
+  const std::vector<WeightedBelief> hypotheses = components.tracker->Hypotheses();
+  if (hypotheses.size() != 1) {
+    mirror.Reset();  // the tracker holds several solutions itself
+    return;
+  }
+  MirrorWatch::Region region;
+  region.bounds_min_m = config.bounds_min_m;
+  region.bounds_max_m = config.bounds_max_m;
+  region.centre_m = array.centroid_m();
+  region.radius_m = acquisition.search_radius_m();
+  const TrackState& track = hypotheses.front().belief;
+  mirror.Update(array, t_s, track.mean.head<3>(), track.covariance.topLeftCorner<3, 3>(), pair_sigmas.Median(),
+                fallback_sigma_s, region);
 }
 
 void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
@@ -199,6 +223,11 @@ void Session::Impl::Report(Estimate* e) const {
     const Vec6 offset = h.belief.mean - best.mean;
     covariance += h.weight * (h.belief.covariance + offset * offset.transpose());
     modes += h.weight >= 0.01;
+  }
+  if (const std::optional<MirrorWatch::Mirror> m = mirror.Live(); m && hypotheses.size() == 1) {
+    const Vec3 offset = m->position_m - best.mean.head<3>();
+    covariance.topLeftCorner<3, 3>() += kMirrorWeight * (m->covariance_m2 + offset * offset.transpose());
+    ++modes;
   }
   e->initialised = true;
   e->state = best.mean;
