@@ -66,7 +66,8 @@ struct Session::Impl {
   // Multipath: a pair whose main peak is far from where the track predicts it, while its GCC
   // has another peak (a local maximum at least kCandidateShare of the main peak's height)
   // within kAssociationGate predicted sigmas, is measured at that peak instead (the tallest
-  // in the gate; returns how many pairs were changed).
+  // in the gate; returns how many pairs were changed). Only while the tracker holds one
+  // hypothesis: the measurement is shared by all of them.
   int AssociateCandidates(const TrackState& predicted);
 
   // Moving arrays: moves `array` and the tracker to the platform's pose at t_s; false

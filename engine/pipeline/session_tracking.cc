@@ -63,6 +63,9 @@ void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& nea
 constexpr double kCandidateShare = 0.3;
 
 int Session::Impl::AssociateCandidates(const TrackState& predicted) {
+  // `predicted` is the heaviest hypothesis: peaks picked near it would be the others'
+  // measurements too, and would hand it the frame (campaign scene 2000127).
+  if (components.tracker->Hypotheses().size() > 1) return 0;
   const Vec3 position = predicted.mean.head<3>();
   const double fs = config.sample_rate_hz;
   const Eigen::VectorXd lag = array.Tdoa(position) * fs;
