@@ -1,7 +1,9 @@
 #include "engine/doa/array_shape.h"
 
 #include <Eigen/SVD>
+#include <limits>
 #include <string>
+#include <utility>
 
 namespace localizer::engine {
 namespace {
@@ -64,6 +66,22 @@ StatusOr<ArrayShapeInfo> ClassifyArray(const std::vector<Vec3>& sensors_m) {
     info.shape = ArrayShape::kVolumetric;
   }
   return info;
+}
+
+PlanarDirection ResolvePlanarMirror(const Vec3& u, const Vec3& normal, const Vec3& side) {
+  PlanarDirection out;
+  out.direction = u;
+  Vec3 mirror = u - 2.0 * u.dot(normal) * normal;
+  out.mirror_direction = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+  if (side.norm() > 0.0) {
+    if (u.dot(side) < mirror.dot(side)) out.direction = mirror;
+    return out;
+  }
+  if (u.dot(normal) < 0.0) std::swap(out.direction, mirror);
+  // The chord between unit vectors is their angle to first order.
+  out.mirror_ambiguous = (out.direction - mirror).norm() > kMirrorDistinctRad;
+  if (out.mirror_ambiguous) out.mirror_direction = mirror;
+  return out;
 }
 
 }  // namespace localizer::engine

@@ -38,6 +38,20 @@ struct ArrayShapeInfo {
 // or two sensors closer than 1 mm.
 StatusOr<ArrayShapeInfo> ClassifyArray(const std::vector<Vec3>& sensors_m);
 
+// A planar array's refined direction u against its mirror image across the plane (normal n):
+// with a stated side (non-zero `side`), the one on that side; without, the one on the
+// normal's side, and mirror_ambiguous when the mirror is another direction: more than
+// kMirrorDistinctRad from u. A direction in the plane to the refinement's precision (its
+// steps stop at 1e-5 rad) is its own mirror: its out-of-plane part (1e-8 on one machine, 0 on
+// another) is rounding, and a flag decided by it would differ between the CPU and the GPU.
+constexpr double kMirrorDistinctRad = 1e-5;
+struct PlanarDirection {
+  Vec3 direction;
+  bool mirror_ambiguous = false;
+  Vec3 mirror_direction;  // NaN when not ambiguous
+};
+PlanarDirection ResolvePlanarMirror(const Vec3& u, const Vec3& normal, const Vec3& side);
+
 // The angles of a unit direction u in the array's frame: azimuth = atan2(y, x), elevation
 // from the x-y plane towards +z, and the cone angle to a linear array's axis, in [0, pi].
 inline double AzimuthRad(const Vec3& u) { return std::atan2(u.y(), u.x()); }

@@ -190,16 +190,10 @@ DirectionPeak SrpPhat::Describe(const Cell& cell, double statistic, bool statist
   }
   Vec3 u = cell.u;
   if (shape_.shape == ArrayShape::kPlanar) {
-    const Vec3& n = shape_.axis;
-    Vec3 mirror = u - 2.0 * u.dot(n) * n;
-    const Vec3& side = options_.source_side;
-    if (side.norm() > 0.0) {
-      if (u.dot(side) < mirror.dot(side)) std::swap(u, mirror);
-    } else {
-      if (u.dot(n) < 0.0) std::swap(u, mirror);
-      peak.mirror_ambiguous = (u - mirror).norm() > 1e-9;
-      if (peak.mirror_ambiguous) peak.mirror_direction = mirror;
-    }
+    const PlanarDirection resolved = ResolvePlanarMirror(u, shape_.axis, options_.source_side);
+    u = resolved.direction;
+    peak.mirror_ambiguous = resolved.mirror_ambiguous;
+    peak.mirror_direction = resolved.mirror_direction;
   }
   peak.direction = u;
   peak.azimuth_rad = AzimuthRad(u);

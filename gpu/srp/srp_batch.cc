@@ -182,18 +182,11 @@ SrpPeak DescribeSrpResult(const SrpArrayModel& model, const SrpSessionResult& r)
     return peak;
   }
   engine::Vec3 u(r.ux, r.uy, r.uz);
-  if (model.shape.shape == engine::ArrayShape::kPlanar) {
-    // As SrpPhat::Describe: the side source_side names, else the normal's side and both candidates.
-    const engine::Vec3& n = model.shape.axis;
-    engine::Vec3 mirror = u - 2.0 * u.dot(n) * n;
-    const engine::Vec3& side = model.source_side;
-    if (side.norm() > 0.0) {
-      if (u.dot(side) < mirror.dot(side)) std::swap(u, mirror);
-    } else {
-      if (u.dot(n) < 0.0) std::swap(u, mirror);
-      peak.mirror_ambiguous = (u - mirror).norm() > 1e-9;
-      if (peak.mirror_ambiguous) peak.mirror_direction = mirror;
-    }
+  if (model.shape.shape == engine::ArrayShape::kPlanar) {  // as SrpPhat::Describe
+    const engine::PlanarDirection resolved = engine::ResolvePlanarMirror(u, model.shape.axis, model.source_side);
+    u = resolved.direction;
+    peak.mirror_ambiguous = resolved.mirror_ambiguous;
+    peak.mirror_direction = resolved.mirror_direction;
   }
   peak.direction = u;
   return peak;

@@ -71,5 +71,26 @@ TEST(ArrayShape, BadArraysAreNamed) {
   EXPECT_NE(nan.message().find("sensor 1"), std::string::npos) << nan.message();
 }
 
+// The mirror across a planar array's plane: the normal's side without a stated side, the
+// stated side with one; a direction in the plane to the refinement's precision is its own
+// mirror on every machine (the CPU's refinement left z = 1.5e-8 where the GPU's left 0).
+TEST(ArrayShape, APlanarDirectionsMirrorIsAmbiguousOnlyWhenItIsAnotherDirection) {
+  const Vec3 n(0, 0, 1);
+  const Vec3 below = Vec3(0.6, 0.0, -0.8);
+  const PlanarDirection free = ResolvePlanarMirror(below, n, Vec3::Zero());
+  EXPECT_TRUE(free.direction.isApprox(Vec3(0.6, 0.0, 0.8)));
+  EXPECT_TRUE(free.mirror_ambiguous);
+  EXPECT_TRUE(free.mirror_direction.isApprox(below));
+  const PlanarDirection stated = ResolvePlanarMirror(Vec3(0.6, 0.0, 0.8), n, Vec3(0, 0, -1));
+  EXPECT_TRUE(stated.direction.isApprox(below));
+  EXPECT_FALSE(stated.mirror_ambiguous);
+  for (const double z : {0.0, 1.5e-8, -1.5e-8, 4e-6}) {
+    const PlanarDirection in_plane = ResolvePlanarMirror(Vec3(std::sqrt(1 - z * z), 0.0, z), n, Vec3::Zero());
+    EXPECT_FALSE(in_plane.mirror_ambiguous) << "z " << z;
+    EXPECT_GE(in_plane.direction.z(), 0.0);
+    EXPECT_TRUE(std::isnan(in_plane.mirror_direction.x()));
+  }
+  EXPECT_TRUE(ResolvePlanarMirror(Vec3(std::sqrt(1 - 1e-10), 0.0, 1e-5), n, Vec3::Zero()).mirror_ambiguous);
+}
 }  // namespace
 }  // namespace localizer::engine
