@@ -30,7 +30,9 @@ struct PairMeasurement {
   // the spread of its cross-spectrum about the measured delay (gcc_phat.h derives it and
   // states how well it agrees with the measured spread). It describes the scatter about the
   // peak that was found; whether that peak is the source is peak_snr's and quality's job.
-  // 0: not computed by this front end (the GPU one; filters then use the GCC's curvature).
+  // Both front ends (CPU and GPU) fill it; 0 would mean not computed, and filters would
+  // then fall back on the GCC window's curvature, which tracks far worse (tetra-air: 0.12 m
+  // pooled RMSE with it, 3.5 m without).
   double delay_sigma_s = 0.0;
   // Set by a session that found this pair's peak where its established track predicts it
   // (within the association gate): the filters then use the pair down to a lower peak SNR

@@ -1,6 +1,6 @@
 // GccPhatEstimator's per-peak statistics (gcc_phat.h): one pass over the kept cross-spectrum
-// at the measured delay (delay_sigma's slope variance and curvature, the aligned spectrum's
-// width), the PHAT-coherence weights it learns, and the candidate peaks.
+// at the measured delay (the moments behind delay_sigma and the candidates' spacing,
+// delay_statistics.h) and the PHAT-coherence weights it learns.
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -16,7 +16,7 @@ namespace localizer::engine {
 // the bins that stand for a conjugate pair and 1 for DC and Nyquist. With kPhatCoherence it
 // also folds this frame's aligned coherence Re(X_k X_r* e^{j w_k d}) / |X_k X_r*| into the
 // pair's running average.
-GccPhatEstimator::Impl::SpectrumStats GccPhatEstimator::Impl::AnalyseSpectrum(int pair, double delay_samples) {
+SpectrumMoments GccPhatEstimator::Impl::AnalyseSpectrum(int pair, double delay_samples) {
   const int n = layout.fft_size;
   const int lo = layout.band_first_bin;
   const int hi = layout.band_end_bin;
@@ -28,7 +28,7 @@ GccPhatEstimator::Impl::SpectrumStats GccPhatEstimator::Impl::AnalyseSpectrum(in
   float* average = learn ? coherence.data() + static_cast<std::size_t>(pair) * layout.bin_count : nullptr;
   const float alpha = static_cast<float>(1.0 / options.coherence_time_constant_frames);
   const double step_angle = bin_rate * delay_samples;
-  SpectrumStats stats;
+  SpectrumMoments stats;
   // The phasor exp(j w_k d) in kLanes independent lanes (lane l at bin first + l), each
   // rotated by exp(j kLanes w_1 d) per block so that the loop vectorises; restarted exactly
   // every 2048 bins (the recurrence then drifts by < 1e-12). Lane sums, reduced at the end.
@@ -140,54 +140,5 @@ void GccPhatEstimator::Impl::LearnCoherence(int pair) {
   }
   coherence_usable[pair] = frames >= options.coherence_warmup_frames && largest > 1e-6f;
 }
-
-// Local extrema of R in the searched window (the padding either side gives the end samples
-// a neighbour), the main peak first, then by decreasing |R|, each at least `radius` lags
-// from those taken; each refined like the main peak (negative ones on -R).
-void GccPhatEstimator::Impl::PickCandidates(std::span<const float> searched, int peak, int max_lag, double radius,
-                                            double slope_std, PairMeasurement* out) {
-  const int count = static_cast<int>(searched.size());
-  const double fs = options.sample_rate_hz;
-  const double cap = SigmaCapSamples(max_lag);
-  const float* w = searched.data();  // w[-K .. count - 1 + K] are valid
-  const auto sigma_of = [&](double curvature, double floor) {
-    if (!(curvature < 0.0)) return cap;
-    const double stat = slope_std / -curvature;
-    return std::min(std::sqrt(stat * stat + floor * floor), cap);
-  };
-  extrema.clear();
-  for (int i = 0; i < count; ++i) {
-    if (i == peak) continue;
-    const float v = w[i];
-    const bool is_max = v > 0.0f && v > w[i - 1] && v >= w[i + 1];
-    const bool is_min = v < 0.0f && v < w[i - 1] && v <= w[i + 1];
-    if (is_max || is_min) extrema.push_back({std::abs(v), i});
-  }
-  std::sort(extrema.begin(), extrema.end(), [](const Extremum& a, const Extremum& b) {
-    return a.magnitude != b.magnitude ? a.magnitude > b.magnitude : a.index < b.index;
-  });
-  out->candidates.resize(1);  // [0], the main peak, is filled by the caller
-  std::array<int, kMaxCandidates> taken{};
-  taken[0] = peak;
-  int taken_count = 1;
-  for (const Extremum& e : extrema) {
-    if (taken_count >= options.max_candidates) break;
-    bool clear = true;
-    for (int t = 0; t < taken_count; ++t) clear = clear && std::abs(e.index - taken[t]) >= radius;
-    if (!clear) continue;
-    taken[taken_count++] = e.index;
-    std::array<float, kPeakSamples> around{};
-    const float sign = w[e.index] < 0.0f ? -1.0f : 1.0f;
-    for (int m = 0; m < kPeakSamples; ++m) around[m] = sign * w[e.index - kPeakHalfWidth + m];
-    const double offset = InterpolatePeak(options.interpolation, around);
-    DelayCandidate candidate;
-    candidate.delay_s = (e.index - max_lag + offset) / fs;
-    candidate.value = w[e.index];
-    candidate.delay_sigma_s =
-        sigma_of(SincCurvature(around, offset), InterpolationErrorSamples(options.interpolation, around, offset)) / fs;
-    out->candidates.push_back(candidate);
-  }
-}
-
 
 }  // namespace localizer::engine

@@ -217,34 +217,14 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
   out->peak_snr = peak_value * layout.noise_floor_inverse;
   out->quality = QualityRatio(peak_value, LargestSidelobe(searched, peak, peak_lag, scale));
 
-  // delay_sigma (gcc_phat.h): sigma = sqrt((N / M) sum c^2 w^2 Im^2) / sum c w^2 Re.
-  const SpectrumStats stats = AnalyseSpectrum(pair, delay_samples);
   const double padding_factor = static_cast<double>(layout.fft_size) / static_cast<double>(options.frame_samples);
-  const double slope_std = std::sqrt(padding_factor * stats.slope_var) / norm;  // std of R'
-  const double floor = InterpolationErrorSamples(options.interpolation, around, offset_samples);
-  const double cap = SigmaCapSamples(max_lag);
-  double sigma = cap;
-  if (stats.curvature > 0.0) {
-    const double stat = slope_std / (stats.curvature / norm);
-    sigma = std::min(std::sqrt(stat * stat + floor * floor), cap);
-  }
-  out->delay_sigma_s = sigma / options.sample_rate_hz;
+  const DelaySpread spread =
+      SpreadFromMoments(AnalyseSpectrum(pair, delay_samples), norm, padding_factor,
+                        InterpolationErrorSamples(options.interpolation, around, offset_samples), max_lag);
+  out->delay_sigma_s = spread.sigma_samples / options.sample_rate_hz;
   if (options.weighting == Weighting::kPhatCoherence) LearnCoherence(pair);
-
-  // Candidates at least an envelope width apart: the rms width of the aligned spectrum.
-  double radius = 1.0;
-  if (stats.level > 0.0) {
-    const double mean = stats.first / stats.level;
-    const double var = stats.curvature / stats.level - mean * mean;
-    if (var > 0.0)
-      radius = std::clamp(kEnvelopeNullPerRmsWidth / std::sqrt(var), 1.0, static_cast<double>(searched_count));
-  }
-  if (options.max_candidates > 1) {
-    PickCandidates(searched, peak, max_lag, radius, slope_std, out);
-  } else {
-    out->candidates.resize(1);  // the main peak alone: no scan of the window's extrema
-  }
-  out->candidates[0] = DelayCandidate{out->delay_s, out->peak_value, out->delay_sigma_s};
+  PickDelayCandidates(searched, peak, max_lag, spread, options.interpolation, options.sample_rate_hz,
+                      options.max_candidates, &extrema, out);
 
   if (options.keep_gcc)
     out->gcc.assign(searched.begin(), searched.end());

@@ -49,11 +49,13 @@ Status GpuTdoaEstimator::Estimate(const float* frame, int frame_samples, double 
   job.job.frame_pinned = true;
   job.job.ring = &ring_;
   job.job.ring_new_samples = fresh;
+  job.job.tails = &tails_;
   const int64_t total_before = ring_.total();
   runtime_->RunGcc(&job);
   // Unless the batch appended this frame's samples (whatever the frame's own outcome), the
   // ring no longer ends with the staged frame: the next frame is sent whole.
   if (!ring_.valid() || ring_.total() != total_before + fresh) ring_.Invalidate();
+  if (job.status.ok()) FinishCandidates(plan_, tails_, out, &extrema_);
   return job.status;
 }
 

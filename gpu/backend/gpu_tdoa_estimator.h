@@ -16,11 +16,13 @@
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "engine/array/array_geometry.h"
 #include "engine/tdoa/gcc_phat.h"
 #include "gpu/backend/gpu_runtime.h"
 #include "gpu/core/device_buffer.h"
+#include "gpu/tdoa/gcc_batch.h"
 #include "gpu/tdoa/sample_ring.h"
 
 namespace localizer::gpu {
@@ -43,6 +45,9 @@ class GpuTdoaEstimator final : public engine::TdoaEstimator {
   PinnedBuffer<float> staging_;  // channels * frame_samples: this session's (last) frame
   SampleRing ring_;              // the same frame on the device (capacity frame_samples)
   int hop_hint_ = 0;             // the last overlap found: the framer's hop
+  // The candidates are picked here, on the session's thread, not on the dispatcher's.
+  std::vector<GccPairTail> tails_;
+  std::vector<engine::WindowExtremum> extrema_;
 };
 
 }  // namespace localizer::gpu

@@ -7,11 +7,13 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <span>
 #include <string>
 #include <unordered_set>
 #include <utility>
 #include <vector>
 
+#include "engine/tdoa/delay_statistics.h"
 #include "engine/tdoa/peak_interpolation.h"
 #include "gpu/core/cuda_status.h"
 #include "gpu/core/device.h"
@@ -118,7 +120,8 @@ struct GccBatch::Impl {
   PinnedBuffer<GccRingAppend> staged_appends;   // max_frames: the ring jobs' appends
   PinnedBuffer<GccPairTask> staged_tasks;
   PinnedBuffer<GccPairResult> staged_results;
-  PinnedBuffer<float> staged_gcc;  // grows to the largest batch's windows
+  PinnedBuffer<float> staged_gcc;               // grows to the largest batch's windows
+  std::vector<engine::WindowExtremum> extrema;  // Fill's scratch for the candidates
   DeviceBuffer<GccFrameSource> sources;
   DeviceBuffer<GccRingAppend> appends;
   DeviceBuffer<GccPairTask> tasks;
@@ -258,7 +261,7 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
       t.max_lag = layout.max_lag_samples[p];
       t.interpolation = static_cast<int32_t>(options.interpolation);
       t.gcc_offset = options.keep_gcc ? gcc_offset : -1;
-      if (options.keep_gcc) gcc_offset += 2 * static_cast<std::int64_t>(t.max_lag) + 1;
+      if (options.keep_gcc) gcc_offset += 2 * static_cast<std::int64_t>(t.max_lag + engine::kPeakHalfWidth) + 1;
     }
   }
 
@@ -334,6 +337,13 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
   peak.task_count = task_count;
   peak.fft_size = key.fft_size;
   LOCALIZER_RETURN_IF_ERROR(LaunchGccPeak(peak, s));
+  GccMomentsArgs moments;
+  moments.tasks = tasks.data();
+  moments.spectra = spectra.data();
+  moments.results = results.data();
+  moments.task_count = task_count;
+  moments.fft_size = key.fft_size;
+  LOCALIZER_RETURN_IF_ERROR(LaunchGccMoments(moments, s));
   LOCALIZER_RETURN_IF_ERROR(Record(kKernelsDone));
 
   LOCALIZER_CUDA_RETURN_IF_ERROR(cudaMemcpyAsync(staged_results.data(), results.data(),
@@ -349,8 +359,26 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
 
 // Job `frame`'s results into its Measurement, as GccPhatEstimator::Estimate fills one; a
 // frame with a non-finite sample is reported instead (lowest channel first, as the CPU).
+void FinishCandidates(const GccPlan& plan, std::span<const GccPairTail> tails, engine::Measurement* out,
+                      std::vector<engine::WindowExtremum>* scratch) {
+  const engine::GccOptions& options = plan.options();
+  for (std::size_t p = 0; p < tails.size() && p < out->pairs.size(); ++p) {
+    const GccPairTail& tail = tails[p];
+    engine::PairMeasurement& pair = out->pairs[p];
+    if (tail.padded.empty() || pair.candidates.empty()) continue;
+    const int kept = static_cast<int>(tail.padded.size()) - 2 * engine::kPeakHalfWidth;
+    engine::PickDelayCandidates(std::span<const float>(tail.padded.data() + engine::kPeakHalfWidth, kept),
+                                tail.peak_index, (kept - 1) / 2, tail.spread, options.interpolation,
+                                options.sample_rate_hz, options.max_candidates, scratch, &pair);
+  }
+}
+
 void GccBatch::Impl::Fill(const GccJob& job, int frame, Status* first_error) {
   const GccPlan& plan = *job.plan;
+  if (job.tails != nullptr) {
+    job.tails->resize(static_cast<std::size_t>(pairs));
+    for (GccPairTail& tail : *job.tails) tail.padded.clear();
+  }
   const GccPairResult* r = staged_results.data() + static_cast<std::size_t>(frame) * pairs;
   for (int c = 0; c < channels; ++c) {
     // Channel c's energy: the reference's is in every pair, another's in its own pair.
@@ -385,20 +413,46 @@ void GccBatch::Impl::Fill(const GccJob& job, int frame, Status* first_error) {
     const int max_lag = layout.max_lag_samples[p];
     pair.sensor = plan.sensor_of_pair(p);
     pair.first_lag_samples = -max_lag;
+    const int count = 2 * max_lag + 1;
+    // R at lags -L..L, with kPeakHalfWidth lags either side readable (the candidates' refinement).
+    const float* searched =
+        task.gcc_offset >= 0 ? staged_gcc.data() + task.gcc_offset + engine::kPeakHalfWidth : nullptr;
     if (!(result.norm > 0.0f)) {
       pair.delay_s = 0.0;
       pair.quality = 0.0;
       pair.peak_value = 0.0;
       pair.peak_snr = 0.0;
+      pair.delay_sigma_s = engine::SigmaCapSamples(max_lag) / options.sample_rate_hz;
+      pair.candidates.clear();
     } else {
       pair.delay_s = (result.peak_lag + result.offset_samples) / options.sample_rate_hz;
       pair.peak_value = result.peak_value;
       pair.peak_snr = result.peak_value * layout.noise_floor_inverse;
       pair.quality = result.quality;
+      // delay_sigma and the candidates by the CPU's functions, from the device's moments.
+      const engine::SpectrumMoments moments{result.level, result.first, result.curvature, result.slope_var};
+      const double padding_factor = static_cast<double>(layout.fft_size) / options.frame_samples;
+      const engine::DelaySpread spread =
+          engine::SpreadFromMoments(moments, result.norm, padding_factor, result.floor_samples, max_lag);
+      pair.delay_sigma_s = spread.sigma_samples / options.sample_rate_hz;
+      const int peak_index = result.peak_lag + max_lag;
+      if (job.tails != nullptr) {
+        GccPairTail& tail = (*job.tails)[p];
+        tail.spread = spread;
+        tail.peak_index = peak_index;
+        if (searched != nullptr)
+          tail.padded.assign(searched - engine::kPeakHalfWidth, searched + count + engine::kPeakHalfWidth);
+        engine::PickDelayCandidates({}, peak_index, max_lag, spread, options.interpolation, options.sample_rate_hz, 1,
+                                    &extrema, &pair);  // the main peak alone, for now
+      } else {
+        // Without a window (keep_gcc off) there are no other extrema to pick: the main peak alone.
+        engine::PickDelayCandidates(std::span<const float>(searched, searched != nullptr ? count : 0), peak_index,
+                                    max_lag, spread, options.interpolation, options.sample_rate_hz,
+                                    searched != nullptr ? options.max_candidates : 1, &extrema, &pair);
+      }
     }
-    if (task.gcc_offset >= 0) {
-      const float* window = staged_gcc.data() + task.gcc_offset;
-      pair.gcc.assign(window, window + 2 * max_lag + 1);
+    if (searched != nullptr) {
+      pair.gcc.assign(searched, searched + count);
     } else {
       pair.gcc.clear();
     }

@@ -17,14 +17,19 @@
 //      and S = sum of |G| over the full spectrum
 //   5. C2R of N over M x P rows (cuFFT, batched)
 //   6. peak, per (frame, pair): R = IFFT(G) / S over lags -(L_p + 8)..(L_p + 8), first
-//      maximum over |lag| <= L_p, sub-sample refinement, quality, peak value
-//   7. results and (with keep_gcc) the GCC windows back to pinned memory in two copies
-// and the host fills each job's Measurement. Agreement with the CPU: every step but the FFTs
-// is the CPU's arithmetic (the engine's own functions, engine/tdoa/gcc_math.h and
-// peak_math.h, compiled for the device; tests/gpu/gcc_math_test.cu checks it on the host),
-// so only cuFFT's rounding against FFTW's (~1e-6 relative) separates them;
-// tests/gpu/gcc_batch_test.cc holds delays to 1e-3 sample, quality, peak value and SNR to
-// 1e-3 relative, GCC windows to 1e-4 absolute. Within one bucket (below), a frame's results
+//      maximum over |lag| <= L_p, sub-sample refinement and its floor, quality, peak value
+//   7. moments, per (frame, pair): G recomputed from the spectra (C2R overwrote it), rotated
+//      to the measured delay, the four sums behind delay_sigma and the candidates' spacing
+//   8. results and (with keep_gcc) the GCC windows, K = 8 lags wider either side, back to
+//      pinned memory in two copies
+// and the host fills each job's Measurement, delay_sigma_s and candidates by the CPU's own
+// functions (engine/tdoa/delay_statistics.h) from the device's moments and window.
+// Agreement with the CPU: every step but the FFTs is the CPU's arithmetic (the engine's own
+// functions, engine/tdoa/gcc_math.h and peak_math.h, compiled for the device;
+// tests/gpu/gcc_math_test.cu checks it on the host), so only cuFFT's rounding against FFTW's
+// (~1e-6 relative) separates them; tests/gpu/gcc_batch_test.cc holds delays to 1e-3 sample,
+// quality, peak value, SNR and delay_sigma to 1e-3 relative, the candidates' delays to 1e-3
+// sample, GCC windows to 1e-4 absolute. Within one bucket (below), a frame's results
 // do not depend on the other frames: rows are transformed and reduced independently. Across
 // buckets that rests on cuFFT computing a row alike whatever the batch count
 // (gcc_batch_test.cc ResultsDoNotDependOnTheBatchBucket checks it on the device).
@@ -53,20 +58,40 @@
 
 #include <memory>
 #include <span>
+#include <vector>
 
 #include "engine/core/measurement.h"
 #include "engine/core/status.h"
+#include "engine/tdoa/delay_statistics.h"
 #include "gpu/tdoa/gcc_plan.h"
 #include "gpu/tdoa/sample_ring.h"
 
 namespace localizer::gpu {
 
+// What a pair's candidates (PairMeasurement::candidates, engine::PickDelayCandidates) are
+// picked from: the spread the device's moments give, the main peak's index in the searched
+// window and R at lags -(L + K)..L + K (K = engine::kPeakHalfWidth). Scanning and sorting a
+// wide window's extrema costs microseconds per pair, so a caller with its own thread (a
+// session) picks them there rather than on the thread that runs the batch for everyone.
+struct GccPairTail {
+  engine::DelaySpread spread;
+  int peak_index = 0;
+  std::vector<float> padded;  // empty: nothing measured, or keep_gcc off
+};
+
+// Picks out->pairs[p]'s candidates from tails[p] as GccPhatEstimator does (tails as a Run
+// with GccJob::tails left them; `scratch` is reused between calls).
+void FinishCandidates(const GccPlan& plan, std::span<const GccPairTail> tails, engine::Measurement* out,
+                      std::vector<engine::WindowExtremum>* scratch);
+
 // One frame to measure.
 struct GccJob {
-  const GccPlan* plan = nullptr;       // the session's plan; its key must be the batch's
-  const float* frame = nullptr;        // channel-major host memory: channels * frame_samples
-  double t_s = 0.0;                    // copied into out->t_s (the frame centre)
-  engine::Measurement* out = nullptr;  // filled as GccPhatEstimator::Estimate fills it
+  const GccPlan* plan = nullptr;  // the session's plan; its key must be the batch's
+  const float* frame = nullptr;   // channel-major host memory: channels * frame_samples
+  double t_s = 0.0;               // copied into out->t_s (the frame centre)
+  // Filled as GccPhatEstimator::Estimate fills it; with keep_gcc off the candidates hold the
+  // main peak alone (the batch returns no window to find the others in).
+  engine::Measurement* out = nullptr;
   // Optional: this job's own outcome. OK, or INVALID_ARGUMENT "channel c holds a non-finite
   // sample (NaN or Inf)" (the CPU's message), in which case *out is untouched.
   Status* status = nullptr;
@@ -85,6 +110,9 @@ struct GccJob {
   // launch completed, or invalidates it when the device failed.
   SampleRing* ring = nullptr;
   int ring_new_samples = 0;
+  // Optional: Run leaves each pair's candidates holding the main peak alone and fills
+  // (*tails)[p] for FinishCandidates on the caller's thread. Null: Run picks them itself.
+  std::vector<GccPairTail>* tails = nullptr;
 };
 
 class GccBatch {

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cub/block/block_reduce.cuh>
 
+#include "engine/tdoa/delay_statistics.h"
 #include "gpu/core/cuda_status.h"
 #include "gpu/tdoa/frame_sources.cuh"
 #include "gpu/tdoa/gcc_kernels.h"
@@ -22,6 +23,7 @@ constexpr int kPackThreads = 256;
 constexpr int kAppendThreads = 256;
 constexpr int kWeighThreads = 256;
 constexpr int kPeakThreads = 128;  // windows are a few hundred lags; 4 warps read them
+constexpr int kMomentThreads = 256;
 
 __global__ void __launch_bounds__(kPackThreads) GccPackKernel(GccPackArgs a) {
   using Reduce = cub::BlockReduce<double, kPackThreads>;
@@ -114,6 +116,7 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
   __shared__ int lobe_last;
   __shared__ bool circular;  // the lobe filled the window: sidelobe from the full corr
   __shared__ double offset;
+  __shared__ double floor_samples;
 
   const int task = blockIdx.x;
   const GccPairTask t = a.tasks[task];
@@ -125,15 +128,19 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
   GccPairResult& result = a.results[task];
   const float norm = result.norm;
 
+  constexpr int K = engine::kPeakHalfWidth;
+  const int kept = count + 2 * K;  // the window out holds lags -(L + K)..L + K
+
   if (!(norm > 0.0f)) {  // no energy in the band: nothing to measure (uniform branch)
     if (window_out != nullptr) {
-      for (int i = threadIdx.x; i < count; i += kPeakThreads) window_out[i] = 0.0f;
+      for (int i = threadIdx.x; i < kept; i += kPeakThreads) window_out[i] = 0.0f;
     }
     if (threadIdx.x == 0) {
       result.offset_samples = 0.0;
       result.peak_value = 0.0f;
       result.quality = 0.0f;
       result.peak_lag = 0;
+      result.floor_samples = 0.0;
     }
     return;
   }
@@ -142,12 +149,11 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
   const auto in_window = [&](int i) { return scaled(i - max_lag); };
 
   // 1. The first maximum of R over the window; the window to the gcc output on the way.
-  gcc::PeakCandidate best = gcc::NoPeak();
-  for (int i = threadIdx.x; i < count; i += kPeakThreads) {
-    const float v = in_window(i);
-    if (window_out != nullptr) window_out[i] = v;
-    best = gcc::BetterPeak(best, {v, i});
+  if (window_out != nullptr) {
+    for (int i = threadIdx.x; i < kept; i += kPeakThreads) window_out[i] = in_window(i - K);
   }
+  gcc::PeakCandidate best = gcc::NoPeak();
+  for (int i = threadIdx.x; i < count; i += kPeakThreads) best = gcc::BetterPeak(best, {in_window(i), i});
   best = ArgMax(scratch.argmax).Reduce(best, BetterPeakOp());
   if (threadIdx.x == 0) peak = best;
   __syncthreads();
@@ -170,6 +176,12 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
     float samples[engine::kPeakSamples];
     for (int m = 0; m < engine::kPeakSamples; ++m) samples[m] = scaled(peak_lag + m - engine::kPeakHalfWidth);
     offset = gcc::InterpolatePeak(t.interpolation, samples);
+    // engine::InterpolationErrorSamples: kSinc's floor, or the others' distance from kSinc.
+    floor_samples = engine::kSincFloorSamples;
+    if (t.interpolation != gcc::kSinc) {
+      const double bias = offset - gcc::InterpolatePeak(gcc::kSinc, samples);
+      floor_samples = sqrt(bias * bias + engine::kSincFloorSamples * engine::kSincFloorSamples);
+    }
   }
   __syncthreads();
 
@@ -191,10 +203,52 @@ __global__ void __launch_bounds__(kPeakThreads) GccPeakKernel(GccPeakArgs a) {
     result.offset_samples = offset;
     result.peak_value = peak.value;
     result.quality = engine::QualityRatio(peak.value, sidelobe);
+    result.floor_samples = floor_samples;
+  }
+}
+
+__global__ void __launch_bounds__(kMomentThreads) GccMomentsKernel(GccMomentsArgs a) {
+  using Reduce = cub::BlockReduce<double, kMomentThreads>;
+  __shared__ typename Reduce::TempStorage scratch;
+  const int task = blockIdx.x;
+  const GccPairTask t = a.tasks[task];
+  GccPairResult& result = a.results[task];
+  if (!(result.norm > 0.0f)) return;  // nothing measured (uniform branch)
+  const int bins = a.fft_size / 2 + 1;
+  const gcc::WeighParams params = gcc::MakeWeighParams(t.weighting, t.beta, result.energy_ref, result.energy_sensor);
+  const float2* xr = reinterpret_cast<const float2*>(a.spectra) + static_cast<std::size_t>(t.ref_row) * bins;
+  const float2* xk = reinterpret_cast<const float2*>(a.spectra) + static_cast<std::size_t>(t.sensor_row) * bins;
+  const double delay_samples = result.peak_lag + result.offset_samples;
+  gcc::BinMoments m;
+  for (int b = t.band_first_bin + static_cast<int>(threadIdx.x); b < t.band_end_bin; b += kMomentThreads) {
+    const float2 r = xr[b];
+    const float2 k = xk[b];
+    gcc::AddBinMoments(b, a.fft_size, delay_samples, gcc::WeighBin(params, {r.x, r.y}, {k.x, k.y}).g, &m);
+  }
+  // Four sums through one TempStorage: a barrier between reductions lets it be reused.
+  const double level = Reduce(scratch).Sum(m.level);
+  __syncthreads();
+  const double first = Reduce(scratch).Sum(m.first);
+  __syncthreads();
+  const double curvature = Reduce(scratch).Sum(m.curvature);
+  __syncthreads();
+  const double slope_var = Reduce(scratch).Sum(m.slope_var);
+  if (threadIdx.x == 0) {
+    result.level = level;
+    result.first = first;
+    result.curvature = curvature;
+    result.slope_var = slope_var;
   }
 }
 
 }  // namespace
+
+Status LaunchGccMoments(const GccMomentsArgs& args, cudaStream_t stream) {
+  if (args.task_count == 0) return Status::Ok();
+  GccMomentsKernel<<<args.task_count, kMomentThreads, 0, stream>>>(args);
+  LOCALIZER_LAUNCH_RETURN_IF_ERROR("GccMomentsKernel");
+  return Status::Ok();
+}
 
 Status LaunchGccPack(const GccPackArgs& args, cudaStream_t stream) {
   if (args.rows == 0) return Status::Ok();

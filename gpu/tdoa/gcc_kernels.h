@@ -3,7 +3,7 @@
 //
 //   new samples ──LaunchGccRingAppend──▶ session rings (sample_ring.cuh)
 //   frames or rings ──LaunchGccPack──▶ signal, energy ──R2C──▶ spectra ──LaunchGccWeigh──▶ cross, S
-//          ──C2R──▶ corr ──LaunchGccPeak──▶ results, gcc windows
+//          ──C2R──▶ corr ──LaunchGccPeak──▶ results, gcc windows ──LaunchGccMoments──▶ results
 //
 // Plain C++ (no Eigen, no engine headers with Eigen): the descriptors are POD structs that
 // gcc_batch.cc fills from each session's GccPlan and uploads with the batch. All pointers are
@@ -44,6 +44,13 @@ struct GccPairResult {
   float peak_value = 0.0f;  // R at the integer peak
   float quality = 0.0f;     // peak over largest sidelobe (gcc_phat.h), capped at 1e9
   int32_t peak_lag = 0;     // integer lag of the peak, samples
+  // The refinement's floor for delay_sigma (engine::InterpolationErrorSamples) and the
+  // moments of G at the delay (engine::SpectrumMoments; LaunchGccMoments).
+  double floor_samples = 0.0;
+  double level = 0.0;
+  double first = 0.0;
+  double curvature = 0.0;
+  double slope_var = 0.0;
 };
 
 // Where one frame's samples are: channel c's row starts at samples + c * row_samples and the
@@ -111,10 +118,11 @@ struct GccWeighArgs {
 Status LaunchGccWeigh(const GccWeighArgs& args, cudaStream_t stream);
 
 // Per task t, from corr row t (the unnormalised C2R output, lag l at index l mod N) and
-// results[t].norm: the peak, its refinement, quality and peak value into results[t], and
-// R = corr / S at lags -L..L into gcc[tasks[t].gcc_offset ..] when that is >= 0. A task with
-// S <= 0 gets peak_lag 0, offset 0, peak 0, quality 0 and an all-zero window. One block per
-// task.
+// results[t].norm: the peak, its refinement, its floor, quality and peak value into
+// results[t], and R = corr / S at lags -(L + K)..L + K (K = engine::kPeakHalfWidth: the
+// candidates' refinement reads past the searched lags) into gcc[tasks[t].gcc_offset ..] when
+// that is >= 0. A task with S <= 0 gets peak_lag 0, offset 0, peak 0, quality 0 and an
+// all-zero window. One block per task.
 struct GccPeakArgs {
   const GccPairTask* tasks = nullptr;
   const float* corr = nullptr;       // task_count rows of fft_size
@@ -124,5 +132,18 @@ struct GccPeakArgs {
   int fft_size = 0;
 };
 Status LaunchGccPeak(const GccPeakArgs& args, cudaStream_t stream);
+
+// Per task t with S > 0, after the peak: G recomputed from the spectra as LaunchGccWeigh
+// weighs it (the C2R has overwritten cross), rotated to the delay peak_lag + offset_samples,
+// its moments into results[t] (level, first, curvature, slope_var). cuFFT's C2R destroys its
+// input, and recomputing costs less than keeping a copy of every cross row. One block per task.
+struct GccMomentsArgs {
+  const GccPairTask* tasks = nullptr;
+  const float* spectra = nullptr;    // as GccWeighArgs
+  GccPairResult* results = nullptr;  // energies, norm, peak in; moments out
+  int task_count = 0;
+  int fft_size = 0;
+};
+Status LaunchGccMoments(const GccMomentsArgs& args, cudaStream_t stream);
 
 }  // namespace localizer::gpu

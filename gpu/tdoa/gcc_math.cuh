@@ -83,6 +83,32 @@ LOCALIZER_HOST_DEVICE inline float FullSpectrumNorm(double half_sum, float g_dc_
   return static_cast<float>(2.0 * half_sum - fabsf(g_dc_re) - fabsf(g_nyquist_re));
 }
 
+// One in-band bin's share of the moments behind delay_sigma and the candidates' spacing
+// (engine/tdoa/delay_statistics.h, SpectrumMoments): G_k rotated to the measured delay d,
+// A_k = G_k exp(j w_k d) = Re + j Im, w_k = 2 pi k / N, c_k = 1 at DC and Nyquist and 2 for
+// the bins that stand for a conjugate pair. The CPU rotates by a recurrence in lanes, this by
+// sincos per bin: they agree to ~1e-12 relative.
+struct BinMoments {
+  double level = 0.0;
+  double first = 0.0;
+  double curvature = 0.0;
+  double slope_var = 0.0;
+};
+LOCALIZER_HOST_DEVICE inline void AddBinMoments(int k, int fft_size, double delay_samples, engine::CrossBin g,
+                                                BinMoments* m) {
+  const double bin_rate = 6.283185307179586 / fft_size;
+  const double angle = bin_rate * delay_samples * k;
+  const double c = sin(angle), co = cos(angle);
+  const double re = g.re * co - g.im * c;
+  const double im = g.re * c + g.im * co;
+  const double w = bin_rate * k;
+  const double weight = (k == 0 || 2 * k == fft_size) ? 1.0 : 2.0;
+  m->level += weight * re;
+  m->first += weight * w * re;
+  m->curvature += weight * w * w * re;
+  m->slope_var += weight * weight * w * w * im * im;
+}
+
 // The argmax's partial result: the larger value wins, the smaller index on ties, which is
 // std::max_element's "first maximum" whatever order the candidates are combined in.
 struct PeakCandidate {

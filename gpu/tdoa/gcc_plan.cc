@@ -2,6 +2,8 @@
 
 #include <functional>
 
+#include "engine/tdoa/peak_math.h"
+
 namespace localizer::gpu {
 
 std::string GccBatchKey::ToString() const {
@@ -19,13 +21,19 @@ std::size_t GccBatchKeyHash::operator()(const GccBatchKey& key) const {
 StatusOr<GccPlan> GccPlan::Create(const engine::ArrayGeometry& array, const engine::GccOptions& options) {
   auto layout = engine::ComputeGccLayout(array, options);
   if (!layout.ok()) return layout.status();
+  if (options.weighting == engine::Weighting::kPhatCoherence) {
+    return InvalidArgument(
+        "weighting phat-coherence learns from frame to frame and is not computed by the GPU "
+        "batch (the GPU backend measures such sessions on the CPU)");
+  }
   GccPlan plan;
   plan.options_ = options;
   plan.layout_ = std::move(layout).value();
   plan.reference_sensor_ = array.reference_sensor();
   for (int p = 0; p < array.pair_count(); ++p) {
     plan.sensor_of_pair_.push_back(array.sensor_of_pair(p));
-    if (options.keep_gcc) plan.gcc_floats_ += 2 * static_cast<std::size_t>(plan.layout_.max_lag_samples[p]) + 1;
+    if (options.keep_gcc)
+      plan.gcc_floats_ += 2 * static_cast<std::size_t>(plan.layout_.max_lag_samples[p] + engine::kPeakHalfWidth) + 1;
   }
   return plan;
 }

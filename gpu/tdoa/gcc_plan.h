@@ -40,7 +40,8 @@ class GccPlan {
 
   // The same validation and errors as engine::GccPhatEstimator::Create: INVALID_ARGUMENT
   // naming the option and value when options.Validate() fails, or when the band holds no FFT
-  // bin. (measure_fft_plans is ignored: cuFFT plans do not depend on it.)
+  // bin; and for weighting phat-coherence, whose learned weights the batch does not keep.
+  // (measure_fft_plans is ignored: cuFFT plans do not depend on it.)
   static StatusOr<GccPlan> Create(const engine::ArrayGeometry& array, const engine::GccOptions& options);
 
   const engine::GccOptions& options() const { return options_; }
@@ -51,7 +52,8 @@ class GccPlan {
   int pair_count() const { return layout_.pair_count(); }
   int reference_sensor() const { return reference_sensor_; }
   int sensor_of_pair(int pair) const { return sensor_of_pair_[pair]; }
-  // Floats of GCC window a frame returns: sum over pairs of 2 L_p + 1 with keep_gcc, else 0.
+  // Floats of GCC window a frame returns: sum over pairs of 2 (L_p + K) + 1 with keep_gcc
+  // (K = engine::kPeakHalfWidth lags either side for the candidates' refinement), else 0.
   std::size_t gcc_floats() const { return gcc_floats_; }
 
  private:

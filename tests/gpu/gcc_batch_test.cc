@@ -89,6 +89,40 @@ TEST(GccBatch, EightChannelArray) {
   ExpectAllMatchCpu(RunOnGpu(*batch, items), items);
 }
 
+// A session's estimator leaves the candidates to its own thread (GccJob::tails): what it
+// picks with FinishCandidates is what the batch picks itself, on an 8-channel array with echoes
+// (several candidates per pair) and on a frame without a kept window.
+TEST(GccBatch, CandidatesFinishedByTheCallerAreTheBatchsOwn) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  for (const bool keep_gcc : {true, false}) {
+    SCOPED_TRACE(keep_gcc ? "window kept" : "no window");
+    auto session =
+        MakeSession("turn-multipath", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000, keep_gcc));
+    auto batch = MakeBatch(session->plan, 8);
+    ASSERT_NE(batch, nullptr);
+    const std::vector<Item> items = SpreadItems(*session, 5);
+    const std::vector<Measurement> whole = RunOnGpu(*batch, items);
+    std::vector<Measurement> out(items.size());
+    std::vector<std::vector<GccPairTail>> tails(items.size());
+    std::vector<GccJob> jobs;
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      GccJob job{&session->plan, items[i].frame.data(), items[i].t_s, &out[i]};
+      job.tails = &tails[i];
+      jobs.push_back(job);
+    }
+    ASSERT_TRUE(batch->Run(jobs).ok());
+    std::vector<engine::WindowExtremum> scratch;
+    std::size_t most = 0;
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      for (const auto& pair : out[i].pairs) EXPECT_LE(pair.candidates.size(), 1u);  // the main peak, until finished
+      FinishCandidates(session->plan, tails[i], &out[i], &scratch);
+      ExpectIdentical(out[i], whole[i]);
+      for (const auto& pair : out[i].pairs) most = std::max(most, pair.candidates.size());
+    }
+    EXPECT_EQ(most, keep_gcc ? 4u : 1u);
+  }
+}
+
 TEST(GccBatch, SilentFrameGivesZeroesLikeTheCpu) {
   LOCALIZER_SKIP_WITHOUT_GPU();
   auto session = MakeSession("tetra-water", Options(0, Weighting::kPhat, PeakInterpolation::kSinc, 300, 3000));

@@ -8,7 +8,8 @@
 // windows), and a host emulation of the whole batched pipeline (FFTW in place of cuFFT, every
 // other step through gcc_math.cuh in the order the kernels take them) against
 // GccPhatEstimator::Estimate, pair by pair, including the silent frame and the quality
-// fallback over the full correlation.
+// fallback over the full correlation, and delay_sigma and the candidates made from the
+// emulated moments kernel's sums as gcc_batch.cc makes them.
 
 // Eigen's CUDA support is for device code; this file uses Eigen on the host only.
 #define EIGEN_NO_CUDA
@@ -28,6 +29,7 @@
 
 #include "engine/core/fast_math.h"
 #include "engine/tdoa/cross_spectrum.h"
+#include "engine/tdoa/delay_statistics.h"
 #include "engine/tdoa/fftw_util.h"
 #include "engine/tdoa/gcc_layout.h"
 #include "engine/tdoa/gcc_phat.h"
@@ -237,6 +239,9 @@ struct EmulatedPair {
   float quality = 0.0f;
   bool circular = false;  // the quality came from the full-correlation fallback
   std::vector<float> gcc;
+  std::vector<float> padded;  // R at lags -(L + K)..L + K, as the kernel keeps it
+  double floor_samples = 0.0;
+  gcc::BinMoments moments;
 };
 
 // R at lag `lag` of a correlation row: corr / S (scaled) or corr itself, as the kernel reads
@@ -289,7 +294,13 @@ EmulatedPair PeakLikeTheKernel(const float* corr, int n, int max_lag, float norm
   float samples[engine::kPeakSamples];
   for (int m = 0; m < engine::kPeakSamples; ++m) samples[m] = scaled(out.peak_lag + m - engine::kPeakHalfWidth);
   out.offset = gcc::InterpolatePeak(interpolation, samples);
+  out.floor_samples = engine::kSincFloorSamples;
+  if (interpolation != gcc::kSinc) {
+    const double bias = out.offset - gcc::InterpolatePeak(gcc::kSinc, samples);
+    out.floor_samples = std::sqrt(bias * bias + engine::kSincFloorSamples * engine::kSincFloorSamples);
+  }
   out.quality = engine::QualityRatio(out.peak_value, sidelobe);
+  for (int i = -engine::kPeakHalfWidth; i < count + engine::kPeakHalfWidth; ++i) out.padded.push_back(in_window(i));
   return out;
 }
 
@@ -338,6 +349,13 @@ std::vector<EmulatedPair> EmulateFrame(const engine::ArrayGeometry& array, const
     fftwf_execute(inverse.get());
     pairs.push_back(
         PeakLikeTheKernel(corr.get(), n, layout.max_lag_samples[p], norm, static_cast<int32_t>(options.interpolation)));
+    // GccMomentsKernel: G recomputed from the spectra (the inverse transform destroyed cross).
+    EmulatedPair& pair = pairs.back();
+    if (!(norm > 0.0f)) continue;
+    for (int b = layout.band_first_bin; b < layout.band_end_bin; ++b) {
+      const gcc::WeighedBin w = gcc::WeighBin(params, {xr[2 * b], xr[2 * b + 1]}, {xk[2 * b], xk[2 * b + 1]});
+      gcc::AddBinMoments(b, n, pair.peak_lag + pair.offset, w.g, &pair.moments);
+    }
   }
   return pairs;
 }
@@ -398,6 +416,31 @@ int ExpectEmulationMatchesCpu(const Case& c, uint64_t seed) {
       worst_gcc = std::max(worst_gcc, std::abs(got.gcc[i] - want.gcc[i]));
     }
     EXPECT_LE(worst_gcc, 1e-5f);
+    // delay_sigma and the candidates as gcc_batch.cc's Fill makes them from the kernels' output.
+    const engine::SpectrumMoments moments{got.moments.level, got.moments.first, got.moments.curvature,
+                                          got.moments.slope_var};
+    const double padding = static_cast<double>(engine::ComputeGccLayout(array, options)->fft_size) / spec.frame_samples;
+    const int max_lag = static_cast<int>(got.gcc.size() / 2);
+    const engine::DelaySpread spread =
+        engine::SpreadFromMoments(moments, got.norm, padding, got.floor_samples, max_lag);
+    EXPECT_LE(RelativeDifference(spread.sigma_samples / spec.sample_rate_hz, want.delay_sigma_s), 1e-4)
+        << spread.sigma_samples / spec.sample_rate_hz << " vs " << want.delay_sigma_s;
+    engine::PairMeasurement picked;
+    picked.delay_s = delay_samples / spec.sample_rate_hz;
+    picked.peak_value = got.peak_value;
+    picked.delay_sigma_s = spread.sigma_samples / spec.sample_rate_hz;
+    std::vector<engine::WindowExtremum> scratch;
+    engine::PickDelayCandidates(std::span<const float>(got.padded.data() + engine::kPeakHalfWidth, got.gcc.size()),
+                                got.peak_lag + max_lag, max_lag, spread, c.interpolation, spec.sample_rate_hz,
+                                options.max_candidates, &scratch, &picked);
+    EXPECT_EQ(picked.candidates.size(), want.candidates.size());
+    for (std::size_t k = 0; k < picked.candidates.size() && k < want.candidates.size(); ++k) {
+      EXPECT_NEAR(picked.candidates[k].delay_s * spec.sample_rate_hz, want.candidates[k].delay_s * spec.sample_rate_hz,
+                  1e-4)
+          << "candidate " << k;
+      EXPECT_LE(RelativeDifference(picked.candidates[k].delay_sigma_s, want.candidates[k].delay_sigma_s), 1e-3)
+          << "candidate " << k;
+    }
     circular += got.circular ? 1 : 0;
   }
   return circular;

@@ -49,6 +49,10 @@ struct Session {
   // Channel-major frame of kFrameSamples starting at sample `start` of every channel.
   std::vector<float> Frame(int64_t start) const {
     std::vector<float> frame(static_cast<std::size_t>(recording.channel_count) * kFrameSamples);
+    if (start < 0 || start > last_start()) {
+      ADD_FAILURE() << "frame at sample " << start << " runs past the recording's " << recording.samples_per_channel;
+      return frame;
+    }
     for (int c = 0; c < recording.channel_count; ++c) {
       const float* channel = recording.samples.data() + c * recording.samples_per_channel + start;
       std::copy(channel, channel + kFrameSamples, frame.begin() + static_cast<std::ptrdiff_t>(c) * kFrameSamples);
@@ -136,6 +140,17 @@ inline void ExpectMatchesCpu(const Measurement& gpu, const Measurement& cpu) {
     EXPECT_LE(Relative(g.quality, c.quality), 1e-3) << g.quality << " vs " << c.quality;
     EXPECT_LE(Relative(g.peak_value, c.peak_value), 1e-3) << g.peak_value << " vs " << c.peak_value;
     EXPECT_LE(Relative(g.peak_snr, c.peak_snr), 1e-3);
+    EXPECT_LE(Relative(g.delay_sigma_s, c.delay_sigma_s), 1e-3) << g.delay_sigma_s << " vs " << c.delay_sigma_s;
+    // Without a kept window the batch has no other extrema to pick: the main peak alone.
+    const std::size_t want_candidates =
+        c.gcc.empty() ? std::min<std::size_t>(c.candidates.size(), 1) : c.candidates.size();
+    ASSERT_EQ(g.candidates.size(), want_candidates);
+    for (std::size_t k = 0; k < want_candidates; ++k) {
+      SCOPED_TRACE("candidate " + std::to_string(k));
+      EXPECT_NEAR(g.candidates[k].delay_s * fs, c.candidates[k].delay_s * fs, 1e-3);
+      EXPECT_NEAR(g.candidates[k].value, c.candidates[k].value, 1e-4);
+      EXPECT_LE(Relative(g.candidates[k].delay_sigma_s, c.candidates[k].delay_sigma_s), 1e-2);
+    }
     ASSERT_EQ(g.gcc.size(), c.gcc.size());
     float worst = 0.0f;
     for (std::size_t i = 0; i < c.gcc.size(); ++i) worst = std::max(worst, std::abs(g.gcc[i] - c.gcc[i]));
@@ -159,6 +174,12 @@ inline void ExpectIdentical(const Measurement& a, const Measurement& b) {
     EXPECT_EQ(a.pairs[p].quality, b.pairs[p].quality);
     EXPECT_EQ(a.pairs[p].peak_value, b.pairs[p].peak_value);
     EXPECT_EQ(a.pairs[p].peak_snr, b.pairs[p].peak_snr);
+    EXPECT_EQ(a.pairs[p].delay_sigma_s, b.pairs[p].delay_sigma_s);
+    ASSERT_EQ(a.pairs[p].candidates.size(), b.pairs[p].candidates.size());
+    for (std::size_t k = 0; k < a.pairs[p].candidates.size(); ++k) {
+      EXPECT_EQ(a.pairs[p].candidates[k].delay_s, b.pairs[p].candidates[k].delay_s);
+      EXPECT_EQ(a.pairs[p].candidates[k].delay_sigma_s, b.pairs[p].candidates[k].delay_sigma_s);
+    }
     EXPECT_EQ(a.pairs[p].gcc, b.pairs[p].gcc);
   }
 }
