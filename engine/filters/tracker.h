@@ -127,6 +127,11 @@ class Tracker {
     (void)array;
     return FailedPrecondition("this tracker cannot follow a moving array");
   }
+  // The track was taken elsewhere (a HandoffTracker restarted on its other filter): this
+  // tracker will not be stepped again until its next initialisation. A batched tracker stops
+  // counting on its work (the GPU filter leaves its dispatcher's producers, who would
+  // otherwise be waited for every batch). The default does nothing.
+  virtual void Suspend() {}
   // Multiple-model trackers: each motion hypothesis and its current probability (summing
   // to 1; after Predict the predicted, after Update the posterior probabilities). Empty
   // for single-model filters.

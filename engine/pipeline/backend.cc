@@ -3,6 +3,7 @@
 #include <mutex>
 
 #include "engine/core/enum_names.h"
+#include "engine/filters/handoff_tracker.h"
 
 namespace localizer::engine {
 namespace {
@@ -98,6 +99,20 @@ std::string GpuUnavailableReason() {
   return provider->UnavailableReason();
 }
 
+namespace {
+// The device filter holds one hypothesis and no bounds: the CPU filter acquires (every mode
+// acquisition finds, the bounds) and hands the track over once one hypothesis is left
+// (filters/handoff_tracker.h).
+StatusOr<std::unique_ptr<Tracker>> MakeHandoff(const ArrayGeometry& array, const ParticleFilterOptions& options,
+                                               BackendProvider& provider) {
+  auto device = provider.MakeTracker(array, options);
+  if (!device.ok()) return device.status();
+  auto cpu = MakeCpuParticleFilter(array, options);
+  if (!cpu.ok()) return cpu.status();
+  return std::unique_ptr<Tracker>(std::make_unique<HandoffTracker>(std::move(cpu).value(), std::move(device).value()));
+}
+}  // namespace
+
 StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGeometry& array, const GccOptions& gcc,
                                             const TrackerOptions& tracker, bool moving_array) {
   const bool particle = tracker.kind == FilterKind::kPf;
@@ -120,7 +135,7 @@ StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGe
       // the Kalman filters do.
       const bool on_device = particle && tracker.particle.likelihood != Likelihood::kMixture &&
                              !tracker.particle.accel_levels() && !moving_array;
-      auto made = on_device  ? provider->MakeTracker(array, tracker.particle)
+      auto made = on_device  ? MakeHandoff(array, tracker.particle, *provider)
                   : particle ? MakeCpuParticleFilter(array, tracker.particle)
                              : MakeCpuOnly(array, tracker);
       if (!made.ok()) return made.status();

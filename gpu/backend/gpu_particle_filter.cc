@@ -25,13 +25,16 @@ StatusOr<std::unique_ptr<GpuParticleFilter>> GpuParticleFilter::Create(std::shar
 
 GpuParticleFilter::GpuParticleFilter(std::shared_ptr<GpuRuntime> runtime, int slot, int pairs,
                                      const engine::ParticleFilterOptions& options)
-    : runtime_(std::move(runtime)), slot_(slot), pairs_(pairs), options_(options), noise_(options.tdoa_sigma_s) {
-  runtime_->AddProducer(GpuRuntime::Stage::kFilter);
-}
+    : runtime_(std::move(runtime)), slot_(slot), pairs_(pairs), options_(options), noise_(options.tdoa_sigma_s) {}
 
 GpuParticleFilter::~GpuParticleFilter() {
-  runtime_->RemoveProducer(GpuRuntime::Stage::kFilter);
+  Suspend();
   runtime_->bank().Close(slot_);
+}
+
+void GpuParticleFilter::Suspend() {
+  if (producing_) runtime_->RemoveProducer(GpuRuntime::Stage::kFilter);
+  producing_ = false;
 }
 
 Status GpuParticleFilter::RunInitialisation(const ParticleBank::InitRequest& request) {
@@ -39,8 +42,13 @@ Status GpuParticleFilter::RunInitialisation(const ParticleBank::InitRequest& req
   job.initialise = true;
   job.init = request;
   job.init.slot = slot_;
+  if (!producing_) runtime_->AddProducer(GpuRuntime::Stage::kFilter);  // from this job on
+  producing_ = true;
   runtime_->StepFilter(&job);
-  if (!job.init_result.status.ok()) return job.init_result.status;
+  if (!job.init_result.status.ok()) {
+    Suspend();  // a filter that did not start submits nothing until it is initialised again
+    return job.init_result.status;
+  }
   state_ = job.init_result.state;
   pending_dt_s_ = 0.0;
   initialised_ = true;

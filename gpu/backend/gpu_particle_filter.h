@@ -33,9 +33,10 @@ class GpuParticleFilter final : public engine::Tracker {
   void Predict(double dt_s) override;
   StatusOr<engine::UpdateReport> Update(const engine::Measurement& measurement) override;
   engine::TrackState State() const override;
+  // Leaves the filter dispatcher's producers until the next initialisation.
+  void Suspend() override;
 
  private:
-  // Joins the filter dispatcher's producers; the destructor leaves them.
   GpuParticleFilter(std::shared_ptr<GpuRuntime> runtime, int slot, int pairs, const engine::ParticleFilterOptions& o);
   // Runs one step through the dispatcher (measurement nullptr: predict only).
   Status Step(const engine::Measurement* measurement, ParticleBank::StepResult* result) const;
@@ -49,6 +50,10 @@ class GpuParticleFilter final : public engine::Tracker {
   engine::ParticleFilterOptions options_;
   engine::PairNoise noise_;
   bool initialised_ = false;
+  // A registered producer of the filter dispatcher: from the first initialisation until
+  // Suspend. Not before: a session still acquiring on the CPU (engine/filters/
+  // handoff_tracker.h) submits nothing, and the dispatcher would wait out its window for it.
+  bool producing_ = false;
   double ess_ = 0.0;
   // State() is const in the interface but may have to apply a pending prediction.
   mutable double pending_dt_s_ = 0.0;

@@ -81,8 +81,14 @@ TEST(GpuBackend, OptionsAreValidated) {
 
 // Pooled over seeds: on the same data two CPU filters that differ only in their seed differ
 // by up to 60 % in one run's RMSE and by up to 9 % pooled over 5 runs (measured on
-// tetra-water/tetra-air, both likelihoods), so one run cannot resolve 10 %.
-TEST(GpuBackend, ScenarioRmseWithinTenPercentOfTheCpu) {
+// tetra-water/tetra-air, both likelihoods), so one run cannot resolve 10 %. The device filter
+// also takes the track over from the CPU filter that acquired it (engine/filters/
+// handoff_tracker.h) from a Gaussian of its state: with a CPU filter in the device's place
+// that alone moves these pooled RMSEs by 0.99-1.18x for the same 10 seeds (hand-offs after 3,
+// 10 or 30 steady updates: 0.99-1.47x), so the bound is 25 %. Measured on an H200
+// (2026-12-04): 1.07, 1.14, 1.10, 1.10; before the hand-off and the device's delay_sigma,
+// tetra-air peak was 15.9x.
+TEST(GpuBackend, ScenarioRmseWithinAQuarterOfTheCpu) {
   LOCALIZER_SKIP_WITHOUT_GPU();
   constexpr int kSeeds = 10;
   for (const char* name : {"tetra-water", "tetra-air"}) {
@@ -101,7 +107,7 @@ TEST(GpuBackend, ScenarioRmseWithinTenPercentOfTheCpu) {
       const double cpu_rmse = std::sqrt(cpu_sq / kSeeds), gpu_rmse = std::sqrt(gpu_sq / kSeeds);
       std::printf("%s %s: pooled rmse over %d seeds: cpu %.4f m, gpu %.4f m (ratio %.3f)\n", name,
                   engine::LikelihoodName(likelihood), kSeeds, cpu_rmse, gpu_rmse, gpu_rmse / cpu_rmse);
-      EXPECT_LE(gpu_rmse, 1.10 * cpu_rmse) << name << " " << engine::LikelihoodName(likelihood);
+      EXPECT_LE(gpu_rmse, 1.25 * cpu_rmse) << name << " " << engine::LikelihoodName(likelihood);
     }
   }
 }
