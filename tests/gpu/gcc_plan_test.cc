@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
 #include <unordered_set>
 #include <vector>
 
@@ -54,6 +55,17 @@ TEST(GccPlan, RejectsWhatTheCpuEstimatorRejectsWithTheSameStatus) {
   }
 }
 
+// PHAT-coherence learns its weights from frame to frame; the batch keeps no such state, so a
+// plan for it is refused rather than weighed some other way.
+TEST(GccPlan, RefusesTheLearntCoherenceWeighting) {
+  GccOptions options = Options(11025.0);
+  options.weighting = engine::Weighting::kPhatCoherence;
+  const auto plan = GccPlan::Create(ScenarioArray("tetra-water"), options);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_EQ(plan.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(plan.status().message().find("phat-coherence"), std::string::npos) << plan.status().message();
+}
+
 TEST(GccPlan, LayoutEqualsTheCpuEstimators) {
   for (const std::string& name : engine::ScenarioNames()) {
     auto scenario = engine::MakeScenario(name);
@@ -77,7 +89,8 @@ TEST(GccPlan, LayoutEqualsTheCpuEstimators) {
       for (int p = 0; p < array.pair_count(); ++p) {
         EXPECT_EQ(plan->layout().max_lag_samples[p], (*cpu)->max_lag_samples(p));
         EXPECT_EQ(plan->sensor_of_pair(p), array.sensor_of_pair(p));
-        gcc_floats += 2 * static_cast<std::size_t>((*cpu)->max_lag_samples(p)) + 1;
+        // The window kept for each pair reaches kPeakHalfWidth lags past the searched ones.
+        gcc_floats += 2 * static_cast<std::size_t>((*cpu)->max_lag_samples(p) + engine::kPeakHalfWidth) + 1;
       }
       EXPECT_EQ(plan->gcc_floats(), options.keep_gcc ? gcc_floats : 0u);
       EXPECT_EQ(plan->reference_sensor(), array.reference_sensor());
