@@ -71,7 +71,7 @@ DelaySpread SpreadFromMoments(const SpectrumMoments& moments, float norm, double
 // by decreasing |R|, each at least spread.radius_lags from those taken, refined like the main
 // peak (negative ones on -R), up to max_candidates. `searched` holds R at lags -L..L and
 // searched.data()[-kPeakHalfWidth .. -1] and [2L + 1 .. 2L + kPeakHalfWidth] must be valid
-// (R at the lags beyond). `scratch` is reused between calls.
+// (R at the lags beyond). `scratch` is reused between calls (may be null for max_candidates 1).
 struct WindowExtremum {
   float magnitude;
   int index;

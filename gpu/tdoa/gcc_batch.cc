@@ -13,7 +13,6 @@
 #include <utility>
 #include <vector>
 
-#include "engine/tdoa/delay_statistics.h"
 #include "engine/tdoa/peak_interpolation.h"
 #include "gpu/core/cuda_status.h"
 #include "gpu/core/device.h"
@@ -120,8 +119,10 @@ struct GccBatch::Impl {
   PinnedBuffer<GccRingAppend> staged_appends;   // max_frames: the ring jobs' appends
   PinnedBuffer<GccPairTask> staged_tasks;
   PinnedBuffer<GccPairResult> staged_results;
-  PinnedBuffer<float> staged_gcc;               // grows to the largest batch's windows
-  std::vector<engine::WindowExtremum> extrema;  // Fill's scratch for the candidates
+  PinnedBuffer<float> staged_gcc;  // grows to the largest batch's windows
+  // Fill's scratch for the candidates of jobs that leave them to the batch.
+  std::vector<GccPairTail> own_tails;
+  std::vector<engine::WindowExtremum> extrema;
   DeviceBuffer<GccFrameSource> sources;
   DeviceBuffer<GccRingAppend> appends;
   DeviceBuffer<GccPairTask> tasks;
@@ -359,26 +360,8 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
 
 // Job `frame`'s results into its Measurement, as GccPhatEstimator::Estimate fills one; a
 // frame with a non-finite sample is reported instead (lowest channel first, as the CPU).
-void FinishCandidates(const GccPlan& plan, std::span<const GccPairTail> tails, engine::Measurement* out,
-                      std::vector<engine::WindowExtremum>* scratch) {
-  const engine::GccOptions& options = plan.options();
-  for (std::size_t p = 0; p < tails.size() && p < out->pairs.size(); ++p) {
-    const GccPairTail& tail = tails[p];
-    engine::PairMeasurement& pair = out->pairs[p];
-    if (tail.padded.empty() || pair.candidates.empty()) continue;
-    const int kept = static_cast<int>(tail.padded.size()) - 2 * engine::kPeakHalfWidth;
-    engine::PickDelayCandidates(std::span<const float>(tail.padded.data() + engine::kPeakHalfWidth, kept),
-                                tail.peak_index, (kept - 1) / 2, tail.spread, options.interpolation,
-                                options.sample_rate_hz, options.max_candidates, scratch, &pair);
-  }
-}
-
 void GccBatch::Impl::Fill(const GccJob& job, int frame, Status* first_error) {
   const GccPlan& plan = *job.plan;
-  if (job.tails != nullptr) {
-    job.tails->resize(static_cast<std::size_t>(pairs));
-    for (GccPairTail& tail : *job.tails) tail.padded.clear();
-  }
   const GccPairResult* r = staged_results.data() + static_cast<std::size_t>(frame) * pairs;
   for (int c = 0; c < channels; ++c) {
     // Channel c's energy: the reference's is in every pair, another's in its own pair.
@@ -400,63 +383,18 @@ void GccBatch::Impl::Fill(const GccJob& job, int frame, Status* first_error) {
       return;
     }
   }
-  const engine::GccOptions& options = plan.options();
-  const engine::GccLayout& layout = plan.layout();
   engine::Measurement* out = job.out;
   out->t_s = job.t_s;
-  out->sample_rate_hz = options.sample_rate_hz;
+  out->sample_rate_hz = plan.options().sample_rate_hz;
   out->pairs.resize(pairs);
+  std::vector<GccPairTail>& tails = job.tails != nullptr ? *job.tails : own_tails;
+  tails.resize(static_cast<std::size_t>(pairs));
   for (int p = 0; p < pairs; ++p) {
-    const GccPairResult& result = r[p];
     const GccPairTask& task = staged_tasks.data()[static_cast<std::size_t>(frame) * pairs + p];
-    engine::PairMeasurement& pair = out->pairs[p];
-    const int max_lag = layout.max_lag_samples[p];
-    pair.sensor = plan.sensor_of_pair(p);
-    pair.first_lag_samples = -max_lag;
-    const int count = 2 * max_lag + 1;
-    // R at lags -L..L, with kPeakHalfWidth lags either side readable (the candidates' refinement).
-    const float* searched =
-        task.gcc_offset >= 0 ? staged_gcc.data() + task.gcc_offset + engine::kPeakHalfWidth : nullptr;
-    if (!(result.norm > 0.0f)) {
-      pair.delay_s = 0.0;
-      pair.quality = 0.0;
-      pair.peak_value = 0.0;
-      pair.peak_snr = 0.0;
-      pair.delay_sigma_s = engine::SigmaCapSamples(max_lag) / options.sample_rate_hz;
-      pair.candidates.clear();
-    } else {
-      pair.delay_s = (result.peak_lag + result.offset_samples) / options.sample_rate_hz;
-      pair.peak_value = result.peak_value;
-      pair.peak_snr = result.peak_value * layout.noise_floor_inverse;
-      pair.quality = result.quality;
-      // delay_sigma and the candidates by the CPU's functions, from the device's moments.
-      const engine::SpectrumMoments moments{result.level, result.first, result.curvature, result.slope_var};
-      const double padding_factor = static_cast<double>(layout.fft_size) / options.frame_samples;
-      const engine::DelaySpread spread =
-          engine::SpreadFromMoments(moments, result.norm, padding_factor, result.floor_samples, max_lag);
-      pair.delay_sigma_s = spread.sigma_samples / options.sample_rate_hz;
-      const int peak_index = result.peak_lag + max_lag;
-      if (job.tails != nullptr) {
-        GccPairTail& tail = (*job.tails)[p];
-        tail.spread = spread;
-        tail.peak_index = peak_index;
-        if (searched != nullptr)
-          tail.padded.assign(searched - engine::kPeakHalfWidth, searched + count + engine::kPeakHalfWidth);
-        engine::PickDelayCandidates({}, peak_index, max_lag, spread, options.interpolation, options.sample_rate_hz, 1,
-                                    &extrema, &pair);  // the main peak alone, for now
-      } else {
-        // Without a window (keep_gcc off) there are no other extrema to pick: the main peak alone.
-        engine::PickDelayCandidates(std::span<const float>(searched, searched != nullptr ? count : 0), peak_index,
-                                    max_lag, spread, options.interpolation, options.sample_rate_hz,
-                                    searched != nullptr ? options.max_candidates : 1, &extrema, &pair);
-      }
-    }
-    if (searched != nullptr) {
-      pair.gcc.assign(searched, searched + count);
-    } else {
-      pair.gcc.clear();
-    }
+    const float* window = task.gcc_offset >= 0 ? staged_gcc.data() + task.gcc_offset : nullptr;
+    FillPairMeasurement(plan, p, r[p], window, &tails[p], &out->pairs[p]);
   }
+  if (job.tails == nullptr) FinishCandidates(plan, tails, out, &extrema);
   if (job.status != nullptr) *job.status = Status::Ok();
 }
 

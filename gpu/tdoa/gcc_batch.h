@@ -62,27 +62,11 @@
 
 #include "engine/core/measurement.h"
 #include "engine/core/status.h"
-#include "engine/tdoa/delay_statistics.h"
+#include "gpu/tdoa/gcc_pair_measurement.h"
 #include "gpu/tdoa/gcc_plan.h"
 #include "gpu/tdoa/sample_ring.h"
 
 namespace localizer::gpu {
-
-// What a pair's candidates (PairMeasurement::candidates, engine::PickDelayCandidates) are
-// picked from: the spread the device's moments give, the main peak's index in the searched
-// window and R at lags -(L + K)..L + K (K = engine::kPeakHalfWidth). Scanning and sorting a
-// wide window's extrema costs microseconds per pair, so a caller with its own thread (a
-// session) picks them there rather than on the thread that runs the batch for everyone.
-struct GccPairTail {
-  engine::DelaySpread spread;
-  int peak_index = 0;
-  std::vector<float> padded;  // empty: nothing measured, or keep_gcc off
-};
-
-// Picks out->pairs[p]'s candidates from tails[p] as GccPhatEstimator does (tails as a Run
-// with GccJob::tails left them; `scratch` is reused between calls).
-void FinishCandidates(const GccPlan& plan, std::span<const GccPairTail> tails, engine::Measurement* out,
-                      std::vector<engine::WindowExtremum>* scratch);
 
 // One frame to measure.
 struct GccJob {
@@ -111,7 +95,8 @@ struct GccJob {
   SampleRing* ring = nullptr;
   int ring_new_samples = 0;
   // Optional: Run leaves each pair's candidates holding the main peak alone and fills
-  // (*tails)[p] for FinishCandidates on the caller's thread. Null: Run picks them itself.
+  // (*tails)[p] for FinishCandidates (gcc_pair_measurement.h) on the caller's thread. Null:
+  // Run picks them itself.
   std::vector<GccPairTail>* tails = nullptr;
 };
 
