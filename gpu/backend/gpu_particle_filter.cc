@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "engine/models/constant_velocity.h"
+
 namespace localizer::gpu {
 
 StatusOr<std::unique_ptr<GpuParticleFilter>> GpuParticleFilter::Create(std::shared_ptr<GpuRuntime> runtime,
@@ -80,7 +82,7 @@ void GpuParticleFilter::Predict(double dt_s) {
   if (initialised_ && dt_s > 0.0) pending_dt_s_ += dt_s;
 }
 
-Status GpuParticleFilter::Step(const engine::Measurement* measurement, ParticleBank::StepResult* result) const {
+Status GpuParticleFilter::Step(const engine::Measurement* measurement, ParticleBank::StepResult* result) {
   FilterQueueJob job;
   job.request.slot = slot_;
   job.request.dt_s = pending_dt_s_;
@@ -118,12 +120,16 @@ StatusOr<engine::UpdateReport> GpuParticleFilter::Update(const engine::Measureme
 }
 
 engine::TrackState GpuParticleFilter::State() const {
-  if (initialised_ && pending_dt_s_ > 0.0) {
-    ParticleBank::StepResult result;
-    // On a device error the last state stands; the next Update reports the error.
-    (void)Step(nullptr, &result);
-  }
-  return state_;
+  if (!initialised_ || !(pending_dt_s_ > 0.0)) return state_;
+  // The prediction's moments on the host: the device applies it with the next step. A
+  // device round for them alone would double each frame's trips through the dispatcher.
+  // Exact under the model, so the cloud's moments once the device predicts it (in expectation).
+  const engine::ConstantVelocity model{options_.accel_noise_mps2};
+  const engine::Mat6 f = model.Transition(pending_dt_s_);
+  engine::TrackState predicted;
+  predicted.mean = f * state_.mean;
+  predicted.covariance = f * state_.covariance * f.transpose() + model.ProcessNoise(pending_dt_s_);
+  return predicted;
 }
 
 }  // namespace localizer::gpu

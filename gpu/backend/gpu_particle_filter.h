@@ -4,8 +4,10 @@
 // resampling) through the shared filter dispatcher, so many sessions' updates run as one
 // launch sequence; Initialise and InitialiseRegion go through the same dispatcher, so
 // sessions that start or restart together initialise in one launch. State() returns the
-// weighted moments the last step (or initialisation) brought back (a Predict not yet
-// followed by an Update is applied first). Pair selection, the adaptive TDOA noise and the
+// weighted moments the last step (or initialisation) brought back; after a Predict not yet
+// followed by an Update, those moments carried forward on the host (F P F^T + Q of the
+// constant-velocity model, exact in expectation), so that reading the prediction costs no
+// trip to the device. Pair selection, the adaptive TDOA noise and the
 // NIS are the CPU filter's (engine/filters/pair_noise.h).
 // Internal to gpu/backend.
 #pragma once
@@ -39,7 +41,7 @@ class GpuParticleFilter final : public engine::Tracker {
  private:
   GpuParticleFilter(std::shared_ptr<GpuRuntime> runtime, int slot, int pairs, const engine::ParticleFilterOptions& o);
   // Runs one step through the dispatcher (measurement nullptr: predict only).
-  Status Step(const engine::Measurement* measurement, ParticleBank::StepResult* result) const;
+  Status Step(const engine::Measurement* measurement, ParticleBank::StepResult* result);
   // Initialises the slot through the filter dispatcher, so that sessions starting together
   // share one launch (ParticleBank::Initialise), and keeps the moments it brings back.
   Status RunInitialisation(const ParticleBank::InitRequest& request);
@@ -55,9 +57,8 @@ class GpuParticleFilter final : public engine::Tracker {
   // handoff_tracker.h) submits nothing, and the dispatcher would wait out its window for it.
   bool producing_ = false;
   double ess_ = 0.0;
-  // State() is const in the interface but may have to apply a pending prediction.
-  mutable double pending_dt_s_ = 0.0;
-  mutable engine::TrackState state_;
+  double pending_dt_s_ = 0.0;  // predicted, not yet sent to the device
+  engine::TrackState state_;
 };
 
 }  // namespace localizer::gpu

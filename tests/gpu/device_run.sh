@@ -38,7 +38,10 @@ if [[ $what == all || $what == bench ]]; then
   done
   timeout 60 "$here/bin/gpu_sessions_bench" --backend gpu --offline --seconds 4 2>&1 | tee "$out/offline_gpu.log"
   timeout 60 "$here/bin/gpu_sessions_bench" --backend cpu --offline --seconds 4 2>&1 | tee "$out/offline_cpu.log"
-  timeout 300 "$here/bin/gpu_sessions_bench" --backend gpu --sessions ${SESSIONS:-1000,2000,3000,4000} --seconds ${AUDIO_S:-5} 2>&1 |
-    tee "$out/sessions.log"
+  # Every session starting in one hop (a burst no service sees), then starts spread over 3 s.
+  for stagger in 0 3; do
+    timeout 300 "$here/bin/gpu_sessions_bench" --backend gpu --sessions ${SESSIONS:-1000,2000,3000,4000} \
+      --seconds ${AUDIO_S:-6} --stagger-s $stagger 2>&1 | tee -a "$out/sessions.log"
+  done
 fi
 exit $status

@@ -9,11 +9,14 @@
 #include <thread>
 #include <vector>
 
+#include "engine/models/constant_velocity.h"
 #include "engine/pipeline/backend.h"
 #include "engine/pipeline/session.h"
 #include "engine/sim/evaluation.h"
 #include "engine/sim/platform_motion.h"
 #include "engine/sim/simulator.h"
+#include "gpu/backend/gpu_particle_filter.h"
+#include "gpu/backend/gpu_runtime.h"
 #include "tests/gpu/gpu_test_util.h"
 #include "tests/pipeline/scenario_run.h"
 
@@ -95,10 +98,12 @@ TEST(GpuBackend, ScenarioRmseWithinAQuarterOfTheCpu) {
     for (auto likelihood : {engine::Likelihood::kPeak, engine::Likelihood::kGcc}) {
       double cpu_sq = 0.0, gpu_sq = 0.0;
       for (int seed = 1; seed <= kSeeds; ++seed) {
-        const auto cpu = engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kCpu,
-                                               engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
-        const auto gpu = engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kGpu,
-                                               engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
+        const auto cpu =
+            engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kCpu, engine::FilterKind::kPf,
+                                  engine::MotionModelKind::kCv, DeviceFilterInPlace);
+        const auto gpu =
+            engine::TrackScenario(name, seed, likelihood, engine::BackendChoice::kGpu, engine::FilterKind::kPf,
+                                  engine::MotionModelKind::kCv, DeviceFilterInPlace);
         ASSERT_EQ(gpu.estimates.size(), cpu.estimates.size());
         EXPECT_GE(gpu.score.scored, cpu.score.scored - 2) << name << " seed " << seed;
         cpu_sq += cpu.score.rmse_m * cpu.score.rmse_m;
@@ -153,9 +158,9 @@ TEST(GpuBackend, MovingArrayKeepsTheFilterOnTheCpuAndMatchesTheCpuBackend) {
 TEST(GpuBackend, SameSeedSameEstimatesTwice) {
   LOCALIZER_SKIP_WITHOUT_GPU();
   const auto first = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, engine::BackendChoice::kGpu,
-                                          engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
+                                           engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
   const auto second = engine::TrackScenario("tetra-water", 3, engine::Likelihood::kPeak, engine::BackendChoice::kGpu,
-                                          engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
+                                            engine::FilterKind::kPf, engine::MotionModelKind::kCv, DeviceFilterInPlace);
   ASSERT_EQ(first.estimates.size(), second.estimates.size());
   for (size_t i = 0; i < first.estimates.size(); ++i) {
     EXPECT_EQ(first.estimates[i].state, second.estimates[i].state) << "frame " << i;
@@ -228,6 +233,57 @@ TEST(GpuBackend, AFullBankRefusesNewSessionsAndTheOthersContinue) {
   EXPECT_FALSE(out.empty());
   open.clear();
   ASSERT_TRUE(RegisterGpuBackend().ok());
+}
+
+// Reading a prediction costs no trip to the device: State() after Predict is the last
+// moments carried forward by the constant-velocity model (F P F^T + Q) on the host, and the
+// device's own prediction of the particles (a step with no usable pair) lands on those
+// moments within the sampling error of 4096 particles.
+TEST(GpuBackend, APredictionIsReadOnTheHostAndIsWhatTheDevicePredicts) {
+  LOCALIZER_SKIP_WITHOUT_GPU();
+  const engine::Scenario scenario = *engine::MakeScenario("tetra-water", 1);
+  const auto array = engine::ArrayGeometry::Create(scenario.sensors_m, scenario.sound_speed_mps);
+  ASSERT_TRUE(array.ok());
+  auto runtime = GpuRuntime::Create(GpuBackendOptions{});
+  ASSERT_TRUE(runtime.ok()) << runtime.status().ToString();
+  engine::ParticleFilterOptions options;
+  options.accel_level_floor = options.accel_level_ceiling = 1.0;
+  options.accel_noise_mps2 = 2.0;
+  auto filter = GpuParticleFilter::Create(*runtime, *array, options);
+  ASSERT_TRUE(filter.ok()) << filter.status().ToString();
+  engine::TrackState belief;
+  belief.mean << 3.0, -2.0, 1.0, 1.5, 0.5, -0.2;
+  belief.covariance = engine::Mat6::Identity();
+  belief.covariance.topLeftCorner<3, 3>() *= 0.04;
+  belief.covariance.bottomRightCorner<3, 3>() *= 0.25;
+  ASSERT_TRUE((*filter)->Initialise(belief).ok());
+  const engine::TrackState start = (*filter)->State();  // the device's moments of the drawn cloud
+  const double dt_s = 0.5;
+  (*filter)->Predict(dt_s);
+  const uint64_t steps_before = (*runtime)->filter_stats().jobs;
+  const engine::TrackState host = (*filter)->State();
+  EXPECT_EQ((*runtime)->filter_stats().jobs, steps_before) << "State() went to the device";
+  const engine::ConstantVelocity model{options.accel_noise_mps2};
+  const engine::Mat6 f = model.Transition(dt_s);
+  EXPECT_LT((host.mean - f * start.mean).norm(), 1e-9);
+  EXPECT_LT((host.covariance - (f * start.covariance * f.transpose() + model.ProcessNoise(dt_s))).norm(), 1e-9);
+
+  engine::Measurement nothing;  // every pair below any SNR: the step only predicts
+  nothing.t_s = 1.0;
+  nothing.sample_rate_hz = scenario.sim.sample_rate_hz;
+  nothing.pairs.resize(static_cast<size_t>(array->pair_count()));
+  auto report = (*filter)->Update(nothing);
+  ASSERT_TRUE(report.ok()) << report.status().ToString();
+  EXPECT_EQ(report->pair_count, 0);
+  EXPECT_EQ((*runtime)->filter_stats().jobs, steps_before + 1);
+  const engine::TrackState device = (*filter)->State();
+  const double n = options.particles;
+  for (int i = 0; i < 6; ++i) {
+    SCOPED_TRACE("component " + std::to_string(i));
+    const double var = host.covariance(i, i);
+    EXPECT_NEAR(device.mean(i), host.mean(i), 5.0 * std::sqrt(var / n));
+    EXPECT_NEAR(device.covariance(i, i), var, 5.0 * var * std::sqrt(2.0 / n));
+  }
 }
 
 }  // namespace
