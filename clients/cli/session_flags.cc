@@ -62,7 +62,10 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
   flags.Double("accel-level-ceiling", &c.tracker.particle.accel_level_ceiling, "G", "",
                "particle filter: largest per-particle gain on --accel-noise");
   flags.Double("accel-level-switch", &c.tracker.particle.accel_level_switch_hz, "HZ", "Hz",
-               "particle filter: rate at which a particle redraws its acceleration level");
+               "particle filter: rate at which a particle redraws its acceleration level (and its turn rate)");
+  flags.Double("turn-rate-max", &c.tracker.particle.turn_rate_max_radps, "W", "rad/s",
+               "particle filter: each particle turns about +z at its own rate, uniform in [-W, W] (0: off; "
+               "with the levels, 1 suits walking and swimming sources: ACCURACY.md, \"Turn rates\")");
   flags.String("backend", &f->backend, "NAME", "compute backend: cpu|gpu|auto (with --server: on the server)");
   flags.String("bounds-min", &f->bounds_min, "X,Y,Z",
                "lower corner of the box that can hold the source, m; per axis a number or -inf "
@@ -121,6 +124,7 @@ const std::pair<const char*, const char*> kFlagOfKey[] = {
     {"accel_level_floor", "accel-level-floor"},
     {"accel_level_ceiling", "accel-level-ceiling"},
     {"accel_level_switch_hz", "accel-level-switch"},
+    {"turn_rate_max_radps", "turn-rate-max"},
     {"seed", "filter-seed"},
     {"search_radius_m", "search-radius"},
     {"presence_false_alarm", "presence-false-alarm"},

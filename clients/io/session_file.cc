@@ -149,6 +149,8 @@ const std::vector<Key>& Keys() {
              [](C& c) -> double& { return c.tracker.particle.accel_level_ceiling; }),
       Double("accel_level_switch_hz", &S::accel_level_switch_hz,
              [](C& c) -> double& { return c.tracker.particle.accel_level_switch_hz; }),
+      Double("turn_rate_max_radps", &S::turn_rate_max_radps,
+             [](C& c) -> double& { return c.tracker.particle.turn_rate_max_radps; }),
       MakeKey<uint64_t>(
           "seed", &S::seed, [](C& c) -> uint64_t& { return c.seed; }, ReadSeed,
           [](const uint64_t& v) { return json(v); }),

@@ -36,8 +36,9 @@ Status ParticleFilterOptions::Validate() const {
     return InvalidArgument("manoeuvre_scale must be finite and >= 1, got " + std::to_string(manoeuvre_scale));
   }
   if (!(accel_level_floor >= 1e-6 && accel_level_floor <= accel_level_ceiling && accel_level_ceiling <= 100.0)) {
-    return InvalidArgument("accel_level_floor and accel_level_ceiling must satisfy 1e-6 <= floor <= ceiling <= 100, got " +
-                           std::to_string(accel_level_floor) + " and " + std::to_string(accel_level_ceiling));
+    return InvalidArgument(
+        "accel_level_floor and accel_level_ceiling must satisfy 1e-6 <= floor <= ceiling <= 100, got " +
+        std::to_string(accel_level_floor) + " and " + std::to_string(accel_level_ceiling));
   }
   if (!(accel_level_switch_hz >= 0.0 && accel_level_switch_hz <= 1000.0)) {
     return InvalidArgument("accel_level_switch_hz must be in [0, 1000], got " + std::to_string(accel_level_switch_hz));
@@ -70,6 +71,12 @@ Status ParticleFilterOptions::Validate() const {
   if (!(tempering_ess_fraction >= 0.0 && tempering_ess_fraction <= 1.0)) {
     return InvalidArgument("tempering_ess_fraction must be in [0, 1], got " + std::to_string(tempering_ess_fraction));
   }
+  if (!(turn_rate_max_radps >= 0.0 && turn_rate_max_radps <= 5.0)) {
+    return InvalidArgument("turn_rate_max_radps must be in [0, 5], got " + std::to_string(turn_rate_max_radps));
+  }
+  if (turn_rate_max_radps > 0.0 && velocity_time_constant_s > 0.0) {
+    return InvalidArgument("turn rates need constant velocity (velocity_time_constant_s = 0)");
+  }
   if (!(kernel_scale >= 0.0 && kernel_scale <= 2.0)) {
     return InvalidArgument("kernel_scale must be in [0, 2], got " + std::to_string(kernel_scale));
   }
@@ -81,6 +88,7 @@ struct ParticleFilter::Impl {
       : array(a), options(o), set(a, o), noise(o.tdoa_sigma_s) {
     set.SetManoeuvre(o.manoeuvre_share, o.manoeuvre_scale);
     set.SetAccelLevels(o.accel_level_floor, o.accel_level_ceiling, o.accel_level_switch_hz);
+    set.SetTurnRates(o.turn_rate_max_radps, o.accel_level_switch_hz);
   }
   ArrayGeometry array;
   ParticleFilterOptions options;

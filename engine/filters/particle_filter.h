@@ -108,6 +108,12 @@ struct ParticleFilterOptions {
   double accel_level_ceiling = 1.0;
   double accel_level_switch_hz = 1.0;
   bool accel_levels() const { return !(accel_level_floor == 1.0 && accel_level_ceiling == 1.0); }
+  // Turn rates that persist: each particle turns its velocity about +z at its own rate,
+  // uniform in [-turn_rate_max_radps, turn_rate_max_radps] when drawn and redrawn at
+  // accel_level_switch_hz (particle_set.h SetTurnRates), so quiet particles can follow an
+  // arc. 0 (the default): off. In [0, 5]; needs velocity_time_constant_s = 0. This filter
+  // only (the backend runs a session with turn rates on the CPU filter).
+  double turn_rate_max_radps = 0.0;
   double tdoa_sigma_s = 0.0;          // TDOA noise std; 0: adaptive (below)
   double peak_dof = 4.0;              // peak likelihood: Student-t degrees of freedom, > 0
   double gcc_sharpness = 1.0;         // GCC likelihood: curvature at the peak / the peak

@@ -20,12 +20,12 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_
   const uint32_t key = NextKey();
   moments_valid_ = false;
   const int n = n_;
-  if (d == 1.0f && gain_.empty() && manoeuvre_share_ <= 0.0f && n % 2 == 0) {
+  if (d == 1.0f && gain_.empty() && turn_.empty() && manoeuvre_share_ <= 0.0f && n % 2 == 0) {
     PredictConstantVelocity(key, dt, a_to_p, a_to_v);
     if (bounded_) ApplyBounds();
     return;
   }
-  DrawAccelNormals(key, SwitchProbability(dt_s));  // axis k of particle i reads accel_[k * N + i]
+  DrawAccelNormals(key, dt_s);  // axis k of particle i reads accel_[k * N + i]
   const float* __restrict ax = accel_.data();
   const float* __restrict ay = accel_.data() + n;
   const float* __restrict az = accel_.data() + 2 * n;
@@ -35,7 +35,9 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_
   float* __restrict vx = cur_.vx.data();
   float* __restrict vy = cur_.vy.data();
   float* __restrict vz = cur_.vz.data();
-  if (d == 1.0f) {  // constant velocity: the GPU filter's step (particle_math.h)
+  if (!turn_.empty()) {  // ParticleFilterOptions::Validate: only with constant velocity
+    PredictPersistentTurns(dt, a_to_p, a_to_v);
+  } else if (d == 1.0f) {  // constant velocity: the GPU filter's step (particle_math.h)
 #pragma omp simd
     for (int i = 0; i < n; ++i) {
       PredictAxis(x[i], vx[i], dt, a_to_p, a_to_v, ax[i]);
@@ -107,7 +109,26 @@ void ParticleSet::SetAccelLevels(double floor, double ceiling, double switch_rat
   DrawLevels();
 }
 
+void ParticleSet::SetTurnRates(double max_radps, double switch_rate_hz) {
+  turn_max_radps_ = static_cast<float>(max_radps);
+  turn_switch_rate_hz_ = switch_rate_hz;
+  if (max_radps == 0.0) {
+    turn_.clear();
+    next_turn_.clear();
+    return;
+  }
+  turn_.assign(n_, 0.0f);
+  next_turn_.assign(n_, 0.0f);
+  DrawLevels();
+}
+
 void ParticleSet::DrawLevels() {
+  if (!turn_.empty()) {  // off: no key drawn, so the random stream is as before
+    const uint32_t key = NextKey();
+    for (int i = 0; i < n_; ++i) {
+      turn_[i] = turn_max_radps_ * (2.0f * UniformFromCounter(key, static_cast<uint32_t>(i)) - 1.0f);
+    }
+  }
   if (gain_.empty()) return;  // off: no key drawn, so the random stream is as before
   const uint32_t key = NextKey();
   const float lo = log_level_floor_, span = log_level_ceiling_ - log_level_floor_;
@@ -115,12 +136,17 @@ void ParticleSet::DrawLevels() {
 }
 
 void ParticleSet::CarryLevels() {
+  if (!turn_.empty()) {
+    for (int m = 0; m < n_; ++m) next_turn_[m] = turn_[index_[m]];
+    std::swap(turn_, next_turn_);
+  }
   if (gain_.empty()) return;
   for (int m = 0; m < n_; ++m) next_gain_[m] = gain_[index_[m]];
   std::swap(gain_, next_gain_);
 }
 
-void ParticleSet::DrawAccelNormals(uint32_t key, float switch_probability) {
+void ParticleSet::DrawAccelNormals(uint32_t key, double dt_s) {
+  const float switch_probability = SwitchProbability(dt_s);
   // 3N standard normals, two per Box–Muller draw: accel_[j] and accel_[half + j] come from
   // uniforms 2j and 2j + 1.
   const int half = static_cast<int>(accel_.size() / 2);
@@ -145,6 +171,16 @@ void ParticleSet::DrawAccelNormals(uint32_t key, float switch_probability) {
       a[i] *= g[i];
       a[n + i] *= g[i];
       a[2 * n + i] *= g[i];
+    }
+  }
+  if (!turn_.empty()) {
+    // Particle i redraws its turn rate when its uniform (counters past the levels' and the
+    // manoeuvres') is below the switch probability; the new rate takes the next counter.
+    const float p = static_cast<float>(-std::expm1(-turn_switch_rate_hz_ * std::max(0.0, dt_s)));
+    const uint32_t base = static_cast<uint32_t>(accel_.size() + 2 * gain_.size() + n_);
+    for (int i = 0; i < n_; ++i) {
+      const uint32_t c = base + 2u * static_cast<uint32_t>(i);
+      if (UniformFromCounter(key, c) < p) turn_[i] = turn_max_radps_ * (2.0f * UniformFromCounter(key, c + 1) - 1.0f);
     }
   }
   if (manoeuvre_share_ <= 0.0f) return;
@@ -174,6 +210,51 @@ ManoeuvreGains ManoeuvreGainsFor(double share, double scale) {
   return {quiet, scale * quiet};
 }
 
+void ParticleSet::PredictPersistentTurns(float dt, float a_to_p, float a_to_v) {
+  const int n = n_;
+  const float* __restrict ax = accel_.data();
+  const float* __restrict ay = accel_.data() + n;
+  const float* __restrict az = accel_.data() + 2 * n;
+  const float* __restrict w = turn_.data();
+  float* __restrict x = cur_.x.data();
+  float* __restrict y = cur_.y.data();
+  float* __restrict z = cur_.z.data();
+  float* __restrict vx = cur_.vx.data();
+  float* __restrict vy = cur_.vy.data();
+  float* __restrict vz = cur_.vz.data();
+  if (turn_max_radps_ * dt <= 0.5f) {
+    // sin(t)/t and (1 - cos t)/t to t^4 and t^5: float-exact for |t| <= 0.5 (the next terms
+    // are below 3e-6 relative), and vectorised where sin and cos per particle would not be.
+#pragma omp simd
+    for (int i = 0; i < n; ++i) {
+      const float t = w[i] * dt, t2 = t * t;
+      const float sinc = 1.0f - t2 * (1.0f / 6.0f - t2 * (1.0f / 120.0f));
+      const float cosc = t * (0.5f - t2 * (1.0f / 24.0f - t2 * (1.0f / 720.0f)));
+      const float s = t * sinc, c = 1.0f - t * cosc;
+      const float ux = vx[i], uy = vy[i];
+      x[i] += dt * (sinc * ux - cosc * uy) + a_to_p * ax[i];
+      y[i] += dt * (cosc * ux + sinc * uy) + a_to_p * ay[i];
+      z[i] += dt * vz[i] + a_to_p * az[i];
+      vx[i] = c * ux - s * uy + a_to_v * ax[i];
+      vy[i] = s * ux + c * uy + a_to_v * ay[i];
+      vz[i] += a_to_v * az[i];
+    }
+    return;
+  }
+  for (int i = 0; i < n; ++i) {  // a long step (a gap in the frames): exact, per particle
+    const double t = static_cast<double>(w[i]) * dt;
+    const double s = std::sin(t), c = std::cos(t);
+    const double sinc = t == 0.0 ? 1.0 : s / t, cosc = t == 0.0 ? 0.0 : (1.0 - c) / t;
+    const double ux = vx[i], uy = vy[i];
+    x[i] += static_cast<float>(dt * (sinc * ux - cosc * uy)) + a_to_p * ax[i];
+    y[i] += static_cast<float>(dt * (cosc * ux + sinc * uy)) + a_to_p * ay[i];
+    z[i] += dt * vz[i] + a_to_p * az[i];
+    vx[i] = static_cast<float>(c * ux - s * uy) + a_to_v * ax[i];
+    vy[i] = static_cast<float>(s * ux + c * uy) + a_to_v * ay[i];
+    vz[i] += a_to_v * az[i];
+  }
+}
+
 void ParticleSet::PredictTurn(double dt_s, double turn_rate_radps, double accel_sigma_mps2, uint32_t key) {
   // The turn's coefficients in double, once.
   const double w = turn_rate_radps, wt = w * dt_s;
@@ -183,7 +264,7 @@ void ParticleSet::PredictTurn(double dt_s, double turn_rate_radps, double accel_
   const float dt = static_cast<float>(dt_s);
   const float a_to_v = static_cast<float>(accel_sigma_mps2 * dt_s);
   const float a_to_p = static_cast<float>(0.5 * accel_sigma_mps2 * dt_s * dt_s);
-  DrawAccelNormals(key, SwitchProbability(dt_s));
+  DrawAccelNormals(key, dt_s);
   moments_valid_ = false;
   const int n = n_;
   const float* __restrict ax = accel_.data();

@@ -119,6 +119,7 @@ void ParticleSet::CopyCloudFrom(const ParticleSet& other) {
   labels_ = other.labels_;
   label_deficit_ = other.label_deficit_;
   gain_ = other.gain_;
+  turn_ = other.turn_;
 }
 
 double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candidates, const std::vector<uint8_t>& choice,

@@ -79,6 +79,13 @@ class ParticleSet {
   // drawn; a particle redraws its gain at rate switch_rate_hz (a jump process), and
   // resampling copies the gain with the particle. floor = ceiling = 1 (the default): off.
   void SetAccelLevels(double floor, double ceiling, double switch_rate_hz);
+  // Turn rates that persist (ParticleFilterOptions::turn_rate_max_radps): each particle
+  // carries its own rate omega_i, uniform in [-max, max] when drawn, and Predict turns its
+  // velocity about +z by omega_i dt (the coordinated turn of PredictTurn) before the white
+  // acceleration; a particle redraws its rate at the levels' switch rate, and resampling
+  // copies it. So a source on an arc is followed by quiet particles on the arc, not by
+  // straight lines that match its bearings while their range drifts. max = 0: off.
+  void SetTurnRates(double max_radps, double switch_rate_hz);
   // A fresh random-stream key per use: hash of (seed, use count).
   uint32_t NextKey();
   // Copies `other`'s particles and weights (same array and particle count; the random
@@ -179,13 +186,16 @@ class ParticleSet {
     std::array<float*, 6> Pointers() { return {x.data(), y.data(), z.data(), vx.data(), vy.data(), vz.data()}; }
   };
   // Fills accel_ with 3N standard normals (see SetManoeuvre), each particle's scaled by its
-  // level gain (SetAccelLevels; the levels first jump with probability switch_probability).
-  void DrawAccelNormals(uint32_t key, float switch_probability = 0.0f);
+  // level gain (SetAccelLevels; over a step of dt_s the levels and the turn rates first jump,
+  // each at its switch rate).
+  void DrawAccelNormals(uint32_t key, double dt_s = 0.0);
   // Predict's constant-velocity step with its normals drawn in the same pass (no levels, no
   // manoeuvres, N even): the same values as DrawAccelNormals then the stored-normals loop.
   void PredictConstantVelocity(uint32_t key, float dt, float a_to_p, float a_to_v);
-  void DrawLevels();                           // every particle's gain afresh (after sampling)
-  void CarryLevels();                          // gain_[m] <- gain_[index_[m]] (after SystematicIndices)
+  void DrawLevels();   // every particle's gain and turn rate afresh (after sampling)
+  void CarryLevels();  // gain_[m] <- gain_[index_[m]], turn_ too (after SystematicIndices)
+  // Predict's step with per-particle turn rates (turn_ not empty), normals in accel_.
+  void PredictPersistentTurns(float dt, float a_to_p, float a_to_v);
   float SwitchProbability(double dt_s) const;  // 1 - exp(-rate dt)
   // Particles [first, end) ~ N(mean, root root^T), normals keyed by (key, 6 i + k).
   void SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32_t key, int first, int end);
@@ -218,6 +228,10 @@ class ParticleSet {
   float log_level_floor_ = 0.0f, log_level_ceiling_ = 0.0f;
   double level_switch_rate_hz_ = 0.0;
   std::vector<float> gain_, next_gain_;
+  // SetTurnRates: the largest rate and the redraw rate; turn_ empty while off.
+  float turn_max_radps_ = 0.0f;
+  double turn_switch_rate_hz_ = 0.0;
+  std::vector<float> turn_, next_turn_;
   // Weighted mean and covariance of the current particles, computed on demand and kept
   // until the particles or weights change (State() and the regulariser share them).
   mutable TrackState moments_;

@@ -130,11 +130,12 @@ StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGe
       auto estimator = provider->MakeEstimator(array, gcc);
       if (!estimator.ok()) return estimator.status();
       // The device kernels weigh by the peak or GCC likelihood of a fixed array with one
-      // acceleration std; the mixture likelihood's particle filter, one with acceleration
-      // levels and one on a moving array run on the CPU beside the GPU GCC, as
-      // the Kalman filters do.
+      // acceleration std and no turn rates; the mixture likelihood's particle filter, one
+      // with acceleration levels or turn rates and one on a moving array run on the CPU
+      // beside the GPU GCC, as the Kalman filters do.
       const bool on_device = particle && tracker.particle.likelihood != Likelihood::kMixture &&
-                             !tracker.particle.accel_levels() && !moving_array;
+                             !tracker.particle.accel_levels() && tracker.particle.turn_rate_max_radps == 0.0 &&
+                             !moving_array;
       auto made = on_device  ? MakeHandoff(array, tracker.particle, *provider)
                   : particle ? MakeCpuParticleFilter(array, tracker.particle)
                              : MakeCpuOnly(array, tracker);

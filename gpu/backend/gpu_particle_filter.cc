@@ -19,6 +19,10 @@ StatusOr<std::unique_ptr<GpuParticleFilter>> GpuParticleFilter::Create(std::shar
         "the GPU particle filter has one acceleration std (set accel_level_floor = accel_level_ceiling = 1, or use "
         "the CPU filter)");
   }
+  if (options.turn_rate_max_radps > 0.0) {
+    return InvalidArgument(
+        "the GPU particle filter has no turn rates (set turn_rate_max_radps = 0, or use the CPU filter)");
+  }
   auto slot = runtime->bank().Open(array, options);
   if (!slot.ok()) return slot.status();
   return std::unique_ptr<GpuParticleFilter>(

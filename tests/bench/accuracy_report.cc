@@ -1,8 +1,9 @@
 // Accuracy over seeds: every named scenario, both likelihoods, seeds 1..N; prints each run
 // and the median RMSE / per-frame CRLB and p95 / RMSE per scenario (BENCHMARKS.md).
-// Run: build/tests/bench/accuracy_report [N=5] [--one-std | --levels FLOOR,CEILING,HZ]
+// Run: build/tests/bench/accuracy_report [N=5] [--turns MAX] [--one-std | --levels FLOOR,CEILING,HZ]
 // --one-std: the particle filter with one acceleration std (levels off); --levels: these
-// acceleration levels instead of the defaults (particle_filter.h).
+// acceleration levels instead of the defaults (particle_filter.h); --turns: per-particle turn
+// rates up to MAX rad/s (ParticleFilterOptions::turn_rate_max_radps).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -42,6 +43,12 @@ int main(int argc, char** argv) {
     }
     argc -= 2;
   }
+  double turns = -1.0;
+  if (argc > 3 && std::string(argv[2]) == "--turns") {
+    turns = std::strtod(argv[3], nullptr);
+    for (int i = 2; i + 2 < argc; ++i) argv[i] = argv[i + 2];
+    argc -= 2;
+  }
   if (argc > 1) {
     const auto n = localizer::ParseInteger(argv[1]);
     if (!n.ok() || *n < 1 || *n > 1000000) {
@@ -59,8 +66,10 @@ int main(int argc, char** argv) {
         const auto adjust = [&](AudioSessionConfig* c) {
           ParticleFilterOptions& p = c->tracker.particle;
           if (one_std) p.accel_level_floor = p.accel_level_ceiling = 1.0;
-          if (floor > 0.0) std::tie(p.accel_level_floor, p.accel_level_ceiling, p.accel_level_switch_hz) =
-              std::tuple(floor, ceiling, switch_hz);
+          if (floor > 0.0)
+            std::tie(p.accel_level_floor, p.accel_level_ceiling, p.accel_level_switch_hz) =
+                std::tuple(floor, ceiling, switch_hz);
+          if (turns >= 0.0) p.turn_rate_max_radps = turns;
         };
         const TrackScore s = TrackScenario(name, static_cast<uint64_t>(seed), likelihood, BackendChoice::kCpu,
                                            FilterKind::kPf, MotionModelKind::kCv, adjust)

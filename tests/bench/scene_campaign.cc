@@ -33,21 +33,22 @@ struct Args {
   std::optional<SceneClass> scene_class;
   double duration_s = 12.0;
   int jobs = 1;
-  std::optional<Weighting> weighting;  // unset: the session default
-  std::optional<uint64_t> trace_seed;  // one scene, frame by frame
-  std::optional<FilterKind> filter;    // unset: the session default
-  int particles = 0;                   // 0: the session default
-  double accel_noise_mps2 = -1.0;      // < 0: the session default
-  double manoeuvre_share = -1.0;       // < 0: the session default
-  int tempered_updates = -1;           // < 0: the session default
-  double tempering_ess = -1.0;         // < 0: the session default
-  double manoeuvre_scale = 0.0;        // < 1: the session default
-  std::optional<Likelihood> likelihood;  // unset: the session default
-  double outlier_probability = -1.0;   // < 0: the session default
-  double kernel_scale = -1.0;          // < 0: the session default
+  std::optional<Weighting> weighting;                                       // unset: the session default
+  std::optional<uint64_t> trace_seed;                                       // one scene, frame by frame
+  std::optional<FilterKind> filter;                                         // unset: the session default
+  int particles = 0;                                                        // 0: the session default
+  double accel_noise_mps2 = -1.0;                                           // < 0: the session default
+  double manoeuvre_share = -1.0;                                            // < 0: the session default
+  int tempered_updates = -1;                                                // < 0: the session default
+  double tempering_ess = -1.0;                                              // < 0: the session default
+  double manoeuvre_scale = 0.0;                                             // < 1: the session default
+  std::optional<Likelihood> likelihood;                                     // unset: the session default
+  double outlier_probability = -1.0;                                        // < 0: the session default
+  double kernel_scale = -1.0;                                               // < 0: the session default
   double level_floor = -1.0, level_ceiling = -1.0, level_switch_hz = -1.0;  // < 0: the default
-  bool band_hint = false;              // --band-hint: the session gets the scene's true band
-  bool help = false;                   // --help: print the usage and exit 0
+  double turn_rate_max_radps = -1.0;                                        // < 0: the session default
+  bool band_hint = false;  // --band-hint: the session gets the scene's true band
+  bool help = false;       // --help: print the usage and exit 0
 };
 
 // The flags' changes to the campaign's default session config (`scene`: the one it runs).
@@ -73,6 +74,7 @@ void Adjust(const Args& a, const RandomSceneOptions& scene_options, AudioSession
     c->tracker.particle.accel_level_ceiling = a.level_ceiling;
     c->tracker.particle.accel_level_switch_hz = a.level_switch_hz;
   }
+  if (a.turn_rate_max_radps >= 0.0) c->tracker.particle.turn_rate_max_radps = a.turn_rate_max_radps;
   if (a.accel_noise_mps2 >= 0.0) {
     c->tracker.particle.accel_noise_mps2 = a.accel_noise_mps2;
     c->tracker.kalman.motion.accel_noise_mps2 = a.accel_noise_mps2;
@@ -88,7 +90,8 @@ void Usage(FILE* out) {
       "                      [--manoeuvre-share P] [--manoeuvre-scale K] [--tempered-updates N]\n"
       "                      [--tempering-ess F]\n"
       "                      [--likelihood peak|gcc|mixture] [--outlier-probability EPS]\n"
-      "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--band-hint] [--trace SEED]\n"
+      "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--turn-rates MAX]\n"
+      "                      [--band-hint] [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
       "within 3 x CRLB to the end), RMSE/CRLB and median NEES/dim after acquisition, lost frames\n"
@@ -105,8 +108,9 @@ void Usage(FILE* out) {
       "ESS would fall below this fraction of N is split into stages), --likelihood,\n"
       "--outlier-probability (the mixture\n"
       "likelihood's eps), --kernel-scale (the particle filter's regularisation) and\n"
-      "--accel-levels (its acceleration levels, e.g. 0.003,3,1; particle_filter.h) override the\n"
-      "session's defaults.\n"
+      "--accel-levels (its acceleration levels, e.g. 0.003,3,1; particle_filter.h) and --turn-rates\n"
+      "(its per-particle turn rates up to MAX rad/s about +z, e.g. 1) override the session's\n"
+      "defaults.\n"
       "--band-hint gives each session its scene's true source band (an oracle: what a perfect band\n"
       "estimate from the data would give; the campaign's default gives none).\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
@@ -174,6 +178,10 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       if (std::sscanf(value.c_str(), "%lf,%lf,%lf", &a->level_floor, &a->level_ceiling, &a->level_switch_hz) != 3 ||
           !(a->level_floor > 0.0))
         return std::fprintf(stderr, "scene_campaign: --accel-levels takes FLOOR,CEILING,HZ (floor > 0)\n"), false;
+    } else if (flag == "--turn-rates") {
+      a->turn_rate_max_radps = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(a->turn_rate_max_radps >= 0.0 && a->turn_rate_max_radps <= 5.0))
+        return std::fprintf(stderr, "scene_campaign: --turn-rates must be in [0, 5] rad/s\n"), false;
     } else if (flag == "--tempered-updates") {
       a->tempered_updates = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->tempered_updates < 0 || a->tempered_updates > 100)
@@ -249,11 +257,11 @@ void PrintRow(FILE* out, const SceneRow& r) {
   }
   std::fprintf(out, "%10" PRIu64 " %-9s %-3s %-3s %-3s %4d %6s %7s %4d %8s %8s %9s %9s %8s %6d %6s %6.1f  %s\n", r.seed,
                SceneClassName(r.scene_class), s.acquired ? "yes" : "no", s.acquired_bearing ? "yes" : "no",
-               s.acquired_reported ? "yes" : "no", s.far_field_frames,
-               Num(s.range_apertures_median, "%.2f").c_str(), Num(s.time_to_acquire_s, "%.2f").c_str(),
-               s.initialised_frames, Num(s.crlb_median_m).c_str(), Num(s.crlb_theory_median_m).c_str(),
-               Num(s.rmse_over_crlb).c_str(), Num(s.rmse_over_crlb_theory).c_str(), Num(s.median_nees_per_dim).c_str(),
-               s.lost_frames, Num(s.silent_failure_s, "%.1f").c_str(), r.wall_s, r.description.c_str());
+               s.acquired_reported ? "yes" : "no", s.far_field_frames, Num(s.range_apertures_median, "%.2f").c_str(),
+               Num(s.time_to_acquire_s, "%.2f").c_str(), s.initialised_frames, Num(s.crlb_median_m).c_str(),
+               Num(s.crlb_theory_median_m).c_str(), Num(s.rmse_over_crlb).c_str(), Num(s.rmse_over_crlb_theory).c_str(),
+               Num(s.median_nees_per_dim).c_str(), s.lost_frames, Num(s.silent_failure_s, "%.1f").c_str(), r.wall_s,
+               r.description.c_str());
 }
 
 void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s) {
@@ -279,11 +287,10 @@ void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s)
                s.scenes, s.run_errors, s.acquired, s.lost, s.silent_failures, s.acquired_theory, s.acquired_bearing,
                s.acquired_bearing_not_position, s.acquired_reported, s.silent_failures_reported, s.range_withheld,
                JsonNum(s.median_time_to_acquire_reported_s).c_str(), JsonNum(s.p95_time_to_acquire_reported_s).c_str(),
-               JsonNum(s.median_time_to_acquire_s).c_str(),
-               JsonNum(s.p95_time_to_acquire_s).c_str(), JsonNum(s.median_time_to_acquire_acquired_s).c_str(),
-               JsonNum(s.p95_time_to_acquire_acquired_s).c_str(), JsonNum(s.median_rmse_over_crlb_gaussian).c_str(),
-               JsonNum(s.median_rmse_over_crlb_hard).c_str(), JsonNum(s.median_nees_per_dim).c_str(),
-               JsonNum(s.median_rmse_over_crlb_theory).c_str());
+               JsonNum(s.median_time_to_acquire_s).c_str(), JsonNum(s.p95_time_to_acquire_s).c_str(),
+               JsonNum(s.median_time_to_acquire_acquired_s).c_str(), JsonNum(s.p95_time_to_acquire_acquired_s).c_str(),
+               JsonNum(s.median_rmse_over_crlb_gaussian).c_str(), JsonNum(s.median_rmse_over_crlb_hard).c_str(),
+               JsonNum(s.median_nees_per_dim).c_str(), JsonNum(s.median_rmse_over_crlb_theory).c_str());
   for (size_t i = 0; i < s.rows.size(); ++i) {
     const SceneRow& r = s.rows[i];
     const SceneScore& c = r.score;
@@ -303,9 +310,9 @@ void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s)
         JsonString(r.error).c_str(), c.frames, c.initialised_frames, c.acquired ? "true" : "false",
         c.acquired_bearing ? "true" : "false", c.acquired_reported ? "true" : "false", c.far_field_frames,
         JsonNum(c.range_withheld_s).c_str(), JsonNum(c.time_to_acquire_reported_s).c_str(),
-        JsonNum(c.range_apertures_median).c_str(),
-        JsonNum(c.time_to_acquire_s).c_str(), JsonNum(c.time_to_acquire_theory_s).c_str(),
-        JsonNum(c.crlb_median_m).c_str(), JsonNum(c.crlb_theory_median_m).c_str(), JsonNum(c.rmse_over_crlb).c_str(),
+        JsonNum(c.range_apertures_median).c_str(), JsonNum(c.time_to_acquire_s).c_str(),
+        JsonNum(c.time_to_acquire_theory_s).c_str(), JsonNum(c.crlb_median_m).c_str(),
+        JsonNum(c.crlb_theory_median_m).c_str(), JsonNum(c.rmse_over_crlb).c_str(),
         JsonNum(c.rmse_over_crlb_theory).c_str(), JsonNum(c.median_error_m).c_str(),
         JsonNum(c.median_nees_per_dim).c_str(), c.lost_frames, JsonNum(c.silent_failure_s).c_str(),
         c.silent_failure ? "true" : "false", JsonNum(r.wall_s).c_str(), i + 1 < s.rows.size() ? "," : "");
@@ -320,7 +327,8 @@ void PrintClass(const char* name, const ClassSummary& c) {
 }
 
 int Trace(uint64_t seed, const RandomSceneOptions& scene_options, const Args& a) {
-  const SceneRow row = RunRandomScene(seed, scene_options, {}, true, [&](AudioSessionConfig* c) { Adjust(a, scene_options, c); });
+  const SceneRow row =
+      RunRandomScene(seed, scene_options, {}, true, [&](AudioSessionConfig* c) { Adjust(a, scene_options, c); });
   if (!row.error.empty()) {
     std::fprintf(stderr, "scene_campaign: scene %" PRIu64 ": %s\n", seed, row.error.c_str());
     return 1;
@@ -328,13 +336,13 @@ int Trace(uint64_t seed, const RandomSceneOptions& scene_options, const Args& a)
   const std::vector<double>& sigma_s = row.score.tdoa_sigma_robust_s;
   std::printf("%s\nrobust TDOA sigma per pair (us):", row.description.c_str());
   for (double s : sigma_s) std::printf(" %.3g", 1e6 * s);
-  std::printf("\n%8s %4s %4s %4s %4s %6s %8s %9s %10s %10s %9s %9s %10s %10s %5s %7s %9s  %s\n", "t_s", "init",
-              "pres", "amb", "far", "silent", "range_m", "r_err_m", "error_m", "crlb_m", "err/crlb", "brg/crlb", "sd_m", "nees", "pairs", "nis", "sigma_us",
-              "per pair (measured - true) / sigma");
+  std::printf("\n%8s %4s %4s %4s %4s %6s %8s %9s %10s %10s %9s %9s %10s %10s %5s %7s %9s  %s\n", "t_s", "init", "pres",
+              "amb", "far", "silent", "range_m", "r_err_m", "error_m", "crlb_m", "err/crlb", "brg/crlb", "sd_m", "nees",
+              "pairs", "nis", "sigma_us", "per pair (measured - true) / sigma");
   for (const FrameScore& f : row.score.per_frame) {
     std::printf("%8.3f %4d %4d %4d %4d %6d %8s %9s %10s %10s %9s %9s %10s %10s %5d %7.3g %9.3g ", f.t_s, f.initialised,
-                f.present, f.ambiguous, f.far_field, f.silent, Num(f.range_m, "%.4g").c_str(), Num(f.range_error_m, "%.3g").c_str(),
-                Num(f.error_m, "%.4g").c_str(), Num(f.crlb_m, "%.4g").c_str(),
+                f.present, f.ambiguous, f.far_field, f.silent, Num(f.range_m, "%.4g").c_str(),
+                Num(f.range_error_m, "%.3g").c_str(), Num(f.error_m, "%.4g").c_str(), Num(f.crlb_m, "%.4g").c_str(),
                 Num(f.error_m / f.crlb_m).c_str(), Num(f.bearing_error_rad / f.bearing_crlb_rad).c_str(),
                 Num(f.sd_m, "%.4g").c_str(), Num(f.nees_position).c_str(), f.pairs_used, f.nis, 1e6 * f.tdoa_sigma_s);
     for (size_t p = 0; p < f.tdoa_error_s.size() && p < sigma_s.size(); ++p) {
@@ -382,8 +390,8 @@ int main(int argc, char** argv) {
 
   const CampaignSummary s = SummariseCampaign(rows);
   std::printf("%10s %-9s %-3s %-3s %-3s %4s %6s %7s %4s %8s %8s %9s %9s %8s %6s %6s %6s  %s\n", "seed", "class", "acq",
-              "brg", "rep", "far", "r_aper", "t_acq_s", "init", "crlb_m", "crlb_th_m", "rmse/crlb", "rmse/crth", "nees/dim", "lost",
-              "silent", "wall_s", "scene");
+              "brg", "rep", "far", "r_aper", "t_acq_s", "init", "crlb_m", "crlb_th_m", "rmse/crlb", "rmse/crth",
+              "nees/dim", "lost", "silent", "wall_s", "scene");
   for (const SceneRow& r : s.rows) PrintRow(stdout, r);
   std::printf("\nscenes %d (run errors %d), duration %g s, campaign seed %" PRIu64 "\n", s.scenes, s.run_errors,
               a.duration_s, a.seed);

@@ -1,6 +1,8 @@
 // wire/config_wire: SessionConfig defaults and round trips (the multiple-model filters',
 // bounds, presence and localization fields included), refused names quoted, policy limits
 // and bad values answered INVALID_ARGUMENT naming the field.
+#include "wire/config_wire.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,7 +12,6 @@
 #include <vector>
 
 #include "tests/wire/minimal_config.h"
-#include "wire/config_wire.h"
 #include "wire/string_limits.h"
 
 namespace localizer::wire {
@@ -128,6 +129,7 @@ TEST(ConfigWire, AccelerationLevelsDefaultRoundTripAndAreValidated) {
   p.mutable_filter()->set_accel_level_floor(0.01);
   p.mutable_filter()->set_accel_level_ceiling(5.0);
   p.mutable_filter()->set_accel_level_switch_hz(-1.0);  // negative: a rate of 0 (levels never redrawn)
+  p.mutable_filter()->set_turn_rate_max_radps(0.8);
   auto config = AudioFromProto(p, {});
   ASSERT_TRUE(config.ok()) << config.status().ToString();
   EXPECT_EQ(config->tracker.particle.accel_level_floor, 0.01);
@@ -139,6 +141,8 @@ TEST(ConfigWire, AccelerationLevelsDefaultRoundTripAndAreValidated) {
   EXPECT_EQ(again->tracker.particle.accel_level_floor, 0.01);
   EXPECT_EQ(again->tracker.particle.accel_level_ceiling, 5.0);
   EXPECT_EQ(again->tracker.particle.accel_level_switch_hz, 0.0);
+  EXPECT_EQ(again->tracker.particle.turn_rate_max_radps, 0.8);
+  EXPECT_EQ(defaulted->tracker.particle.turn_rate_max_radps, 0.0) << "off unless asked";
   p.mutable_filter()->set_accel_level_floor(6.0);  // above the ceiling (5)
   auto bad = AudioFromProto(p, {});
   const Status status = bad.ok() ? (*bad).Validate() : bad.status();
@@ -414,8 +418,7 @@ TEST(ConfigWire, SourcePlaneRoundTripsAndAZeroNormalIsNamed) {
   EXPECT_EQ(effective.source_plane().point_m().z(), 1.5);
   EXPECT_EQ(effective.source_plane().normal().z(), 2.0);
   p.mutable_source_plane()->mutable_normal()->set_z(0.0);
-  EXPECT_NE(AudioFromProto(p, {}).status().message().find("source_plane.normal must not be zero"),
-            std::string::npos);
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("source_plane.normal must not be zero"), std::string::npos);
   p.mutable_source_plane()->mutable_normal()->set_z(1.0);
   p.mutable_source_plane()->mutable_point_m()->set_y(std::numeric_limits<double>::quiet_NaN());
   EXPECT_NE(AudioFromProto(p, {}).status().message().find("source_plane"), std::string::npos);

@@ -60,7 +60,7 @@ class Session:
                  tdoa_sigma_s: float = 0.0, accel_noise_mps2: float = 1.0,
                  manoeuvre_share: float = 0.0, manoeuvre_scale: float = 10.0,
                  accel_level_floor: float = 1.0, accel_level_ceiling: float = 1.0,
-                 accel_level_switch_hz: float = 1.0, seed: int = 1,
+                 accel_level_switch_hz: float = 1.0, turn_rate_max_radps: float = 0.0, seed: int = 1,
                  init_speed_sigma_mps: float = 2.0,
                  init_region_min_m: Vec3 | None = None, init_region_max_m: Vec3 | None = None,
                  divergence_window: int = 8,

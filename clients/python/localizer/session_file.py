@@ -51,13 +51,14 @@ CHOICES: dict[str, tuple[str, ...]] = {
 _INTS = ("frame_samples", "hop_samples", "particles")
 _NUMBERS = ("phat_beta", "band_low_hz", "band_high_hz", "despike_k", "outlier_probability", "tdoa_sigma_s",
             "accel_noise_mps2", "manoeuvre_share", "manoeuvre_scale", "accel_level_floor", "accel_level_ceiling",
-            "accel_level_switch_hz", "search_radius_m", "presence_false_alarm", "source_timeout_s")
+            "accel_level_switch_hz", "turn_rate_max_radps", "search_radius_m", "presence_false_alarm", "source_timeout_s")
 # Every "session" key, in clients/io/session_file.h's order.
 SESSION_KEYS: tuple[str, ...] = (
     "frame_samples", "hop_samples", "weighting", "phat_beta", "band_low_hz", "band_high_hz", "despike_k",
     "filter", "motion_model", "imm_modes", "imm_variant", "robust", "particles", "likelihood",
     "outlier_probability", "tdoa_sigma_s", "accel_noise_mps2", "manoeuvre_share", "manoeuvre_scale",
-    "accel_level_floor", "accel_level_ceiling", "accel_level_switch_hz", "seed", "search_radius_m",
+    "accel_level_floor", "accel_level_ceiling", "accel_level_switch_hz", "turn_rate_max_radps", "seed",
+    "search_radius_m",
     "presence_false_alarm", "source_timeout_s", "backend")
 # Keys that belong at the top level (the top-level fields, and localizer.engine's names of the
 # source plane), refused in "session" saying so.
@@ -135,6 +136,7 @@ def _check_ranges(s: Mapping[str, Any], where: str) -> None:
         refuse("accel_level_floor" if "accel_level_floor" in s else "accel_level_ceiling",
                f"1e-6 <= floor <= ceiling <= 100 (floor {floor}, ceiling {ceiling})")
     check("accel_level_switch_hz", 0.0 <= g("accel_level_switch_hz", 0.0) <= 1000.0, "in [0, 1000]")
+    check("turn_rate_max_radps", 0.0 <= g("turn_rate_max_radps", 0.0) <= 5.0, "in [0, 5] rad/s")
     check("search_radius_m", 0.0 <= g("search_radius_m", 0.0) <= 1e7, "in [0, 1e7]")
     check("presence_false_alarm", 0.0 < g("presence_false_alarm", 1e-3) <= 0.1, "in (0, 0.1]")
     check("source_timeout_s", 0.0 < g("source_timeout_s", 1.0) <= 1e6, "in (0, 1e6]")
@@ -228,7 +230,7 @@ class SessionFile:
             f.likelihood = pb.Likelihood.Value("LIKELIHOOD_" + s["likelihood"].upper())
         for key in ("motion_model", "imm_modes", "imm_variant", "robust", "particles", "outlier_probability",
                     "tdoa_sigma_s", "accel_noise_mps2", "manoeuvre_share", "manoeuvre_scale", "accel_level_floor",
-                    "accel_level_ceiling"):
+                    "accel_level_ceiling", "turn_rate_max_radps"):
             if key in s:
                 setattr(f, key, s[key])
         if "accel_level_switch_hz" in s:  # the wire's 0 is the default; a rate of 0 goes as -1
