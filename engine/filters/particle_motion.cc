@@ -95,31 +95,26 @@ float ParticleSet::SwitchProbability(double dt_s) const {
   return static_cast<float>(-std::expm1(-level_switch_rate_hz_ * std::max(0.0, dt_s)));
 }
 
+// A per-particle value and its resampling scratch: n entries when on, none when off.
+static void PerParticle(bool on, int n, std::vector<float>* value, std::vector<float>* scratch) {
+  value->assign(on ? n : 0, 1.0f);
+  scratch->assign(on ? n : 0, 1.0f);
+}
+
 void ParticleSet::SetAccelLevels(double floor, double ceiling, double switch_rate_hz) {
   log_level_floor_ = static_cast<float>(std::log(floor));
   log_level_ceiling_ = static_cast<float>(std::log(ceiling));
   level_switch_rate_hz_ = switch_rate_hz;
-  if (floor == 1.0 && ceiling == 1.0) {  // off (ParticleFilterOptions::accel_levels)
-    gain_.clear();
-    next_gain_.clear();
-    return;
-  }
-  gain_.assign(n_, 1.0f);
-  next_gain_.assign(n_, 1.0f);
-  DrawLevels();
+  const bool on = !(floor == 1.0 && ceiling == 1.0);  // ParticleFilterOptions::accel_levels
+  PerParticle(on, n_, &gain_, &next_gain_);
+  if (on) DrawLevels();
 }
 
 void ParticleSet::SetTurnRates(double max_radps, double switch_rate_hz) {
   turn_max_radps_ = static_cast<float>(max_radps);
   turn_switch_rate_hz_ = switch_rate_hz;
-  if (max_radps == 0.0) {
-    turn_.clear();
-    next_turn_.clear();
-    return;
-  }
-  turn_.assign(n_, 0.0f);
-  next_turn_.assign(n_, 0.0f);
-  DrawLevels();
+  PerParticle(max_radps != 0.0, n_, &turn_, &next_turn_);
+  if (max_radps != 0.0) DrawLevels();
 }
 
 void ParticleSet::DrawLevels() {

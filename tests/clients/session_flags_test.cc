@@ -119,6 +119,7 @@ TEST(SessionFileFlags, EveryKeyMeansWhatItsFlagMeans) {
                                                                      {"0.01", "0.01"},
                                                                      {"3", "3"},
                                                                      {"2", "2"},
+                                                                     {"0.8", "0.8"},
                                                                      {"42", "42"},
                                                                      {"30", "30"},
                                                                      {"0.01", "0.01"},
