@@ -65,7 +65,7 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "particle filter: rate at which a particle redraws its acceleration level (and its turn rate)");
   flags.Double("turn-rate-max", &c.tracker.particle.turn_rate_max_radps, "W", "rad/s",
                "particle filter: each particle turns about +z at its own rate, uniform in [-W, W] (0: off; "
-               "with the levels, 1 suits walking and swimming sources: ACCURACY.md, \"Turn rates\")");
+               "with the levels 0.003 and 3, try 1: ACCURACY.md, \"Seventeenth pass\")");
   flags.String("backend", &f->backend, "NAME", "compute backend: cpu|gpu|auto (with --server: on the server)");
   flags.String("bounds-min", &f->bounds_min, "X,Y,Z",
                "lower corner of the box that can hold the source, m; per axis a number or -inf "

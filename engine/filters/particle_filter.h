@@ -93,17 +93,14 @@ struct ParticleFilterOptions {
   // particles (frames average over seconds), a manoeuvring one the loud ones, and the
   // redraws keep every level alive for the next change. Why: the right single std spans
   // three decades across arrays and motions (a 0.4 m board with millimetre fixes against a
-  // 40 m array at sea). Off by default (floor = ceiling = 1, one std). Measured (ACCURACY.md,
-  // "Acceleration levels"), at 0.003 / 3 / 1 Hz against one std: five 200-scene campaign
-  // draws, median Gaussian RMSE/CRLB 0.56-0.64 against 0.71-0.78, 974 against 966 of 1000
-  // acquired, 20 against 17 silent failures; named scenes (3 seeds, peak) tetra-water 0.126 ->
-  // 0.015, clicks-water 0.121 -> 0.023, turn-multipath 1.07 -> 0.93, but tetra-air 0.19 ->
-  // 1.28: a talker walking an arc 4-8 apertures from a 0.5 m array, whose weakly observed
-  // range the quiet core lags until the divergence test restarts it (2 restarts a run), as
-  // with manoeuvre_share. Suits sources that sit still or move steadily in view of the
-  // array. floor in [1e-6, ceiling], ceiling <= 100, switch rate in [0, 1000] Hz. This filter
-  // only: the multiple-model and the GPU particle filters keep one std (the backend runs a
-  // session with levels on the CPU filter).
+  // 40 m array at sea). Off by default (floor = ceiling = 1, one std). Suggested 0.003 / 3 /
+  // 1 Hz with the turn rates below (ACCURACY.md, "Seventeenth pass"); alone, the levels' quiet
+  // particles lag a source on an arc along its weakly observed range (tetra-air 0.17 -> 1.15 x
+  // CRLB, 1-2 restarts a run), and with or without turn rates they lag a source that keeps
+  // accelerating (filter_bounds_test's 0.34 m/s^2 path: 1.43 x its bound alone, 3.5 x with
+  // turn rates, against 0.91 x with one std). floor in [1e-6, ceiling], ceiling <= 100, switch
+  // rate in [0, 1000] Hz. This filter only: the multiple-model and the GPU particle filters
+  // keep one std (the backend runs a session with levels on the CPU filter).
   double accel_level_floor = 1.0;
   double accel_level_ceiling = 1.0;
   double accel_level_switch_hz = 1.0;
@@ -111,9 +108,20 @@ struct ParticleFilterOptions {
   // Turn rates that persist: each particle turns its velocity about +z at its own rate,
   // uniform in [-turn_rate_max_radps, turn_rate_max_radps] when drawn and redrawn at
   // accel_level_switch_hz (particle_set.h SetTurnRates), so quiet particles can follow an
-  // arc. 0 (the default): off. In [0, 5]; needs velocity_time_constant_s = 0. This filter
-  // only (the backend runs a session with turn rates on the CPU filter).
+  // arc instead of straight lines whose range drifts. 0 (the default): off. In [0, 5]; needs
+  // velocity_time_constant_s = 0. With the levels at 0.003 / 3 and W = 1, against one std:
+  // five 200-scene campaign draws, 988 against 967 acquired, 503 against 334 within 3 x the
+  // theoretical CRLB, p95 time to acquire 5.2-8.0 s against 10.1-11.6, Gaussian RMSE/CRLB
+  // 0.51-0.59 against 0.67-0.76, 7 against 5 silent failures, +18 % CPU; but a source that
+  // keeps accelerating is lagged (above) (ACCURACY.md, "Seventeenth pass"). This filter only
+  // (the backend runs a session with turn rates on the CPU filter).
   double turn_rate_max_radps = 0.0;
+  // One acceleration std and no turn rates: the motion the GPU particle filter runs.
+  void SetSingleMotion() {
+    accel_level_floor = accel_level_ceiling = 1.0;
+    turn_rate_max_radps = 0.0;
+  }
+  bool single_motion() const { return !accel_levels() && turn_rate_max_radps == 0.0; }
   double tdoa_sigma_s = 0.0;          // TDOA noise std; 0: adaptive (below)
   double peak_dof = 4.0;              // peak likelihood: Student-t degrees of freedom, > 0
   double gcc_sharpness = 1.0;         // GCC likelihood: curvature at the peak / the peak

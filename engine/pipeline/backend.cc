@@ -134,8 +134,7 @@ StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGe
       // with acceleration levels or turn rates and one on a moving array run on the CPU
       // beside the GPU GCC, as the Kalman filters do.
       const bool on_device = particle && tracker.particle.likelihood != Likelihood::kMixture &&
-                             !tracker.particle.accel_levels() && tracker.particle.turn_rate_max_radps == 0.0 &&
-                             !moving_array;
+                             tracker.particle.single_motion() && !moving_array;
       auto made = on_device  ? MakeHandoff(array, tracker.particle, *provider)
                   : particle ? MakeCpuParticleFilter(array, tracker.particle)
                              : MakeCpuOnly(array, tracker);

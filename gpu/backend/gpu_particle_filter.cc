@@ -14,14 +14,10 @@ StatusOr<std::unique_ptr<GpuParticleFilter>> GpuParticleFilter::Create(std::shar
     // BuildComponents keeps such filters on the CPU; the device kernels weigh by peak or GCC.
     return InvalidArgument("the GPU particle filter has no mixture likelihood (use the CPU filter)");
   }
-  if (options.accel_levels()) {
+  if (!options.single_motion()) {
     return InvalidArgument(
-        "the GPU particle filter has one acceleration std (set accel_level_floor = accel_level_ceiling = 1, or use "
-        "the CPU filter)");
-  }
-  if (options.turn_rate_max_radps > 0.0) {
-    return InvalidArgument(
-        "the GPU particle filter has no turn rates (set turn_rate_max_radps = 0, or use the CPU filter)");
+        "the GPU particle filter has one acceleration std and no turn rates (set accel_level_floor = "
+        "accel_level_ceiling = 1 and turn_rate_max_radps = 0, or use the CPU filter)");
   }
   auto slot = runtime->bank().Open(array, options);
   if (!slot.ok()) return slot.status();

@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
       for (int seed = 1; seed <= seeds; ++seed) {
         const auto adjust = [&](AudioSessionConfig* c) {
           ParticleFilterOptions& p = c->tracker.particle;
-          if (one_std) p.accel_level_floor = p.accel_level_ceiling = 1.0;
+          if (one_std) p.SetSingleMotion();
           if (floor > 0.0)
             std::tie(p.accel_level_floor, p.accel_level_ceiling, p.accel_level_switch_hz) =
                 std::tuple(floor, ceiling, switch_hz);

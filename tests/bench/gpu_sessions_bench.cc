@@ -71,7 +71,7 @@ AudioSessionConfig ConfigFor(const Audio& a, BackendChoice backend, int particle
   c.tracker.particle.particles = particles;
   // One acceleration std on both backends: the device filter has no acceleration levels (a
   // session with them runs its filter on the CPU), and like is compared with like.
-  c.tracker.particle.accel_level_floor = c.tracker.particle.accel_level_ceiling = 1.0;
+  c.tracker.particle.SetSingleMotion();
   c.backend = backend;
   c.seed = seed;
   return c;

@@ -8,6 +8,7 @@
 #include <benchmark/benchmark.h>
 
 #include <memory>
+#include <string>
 
 #include "engine/pipeline/range_observability.h"
 #include "engine/pipeline/session.h"
@@ -47,8 +48,11 @@ AudioSessionConfig BenchConfig(const Scenario& scenario, const SimResult& sim, i
 void BM_PipelinePerAudioSecond(benchmark::State& state) {
   Scenario scenario;
   const SimResult& sim = Audio(44100.0, &scenario);
-  const AudioSessionConfig config = BenchConfig(scenario, sim, static_cast<int>(state.range(0)),
-                                                state.range(1) == 0 ? Likelihood::kPeak : Likelihood::kGcc);
+  AudioSessionConfig config = BenchConfig(scenario, sim, static_cast<int>(state.range(0)),
+                                          state.range(1) == 0 ? Likelihood::kPeak : Likelihood::kGcc);
+  // Third argument 1: one acceleration std, no turn rates (the default before the seventeenth
+  // pass, and the GPU filter's motion); 0: the default motion.
+  if (state.range(2) == 1) config.tracker.particle.SetSingleMotion();
   // 0.1 s blocks, as a streaming client would send them.
   const int64_t block = 4410;
   const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
@@ -66,9 +70,10 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
       benchmark::Counter(runs * audio_s * 1e-3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["tdoa_us_per_frame"] = 1e6 * totals.tdoa_s / static_cast<double>(totals.frames);
   state.counters["filter_us_per_frame"] = 1e6 * totals.filter_s / static_cast<double>(totals.frames);
-  state.SetLabel(LikelihoodName(config.tracker.particle.likelihood));
+  state.SetLabel(std::string(LikelihoodName(config.tracker.particle.likelihood)) +
+                 (state.range(2) == 1 ? " one-std" : " levels+turns"));
 }
-BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 // Several sessions fed in turn, one 4096-sample block each, as the server's workers take
 // them: each block finds its session's state (particles, filter scratch, transform buffers)

@@ -30,7 +30,7 @@ using engine::Session;
 // The device particle filter has one acceleration std: sessions that must run it there say
 // so, whatever the default (a session with acceleration levels runs its filter on the CPU).
 AudioSessionConfig DeviceFilter(AudioSessionConfig config) {
-  config.tracker.particle.accel_level_floor = config.tracker.particle.accel_level_ceiling = 1.0;
+  config.tracker.particle.SetSingleMotion();
   return config;
 }
 void DeviceFilterInPlace(AudioSessionConfig* config) { *config = DeviceFilter(*config); }
@@ -247,7 +247,7 @@ TEST(GpuBackend, APredictionIsReadOnTheHostAndIsWhatTheDevicePredicts) {
   auto runtime = GpuRuntime::Create(GpuBackendOptions{});
   ASSERT_TRUE(runtime.ok()) << runtime.status().ToString();
   engine::ParticleFilterOptions options;
-  options.accel_level_floor = options.accel_level_ceiling = 1.0;
+  options.SetSingleMotion();
   options.accel_noise_mps2 = 2.0;
   auto filter = GpuParticleFilter::Create(*runtime, *array, options);
   ASSERT_TRUE(filter.ok()) << filter.status().ToString();

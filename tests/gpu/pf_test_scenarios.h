@@ -54,9 +54,9 @@ inline engine::ParticleFilterOptions CvOptions(int particles = 4096, uint64_t se
   o.accel_noise_mps2 = 0.05;
   o.tdoa_sigma_s = 8e-6;
   o.seed = seed;
-  o.tempered_updates = 0;  // the device filter has no progressive correction yet: compare like with like
-  o.accel_level_floor = o.accel_level_ceiling = 1.0;  // nor acceleration levels
-  o.tempering_ess_fraction = 0.0;                     // nor adaptive tempering
+  o.tempered_updates = 0;          // the device filter has no progressive correction yet: compare like with like
+  o.SetSingleMotion();             // nor acceleration levels or turn rates
+  o.tempering_ess_fraction = 0.0;  // nor adaptive tempering
   return o;
 }
 

@@ -53,9 +53,7 @@ class StandInProvider final : public BackendProvider {
   int device_updates = 0;
 };
 
-void OneAccelerationStd(AudioSessionConfig* config) {
-  config->tracker.particle.accel_level_floor = config->tracker.particle.accel_level_ceiling = 1.0;
-}
+void OneAccelerationStd(AudioSessionConfig* config) { config->tracker.particle.SetSingleMotion(); }
 
 // tetra-air (0.4 m tetrahedron, the source at 2-3 m: two exact TDOA solutions at the start).
 // Started from the heaviest mode alone, as the device filter was before the hand-off, the

@@ -142,7 +142,14 @@ TEST(ConfigWire, AccelerationLevelsDefaultRoundTripAndAreValidated) {
   EXPECT_EQ(again->tracker.particle.accel_level_ceiling, 5.0);
   EXPECT_EQ(again->tracker.particle.accel_level_switch_hz, 0.0);
   EXPECT_EQ(again->tracker.particle.turn_rate_max_radps, 0.8);
-  EXPECT_EQ(defaulted->tracker.particle.turn_rate_max_radps, 0.0) << "off unless asked";
+  EXPECT_EQ(defaulted->tracker.particle.turn_rate_max_radps, engine_default.turn_rate_max_radps);
+  p.mutable_filter()->set_turn_rate_max_radps(-1.0);  // negative: no turn rates
+  auto no_turns = AudioFromProto(p, {});
+  ASSERT_TRUE(no_turns.ok()) << no_turns.status().ToString();
+  EXPECT_EQ(no_turns->tracker.particle.turn_rate_max_radps, 0.0);
+  auto no_turns_again = AudioFromProto(ConfigToProto(*no_turns, ""), {});
+  ASSERT_TRUE(no_turns_again.ok());
+  EXPECT_EQ(no_turns_again->tracker.particle.turn_rate_max_radps, 0.0) << "off survives the round trip";
   p.mutable_filter()->set_accel_level_floor(6.0);  // above the ceiling (5)
   auto bad = AudioFromProto(p, {});
   const Status status = bad.ok() ? (*bad).Validate() : bad.status();

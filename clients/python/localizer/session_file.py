@@ -230,11 +230,13 @@ class SessionFile:
             f.likelihood = pb.Likelihood.Value("LIKELIHOOD_" + s["likelihood"].upper())
         for key in ("motion_model", "imm_modes", "imm_variant", "robust", "particles", "outlier_probability",
                     "tdoa_sigma_s", "accel_noise_mps2", "manoeuvre_share", "manoeuvre_scale", "accel_level_floor",
-                    "accel_level_ceiling", "turn_rate_max_radps"):
+                    "accel_level_ceiling"):
             if key in s:
                 setattr(f, key, s[key])
         if "accel_level_switch_hz" in s:  # the wire's 0 is the default; a rate of 0 goes as -1
             f.accel_level_switch_hz = s["accel_level_switch_hz"] if s["accel_level_switch_hz"] > 0 else -1.0
+        if "turn_rate_max_radps" in s:  # likewise: no turn rates go as -1
+            f.turn_rate_max_radps = s["turn_rate_max_radps"] if s["turn_rate_max_radps"] > 0 else -1.0
         if any(math.isfinite(x) for x in self.bounds_min_m + self.bounds_max_m):
             config.bounds.CopyFrom(_bounds(self.bounds_min_m, self.bounds_max_m))
         if self.max_sources is not None:
