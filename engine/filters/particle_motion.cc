@@ -91,8 +91,8 @@ void ParticleSet::PredictConstantVelocity(uint32_t key, float dt, float a_to_p, 
   }
 }
 
-float ParticleSet::SwitchProbability(double dt_s) const {
-  return static_cast<float>(-std::expm1(-level_switch_rate_hz_ * std::max(0.0, dt_s)));
+float ParticleSet::SwitchProbability(double rate_hz, double dt_s) {
+  return static_cast<float>(-std::expm1(-rate_hz * std::max(0.0, dt_s)));
 }
 
 // A per-particle value and its resampling scratch: n entries when on, none when off.
@@ -141,7 +141,7 @@ void ParticleSet::CarryLevels() {
 }
 
 void ParticleSet::DrawAccelNormals(uint32_t key, double dt_s) {
-  const float switch_probability = SwitchProbability(dt_s);
+  const float switch_probability = SwitchProbability(level_switch_rate_hz_, dt_s);
   // 3N standard normals, two per Box–Muller draw: accel_[j] and accel_[half + j] come from
   // uniforms 2j and 2j + 1.
   const int half = static_cast<int>(accel_.size() / 2);
@@ -171,7 +171,7 @@ void ParticleSet::DrawAccelNormals(uint32_t key, double dt_s) {
   if (!turn_.empty()) {
     // Particle i redraws its turn rate when its uniform (counters past the levels' and the
     // manoeuvres') is below the switch probability; the new rate takes the next counter.
-    const float p = static_cast<float>(-std::expm1(-turn_switch_rate_hz_ * std::max(0.0, dt_s)));
+    const float p = SwitchProbability(turn_switch_rate_hz_, dt_s);
     const uint32_t base = static_cast<uint32_t>(accel_.size() + 2 * gain_.size() + n_);
     for (int i = 0; i < n_; ++i) {
       const uint32_t c = base + 2u * static_cast<uint32_t>(i);

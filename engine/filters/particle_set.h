@@ -196,7 +196,7 @@ class ParticleSet {
   void CarryLevels();  // gain_[m] <- gain_[index_[m]], turn_ too (after SystematicIndices)
   // Predict's step with per-particle turn rates (turn_ not empty), normals in accel_.
   void PredictPersistentTurns(float dt, float a_to_p, float a_to_v);
-  float SwitchProbability(double dt_s) const;  // 1 - exp(-rate dt)
+  static float SwitchProbability(double rate_hz, double dt_s);  // 1 - exp(-rate dt)
   // Particles [first, end) ~ N(mean, root root^T), normals keyed by (key, 6 i + k).
   void SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32_t key, int first, int end);
   void SetEqualWeights();

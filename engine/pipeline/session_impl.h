@@ -67,8 +67,8 @@ struct Session::Impl {
   // has another peak (a local maximum at least kCandidateShare of the main peak's height)
   // within kAssociationGate predicted sigmas, is measured at that peak instead (the tallest
   // in the gate; returns how many pairs were changed). Only while the tracker holds one
-  // hypothesis: the measurement is shared by all of them.
-  int AssociateCandidates(const TrackState& predicted);
+  // hypothesis (`hypotheses`, the tracker's count): the measurement is shared by all of them.
+  int AssociateCandidates(const TrackState& predicted, size_t hypotheses);
 
   // Moving arrays: moves `array` and the tracker to the platform's pose at t_s; false
   // when there is no pose yet (no IMU sample).

@@ -62,10 +62,10 @@ void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& nea
 
 constexpr double kCandidateShare = 0.3;
 
-int Session::Impl::AssociateCandidates(const TrackState& predicted) {
+int Session::Impl::AssociateCandidates(const TrackState& predicted, size_t hypotheses) {
   // `predicted` is the heaviest hypothesis: peaks picked near it would be the others'
   // measurements too, and would hand it the frame (campaign scene 2000127).
-  if (components.tracker->Hypotheses().size() > 1) return 0;
+  if (hypotheses > 1) return 0;
   const Vec3 position = predicted.mean.head<3>();
   const double fs = config.sample_rate_hz;
   const Eigen::VectorXd lag = array.Tdoa(position) * fs;
@@ -169,7 +169,8 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
   Tracker& tracker = *components.tracker;
   tracker.Predict(dt_s);
   if (!measured) return;
-  const TrackState predicted = tracker.Hypotheses().front().belief;
+  const std::vector<WeightedBelief> prior = tracker.Hypotheses();
+  const TrackState& predicted = prior.front().belief;
   const PresenceResult near =
       acquisition.Around(measurement, predicted.mean.head<3>(), predicted.covariance.topLeftCorner<3, 3>());
   e->presence_statistic = near.statistic;
@@ -178,7 +179,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     e->source_present = true;
     silent_s = 0.0;
     heard_elsewhere = 0;
-    AssociateCandidates(predicted);
+    AssociateCandidates(predicted, prior.size());
     UpdateAndWatch(predicted, e);
     if (!e->reinitialised) Audit(predicted, near, e);
     return;
@@ -195,7 +196,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     for (const PositionMode& mode : found.modes) {
       if (NearTrack(predicted, mode)) {
         heard_elsewhere = 0;
-        AssociateCandidates(predicted);
+        AssociateCandidates(predicted, prior.size());
         UpdateAndWatch(predicted, e);
         return;
       }
