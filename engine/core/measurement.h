@@ -23,7 +23,8 @@ struct PairMeasurement {
                             // even < 1, means no clear peak; see gcc_phat.h)
   double peak_value = 0.0;  // GCC value at the peak (PHAT: 1 for a perfect single path)
   // peak_value over the GCC's standard deviation when the channels hold only independent
-  // noise (1 / sqrt(in-band bins of the full spectrum), exact for PHAT): the detection
+  // noise (1 / sqrt(in-band bins of the full spectrum) for PHAT; for learnt weights, the same
+  // with the weights' effective bin count (sum w)^2 / sum w^2): the detection
   // statistic. Noise alone gives ~2-4 (max over the window); a source far more.
   double peak_snr = 0.0;
   // Standard deviation of delay_s on this frame, seconds, from the GCC's own curvature and

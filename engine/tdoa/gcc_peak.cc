@@ -103,7 +103,7 @@ SpectrumMoments GccPhatEstimator::Impl::AnalyseSpectrum(int pair, double delay_s
 }
 
 // After a frame has been folded in: w = c^2 / (1 - c^2) from the bias-corrected average c
-// (clamped to [0, 0.99]) for the pair's next frame.
+// (clamped to [0, 0.98]) for the pair's next frame.
 void GccPhatEstimator::Impl::LearnCoherence(int pair) {
   const int frames = ++coherence_frames[pair];
   const double alpha = 1.0 / options.coherence_time_constant_frames;

@@ -60,7 +60,6 @@ float LargestOutsideLobe(const float* corr, int n, int peak_lag) {
   return best;
 }
 
-
 }  // namespace
 
 // ---- Estimator ----------------------------------------------------------------------------
@@ -113,7 +112,12 @@ Status GccPhatEstimator::Impl::TransformChannel(const float* samples, int channe
 }
 
 // Fills `cross` with G = W X_k conj(X_r) B and returns S, the sum of |G| over all N bins.
-float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
+// Noise alone gives each bin a uniform phase, so R(l) = (1/S) sum_k G_k e^{j w_k l} has
+// variance (sum over interior bins of 2 |G_k|^2 + |G_0|^2 + |G_N/2|^2) / S^2: 1 / (2 B) for
+// PHAT's B unit bins (the layout's constant, kept for every weighting but the learnt one),
+// 1 / (2 B_eff) with B_eff = (sum w)^2 / sum w^2 for PHAT-coherence, whose weights gather on
+// a few bins and would otherwise read noise as a source many times over.
+float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair, float* noise_floor_inverse) {
   const int ref = array.reference_sensor();
   const int sensor = array.sensor_of_pair(pair);
   const float* xr = spectra.get() + static_cast<std::size_t>(ref) * spectrum_stride;
@@ -153,7 +157,17 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
       break;
   }
   // Bins 1..N/2-1 stand for two bins of the full spectrum; DC and Nyquist (real) for one.
-  return 2.0f * half_sum - std::abs(g[0]) - std::abs(g[2 * (bin_count - 1)]);
+  const float norm = 2.0f * half_sum - std::abs(g[0]) - std::abs(g[2 * (bin_count - 1)]);
+  *noise_floor_inverse = layout.noise_floor_inverse;
+  if (options.weighting == Weighting::kPhatCoherence && coherence_usable[pair]) {
+    double variance = 0.0;
+    for (int k = lo; k < hi; ++k) {
+      const double power = static_cast<double>(g[2 * k]) * g[2 * k] + static_cast<double>(g[2 * k + 1]) * g[2 * k + 1];
+      variance += (k == 0 || k == bin_count - 1) ? power : 2.0 * power;
+    }
+    *noise_floor_inverse = variance > 0.0 ? static_cast<float>(norm / std::sqrt(variance)) : 0.0f;
+  }
+  return norm;
 }
 
 // window[i] = R(i - L - K) * scale: the searched lags plus kPeakHalfWidth either side for
@@ -185,7 +199,8 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
   out->sensor = array.sensor_of_pair(pair);
   out->first_lag_samples = -max_lag;
 
-  const float norm = WeighCrossSpectrum(pair);
+  float noise_floor_inverse = 0.0f;
+  const float norm = WeighCrossSpectrum(pair, &noise_floor_inverse);
   if (!(norm > 0.0f)) {  // no energy in the band: nothing to measure
     out->delay_s = 0.0;
     out->quality = 0.0;
@@ -214,7 +229,7 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
 
   out->delay_s = delay_samples / options.sample_rate_hz;
   out->peak_value = peak_value;
-  out->peak_snr = peak_value * layout.noise_floor_inverse;
+  out->peak_snr = peak_value * noise_floor_inverse;
   out->quality = QualityRatio(peak_value, LargestSidelobe(searched, peak, peak_lag, scale));
 
   const double padding_factor = static_cast<double>(layout.fft_size) / static_cast<double>(options.frame_samples);

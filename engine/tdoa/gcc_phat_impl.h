@@ -21,7 +21,10 @@ struct GccPhatEstimator::Impl {
 
   Status Init();
   Status TransformChannel(const float* samples, int channel);
-  float WeighCrossSpectrum(int pair);
+  // Fills `cross` for `pair` and returns S (the sum of |G| over all N bins); sets
+  // *noise_floor_inverse to S / sqrt(sum of the noise-only variances of the bins' terms), the
+  // inverse of R's noise-only standard deviation for these weights.
+  float WeighCrossSpectrum(int pair, float* noise_floor_inverse);
   void MeasurePair(int pair, PairMeasurement* out);
   void GatherWindow(int max_lag, float scale);
   float LargestSidelobe(std::span<const float> searched, int peak, int peak_lag, float scale) const;
@@ -52,6 +55,5 @@ struct GccPhatEstimator::Impl {
   FftwPlan forward;
   FftwPlan inverse;
 };
-
 
 }  // namespace localizer::engine
