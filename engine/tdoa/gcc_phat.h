@@ -110,7 +110,7 @@
 // weight ~0. peak_snr divides by the weights' own noise-only scale (effective bins
 // (sum w)^2 / sum w^2, which falls far below the band's bins once the weights gather on the
 // source's), so the presence test's null holds for them as for PHAT (white noise streamed at a
-// half-frame hop: 95th percentile 3.1 against PHAT's 3.2, 11.2 with PHAT's scale). The first
+// half-frame hop: 95th percentile 3.2, as PHAT's; 11.2 with PHAT's scale). The first
 // coherence_warmup_frames frames of each pair use plain PHAT. S still
 // normalises, so R(d) = 1 for a perfect path. The coherence is learnt from the unweighted
 // spectra, so a bin weighted to zero can come back. The state is per estimator and per pair:

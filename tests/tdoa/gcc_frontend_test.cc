@@ -288,7 +288,7 @@ TEST(PhatCoherence, FreshEstimatorAndResetReplayBitForBit) {
 // share half their samples): peak_snr must read as noise whatever the weighting, since the
 // presence test's null is built on it. The 95th percentile over 3 pairs x 200 frames of
 // independent white noise, against PHAT's on the same frames. Measured: PHAT 3.2; PHAT-coherence
-// 3.1 (11.2 with PHAT's scale, i.e. noise read as a source).
+// 3.2 (11.2 with PHAT's scale, i.e. noise read as a source).
 std::vector<double> NoisePeakSnr(Weighting weighting) {
   SignalSpec spec;
   GccOptions o = Options(spec, false);
