@@ -1,0 +1,93 @@
+#!/usr/bin/python3
+"""Scores `localizer-cli track` on a room scene made by `localizer-cli simulate --room`.
+
+The scene folder holds sources.csv (each talker's azimuth, elevation and cone angle from the
+array's centroid) and sounding.csv (when each talker sounds). Per frame of the track CSV, a
+row is *heard* when its source_present is 1 (the track took a peak this frame); a talker's
+sounding frame is covered when a heard row lies within the tolerance of the talker (azimuth,
+or the cone angle for a line array; ACCURACY.md, "Named room scenes through the CLI").
+
+Per talker: its sounding frames, the share covered by a heard row, the share with any
+reported row (heard or coasting) within the tolerance, the identities that were heard on it
+in at least 5 frames, and the median error of its heard rows. Then false time: heard rows
+farther than the tolerance from every talker, in seconds per minute of audio.
+
+usage: /usr/bin/python3 room_scene_score.py SCENE_DIR TRACK_CSV [--tolerance-deg 15] [--line]
+(--line: score cone angles; the default is azimuths)
+"""
+import argparse
+import collections
+import csv
+import math
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('scene_dir', help='folder written by localizer-cli simulate --room')
+    parser.add_argument('track_csv', help='CSV written by localizer-cli track on that scene')
+    parser.add_argument('--tolerance-deg', type=float, default=15.0,
+                        help='a row this close to a talker is that talker (default: 15 degrees)')
+    parser.add_argument('--line', action='store_true', help='a line array: score cone angles')
+    args = parser.parse_args()
+
+    with open(f'{args.scene_dir}/sources.csv') as f:
+        talkers = list(csv.DictReader(f))
+    sounding = collections.defaultdict(list)
+    with open(f'{args.scene_dir}/sounding.csv') as f:
+        for r in csv.DictReader(f):
+            sounding[int(r['source'])].append((float(r['on_s']), float(r['off_s'])))
+    with open(args.track_csv) as f:
+        rows = list(csv.DictReader(f))
+
+    key = 'cone_angle_rad' if args.line else 'azimuth_rad'
+
+    def separation(a, b):
+        if args.line:
+            return abs(a - b)
+        return abs((a - b + math.pi) % (2 * math.pi) - math.pi)
+
+    frames = sorted({float(r['t_s']) for r in rows})
+    if len(frames) < 2:
+        raise SystemExit('the track CSV holds fewer than two frames')
+    hop_s = frames[1] - frames[0]
+    minutes = (frames[-1] - frames[0] + hop_s) / 60.0
+    by_frame = collections.defaultdict(list)
+    for r in rows:
+        if r['source_id'] and r[key] != '':
+            by_frame[float(r['t_s'])].append(r)
+    tolerance = math.radians(args.tolerance_deg)
+
+    for k, talker in enumerate(talkers):
+        truth = float(talker[key])
+        frames_on = [t for t in frames if any(a <= t <= b for a, b in sounding[k])]
+        heard = reported = 0
+        ids = collections.Counter()
+        errors = []
+        for t in frames_on:
+            near = [r for r in by_frame[t] if separation(float(r[key]), truth) < tolerance]
+            took = [r for r in near if r['source_present'] == '1']
+            heard += bool(took)
+            reported += bool(near)
+            for r in took:
+                ids[r['source_id']] += 1
+                errors.append(math.degrees(separation(float(r[key]), truth)))
+        errors.sort()
+        n = max(1, len(frames_on))
+        median = f'{errors[len(errors) // 2]:.1f}' if errors else '-'
+        steady = sorted((i for i, c in ids.items() if c >= 5), key=lambda i: -ids[i])
+        print(f'talker {k}: sounding frames {len(frames_on)}, heard {100 * heard / n:.0f} %, '
+              f'reported {100 * reported / n:.0f} %, ids {len(steady)} {steady}, median error {median} deg')
+
+    false_rows = 0
+    for t in frames:
+        for r in by_frame[t]:
+            if r['source_present'] != '1':
+                continue
+            if all(separation(float(r[key]), float(s[key])) >= tolerance for s in talkers):
+                false_rows += 1
+    print(f'false: {false_rows} heard rows beyond {args.tolerance_deg:g} deg of every talker, '
+          f'{false_rows * hop_s / minutes:.1f} s per minute')
+
+
+if __name__ == '__main__':
+    main()
