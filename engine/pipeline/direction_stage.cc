@@ -8,8 +8,7 @@
 namespace localizer::engine {
 namespace {
 
-constexpr double kHeardSigmas = 3.0;  // a peak this many sigmas from a track is its own
-constexpr int kMaxRiseFrames = 64;    // PairSpectraOptions::rise_lag_frames' ceiling
+constexpr int kMaxRiseFrames = 64;  // PairSpectraOptions::rise_lag_frames' ceiling
 
 // Angle between a track and a peak: of directions, or of cone angles (linear arrays).
 double Separation(const SourceTrack& track, const DirectionPeak& peak) {
@@ -62,8 +61,8 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
     if (!locator.ok()) return locator.status();
     near = std::move(locator).value();
   }
-  return std::unique_ptr<DirectionStage>(new DirectionStage(std::move(made).value(), std::move(tracker).value(),
-                                                            options.peak_sigma_rad, std::move(near)));
+  return std::unique_ptr<DirectionStage>(
+      new DirectionStage(std::move(made).value(), std::move(tracker).value(), std::move(near)));
 }
 
 void DirectionStage::Locate(SourceEstimate* source) const {
@@ -106,23 +105,19 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
     s.sigma_rad = track.sigma_rad;
     e->sources.push_back(s);
   }
-  // Each peak is heard by the nearest track that took a plot this frame (not coasting),
-  // within kHeardSigmas of its sigma (at least the peaks' own).
-  for (const DirectionPeak& peak : *peaks) {
-    double nearest_rad = std::numeric_limits<double>::infinity();
-    SourceEstimate* heard = nullptr;
-    for (size_t j = 0; j < tracks_.size(); ++j) {
-      const SourceTrack& track = tracks_[j];
-      if (track.status == TrackStatus::kCoasting) continue;
-      const double d = Separation(track, peak);
-      if (d <= kHeardSigmas * std::max(track.sigma_rad, peak_sigma_rad_) && d < nearest_rad) {
-        nearest_rad = d;
-        heard = &e->sources[first + j];
-      }
-    }
-    if (heard == nullptr) continue;
-    heard->source_present = true;
-    heard->power_db = std::isnan(heard->power_db) ? peak.power_db : std::max(heard->power_db, peak.power_db);
+  // A track that took a plot this frame (status confirmed; a miss makes it coasting) heard
+  // its source, and reports the power of the peak nearest to it. The tracker's own
+  // assignment decides, not a distance test here: a planar board's elevation is loose
+  // (max_elevation_sigma_rad), so a peak it assigned can lie far from the track in 3-D angle.
+  for (size_t j = 0; j < tracks_.size(); ++j) {
+    const SourceTrack& track = tracks_[j];
+    if (track.status != TrackStatus::kConfirmed || peaks->empty()) continue;
+    SourceEstimate& heard = e->sources[first + j];
+    heard.source_present = true;
+    const DirectionPeak* nearest = &peaks->front();
+    for (const DirectionPeak& peak : *peaks)
+      if (Separation(track, peak) < Separation(track, *nearest)) nearest = &peak;
+    heard.power_db = nearest->power_db;
   }
   if (!near_) return;
   for (size_t j = first; j < e->sources.size(); ++j) {

@@ -9,8 +9,8 @@
 // config.presence_false_alarm per search; the tracker associates them with its tracks
 // (identities kept through pauses of up to max_coast_s), confirms new ones after M of N
 // frames and deletes silent ones. Estimate::sources gets the confirmed and coasting tracks;
-// each peak is heard by the nearest track that took a plot this frame, within three of its
-// angular sigmas, which then reports the peak's power (otherwise the track is a prediction).
+// a track the tracker gave a peak this frame (status confirmed) is heard (source_present)
+// and reports the power of the peak nearest to it; a coasting one is a prediction.
 // Estimate::source_present says
 // whether any peak passed the threshold; presence_statistic is the strongest peak's statistic (0 when none passed) and
 // presence_threshold the threshold.
@@ -49,15 +49,11 @@ class DirectionStage {
   void Frame(const float* frame, double t_s, Estimate* e);
 
  private:
-  DirectionStage(SrpPhat srp, DirectionTracker tracker, double peak_sigma_rad, std::optional<NearFieldLocator> near)
-      : srp_(std::move(srp)),
-        tracker_(std::move(tracker)),
-        peak_sigma_rad_(peak_sigma_rad),
-        near_(std::move(near)) {}
+  DirectionStage(SrpPhat srp, DirectionTracker tracker, std::optional<NearFieldLocator> near)
+      : srp_(std::move(srp)), tracker_(std::move(tracker)), near_(std::move(near)) {}
   void Locate(SourceEstimate* source) const;  // near-field fit of a heard source
   SrpPhat srp_;
   DirectionTracker tracker_;
-  double peak_sigma_rad_;
   std::optional<NearFieldLocator> near_;  // sessions with positions
   std::vector<SourceTrack> tracks_;
 };
