@@ -114,10 +114,14 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
     if (track.status != TrackStatus::kConfirmed || peaks->empty()) continue;
     SourceEstimate& heard = e->sources[first + j];
     heard.source_present = true;
-    const DirectionPeak* nearest = &peaks->front();
-    for (const DirectionPeak& peak : *peaks)
-      if (Separation(track, peak) < Separation(track, *nearest)) nearest = &peak;
-    heard.power_db = nearest->power_db;
+    double nearest_rad = std::numeric_limits<double>::infinity();
+    for (const DirectionPeak& peak : *peaks) {
+      const double d = Separation(track, peak);
+      if (d < nearest_rad) {
+        nearest_rad = d;
+        heard.power_db = peak.power_db;
+      }
+    }
   }
   if (!near_) return;
   for (size_t j = first; j < e->sources.size(); ++j) {

@@ -112,12 +112,7 @@ Status GccPhatEstimator::Impl::TransformChannel(const float* samples, int channe
 }
 
 // Fills `cross` with G = W X_k conj(X_r) B and returns S, the sum of |G| over all N bins.
-// Noise alone gives each bin a uniform phase, so R(l) = (1/S) sum_k G_k e^{j w_k l} has
-// variance (sum over interior bins of 2 |G_k|^2 + |G_0|^2 + |G_N/2|^2) / S^2: 1 / (2 B) for
-// PHAT's B unit bins (the layout's constant, kept for every weighting but the learnt one),
-// 1 / (2 B_eff) with B_eff = (sum w)^2 / sum w^2 for PHAT-coherence, whose weights gather on
-// a few bins and would otherwise read noise as a source many times over.
-float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair, float* noise_floor_inverse) {
+float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
   const int ref = array.reference_sensor();
   const int sensor = array.sensor_of_pair(pair);
   const float* xr = spectra.get() + static_cast<std::size_t>(ref) * spectrum_stride;
@@ -157,28 +152,35 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair, float* noise_floor_in
       break;
   }
   // Bins 1..N/2-1 stand for two bins of the full spectrum; DC and Nyquist (real) for one.
-  const float norm = 2.0f * half_sum - std::abs(g[0]) - std::abs(g[2 * (bin_count - 1)]);
-  *noise_floor_inverse = layout.noise_floor_inverse;
-  if (options.weighting == Weighting::kPhatCoherence && coherence_usable[pair]) {
-    // Sum of squares over the band's interleaved floats, in independent lanes so it vectorises;
-    // then DC and Nyquist (whose imaginary parts are 0) counted once.
-    constexpr int kSumLanes = 16;
-    double lanes[kSumLanes] = {};
-    const float* first = g + 2 * lo;
-    const int count = 2 * (hi - lo);
-    int i = 0;
-    for (; i + kSumLanes <= count; i += kSumLanes) {
-      for (int l = 0; l < kSumLanes; ++l) lanes[l] += static_cast<double>(first[i + l]) * first[i + l];
-    }
-    double power = 0.0;
-    for (; i < count; ++i) power += static_cast<double>(first[i]) * first[i];
-    for (double lane : lanes) power += lane;
-    double variance = 2.0 * power;
-    if (lo == 0) variance -= static_cast<double>(g[0]) * g[0];
-    if (hi == bin_count) variance -= static_cast<double>(g[2 * (bin_count - 1)]) * g[2 * (bin_count - 1)];
-    *noise_floor_inverse = variance > 0.0 ? static_cast<float>(norm / std::sqrt(variance)) : 0.0f;
+  return 2.0f * half_sum - std::abs(g[0]) - std::abs(g[2 * (bin_count - 1)]);
+}
+
+// Noise alone gives each bin a uniform phase, so R(l) = (1/S) sum_k G_k e^{j w_k l} has
+// variance (sum over interior bins of 2 |G_k|^2 + |G_0|^2 + |G_N/2|^2) / S^2: 1 / (2 B) for
+// PHAT's B unit bins (the layout's constant), 1 / (2 B_eff) with B_eff = (sum w)^2 / sum w^2
+// for learnt weights, which gather on a few bins and would otherwise read noise as a source
+// many times over. Reads the kept cross-spectrum `weighed`.
+float GccPhatEstimator::Impl::WeighedNoiseFloorInverse(float norm) const {
+  const float* g = weighed.get();
+  const int lo = layout.band_first_bin;
+  const int hi = layout.band_end_bin;
+  const int last = layout.bin_count - 1;
+  // Sum of squares over the band's interleaved floats, in independent lanes so it vectorises;
+  // then DC and Nyquist (whose imaginary parts are 0) counted once.
+  double lanes[kLanes] = {};
+  const float* first = g + 2 * lo;
+  const int count = 2 * (hi - lo);
+  int i = 0;
+  for (; i + kLanes <= count; i += kLanes) {
+    for (int l = 0; l < kLanes; ++l) lanes[l] += static_cast<double>(first[i + l]) * first[i + l];
   }
-  return norm;
+  double power = 0.0;
+  for (; i < count; ++i) power += static_cast<double>(first[i]) * first[i];
+  for (double lane : lanes) power += lane;
+  double variance = 2.0 * power;
+  if (lo == 0) variance -= static_cast<double>(g[0]) * g[0];
+  if (hi == last + 1) variance -= static_cast<double>(g[2 * last]) * g[2 * last];
+  return variance > 0.0 ? static_cast<float>(norm / std::sqrt(variance)) : 0.0f;
 }
 
 // window[i] = R(i - L - K) * scale: the searched lags plus kPeakHalfWidth either side for
@@ -210,8 +212,7 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
   out->sensor = array.sensor_of_pair(pair);
   out->first_lag_samples = -max_lag;
 
-  float noise_floor_inverse = 0.0f;
-  const float norm = WeighCrossSpectrum(pair, &noise_floor_inverse);
+  const float norm = WeighCrossSpectrum(pair);
   if (!(norm > 0.0f)) {  // no energy in the band: nothing to measure
     out->delay_s = 0.0;
     out->quality = 0.0;
@@ -226,6 +227,8 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
     return;
   }
   std::memcpy(weighed.get(), cross.get(), sizeof(float) * 2 * layout.bin_count);
+  const bool learnt = options.weighting == Weighting::kPhatCoherence && coherence_usable[pair];
+  const float noise_floor_inverse = learnt ? WeighedNoiseFloorInverse(norm) : layout.noise_floor_inverse;
   fftwf_execute(inverse.get());
   const float scale = 1.0f / norm;
   GatherWindow(max_lag, scale);

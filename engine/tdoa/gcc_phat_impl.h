@@ -21,10 +21,10 @@ struct GccPhatEstimator::Impl {
 
   Status Init();
   Status TransformChannel(const float* samples, int channel);
-  // Fills `cross` for `pair` and returns S (the sum of |G| over all N bins); sets
-  // *noise_floor_inverse to S / sqrt(sum of the noise-only variances of the bins' terms), the
-  // inverse of R's noise-only standard deviation for these weights.
-  float WeighCrossSpectrum(int pair, float* noise_floor_inverse);
+  float WeighCrossSpectrum(int pair);
+  // S / sqrt(the noise-only variance of S R) for the weights in `weighed`: 1 / (R's noise-only
+  // standard deviation), for weights that are not PHAT's unit ones.
+  float WeighedNoiseFloorInverse(float norm) const;
   void MeasurePair(int pair, PairMeasurement* out);
   void GatherWindow(int max_lag, float scale);
   float LargestSidelobe(std::span<const float> searched, int peak, int peak_lag, float scale) const;
