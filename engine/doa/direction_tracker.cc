@@ -28,6 +28,8 @@ Status DirectionTrackerOptions::Validate() const {
   if (!(lost_source_after_s >= 0.0) || !std::isfinite(lost_source_after_s))
     return InvalidArgument("lost_source_after_s must be >= 0");
   if (steady_hits < 1) return InvalidArgument("steady_hits must be >= 1");
+  if (min_lead_frames < 0) return InvalidArgument("min_lead_frames must be >= 0");
+  if (!(min_lead_share >= 0.0 && min_lead_share <= 1.0)) return InvalidArgument("min_lead_share must be in [0, 1]");
   if (!(coast_rate_decay_s >= 0.0) || !std::isfinite(coast_rate_decay_s))
     return InvalidArgument("coast_rate_decay_s must be finite and >= 0");
   return Status::Ok();  // confirm_hits / confirm_window: TwsOptions::Validate names them
@@ -101,17 +103,22 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
     it = alive ? std::next(it) : lineage_.erase(it);
   }
   const bool linear = shape_.shape == ArrayShape::kLinear;
-  const Vec3 riser_u = !riser ? Vec3::Zero()
+  const Vec3 riser_u = !riser   ? Vec3::Zero()
                        : linear ? Vec3(std::cos(riser->cone_angle_rad), std::sin(riser->cone_angle_rad), 0.0)
                                 : riser->direction;
   uint64_t riser_track = 0;
   double riser_d2 = kSameSourceGate;
+  // The track that took the frame's strongest peak (plots_ keep the peaks' order: strongest
+  // first): the hit track nearest it.
+  uint64_t leader = 0;
+  double leader_d2 = kSameSourceGate;
   for (const tws::TrackReport& r : reports_) {
     Lineage& l = lineage_[r.id];
     const bool born = l.reported_id == 0;
     if (born) l.reported_id = r.id;
     const bool hit = r.consecutive_misses == 0;
     l.run = hit ? l.run + 1 : 0;
+    l.hits += hit;
     if (!(r.position_m.norm() > 0.0)) continue;
     const Vec3 u = r.position_m.normalized();
     if (born || l.run >= options_.steady_hits) l.anchor = u, l.anchor_s = t_s;
@@ -119,8 +126,13 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
       const double d2 = SameSourceD2(u, riser_u);
       if (d2 < riser_d2) riser_d2 = d2, riser_track = r.id;
     }
+    if (hit && !plots_.empty()) {
+      const double d2 = SameSourceD2(u, plots_.front().position_m);
+      if (d2 < leader_d2) leader_d2 = d2, leader = r.id;
+    }
   }
   if (riser_track != 0) lineage_[riser_track].anchor = riser_u, lineage_[riser_track].anchor_s = t_s;
+  if (leader != 0) ++lineage_[leader].leads;
   // A track confirmed now, where another's source was last heard, is that source resuming:
   // it joins that track's identity.
   for (const tws::TrackReport& r : reports_) {
@@ -137,7 +149,11 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
       const double d2 = SameSourceD2(lo.anchor, u);
       if (d2 < best_d2) best_d2 = d2, best = &lo;
     }
-    if (best) l.reported_id = best->reported_id;
+    if (best) {
+      l.reported_id = best->reported_id;
+      // The same source: its record of leading carries over.
+      if (best->leads > l.leads) l.leads = best->leads, l.hits = best->hits;
+    }
   }
   // One track speaks for each identity: the one whose source was heard last (the newer on a
   // tie).
@@ -205,6 +221,10 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   for (const tws::TrackReport& r : reports_) {
     const Lineage& l = lineage_[r.id];
     if (!l.shown) continue;
+    // It seldom leads its frame: a reflection ("Leading" in the header).
+    if (r.status != tws::TrackStatus::kTentative &&
+        (l.leads < options_.min_lead_frames || l.leads < options_.min_lead_share * l.hits))
+      continue;
     heard |= r.status == tws::TrackStatus::kConfirmed;
     if (r.status == tws::TrackStatus::kTentative && !include_tentative) continue;
     SourceTrack track;

@@ -89,6 +89,26 @@
 // 153 / 160 / 146 / 142 / 133 / 126 frames; 0.2 s is the value that worsened neither and
 // took the room's seeds 1 and 2 to at most 0.9 s of false track per minute.
 //
+// Leading. A reflection is a delayed, weaker copy of its source: while the source sounds, the
+// reflection's peak is beside the direct one and below it, and when the source stops both
+// go. Some reflections still rise past the threshold and start tracks (the rules above let
+// through one on a frame whose direct peak barely rose), and on a line array, where every
+// image source maps to a cone angle of its own, floor, ceiling and wall images held tracks
+// that took peaks in 50-60 % of frames (74 s of false track per minute on the one-talker
+// line scene, scenes/rooms). Such tracks seldom take their frame's strongest peak: over
+// their lives 1 in 100 to 1 in 60 frames heard (the odd frame where the direct peak scatters
+// away), against most frames for a talker alone and about half for two talking at once. So
+// a confirmed track is reported (and counts as a heard source for the lost-source rule) only
+// while it has led its frame in at least max(min_lead_frames, min_lead_share x hits) of the
+// frames it took a peak in; it stays in the tracker meanwhile and keeps taking its
+// reflection's peaks, which then move no other track. A track that continues another's
+// identity inherits that track's count. Cost: a talker always quieter than another that
+// never pauses while it talks never leads, and is not reported; a new source is reported from
+// its first lead (usually its onset, where it rose most). Measured (ACCURACY.md, "Tracks that
+// never lead"): on seeded rooms the project was not tuned on, false track time per minute
+// 1.7 -> 0.9 (square), 11.6 -> 1.9 (circle), 37 -> 10 (line), heard share -0.4, -1.8 and
+// -6.8 points; a share of 0.2 cost a talker on the three-talker line half its frames.
+//
 // Defaults suit talkers around a board: sigma 0.05 rad (3 degrees, about a small board's
 // frame-by-frame spread in a reverberant room), angular acceleration 2 rad/s^2, 3 of 5
 // frames to confirm, deletion after max_coast_s of silence (1 s: pauses in speech keep their
@@ -139,6 +159,10 @@ struct DirectionTrackerOptions {
   // A coasting track's angular rate decays with this time constant (s, >= 0; 0: off, it
   // coasts at constant rate). See "Coasting" above for why, and why 0.2 s.
   double coast_rate_decay_s = 0.2;
+  // A confirmed track is reported only while it has taken its frame's strongest peak in at
+  // least max(min_lead_frames, min_lead_share x its hits) frames (0, 0: off). See "Leading".
+  int min_lead_frames = 1;
+  double min_lead_share = 0.1;
 
   Status Validate() const;
 };
@@ -160,7 +184,9 @@ class DirectionTracker {
   // `shape` as SrpPhat::shape() gives it (planar arrays need its unit normal in `axis`).
   static StatusOr<DirectionTracker> Create(const ArrayShapeInfo& shape, const DirectionTrackerOptions& options);
 
-  // One frame's peaks at time t_s (after the previous frame's) and its in-band power
+  // One frame's peaks at time t_s (after the previous frame's), strongest first as
+  // SrpPhat::Analyse gives them (the lost-source and leading rules read the first as the
+  // frame's strongest), and its in-band power
   // (SrpPhat::band_power, for onsets). Fills `out` with the confirmed and coasting tracks
   // (tentative ones too when asked), in order of id. A tentative track shows its own id; once
   // confirmed it may show another's (continue_identities).
@@ -191,7 +217,9 @@ class DirectionTracker {
     uint64_t reported_id = 0;  // the identity it reports: its own, or the one it continues
     bool confirmed = false;    // has been confirmed
     bool shown = true;         // it speaks for its identity (of those that share it, the one heard last)
-    int run = 0;  // hits in a row
+    int run = 0;               // hits in a row
+    int hits = 0;              // frames in which it took a peak
+    int leads = 0;             // of those, frames in which it took the frame's strongest peak
     // Where its source was last heard: its first plot, the latest rising peak it took, or
     // its position after steady_hits hits in a row. NaN before the first.
     Vec3 anchor = Vec3::Constant(DirectionPeak::kNan);

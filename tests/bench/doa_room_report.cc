@@ -45,8 +45,14 @@ constexpr int kFrame = 512, kHop = 256;
 
 double Wrap(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 
+// Departures from the goal scene, for scenes its defaults never drew.
+struct SceneVariant {
+  double quiet_db = 0.0;         // the second talker this much quieter
+  bool random_azimuths = false;  // talkers at seeded azimuths at least 30 degrees apart, not 90 apart
+};
+
 int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, const std::string& dump_path,
-        const DirectionTrackerOptions& tracking_flags) {
+        const DirectionTrackerOptions& tracking_flags, const SceneVariant& variant) {
   FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
   if (dump)  // threshold: the peak's (SrpPhat's t, what its rise is held to); 0 on track rows
     std::fprintf(dump, "kind,rt60,frame,on0,on1,energy,onset,rank,id,status,az,el,stat,rise,dist0,dist1,threshold\n");
@@ -74,10 +80,26 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
     double fir_energy = 0.0;
     for (double h : fir) fir_energy += h * h;
     for (double& h : fir) h /= std::sqrt(fir_energy);  // unit power out of unit-power noise
+    // Their own generator, so the default scene's draws are unchanged.
+    std::mt19937_64 azimuth_rng(seed ^ 0x9e3779b97f4a7c15ULL);
+    std::uniform_real_distribution<double> azimuth(-std::numbers::pi, std::numbers::pi);
+    const double first_rad = azimuth(azimuth_rng);
+    double second_rad = first_rad;
+    while (std::abs(Wrap(second_rad - first_rad)) < std::numbers::pi / 6) second_rad = azimuth(azimuth_rng);
     for (int k = 0; k < 2; ++k) {
       Talker& t = talkers[static_cast<size_t>(k)];
-      t.azimuth_rad = Wrap(0.4 + k * std::numbers::pi / 2);
-      const double range = 1.5 + uniform(rng), height = 0.3 + 0.2 * uniform(rng);
+      t.azimuth_rad =
+          variant.random_azimuths ? (k == 0 ? first_rad : second_rad) : Wrap(0.4 + k * std::numbers::pi / 2);
+      double range = 1.5 + uniform(rng);
+      const double height = 0.3 + 0.2 * uniform(rng);
+      // Seeded azimuths may face a near wall: the talker stays 0.3 m inside it.
+      const double along_x = std::cos(t.azimuth_rad), along_y = std::sin(t.azimuth_rad);
+      if (std::abs(along_x) > 1e-9)
+        range = std::min(range,
+                         ((along_x > 0 ? room.size_m.x() : 0.0) - centre.x() - std::copysign(0.3, along_x)) / along_x);
+      if (std::abs(along_y) > 1e-9)
+        range = std::min(range,
+                         ((along_y > 0 ? room.size_m.y() : 0.0) - centre.y() - std::copysign(0.3, along_y)) / along_y);
       t.source.position_m = centre + Vec3(range * std::cos(t.azimuth_rad), range * std::sin(t.azimuth_rad), height);
       t.on.assign(static_cast<size_t>(samples), false);
       for (int64_t i = 0; i < samples;) {
@@ -92,7 +114,8 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, c
       for (int64_t i = 0; i < samples; ++i) {
         double acc = 0.0;
         for (size_t j = 0; j < fir.size(); ++j) acc += fir[j] * white[static_cast<size_t>(i) + j];
-        t.source.signal[static_cast<size_t>(i)] = t.on[static_cast<size_t>(i)] ? acc : 0.0;
+        const double gain = k == 1 ? std::pow(10.0, -variant.quiet_db / 20.0) : 1.0;
+        t.source.signal[static_cast<size_t>(i)] = t.on[static_cast<size_t>(i)] ? gain * acc : 0.0;
       }
     }
     std::vector<RoomSource> sources{talkers[0].source, talkers[1].source};
@@ -215,6 +238,7 @@ int main(int argc, char** argv) {
   std::string dump;
   localizer::engine::DirectionTrackerOptions tracking;
   bool start_anywhere = false, no_continue = false;
+  localizer::engine::SceneVariant variant;
   localizer::FlagSet flags("doa_room_report [flags]",
                            "Two talkers with pauses around a 4-microphone board in rooms of RT60 0.2, 0.4 and\n"
                            "0.6 s, through SrpPhat and DirectionTracker; one line of figures per RT60.");
@@ -240,6 +264,15 @@ int main(int argc, char** argv) {
   flags.Double("coast-decay", &tracking.coast_rate_decay_s, "S", "s",
                "DirectionTrackerOptions::coast_rate_decay_s: a coasting track's rate decays with this time "
                "constant (0: off, constant rate)");
+  flags.Int("min-lead", &tracking.min_lead_frames, "N", "frames",
+            "DirectionTrackerOptions::min_lead_frames: a confirmed track is reported once it took its frame's "
+            "strongest peak this often (0: off)");
+  flags.Double("min-lead-share", &tracking.min_lead_share, "F", "",
+               "DirectionTrackerOptions::min_lead_share: ... and in at least this share of the frames it took a "
+               "peak in (0: off)");
+  flags.Double("quiet-db", &variant.quiet_db, "D", "dB", "the second talker this much quieter, in [0, 30]");
+  flags.Bool("random-azimuths", &variant.random_azimuths,
+             "talkers at seeded azimuths at least 30 degrees apart (default: 0.4 rad and 90 degrees on)");
   flags.String("dump", &dump, "PATH", "CSV of every frame's peaks and tracks (for analysis)");
   const localizer::Status parsed = flags.Parse(std::vector<std::string>(argv + 1, argv + argc));
   if (flags.help_requested()) return std::printf("%s", flags.Usage().c_str()), 0;
@@ -250,7 +283,9 @@ int main(int argc, char** argv) {
     return std::fprintf(stderr, "doa_room_report: --max-sources must be in [1, 16]\n"), 2;
   if (!(relative >= 0.0 && relative < 1.0))
     return std::fprintf(stderr, "doa_room_report: --relative must be in [0, 1)\n"), 2;
+  if (!(variant.quiet_db >= 0.0 && variant.quiet_db <= 30.0))
+    return std::fprintf(stderr, "doa_room_report: --quiet-db must be in [0, 30]\n"), 2;
   tracking.start_at_onsets_only = !start_anywhere;
   tracking.continue_identities = !no_continue;
-  return localizer::engine::Run(seconds, seed, max_sources, relative, dump, tracking);
+  return localizer::engine::Run(seconds, seed, max_sources, relative, dump, tracking, variant);
 }

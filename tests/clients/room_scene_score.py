@@ -21,28 +21,22 @@ import csv
 import math
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('scene_dir', help='folder written by localizer-cli simulate --room')
-    parser.add_argument('track_csv', help='CSV written by localizer-cli track on that scene')
-    parser.add_argument('--tolerance-deg', type=float, default=15.0,
-                        help='a row this close to a talker is that talker (default: 15 degrees)')
-    parser.add_argument('--line', action='store_true', help='a line array: score cone angles')
-    args = parser.parse_args()
-
-    with open(f'{args.scene_dir}/sources.csv') as f:
+def score(scene_dir, track_csv, line=False, tolerance_deg=15.0):
+    """The scores as a dict: 'talkers' (per talker: sounding, heard, reported, ids, errors_deg)
+    and 'false_s_per_min'."""
+    with open(f'{scene_dir}/sources.csv') as f:
         talkers = list(csv.DictReader(f))
     sounding = collections.defaultdict(list)
-    with open(f'{args.scene_dir}/sounding.csv') as f:
+    with open(f'{scene_dir}/sounding.csv') as f:
         for r in csv.DictReader(f):
             sounding[int(r['source'])].append((float(r['on_s']), float(r['off_s'])))
-    with open(args.track_csv) as f:
+    with open(track_csv) as f:
         rows = list(csv.DictReader(f))
 
-    key = 'cone_angle_rad' if args.line else 'azimuth_rad'
+    key = 'cone_angle_rad' if line else 'azimuth_rad'
 
     def separation(a, b):
-        if args.line:
+        if line:
             return abs(a - b)
         return abs((a - b + math.pi) % (2 * math.pi) - math.pi)
 
@@ -55,8 +49,9 @@ def main():
     for r in rows:
         if r['source_id'] and r[key] != '':
             by_frame[float(r['t_s'])].append(r)
-    tolerance = math.radians(args.tolerance_deg)
+    tolerance = math.radians(tolerance_deg)
 
+    result = {'talkers': []}
     for k, talker in enumerate(talkers):
         truth = float(talker[key])
         frames_on = [t for t in frames if any(a <= t <= b for a, b in sounding[k])]
@@ -71,12 +66,9 @@ def main():
             for r in took:
                 ids[r['source_id']] += 1
                 errors.append(math.degrees(separation(float(r[key]), truth)))
-        errors.sort()
-        n = max(1, len(frames_on))
-        median = f'{errors[len(errors) // 2]:.1f}' if errors else '-'
         steady = sorted((i for i, c in ids.items() if c >= 5), key=lambda i: -ids[i])
-        print(f'talker {k}: sounding frames {len(frames_on)}, heard {100 * heard / n:.0f} %, '
-              f'reported {100 * reported / n:.0f} %, ids {len(steady)} {steady}, median error {median} deg')
+        result['talkers'].append({'sounding': len(frames_on), 'heard': heard, 'reported': reported,
+                                  'ids': steady, 'errors_deg': sorted(errors)})
 
     false_rows = 0
     for t in frames:
@@ -85,8 +77,28 @@ def main():
                 continue
             if all(separation(float(r[key]), float(s[key])) >= tolerance for s in talkers):
                 false_rows += 1
-    print(f'false: {false_rows} heard rows beyond {args.tolerance_deg:g} deg of every talker, '
-          f'{false_rows * hop_s / minutes:.1f} s per minute')
+    result['false_rows'] = false_rows
+    result['false_s_per_min'] = false_rows * hop_s / minutes
+    return result
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('scene_dir', help='folder written by localizer-cli simulate --room')
+    parser.add_argument('track_csv', help='CSV written by localizer-cli track on that scene')
+    parser.add_argument('--tolerance-deg', type=float, default=15.0,
+                        help='a row this close to a talker is that talker (default: 15 degrees)')
+    parser.add_argument('--line', action='store_true', help='a line array: score cone angles')
+    args = parser.parse_args()
+    result = score(args.scene_dir, args.track_csv, args.line, args.tolerance_deg)
+    for k, t in enumerate(result['talkers']):
+        n = max(1, t['sounding'])
+        errors = t['errors_deg']
+        median = f'{errors[len(errors) // 2]:.1f}' if errors else '-'
+        print(f'talker {k}: sounding frames {t["sounding"]}, heard {100 * t["heard"] / n:.0f} %, '
+              f'reported {100 * t["reported"] / n:.0f} %, ids {len(t["ids"])} {t["ids"]}, median error {median} deg')
+    print(f'false: {result["false_rows"]} heard rows beyond {args.tolerance_deg:g} deg of every talker, '
+          f'{result["false_s_per_min"]:.1f} s per minute')
 
 
 if __name__ == '__main__':

@@ -31,7 +31,7 @@ struct RoomScore {
 
 RoomScore RunRoom(bool start_at_onsets_only, uint64_t seed, double resume_after_s = 0.0,
                   bool continue_identities = false,
-                  double coast_rate_decay_s = DirectionTrackerOptions{}.coast_rate_decay_s) {
+                  double coast_rate_decay_s = DirectionTrackerOptions{}.coast_rate_decay_s, bool leading = false) {
   const Vec3 centre(2.2, 1.9, 1.0);
   const double a = 0.0405;
   std::vector<Vec3> board, relative{Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
@@ -77,6 +77,7 @@ RoomScore RunRoom(bool start_at_onsets_only, uint64_t seed, double resume_after_
   tracking.resume_after_s = resume_after_s;
   tracking.continue_identities = continue_identities;
   tracking.coast_rate_decay_s = coast_rate_decay_s;
+  if (!leading) tracking.min_lead_frames = 0, tracking.min_lead_share = 0.0;  // the stack the first tests measured
   EXPECT_TRUE(srp.ok());
   auto tracker = DirectionTracker::Create(srp->shape(), tracking);
   EXPECT_TRUE(tracker.ok());
@@ -166,13 +167,30 @@ TEST(DirectionTrackerRoom, ATalkerResumingKeepsItsIdentityAndItsOldTrackGoes) {
   const double resume_s = DirectionTrackerOptions{}.resume_after_s;
   const RoomScore without = RunRoom(true, 7, resume_s, false, 0.0);
   const RoomScore with = RunRoom(true, 7, resume_s, true, 0.0);
-  std::printf("identities continued: %.1f s/min false, %.1f %% tracked, %d ids; without: %.1f s/min false, %.1f %% "
-              "tracked, %d ids\n",
-              with.false_track_s_per_min, 100.0 * with.tracked_share, with.ids, without.false_track_s_per_min,
-              100.0 * without.tracked_share, without.ids);
+  std::printf(
+      "identities continued: %.1f s/min false, %.1f %% tracked, %d ids; without: %.1f s/min false, %.1f %% "
+      "tracked, %d ids\n",
+      with.false_track_s_per_min, 100.0 * with.tracked_share, with.ids, without.false_track_s_per_min,
+      100.0 * without.tracked_share, without.ids);
   EXPECT_LT(with.false_track_s_per_min, without.false_track_s_per_min);
   EXPECT_GE(with.tracked_share, without.tracked_share - 0.01);
   EXPECT_LT(with.ids, without.ids);
+}
+
+// Leading (direction_tracker.h): tracks that seldom take their frame's strongest peak are not
+// reported. Measured with precedence off (every unexplained peak starts a track), so that the
+// room's reflections hold tracks to be judged; the other rules at their defaults. When
+// written: 55.4 s/min false and 95.1 % tracked with it, 207.4 and 99.5 % without. Asserted: at
+// most 0.4 x the false time, at most 5 points less tracked.
+TEST(DirectionTrackerRoom, TracksThatSeldomLeadTheirFrameAreNotReported) {
+  const DirectionTrackerOptions defaults;
+  const RoomScore without = RunRoom(false, 7, defaults.resume_after_s, true, defaults.coast_rate_decay_s, false);
+  const RoomScore with = RunRoom(false, 7, defaults.resume_after_s, true, defaults.coast_rate_decay_s, true);
+  std::printf("leading: %.1f s/min false, %.1f %% tracked; without: %.1f s/min false, %.1f %% tracked\n",
+              with.false_track_s_per_min, 100.0 * with.tracked_share, without.false_track_s_per_min,
+              100.0 * without.tracked_share);
+  EXPECT_LE(with.false_track_s_per_min, 0.4 * without.false_track_s_per_min);
+  EXPECT_GE(with.tracked_share, without.tracked_share - 0.05);
 }
 
 }  // namespace

@@ -240,9 +240,12 @@ TEST(DirectionTracker, ATalkerResumingWhereItWasHeardKeepsItsIdentity) {
     int most_at_once = 0, away_frames = 0;
     for (int f = 0; f < 120; ++f) {
       std::vector<DirectionPeak> peaks;
-      if (f < 40) peaks.push_back(TalkerPeak(talker, f == 0 ? 20.0 : 0.0));  // talks
-      else if (f < 75 && f % 2 == 0) peaks.push_back(TalkerPeak(talker + 0.016 * (f - 40), 0.0));  // stray peaks
-      else if (f >= 80) peaks.push_back(TalkerPeak(talker, f == 80 ? 20.0 : 0.0));  // resumes
+      if (f < 40)
+        peaks.push_back(TalkerPeak(talker, f == 0 ? 20.0 : 0.0));  // talks
+      else if (f < 75 && f % 2 == 0)
+        peaks.push_back(TalkerPeak(talker + 0.016 * (f - 40), 0.0));  // stray peaks
+      else if (f >= 80)
+        peaks.push_back(TalkerPeak(talker, f == 80 ? 20.0 : 0.0));  // resumes
       ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
       most_at_once = std::max(most_at_once, static_cast<int>(tracks.size()));
       for (const SourceTrack& t : tracks) {
@@ -328,10 +331,79 @@ TEST(DirectionTracker, APausedTalkersTrackStaysWhereItWasHeard) {
   }
 }
 
+// Leading (direction_tracker.h). A talker at 0.4 rad (statistic 20) and its reflection at 1.6
+// rad (12: weaker, in every frame the talker sounds). The reflection rises past the threshold
+// at frame 10, after the talker's echo window has closed, so it starts a track, confirmed two
+// frames later. At frame 50 the talker's peak scatters away and the reflection is the frame's
+// strongest once. With the defaults the reflection's track is never reported (1 lead in about
+// 60 frames heard, under a tenth); with min_lead_frames 1 alone it is reported from its lead
+// on; with both off from its confirmation. The talker is reported throughout, with one id.
+TEST(DirectionTracker, AReflectionThatSeldomLeadsIsNotReported) {
+  struct Case {
+    int min_lead_frames;
+    double min_lead_share;
+    int first_reported_frame;  // of the reflection's track (-1: never)
+  };
+  for (const Case& c : {Case{1, 0.1, -1}, Case{1, 0.0, 50}, Case{0, 0.0, 12}}) {
+    DirectionTrackerOptions options;
+    options.frame_period_s = kHop_s;
+    options.min_lead_frames = c.min_lead_frames;
+    options.min_lead_share = c.min_lead_share;
+    auto tracker = DirectionTracker::Create(Board(), options);
+    ASSERT_TRUE(tracker.ok());
+    std::vector<SourceTrack> tracks;
+    int first_reflection = -1, talker_frames = 0;
+    std::map<uint64_t, int> talker_ids;
+    for (int f = 0; f < 70; ++f) {
+      std::vector<DirectionPeak> peaks;  // strongest first, as SrpPhat gives them
+      if (f != 50) peaks.push_back(TalkerPeak(0.4, f == 0 ? 20.0 : 0.0));
+      peaks.push_back(PeakAt(1.6, 0.3, 12.0, f == 10 ? 6.0 : 0.0));
+      ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
+      for (const SourceTrack& t : tracks) {
+        if (std::abs(t.azimuth_rad - 1.6) < 0.1 && first_reflection < 0) first_reflection = f;
+        if (std::abs(t.azimuth_rad - 0.4) < 0.1) ++talker_frames, ++talker_ids[t.id];
+      }
+    }
+    EXPECT_EQ(first_reflection, c.first_reported_frame) << c.min_lead_frames << " " << c.min_lead_share;
+    EXPECT_EQ(talker_frames, 68);  // confirmed at its third frame
+    EXPECT_EQ(talker_ids.size(), 1u);
+  }
+}
+
+// The rule's cost: a second, quieter talker (statistic 12) that starts while the first talks on
+// is not reported until it leads, when the first pauses (frames 60-79), and then only once its
+// leads reach a tenth of its frames heard (at frame 60 + k: k + 1 leads in 41 + k, so k = 4);
+// it stays reported after the first resumes (20 leads in its 80 frames heard).
+TEST(DirectionTracker, AQuieterTalkerIsReportedOnceItLeadsATenthOfItsFrames) {
+  DirectionTrackerOptions options;
+  options.frame_period_s = kHop_s;
+  auto tracker = DirectionTracker::Create(Board(), options);
+  ASSERT_TRUE(tracker.ok());
+  std::vector<SourceTrack> tracks;
+  int first_reported = -1, reported_frames = 0;
+  for (int f = 0; f < 100; ++f) {
+    std::vector<DirectionPeak> peaks;
+    const bool first_talks = f < 60 || f >= 80;
+    if (first_talks) peaks.push_back(TalkerPeak(0.4, f == 0 || f == 80 ? 20.0 : 0.0));
+    if (f >= 20) peaks.push_back(PeakAt(1.6, 0.3, 12.0, f == 20 ? 12.0 : 0.0));
+    ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
+    for (const SourceTrack& t : tracks) {
+      if (std::abs(t.azimuth_rad - 1.6) >= 0.1) continue;
+      if (first_reported < 0) first_reported = f;
+      ++reported_frames;
+    }
+  }
+  EXPECT_EQ(first_reported, 64);
+  EXPECT_EQ(reported_frames, 36);
+}
+
 TEST(DirectionTracker, BadOptionsAndPeaksAreNamed) {
   DirectionTrackerOptions options;
   options.peak_sigma_rad = 0.0;
   EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("peak_sigma_rad"), std::string::npos);
+  options = DirectionTrackerOptions{};
+  options.min_lead_share = 1.5;
+  EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("min_lead_share"), std::string::npos);
   auto tracker = DirectionTracker::Create(Board(), DirectionTrackerOptions{});
   ASSERT_TRUE(tracker.ok());
   std::vector<SourceTrack> out;
