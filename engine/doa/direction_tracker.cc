@@ -29,6 +29,8 @@ Status DirectionTrackerOptions::Validate() const {
     return InvalidArgument("lost_source_after_s must be >= 0");
   if (steady_hits < 1) return InvalidArgument("steady_hits must be >= 1");
   if (min_lead_frames < 0) return InvalidArgument("min_lead_frames must be >= 0");
+  if (!(remember_identity_s >= 0.0) || !std::isfinite(remember_identity_s))
+    return InvalidArgument("remember_identity_s must be finite and >= 0");
   if (!(min_lead_share >= 0.0 && min_lead_share <= 1.0)) return InvalidArgument("min_lead_share must be in [0, 1]");
   if (!(coast_rate_decay_s >= 0.0) || !std::isfinite(coast_rate_decay_s))
     return InvalidArgument("coast_rate_decay_s must be finite and >= 0");
@@ -100,8 +102,16 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
     const uint64_t id = it->first;
     const bool alive =
         std::any_of(reports_.begin(), reports_.end(), [&](const tws::TrackReport& r) { return r.id == id; });
+    // A deleted track whose source was reported: its identity is remembered ("Identities").
+    const Lineage& l = it->second;
+    if (!alive && options_.remember_identity_s > 0.0 && l.confirmed && l.anchor.allFinite() &&
+        l.leads >= options_.min_lead_frames && l.leads >= options_.min_lead_share * l.hits)
+      departed_.push_back({l, t_s + options_.remember_identity_s});
     it = alive ? std::next(it) : lineage_.erase(it);
   }
+  departed_.erase(
+      std::remove_if(departed_.begin(), departed_.end(), [&](const Departed& d) { return d.until_s < t_s; }),
+      departed_.end());
   const bool linear = shape_.shape == ArrayShape::kLinear;
   const Vec3 riser_u = !riser   ? Vec3::Zero()
                        : linear ? Vec3(std::cos(riser->cone_angle_rad), std::sin(riser->cone_angle_rad), 0.0)
@@ -148,6 +158,18 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
       if (o.id == r.id || !lo.confirmed || !lo.anchor.allFinite()) continue;
       const double d2 = SameSourceD2(lo.anchor, u);
       if (d2 < best_d2) best_d2 = d2, best = &lo;
+    }
+    const Departed* gone = nullptr;  // or a deleted one's, remembered
+    for (const Departed& d : departed_) {
+      const double d2 = SameSourceD2(d.lineage.anchor, u);
+      if (d2 < best_d2) best_d2 = d2, best = &d.lineage, gone = &d;
+    }
+    if (gone) {
+      const uint64_t id = gone->lineage.reported_id;
+      l.reported_id = id;
+      if (gone->lineage.leads > l.leads) l.leads = gone->lineage.leads, l.hits = gone->lineage.hits;
+      departed_.erase(departed_.begin() + (gone - departed_.data()));
+      continue;
     }
     if (best) {
       l.reported_id = best->reported_id;

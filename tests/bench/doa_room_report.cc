@@ -270,6 +270,9 @@ int main(int argc, char** argv) {
   flags.Double("min-lead-share", &tracking.min_lead_share, "F", "",
                "DirectionTrackerOptions::min_lead_share: ... and in at least this share of the frames it took a "
                "peak in (0: off)");
+  flags.Double("remember", &tracking.remember_identity_s, "S", "s",
+               "DirectionTrackerOptions::remember_identity_s: a deleted track's identity is remembered this long "
+               "(0: off)");
   flags.Double("quiet-db", &variant.quiet_db, "D", "dB", "the second talker this much quieter, in [0, 30]");
   flags.Bool("random-azimuths", &variant.random_azimuths,
              "talkers at seeded azimuths at least 30 degrees apart (default: 0.4 rad and 90 degrees on)");

@@ -331,6 +331,37 @@ TEST(DirectionTracker, APausedTalkersTrackStaysWhereItWasHeard) {
   }
 }
 
+// A talker silent for 1.6 s, longer than max_coast_s (1 s): its track is deleted, and when it
+// resumes 0.02 rad from where it was heard the new track takes its identity while it is
+// remembered (remember_identity_s, 3 s by default; "Identities" in direction_tracker.h). With
+// the memory off it gets a second one. The same talker resuming 4.8 s later gets a new one.
+TEST(DirectionTracker, ATalkerSilentLongerThanItsTrackKeepsItsIdentityWhileRemembered) {
+  struct Case {
+    double remember_s;
+    int silent_frames;
+    size_t ids;
+  };
+  for (const Case& c : {Case{3.0, 100, 1}, Case{0.0, 100, 2}, Case{3.0, 300, 2}}) {
+    DirectionTrackerOptions options;
+    options.frame_period_s = kHop_s;
+    options.remember_identity_s = c.remember_s;
+    auto tracker = DirectionTracker::Create(Board(), options);
+    ASSERT_TRUE(tracker.ok());
+    std::vector<SourceTrack> tracks;
+    std::map<uint64_t, int> frames_of;
+    const int resume = 40 + c.silent_frames;
+    for (int f = 0; f < resume + 40; ++f) {
+      std::vector<DirectionPeak> peaks;
+      if (f < 40) peaks.push_back(TalkerPeak(0.4, f == 0 ? 20.0 : 0.0));
+      if (f >= resume) peaks.push_back(TalkerPeak(0.42, f == resume ? 20.0 : 0.0));
+      ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
+      for (const SourceTrack& t : tracks) ++frames_of[t.id];
+      if (f == resume - 1) EXPECT_TRUE(tracks.empty());  // deleted after max_coast_s
+    }
+    EXPECT_EQ(frames_of.size(), c.ids) << c.remember_s << " " << c.silent_frames;
+  }
+}
+
 // Leading (direction_tracker.h). A talker at 0.4 rad (statistic 20) and its reflection at 1.6
 // rad (12: weaker, in every frame the talker sounds). The reflection rises past the threshold
 // at frame 10, after the talker's echo window has closed, so it starts a track, confirmed two
@@ -404,6 +435,10 @@ TEST(DirectionTracker, BadOptionsAndPeaksAreNamed) {
   options = DirectionTrackerOptions{};
   options.min_lead_share = 1.5;
   EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("min_lead_share"), std::string::npos);
+  options = DirectionTrackerOptions{};
+  options.remember_identity_s = -1.0;
+  EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("remember_identity_s"),
+            std::string::npos);
   auto tracker = DirectionTracker::Create(Board(), DirectionTrackerOptions{});
   ASSERT_TRUE(tracker.ok());
   std::vector<SourceTrack> out;
