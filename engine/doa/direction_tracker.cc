@@ -97,6 +97,10 @@ double DirectionTracker::SameSourceD2(const Vec3& a, const Vec3& b) const {
   return angle * angle / (2.0 * options_.peak_sigma_rad * options_.peak_sigma_rad);
 }
 
+bool DirectionTracker::Leads(const Lineage& l) const {
+  return l.leads >= options_.min_lead_frames && l.leads >= options_.min_lead_share * l.hits;
+}
+
 void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
   for (auto it = lineage_.begin(); it != lineage_.end();) {  // forget the deleted tracks
     const uint64_t id = it->first;
@@ -104,8 +108,7 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
         std::any_of(reports_.begin(), reports_.end(), [&](const tws::TrackReport& r) { return r.id == id; });
     // A deleted track whose source was reported: its identity is remembered ("Identities").
     const Lineage& l = it->second;
-    if (!alive && options_.remember_identity_s > 0.0 && l.confirmed && l.anchor.allFinite() &&
-        l.leads >= options_.min_lead_frames && l.leads >= options_.min_lead_share * l.hits)
+    if (!alive && options_.remember_identity_s > 0.0 && l.confirmed && l.anchor.allFinite() && Leads(l))
       departed_.push_back({l, t_s + options_.remember_identity_s});
     it = alive ? std::next(it) : lineage_.erase(it);
   }
@@ -164,18 +167,11 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
       const double d2 = SameSourceD2(d.lineage.anchor, u);
       if (d2 < best_d2) best_d2 = d2, best = &d.lineage, gone = &d;
     }
-    if (gone) {
-      const uint64_t id = gone->lineage.reported_id;
-      l.reported_id = id;
-      if (gone->lineage.leads > l.leads) l.leads = gone->lineage.leads, l.hits = gone->lineage.hits;
-      departed_.erase(departed_.begin() + (gone - departed_.data()));
-      continue;
-    }
-    if (best) {
-      l.reported_id = best->reported_id;
-      // The same source: its record of leading carries over.
-      if (best->leads > l.leads) l.leads = best->leads, l.hits = best->hits;
-    }
+    if (!best) continue;
+    l.reported_id = best->reported_id;
+    // The same source: its record of leading carries over.
+    if (best->leads > l.leads) l.leads = best->leads, l.hits = best->hits;
+    if (gone) departed_.erase(departed_.begin() + (gone - departed_.data()));  // its identity is taken
   }
   // One track speaks for each identity: the one whose source was heard last (the newer on a
   // tie).
@@ -243,10 +239,7 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   for (const tws::TrackReport& r : reports_) {
     const Lineage& l = lineage_[r.id];
     if (!l.shown) continue;
-    // It seldom leads its frame: a reflection ("Leading" in the header).
-    if (r.status != tws::TrackStatus::kTentative &&
-        (l.leads < options_.min_lead_frames || l.leads < options_.min_lead_share * l.hits))
-      continue;
+    if (r.status != tws::TrackStatus::kTentative && !Leads(l)) continue;  // a reflection ("Leading")
     heard |= r.status == tws::TrackStatus::kConfirmed;
     if (r.status == tws::TrackStatus::kTentative && !include_tentative) continue;
     SourceTrack track;

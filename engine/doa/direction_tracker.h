@@ -238,6 +238,9 @@ class DirectionTracker {
     Vec3 anchor = Vec3::Constant(DirectionPeak::kNan);
     double anchor_s = -1e300;  // when it was set
   };
+  // It has led its frame often enough to be reported ("Leading"): leads >=
+  // max(min_lead_frames, min_lead_share x hits).
+  bool Leads(const Lineage& l) const;
   std::map<uint64_t, Lineage> lineage_;
   std::vector<tws::CartesianPlot> plots_;
   struct Departed {  // a deleted track's lineage, remembered until until_s (remember_identity_s)

@@ -53,9 +53,6 @@ def draw_scene(rng, sensors, line, max_talkers, min_separation_rad):
             return math.acos(max(-1.0, min(1.0, sum(v[k] * axis[k] for k in range(3)) / math.sqrt(sum(x * x for x in v)))))
         return math.atan2(v[1], v[0])
 
-    def separation(a, b):
-        return abs(a - b) if line else abs((a - b + math.pi) % (2 * math.pi) - math.pi)
-
     talkers, angles = [], []
     count = rng.randint(1, max_talkers)
     for k in range(count):
@@ -67,7 +64,7 @@ def draw_scene(rng, sensors, line, max_talkers, min_separation_rad):
             if not all(0.3 <= p[i] <= size[i] - 0.3 for i in range(3)):
                 continue
             angle = angle_of(p)
-            if all(separation(angle, other) >= min_separation_rad for other in angles):
+            if all(room_scene_score.separation(angle, other, line) >= min_separation_rad for other in angles):
                 break
         else:
             break  # no room for another talker in this scene

@@ -21,6 +21,13 @@ import csv
 import math
 
 
+def separation(a, b, line=False):
+    """Angle between two azimuths (wrapped), or between two cone angles for a line (rad)."""
+    if line:
+        return abs(a - b)
+    return abs((a - b + math.pi) % (2 * math.pi) - math.pi)
+
+
 def score(scene_dir, track_csv, line=False, tolerance_deg=15.0):
     """The scores as a dict: 'talkers' (per talker: sounding, heard, reported, ids, errors_deg)
     and 'false_s_per_min'."""
@@ -34,11 +41,6 @@ def score(scene_dir, track_csv, line=False, tolerance_deg=15.0):
         rows = list(csv.DictReader(f))
 
     key = 'cone_angle_rad' if line else 'azimuth_rad'
-
-    def separation(a, b):
-        if line:
-            return abs(a - b)
-        return abs((a - b + math.pi) % (2 * math.pi) - math.pi)
 
     frames = sorted({float(r['t_s']) for r in rows})
     if len(frames) < 2:
@@ -59,13 +61,13 @@ def score(scene_dir, track_csv, line=False, tolerance_deg=15.0):
         ids = collections.Counter()
         errors = []
         for t in frames_on:
-            near = [r for r in by_frame[t] if separation(float(r[key]), truth) < tolerance]
+            near = [r for r in by_frame[t] if separation(float(r[key]), truth, line) < tolerance]
             took = [r for r in near if r['source_present'] == '1']
             heard += bool(took)
             reported += bool(near)
             for r in took:
                 ids[r['source_id']] += 1
-                errors.append(math.degrees(separation(float(r[key]), truth)))
+                errors.append(math.degrees(separation(float(r[key]), truth, line)))
         steady = sorted((i for i, c in ids.items() if c >= 5), key=lambda i: -ids[i])
         result['talkers'].append({'sounding': len(frames_on), 'heard': heard, 'reported': reported,
                                   'ids': steady, 'errors_deg': sorted(errors)})
@@ -75,7 +77,7 @@ def score(scene_dir, track_csv, line=False, tolerance_deg=15.0):
         for r in by_frame[t]:
             if r['source_present'] != '1':
                 continue
-            if all(separation(float(r[key]), float(s[key])) >= tolerance for s in talkers):
+            if all(separation(float(r[key]), float(s[key]), line) >= tolerance for s in talkers):
                 false_rows += 1
     result['false_rows'] = false_rows
     result['false_s_per_min'] = false_rows * hop_s / minutes
