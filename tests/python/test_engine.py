@@ -256,7 +256,9 @@ class SessionContractTest(unittest.TestCase):
             le.Session(s["sensors_m"], s["sample_rate_hz"], backend="gpu")
 
     def test_the_engine_runs_without_the_gil(self):
-        x = np.concatenate([self.scene["samples"]] * 12)  # 48 s of audio: tenths of a second of work
+        # 144 s of audio: a few tenths of a second of work even on a quiet, fast host (48 s took
+        # 0.06 s on one, under the 0.1 s this test needs to tell a held GIL from a released one)
+        x = np.concatenate([self.scene["samples"]] * 36)
         alone = [self.session(seed=k, particles=4096).process(x) for k in (1, 2)]
         results, inside, spans = {}, threading.Event(), {}
 
