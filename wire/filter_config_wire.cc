@@ -87,6 +87,7 @@ Status TrackerFromProto(const v1::FilterConfig& f, const ConfigPolicy& policy, e
   if (f.accel_level_ceiling() != 0.0) particle.accel_level_ceiling = f.accel_level_ceiling();
   if (f.accel_level_switch_hz() != 0.0) particle.accel_level_switch_hz = std::max(0.0, f.accel_level_switch_hz());
   if (f.turn_rate_max_radps() != 0.0) particle.turn_rate_max_radps = std::max(0.0, f.turn_rate_max_radps());
+  if (f.speed_change_max_mps2() != 0.0) particle.speed_change_max_mps2 = std::max(0.0, f.speed_change_max_mps2());
   if (f.min_peak_snr() != 0.0) particle.min_peak_snr = f.min_peak_snr();
   if (f.resample_threshold() != 0.0) particle.resample_threshold = f.resample_threshold();
   t->kalman.motion.accel_noise_mps2 = particle.accel_noise_mps2;
@@ -118,6 +119,8 @@ void TrackerToProto(const engine::TrackerOptions& t, v1::FilterConfig* f) {
   f->set_accel_level_switch_hz(t.particle.accel_level_switch_hz > 0.0 ? t.particle.accel_level_switch_hz : -1.0);
   // 0 on the wire means "the default": no turn rates go out as -1.
   f->set_turn_rate_max_radps(t.particle.turn_rate_max_radps > 0.0 ? t.particle.turn_rate_max_radps : -1.0);
+  // Likewise: no speed changes go out as -1.
+  f->set_speed_change_max_mps2(t.particle.speed_change_max_mps2 > 0.0 ? t.particle.speed_change_max_mps2 : -1.0);
   f->set_min_peak_snr(kalman ? t.kalman.min_peak_snr : t.particle.min_peak_snr);
   f->set_resample_threshold(t.particle.resample_threshold);
 }

@@ -64,8 +64,11 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
   flags.Double("accel-level-switch", &c.tracker.particle.accel_level_switch_hz, "HZ", "Hz",
                "particle filter: rate at which a particle redraws its acceleration level (and its turn rate)");
   flags.Double("turn-rate-max", &c.tracker.particle.turn_rate_max_radps, "W", "rad/s",
-               "particle filter: each particle turns about +z at its own rate, uniform in [-W, W] (0: off; "
-               "with the levels 0.003 and 3, try 1: ACCURACY.md, \"Seventeenth pass\")");
+               "particle filter: each particle turns about +z at its own rate, uniform in [-W, W] (0: off)");
+  flags.Double("speed-change-max", &c.tracker.particle.speed_change_max_mps2, "A", "m/s^2",
+               "particle filter: each particle speeds up or slows down along its velocity at its own rate, 0 "
+               "for half of them and uniform in [-A, A] for the others (0: off; with --accel-level-floor 1 "
+               "--accel-level-ceiling 1 --turn-rate-max 0: one std, the GPU filter's motion)");
   flags.String("backend", &f->backend, "NAME", "compute backend: cpu|gpu|auto (with --server: on the server)");
   flags.String("bounds-min", &f->bounds_min, "X,Y,Z",
                "lower corner of the box that can hold the source, m; per axis a number or -inf "
@@ -125,6 +128,7 @@ const std::pair<const char*, const char*> kFlagOfKey[] = {
     {"accel_level_ceiling", "accel-level-ceiling"},
     {"accel_level_switch_hz", "accel-level-switch"},
     {"turn_rate_max_radps", "turn-rate-max"},
+    {"speed_change_max_mps2", "speed-change-max"},
     {"seed", "filter-seed"},
     {"search_radius_m", "search-radius"},
     {"presence_false_alarm", "presence-false-alarm"},

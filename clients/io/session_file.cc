@@ -151,6 +151,8 @@ const std::vector<Key>& Keys() {
              [](C& c) -> double& { return c.tracker.particle.accel_level_switch_hz; }),
       Double("turn_rate_max_radps", &S::turn_rate_max_radps,
              [](C& c) -> double& { return c.tracker.particle.turn_rate_max_radps; }),
+      Double("speed_change_max_mps2", &S::speed_change_max_mps2,
+             [](C& c) -> double& { return c.tracker.particle.speed_change_max_mps2; }),
       MakeKey<uint64_t>(
           "seed", &S::seed, [](C& c) -> uint64_t& { return c.seed; }, ReadSeed,
           [](const uint64_t& v) { return json(v); }),

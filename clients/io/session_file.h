@@ -31,10 +31,11 @@
 //     "accel_noise_mps2": 1.0,        m/s^2, >= 0                             --accel-noise
 //     "manoeuvre_share": 0.0,         [0, 1)                                  --manoeuvre-share
 //     "manoeuvre_scale": 10.0,        >= 1                                    --manoeuvre-scale
-//     "accel_level_floor": 1.0,       1e-6 <= floor <= ceiling <= 100         --accel-level-floor
-//     "accel_level_ceiling": 1.0,                                             --accel-level-ceiling
+//     "accel_level_floor": 0.003,     1e-6 <= floor <= ceiling <= 100         --accel-level-floor
+//     "accel_level_ceiling": 3.0,     (both 1: one std)                       --accel-level-ceiling
 //     "accel_level_switch_hz": 1.0,   Hz, [0, 1000]                           --accel-level-switch
-//     "turn_rate_max_radps": 0.0,     rad/s, [0, 5] (0: off)                  --turn-rate-max
+//     "turn_rate_max_radps": 1.0,     rad/s, [0, 5] (0: off)                  --turn-rate-max
+//     "speed_change_max_mps2": 1.0,   m/s^2, [0, 20] (0: off)                 --speed-change-max
 //     "seed": 1,                      the filter's seed, integer >= 0         --filter-seed
 //     "search_radius_m": 0.0,         m, [0, 1e7] (0: 10 apertures)           --search-radius
 //     "presence_false_alarm": 0.001,  per frame, (0, 0.1]                     --presence-false-alarm
@@ -104,6 +105,7 @@ struct SessionSettings {
   std::optional<double> accel_level_ceiling;
   std::optional<double> accel_level_switch_hz;
   std::optional<double> turn_rate_max_radps;
+  std::optional<double> speed_change_max_mps2;
   std::optional<uint64_t> seed;
   // Acquisition, presence, backend
   std::optional<double> search_radius_m;

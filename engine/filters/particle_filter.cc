@@ -75,7 +75,15 @@ Status ParticleFilterOptions::Validate() const {
     return InvalidArgument("turn_rate_max_radps must be in [0, 5], got " + std::to_string(turn_rate_max_radps));
   }
   if (turn_rate_max_radps > 0.0 && velocity_time_constant_s > 0.0) {
-    return InvalidArgument("turn rates need constant velocity (velocity_time_constant_s = 0)");
+    return InvalidArgument(
+        "turn rates need constant velocity: velocity_time_constant_s > 0 needs turn_rate_max_radps = 0");
+  }
+  if (!(speed_change_max_mps2 >= 0.0 && speed_change_max_mps2 <= 20.0)) {
+    return InvalidArgument("speed_change_max_mps2 must be in [0, 20], got " + std::to_string(speed_change_max_mps2));
+  }
+  if (speed_change_max_mps2 > 0.0 && velocity_time_constant_s > 0.0) {
+    return InvalidArgument(
+        "speed changes need constant velocity: velocity_time_constant_s > 0 needs speed_change_max_mps2 = 0");
   }
   if (!(kernel_scale >= 0.0 && kernel_scale <= 2.0)) {
     return InvalidArgument("kernel_scale must be in [0, 2], got " + std::to_string(kernel_scale));
@@ -89,6 +97,7 @@ struct ParticleFilter::Impl {
     set.SetManoeuvre(o.manoeuvre_share, o.manoeuvre_scale);
     set.SetAccelLevels(o.accel_level_floor, o.accel_level_ceiling, o.accel_level_switch_hz);
     set.SetTurnRates(o.turn_rate_max_radps, o.accel_level_switch_hz);
+    set.SetSpeedChanges(o.speed_change_max_mps2, o.accel_level_switch_hz);  // after the turn rates
   }
   ArrayGeometry array;
   ParticleFilterOptions options;

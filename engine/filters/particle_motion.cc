@@ -36,7 +36,7 @@ void ParticleSet::Predict(double dt_s, double accel_sigma_mps2, double velocity_
   float* __restrict vy = cur_.vy.data();
   float* __restrict vz = cur_.vz.data();
   if (!turn_.empty()) {  // ParticleFilterOptions::Validate: only with constant velocity
-    PredictPersistentTurns(dt, a_to_p, a_to_v);
+    PredictPersistentMotion(dt, a_to_p, a_to_v);
   } else if (d == 1.0f) {  // constant velocity: the GPU filter's step (particle_math.h)
 #pragma omp simd
     for (int i = 0; i < n; ++i) {
@@ -117,7 +117,30 @@ void ParticleSet::SetTurnRates(double max_radps, double switch_rate_hz) {
   if (max_radps != 0.0) DrawLevels();
 }
 
+void ParticleSet::SetSpeedChanges(double max_mps2, double switch_rate_hz) {
+  speed_change_max_mps2_ = static_cast<float>(max_mps2);
+  speed_change_switch_rate_hz_ = switch_rate_hz;
+  const bool on = max_mps2 != 0.0;
+  PerParticle(on, n_, &speed_change_, &next_speed_change_);
+  if (on && turn_.empty()) {  // the persistent-motion step with every turn rate 0
+    PerParticle(true, n_, &turn_, &next_turn_);
+    std::fill(turn_.begin(), turn_.end(), 0.0f);
+    turn_max_radps_ = 0.0f;
+    turn_switch_rate_hz_ = 0.0;
+  }
+  if (on) DrawLevels();
+}
+
+float ParticleSet::DrawSpeedChange(uint32_t key, uint32_t c) const {
+  if (UniformFromCounter(key, c) < kSpeedHoldShare) return 0.0f;
+  return speed_change_max_mps2_ * (2.0f * UniformFromCounter(key, c + 1) - 1.0f);
+}
+
 void ParticleSet::DrawLevels() {
+  if (!speed_change_.empty()) {  // off: no key drawn, so the random stream is as before
+    const uint32_t key = NextKey();
+    for (int i = 0; i < n_; ++i) speed_change_[i] = DrawSpeedChange(key, 2u * static_cast<uint32_t>(i));
+  }
   if (!turn_.empty()) {  // off: no key drawn, so the random stream is as before
     const uint32_t key = NextKey();
     for (int i = 0; i < n_; ++i) {
@@ -131,6 +154,10 @@ void ParticleSet::DrawLevels() {
 }
 
 void ParticleSet::CarryLevels() {
+  if (!speed_change_.empty()) {
+    for (int m = 0; m < n_; ++m) next_speed_change_[m] = speed_change_[index_[m]];
+    std::swap(speed_change_, next_speed_change_);
+  }
   if (!turn_.empty()) {
     for (int m = 0; m < n_; ++m) next_turn_[m] = turn_[index_[m]];
     std::swap(turn_, next_turn_);
@@ -140,8 +167,63 @@ void ParticleSet::CarryLevels() {
   std::swap(gain_, next_gain_);
 }
 
+// The jumps of each particle's level, turn rate and speed change over dt_s, then its normals
+// scaled by its level gain. Each kind has its own switch uniform: level jumps take counters
+// past the normals' (2 per particle: the switch, then the new gain), turn rates past the
+// levels' and the manoeuvres' (2 per particle), speed changes past the turn rates' (3: the
+// switch, then DrawSpeedChange's two). Turn rates and speed changes are drawn for every
+// particle and kept where the switch fires (vectorised: no branch per particle); a level's
+// new gain needs an exp, so the few level jumps (1 - exp(-rate dt), ~5 % at 1 Hz) are marked
+// in a vectorised pass and drawn in a scalar one.
+void ParticleSet::DrawPersistentJumps(uint32_t key, double dt_s) {
+  const int n = n_;
+  const uint32_t level_base = static_cast<uint32_t>(accel_.size());
+  const uint32_t turn_base = static_cast<uint32_t>(accel_.size() + 2 * gain_.size() + n_);
+  const uint32_t speed_base = turn_base + static_cast<uint32_t>(2 * turn_.size());
+  if (!turn_.empty()) {
+    const float p = SwitchProbability(turn_switch_rate_hz_, dt_s), w_max = turn_max_radps_;
+    float* __restrict w = turn_.data();
+#pragma omp simd
+    for (int i = 0; i < n; ++i) {
+      const uint32_t c = turn_base + 2u * static_cast<uint32_t>(i);
+      const float drawn = w_max * (2.0f * UniformFromCounter(key, c + 1) - 1.0f);
+      w[i] = UniformFromCounter(key, c) < p ? drawn : w[i];
+    }
+  }
+  if (!speed_change_.empty()) {
+    const float p = SwitchProbability(speed_change_switch_rate_hz_, dt_s), a_max = speed_change_max_mps2_;
+    float* __restrict a = speed_change_.data();
+#pragma omp simd
+    for (int i = 0; i < n; ++i) {
+      const uint32_t c = speed_base + 3u * static_cast<uint32_t>(i);
+      // DrawSpeedChange(key, c + 1), inline so that the loop vectorises.
+      const float drawn = UniformFromCounter(key, c + 1) < kSpeedHoldShare
+                              ? 0.0f
+                              : a_max * (2.0f * UniformFromCounter(key, c + 2) - 1.0f);
+      a[i] = UniformFromCounter(key, c) < p ? drawn : a[i];
+    }
+  }
+  if (gain_.empty()) return;
+  const float p = SwitchProbability(level_switch_rate_hz_, dt_s);
+  jumps_.resize(static_cast<size_t>(n));
+  uint8_t* __restrict jump = jumps_.data();
+#pragma omp simd
+  for (int i = 0; i < n; ++i) jump[i] = UniformFromCounter(key, level_base + 2u * static_cast<uint32_t>(i)) < p;
+  const float lo = log_level_floor_, span = log_level_ceiling_ - log_level_floor_;
+  float* __restrict g = gain_.data();
+  for (int i = 0; i < n; ++i) {
+    if (jump[i]) g[i] = std::exp(lo + span * UniformFromCounter(key, level_base + 2u * static_cast<uint32_t>(i) + 1));
+  }
+  float* __restrict a = accel_.data();
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
+    a[i] *= g[i];
+    a[n + i] *= g[i];
+    a[2 * n + i] *= g[i];
+  }
+}
+
 void ParticleSet::DrawAccelNormals(uint32_t key, double dt_s) {
-  const float switch_probability = SwitchProbability(level_switch_rate_hz_, dt_s);
   // 3N standard normals, two per Box–Muller draw: accel_[j] and accel_[half + j] come from
   // uniforms 2j and 2j + 1.
   const int half = static_cast<int>(accel_.size() / 2);
@@ -152,32 +234,7 @@ void ParticleSet::DrawAccelNormals(uint32_t key, double dt_s) {
     const uint32_t c = 2u * static_cast<uint32_t>(j);
     NormalPairFromUniforms(UniformFromCounter(key, c), UniformFromCounter(key, c + 1), &first[j], &second[j]);
   }
-  if (!gain_.empty()) {
-    // Particle i's level jumps when its uniform (counters past the normals') is below the
-    // switch probability; the new gain takes the next counter. Then its normals scale.
-    const int n = n_;
-    const uint32_t base = static_cast<uint32_t>(accel_.size());
-    const float lo = log_level_floor_, span = log_level_ceiling_ - log_level_floor_;
-    float* __restrict a = accel_.data();
-    float* __restrict g = gain_.data();
-    for (int i = 0; i < n; ++i) {
-      const uint32_t c = base + 2u * static_cast<uint32_t>(i);
-      if (UniformFromCounter(key, c) < switch_probability) g[i] = std::exp(lo + span * UniformFromCounter(key, c + 1));
-      a[i] *= g[i];
-      a[n + i] *= g[i];
-      a[2 * n + i] *= g[i];
-    }
-  }
-  if (!turn_.empty()) {
-    // Particle i redraws its turn rate when its uniform (counters past the levels' and the
-    // manoeuvres') is below the switch probability; the new rate takes the next counter.
-    const float p = SwitchProbability(turn_switch_rate_hz_, dt_s);
-    const uint32_t base = static_cast<uint32_t>(accel_.size() + 2 * gain_.size() + n_);
-    for (int i = 0; i < n_; ++i) {
-      const uint32_t c = base + 2u * static_cast<uint32_t>(i);
-      if (UniformFromCounter(key, c) < p) turn_[i] = turn_max_radps_ * (2.0f * UniformFromCounter(key, c + 1) - 1.0f);
-    }
-  }
+  if (!gain_.empty() || !turn_.empty()) DrawPersistentJumps(key, dt_s);
   if (manoeuvre_share_ <= 0.0f) return;
   // Particle i manoeuvres this step when its uniform (counters past the normals') is below
   // the share: its three axes' normals take the manoeuvre gain, the others the quiet gain.
@@ -205,7 +262,19 @@ ManoeuvreGains ManoeuvreGainsFor(double share, double scale) {
   return {quiet, scale * quiet};
 }
 
-void ParticleSet::PredictPersistentTurns(float dt, float a_to_p, float a_to_v) {
+// A speed change of a_mps2 over dt on velocity u: the velocity's gain max(0, 1 + a dt / |u|)
+// (a particle that slows to a stop stays stopped until its next redraw) and the position
+// step's, the mean of the start's 1 and the end's (the step's mean speed over the start's).
+// A particle at rest (|u| < 1 mm/s) has no heading to speed up along: both gains stay 1.
+static inline void SpeedChangeGains(float a_mps2, float dt, float ux, float uy, float uz, float* position_gain,
+                                    float* velocity_gain) {
+  const float speed = std::sqrt(ux * ux + uy * uy + uz * uz);
+  const float g = speed > 1e-3f ? a_mps2 * dt / speed : 0.0f;
+  *velocity_gain = std::max(0.0f, 1.0f + g);
+  *position_gain = 0.5f * (1.0f + *velocity_gain);
+}
+
+void ParticleSet::PredictPersistentMotion(float dt, float a_to_p, float a_to_v) {
   const int n = n_;
   const float* __restrict ax = accel_.data();
   const float* __restrict ay = accel_.data() + n;
@@ -217,6 +286,7 @@ void ParticleSet::PredictPersistentTurns(float dt, float a_to_p, float a_to_v) {
   float* __restrict vx = cur_.vx.data();
   float* __restrict vy = cur_.vy.data();
   float* __restrict vz = cur_.vz.data();
+  const float* __restrict a = speed_change_.empty() ? nullptr : speed_change_.data();
   if (turn_max_radps_ * dt <= 0.5f) {
     // sin(t)/t and (1 - cos t)/t to t^4 and t^5: float-exact for |t| <= 0.5 (the next terms
     // are below 3e-6 relative), and vectorised where sin and cos per particle would not be.
@@ -226,13 +296,15 @@ void ParticleSet::PredictPersistentTurns(float dt, float a_to_p, float a_to_v) {
       const float sinc = 1.0f - t2 * (1.0f / 6.0f - t2 * (1.0f / 120.0f));
       const float cosc = t * (0.5f - t2 * (1.0f / 24.0f - t2 * (1.0f / 720.0f)));
       const float s = t * sinc, c = 1.0f - t * cosc;
-      const float ux = vx[i], uy = vy[i];
-      x[i] += dt * (sinc * ux - cosc * uy) + a_to_p * ax[i];
-      y[i] += dt * (cosc * ux + sinc * uy) + a_to_p * ay[i];
-      z[i] += dt * vz[i] + a_to_p * az[i];
-      vx[i] = c * ux - s * uy + a_to_v * ax[i];
-      vy[i] = s * ux + c * uy + a_to_v * ay[i];
-      vz[i] += a_to_v * az[i];
+      const float ux = vx[i], uy = vy[i], uz = vz[i];
+      float pg = 1.0f, vg = 1.0f;
+      if (a != nullptr) SpeedChangeGains(a[i], dt, ux, uy, uz, &pg, &vg);
+      x[i] += pg * dt * (sinc * ux - cosc * uy) + a_to_p * ax[i];
+      y[i] += pg * dt * (cosc * ux + sinc * uy) + a_to_p * ay[i];
+      z[i] += pg * dt * uz + a_to_p * az[i];
+      vx[i] = vg * (c * ux - s * uy) + a_to_v * ax[i];
+      vy[i] = vg * (s * ux + c * uy) + a_to_v * ay[i];
+      vz[i] = vg * uz + a_to_v * az[i];
     }
     return;
   }
@@ -241,12 +313,14 @@ void ParticleSet::PredictPersistentTurns(float dt, float a_to_p, float a_to_v) {
     const double s = std::sin(t), c = std::cos(t);
     const double sinc = t == 0.0 ? 1.0 : s / t, cosc = t == 0.0 ? 0.0 : (1.0 - c) / t;
     const double ux = vx[i], uy = vy[i];
-    x[i] += static_cast<float>(dt * (sinc * ux - cosc * uy)) + a_to_p * ax[i];
-    y[i] += static_cast<float>(dt * (cosc * ux + sinc * uy)) + a_to_p * ay[i];
-    z[i] += dt * vz[i] + a_to_p * az[i];
-    vx[i] = static_cast<float>(c * ux - s * uy) + a_to_v * ax[i];
-    vy[i] = static_cast<float>(s * ux + c * uy) + a_to_v * ay[i];
-    vz[i] += a_to_v * az[i];
+    float pg = 1.0f, vg = 1.0f;
+    if (a != nullptr) SpeedChangeGains(a[i], dt, vx[i], vy[i], vz[i], &pg, &vg);
+    x[i] += pg * static_cast<float>(dt * (sinc * ux - cosc * uy)) + a_to_p * ax[i];
+    y[i] += pg * static_cast<float>(dt * (cosc * ux + sinc * uy)) + a_to_p * ay[i];
+    z[i] += pg * dt * vz[i] + a_to_p * az[i];
+    vx[i] = vg * static_cast<float>(c * ux - s * uy) + a_to_v * ax[i];
+    vy[i] = vg * static_cast<float>(s * ux + c * uy) + a_to_v * ay[i];
+    vz[i] = vg * vz[i] + a_to_v * az[i];
   }
 }
 

@@ -120,6 +120,7 @@ void ParticleSet::CopyCloudFrom(const ParticleSet& other) {
   label_deficit_ = other.label_deficit_;
   gain_ = other.gain_;
   turn_ = other.turn_;
+  speed_change_ = other.speed_change_;
 }
 
 double ParticleSet::TakeParticles(const std::vector<const ParticleSet*>& candidates, const std::vector<uint8_t>& choice,

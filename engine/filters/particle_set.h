@@ -86,6 +86,14 @@ class ParticleSet {
   // copies it. So a source on an arc is followed by quiet particles on the arc, not by
   // straight lines that match its bearings while their range drifts. max = 0: off.
   void SetTurnRates(double max_radps, double switch_rate_hz);
+  // Speed changes that persist (ParticleFilterOptions::speed_change_max_mps2): each
+  // particle carries its own acceleration along its velocity, 0 for a share kSpeedHoldShare
+  // of the draws (they hold their speed) and uniform in [-max, max] for the others; Predict
+  // scales the (turned) velocity by max(0, 1 + a_i dt / |v|) and moves the particle by the
+  // step's mean velocity. Redrawn at switch_rate_hz and copied by resampling, as the turn
+  // rates. So a quiet particle can follow a source that speeds up or slows down. max = 0: off.
+  void SetSpeedChanges(double max_mps2, double switch_rate_hz);
+  static constexpr float kSpeedHoldShare = 0.5f;
   // A fresh random-stream key per use: hash of (seed, use count).
   uint32_t NextKey();
   // Copies `other`'s particles and weights (same array and particle count; the random
@@ -189,13 +197,19 @@ class ParticleSet {
   // level gain (SetAccelLevels; over a step of dt_s the levels and the turn rates first jump,
   // each at its switch rate).
   void DrawAccelNormals(uint32_t key, double dt_s = 0.0);
+  // DrawAccelNormals' jumps of the per-particle levels, turn rates and speed changes over dt_s,
+  // then the normals scaled by each particle's level gain.
+  void DrawPersistentJumps(uint32_t key, double dt_s);
   // Predict's constant-velocity step with its normals drawn in the same pass (no levels, no
   // manoeuvres, N even): the same values as DrawAccelNormals then the stored-normals loop.
   void PredictConstantVelocity(uint32_t key, float dt, float a_to_p, float a_to_v);
-  void DrawLevels();   // every particle's gain and turn rate afresh (after sampling)
-  void CarryLevels();  // gain_[m] <- gain_[index_[m]], turn_ too (after SystematicIndices)
-  // Predict's step with per-particle turn rates (turn_ not empty), normals in accel_.
-  void PredictPersistentTurns(float dt, float a_to_p, float a_to_v);
+  // Every particle's gain, turn rate and speed change afresh (after sampling).
+  void DrawLevels();
+  // gain_[m] <- gain_[index_[m]], turn_ and speed_change_ too (after SystematicIndices).
+  void CarryLevels();
+  // Predict's step with per-particle turn rates and speed changes (turn_ not empty),
+  // normals in accel_.
+  void PredictPersistentMotion(float dt, float a_to_p, float a_to_v);
   static float SwitchProbability(double rate_hz, double dt_s);  // 1 - exp(-rate dt)
   // Particles [first, end) ~ N(mean, root root^T), normals keyed by (key, 6 i + k).
   void SampleGaussianRange(const Vec6& mean, const Mat6& root, uint32_t key, int first, int end);
@@ -232,6 +246,13 @@ class ParticleSet {
   float turn_max_radps_ = 0.0f;
   double turn_switch_rate_hz_ = 0.0;
   std::vector<float> turn_, next_turn_;
+  // SetSpeedChanges: the largest rate and the redraw rate; speed_change_ empty while off
+  // (turn_ then holds zeros, so one prediction serves both).
+  float speed_change_max_mps2_ = 0.0f;
+  double speed_change_switch_rate_hz_ = 0.0;
+  std::vector<float> speed_change_, next_speed_change_;
+  float DrawSpeedChange(uint32_t key, uint32_t c) const;  // from counters c and c + 1
+  std::vector<uint8_t> jumps_;                            // scratch for DrawPersistentJumps: which levels jump
   // Weighted mean and covariance of the current particles, computed on demand and kept
   // until the particles or weights change (State() and the regulariser share them).
   mutable TrackState moments_;

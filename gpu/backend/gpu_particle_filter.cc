@@ -16,8 +16,9 @@ StatusOr<std::unique_ptr<GpuParticleFilter>> GpuParticleFilter::Create(std::shar
   }
   if (!options.single_motion()) {
     return InvalidArgument(
-        "the GPU particle filter has one acceleration std and no turn rates (set accel_level_floor = "
-        "accel_level_ceiling = 1 and turn_rate_max_radps = 0, or use the CPU filter)");
+        "the GPU particle filter has one acceleration std, no turn rates and no speed changes (set "
+        "accel_level_floor = accel_level_ceiling = 1, turn_rate_max_radps = 0 and speed_change_max_mps2 = 0, or "
+        "use the CPU filter)");
   }
   auto slot = runtime->bank().Open(array, options);
   if (!slot.ok()) return slot.status();

@@ -1,9 +1,11 @@
 // Accuracy over seeds: every named scenario, both likelihoods, seeds 1..N; prints each run
 // and the median RMSE / per-frame CRLB and p95 / RMSE per scenario (BENCHMARKS.md).
-// Run: build/tests/bench/accuracy_report [N=5] [--turns MAX] [--one-std | --levels FLOOR,CEILING,HZ]
-// --one-std: the particle filter with one acceleration std (levels off); --levels: these
-// acceleration levels instead of the defaults (particle_filter.h); --turns: per-particle turn
-// rates up to MAX rad/s (ParticleFilterOptions::turn_rate_max_radps).
+// Run: build/tests/bench/accuracy_report [N=5] [--one-std] [--levels FLOOR,CEILING,HZ]
+//        [--turns MAX] [--speed-changes MAX]
+// --one-std: the particle filter with one acceleration std, no turn rates and no speed changes
+// (SetSingleMotion); --levels: these acceleration levels instead of the defaults
+// (particle_filter.h); --turns: per-particle turn rates up to MAX rad/s; --speed-changes:
+// per-particle speed changes up to MAX m/s^2 (ParticleFilterOptions).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -31,31 +33,32 @@ int main(int argc, char** argv) {
   using namespace localizer::engine;
   int seeds = 5;
   bool one_std = false;
-  double floor = -1.0, ceiling = -1.0, switch_hz = -1.0;
-  if (argc > 1 && std::string(argv[argc - 1]) == "--one-std") {
-    one_std = true;
-    --argc;
-  }
-  if (argc > 2 && std::string(argv[argc - 2]) == "--levels") {
-    if (std::sscanf(argv[argc - 1], "%lf,%lf,%lf", &floor, &ceiling, &switch_hz) != 3) {
-      std::fprintf(stderr, "accuracy_report: --levels takes FLOOR,CEILING,HZ, got \"%s\"\n", argv[argc - 1]);
-      return 2;
+  double floor = -1.0, ceiling = -1.0, switch_hz = -1.0, turns = -1.0, speed_changes = -1.0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (arg == "--one-std") {
+      one_std = true;
+    } else if (arg == "--levels" && has_value) {
+      if (std::sscanf(argv[++i], "%lf,%lf,%lf", &floor, &ceiling, &switch_hz) != 3) {
+        std::fprintf(stderr, "accuracy_report: --levels takes FLOOR,CEILING,HZ, got \"%s\"\n", argv[i]);
+        return 2;
+      }
+    } else if (arg == "--turns" && has_value) {
+      turns = std::strtod(argv[++i], nullptr);
+    } else if (arg == "--speed-changes" && has_value) {
+      speed_changes = std::strtod(argv[++i], nullptr);
+    } else {
+      const auto n = localizer::ParseInteger(arg);
+      if (!n.ok() || *n < 1 || *n > 1000000) {
+        std::fprintf(stderr,
+                     "usage: accuracy_report [N=5] [--one-std] [--levels FLOOR,CEILING,HZ] [--turns MAX] "
+                     "[--speed-changes MAX]\n(N must be an integer in [1, 1000000], got \"%s\")\n",
+                     arg.c_str());
+        return 2;
+      }
+      seeds = static_cast<int>(*n);
     }
-    argc -= 2;
-  }
-  double turns = -1.0;
-  if (argc > 3 && std::string(argv[2]) == "--turns") {
-    turns = std::strtod(argv[3], nullptr);
-    for (int i = 2; i + 2 < argc; ++i) argv[i] = argv[i + 2];
-    argc -= 2;
-  }
-  if (argc > 1) {
-    const auto n = localizer::ParseInteger(argv[1]);
-    if (!n.ok() || *n < 1 || *n > 1000000) {
-      std::fprintf(stderr, "accuracy_report: N must be an integer in [1, 1000000], got \"%s\"\n", argv[1]);
-      return 2;
-    }
-    seeds = static_cast<int>(*n);
   }
   std::printf("%-16s %-5s %5s %8s %8s %8s %8s %7s %6s\n", "scenario", "lik", "seed", "rmse_m", "p95_m", "crlb_m",
               "ratio", "p95/rmse", "reinit");
@@ -70,6 +73,7 @@ int main(int argc, char** argv) {
             std::tie(p.accel_level_floor, p.accel_level_ceiling, p.accel_level_switch_hz) =
                 std::tuple(floor, ceiling, switch_hz);
           if (turns >= 0.0) p.turn_rate_max_radps = turns;
+          if (speed_changes >= 0.0) p.speed_change_max_mps2 = speed_changes;
         };
         const TrackScore s = TrackScenario(name, static_cast<uint64_t>(seed), likelihood, BackendChoice::kCpu,
                                            FilterKind::kPf, MotionModelKind::kCv, adjust)

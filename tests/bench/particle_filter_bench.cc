@@ -6,7 +6,6 @@
 
 #include <random>
 #include <string>
-#include <tuple>
 
 #include "engine/filters/particle_filter.h"
 
@@ -26,12 +25,10 @@ void BM_ParticleFilterStep(benchmark::State& state) {
   options.particles = particles;
   options.tdoa_sigma_s = 10e-6;
   options.likelihood = likelihood;
-  // Third argument 1: acceleration levels with turn rates (ACCURACY.md, "Seventeenth pass");
-  // 0: the default motion (one std, the GPU filter's, with the fused prediction).
-  if (state.range(2) == 1) {
-    std::tie(options.accel_level_floor, options.accel_level_ceiling, options.turn_rate_max_radps) =
-        std::tuple(0.003, 3.0, 1.0);
-  }
+  // Third argument 1: the default motion (acceleration levels, turn rates and speed changes:
+  // ACCURACY.md, "Nineteenth pass"); 0: one std, the GPU filter's, with the fused prediction
+  // (the default before it).
+  if (state.range(2) == 0) options.SetSingleMotion();
   auto pf = std::move(*ParticleFilter::Create(array, options));
   const Vec3 source(6.0, -4.0, 1.0);
   TrackState belief;
@@ -69,7 +66,8 @@ void BM_ParticleFilterStep(benchmark::State& state) {
   state.counters["ns_per_particle_step"] =
       benchmark::Counter(static_cast<double>(state.iterations()) * particles * 1e-9,
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.SetLabel(std::string(LikelihoodName(likelihood)) + (options.single_motion() ? " one-std" : " levels+turns"));
+  state.SetLabel(std::string(LikelihoodName(likelihood)) +
+                 (options.single_motion() ? " one-std" : " levels+turns+speed"));
 }
 BENCHMARK(BM_ParticleFilterStep)->ArgsProduct({{1024, 4096, 16384}, {0, 1}, {0, 1}})->Unit(benchmark::kMicrosecond);
 

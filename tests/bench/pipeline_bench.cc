@@ -9,7 +9,6 @@
 
 #include <memory>
 #include <string>
-#include <tuple>
 
 #include "engine/pipeline/range_observability.h"
 #include "engine/pipeline/session.h"
@@ -51,12 +50,9 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   const SimResult& sim = Audio(44100.0, &scenario);
   AudioSessionConfig config = BenchConfig(scenario, sim, static_cast<int>(state.range(0)),
                                           state.range(1) == 0 ? Likelihood::kPeak : Likelihood::kGcc);
-  // Third argument 1: acceleration levels with turn rates (ACCURACY.md, "Seventeenth pass");
-  // 0: the default motion (one std, the GPU filter's).
-  if (state.range(2) == 1) {
-    ParticleFilterOptions& p = config.tracker.particle;
-    std::tie(p.accel_level_floor, p.accel_level_ceiling, p.turn_rate_max_radps) = std::tuple(0.003, 3.0, 1.0);
-  }
+  // Third argument 1: the default motion (acceleration levels, turn rates and speed changes:
+  // ACCURACY.md, "Nineteenth pass"); 0: one std, the GPU filter's (the default before it).
+  if (state.range(2) == 0) config.tracker.particle.SetSingleMotion();
   // 0.1 s blocks, as a streaming client would send them.
   const int64_t block = 4410;
   const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
@@ -75,7 +71,7 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   state.counters["tdoa_us_per_frame"] = 1e6 * totals.tdoa_s / static_cast<double>(totals.frames);
   state.counters["filter_us_per_frame"] = 1e6 * totals.filter_s / static_cast<double>(totals.frames);
   state.SetLabel(std::string(LikelihoodName(config.tracker.particle.likelihood)) +
-                 (config.tracker.particle.single_motion() ? " one-std" : " levels+turns"));
+                 (config.tracker.particle.single_motion() ? " one-std" : " levels+turns+speed"));
 }
 BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
 

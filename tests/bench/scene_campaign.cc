@@ -47,6 +47,7 @@ struct Args {
   double kernel_scale = -1.0;                                               // < 0: the session default
   double level_floor = -1.0, level_ceiling = -1.0, level_switch_hz = -1.0;  // < 0: the default
   double turn_rate_max_radps = -1.0;                                        // < 0: the session default
+  double speed_change_max_mps2 = -1.0;                                      // < 0: the session default
   bool band_hint = false;  // --band-hint: the session gets the scene's true band
   bool help = false;       // --help: print the usage and exit 0
 };
@@ -75,6 +76,7 @@ void Adjust(const Args& a, const RandomSceneOptions& scene_options, AudioSession
     c->tracker.particle.accel_level_switch_hz = a.level_switch_hz;
   }
   if (a.turn_rate_max_radps >= 0.0) c->tracker.particle.turn_rate_max_radps = a.turn_rate_max_radps;
+  if (a.speed_change_max_mps2 >= 0.0) c->tracker.particle.speed_change_max_mps2 = a.speed_change_max_mps2;
   if (a.accel_noise_mps2 >= 0.0) {
     c->tracker.particle.accel_noise_mps2 = a.accel_noise_mps2;
     c->tracker.kalman.motion.accel_noise_mps2 = a.accel_noise_mps2;
@@ -91,7 +93,7 @@ void Usage(FILE* out) {
       "                      [--tempering-ess F]\n"
       "                      [--likelihood peak|gcc|mixture] [--outlier-probability EPS]\n"
       "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--turn-rates MAX]\n"
-      "                      [--band-hint] [--trace SEED]\n"
+      "                      [--speed-changes MAX] [--band-hint] [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
       "within 3 x CRLB to the end), RMSE/CRLB and median NEES/dim after acquisition, lost frames\n"
@@ -109,8 +111,9 @@ void Usage(FILE* out) {
       "--outlier-probability (the mixture\n"
       "likelihood's eps), --kernel-scale (the particle filter's regularisation) and\n"
       "--accel-levels (its acceleration levels, e.g. 0.003,3,1; particle_filter.h) and --turn-rates\n"
-      "(its per-particle turn rates up to MAX rad/s about +z, e.g. 1) override the session's\n"
-      "defaults.\n"
+      "(its per-particle turn rates up to MAX rad/s about +z, e.g. 1) and --speed-changes (its\n"
+      "per-particle accelerations along the velocity up to MAX m/s^2, e.g. 1) override the\n"
+      "session's defaults.\n"
       "--band-hint gives each session its scene's true source band (an oracle: what a perfect band\n"
       "estimate from the data would give; the campaign's default gives none).\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
@@ -182,6 +185,10 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->turn_rate_max_radps = std::strtod(value.c_str(), &end);
       if (*end != '\0' || !(a->turn_rate_max_radps >= 0.0 && a->turn_rate_max_radps <= 5.0))
         return std::fprintf(stderr, "scene_campaign: --turn-rates must be in [0, 5] rad/s\n"), false;
+    } else if (flag == "--speed-changes") {
+      a->speed_change_max_mps2 = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(a->speed_change_max_mps2 >= 0.0 && a->speed_change_max_mps2 <= 20.0))
+        return std::fprintf(stderr, "scene_campaign: --speed-changes must be in [0, 20] m/s^2\n"), false;
     } else if (flag == "--tempered-updates") {
       a->tempered_updates = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->tempered_updates < 0 || a->tempered_updates > 100)

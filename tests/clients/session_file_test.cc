@@ -39,7 +39,7 @@ constexpr const char* kEveryKey = R"({
   "imm_modes": "ca,cv", "imm_variant": "ukf", "robust": "huber", "particles": 1024, "likelihood": "mixture",
   "outlier_probability": 0.1, "tdoa_sigma_s": 2.5e-05, "accel_noise_mps2": 0.5, "manoeuvre_share": 0.1,
   "manoeuvre_scale": 5, "accel_level_floor": 0.01, "accel_level_ceiling": 3, "accel_level_switch_hz": 2,
-  "turn_rate_max_radps": 0.8, "seed": 18446744073709551615, "search_radius_m": 30, "presence_false_alarm": 0.01, "source_timeout_s": 3,
+  "turn_rate_max_radps": 0.8, "speed_change_max_mps2": 1.5, "seed": 18446744073709551615, "search_radius_m": 30, "presence_false_alarm": 0.01, "source_timeout_s": 3,
   "backend": "auto"
 })";
 
@@ -72,6 +72,7 @@ TEST(SessionFile, ReadsEveryKey) {
   EXPECT_EQ(s.accel_level_ceiling, 3.0);
   EXPECT_EQ(s.accel_level_switch_hz, 2.0);
   EXPECT_EQ(s.turn_rate_max_radps, 0.8);
+  EXPECT_EQ(s.speed_change_max_mps2, 1.5);
   EXPECT_EQ(s.seed, 18446744073709551615ull);
   EXPECT_EQ(s.search_radius_m, 30.0);
   EXPECT_EQ(s.presence_false_alarm, 0.01);

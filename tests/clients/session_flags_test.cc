@@ -67,11 +67,11 @@ std::string Fields(const engine::AudioSessionConfig& c) {
       Num(t.kalman.motion.accel_noise_mps2) + " manoeuvre=" + Num(t.particle.manoeuvre_share) + "," +
       Num(t.particle.manoeuvre_scale) + " levels=" + Num(t.particle.accel_level_floor) + "," +
       Num(t.particle.accel_level_ceiling) + "," + Num(t.particle.accel_level_switch_hz) +
-      " turns=" + Num(t.particle.turn_rate_max_radps) + " seed=" + std::to_string(c.seed) +
-      " search_radius_m=" + Num(c.search_radius_m) + " presence_false_alarm=" + Num(c.presence_false_alarm) +
-      " source_timeout_s=" + Num(c.source_timeout_s) + " backend=" + engine::BackendChoiceName(c.backend) +
-      " c=" + Num(c.sound_speed_mps) + " rate=" + Num(c.sample_rate_hz) +
-      " localization=" + engine::LocalizationName(c.localization);
+      " turns=" + Num(t.particle.turn_rate_max_radps) + " speed_changes=" + Num(t.particle.speed_change_max_mps2) +
+      " seed=" + std::to_string(c.seed) + " search_radius_m=" + Num(c.search_radius_m) +
+      " presence_false_alarm=" + Num(c.presence_false_alarm) + " source_timeout_s=" + Num(c.source_timeout_s) +
+      " backend=" + engine::BackendChoiceName(c.backend) + " c=" + Num(c.sound_speed_mps) +
+      " rate=" + Num(c.sample_rate_hz) + " localization=" + engine::LocalizationName(c.localization);
   return out;
 }
 
@@ -120,6 +120,7 @@ TEST(SessionFileFlags, EveryKeyMeansWhatItsFlagMeans) {
                                                                      {"4", "4"},
                                                                      {"2", "2"},
                                                                      {"0.8", "0.8"},
+                                                                     {"1.5", "1.5"},
                                                                      {"42", "42"},
                                                                      {"30", "30"},
                                                                      {"0.01", "0.01"},

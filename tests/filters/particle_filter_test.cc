@@ -256,6 +256,7 @@ TEST(ParticleFilter, MeanRevertingVelocityDecaysByTheTimeConstant) {
   const ArrayGeometry array = Tetrahedron(2.0, Vec3::Zero(), 343.0);
   for (double tau_s : {0.0, 10.0, 1.0}) {
     ParticleFilterOptions o = Options();
+    o.SetSingleMotion();  // no turn rates or speed changes: the mean velocity is kept
     o.accel_noise_mps2 = 0.0;
     o.velocity_time_constant_s = tau_s;
     auto pf = ParticleFilter::Create(array, o);
@@ -353,7 +354,7 @@ TEST(ParticleFilter, AccelerationLevelsScaleTheWhiteAccelerationLogUniformly) {
     // only 14 % of its draws that close to zero.
     EXPECT_GT(static_cast<double>(quiet) / o.particles, 0.4) << "axis " << k;
   }
-  EXPECT_FALSE(ParticleFilterOptions{}.accel_levels()) << "off by default";
+  EXPECT_TRUE(ParticleFilterOptions{}.accel_levels()) << "on by default (the nineteenth pass)";
   ParticleFilterOptions bad = Options();
   bad.accel_level_floor = 2.0;
   bad.accel_level_ceiling = 1.0;
@@ -375,6 +376,7 @@ StillThenMovingResult RunStillThenMoving(bool levels, uint64_t noise_seed) {
   const double fs = 11025.0, hop_s = 2048.0 / fs, sigma_s = 8e-6, start_s = 6.0;
   ParticleFilterOptions o = Options();
   o.accel_noise_mps2 = 1.0;
+  o.SetSingleMotion();  // the levels alone against one std
   if (levels) {
     std::tie(o.accel_level_floor, o.accel_level_ceiling, o.accel_level_switch_hz) = std::tuple(0.003, 3.0, 1.0);
   }

@@ -79,7 +79,7 @@ TEST(ParticleTurnRates, OptionsAreValidated) {
   bad.turn_rate_max_radps = 0.5;
   bad.velocity_time_constant_s = 10.0;
   EXPECT_NE(ParticleFilter::Create(array, bad).status().message().find("constant velocity"), std::string::npos);
-  EXPECT_EQ(ParticleFilterOptions{}.turn_rate_max_radps, 0.0) << "off by default";
+  EXPECT_EQ(ParticleFilterOptions{}.turn_rate_max_radps, 1.0) << "on by default (the nineteenth pass)";
 }
 
 // A source circling at 1.2 m/s, 0.4 rad/s (0.48 m/s^2 towards the centre) 3 m around a 2 m

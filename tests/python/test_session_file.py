@@ -75,7 +75,7 @@ BAD = [
     ({"presence_false_alarm": 0.5}, "presence_false_alarm"),
     ({"band_low_hz": 3000, "band_high_hz": 300}, "band_high_hz"),
     ({"despike_k": 0.5}, "despike_k"),
-    ({"accel_level_floor": 2}, "accel_level_floor"),
+    ({"accel_level_floor": 4}, "accel_level_floor"),
     ({"manoeuvre_share": 1}, "manoeuvre_share"),
 ]
 # Edge cases both accept.
@@ -101,7 +101,7 @@ class ReaderTest(unittest.TestCase):
             "sound_speed_mps": 1500.0, "reference_sensor": 1, "localization": "position", "particles": 1024,
             "filter": "ekf", "imm_modes": "ca,cv", "band_low_hz": 300.0, "band_high_hz": 3000.0,
             "bounds_min_m": (-math.inf,) * 3, "bounds_max_m": (math.inf, math.inf, 7.0)})
-        self.assertEqual(len(SESSION_KEYS), 28)
+        self.assertEqual(len(SESSION_KEYS), 29)
 
     def test_an_array_file_without_session_reads_as_before(self):
         sf = parse_session_file(text())
@@ -149,7 +149,7 @@ class SessionConfigTest(unittest.TestCase):
              "filter": "imm", "imm_modes": "ca,cv", "imm_variant": "ukf", "robust": "huber", "particles": 1024,
              "likelihood": "mixture", "outlier_probability": 0.1, "tdoa_sigma_s": 2.5e-05, "accel_noise_mps2": 0.5,
              "manoeuvre_share": 0.0, "manoeuvre_scale": 5, "accel_level_floor": 0.01, "accel_level_ceiling": 3,
-             "accel_level_switch_hz": 0, "turn_rate_max_radps": 0.8, "seed": 42, "search_radius_m": 30, "presence_false_alarm": 0.01,
+             "accel_level_switch_hz": 0, "turn_rate_max_radps": 0.8, "speed_change_max_mps2": 1.5, "seed": 42, "search_radius_m": 30, "presence_false_alarm": 0.01,
              "source_timeout_s": 3, "backend": "auto"},
             sample_rate_hz=11025, reference_sensor=2, band_hz=[300, 8000], bottom_z_m=-5.0, max_sources=3,
             source_side={"normal": [0, 0, 1]}))
@@ -168,6 +168,7 @@ class SessionConfigTest(unittest.TestCase):
         self.assertTrue(f.HasField("manoeuvre_share"))  # 0 stated: optional on the wire, so it is carried
         self.assertEqual((f.accel_level_floor, f.accel_level_ceiling, f.accel_level_switch_hz), (0.01, 3.0, -1.0))
         self.assertEqual(f.turn_rate_max_radps, 0.8)
+        self.assertEqual(f.speed_change_max_mps2, 1.5)
         self.assertEqual(f.motion_model, "")  # not stated: the server's default
         self.assertTrue(c.HasField("seed"))
         self.assertEqual((c.seed, c.search_radius_m, c.presence_false_alarm, c.source_timeout_s, c.backend),

@@ -130,6 +130,7 @@ TEST(ConfigWire, AccelerationLevelsDefaultRoundTripAndAreValidated) {
   p.mutable_filter()->set_accel_level_ceiling(5.0);
   p.mutable_filter()->set_accel_level_switch_hz(-1.0);  // negative: a rate of 0 (levels never redrawn)
   p.mutable_filter()->set_turn_rate_max_radps(0.8);
+  p.mutable_filter()->set_speed_change_max_mps2(1.5);
   auto config = AudioFromProto(p, {});
   ASSERT_TRUE(config.ok()) << config.status().ToString();
   EXPECT_EQ(config->tracker.particle.accel_level_floor, 0.01);
@@ -142,7 +143,9 @@ TEST(ConfigWire, AccelerationLevelsDefaultRoundTripAndAreValidated) {
   EXPECT_EQ(again->tracker.particle.accel_level_ceiling, 5.0);
   EXPECT_EQ(again->tracker.particle.accel_level_switch_hz, 0.0);
   EXPECT_EQ(again->tracker.particle.turn_rate_max_radps, 0.8);
+  EXPECT_EQ(again->tracker.particle.speed_change_max_mps2, 1.5);
   EXPECT_EQ(defaulted->tracker.particle.turn_rate_max_radps, engine_default.turn_rate_max_radps);
+  EXPECT_EQ(defaulted->tracker.particle.speed_change_max_mps2, engine_default.speed_change_max_mps2);
   p.mutable_filter()->set_turn_rate_max_radps(-1.0);  // negative: no turn rates
   auto no_turns = AudioFromProto(p, {});
   ASSERT_TRUE(no_turns.ok()) << no_turns.status().ToString();
@@ -150,6 +153,13 @@ TEST(ConfigWire, AccelerationLevelsDefaultRoundTripAndAreValidated) {
   auto no_turns_again = AudioFromProto(ConfigToProto(*no_turns, ""), {});
   ASSERT_TRUE(no_turns_again.ok());
   EXPECT_EQ(no_turns_again->tracker.particle.turn_rate_max_radps, 0.0) << "off survives the round trip";
+  p.mutable_filter()->set_speed_change_max_mps2(-1.0);  // negative: no speed changes
+  auto no_speed_changes = AudioFromProto(p, {});
+  ASSERT_TRUE(no_speed_changes.ok()) << no_speed_changes.status().ToString();
+  EXPECT_EQ(no_speed_changes->tracker.particle.speed_change_max_mps2, 0.0);
+  auto no_speed_changes_again = AudioFromProto(ConfigToProto(*no_speed_changes, ""), {});
+  ASSERT_TRUE(no_speed_changes_again.ok());
+  EXPECT_EQ(no_speed_changes_again->tracker.particle.speed_change_max_mps2, 0.0) << "off survives the round trip";
   p.mutable_filter()->set_accel_level_floor(6.0);  // above the ceiling (5)
   auto bad = AudioFromProto(p, {});
   const Status status = bad.ok() ? (*bad).Validate() : bad.status();

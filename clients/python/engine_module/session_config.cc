@@ -116,6 +116,7 @@ const std::vector<Option>& Options() {
       Double("accel_level_ceiling", [](Config& c) -> double& { return c.tracker.particle.accel_level_ceiling; }),
       Double("accel_level_switch_hz", [](Config& c) -> double& { return c.tracker.particle.accel_level_switch_hz; }),
       Double("turn_rate_max_radps", [](Config& c) -> double& { return c.tracker.particle.turn_rate_max_radps; }),
+      Double("speed_change_max_mps2", [](Config& c) -> double& { return c.tracker.particle.speed_change_max_mps2; }),
       Number<uint64_t>(
           "seed", [](Config& c) -> uint64_t& { return c.seed; }, "a non-negative int"),
       Double("init_speed_sigma_mps", [](Config& c) -> double& { return c.init_speed_sigma_mps; }),

@@ -51,14 +51,15 @@ CHOICES: dict[str, tuple[str, ...]] = {
 _INTS = ("frame_samples", "hop_samples", "particles")
 _NUMBERS = ("phat_beta", "band_low_hz", "band_high_hz", "despike_k", "outlier_probability", "tdoa_sigma_s",
             "accel_noise_mps2", "manoeuvre_share", "manoeuvre_scale", "accel_level_floor", "accel_level_ceiling",
-            "accel_level_switch_hz", "turn_rate_max_radps", "search_radius_m", "presence_false_alarm", "source_timeout_s")
+            "accel_level_switch_hz", "turn_rate_max_radps", "speed_change_max_mps2", "search_radius_m",
+            "presence_false_alarm", "source_timeout_s")
 # Every "session" key, in clients/io/session_file.h's order.
 SESSION_KEYS: tuple[str, ...] = (
     "frame_samples", "hop_samples", "weighting", "phat_beta", "band_low_hz", "band_high_hz", "despike_k",
     "filter", "motion_model", "imm_modes", "imm_variant", "robust", "particles", "likelihood",
     "outlier_probability", "tdoa_sigma_s", "accel_noise_mps2", "manoeuvre_share", "manoeuvre_scale",
-    "accel_level_floor", "accel_level_ceiling", "accel_level_switch_hz", "turn_rate_max_radps", "seed",
-    "search_radius_m",
+    "accel_level_floor", "accel_level_ceiling", "accel_level_switch_hz", "turn_rate_max_radps",
+    "speed_change_max_mps2", "seed", "search_radius_m",
     "presence_false_alarm", "source_timeout_s", "backend")
 # Keys that belong at the top level (the top-level fields, and localizer.engine's names of the
 # source plane), refused in "session" saying so.
@@ -66,7 +67,7 @@ _MISPLACED = tuple(k for k in TOP_LEVEL if k != "session") + ("source_plane_poin
 _ENGINE_ONLY = ("max_block_samples", "init_speed_sigma_mps", "init_region_min_m", "init_region_max_m",
                 "divergence_window")
 # Engine defaults the range checks fall back on (engine::AudioSessionConfig).
-_DEFAULTS = {"frame_samples": 4096, "filter": "pf", "accel_level_floor": 1.0, "accel_level_ceiling": 1.0}
+_DEFAULTS = {"frame_samples": 4096, "filter": "pf", "accel_level_floor": 0.003, "accel_level_ceiling": 3.0}
 _INT_MAX = 2**31 - 1
 
 
@@ -137,6 +138,7 @@ def _check_ranges(s: Mapping[str, Any], where: str) -> None:
                f"1e-6 <= floor <= ceiling <= 100 (floor {floor}, ceiling {ceiling})")
     check("accel_level_switch_hz", 0.0 <= g("accel_level_switch_hz", 0.0) <= 1000.0, "in [0, 1000]")
     check("turn_rate_max_radps", 0.0 <= g("turn_rate_max_radps", 0.0) <= 5.0, "in [0, 5] rad/s")
+    check("speed_change_max_mps2", 0.0 <= g("speed_change_max_mps2", 0.0) <= 20.0, "in [0, 20] m/s^2")
     check("search_radius_m", 0.0 <= g("search_radius_m", 0.0) <= 1e7, "in [0, 1e7]")
     check("presence_false_alarm", 0.0 < g("presence_false_alarm", 1e-3) <= 0.1, "in (0, 0.1]")
     check("source_timeout_s", 0.0 < g("source_timeout_s", 1.0) <= 1e6, "in (0, 1e6]")
@@ -237,6 +239,8 @@ class SessionFile:
             f.accel_level_switch_hz = s["accel_level_switch_hz"] if s["accel_level_switch_hz"] > 0 else -1.0
         if "turn_rate_max_radps" in s:  # likewise: no turn rates go as -1
             f.turn_rate_max_radps = s["turn_rate_max_radps"] if s["turn_rate_max_radps"] > 0 else -1.0
+        if "speed_change_max_mps2" in s:  # likewise: no speed changes go as -1
+            f.speed_change_max_mps2 = s["speed_change_max_mps2"] if s["speed_change_max_mps2"] > 0 else -1.0
         if any(math.isfinite(x) for x in self.bounds_min_m + self.bounds_max_m):
             config.bounds.CopyFrom(_bounds(self.bounds_min_m, self.bounds_max_m))
         if self.max_sources is not None:
