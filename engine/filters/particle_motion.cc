@@ -180,28 +180,29 @@ void ParticleSet::DrawPersistentJumps(uint32_t key, double dt_s) {
   const uint32_t level_base = static_cast<uint32_t>(accel_.size());
   const uint32_t turn_base = static_cast<uint32_t>(accel_.size() + 2 * gain_.size() + n_);
   const uint32_t speed_base = turn_base + static_cast<uint32_t>(2 * turn_.size());
-  if (!turn_.empty()) {
-    const float p = SwitchProbability(turn_switch_rate_hz_, dt_s), w_max = turn_max_radps_;
-    float* __restrict w = turn_.data();
+  // value[i] takes draw(c) where particle i's switch uniform (counter c = base + stride i)
+  // falls below the switch probability; draw reads counters from c + 1.
+  const auto redraw = [&](double rate_hz, uint32_t base, uint32_t stride, float* __restrict value, auto draw) {
+    const float p = SwitchProbability(rate_hz, dt_s);
 #pragma omp simd
     for (int i = 0; i < n; ++i) {
-      const uint32_t c = turn_base + 2u * static_cast<uint32_t>(i);
-      const float drawn = w_max * (2.0f * UniformFromCounter(key, c + 1) - 1.0f);
-      w[i] = UniformFromCounter(key, c) < p ? drawn : w[i];
+      const uint32_t c = base + stride * static_cast<uint32_t>(i);
+      const float drawn = draw(c);
+      value[i] = UniformFromCounter(key, c) < p ? drawn : value[i];
     }
+  };
+  if (!turn_.empty()) {
+    const float w_max = turn_max_radps_;
+    redraw(turn_switch_rate_hz_, turn_base, 2u, turn_.data(),
+           [=](uint32_t c) { return w_max * (2.0f * UniformFromCounter(key, c + 1) - 1.0f); });
   }
   if (!speed_change_.empty()) {
-    const float p = SwitchProbability(speed_change_switch_rate_hz_, dt_s), a_max = speed_change_max_mps2_;
-    float* __restrict a = speed_change_.data();
-#pragma omp simd
-    for (int i = 0; i < n; ++i) {
-      const uint32_t c = speed_base + 3u * static_cast<uint32_t>(i);
-      // DrawSpeedChange(key, c + 1), inline so that the loop vectorises.
-      const float drawn = UniformFromCounter(key, c + 1) < kSpeedHoldShare
-                              ? 0.0f
-                              : a_max * (2.0f * UniformFromCounter(key, c + 2) - 1.0f);
-      a[i] = UniformFromCounter(key, c) < p ? drawn : a[i];
-    }
+    const float a_max = speed_change_max_mps2_;
+    // DrawSpeedChange(key, c + 1), inline so that the loop vectorises.
+    redraw(speed_change_switch_rate_hz_, speed_base, 3u, speed_change_.data(), [=](uint32_t c) {
+      return UniformFromCounter(key, c + 1) < kSpeedHoldShare ? 0.0f
+                                                              : a_max * (2.0f * UniformFromCounter(key, c + 2) - 1.0f);
+    });
   }
   if (gain_.empty()) return;
   const float p = SwitchProbability(level_switch_rate_hz_, dt_s);

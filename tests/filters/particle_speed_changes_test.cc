@@ -16,14 +16,6 @@
 namespace localizer::engine {
 namespace {
 
-ParticleFilterOptions Options() {
-  ParticleFilterOptions o;
-  o.particles = 4096;
-  o.tdoa_sigma_s = 8e-6;
-  o.seed = 42;
-  return o;
-}
-
 // Without acceleration noise every particle keeps its heading and changes its speed at its own
 // constant rate a_i: half of them hold their speed, the others spread over [-max, max]; each
 // lies where its constant acceleration along the line takes it, (v0 + v) t / 2.
@@ -32,7 +24,7 @@ TEST(ParticleSpeedChanges, EachParticleSpeedsUpOrSlowsDownAlongItsHeading) {
   const double max_mps2 = 0.8, speed_mps = 2.0, step_s = 0.1;
   const int steps = 20;
   const double t_s = steps * step_s;
-  ParticleFilterOptions o = Options();
+  ParticleFilterOptions o = PersistentMotionOptions();
   ParticleSet set(array, o);
   set.SetSpeedChanges(max_mps2, 0.0);  // no redraws
   Vec6 start = Vec6::Zero();
@@ -61,7 +53,7 @@ TEST(ParticleSpeedChanges, EachParticleSpeedsUpOrSlowsDownAlongItsHeading) {
 // A particle that slows to a stop stays stopped (it does not reverse) until it redraws.
 TEST(ParticleSpeedChanges, AParticleThatSlowsToAStopStaysStopped) {
   const ArrayGeometry array = Tetrahedron(2.0, Vec3::Zero(), 1500.0);
-  ParticleFilterOptions o = Options();
+  ParticleFilterOptions o = PersistentMotionOptions();
   ParticleSet set(array, o);
   set.SetSpeedChanges(5.0, 0.0);
   Vec6 start = Vec6::Zero();
@@ -79,7 +71,7 @@ TEST(ParticleSpeedChanges, AParticleThatSlowsToAStopStaysStopped) {
 
 TEST(ParticleSpeedChanges, OptionsAreValidated) {
   const ArrayGeometry array = Tetrahedron(2.0, Vec3::Zero(), 1500.0);
-  ParticleFilterOptions bad = Options();
+  ParticleFilterOptions bad = PersistentMotionOptions();
   bad.speed_change_max_mps2 = -0.1;
   EXPECT_NE(ParticleFilter::Create(array, bad).status().message().find("speed_change_max_mps2"), std::string::npos);
   bad.speed_change_max_mps2 = 21.0;
@@ -88,7 +80,7 @@ TEST(ParticleSpeedChanges, OptionsAreValidated) {
   bad.velocity_time_constant_s = 10.0;
   EXPECT_NE(ParticleFilter::Create(array, bad).status().message().find("constant velocity"), std::string::npos);
   EXPECT_EQ(ParticleFilterOptions{}.speed_change_max_mps2, 1.0) << "on by default (the nineteenth pass)";
-  ParticleFilterOptions single = Options();
+  ParticleFilterOptions single = PersistentMotionOptions();
   EXPECT_FALSE(single.single_motion());
   single.SetSingleMotion();
   EXPECT_TRUE(single.single_motion());

@@ -15,14 +15,6 @@
 namespace localizer::engine {
 namespace {
 
-ParticleFilterOptions Options() {
-  ParticleFilterOptions o;
-  o.particles = 4096;
-  o.tdoa_sigma_s = 8e-6;
-  o.seed = 42;
-  return o;
-}
-
 // Without acceleration noise every particle runs on its own circle: speed kept, heading
 // turned by omega_i t with |omega_i| <= max, position on the arc that heading implies; one
 // long step (the exact branch) lands where many short ones (the series) do.
@@ -31,7 +23,7 @@ TEST(ParticleTurnRates, EachParticleTurnsOnItsOwnCircle) {
   const double max_radps = 0.5, speed_mps = 2.0, step_s = 0.1;
   const int steps = 20;
   const double t_s = steps * step_s;
-  ParticleFilterOptions o = Options();
+  ParticleFilterOptions o = PersistentMotionOptions();
   ParticleSet short_steps(array, o), long_step(array, o);
   Vec6 start = Vec6::Zero();
   start(3) = speed_mps;
@@ -71,7 +63,7 @@ TEST(ParticleTurnRates, EachParticleTurnsOnItsOwnCircle) {
 
 TEST(ParticleTurnRates, OptionsAreValidated) {
   const ArrayGeometry array = Tetrahedron(2.0, Vec3::Zero(), 1500.0);
-  ParticleFilterOptions bad = Options();
+  ParticleFilterOptions bad = PersistentMotionOptions();
   bad.turn_rate_max_radps = -0.1;
   EXPECT_NE(ParticleFilter::Create(array, bad).status().message().find("turn_rate_max_radps"), std::string::npos);
   bad.turn_rate_max_radps = 6.0;
@@ -91,7 +83,7 @@ double ArcRmse(double turn_max_radps, uint64_t noise_seed) {
   const Vec3 centre(0.5, 0.3, -9.0);
   const auto truth = [&](double t) { return Vec3(centre + radius * Vec3(std::cos(w * t), std::sin(w * t), 0.0)); };
   const auto velocity = [&](double t) { return Vec3(speed * Vec3(-std::sin(w * t), std::cos(w * t), 0.0)); };
-  ParticleFilterOptions o = Options();
+  ParticleFilterOptions o = PersistentMotionOptions();
   o.accel_noise_mps2 = 1.0;
   std::tie(o.accel_level_floor, o.accel_level_ceiling, o.accel_level_switch_hz) = std::tuple(0.003, 3.0, 1.0);
   o.turn_rate_max_radps = turn_max_radps;

@@ -1,5 +1,6 @@
 // Synthetic TDOA frames for the particle filter's tests: a regular tetrahedron and the
-// delays a frame measures for a source moving at constant velocity, with Gaussian noise.
+// delays a frame measures for a source moving at constant velocity, with Gaussian noise; and
+// the options the per-particle motion tests share.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -9,8 +10,19 @@
 
 #include "engine/array/array_geometry.h"
 #include "engine/core/measurement.h"
+#include "engine/filters/particle_filter.h"
 
 namespace localizer::engine {
+
+// The per-particle motion tests' filter (turn rates, speed changes): 4096 particles, a fixed
+// TDOA noise of 8 us, seed 42; the motion itself is the defaults'.
+inline ParticleFilterOptions PersistentMotionOptions() {
+  ParticleFilterOptions o;
+  o.particles = 4096;
+  o.tdoa_sigma_s = 8e-6;
+  o.seed = 42;
+  return o;
+}
 
 inline ArrayGeometry Tetrahedron(double edge_m, const Vec3& centre, double c) {
   const double a = edge_m / (2.0 * std::sqrt(2.0));
@@ -22,8 +34,8 @@ inline ArrayGeometry Tetrahedron(double edge_m, const Vec3& centre, double c) {
 
 // TDOAs a frame centred at t_s measures for a source at p0 + v t: pair k describes the
 // instant t_s - d_k / 2 (solved by fixed-point iteration), plus Gaussian noise.
-inline Measurement MakeMeasurement(const ArrayGeometry& array, const Vec3& p0, const Vec3& v, double t_s, double sigma_s,
-                            double fs, std::mt19937_64& rng) {
+inline Measurement MakeMeasurement(const ArrayGeometry& array, const Vec3& p0, const Vec3& v, double t_s,
+                                   double sigma_s, double fs, std::mt19937_64& rng) {
   std::normal_distribution<double> noise(0.0, sigma_s);
   Measurement m;
   m.t_s = t_s;
