@@ -42,6 +42,9 @@ Status LoadOptions::Validate() {
   }
   if (block_samples < 1) return InvalidArgument("--block must be >= 1" + Got(block_samples));
   if (particles < 16) return InvalidArgument("--particles must be >= 16" + Got(particles));
+  if (motion != "default" && motion != "one-std") {
+    return InvalidArgument("--motion must be default or one-std, got \"" + motion + "\"");
+  }
   if (seed < 0) return InvalidArgument("--seed must be >= 0" + Got(seed));
   if (!(signal_seconds > 0.0)) return InvalidArgument("--signal-seconds must be > 0" + Got(signal_seconds));
   if (signal_seconds * sample_rate_hz > 1e8) {
@@ -85,6 +88,9 @@ void RegisterLoadFlags(FlagSet& flags, LoadOptions* o) {
   flags.Int("hop", &o->hop_samples, "N", "samples", "frame advance");
   flags.Int("block", &o->block_samples, "N", "samples", "samples per channel per block");
   flags.Int("particles", &o->particles, "N", "", "particle filter size");
+  flags.String("motion", &o->motion, "M",
+               "particle filter motion: default (the server's: acceleration levels, turn rates, speed changes) | "
+               "one-std (one acceleration std, the GPU filter's)");
   flags.String("encoding", &o->encoding, "ENC", "float (SampleBlock.samples) | pcm16 (pcm_s16le)");
   flags.String("backend", &o->backend, "NAME", "session backend: auto | cpu | gpu");
   flags.Int("seed", &o->seed, "N", "", "signal seed; session i's config uses seed + i");

@@ -34,6 +34,7 @@ struct LoadOptions {
   int hop_samples = 2048;          // frame advance, samples
   int block_samples = 4096;        // per channel per block
   int particles = 4096;            // particle filter size
+  std::string motion = "default";  // "default" (the server's) | "one-std" (the GPU filter's)
   std::string encoding = "float";  // "float" (SampleBlock.samples) | "pcm16"
   std::string backend = "auto";    // the session's backend: "auto", "cpu", "gpu"
   int seed = 1;                    // signal seed; session i's config has seed + i

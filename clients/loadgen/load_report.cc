@@ -74,6 +74,7 @@ nlohmann::json ResultJson(const LoadOptions& o, const LoadStats& stats, const Ru
   r["frame_samples"] = o.frame_samples;
   r["hop_samples"] = o.hop_samples;
   r["particles"] = o.particles;
+  r["motion"] = o.motion;
   r["backend"] = o.backend;
   r["backends"] = TallyJson(stats.backends());
   r["duration_s"] = o.duration_s;

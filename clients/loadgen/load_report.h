@@ -26,7 +26,7 @@ std::string ProgressLine(double elapsed_s, const LoadOptions& options, const Loa
 
 // The result, every figure named with its unit:
 //   sessions, sessions_started, sessions_opened, threads, connections, rate, encoding,
-//   channels, sample_rate_hz, block_samples, frame_samples, hop_samples, particles, backend,
+//   channels, sample_rate_hz, block_samples, frame_samples, hop_samples, particles, motion, backend,
 //   backends {name: sessions}, duration_s, ramp_s, wall_s, interrupted,
 //   blocks_sent, blocks_per_s (first send -> last send), estimates_received,
 //   estimates_per_s (first send -> last estimate), estimates_unmatched,

@@ -161,6 +161,13 @@ std::string Workload::OpenRequest(int index) const {
   config->set_frame_samples(static_cast<uint32_t>(options_.frame_samples));
   config->set_hop_samples(static_cast<uint32_t>(options_.hop_samples));
   config->mutable_filter()->set_particles(static_cast<uint32_t>(options_.particles));
+  if (options_.motion == "one-std") {  // the wire's 0 is the default: off goes as -1
+    v1::FilterConfig* filter = config->mutable_filter();
+    filter->set_accel_level_floor(1.0);
+    filter->set_accel_level_ceiling(1.0);
+    filter->set_turn_rate_max_radps(-1.0);
+    filter->set_speed_change_max_mps2(-1.0);
+  }
   config->set_band_low_hz(kBandLowHz);
   config->set_band_high_hz(band_high_hz_);
   config->set_seed(static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(index));

@@ -53,14 +53,15 @@ TEST_F(LoadgenTest, RealtimeRunAccountsForEveryBlockWithOrderedLatencies) {
   TempDir dir;
   const std::string result_path = dir.File("result.json"), err_path = dir.File("stderr.txt");
   const int sessions = 3;
-  const int code =
-      RunLoadgen("--target " + target_ + " --sessions " + std::to_string(sessions) +
-                     " --duration 2 --rate realtime --backend cpu --threads 2 --json '" + result_path + "'",
-                 err_path);
+  const int code = RunLoadgen("--target " + target_ + " --sessions " + std::to_string(sessions) +
+                                  " --duration 2 --rate realtime --backend cpu --threads 2 --motion one-std --json '" +
+                                  result_path + "'",
+                              err_path);
   const std::string err = ReadText(err_path);
   ASSERT_EQ(code, 0) << err;
   const nlohmann::json r = nlohmann::json::parse(ReadText(result_path));
   EXPECT_EQ(r["sessions_opened"], sessions);
+  EXPECT_EQ(r["motion"], "one-std") << "the sessions above opened with the one-std filter config";
   EXPECT_EQ(r["errors"], 0) << r.dump(2);
   EXPECT_EQ(r["rejected"], 0) << r.dump(2);
   EXPECT_EQ(r["gaps"], 0);
@@ -93,6 +94,8 @@ TEST(LoadgenFlags, ABadFlagExitsTwoNamingTheFlag) {
   EXPECT_NE(ReadText(err_path).find("--hop"), std::string::npos) << ReadText(err_path);
   EXPECT_EQ(RunLoadgen(base + "--rate sometimes", err_path), 2);
   EXPECT_NE(ReadText(err_path).find("--rate"), std::string::npos) << ReadText(err_path);
+  EXPECT_EQ(RunLoadgen(base + "--rate realtime --motion fast", err_path), 2);
+  EXPECT_NE(ReadText(err_path).find("--motion"), std::string::npos) << ReadText(err_path);
   EXPECT_EQ(RunLoadgen(base + "--rate max --sesions 3", err_path), 2);
   EXPECT_NE(ReadText(err_path).find("--sesions"), std::string::npos) << ReadText(err_path);
   EXPECT_EQ(RunLoadgen("--target 127.0.0.1:1 --duration 1 --rate max", err_path), 2);
