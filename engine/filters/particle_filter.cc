@@ -97,7 +97,7 @@ struct ParticleFilter::Impl {
     set.SetManoeuvre(o.manoeuvre_share, o.manoeuvre_scale);
     set.SetAccelLevels(o.accel_level_floor, o.accel_level_ceiling, o.accel_level_switch_hz);
     set.SetTurnRates(o.turn_rate_max_radps, o.accel_level_switch_hz);
-    set.SetSpeedChanges(o.speed_change_max_mps2, o.accel_level_switch_hz);  // after the turn rates
+    set.SetSpeedChanges(o.speed_change_max_mps2, o.accel_level_switch_hz);
   }
   ArrayGeometry array;
   ParticleFilterOptions options;

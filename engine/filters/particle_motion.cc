@@ -110,10 +110,17 @@ void ParticleSet::SetAccelLevels(double floor, double ceiling, double switch_rat
   if (on) DrawLevels();
 }
 
+// turn_ holds the turn rates, or zeros while only speed changes are on, so that one
+// prediction step (PredictPersistentMotion) serves both, whichever was set first.
+void ParticleSet::SizeTurnRates() {
+  PerParticle(turn_max_radps_ != 0.0f || !speed_change_.empty(), n_, &turn_, &next_turn_);
+  std::fill(turn_.begin(), turn_.end(), 0.0f);
+}
+
 void ParticleSet::SetTurnRates(double max_radps, double switch_rate_hz) {
   turn_max_radps_ = static_cast<float>(max_radps);
   turn_switch_rate_hz_ = switch_rate_hz;
-  PerParticle(max_radps != 0.0, n_, &turn_, &next_turn_);
+  SizeTurnRates();
   if (max_radps != 0.0) DrawLevels();
 }
 
@@ -122,24 +129,31 @@ void ParticleSet::SetSpeedChanges(double max_mps2, double switch_rate_hz) {
   speed_change_switch_rate_hz_ = switch_rate_hz;
   const bool on = max_mps2 != 0.0;
   PerParticle(on, n_, &speed_change_, &next_speed_change_);
-  if (on && turn_.empty()) {  // the persistent-motion step with every turn rate 0
-    PerParticle(true, n_, &turn_, &next_turn_);
-    std::fill(turn_.begin(), turn_.end(), 0.0f);
-    turn_max_radps_ = 0.0f;
-    turn_switch_rate_hz_ = 0.0;
-  }
+  SizeTurnRates();
   if (on) DrawLevels();
 }
 
-float ParticleSet::DrawSpeedChange(uint32_t key, uint32_t c) const {
-  if (UniformFromCounter(key, c) < kSpeedHoldShare) return 0.0f;
-  return speed_change_max_mps2_ * (2.0f * UniformFromCounter(key, c + 1) - 1.0f);
+// A speed change from counters c and c + 1 of `key`: 0 for a share kSpeedHoldShare of the
+// draws, uniform in [-max, max] for the others.
+static inline float DrawSpeedChange(uint32_t key, uint32_t c, float max_mps2) {
+  return UniformFromCounter(key, c) < ParticleSet::kSpeedHoldShare
+             ? 0.0f
+             : max_mps2 * (2.0f * UniformFromCounter(key, c + 1) - 1.0f);
+}
+
+// value[m] <- value[index[m]] for the n slots (resampling), through its scratch.
+static void CarryPerParticle(const int* index, int n, std::vector<float>* value, std::vector<float>* scratch) {
+  if (value->empty()) return;
+  for (int m = 0; m < n; ++m) (*scratch)[m] = (*value)[index[m]];
+  std::swap(*value, *scratch);
 }
 
 void ParticleSet::DrawLevels() {
   if (!speed_change_.empty()) {  // off: no key drawn, so the random stream is as before
     const uint32_t key = NextKey();
-    for (int i = 0; i < n_; ++i) speed_change_[i] = DrawSpeedChange(key, 2u * static_cast<uint32_t>(i));
+    for (int i = 0; i < n_; ++i) {
+      speed_change_[i] = DrawSpeedChange(key, 2u * static_cast<uint32_t>(i), speed_change_max_mps2_);
+    }
   }
   if (!turn_.empty()) {  // off: no key drawn, so the random stream is as before
     const uint32_t key = NextKey();
@@ -154,17 +168,9 @@ void ParticleSet::DrawLevels() {
 }
 
 void ParticleSet::CarryLevels() {
-  if (!speed_change_.empty()) {
-    for (int m = 0; m < n_; ++m) next_speed_change_[m] = speed_change_[index_[m]];
-    std::swap(speed_change_, next_speed_change_);
-  }
-  if (!turn_.empty()) {
-    for (int m = 0; m < n_; ++m) next_turn_[m] = turn_[index_[m]];
-    std::swap(turn_, next_turn_);
-  }
-  if (gain_.empty()) return;
-  for (int m = 0; m < n_; ++m) next_gain_[m] = gain_[index_[m]];
-  std::swap(gain_, next_gain_);
+  CarryPerParticle(index_.data(), n_, &speed_change_, &next_speed_change_);
+  CarryPerParticle(index_.data(), n_, &turn_, &next_turn_);
+  CarryPerParticle(index_.data(), n_, &gain_, &next_gain_);
 }
 
 // The jumps of each particle's level, turn rate and speed change over dt_s, then its normals
@@ -198,11 +204,8 @@ void ParticleSet::DrawPersistentJumps(uint32_t key, double dt_s) {
   }
   if (!speed_change_.empty()) {
     const float a_max = speed_change_max_mps2_;
-    // DrawSpeedChange(key, c + 1), inline so that the loop vectorises.
-    redraw(speed_change_switch_rate_hz_, speed_base, 3u, speed_change_.data(), [=](uint32_t c) {
-      return UniformFromCounter(key, c + 1) < kSpeedHoldShare ? 0.0f
-                                                              : a_max * (2.0f * UniformFromCounter(key, c + 2) - 1.0f);
-    });
+    redraw(speed_change_switch_rate_hz_, speed_base, 3u, speed_change_.data(),
+           [=](uint32_t c) { return DrawSpeedChange(key, c + 1, a_max); });
   }
   if (gain_.empty()) return;
   const float p = SwitchProbability(level_switch_rate_hz_, dt_s);

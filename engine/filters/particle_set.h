@@ -205,6 +205,8 @@ class ParticleSet {
   void PredictConstantVelocity(uint32_t key, float dt, float a_to_p, float a_to_v);
   // Every particle's gain, turn rate and speed change afresh (after sampling).
   void DrawLevels();
+  // Sizes turn_ for the turn rates or, with only speed changes on, zeros (PredictPersistentMotion).
+  void SizeTurnRates();
   // gain_[m] <- gain_[index_[m]], turn_ and speed_change_ too (after SystematicIndices).
   void CarryLevels();
   // Predict's step with per-particle turn rates and speed changes (turn_ not empty),
@@ -247,12 +249,11 @@ class ParticleSet {
   double turn_switch_rate_hz_ = 0.0;
   std::vector<float> turn_, next_turn_;
   // SetSpeedChanges: the largest rate and the redraw rate; speed_change_ empty while off
-  // (turn_ then holds zeros, so one prediction serves both).
+  // (with turn rates off, turn_ then holds zeros: SizeTurnRates).
   float speed_change_max_mps2_ = 0.0f;
   double speed_change_switch_rate_hz_ = 0.0;
   std::vector<float> speed_change_, next_speed_change_;
-  float DrawSpeedChange(uint32_t key, uint32_t c) const;  // from counters c and c + 1
-  std::vector<uint8_t> jumps_;                            // scratch for DrawPersistentJumps: which levels jump
+  std::vector<uint8_t> jumps_;  // scratch for DrawPersistentJumps: which levels jump
   // Weighted mean and covariance of the current particles, computed on demand and kept
   // until the particles or weights change (State() and the regulariser share them).
   mutable TrackState moments_;
