@@ -15,4 +15,9 @@ namespace localizer::engine {
 void GatherParents16(const std::array<float*, 6>& from, const int* index, int n, float (*parent)[16]);
 #endif
 
+// dst[m] = src[index[m]] for m in [0, n), index non-decreasing and below n (the per-particle
+// values that resampling carries, particle_motion.cc); GatherParents16's loads when built
+// with AVX-512, a scalar loop otherwise. src and dst must not overlap.
+void GatherSorted(const float* src, const int* index, int n, float* dst);
+
 }  // namespace localizer::engine

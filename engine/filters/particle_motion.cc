@@ -4,8 +4,13 @@
 // vector option as particle_set.cc (engine/CMakeLists.txt): the draws are compute-bound.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#if defined(__AVX512BW__)
+#include <immintrin.h>
+#endif
 
 #include "engine/core/fast_math.h"
+#include "engine/filters/particle_gather.h"
 #include "engine/filters/particle_set.h"
 
 namespace localizer::engine {
@@ -144,7 +149,7 @@ static inline float DrawSpeedChange(uint32_t key, uint32_t c, float max_mps2) {
 // value[m] <- value[index[m]] for the n slots (resampling), through its scratch.
 static void CarryPerParticle(const int* index, int n, std::vector<float>* value, std::vector<float>* scratch) {
   if (value->empty()) return;
-  for (int m = 0; m < n; ++m) (*scratch)[m] = (*value)[index[m]];
+  GatherSorted(value->data(), index, n, scratch->data());
   std::swap(*value, *scratch);
 }
 
@@ -171,6 +176,19 @@ void ParticleSet::CarryLevels() {
   CarryPerParticle(index_.data(), n_, &speed_change_, &next_speed_change_);
   CarryPerParticle(index_.data(), n_, &turn_, &next_turn_);
   CarryPerParticle(index_.data(), n_, &gain_, &next_gain_);
+}
+
+// Bit k set where flags[k] != 0, k < count <= 64.
+static inline uint64_t FlagMask64(const uint8_t* flags, int count) {
+#if defined(__AVX512BW__)
+  if (count == 64) {
+    const __m512i v = _mm512_loadu_si512(flags);
+    return _mm512_test_epi8_mask(v, v);
+  }
+#endif
+  uint64_t mask = 0;
+  for (int k = 0; k < count; ++k) mask |= static_cast<uint64_t>(flags[k] != 0) << k;
+  return mask;
 }
 
 // The jumps of each particle's level, turn rate and speed change over dt_s, then its normals
@@ -215,8 +233,13 @@ void ParticleSet::DrawPersistentJumps(uint32_t key, double dt_s) {
   for (int i = 0; i < n; ++i) jump[i] = UniformFromCounter(key, level_base + 2u * static_cast<uint32_t>(i)) < p;
   const float lo = log_level_floor_, span = log_level_ceiling_ - log_level_floor_;
   float* __restrict g = gain_.data();
-  for (int i = 0; i < n; ++i) {
-    if (jump[i]) g[i] = std::exp(lo + span * UniformFromCounter(key, level_base + 2u * static_cast<uint32_t>(i) + 1));
+  for (int base = 0; base < n; base += 64) {  // a branch per jump, not per particle
+    uint64_t bits = FlagMask64(jump + base, std::min(64, n - base));
+    while (bits != 0) {
+      const int i = base + __builtin_ctzll(bits);
+      bits &= bits - 1;
+      g[i] = std::exp(lo + span * UniformFromCounter(key, level_base + 2u * static_cast<uint32_t>(i) + 1));
+    }
   }
   float* __restrict a = accel_.data();
 #pragma omp simd

@@ -76,20 +76,41 @@ void RunningMax(int* __restrict index, int n) {
 }  // namespace
 
 #if defined(__AVX512F__)
+namespace {
+
+// Systematic resampling's indices advance about one particle per slot, so 16 slots' parents
+// nearly always lie within 32 consecutive particles from index[0]: two loads and a permute.
+inline bool ParentsNear(const int* index, int n) { return index[15] - index[0] < 32 && index[0] + 32 <= n; }
+
+// The 16 values column[index[k]]: near (ParentsNear), from the two loads at index[0]
+// permuted by offset = index - index[0]; otherwise a 16-way gather.
+inline __m512 GatherColumn16(const float* column, const int* index, bool near, __m512i offset, __m512i slots) {
+  if (!near) return _mm512_i32gather_ps(slots, column, 4);
+  const float* src = column + index[0];
+  return _mm512_permutex2var_ps(_mm512_loadu_ps(src), offset, _mm512_loadu_ps(src + 16));
+}
+
+}  // namespace
+
 void GatherParents16(const std::array<float*, 6>& from, const int* index, int n, float (*parent)[16]) {
   const __m512i slots = _mm512_loadu_si512(index);
-  const int lo = index[0];
-  if (index[15] - lo < 32 && lo + 32 <= n) {
-    const __m512i offset = _mm512_sub_epi32(slots, _mm512_set1_epi32(lo));
-    for (int r = 0; r < 6; ++r) {
-      const float* src = from[r] + lo;
-      _mm512_store_ps(parent[r], _mm512_permutex2var_ps(_mm512_loadu_ps(src), offset, _mm512_loadu_ps(src + 16)));
-    }
-    return;
-  }
-  for (int r = 0; r < 6; ++r) _mm512_store_ps(parent[r], _mm512_i32gather_ps(slots, from[r], 4));
+  const __m512i offset = _mm512_sub_epi32(slots, _mm512_set1_epi32(index[0]));
+  const bool near = ParentsNear(index, n);
+  for (int r = 0; r < 6; ++r) _mm512_store_ps(parent[r], GatherColumn16(from[r], index, near, offset, slots));
 }
 #endif
+
+void GatherSorted(const float* __restrict src, const int* __restrict index, int n, float* __restrict dst) {
+  int m = 0;
+#if defined(__AVX512F__)
+  for (; m + 16 <= n; m += 16) {
+    const __m512i slots = _mm512_loadu_si512(index + m);
+    const __m512i offset = _mm512_sub_epi32(slots, _mm512_set1_epi32(index[m]));
+    _mm512_storeu_ps(dst + m, GatherColumn16(src, index + m, ParentsNear(index + m, n), offset, slots));
+  }
+#endif
+  for (; m < n; ++m) dst[m] = src[index[m]];
+}
 
 void ParticleSet::ResampleSystematic(double kernel_scale) {
   if (labels_ > 1) {

@@ -4,12 +4,14 @@
 // remainder; and while several labels live, each label is moved with its own kernel.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
 #include "engine/filters/particle_filter.h"
+#include "engine/filters/particle_gather.h"
 #include "engine/filters/particle_set.h"
 #include "tests/filters/tdoa_frames.h"
 
@@ -112,6 +114,30 @@ TEST(ParticleFilter, ResamplingSeveralLabelsMovesEachWithItsOwnKernel) {
         EXPECT_NEAR(std::sqrt(mode.belief.covariance(axis, axis)), sd, 0.1 * sd)
             << "n " << n << ", label at x = " << 20 * c << ", axis " << axis;
       }
+    }
+  }
+}
+
+TEST(ParticleSet, GatherSortedCarriesEachSlotsParentsValue) {
+  // The per-particle values resampling carries (levels, turn rates, speed changes): runs of
+  // neighbours (the loads-and-permute path), jumps of 40 particles (the gather path), a
+  // parent at the array's last entry, and counts with and without a remainder of 16.
+  for (int n : {4096, 4099, 45, 16, 3}) {
+    std::vector<float> value(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) value[static_cast<size_t>(i)] = 0.5f + static_cast<float>(i);
+    // Parents advance by 0 or 1 per slot in even blocks of 64 slots, by 40 in odd ones, and
+    // stop at the last particle.
+    std::vector<int> index(static_cast<size_t>(n));
+    int parent = 0;
+    for (int m = 0; m < n; ++m) {
+      parent = std::min(n - 1, parent + ((m / 64) % 2 == 0 ? m % 2 : 40));
+      index[static_cast<size_t>(m)] = parent;
+    }
+    std::vector<float> carried(static_cast<size_t>(n), -1.0f);
+    GatherSorted(value.data(), index.data(), n, carried.data());
+    for (int m = 0; m < n; ++m) {
+      ASSERT_EQ(carried[static_cast<size_t>(m)], value[static_cast<size_t>(index[static_cast<size_t>(m)])])
+          << "n " << n << ", slot " << m;
     }
   }
 }
