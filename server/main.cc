@@ -12,6 +12,7 @@
 
 #include "engine/core/flags.h"
 #include "engine/pipeline/backend.h"
+#include "server/service/heap_settings.h"
 #include "server/service/log.h"
 #include "server/service/server.h"
 #include "server/service/version.h"
@@ -134,6 +135,8 @@ int Main(int argc, char** argv) {
     std::cerr << "localizer-server: " << valid.message() << "\n";
     return 2;
   }
+
+  ConfigureHeapForServing();  // before any thread starts (heap_settings.h)
 
   // Signals are taken by sigwait on this thread; every thread started later inherits the mask.
   sigset_t stop_signals;
