@@ -30,6 +30,19 @@ struct CrossBin {
   float im;
 };
 
+// The frame's taper (GccOptions::taper_fraction, gcc_phat.h): a Tukey window whose first and
+// last E = floor(taper_fraction n / 2) samples rise and fall as half cosines,
+//   gain(i) = (1 - cos(pi (j + 1/2) / E)) / 2 for j = min(i, n - 1 - i) < E, else 1,
+// so no sample is zeroed and the frame's middle is untouched (E = 0: a rectangle).
+LOCALIZER_HOST_DEVICE inline int TaperEdgeSamples(int n, float taper_fraction) {
+  return static_cast<int>(0.5f * taper_fraction * static_cast<float>(n));
+}
+LOCALIZER_HOST_DEVICE inline float TaperGain(int i, int n, int edge) {
+  const int j = i < n - 1 - i ? i : n - 1 - i;
+  if (j >= edge) return 1.0f;
+  return 0.5f * (1.0f - cosf(3.14159265358979f * (static_cast<float>(j) + 0.5f) / static_cast<float>(edge)));
+}
+
 // X_k conj(X_r).
 LOCALIZER_HOST_DEVICE inline CrossBin CrossOf(CrossBin xr, CrossBin xk) {
   return {xk.re * xr.re + xk.im * xr.im, xk.im * xr.re - xk.re * xr.im};

@@ -78,6 +78,9 @@ Status GccOptions::Validate() const {
   if (!(phat_beta >= 0.0 && phat_beta <= 1.0)) {
     return BadOption("phat_beta", phat_beta, "must be in [0, 1]");
   }
+  if (!(taper_fraction >= 0.0 && taper_fraction <= 1.0)) {
+    return BadOption("taper_fraction", taper_fraction, "must be in [0, 1]");
+  }
   if (lag_margin_samples < 0) {
     return BadOption("lag_margin_samples", lag_margin_samples, "must be >= 0");
   }

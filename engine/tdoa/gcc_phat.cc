@@ -22,20 +22,24 @@ namespace {
 // Copies one channel into the zero-padded transform input and returns its energy (sum of
 // squares, double so that no finite input overflows). Partial sums in kLanes lanes let the
 // compiler vectorise the reduction without reassociating a single float sum.
-double CopyChannel(const float* src, int n, float* dst) {
+// dst = src (window empty) or src times the window (n gains, gcc_math.h's TaperGain); returns
+// the energy of dst. One pass: the copy, the gain and the sum of squares in kLanes lanes.
+double CopyChannel(const float* src, int n, std::span<const float> window, float* dst) {
+  const bool windowed = !window.empty();
   double lanes[kLanes] = {};
   int i = 0;
   for (; i + kLanes <= n; i += kLanes) {
     for (int j = 0; j < kLanes; ++j) {
-      const float v = src[i + j];
+      const float v = windowed ? src[i + j] * window[static_cast<std::size_t>(i + j)] : src[i + j];
       dst[i + j] = v;
       lanes[j] += static_cast<double>(v) * v;
     }
   }
   double energy = 0.0;
   for (; i < n; ++i) {
-    dst[i] = src[i];
-    energy += static_cast<double>(src[i]) * src[i];
+    const float v = windowed ? src[i] * window[static_cast<std::size_t>(i)] : src[i];
+    dst[i] = v;
+    energy += static_cast<double>(v) * v;
   }
   for (double lane : lanes) energy += lane;
   return energy;
@@ -68,6 +72,12 @@ Status GccPhatEstimator::Impl::Init() {
   auto computed = ComputeGccLayout(array, options);
   if (!computed.ok()) return computed.status();
   layout = std::move(computed).value();
+  const int n = options.frame_samples;
+  const int edge = TaperEdgeSamples(n, static_cast<float>(options.taper_fraction));
+  taper_gains.assign(edge > 0 ? static_cast<std::size_t>(n) : 0, 1.0f);
+  for (int i = 0; i < static_cast<int>(taper_gains.size()); ++i) {
+    taper_gains[static_cast<std::size_t>(i)] = TaperGain(i, n, edge);
+  }
   const int fft_size = layout.fft_size;
   spectrum_stride = (2 * layout.bin_count + 15) / 16 * 16;
   const int widest_lag = layout.widest_lag();
@@ -101,7 +111,7 @@ Status GccPhatEstimator::Impl::Init() {
 // r2c of one channel into its slot in `spectra`. The padded tail stays zero: out-of-place
 // r2c preserves its input, and only the first frame_samples are ever written.
 Status GccPhatEstimator::Impl::TransformChannel(const float* samples, int channel) {
-  const double e = CopyChannel(samples, options.frame_samples, padded.get());
+  const double e = CopyChannel(samples, options.frame_samples, taper_gains, padded.get());
   if (!std::isfinite(e)) {
     return InvalidArgument("channel " + std::to_string(channel) + " holds a non-finite sample (NaN or Inf)");
   }

@@ -32,6 +32,8 @@
 //   kParabolic  0.056        0.0020   0.038     0.055        0.0040   0.038
 //   kGaussian   0.116        0.0031   0.065     0.119        0.0079   0.067
 //   kSinc       0.0003       0.0012   0.0011    0.0011       0.0032   0.0029
+// (rectangular frames; GccOptions::taper_fraction's default 0.2 takes kSinc's noiseless rms
+// to 0.00035 by quieting the frame ends, gcc_phat.h.)
 // kSinc is the default (GccOptions::interpolation): it removes the bias and the rms error
 // falls 35x (noiseless) and 13x (20 dB). Without the band set, on a noiseless band-limited
 // source PHAT whitens the out-of-band leakage of the frame edges and every method scatters

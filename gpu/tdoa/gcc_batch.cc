@@ -251,6 +251,8 @@ Status GccBatch::Impl::Enqueue(std::span<const GccJob> jobs, int bucket, std::si
     }
     const engine::GccOptions& options = plan.options();
     const engine::GccLayout& layout = plan.layout();
+    staged_sources.data()[j].taper_edge =
+        engine::TaperEdgeSamples(key.frame_samples, static_cast<float>(options.taper_fraction));
     for (int p = 0; p < pairs; ++p) {
       GccPairTask& t = staged_tasks.data()[j * pairs + p];
       t.ref_row = j * channels + plan.reference_sensor();

@@ -37,7 +37,9 @@ __global__ void __launch_bounds__(kPackThreads) GccPackKernel(GccPackArgs a) {
   float* out = a.signal + static_cast<std::size_t>(row) * a.fft_size;
   double energy = 0.0;
   for (int i = threadIdx.x; i < a.fft_size; i += kPackThreads) {
-    const float v = (live && i < a.frame_samples) ? *FrameSample(source, channel, i) : 0.0f;
+    const float v = (live && i < a.frame_samples)
+                        ? *FrameSample(source, channel, i) * engine::TaperGain(i, a.frame_samples, source.taper_edge)
+                        : 0.0f;
     out[i] = v;
     energy += static_cast<double>(v) * v;
   }

@@ -61,10 +61,11 @@ struct GccFrameSource {
   const float* samples = nullptr;
   int32_t row_samples = 0;
   int32_t first = 0;
+  int32_t taper_edge = 0;  // samples tapered at each end (engine/tdoa/gcc_math.h's TaperGain)
 };
 
 // rows = padded_frames * channels rows of fft_size floats: row r < live_rows gets frame row
-// r (frame_samples floats) then zeros; rows >= live_rows get zeros. energy[r] = sum of
+// r (frame_samples floats, times the frame's taper) then zeros; rows >= live_rows get zeros. energy[r] = sum of
 // squares of row r in double, by a fixed-order block reduction. The values, hence every
 // result, are the same whether a frame is read from the host or from a ring.
 struct GccPackArgs {

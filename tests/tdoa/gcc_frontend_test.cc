@@ -244,8 +244,10 @@ TEST(PhatCoherence, WithoutABandHintMatchesPhatWithTheTrueBand) {
         snr, hinted.spread, hinted.lost, blind.spread, blind.lost, learnt.spread, learnt.lost);
     EXPECT_EQ(learnt.lost, 0) << snr;
     EXPECT_LT(learnt.spread, 1.3 * hinted.spread) << snr;
-    // Without the band plain PHAT is far worse (measured 2.5-5x), so the test has teeth.
-    EXPECT_GT(blind.spread, 2.0 * learnt.spread) << snr;
+    // Without the band plain PHAT is far worse, so the test has teeth: measured 2.5-5x with
+    // rectangular frames, 1.9-4.8x since the frames' taper (GccOptions::taper_fraction) cut
+    // blind PHAT's scatter.
+    EXPECT_GT(blind.spread, 1.5 * learnt.spread) << snr;
   }
 }
 

@@ -96,6 +96,9 @@ TEST(GccOptions, BadValuesAreRejectedNamingFieldAndValue) {
        }},
       {"phat_beta", "1.5", [](GccOptions& o) { o.phat_beta = 1.5; }},
       {"phat_beta", "-0.1", [](GccOptions& o) { o.phat_beta = -0.1; }},
+      {"taper_fraction", "1.5", [](GccOptions& o) { o.taper_fraction = 1.5; }},
+      {"taper_fraction", "-0.1", [](GccOptions& o) { o.taper_fraction = -0.1; }},
+      {"taper_fraction", "nan", [](GccOptions& o) { o.taper_fraction = std::nan(""); }},
       {"lag_margin_samples", "-1", [](GccOptions& o) { o.lag_margin_samples = -1; }},
   };
   const ArrayGeometry array = Tetrahedron();

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <vector>
 
+#include "engine/tdoa/gcc_math.h"
 #include "engine/tdoa/gcc_phat.h"
 #include "tests/tdoa/tdoa_test_signals.h"
 
@@ -61,10 +62,12 @@ struct BiasStats {
 
 // Sweeps the true fractional delay 0, 0.1, ..., 1.0 sample on GCC-PHAT of band-limited
 // noise (three pairs per frame, `trials` frames per fraction) and returns bias and spread.
-BiasStats MeasureBias(PeakInterpolation method, int trials, double snr_db, bool band_limited, bool print) {
+BiasStats MeasureBias(PeakInterpolation method, int trials, double snr_db, bool band_limited, bool print,
+                      double taper_fraction = GccOptions().taper_fraction) {
   const SignalSpec spec;
   auto array = ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
   GccOptions options;
+  options.taper_fraction = taper_fraction;
   options.sample_rate_hz = spec.sample_rate_hz;
   options.frame_samples = spec.frame_samples;
   options.interpolation = method;
@@ -157,6 +160,43 @@ TEST(PeakInterpolation, LeavingOutTheBandSpreadsTheEstimates) {
   const BiasStats without_band = MeasureBias(PeakInterpolation::kSinc, 16, 20.0, false, true);
   EXPECT_GT(without_band.max_std, 3.0 * with_band.max_std);
   EXPECT_GT(without_band.rms, 3.0 * with_band.rms);
+}
+
+// GccOptions::taper_fraction. With rectangular frames the delayed copies' unmatched samples
+// at the frame ends scatter the peak; tapered ends remove most of that (noiseless, band set:
+// measured rms 0.00148 -> 0.00035 sample), and without the band at 20 dB the whitened
+// out-of-band noise still dominates but the taper trims it (0.0174 -> 0.0153).
+TEST(PeakInterpolation, TaperingTheFrameEndsCutsTheirScatter) {
+  const BiasStats rectangle = MeasureBias(PeakInterpolation::kSinc, 16, kNoiseless, true, false, 0.0);
+  const BiasStats tapered = MeasureBias(PeakInterpolation::kSinc, 16, kNoiseless, true, false, 0.2);
+  const BiasStats noisy_rectangle = MeasureBias(PeakInterpolation::kSinc, 16, 20.0, false, false, 0.0);
+  const BiasStats noisy_tapered = MeasureBias(PeakInterpolation::kSinc, 16, 20.0, false, false, 0.2);
+  std::printf("noiseless, band: rms %.5f -> %.5f; 20 dB, no band: rms %.5f -> %.5f\n", rectangle.rms, tapered.rms,
+              noisy_rectangle.rms, noisy_tapered.rms);
+  EXPECT_LT(tapered.rms, 0.5 * rectangle.rms);
+  EXPECT_LT(tapered.max_std, 0.5 * rectangle.max_std);
+  EXPECT_LT(noisy_tapered.rms, 0.95 * noisy_rectangle.rms);
+}
+
+// The taper's gains (gcc_math.h): symmetric, 1 over the middle, rising through (0, 1) over the
+// edge, and a rectangle at 0.
+TEST(PeakInterpolation, TaperGainIsASymmetricTukeyWindow) {
+  const int n = 4096;
+  EXPECT_EQ(TaperEdgeSamples(n, 0.0f), 0);
+  EXPECT_EQ(TaperEdgeSamples(n, 0.2f), 409);
+  EXPECT_EQ(TaperEdgeSamples(n, 1.0f), 2048);
+  for (int i = 0; i < n; i += 7) EXPECT_EQ(TaperGain(i, n, 0), 1.0f) << i;
+  const int edge = TaperEdgeSamples(n, 0.2f);
+  float last = 0.0f;
+  for (int i = 0; i < edge; ++i) {
+    const float g = TaperGain(i, n, edge);
+    EXPECT_GT(g, last) << i;
+    EXPECT_LT(g, 1.0f) << i;
+    EXPECT_EQ(g, TaperGain(n - 1 - i, n, edge)) << i;
+    last = g;
+  }
+  EXPECT_NEAR(TaperGain(edge / 2, n, edge), 0.5f, 0.01f);
+  for (int i = edge; i < n - edge; i += 5) EXPECT_EQ(TaperGain(i, n, edge), 1.0f) << i;
 }
 
 // peak_math.h writes the window's tap phases as constants (the GPU needs no table set-up);
