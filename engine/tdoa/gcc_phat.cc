@@ -19,11 +19,11 @@
 namespace localizer::engine {
 namespace {
 
-// Copies one channel into the zero-padded transform input and returns its energy (sum of
-// squares, double so that no finite input overflows). Partial sums in kLanes lanes let the
-// compiler vectorise the reduction without reassociating a single float sum.
-// dst = src (window empty) or src times the window (n gains, gcc_math.h's TaperGain); returns
-// the energy of dst. One pass: the copy, the gain and the sum of squares in kLanes lanes.
+// Copies one channel into the zero-padded transform input, times the frame's taper when
+// `window` holds its n gains (gcc_math.h's TaperGain; empty: a plain copy), and returns the
+// copy's energy (sum of squares, double so that no finite input overflows). One pass; partial
+// sums in kLanes lanes let the compiler vectorise the reduction without reassociating a
+// single float sum.
 double CopyChannel(const float* src, int n, std::span<const float> window, float* dst) {
   const bool windowed = !window.empty();
   double lanes[kLanes] = {};

@@ -65,9 +65,10 @@ struct GccFrameSource {
 };
 
 // rows = padded_frames * channels rows of fft_size floats: row r < live_rows gets frame row
-// r (frame_samples floats, times the frame's taper) then zeros; rows >= live_rows get zeros. energy[r] = sum of
-// squares of row r in double, by a fixed-order block reduction. The values, hence every
-// result, are the same whether a frame is read from the host or from a ring.
+// r (frame_samples floats, times the frame's taper) then zeros; rows >= live_rows get zeros.
+// energy[r] = sum of squares of row r in double, by a fixed-order block reduction. The
+// values, hence every result, are the same whether a frame is read from the host or from a
+// ring.
 struct GccPackArgs {
   // Per live frame, where it lies: page-locked host memory that the device reads in place
   // (cudaMallocHost: mapped at the same address under unified addressing, so no separate
