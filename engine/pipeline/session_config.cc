@@ -1,5 +1,6 @@
 #include "engine/pipeline/session_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -103,6 +104,12 @@ Status AudioSessionConfig::Validate() const {
   return tracker.particle.Validate();
 }
 
+double FramingTaperFraction(int frame_samples, int hop_samples) {
+  if (frame_samples <= 0) return GccOptions().taper_fraction;
+  const double overlap_taper = 2.0 * (1.0 - static_cast<double>(hop_samples) / frame_samples);
+  return std::clamp(overlap_taper, GccOptions().taper_fraction, 1.0);
+}
+
 GccOptions AudioSessionConfig::GccOptionsFor() const {
   GccOptions gcc;
   gcc.frame_samples = frame_samples;
@@ -111,6 +118,7 @@ GccOptions AudioSessionConfig::GccOptionsFor() const {
   gcc.phat_beta = phat_beta;
   gcc.band_low_hz = band_low_hz;
   gcc.band_high_hz = band_high_hz;
+  gcc.taper_fraction = FramingTaperFraction(frame_samples, hop_samples);
   gcc.keep_gcc = true;     // acquisition, presence, multipath association and the noise anchor read it
   gcc.max_candidates = 1;  // the session looks for other peaks in the kept GCC, near its track
   return gcc;

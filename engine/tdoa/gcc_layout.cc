@@ -6,6 +6,7 @@
 #include <string>
 
 #include "engine/tdoa/fftw_util.h"
+#include "engine/tdoa/gcc_math.h"
 #include "engine/tdoa/peak_interpolation.h"
 
 namespace localizer::engine {
@@ -15,6 +16,18 @@ std::string Value(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", v);
   return text;
+}
+
+// 1 / sqrt(n sum w^4 / (sum w^2)^2) over the frame's taper (gcc_layout.h).
+float TaperNoiseFactor(int n, double taper_fraction) {
+  const int edge = TaperEdgeSamples(n, static_cast<float>(taper_fraction));
+  double sum2 = 0.0, sum4 = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double w2 = static_cast<double>(TaperGain(i, n, edge)) * TaperGain(i, n, edge);
+    sum2 += w2;
+    sum4 += w2 * w2;
+  }
+  return sum4 > 0.0 ? static_cast<float>(sum2 / std::sqrt(n * sum4)) : 1.0f;
 }
 
 }  // namespace
@@ -55,7 +68,9 @@ StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOption
     return InvalidArgument("band [" + Value(options.band_low_hz) + ", " + Value(options.band_high_hz) +
                            "] Hz holds no FFT bin (bin spacing " + Value(fs / layout.fft_size) + " Hz)");
   }
-  layout.noise_floor_inverse = static_cast<float>(std::sqrt(2.0 * (layout.band_end_bin - layout.band_first_bin)));
+  layout.taper_noise_factor = TaperNoiseFactor(options.frame_samples, options.taper_fraction);
+  layout.noise_floor_inverse =
+      layout.taper_noise_factor * static_cast<float>(std::sqrt(2.0 * (layout.band_end_bin - layout.band_first_bin)));
 
   // Keep each window and the interpolator's reach inside half the transform.
   const int half_fft = layout.fft_size / 2;  // an integer: the transform's half length

@@ -190,7 +190,7 @@ float GccPhatEstimator::Impl::WeighedNoiseFloorInverse(float norm) const {
   double variance = 2.0 * power;
   if (lo == 0) variance -= static_cast<double>(g[0]) * g[0];
   if (hi == last + 1) variance -= static_cast<double>(g[2 * last]) * g[2 * last];
-  return variance > 0.0 ? static_cast<float>(norm / std::sqrt(variance)) : 0.0f;
+  return variance > 0.0 ? layout.taper_noise_factor * static_cast<float>(norm / std::sqrt(variance)) : 0.0f;
 }
 
 // window[i] = R(i - L - K) * scale: the searched lags plus kPeakHalfWidth either side for

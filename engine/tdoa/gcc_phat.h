@@ -182,9 +182,10 @@ struct GccOptions {
   // Gaussian RMSE/CRLB 0.585 -> 0.564 (median of draws, better in 8 of 10), silent failures
   // 12 -> 10, acquired 1975 -> 1972, within 3 x the theoretical CRLB 841 -> 829, p95 time to
   // acquire 6.1 -> 6.7 s (median of draws; worst 9.1 -> 7.5): beyond the Gaussian ratio,
-  // within the draws' noise. Hann did more for the campaign's Gaussian ratio but
-  // changes the noise-only statistics that presence and peak_snr rest on (their noise floor
-  // assumes near-rectangular frames: pure noise then passes for a source); 0.2 keeps them.
+  // within the draws' noise. A session sets it from its framing (session_config.h,
+  // FramingTaperFraction: Hann at 50 % overlap, which did better still); 0.2 is for a frame
+  // that no other overlaps. The noise floor behind peak_snr and presence follows the taper
+  // (gcc_layout.h), so pure noise reads the same through any of them.
   double taper_fraction = 0.2;
   bool keep_gcc = true;                                        // copy the GCC over the lag window into the Measurement
   PeakInterpolation interpolation = PeakInterpolation::kSinc;  // sub-sample refinement

@@ -23,7 +23,7 @@ struct GccPhatEstimator::Impl {
   Status TransformChannel(const float* samples, int channel);
   float WeighCrossSpectrum(int pair);
   // S / sqrt(the noise-only variance of S R) for the weights in `weighed`: 1 / (R's noise-only
-  // standard deviation), for weights that are not PHAT's unit ones.
+  // standard deviation), for weights that are not PHAT's unit ones; times the taper's factor (gcc_layout.h).
   float WeighedNoiseFloorInverse(float norm) const;
   void MeasurePair(int pair, PairMeasurement* out);
   void GatherWindow(int max_lag, float scale);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <random>
 
+#include "engine/pipeline/mirror_watch.h"
 #include "engine/pipeline/scene_campaign.h"
 #include "engine/pipeline/session.h"
 #include "engine/sim/simulator.h"
@@ -99,9 +100,12 @@ TEST(AcquisitionSession, AFarSecondSolutionFavouredByTheEvidenceIsNotReportedAsC
 // slowly in a straight line) whose two exact TDOA solutions meet near 8 s: the track leaves
 // on the other branch and is 0.6-1.3 m off by the end with every innovation small (before the
 // mirror watch: position NEES 90-394, ambiguous 0). The track's mirror then is the truth and
-// moves as a source can, so every frame more than 3 CRLBs off after 9 s must say ambiguous
-// and cover the truth. Run with one acceleration std: the default motion (levels, turn rates
-// and speed changes) stays on the true branch here, and the contract is the mirror watch's.
+// moves as a source can, so every frame more than 3 CRLBs off after 9 s must cover the
+// truth, and say ambiguous once the watch has seen the mirror move for its window
+// (MirrorWatch::kWindowFrames frames after the first such frame; with Hann-tapered frames the
+// track leaves gradually, 0.3 m at 9.6 s to 0.7 m at 10.6 s, before the watch takes over).
+// Run with one acceleration std: the default motion (levels, turn rates and speed changes)
+// stays on the true branch here, and the contract is the mirror watch's.
 TEST(AcquisitionSession, ATrackOnTheOtherBranchSaysTheMirrorIsPossible) {
   const SceneRow row = RunRandomScene(1000081, RandomSceneOptions{}, {}, /*keep_frames=*/true,
                                       [](AudioSessionConfig* c) { c->tracker.particle.SetSingleMotion(); });
@@ -111,7 +115,8 @@ TEST(AcquisitionSession, ATrackOnTheOtherBranchSaysTheMirrorIsPossible) {
   for (const FrameScore& f : row.score.per_frame) {
     if (f.t_s < 9.0 || !f.initialised || !(f.error_m > 3.0 * f.crlb_m)) continue;
     ++far_off;
-    EXPECT_TRUE(f.ambiguous) << "t=" << f.t_s << " error " << f.error_m << " m";
+    if (far_off > MirrorWatch::kWindowFrames)
+      EXPECT_TRUE(f.ambiguous) << "t=" << f.t_s << " error " << f.error_m << " m";
     EXPECT_LT(f.nees_position, 16.0) << "t=" << f.t_s << " error " << f.error_m << " m";
   }
   EXPECT_GT(far_off, 2) << "the scene no longer leaves on the other branch: the test needs another scene";

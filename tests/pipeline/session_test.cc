@@ -8,9 +8,27 @@
 #include <random>
 
 #include "engine/sim/simulator.h"
+#include "engine/tdoa/gcc_math.h"
 
 namespace localizer::engine {
 namespace {
+
+// The frames' taper follows the overlap: the widest Tukey window whose hop-shifted copies sum
+// to a constant (Hann at 50 %), never narrower than GccOptions' 0.2 (a frame nothing overlaps).
+TEST(SessionConfig, TheFramesTaperIsTheWidestThatTheOverlapKeepsConstant) {
+  AudioSessionConfig c;
+  c.frame_samples = 4096;
+  for (const auto& [hop, taper] :
+       {std::pair{2048, 1.0}, std::pair{1024, 1.0}, std::pair{3072, 0.5}, std::pair{4096, 0.2}, std::pair{4000, 0.2}}) {
+    c.hop_samples = hop;
+    EXPECT_DOUBLE_EQ(c.GccOptionsFor().taper_fraction, taper) << "hop " << hop;
+  }
+  // Tukey 0.5 at a 3/4-frame hop: each sample's gains over the frames holding it sum to 1.
+  const int n = 4096, hop = 3072, edge = TaperEdgeSamples(n, 0.5f);
+  for (int i = hop; i < n; i += 97) {
+    EXPECT_NEAR(TaperGain(i, n, edge) + TaperGain(i - hop, n, edge), 1.0, 2e-3) << "sample " << i;
+  }
+}
 
 struct Fixture {
   Scenario scenario;

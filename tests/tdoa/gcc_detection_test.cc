@@ -42,5 +42,46 @@ TEST(GccDetection, PeakSnrSeparatesASourceFromNoise) {
   for (const PairMeasurement& p : m.pairs) EXPECT_GT(p.peak_snr, 10.0);
 }
 
+// The noise floor follows the frame's taper: a window correlates neighbouring bins, which
+// widens R's noise-only spread (by about sqrt(N sum w^4 / (sum w^2)^2)), so peak_snr on
+// noise alone must read the same for every taper, with the band set and without.
+TEST(GccDetection, NoiseAlonePeakSnrDoesNotDependOnTheTaper) {
+  const SignalSpec spec;
+  const auto array = *ArrayGeometry::Create(testing::TetrahedronSensors(), 1500.0);
+  for (const bool band : {true, false}) {
+    std::vector<double> medians, p99s;
+    for (const double taper : {0.0, 0.2, 0.5, 1.0}) {
+      GccOptions options;
+      options.sample_rate_hz = spec.sample_rate_hz;
+      options.frame_samples = spec.frame_samples;
+      if (band) {
+        options.band_low_hz = spec.band_low_hz;
+        options.band_high_hz = spec.band_high_hz;
+      }
+      options.taper_fraction = taper;
+      auto gcc = std::move(*GccPhatEstimator::Create(array, options));
+      std::mt19937_64 rng(22);
+      std::normal_distribution<float> noise(0.0f, 1.0f);
+      std::vector<float> frame(static_cast<size_t>(4 * spec.frame_samples));
+      std::vector<double> snr;
+      Measurement m;
+      for (int trial = 0; trial < 100; ++trial) {
+        for (float& x : frame) x = noise(rng);
+        ASSERT_TRUE(gcc->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
+        for (const PairMeasurement& p : m.pairs) snr.push_back(p.peak_snr);
+      }
+      std::sort(snr.begin(), snr.end());
+      medians.push_back(snr[snr.size() / 2]);
+      p99s.push_back(snr[snr.size() * 99 / 100]);
+      std::printf("band %d taper %.1f: noise peak_snr median %.2f p99 %.2f\n", band, taper, medians.back(),
+                  p99s.back());
+    }
+    for (size_t i = 1; i < medians.size(); ++i) {
+      EXPECT_NEAR(medians[i] / medians[0], 1.0, 0.08) << "taper #" << i << " band " << band;
+      EXPECT_LT(p99s[i], 5.0) << "taper #" << i << " band " << band;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace localizer::engine
