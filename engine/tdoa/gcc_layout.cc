@@ -18,12 +18,11 @@ std::string Value(double v) {
   return text;
 }
 
-// 1 / sqrt(n sum w^4 / (sum w^2)^2) over the frame's taper (gcc_layout.h).
+// 1 / sqrt(n sum w^4 / (sum w^2)^2) over the frame's taper (gcc_layout.h); 1 for a rectangle.
 float TaperNoiseFactor(int n, double taper_fraction) {
-  const int edge = TaperEdgeSamples(n, static_cast<float>(taper_fraction));
   double sum2 = 0.0, sum4 = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const double w2 = static_cast<double>(TaperGain(i, n, edge)) * TaperGain(i, n, edge);
+  for (const float gain : TaperGains(n, taper_fraction)) {
+    const double w2 = static_cast<double>(gain) * gain;
     sum2 += w2;
     sum4 += w2 * w2;
   }
@@ -31,6 +30,15 @@ float TaperNoiseFactor(int n, double taper_fraction) {
 }
 
 }  // namespace
+
+std::vector<float> TaperGains(int n, double taper_fraction) {
+  const int edge = TaperEdgeSamples(n, static_cast<float>(taper_fraction));
+  std::vector<float> gains;
+  if (edge <= 0) return gains;
+  gains.reserve(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) gains.push_back(TaperGain(i, n, edge));
+  return gains;
+}
 
 int GccLayout::widest_lag() const {
   int widest = 0;

@@ -47,4 +47,8 @@ struct GccLayout {
 // ("band [lo, hi] Hz holds no FFT bin (bin spacing ... Hz)").
 StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOptions& options);
 
+// The frame's taper as n gains (gcc_math.h's TaperGain), empty when taper_fraction leaves no
+// sample tapered (a rectangle): the CPU estimator's table and the source of G above.
+std::vector<float> TaperGains(int n, double taper_fraction);
+
 }  // namespace localizer::engine

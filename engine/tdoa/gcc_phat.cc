@@ -72,12 +72,7 @@ Status GccPhatEstimator::Impl::Init() {
   auto computed = ComputeGccLayout(array, options);
   if (!computed.ok()) return computed.status();
   layout = std::move(computed).value();
-  const int n = options.frame_samples;
-  const int edge = TaperEdgeSamples(n, static_cast<float>(options.taper_fraction));
-  taper_gains.assign(edge > 0 ? static_cast<std::size_t>(n) : 0, 1.0f);
-  for (int i = 0; i < static_cast<int>(taper_gains.size()); ++i) {
-    taper_gains[static_cast<std::size_t>(i)] = TaperGain(i, n, edge);
-  }
+  taper_gains = TaperGains(options.frame_samples, options.taper_fraction);
   const int fft_size = layout.fft_size;
   spectrum_stride = (2 * layout.bin_count + 15) / 16 * 16;
   const int widest_lag = layout.widest_lag();
