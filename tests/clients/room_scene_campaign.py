@@ -14,7 +14,7 @@ Prints one line per scene, then the pooled heard share, the median per-talker he
 the false time (heard rows beyond 15 degrees of every talker) and the identities per talker.
 
 usage: /usr/bin/python3 room_scene_campaign.py --array scenes/arrays/square4.json
-           [--scenes 20] [--seed 1] [--line] [--max-talkers 3] [--cli build/clients/localizer-cli]
+           [--scenes 20] [--seed 1] [--line] [--max-talkers 3] [--snr-db LO HI] [--cli build/clients/localizer-cli]
            [--work DIR] [--track-arg=--flag=value ...] [--json out.json]
 """
 import argparse
@@ -31,8 +31,10 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import room_scene_score  # noqa: E402
 
+NOISE_DB = -15  # sensor noise against a level-0 talker's direct sound at 1 m
 
-def draw_scene(rng, sensors, line, max_talkers, min_separation_rad):
+
+def draw_scene(rng, sensors, line, max_talkers, min_separation_rad, snr_db=None):
     """A scene dict for simulate --room, and each talker's scored angle (for the record)."""
     size = [rng.uniform(4.0, 8.0), rng.uniform(3.5, 7.0), rng.uniform(2.5, 3.5)]
     rt60 = rng.uniform(0.2, 0.6)
@@ -69,11 +71,15 @@ def draw_scene(rng, sensors, line, max_talkers, min_separation_rad):
         else:
             break  # no room for another talker in this scene
         angles.append(angle)
-        talkers.append({'position_m': [round(v, 3) for v in p], 'signal': 'bursts',
-                        'level_db': 0.0 if k == 0 else round(rng.uniform(-10.0, 0.0), 1)})
+        if snr_db:
+            # Direct sound at distance r: level - 20 log10(r) over noise at NOISE_DB (1 m).
+            level = rng.uniform(*snr_db) + NOISE_DB + 20.0 * math.log10(math.dist(p, centroid))
+        else:
+            level = 0.0 if k == 0 else rng.uniform(-10.0, 0.0)
+        talkers.append({'position_m': [round(v, 3) for v in p], 'signal': 'bursts', 'level_db': round(level, 1)})
     scene = {'room': {'size_m': [round(v, 3) for v in size], 'rt60_s': round(rt60, 3)},
              'array_position_m': [round(v, 3) for v in array], 'sample_rate_hz': 16000, 'duration_s': 20,
-             'noise_db': -15, 'sources': talkers}
+             'noise_db': NOISE_DB, 'sources': talkers}
     return scene, angles
 
 
@@ -91,6 +97,9 @@ def main():
     parser.add_argument('--max-talkers', type=int, default=3, help='1 to this many talkers per scene (default 3)')
     parser.add_argument('--min-separation-deg', type=float, default=30.0,
                         help='talkers at least this far apart as the array sees them (default 30)')
+    parser.add_argument('--snr-db', type=float, nargs=2, metavar=('LO', 'HI'),
+                        help="each talker's direct sound LO to HI dB over the sensor noise at the array "
+                             '(default: levels 0 to -10 dB against a noise of -15 dB at 1 m)')
     parser.add_argument('--cli', default='build/clients/localizer-cli', help='the localizer-cli to run')
     parser.add_argument('--work', help='folder for the scenes (default: a temporary one, removed)')
     parser.add_argument('--track-arg', action='append', default=[], help='extra flag for track (repeatable)')
@@ -100,6 +109,8 @@ def main():
         parser.error('--scenes must be in [1, 1000]')
     if not 1 <= args.max_talkers <= 6:
         parser.error('--max-talkers must be in [1, 6]')
+    if args.snr_db and not -20.0 <= args.snr_db[0] <= args.snr_db[1] <= 40.0:
+        parser.error('--snr-db needs -20 <= LO <= HI <= 40')
     with open(args.array) as f:
         sensors = json.load(f)['sensors_m']
 
@@ -109,7 +120,8 @@ def main():
     started = time.monotonic()
     for i in range(args.scenes):
         rng = random.Random(args.seed * 1000 + i)
-        scene, angles = draw_scene(rng, sensors, args.line, args.max_talkers, math.radians(args.min_separation_deg))
+        scene, angles = draw_scene(rng, sensors, args.line, args.max_talkers, math.radians(args.min_separation_deg),
+                                   args.snr_db)
         folder = os.path.join(work, f'scene{i:03d}')
         os.makedirs(folder, exist_ok=True)
         with open(os.path.join(folder, 'scene.json'), 'w') as f:
@@ -134,8 +146,13 @@ def main():
     shares = [s for r in records for s in r['heard_shares']]
     false = [r['scores']['false_s_per_min'] for r in records]
     errors = sorted(e for t in talkers for e in t['errors_deg'])
+    alone = sum(t['alone'] for t in talkers)
+    heard_alone = sum(t['heard_alone'] for t in talkers)
+    overlapped = sum(t['sounding'] for t in talkers) - alone
     print(f'{len(records)} scenes, {len(talkers)} talkers: heard {100 * pooled:.1f} % of sounding talker-frames '
-          f'(median talker {100 * statistics.median(shares):.0f} %, talkers under 95 %: '
+          f'(alone {100 * heard_alone / max(1, alone):.1f} % of {alone}, with another talker '
+          f'{100 * (sum(t["heard"] for t in talkers) - heard_alone) / max(1, overlapped):.1f} % of {overlapped}; '
+          f'median talker {100 * statistics.median(shares):.0f} %, talkers under 95 %: '
           f'{sum(s < 0.95 for s in shares)}); false {statistics.mean(false):.2f} s/min mean, '
           f'{statistics.median(false):.2f} median, scenes over 1 s/min: {sum(f > 1.0 for f in false)}; '
           f'ids per talker {statistics.mean(len(t["ids"]) for t in talkers):.2f}; median error of heard rows '

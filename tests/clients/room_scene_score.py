@@ -8,7 +8,8 @@ sounding frame is covered when a heard row lies within the tolerance of the talk
 or the cone angle for a line array; ACCURACY.md, "Named room scenes through the CLI").
 
 Per talker: its sounding frames, the share covered by a heard row, the share with any
-reported row (heard or coasting) within the tolerance, the identities that were heard on it
+reported row (heard or coasting) within the tolerance, the same heard share over the frames in
+which no other talker sounds (alone), the identities that were heard on it
 in at least 5 frames, and the median error of its heard rows. Then false time: heard rows
 farther than the tolerance from every talker, in seconds per minute of audio.
 
@@ -57,7 +58,7 @@ def score(scene_dir, track_csv, line=False, tolerance_deg=15.0):
     for k, talker in enumerate(talkers):
         truth = float(talker[key])
         frames_on = [t for t in frames if any(a <= t <= b for a, b in sounding[k])]
-        heard = reported = 0
+        heard = reported = alone = heard_alone = 0
         ids = collections.Counter()
         errors = []
         for t in frames_on:
@@ -65,12 +66,16 @@ def score(scene_dir, track_csv, line=False, tolerance_deg=15.0):
             took = [r for r in near if r['source_present'] == '1']
             heard += bool(took)
             reported += bool(near)
+            if not any(any(a <= t <= b for a, b in sounding[j]) for j in sounding if j != k):
+                alone += 1
+                heard_alone += bool(took)
             for r in took:
                 ids[r['source_id']] += 1
                 errors.append(math.degrees(separation(float(r[key]), truth, line)))
         steady = sorted((i for i, c in ids.items() if c >= 5), key=lambda i: -ids[i])
         result['talkers'].append({'sounding': len(frames_on), 'heard': heard, 'reported': reported,
-                                  'ids': steady, 'errors_deg': sorted(errors)})
+                                  'alone': alone, 'heard_alone': heard_alone, 'ids': steady,
+                                  'errors_deg': sorted(errors)})
 
     false_rows = 0
     for t in frames:
@@ -97,8 +102,9 @@ def main():
         n = max(1, t['sounding'])
         errors = t['errors_deg']
         median = f'{errors[len(errors) // 2]:.1f}' if errors else '-'
+        alone = f'{100 * t["heard_alone"] / t["alone"]:.0f} %' if t['alone'] else '-'
         print(f'talker {k}: sounding frames {t["sounding"]}, heard {100 * t["heard"] / n:.0f} %, '
-              f'reported {100 * t["reported"] / n:.0f} %, ids {len(t["ids"])} {t["ids"]}, median error {median} deg')
+              f'alone {t["alone"]} frames, heard {alone} of them, reported {100 * t["reported"] / n:.0f} %, ids {len(t["ids"])} {t["ids"]}, median error {median} deg')
     print(f'false: {result["false_rows"]} heard rows beyond {args.tolerance_deg:g} deg of every talker, '
           f'{result["false_s_per_min"]:.1f} s per minute')
 
