@@ -32,6 +32,7 @@ Status DirectionTrackerOptions::Validate() const {
   if (!(remember_identity_s >= 0.0) || !std::isfinite(remember_identity_s))
     return InvalidArgument("remember_identity_s must be finite and >= 0");
   if (!(min_lead_share >= 0.0 && min_lead_share <= 1.0)) return InvalidArgument("min_lead_share must be in [0, 1]");
+  if (persistent_leader_frames < 0) return InvalidArgument("persistent_leader_frames must be >= 0");
   if (!(coast_rate_decay_s >= 0.0) || !std::isfinite(coast_rate_decay_s))
     return InvalidArgument("coast_rate_decay_s must be finite and >= 0");
   return Status::Ok();  // confirm_hits / confirm_window: TwsOptions::Validate names them
@@ -97,6 +98,11 @@ double DirectionTracker::SameSourceD2(const Vec3& a, const Vec3& b) const {
   return angle * angle / (2.0 * options_.peak_sigma_rad * options_.peak_sigma_rad);
 }
 
+Vec3 DirectionTracker::UnitOf(const DirectionPeak& peak) const {
+  if (shape_.shape != ArrayShape::kLinear) return peak.direction;
+  return Vec3(std::cos(peak.cone_angle_rad), std::sin(peak.cone_angle_rad), 0.0);
+}
+
 bool DirectionTracker::Leads(const Lineage& l) const {
   return l.leads >= options_.min_lead_frames && l.leads >= options_.min_lead_share * l.hits;
 }
@@ -115,10 +121,7 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
   departed_.erase(
       std::remove_if(departed_.begin(), departed_.end(), [&](const Departed& d) { return d.until_s < t_s; }),
       departed_.end());
-  const bool linear = shape_.shape == ArrayShape::kLinear;
-  const Vec3 riser_u = !riser   ? Vec3::Zero()
-                       : linear ? Vec3(std::cos(riser->cone_angle_rad), std::sin(riser->cone_angle_rad), 0.0)
-                                : riser->direction;
+  const Vec3 riser_u = riser ? UnitOf(*riser) : Vec3::Zero();
   uint64_t riser_track = 0;
   double riser_d2 = kSameSourceGate;
   // The track that took the frame's strongest peak (plots_ keep the peaks' order: strongest
@@ -207,21 +210,35 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     echo_statistic_ = open ? std::max(echo_statistic_, riser->statistic) : riser->statistic;
     echo_until_s_ = t_s + options_.echo_window_s;
   }
+  // Persistent leaders: the strongest peak at one direction frame after frame is a source,
+  // whether or not it rose; a reflection seldom leads even one frame while its source sounds.
+  const Vec3 first_u = peaks.empty() ? Vec3::Constant(DirectionPeak::kNan) : UnitOf(peaks.front());
+  const bool same_leader = leader_run_ > 0 && SameSourceD2(leader_u_, first_u) < kSameSourceGate;
+  leader_run_ = !first_u.allFinite() ? 0 : same_leader ? leader_run_ + 1 : 1;
+  leader_u_ = first_u;
+  const bool persistent =
+      options_.persistent_leader_frames > 0 && leader_run_ >= options_.persistent_leader_frames && may_start;
+  bool persistent_starts = persistent;        // unless a track (tentative too) lies within twice the gate
+  for (const tws::TrackReport& r : reports_)  // the last frame's
+    if (r.position_m.norm() > 0.0 && SameSourceD2(r.position_m.normalized(), first_u) < 4.0 * kSameSourceGate)
+      persistent_starts = false;
   plots_.clear();
   for (const DirectionPeak& peak : peaks) {
-    const Vec3 u = linear ? Vec3(std::cos(peak.cone_angle_rad), std::sin(peak.cone_angle_rad), 0.0) : peak.direction;
+    const Vec3 u = UnitOf(peak);
     if (!u.allFinite()) return InvalidArgument("a peak without a direction for this array's shape");
     tws::CartesianPlot plot;
     plot.position_m = u;
+    const bool first = &peak == &peaks.front();
     // A source that sounds on without onsets (a steady one whose track was lost) is still
     // the frame's strongest peak: when no confirmed track has been heard for
     // lost_source_after_s, it may start a track on a frame whose power did not fall.
-    const bool strongest =
-        options_.lost_source_after_s > 0.0 && unheard_s_ >= options_.lost_source_after_s && &peak == &peaks.front();
+    const bool strongest = options_.lost_source_after_s > 0.0 && unheard_s_ >= options_.lost_source_after_s && first;
     plot.may_start_track =
         !options_.start_at_onsets_only ||
-        (may_start && ((!echo_blocks && &peak == riser && peak.rise >= peak.threshold) || strongest));
-    plot.may_resume_track = peak.rise >= peak.threshold;  // used only when resume_after_s > 0
+        (may_start && ((!echo_blocks && &peak == riser && peak.rise >= peak.threshold) || strongest)) ||
+        (first && persistent_starts);
+    // Read only when resume_after_s > 0.
+    plot.may_resume_track = peak.rise >= peak.threshold || (first && persistent);
     if (linear) {
       const Mat3 radial = u * u.transpose();
       plot.covariance_m2 = s2 * (Mat3::Identity() - radial) + kRadialShare * kRadialShare * s2 * radial;

@@ -270,6 +270,9 @@ int main(int argc, char** argv) {
   flags.Double("min-lead-share", &tracking.min_lead_share, "F", "",
                "DirectionTrackerOptions::min_lead_share: ... and in at least this share of the frames it took a "
                "peak in (0: off)");
+  flags.Int("persist", &tracking.persistent_leader_frames, "N", "frames",
+            "DirectionTrackerOptions::persistent_leader_frames: the strongest peak at one direction this many "
+            "frames in a row may start or resume a track (0: off)");
   flags.Double("remember", &tracking.remember_identity_s, "S", "s",
                "DirectionTrackerOptions::remember_identity_s: a deleted track's identity is remembered this long "
                "(0: off)");

@@ -78,7 +78,8 @@ RoomScore RunRoom(bool start_at_onsets_only, uint64_t seed, double resume_after_
   tracking.continue_identities = continue_identities;
   tracking.coast_rate_decay_s = coast_rate_decay_s;
   if (!leading) tracking.min_lead_frames = 0, tracking.min_lead_share = 0.0;  // the stack the first tests measured
-  tracking.remember_identity_s = 0.0;  // later than every rule these tests measure
+  tracking.remember_identity_s = 0.0;     // later than every rule these tests measure
+  tracking.persistent_leader_frames = 0;  // so is this
   EXPECT_TRUE(srp.ok());
   auto tracker = DirectionTracker::Create(srp->shape(), tracking);
   EXPECT_TRUE(tracker.ok());

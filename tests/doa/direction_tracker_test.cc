@@ -195,6 +195,7 @@ TEST(DirectionTracker, ASteadySourceWithoutOnsetsIsStartedOnlyByTheLostSourceRul
     DirectionTrackerOptions options;
     options.frame_period_s = kHop_s;
     options.lost_source_after_s = lost_after_s;
+    options.persistent_leader_frames = 0;  // a later rule that also starts such a source
     auto tracker = DirectionTracker::Create(Board(), options);
     ASSERT_TRUE(tracker.ok());
     std::vector<SourceTrack> tracks;
@@ -428,6 +429,55 @@ TEST(DirectionTracker, AQuieterTalkerIsReportedOnceItLeadsATenthOfItsFrames) {
   EXPECT_EQ(reported_frames, 36);
 }
 
+// Persistent leaders ("Persistent leaders" in direction_tracker.h). Talker A (azimuth 1.5,
+// statistic 20) talks throughout; talker B (0.4, statistic 25, so the frame's strongest while
+// it sounds) talks from frame 0, pauses, and resumes without a rise, as a talker resuming
+// in a room full of another's sound often does. After a short pause (32 frames, 0.5 s) B's
+// track is silent past resume_after_s, so only a rise could resume it; after a long one (96
+// frames, 1.5 s) it has been deleted (max_coast_s), and with A heard nothing else starts
+// one. With persistent_leader_frames 3, B is heard again from its third frame back, under
+// its old identity (continued, or remembered); with 0, never again.
+TEST(DirectionTracker, ATalkerResumingWithoutARiseIsHeardOnceItLeadsThreeFramesInARow) {
+  const double a = 1.5, b = 0.4;
+  for (const int pause_frames : {32, 96}) {
+    for (const int persist : {3, 0}) {
+      DirectionTrackerOptions options;
+      options.frame_period_s = kHop_s;
+      options.persistent_leader_frames = persist;
+      auto tracker = DirectionTracker::Create(Board(), options);
+      ASSERT_TRUE(tracker.ok());
+      std::vector<SourceTrack> tracks;
+      const int resume = 40 + pause_frames;
+      int first_heard_again = -1, heard_again = 0;
+      uint64_t id_before = 0, id_after = 0;
+      for (int f = 0; f < resume + 60; ++f) {
+        std::vector<DirectionPeak> peaks;  // strongest first
+        const bool b_talks = f < 40 || f >= resume;
+        if (b_talks) peaks.push_back(PeakAt(b, 0.3, 25.0, f == 0 ? 25.0 : 0.5));
+        peaks.push_back(PeakAt(a, 0.3, 20.0, f == 5 ? 20.0 : 0.5));
+        ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
+        for (const SourceTrack& t : tracks) {
+          if (t.status != tws::TrackStatus::kConfirmed || std::abs(t.azimuth_rad - b) > 0.1) continue;
+          if (f < 40) id_before = t.id;
+          if (f < resume) continue;
+          if (first_heard_again < 0) first_heard_again = f, id_after = t.id;
+          ++heard_again;
+        }
+      }
+      ASSERT_NE(id_before, 0u);
+      if (persist > 0) {
+        // Resumed at the third leading frame; started anew there after a deletion and
+        // confirmed at its third hit.
+        EXPECT_EQ(first_heard_again, resume + (pause_frames < 64 ? 2 : 4)) << pause_frames;
+        EXPECT_EQ(heard_again, resume + 60 - first_heard_again) << pause_frames;
+        EXPECT_EQ(id_after, id_before) << pause_frames;
+      } else {
+        EXPECT_EQ(heard_again, 0) << pause_frames;
+      }
+    }
+  }
+}
+
 TEST(DirectionTracker, BadOptionsAndPeaksAreNamed) {
   DirectionTrackerOptions options;
   options.peak_sigma_rad = 0.0;
@@ -435,6 +485,10 @@ TEST(DirectionTracker, BadOptionsAndPeaksAreNamed) {
   options = DirectionTrackerOptions{};
   options.min_lead_share = 1.5;
   EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("min_lead_share"), std::string::npos);
+  options = DirectionTrackerOptions{};
+  options.persistent_leader_frames = -1;
+  EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("persistent_leader_frames"),
+            std::string::npos);
   options = DirectionTrackerOptions{};
   options.remember_identity_s = -1.0;
   EXPECT_NE(DirectionTracker::Create(Board(), options).status().message().find("remember_identity_s"),
