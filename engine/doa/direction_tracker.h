@@ -39,7 +39,8 @@
 // rises nowhere), the frame's strongest peak may start one too: a reflection is never the
 // strongest while its source sounds. Costs: a source that starts while a louder one's echo
 // window is open, or in the same frame as another, waits for its next onset; a source that
-// sounds without onsets (a steady hum) beside others that are tracked is never started.
+// sounds without onsets (a steady hum) beside others that are tracked is started only once it
+// leads its frames ("Persistent leaders"), and never while it is quieter than another.
 //
 // Resuming. A talker's track coasts through a pause with a gate that widens as its
 // prediction's uncertainty grows (to ~0.5 rad after 1 s), while the other talker's
