@@ -13,10 +13,10 @@
 //                                                     source's direct sound at 1 m (default -20)
 //     "sources": [                                    1 to 16, fixed
 //       {"position_m": [4.5, 3.2, 1.4],               required, inside the room
-//        "signal": "bursts",                          broadband | tones | bursts (default)
+//        "signal": "bursts",                          broadband | tones | bursts (default) | speech
 //        "band_hz": [100, 7000],                      default [100, min(7000, fs / 2)]
 //        "level_db": 0,                               default 0
-//        "on_s": [0.4, 1.5], "off_s": [0.2, 1.0],     bursts' on and off durations (defaults)
+//        "on_s": [0.4, 1.5], "off_s": [0.2, 1.0],     bursts' (and speech's) on and off durations (defaults)
 //        "start_s": 0, "stop_s": 20}                  when it may sound (default: throughout)
 //     ]
 //   }

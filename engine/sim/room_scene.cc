@@ -6,12 +6,13 @@
 #include <random>
 
 #include "engine/sim/band_pass_fir.h"
+#include "engine/sim/speech_like.h"
 
 namespace localizer::engine {
 namespace {
 
-constexpr double kEdge_s = 0.01;           // bursts' raised-cosine edges
-constexpr double kMaxTotalSamples = 2e8;   // sensors x samples
+constexpr double kEdge_s = 0.01;          // bursts' raised-cosine edges
+constexpr double kMaxTotalSamples = 2e8;  // sensors x samples
 constexpr int kTones = 3;
 constexpr double kTonePower = 0.8;
 
@@ -37,7 +38,8 @@ StatusOr<RoomSignal> ParseRoomSignal(const std::string& name, const std::string&
   if (name == "broadband") return RoomSignal::kBroadband;
   if (name == "tones") return RoomSignal::kTones;
   if (name == "bursts") return RoomSignal::kBursts;
-  return InvalidArgument(field + " is \"" + name + "\"; expected broadband, tones or bursts");
+  if (name == "speech") return RoomSignal::kSpeech;
+  return InvalidArgument(field + " is \"" + name + "\"; expected broadband, tones, bursts or speech");
 }
 
 const char* RoomSignalName(RoomSignal signal) {
@@ -48,6 +50,8 @@ const char* RoomSignalName(RoomSignal signal) {
       return "tones";
     case RoomSignal::kBursts:
       return "bursts";
+    case RoomSignal::kSpeech:
+      return "speech";
   }
   return "broadband";
 }
@@ -75,7 +79,8 @@ Status RoomScene::Validate(const std::vector<Vec3>& sensors_m) const {
   };
   for (size_t m = 0; m < sensors_m.size(); ++m) {
     if (!inside(sensors_m[m])) {
-      return InvalidArgument("sensor " + std::to_string(m) + " lies outside the room (array_position_m + the array's "
+      return InvalidArgument("sensor " + std::to_string(m) +
+                             " lies outside the room (array_position_m + the array's "
                              "sensors_m must be inside room.size_m)");
     }
   }
@@ -85,7 +90,8 @@ Status RoomScene::Validate(const std::vector<Vec3>& sensors_m) const {
     if (!(s.band_low_hz >= 0.0 && s.band_low_hz < s.band_high_hz && s.band_high_hz <= 0.5 * sample_rate_hz)) {
       return InvalidArgument(Field(i, "band_hz") + " must satisfy 0 <= low < high <= sample_rate_hz / 2");
     }
-    if (!(s.level_db >= -60.0 && s.level_db <= 60.0)) return InvalidArgument(Field(i, "level_db") + " must be in [-60, 60]");
+    if (!(s.level_db >= -60.0 && s.level_db <= 60.0))
+      return InvalidArgument(Field(i, "level_db") + " must be in [-60, 60]");
     if (!(s.on_min_s > 0.0 && s.on_min_s <= s.on_max_s && std::isfinite(s.on_max_s))) {
       return InvalidArgument(Field(i, "on_s") + " must be [min, max] with 0 < min <= max, finite");
     }
@@ -111,7 +117,9 @@ StatusOr<RenderedRoomScene> RenderRoomScene(const RoomScene& scene, const std::v
     std::seed_seq seq{seed, uint64_t{i}, uint64_t{0x524f4f4d}};  // "ROOM"
     std::mt19937_64 rng(seq);
     std::uniform_real_distribution<double> uniform(0.0, 1.0);
-    std::vector<double> signal = BandNoise(s, fs, n, &rng);
+    std::vector<double> signal = s.signal == RoomSignal::kSpeech
+                                     ? SpeechLikeSignal(s.band_low_hz, s.band_high_hz, fs, n, &rng)
+                                     : BandNoise(s, fs, n, &rng);
     if (s.signal == RoomSignal::kTones) {
       for (double& v : signal) v *= std::sqrt(1.0 - kTonePower);
       const double lo = s.band_low_hz + 0.1 * (s.band_high_hz - s.band_low_hz);
@@ -120,13 +128,14 @@ StatusOr<RenderedRoomScene> RenderRoomScene(const RoomScene& scene, const std::v
         const double f = lo + width * uniform(rng), phase = 2.0 * std::numbers::pi * uniform(rng);
         const double amplitude = std::sqrt(2.0 * kTonePower / kTones);
         for (int64_t t = 0; t < n; ++t) {
-          signal[static_cast<size_t>(t)] += amplitude * std::cos(2.0 * std::numbers::pi * f * static_cast<double>(t) / fs + phase);
+          signal[static_cast<size_t>(t)] +=
+              amplitude * std::cos(2.0 * std::numbers::pi * f * static_cast<double>(t) / fs + phase);
         }
       }
     }
     // The gate: 1 while sounding (bursts alternate on and off), edges raised-cosine.
     std::vector<std::pair<double, double>> on;
-    if (s.signal == RoomSignal::kBursts) {
+    if (s.signal == RoomSignal::kBursts || s.signal == RoomSignal::kSpeech) {
       const auto draw = [&](double a, double b) { return a + (b - a) * uniform(rng); };
       double t = s.start_s - draw(0.0, s.off_max_s);  // a random phase: may start mid-burst
       while (t < std::min(s.stop_s, scene.duration_s)) {

@@ -10,6 +10,8 @@
 //   bursts     the broadband noise, on for a duration uniform in [on_min_s, on_max_s], off
 //              for one uniform in [off_min_s, off_max_s], alternately from a random phase,
 //              with 10 ms raised-cosine edges: talkers with pauses.
+//   speech     a speech-like talker (speech_like.h: harmonic voiced and noisy unvoiced
+//              syllables, most power below 1 kHz), gated on and off like bursts.
 // Every source sounds only within [start_s, stop_s) of emission time. Sensor noise: white,
 // of power noise_db relative to a level-0 source's direct sound at 1 m (1 / (4 pi)^2).
 // Draws come from one std::mt19937_64 per source and one for the noise, seeded from `seed`
@@ -30,18 +32,18 @@
 
 namespace localizer::engine {
 
-enum class RoomSignal { kBroadband, kTones, kBursts };
-// "broadband" | "tones" | "bursts"; INVALID_ARGUMENT naming `field` otherwise.
+enum class RoomSignal { kBroadband, kTones, kBursts, kSpeech };
+// "broadband" | "tones" | "bursts" | "speech"; INVALID_ARGUMENT naming `field` otherwise.
 StatusOr<RoomSignal> ParseRoomSignal(const std::string& name, const std::string& field);
 const char* RoomSignalName(RoomSignal signal);
 
 struct RoomSceneSource {
   Vec3 position_m = Vec3::Zero();  // inside the room
   RoomSignal signal = RoomSignal::kBursts;
-  double band_low_hz = 100.0;   // 0 <= low < high <= fs / 2
+  double band_low_hz = 100.0;  // 0 <= low < high <= fs / 2
   double band_high_hz = 7000.0;
-  double level_db = 0.0;  // in [-60, 60]
-  double on_min_s = 0.4, on_max_s = 1.5;   // bursts: 0 < min <= max
+  double level_db = 0.0;                  // in [-60, 60]
+  double on_min_s = 0.4, on_max_s = 1.5;  // bursts and speech: 0 < min <= max
   double off_min_s = 0.2, off_max_s = 1.0;
   double start_s = 0.0;  // sounds within [start_s, stop_s) of emission time
   double stop_s = std::numeric_limits<double>::infinity();
@@ -49,9 +51,9 @@ struct RoomSceneSource {
 
 struct RoomScene {
   ShoeboxRoom room;
-  double sample_rate_hz = 16000.0;  // in [1000, 192000]
-  double duration_s = 10.0;         // in (0, 600]
-  double noise_db = -20.0;          // in [-120, 40]
+  double sample_rate_hz = 16000.0;       // in [1000, 192000]
+  double duration_s = 10.0;              // in (0, 600]
+  double noise_db = -20.0;               // in [-120, 40]
   std::vector<RoomSceneSource> sources;  // 1 to 16
 
   // INVALID_ARGUMENT naming the field (sources[1].band_hz, room.rt60_s, ...): values out of
@@ -68,7 +70,7 @@ struct SoundingInterval {
 
 struct RenderedRoomScene {
   int64_t samples_per_channel = 0;
-  std::vector<float> samples;  // sensors x samples_per_channel, channel-major
+  std::vector<float> samples;              // sensors x samples_per_channel, channel-major
   std::vector<SoundingInterval> sounding;  // by source, then time
 };
 

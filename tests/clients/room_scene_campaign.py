@@ -5,7 +5,8 @@ The nine named scenes (scenes/rooms) are what the direction tracker was tuned on
 scenes it was not: per scene a seeded room (4-8 x 3.5-7 x 2.5-3.5 m, RT60 0.2-0.6 s), the
 array somewhere in it (at least 1 m from the walls), 1 to --max-talkers talkers 1-3 m away
 (at least --min-separation-deg apart as the array sees them: azimuths, or cone angles for a
-line), the first at level 0 and the others 0 to -10 dB, speech-like bursts, sensor noise
+line), the first at level 0 and the others 0 to -10 dB, white bursts with pauses (or with
+--signal speech the speech-like talker of engine/sim/speech_like.h), sensor noise
 -15 dB against a level-0 talker at 1 m. Each scene is rendered, tracked with `track`'s
 defaults (plus --track-arg) and scored by room_scene_score.score (a talker's sounding frame
 is heard when a row within 15 degrees has source_present 1).
@@ -14,7 +15,7 @@ Prints one line per scene, then the pooled heard share, the median per-talker he
 the false time (heard rows beyond 15 degrees of every talker) and the identities per talker.
 
 usage: /usr/bin/python3 room_scene_campaign.py --array scenes/arrays/square4.json
-           [--scenes 20] [--seed 1] [--line] [--max-talkers 3] [--snr-db LO HI] [--cli build/clients/localizer-cli]
+           [--scenes 20] [--seed 1] [--line] [--max-talkers 3] [--snr-db LO HI] [--signal speech] [--cli build/clients/localizer-cli]
            [--work DIR] [--track-arg=--flag=value ...] [--json out.json]
 """
 import argparse
@@ -34,7 +35,7 @@ import room_scene_score  # noqa: E402
 NOISE_DB = -15  # sensor noise against a level-0 talker's direct sound at 1 m
 
 
-def draw_scene(rng, sensors, line, max_talkers, min_separation_rad, snr_db=None):
+def draw_scene(rng, sensors, line, max_talkers, min_separation_rad, snr_db=None, signal='bursts'):
     """A scene dict for simulate --room, and each talker's scored angle (for the record)."""
     size = [rng.uniform(4.0, 8.0), rng.uniform(3.5, 7.0), rng.uniform(2.5, 3.5)]
     rt60 = rng.uniform(0.2, 0.6)
@@ -76,7 +77,7 @@ def draw_scene(rng, sensors, line, max_talkers, min_separation_rad, snr_db=None)
             level = rng.uniform(*snr_db) + NOISE_DB + 20.0 * math.log10(math.dist(p, centroid))
         else:
             level = 0.0 if k == 0 else rng.uniform(-10.0, 0.0)
-        talkers.append({'position_m': [round(v, 3) for v in p], 'signal': 'bursts', 'level_db': round(level, 1)})
+        talkers.append({'position_m': [round(v, 3) for v in p], 'signal': signal, 'level_db': round(level, 1)})
     scene = {'room': {'size_m': [round(v, 3) for v in size], 'rt60_s': round(rt60, 3)},
              'array_position_m': [round(v, 3) for v in array], 'sample_rate_hz': 16000, 'duration_s': 20,
              'noise_db': NOISE_DB, 'sources': talkers}
@@ -100,6 +101,8 @@ def main():
     parser.add_argument('--snr-db', type=float, nargs=2, metavar=('LO', 'HI'),
                         help="each talker's direct sound LO to HI dB over the sensor noise at the array "
                              '(default: levels 0 to -10 dB against a noise of -15 dB at 1 m)')
+    parser.add_argument('--signal', choices=['bursts', 'speech'], default='bursts',
+                        help="the talkers' signal (simulate --room: white bursts, or speech-like; default bursts)")
     parser.add_argument('--cli', default='build/clients/localizer-cli', help='the localizer-cli to run')
     parser.add_argument('--work', help='folder for the scenes (default: a temporary one, removed)')
     parser.add_argument('--track-arg', action='append', default=[], help='extra flag for track (repeatable)')
@@ -121,7 +124,7 @@ def main():
     for i in range(args.scenes):
         rng = random.Random(args.seed * 1000 + i)
         scene, angles = draw_scene(rng, sensors, args.line, args.max_talkers, math.radians(args.min_separation_deg),
-                                   args.snr_db)
+                                   args.snr_db, args.signal)
         folder = os.path.join(work, f'scene{i:03d}')
         os.makedirs(folder, exist_ok=True)
         with open(os.path.join(folder, 'scene.json'), 'w') as f:

@@ -44,7 +44,7 @@ TEST(RoomSceneFiles, BadFieldsAreNamed) {
            {R"({"room": {"size_m": [6, 5, 3]}, "sources": [], "colour": 1})", "unknown field \"colour\""},
            {R"({"room": {"size_m": [6, 5]}, "sources": []})", "room.size_m must be [x, y, z]"},
            {R"({"room": {"size_m": [6, 5, 3]}, "sources": [{"signal": "bursts"}]})", "sources[0] needs position_m"},
-           {R"({"room": {"size_m": [6, 5, 3]}, "sources": [{"position_m": [1, 1, 1], "signal": "speech"}]})",
+           {R"({"room": {"size_m": [6, 5, 3]}, "sources": [{"position_m": [1, 1, 1], "signal": "whisper"}]})",
             "sources[0].signal"},
            {R"({"room": {"size_m": [6, 5, 3]}, "sources": [{"position_m": [1, 1, 1], "on_s": 1}]})",
             "sources[0].on_s must be [low, high]"},

@@ -357,7 +357,9 @@ TEST(DirectionTracker, ATalkerSilentLongerThanItsTrackKeepsItsIdentityWhileRemem
       if (f >= resume) peaks.push_back(TalkerPeak(0.42, f == resume ? 20.0 : 0.0));
       ASSERT_TRUE(tracker->Update(f * kHop_s, peaks, 1.0, &tracks).ok());
       for (const SourceTrack& t : tracks) ++frames_of[t.id];
-      if (f == resume - 1) EXPECT_TRUE(tracks.empty());  // deleted after max_coast_s
+      if (f == resume - 1) {
+        EXPECT_TRUE(tracks.empty());  // deleted after max_coast_s
+      }
     }
     EXPECT_EQ(frames_of.size(), c.ids) << c.remember_s << " " << c.silent_frames;
   }

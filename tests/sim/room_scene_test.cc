@@ -131,7 +131,7 @@ TEST(RoomScene, BadScenesAreRefusedNamingTheField) {
   bad.sample_rate_hz = 192000.0;
   EXPECT_NE(bad.Validate(std::vector<Vec3>(4, Vec3(1, 1, 1))).message().find("2e8 samples"), std::string::npos);
   EXPECT_NE(scene.Validate({Vec3(-1.0, 1.0, 1.0)}).message().find("sensor 0 lies outside the room"), std::string::npos);
-  EXPECT_EQ(ParseRoomSignal("speech", "signal").status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(ParseRoomSignal("whisper", "signal").status().code(), StatusCode::kInvalidArgument);
 }
 
 }  // namespace
