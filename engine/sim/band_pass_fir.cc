@@ -69,4 +69,18 @@ std::vector<double> FilterValid(const std::vector<double>& x, const std::vector<
   return y;
 }
 
+std::vector<double> UnitPowerBandNoise(double band_low_hz, double band_high_hz, double sample_rate_hz, int64_t n,
+                                       std::mt19937_64* rng) {
+  const BandPassFir fir = DesignBandPassFir(band_low_hz, band_high_hz, sample_rate_hz);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<double> white(static_cast<size_t>(n) + fir.taps.size() - 1);
+  for (double& v : white) v = gauss(*rng);
+  std::vector<double> out = FilterValid(white, fir.taps);
+  double energy = 0.0;
+  for (double h : fir.taps) energy += h * h;
+  const double scale = energy > 0.0 ? 1.0 / std::sqrt(energy) : 0.0;
+  for (double& v : out) v *= scale;
+  return out;
+}
+
 }  // namespace localizer::engine

@@ -10,6 +10,8 @@
 // 150 Hz, 1161 taps. Passband ripple and stopband level are both about -60 dB.
 #pragma once
 
+#include <cstdint>
+#include <random>
 #include <vector>
 
 namespace localizer::engine {
@@ -26,5 +28,10 @@ BandPassFir DesignBandPassFir(double band_low_hz, double band_high_hz, double sa
 // convolution with no edge transient. For symmetric taps y[n] is x filtered and aligned with
 // x[n + (taps.size() - 1) / 2]. Cost x.size() * taps.size() multiply-adds.
 std::vector<double> FilterValid(const std::vector<double>& x, const std::vector<double>& taps);
+
+// n samples of white Gaussian noise from `rng` through DesignBandPassFir(low, high), scaled by
+// the taps' energy so that its power is 1 (same requirements on the band).
+std::vector<double> UnitPowerBandNoise(double band_low_hz, double band_high_hz, double sample_rate_hz, int64_t n,
+                                       std::mt19937_64* rng);
 
 }  // namespace localizer::engine

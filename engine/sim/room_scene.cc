@@ -18,20 +18,6 @@ constexpr double kTonePower = 0.8;
 
 std::string Field(size_t i, const std::string& name) { return "sources[" + std::to_string(i) + "]." + name; }
 
-// Unit-power band-limited noise, n samples.
-std::vector<double> BandNoise(const RoomSceneSource& s, double fs, int64_t n, std::mt19937_64* rng) {
-  const BandPassFir fir = DesignBandPassFir(s.band_low_hz, s.band_high_hz, fs);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::vector<double> white(static_cast<size_t>(n) + fir.taps.size() - 1);
-  for (double& v : white) v = gauss(*rng);
-  std::vector<double> out = FilterValid(white, fir.taps);
-  double energy = 0.0;
-  for (double h : fir.taps) energy += h * h;
-  const double scale = energy > 0.0 ? 1.0 / std::sqrt(energy) : 0.0;
-  for (double& v : out) v *= scale;
-  return out;
-}
-
 }  // namespace
 
 StatusOr<RoomSignal> ParseRoomSignal(const std::string& name, const std::string& field) {
@@ -119,7 +105,7 @@ StatusOr<RenderedRoomScene> RenderRoomScene(const RoomScene& scene, const std::v
     std::uniform_real_distribution<double> uniform(0.0, 1.0);
     std::vector<double> signal = s.signal == RoomSignal::kSpeech
                                      ? SpeechLikeSignal(s.band_low_hz, s.band_high_hz, fs, n, &rng)
-                                     : BandNoise(s, fs, n, &rng);
+                                     : UnitPowerBandNoise(s.band_low_hz, s.band_high_hz, fs, n, &rng);
     if (s.signal == RoomSignal::kTones) {
       for (double& v : signal) v *= std::sqrt(1.0 - kTonePower);
       const double lo = s.band_low_hz + 0.1 * (s.band_high_hz - s.band_low_hz);

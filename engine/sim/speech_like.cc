@@ -19,19 +19,6 @@ double Formant(double f, double centre_hz, double width_hz, double prominence) {
   return prominence / (1.0 + x * x);
 }
 
-// Unit-power noise in [low, high], n samples.
-std::vector<double> Noise(double low, double high, double fs, int64_t n, std::mt19937_64* rng) {
-  const BandPassFir fir = DesignBandPassFir(low, high, fs);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::vector<double> white(static_cast<size_t>(n) + fir.taps.size() - 1);
-  for (double& v : white) v = gauss(*rng);
-  std::vector<double> out = FilterValid(white, fir.taps);
-  double energy = 0.0;
-  for (double h : fir.taps) energy += h * h;
-  for (double& v : out) v *= energy > 0.0 ? 1.0 / std::sqrt(energy) : 0.0;
-  return out;
-}
-
 }  // namespace
 
 std::vector<double> SpeechLikeSignal(double band_low_hz, double band_high_hz, double fs, int64_t n,
@@ -39,7 +26,8 @@ std::vector<double> SpeechLikeSignal(double band_low_hz, double band_high_hz, do
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   const auto draw = [&](double a, double b) { return a + (b - a) * uniform(*rng); };
   const double f0_hz = draw(90.0, 250.0);
-  const std::vector<double> hiss = Noise(std::max(band_low_hz, 0.3 * band_high_hz), band_high_hz, fs, n, rng);
+  const std::vector<double> hiss =
+      UnitPowerBandNoise(std::max(band_low_hz, 0.3 * band_high_hz), band_high_hz, fs, n, rng);
   std::vector<double> out(static_cast<size_t>(n), 0.0);
   double t_s = -draw(0.0, 0.25);  // a random phase
   const double end_s = static_cast<double>(n) / fs;
