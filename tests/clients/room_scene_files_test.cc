@@ -118,7 +118,7 @@ TEST(RoomSceneFiles, EveryNamedSceneFitsEveryNamedArray) {
       ++pairs;
     }
   }
-  EXPECT_EQ(pairs, 18);  // 6 rooms x 3 arrays: 1, 2 and 3 talkers, free and RT60 0.4 s
+  EXPECT_EQ(pairs, 27);  // 9 rooms x 3 arrays: 1, 2 and 3 talkers, free, RT60 0.4 s and speech-like
 }
 
 }  // namespace
