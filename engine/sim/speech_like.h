@@ -9,11 +9,12 @@
 //     high), like fricatives.
 //   - Syllabic rhythm: syllables of 0.12-0.25 s, 70 % voiced, each at its own level (+-6 dB),
 //     separated by 20-80 ms of silence, with 10 ms raised-cosine edges.
-// Only components within [band_low_hz, band_high_hz] are made. The result has unit mean power
-// over all n samples (gaps included), so a room scene's level_db means the same as for the
-// other signals; the scene's on/off gate (utterances and pauses) is applied by the caller.
-// Deterministic for a given generator state. Cost: O(n x harmonics below band_high_hz / f0),
-// about 0.3 s per source for 20 s at 16 kHz.
+// Only components within [band_low_hz, band_high_hz] are made, and harmonics only up to
+// 8 kHz. The result has unit mean power over all n samples (gaps included), so a room scene's
+// level_db means the same as for the other signals; the scene's on/off gate (utterances and
+// pauses) is applied by the caller.
+// Deterministic for a given generator state. Cost: O(n x harmonics below min(band_high_hz,
+// 8 kHz) / f0), at most about 100 cosines per sample; about 0.3 s per source for 20 s at 16 kHz.
 #pragma once
 
 #include <cstdint>
