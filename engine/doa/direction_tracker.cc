@@ -218,10 +218,12 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   leader_u_ = first_u;
   const bool persistent =
       options_.persistent_leader_frames > 0 && leader_run_ >= options_.persistent_leader_frames && may_start;
-  bool persistent_starts = persistent;        // unless a track (tentative too) lies within twice the gate
-  for (const tws::TrackReport& r : reports_)  // the last frame's
-    if (r.position_m.norm() > 0.0 && SameSourceD2(r.position_m.normalized(), first_u) < 4.0 * kSameSourceGate)
-      persistent_starts = false;
+  // It may resume a silent track, and start one only where no track of the last frame
+  // (tentative too) lies within twice the gate.
+  const bool persistent_starts =
+      persistent && std::none_of(reports_.begin(), reports_.end(), [&](const tws::TrackReport& r) {
+        return r.position_m.norm() > 0.0 && SameSourceD2(r.position_m.normalized(), first_u) < 4.0 * kSameSourceGate;
+      });
   plots_.clear();
   for (const DirectionPeak& peak : peaks) {
     const Vec3 u = UnitOf(peak);

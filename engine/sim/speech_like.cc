@@ -16,7 +16,7 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 // sample at about 100 harmonics whatever the rate.
 constexpr double kMaxHarmonic_hz = 8000.0;
 
-// A formant's bump over the tilt: 1 + prominence at its centre, half of that at +-width / 2.
+// A formant's bump added to the tilt's 1: prominence at its centre, half of that at +-width / 2.
 double Formant(double f, double centre_hz, double width_hz, double prominence) {
   const double x = (f - centre_hz) / (0.5 * width_hz);
   return prominence / (1.0 + x * x);
