@@ -86,6 +86,9 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "a track coasting this long with no source heard is dropped and acquisition restarts");
   flags.Double("despike-k", &c.despike_k, "K", "robust sd",
                "clip each frame's channels at K robust standard deviations before the GCC (0: off)");
+  flags.Int("cross-pairs", &c.cross_pairs_max_sensors, "N", "sensors",
+            "arrays of at most N sensors also measure the pairs without the reference sensor, which "
+            "acquisition and presence check each position against (0: never; in [0, 16])");
   flags.String("localization", &f->localization, "NAME",
                "what is reported: position (3-D from 4+ sensors off a common plane; per source from a "
                "planar array with --source-side, or a linear one with --source-plane and --source-side) | "

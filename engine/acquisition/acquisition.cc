@@ -83,11 +83,18 @@ bool Acquisition::InBounds(const Vec3& p) const {
   return (p.array() >= options_.bounds_min_m.array()).all() && (p.array() <= options_.bounds_max_m.array()).all();
 }
 
+double Acquisition::CrossLag(int q, const Eigen::VectorXd& pair_lags) const {
+  return pair_lags(array_.pair_of_sensor(field_.cross_sensor_b(q))) -
+         pair_lags(array_.pair_of_sensor(field_.cross_sensor_a(q)));
+}
+
 double Acquisition::Score(const Vec3& p) const {
   const double scale = field_.sample_rate_hz();
   const Eigen::VectorXd lags = array_.Tdoa(p) * scale;
+  const int pairs = field_.reference_pairs();
   double s = 0.0;
-  for (int q = 0; q < field_.pair_count(); ++q) s += field_.At(q, lags(q));
+  for (int q = 0; q < pairs; ++q) s += field_.At(q, lags(q));
+  for (int q = pairs; q < field_.pair_count(); ++q) s += field_.At(q, CrossLag(q, lags));
   return s;
 }
 
@@ -99,10 +106,11 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
     const Measurement** slot;
     ~Forget() { *slot = nullptr; }
   } forget{&measurement_};
-  const int pairs = field_.pair_count();
+  const int pairs = field_.reference_pairs();
+  const int all_pairs = field_.pair_count();
   const int usable = field_.usable_pairs();
   out.presence.threshold = std::numeric_limits<double>::infinity();
-  if (usable < 3 || pairs != array_.pair_count()) return out;
+  if (field_.usable_reference_pairs() < 3 || pairs != array_.pair_count()) return out;
   const double fs = m.sample_rate_hz;
   const double c = array_.sound_speed_mps();
   const Vec3 centre = array_.centroid_m();
@@ -118,7 +126,10 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
   };
   std::vector<Cell> cells;
   cells.reserve(directions_.size() * static_cast<size_t>(shells));
-  std::vector<double> lags(static_cast<size_t>(pairs)), widths(static_cast<size_t>(pairs));
+  // Per field pair (reference, then cross): the cell centre's lag and the cell's half-width.
+  std::vector<double> lags(static_cast<size_t>(all_pairs)), widths(static_cast<size_t>(all_pairs));
+  std::vector<double> sensor_range(static_cast<size_t>(array_.sensor_count()));
+  std::vector<Vec3> sensor_unit(static_cast<size_t>(array_.sensor_count()));
   // Shell s > 0 spans [r_min q^(s-1), r_min q^s].
   std::vector<double> shell_lo(static_cast<size_t>(shells), 0.0);
   for (int s = 1; s < shells; ++s) shell_lo[static_cast<size_t>(s)] = r_min * std::pow(q, s - 1);
@@ -138,18 +149,25 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
   };
   const int ref = array_.reference_sensor();
   auto lag_windows = [&](const Vec3& x, double rad) {
-    const Vec3 to_ref = x - array_.sensor_m(ref);
-    const double d_ref = to_ref.norm();
-    const Vec3 u_ref = d_ref > 0.0 ? Vec3(to_ref / d_ref) : Vec3::Zero();
-    for (int p = 0; p < pairs; ++p) {
-      const Vec3 to_k = x - array_.sensor_m(array_.sensor_of_pair(p));
+    for (int k = 0; k < array_.sensor_count(); ++k) {
+      const Vec3 to_k = x - array_.sensor_m(k);
       const double d_k = to_k.norm();
-      const Vec3 u_k = d_k > 0.0 ? Vec3(to_k / d_k) : Vec3::Zero();
-      lags[static_cast<size_t>(p)] = (d_k - d_ref) / c * fs;
-      // |grad lag| <= 2 fs / c near a sensor, where the unit vectors are undefined.
-      const double grad = (d_k > rad && d_ref > rad) ? (u_k - u_ref).norm() / c * fs : 2.0 * fs / c;
-      widths[static_cast<size_t>(p)] = grad * rad + 0.5;
+      sensor_range[static_cast<size_t>(k)] = d_k;
+      sensor_unit[static_cast<size_t>(k)] = d_k > 0.0 ? Vec3(to_k / d_k) : Vec3::Zero();
     }
+    // Pair (a, b): lag (d_b - d_a) fs / c; |grad lag| <= 2 fs / c near a sensor, where the
+    // unit vectors are undefined.
+    auto window = [&](int p, int a, int b) {
+      const double d_a = sensor_range[static_cast<size_t>(a)], d_b = sensor_range[static_cast<size_t>(b)];
+      lags[static_cast<size_t>(p)] = (d_b - d_a) / c * fs;
+      const double grad =
+          (d_b > rad && d_a > rad)
+              ? (sensor_unit[static_cast<size_t>(b)] - sensor_unit[static_cast<size_t>(a)]).norm() / c * fs
+              : 2.0 * fs / c;
+      widths[static_cast<size_t>(p)] = grad * rad + 0.5;
+    };
+    for (int p = 0; p < pairs; ++p) window(p, ref, array_.sensor_of_pair(p));
+    for (int p = pairs; p < all_pairs; ++p) window(p, field_.cross_sensor_a(p), field_.cross_sensor_b(p));
   };
   for (int s = 0; s < shells; ++s) {
     const int dirs = s == 0 ? 1 : static_cast<int>(directions_.size());
@@ -160,7 +178,7 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
       if (DistanceToBox(x, options_.bounds_min_m, options_.bounds_max_m) > rad) continue;
       lag_windows(x, rad);
       double upper = 0.0;
-      for (int p = 0; p < pairs; ++p)
+      for (int p = 0; p < all_pairs; ++p)
         upper += field_.MaxAround(p, lags[static_cast<size_t>(p)], widths[static_cast<size_t>(p)]);
       cells.push_back({static_cast<float>(upper), d, s});
     }
@@ -274,7 +292,7 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
     // No position could be solved: report the bound no position can exceed (each pair's
     // largest value anywhere in its window), so a frame says how far from present it was.
     double unconstrained = 0.0, lag = 0.0, value = 0.0;
-    for (int p = 0; p < pairs; ++p) {
+    for (int p = 0; p < all_pairs; ++p) {
       if (field_.usable(p) && field_.ArgMax(p, field_.first_lag(p), field_.last_lag(p), &lag, &value)) {
         unconstrained += value;
       }
@@ -292,18 +310,30 @@ PresenceResult Acquisition::Around(const Measurement& m, const Vec3& position_m,
   field_.Build(m, /*with_levels=*/false);
   const int usable = field_.usable_pairs();
   out.threshold = std::numeric_limits<double>::infinity();
-  if (usable == 0 || field_.pair_count() != array_.pair_count()) return out;
+  if (usable == 0 || field_.reference_pairs() != array_.pair_count()) return out;
   const double fs = m.sample_rate_hz;
-  const Eigen::VectorXd lag = array_.Tdoa(position_m) * fs;
+  const Eigen::VectorXd pair_lag = array_.Tdoa(position_m) * fs;
   const Eigen::MatrixXd jac = array_.TdoaJacobian(position_m) * fs;
+  const int pairs = field_.reference_pairs();
   double sum = 0.0, combinations = 1.0, unconstrained = 0.0;
   for (int p = 0; p < field_.pair_count(); ++p) {
     if (!field_.usable(p)) continue;
-    const Eigen::Vector3d row = jac.row(p).transpose();
+    // A cross pair (a, b) reads lag_b - lag_a, with the gradient's difference.
+    Eigen::Vector3d row;
+    double lag_p = 0.0;
+    if (p < pairs) {
+      row = jac.row(p).transpose();
+      lag_p = pair_lag(p);
+    } else {
+      const int a = array_.pair_of_sensor(field_.cross_sensor_a(p)),
+                b = array_.pair_of_sensor(field_.cross_sensor_b(p));
+      row = (jac.row(b) - jac.row(a)).transpose();
+      lag_p = pair_lag(b) - pair_lag(a);
+    }
     const double spread = std::sqrt(std::max(0.0, row.dot(covariance_m2 * row)));
     const double half = std::min(3.0 * spread + 1.0, static_cast<double>(field_.last_lag(p) - field_.first_lag(p)));
-    const double a = std::max(lag(p) - half, static_cast<double>(field_.first_lag(p)));
-    const double b = std::min(lag(p) + half, static_cast<double>(field_.last_lag(p)));
+    const double a = std::max(lag_p - half, static_cast<double>(field_.first_lag(p)));
+    const double b = std::min(lag_p + half, static_cast<double>(field_.last_lag(p)));
     double at = 0.0, value = 0.0;
     if (a <= b && field_.ArgMax(p, a, b, &at, &value)) {
       sum += value;

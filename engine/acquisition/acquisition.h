@@ -20,9 +20,20 @@
 // solution, summed over all usable pairs; a mode within 3 position standard deviations of a
 // stronger one, by each one's own covariance, is merged into it. A solution beyond 1.5 x
 // the radius is parked on the sphere in its direction (its range spread clipped to the
-// radius), and two parked within one search direction's radius are one mode. Every mode within mode_margin sqrt(P) of the best survives (a
-// 4-sensor array's two exact TDOA solutions score alike and both survive), at most max_modes,
+// radius), and two parked within one search direction's radius are one mode. Every mode within mode_margin sqrt(P) of
+// the best survives (a 4-sensor array's two exact TDOA solutions score alike and both survive), at most max_modes,
 // strongest first, each with its fix covariance (H^T W H)^-1.
+//
+// Cross pairs. When the measurement holds pairs without the reference (Measurement::cross_pairs,
+// GccOptions::cross_pairs_max_sensors), the spatial spectrum sums them too, each at the lag
+// lag_b - lag_a its position predicts: cell bounds, mode scores, the mode margin and the
+// presence statistics count every usable pair (P above is then reference plus cross pairs),
+// while the solve and the count of lag combinations M use the reference pairs. Why: a
+// 4-sensor array's three reference pairs have an exact solution through any one pair's wrong
+// peak (an echo's cross term, crosstalk, noise), which scores as well as the truth; the
+// cross pairs read low there (acquisition_test: crosstalk on one pair, best mode 1.7 sd from
+// the truth with them, 2200 sd without). They cannot tell apart what every pair agrees on:
+// a 4-sensor array's second exact solution, or one channel's echo louder than its direct path.
 //
 // Presence (presence.h): statistic = best mode's score / sqrt(P) (with no mode solved, the
 // sum of each pair's largest value / sqrt(P), which no position can exceed; never present
@@ -30,7 +41,7 @@
 // search chose from are M = min(prod_p W_p, 8 max_p W_p^3) for lag windows of W_p lags (a
 // position has 3 degrees of freedom). Around a track, the per-pair windows are
 // +-(3 sqrt(J_p C J_p^T) fs + 1) lags about the track's predicted lags (C its position
-// covariance) and M = prod_p W_p.
+// covariance; a cross pair's J is J_b - J_a) and M = prod_p W_p over every usable pair.
 //
 // Cost: (cells x (sensors + pairs)) + refinements x ~10 solves; ~1-3 ms for the default grid
 // on one core. Not thread-safe; one per session.
@@ -112,6 +123,9 @@ class Acquisition {
               PositionMode* mode) const;
   bool InBounds(const Vec3& p) const;
   double Score(const Vec3& p) const;
+  // Field pair q >= reference_pairs() (a cross pair (a, b)): its lag from the reference
+  // pairs' lags, lag_b - lag_a.
+  double CrossLag(int q, const Eigen::VectorXd& pair_lags) const;
 
   ArrayGeometry array_;
   AcquisitionOptions options_;

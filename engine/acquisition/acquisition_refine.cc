@@ -18,7 +18,7 @@ constexpr double kMaxSigmaSamples = 5.0;
 
 bool Acquisition::Refine(const Vec3& start_m, const std::vector<double>& lo, const std::vector<double>& hi,
                          PositionMode* mode) const {
-  const int pairs = field_.pair_count();
+  const int pairs = field_.reference_pairs();  // the solve uses the reference pairs; Score all
   const double fs = field_.sample_rate_hz();
   std::vector<double> pick(static_cast<size_t>(pairs), 0.0), sigma(static_cast<size_t>(pairs), 1.0);
   std::vector<char> used(static_cast<size_t>(pairs), 0);

@@ -8,37 +8,51 @@ namespace localizer::engine {
 
 void LagField::Build(const Measurement& m, bool with_levels) {
   sample_rate_hz_ = m.sample_rate_hz;
-  pairs_.resize(m.pairs.size());
+  reference_pairs_ = static_cast<int>(m.pairs.size());
+  pairs_.resize(m.pairs.size() + m.cross_pairs.size());
   usable_ = 0;
   for (size_t p = 0; p < m.pairs.size(); ++p) {
     const PairMeasurement& pm = m.pairs[p];
-    Pair& out = pairs_[p];
-    out.first_lag = pm.first_lag_samples;
-    out.usable = !pm.gcc.empty() && pm.peak_value > 0.0 && pm.peak_snr > 0.0;
-    if (!out.usable) {
-      out.levels.assign(1, std::vector<float>(std::max<size_t>(pm.gcc.size(), 1), 0.0f));
-      continue;
-    }
-    ++usable_;
-    const double inv_sigma = pm.peak_snr / pm.peak_value;  // 1 / sigma_R
-    const int n = static_cast<int>(pm.gcc.size());
-    int level_count = 1;
-    while (with_levels && (1 << (level_count - 1)) < n) ++level_count;
-    out.levels.resize(static_cast<size_t>(level_count));
-    std::vector<float>& base = out.levels[0];
-    base.resize(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i)
-      base[static_cast<size_t>(i)] = static_cast<float>(pm.gcc[static_cast<size_t>(i)] * inv_sigma);
-    for (int l = 1; l < level_count; ++l) {
-      const std::vector<float>& prev = out.levels[static_cast<size_t>(l - 1)];
-      std::vector<float>& next = out.levels[static_cast<size_t>(l)];
-      next.resize(static_cast<size_t>(n));
-      const int d = 1 << (l - 1);
-      for (int i = 0; i < n; ++i) {
-        const float a = prev[static_cast<size_t>(std::max(i - d, 0))];
-        const float b = prev[static_cast<size_t>(std::min(i + d, n - 1))];
-        next[static_cast<size_t>(i)] = std::max(prev[static_cast<size_t>(i)], std::max(a, b));
-      }
+    const bool usable = !pm.gcc.empty() && pm.peak_value > 0.0 && pm.peak_snr > 0.0;
+    BuildPair(pm.gcc, pm.first_lag_samples, usable ? pm.peak_snr / pm.peak_value : 0.0, with_levels, &pairs_[p]);
+  }
+  usable_reference_ = usable_;
+  for (size_t q = 0; q < m.cross_pairs.size(); ++q) {
+    const CrossPairGcc& cp = m.cross_pairs[q];
+    Pair& out = pairs_[m.pairs.size() + q];
+    BuildPair(cp.gcc, cp.first_lag_samples, cp.noise_floor_inverse, with_levels, &out);
+    out.sensor_a = cp.sensor_a;
+    out.sensor_b = cp.sensor_b;
+  }
+}
+
+void LagField::BuildPair(const std::vector<float>& gcc, int first_lag, double inv_sigma, bool with_levels, Pair* pair) {
+  Pair& out = *pair;
+  out.first_lag = first_lag;
+  out.sensor_a = out.sensor_b = -1;
+  out.usable = !gcc.empty() && inv_sigma > 0.0;
+  if (!out.usable) {
+    out.levels.assign(1, std::vector<float>(std::max<size_t>(gcc.size(), 1), 0.0f));
+    return;
+  }
+  ++usable_;
+  const int n = static_cast<int>(gcc.size());
+  int level_count = 1;
+  while (with_levels && (1 << (level_count - 1)) < n) ++level_count;
+  out.levels.resize(static_cast<size_t>(level_count));
+  std::vector<float>& base = out.levels[0];
+  base.resize(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i)
+    base[static_cast<size_t>(i)] = static_cast<float>(gcc[static_cast<size_t>(i)] * inv_sigma);
+  for (int l = 1; l < level_count; ++l) {
+    const std::vector<float>& prev = out.levels[static_cast<size_t>(l - 1)];
+    std::vector<float>& next = out.levels[static_cast<size_t>(l)];
+    next.resize(static_cast<size_t>(n));
+    const int d = 1 << (l - 1);
+    for (int i = 0; i < n; ++i) {
+      const float a = prev[static_cast<size_t>(std::max(i - d, 0))];
+      const float b = prev[static_cast<size_t>(std::min(i + d, n - 1))];
+      next[static_cast<size_t>(i)] = std::max(prev[static_cast<size_t>(i)], std::max(a, b));
     }
   }
 }

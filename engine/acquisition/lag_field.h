@@ -15,8 +15,13 @@
 // over a cell whose lags span that half-width.
 // A pair is usable when the frame kept its GCC (GccOptions::keep_gcc) and its peak is
 // positive; unusable pairs read as 0 (no evidence either way).
+// Pairs 0..reference_pairs() - 1 are the measurement's reference pairs (its order); the
+// measurement's cross pairs (Measurement::cross_pairs, two non-reference sensors) follow,
+// usable when they hold energy in the band. A cross pair (a, b) at a position reads the lag
+// lag_b - lag_a of the reference pairs of sensors b and a.
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 #include "engine/core/measurement.h"
@@ -29,8 +34,13 @@ class LagField {
   // (O(window x levels) per pair; MaxAround needs them).
   void Build(const Measurement& m, bool with_levels = true);
 
-  int pair_count() const { return static_cast<int>(pairs_.size()); }
-  int usable_pairs() const { return usable_; }
+  int pair_count() const { return static_cast<int>(pairs_.size()); }  // reference and cross
+  int usable_pairs() const { return usable_; }                        // reference and cross
+  int reference_pairs() const { return reference_pairs_; }
+  int usable_reference_pairs() const { return usable_reference_; }
+  // Pair p >= reference_pairs(): its sensors a and b (Measurement::cross_pairs).
+  int cross_sensor_a(int p) const { return pairs_[static_cast<std::size_t>(p)].sensor_a; }
+  int cross_sensor_b(int p) const { return pairs_[static_cast<std::size_t>(p)].sensor_b; }
   bool usable(int p) const { return pairs_[p].usable; }
   double sample_rate_hz() const { return sample_rate_hz_; }
   // Normalised GCC of pair p at a fractional lag (samples), linear between integer lags;
@@ -52,10 +62,15 @@ class LagField {
   struct Pair {
     bool usable = false;
     int first_lag = 0;
+    int sensor_a = -1, sensor_b = -1;        // a cross pair's sensors
     std::vector<std::vector<float>> levels;  // levels[0] = n_p, then max-filtered
   };
+  // Fills `pair` from a GCC window and its noise scale 1 / sigma_R (0: unusable).
+  void BuildPair(const std::vector<float>& gcc, int first_lag, double inv_sigma, bool with_levels, Pair* pair);
   std::vector<Pair> pairs_;
   int usable_ = 0;
+  int reference_pairs_ = 0;
+  int usable_reference_ = 0;
   double sample_rate_hz_ = 0.0;
 };
 

@@ -32,6 +32,11 @@ class ArrayGeometry {
   const std::vector<Vec3>& sensors_m() const { return sensors_m_; }
   const Vec3& sensor_m(int k) const { return sensors_m_[k]; }
   int sensor_of_pair(int pair) const { return pair < reference_ ? pair : pair + 1; }
+  // The pair whose non-reference sensor is `sensor` (the inverse of sensor_of_pair); -1 for
+  // the reference itself.
+  int pair_of_sensor(int sensor) const {
+    return sensor == reference_ ? -1 : (sensor < reference_ ? sensor : sensor - 1);
+  }
   // Largest |delay| any source position can produce on this pair.
   double max_delay_s(int pair) const { return max_delay_s_[pair]; }
   Vec3 centroid_m() const;

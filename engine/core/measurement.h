@@ -52,6 +52,23 @@ struct PairMeasurement {
   std::vector<float> gcc;
 };
 
+// The GCC of two sensors that are both not the reference (sensor_a < sensor_b), measured
+// only for redundancy (GccOptions::cross_pairs_max_sensors): on a 4-sensor array the three
+// reference pairs always have an exact solution, also with one pair on an echo or a noise
+// peak, and only the pairs without the reference can outvote it. Acquisition and presence
+// read it (lag_field.h); the filters do not. Lag l (samples) of gcc stands for
+// t_arrival(sensor_b) - t_arrival(sensor_a) = l / sample_rate_hz, lags first_lag_samples,
+// first_lag_samples + 1, ..., normalised as PairMeasurement::gcc.
+struct CrossPairGcc {
+  int sensor_a = 0;
+  int sensor_b = 0;
+  // 1 / the GCC's noise-only standard deviation (as peak_snr / peak_value of a reference
+  // pair); 0 when the frame had no energy in the band.
+  double noise_floor_inverse = 0.0;
+  int first_lag_samples = 0;
+  std::vector<float> gcc;
+};
+
 struct Measurement {
   // Reception instant, in seconds from the first sample at the receivers, of the centre of
   // the frame the pairs were measured on. Pair k describes the emission that reached the
@@ -59,6 +76,10 @@ struct Measurement {
   double t_s = 0.0;
   double sample_rate_hz = 0.0;
   std::vector<PairMeasurement> pairs;  // one per non-reference sensor, ascending sensor index
+  // Every pair of non-reference sensors (a < b, ascending a then b) once the front end was
+  // asked for them (TdoaEstimator::MeasureCrossPairs); empty otherwise (not asked, the GPU
+  // front end, larger arrays, keep_gcc off).
+  std::vector<CrossPairGcc> cross_pairs;
 };
 
 }  // namespace localizer::engine

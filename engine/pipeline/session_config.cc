@@ -95,6 +95,10 @@ Status AudioSessionConfig::Validate() const {
   if (!(search_radius_m >= 0.0) || search_radius_m > 1e7) {
     return InvalidArgument("search_radius_m must be in [0, 1e7], got " + Num(search_radius_m));
   }
+  if (cross_pairs_max_sensors < 0 || cross_pairs_max_sensors > 16) {
+    return InvalidArgument("cross_pairs_max_sensors must be in [0, 16], got " +
+                           std::to_string(cross_pairs_max_sensors));
+  }
   if (!(presence_false_alarm > 0.0) || presence_false_alarm > 0.1) {
     return InvalidArgument("presence_false_alarm must be in (0, 0.1], got " + Num(presence_false_alarm));
   }
@@ -121,6 +125,7 @@ GccOptions AudioSessionConfig::GccOptionsFor() const {
   gcc.taper_fraction = FramingTaperFraction(frame_samples, hop_samples);
   gcc.keep_gcc = true;     // acquisition, presence, multipath association and the noise anchor read it
   gcc.max_candidates = 1;  // the session looks for other peaks in the kept GCC, near its track
+  gcc.cross_pairs_max_sensors = cross_pairs_max_sensors;
   return gcc;
 }
 

@@ -79,6 +79,11 @@ struct AudioSessionConfig {
   double phat_beta = 0.8;
   double band_low_hz = 0.0;
   double band_high_hz = 0.0;  // 0: Nyquist
+  // Arrays of at most this many sensors (in [0, 16]; 0: never) also measure the pairs without
+  // the reference, which acquisition and presence check every position against
+  // (GccOptions::cross_pairs_max_sensors): a 4-sensor array's three reference pairs cannot
+  // outvote one that locked on an echo or a noise peak.
+  int cross_pairs_max_sensors = 4;
   // Impulsive-noise front end (engine/tdoa/despike.h): each frame's channels are clipped at
   // despike_k robust standard deviations before the GCC (0: off), keeping outliers that every
   // channel shows within the array's largest delay (a coherent impulsive source).

@@ -47,6 +47,10 @@ struct Session::Impl {
   void TrackFrame(double dt_s, bool measured, Estimate* e);
   // No track: search the volume; a present source starts one.
   void AcquireFrame(bool measured, Estimate* e);
+  // Acquisition's volume search of this frame, over every pair the front end measures: the
+  // pairs without the reference are measured first, once per frame (small arrays only,
+  // AudioSessionConfig::cross_pairs_max_sensors), so only frames that search pay for them.
+  AcquisitionResult SearchAllPairs();
   // A present frame that the track explains much worse than each pair's best peak allows
   // (PresenceResult::unconstrained), or whose update used fewer than 3 pairs, is audited by
   // a volume search (at most every

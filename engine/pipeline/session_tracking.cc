@@ -45,7 +45,7 @@ void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& nea
   const bool suspicious = near.unconstrained - near.statistic > kAuditMargin || e->pairs_used < 3;
   if (!suspicious || frames_since_audit < kAuditSpacingFrames) return;
   frames_since_audit = 0;
-  const AcquisitionResult found = acquisition.Search(measurement);
+  const AcquisitionResult found = SearchAllPairs();
   if (!found.presence.present || found.modes.empty()) return;
   const double best = found.modes.front().score;
   for (const PositionMode& mode : found.modes) {
@@ -145,7 +145,7 @@ void Session::Impl::UpdateAndWatch(const TrackState& predicted, Estimate* e) {
   // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too),
   // and the track's own: the frame that tripped the test may itself hold the bad pair (a
   // 4-sensor array's three pairs always have an exact, wrong, solution with one pair off).
-  const AcquisitionResult found = acquisition.Search(measurement);
+  const AcquisitionResult found = SearchAllPairs();
   if (found.presence.present) e->reinitialised = StartFromModes(WithOwnTrack(found.modes, predicted));
 }
 
@@ -185,7 +185,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     return;
   }
   // Not near the track: silence, or a source the track has lost?
-  const AcquisitionResult found = acquisition.Search(measurement);
+  const AcquisitionResult found = SearchAllPairs();
   if (found.presence.present) {
     e->source_present = true;
     e->presence_statistic = found.presence.statistic;
@@ -209,9 +209,15 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
   if (silent_s >= config.source_timeout_s) live = false;  // dropped: acquisition restarts
 }
 
+AcquisitionResult Session::Impl::SearchAllPairs() {
+  // A failed request leaves the cross pairs empty: the search then uses the reference pairs.
+  if (measurement.cross_pairs.empty()) (void)components.estimator->MeasureCrossPairs(&measurement);
+  return acquisition.Search(measurement);
+}
+
 void Session::Impl::AcquireFrame(bool measured, Estimate* e) {
   if (!measured) return;
-  const AcquisitionResult found = acquisition.Search(measurement);
+  const AcquisitionResult found = SearchAllPairs();
   e->source_present = found.presence.present;
   e->presence_statistic = found.presence.statistic;
   e->presence_threshold = found.presence.threshold;

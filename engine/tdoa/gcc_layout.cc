@@ -43,6 +43,7 @@ std::vector<float> TaperGains(int n, double taper_fraction) {
 int GccLayout::widest_lag() const {
   int widest = 0;
   for (int lag : max_lag_samples) widest = std::max(widest, lag);
+  for (int lag : cross_max_lag_samples) widest = std::max(widest, lag);
   return widest;
 }
 
@@ -85,6 +86,20 @@ StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOption
   const double lag_limit = half_fft - 1.0 - kPeakHalfWidth;
   for (int p = 0; p < array.pair_count(); ++p) {
     layout.max_lag_samples.push_back(static_cast<int>(std::min(wanted_lag(p), lag_limit)));
+  }
+  if (options.keep_gcc && array.sensor_count() <= options.cross_pairs_max_sensors) {
+    const double alias_limit = layout.fft_size - options.frame_samples - kPeakHalfWidth - 1.0;
+    const double c = array.sound_speed_mps();
+    for (int a = 0; a < array.sensor_count(); ++a) {
+      for (int b = a + 1; b < array.sensor_count(); ++b) {
+        if (a == array.reference_sensor() || b == array.reference_sensor()) continue;
+        const double wanted =
+            std::ceil((array.sensor_m(a) - array.sensor_m(b)).norm() / c * fs) + options.lag_margin_samples;
+        layout.cross_sensors.push_back({a, b});
+        layout.cross_max_lag_samples.push_back(
+            static_cast<int>(std::max(0.0, std::min({wanted, lag_limit, alias_limit}))));
+      }
+    }
   }
   return layout;
 }

@@ -20,6 +20,7 @@
 // Cost: O(pairs). Thread-safe (a pure function).
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "engine/array/array_geometry.h"
@@ -38,9 +39,15 @@ struct GccLayout {
   float noise_floor_inverse = 0.0f;  // sqrt(2 * (band_end_bin - band_first_bin)) * taper_noise_factor
   float taper_noise_factor = 1.0f;   // 1 / sqrt(G), G as above: applies to any bin weighting
   std::vector<int> max_lag_samples;  // L_p per pair, in [0, N/2 - 1 - kPeakHalfWidth]
+  // Pairs of non-reference sensors measured for redundancy (GccOptions::cross_pairs_max_sensors;
+  // empty unless the array has at most that many sensors and the GCC is kept): sensors
+  // (a, b), a < b, ascending, and each one's half-width, min(wanted, N/2 - 1 - K,
+  // N - frame_samples - K - 1): beyond the last the circular correlation aliases.
+  std::vector<std::array<int, 2>> cross_sensors;
+  std::vector<int> cross_max_lag_samples;
 
   int pair_count() const { return static_cast<int>(max_lag_samples.size()); }
-  int widest_lag() const;  // max_p L_p (0 without pairs)
+  int widest_lag() const;  // max L over the pairs and the cross pairs (0 without pairs)
 };
 
 // INVALID_ARGUMENT when options.Validate() fails (its message) or the band holds no FFT bin

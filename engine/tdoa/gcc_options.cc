@@ -87,6 +87,9 @@ Status GccOptions::Validate() const {
   if (max_candidates < 1 || max_candidates > kMaxCandidates) {
     return BadOption("max_candidates", max_candidates, "must be in [1, " + std::to_string(kMaxCandidates) + "]");
   }
+  if (cross_pairs_max_sensors < 0 || cross_pairs_max_sensors > 16) {
+    return BadOption("cross_pairs_max_sensors", cross_pairs_max_sensors, "must be in [0, 16]");
+  }
   if (!(coherence_time_constant_frames >= 1.0) || !std::isfinite(coherence_time_constant_frames)) {
     return BadOption("coherence_time_constant_frames", coherence_time_constant_frames, "must be finite and >= 1");
   }

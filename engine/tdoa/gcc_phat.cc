@@ -116,10 +116,13 @@ Status GccPhatEstimator::Impl::TransformChannel(const float* samples, int channe
   return Status::Ok();
 }
 
-// Fills `cross` with G = W X_k conj(X_r) B and returns S, the sum of |G| over all N bins.
 float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
-  const int ref = array.reference_sensor();
-  const int sensor = array.sensor_of_pair(pair);
+  return WeighSensors(array.reference_sensor(), array.sensor_of_pair(pair), pair);
+}
+
+// Fills `cross` with G = W X_k conj(X_r) B for sensors r = ref, k = sensor and returns S, the
+// sum of |G| over all N bins. `pair` picks kPhatCoherence's learnt weights (-1: plain PHAT).
+float GccPhatEstimator::Impl::WeighSensors(int ref, int sensor, int pair) {
   const float* xr = spectra.get() + static_cast<std::size_t>(ref) * spectrum_stride;
   const float* xk = spectra.get() + static_cast<std::size_t>(sensor) * spectrum_stride;
   float* g = cross.get();
@@ -148,7 +151,7 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
       half_sum = WeighBins(xr, xk, lo, hi, CcWeight{}, g);
       break;
     case Weighting::kPhatCoherence:
-      if (coherence_usable[pair]) {
+      if (pair >= 0 && coherence_usable[pair]) {
         const float* w = coherence_weight.data() + static_cast<std::size_t>(pair) * bin_count;
         half_sum = WeighBins(xr, xk, lo, hi, CoherencePhatWeight{floor_mag, w}, g);
       } else {  // warming up: plain PHAT
@@ -266,6 +269,25 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
     out->gcc.clear();
 }
 
+void GccPhatEstimator::Impl::MeasureCrossPair(int index, CrossPairGcc* out) {
+  const auto [a, b] = layout.cross_sensors[static_cast<std::size_t>(index)];
+  const int max_lag = layout.cross_max_lag_samples[static_cast<std::size_t>(index)];
+  out->sensor_a = a;
+  out->sensor_b = b;
+  out->first_lag_samples = -max_lag;
+  const float norm = WeighSensors(a, b, /*pair=*/-1);
+  if (!(norm > 0.0f)) {
+    out->noise_floor_inverse = 0.0;
+    out->gcc.assign(2 * max_lag + 1, 0.0f);
+    return;
+  }
+  out->noise_floor_inverse = layout.noise_floor_inverse;
+  fftwf_execute(inverse.get());
+  GatherWindow(max_lag, 1.0f / norm);
+  const float* searched = window.data() + kPeakHalfWidth;
+  out->gcc.assign(searched, searched + 2 * max_lag + 1);
+}
+
 GccPhatEstimator::GccPhatEstimator(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 GccPhatEstimator::~GccPhatEstimator() = default;
 
@@ -286,6 +308,7 @@ Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double 
         "frame_samples is " + std::to_string(frame_samples) +
         "; the estimator was created for frame_samples = " + std::to_string(s.options.frame_samples));
   }
+  s.have_spectra = false;
   for (int ch = 0; ch < s.array.sensor_count(); ++ch) {
     LOCALIZER_RETURN_IF_ERROR(s.TransformChannel(frame + static_cast<std::size_t>(ch) * frame_samples, ch));
   }
@@ -293,6 +316,18 @@ Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double 
   out->sample_rate_hz = s.options.sample_rate_hz;
   out->pairs.resize(s.array.pair_count());
   for (int p = 0; p < s.array.pair_count(); ++p) s.MeasurePair(p, &out->pairs[p]);
+  out->cross_pairs.clear();  // measured on request, from these spectra (MeasureCrossPairs)
+  s.have_spectra = true;
+  return Status::Ok();
+}
+
+Status GccPhatEstimator::MeasureCrossPairs(Measurement* out) {
+  Impl& s = *impl_;
+  if (out == nullptr) return InvalidArgument("out (the Measurement to fill) is null");
+  if (!s.have_spectra) return FailedPrecondition("MeasureCrossPairs needs a frame estimated first");
+  out->cross_pairs.resize(s.layout.cross_sensors.size());
+  for (std::size_t q = 0; q < out->cross_pairs.size(); ++q)
+    s.MeasureCrossPair(static_cast<int>(q), &out->cross_pairs[q]);
   return Status::Ok();
 }
 

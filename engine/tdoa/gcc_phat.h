@@ -126,7 +126,8 @@
 // the weight array read in the weighing pass plus one O(bins) update per pair and frame:
 // BM_GccPhatCoherence 133 us per 4 x 4096 frame against 91-96 us for PHAT (same run).
 //
-// Cost per frame: (channels) real FFTs of N plus (channels - 1) inverse FFTs of N, O(N) for
+// Cost per frame: (channels) real FFTs of N plus (channels - 1) inverse FFTs of N (and one
+// more weighing and inverse FFT per cross pair, GccOptions::cross_pairs_max_sensors), O(N) for
 // the spectra (one vectorised pass per pair, cross_spectrum.h), O(L_p) for the peak and
 // ~0.2 us per pair for the sinc refinement; plans are made once in Create and reused, so
 // Estimate allocates nothing after the first call (which sizes out->pairs and each pair's
@@ -192,6 +193,17 @@ struct GccOptions {
   bool measure_fft_plans = false;                              // FFTW_MEASURE instead of FFTW_ESTIMATE (see above)
   int max_candidates = 4;  // PairMeasurement::candidates per pair, in [1, 32]; 1: the
                            // main peak only
+  // Arrays of at most this many sensors (in [0, 16]; 0: never) can also measure every pair of
+  // non-reference sensors, into Measurement::cross_pairs, on request (MeasureCrossPairs; only
+  // with keep_gcc; their GCC over the lag window and noise scale, no peak): (S - 1)(S - 2) / 2
+  // more weighings and inverse transforms, 3 for 4 sensors (+11 us on a 4 x 4096 frame at
+  // 44.1 kHz, about a quarter of the stage). Why: a 4-sensor array's three reference pairs have an exact
+  // solution whatever one of them measured, so a pair on an echo or a noise peak moves the
+  // fix without a trace in any residual; with the other three pairs, acquisition and presence
+  // (lag_field.h) see it. A cross pair's window is clamped where the transform's circular
+  // correlation would alias (N - frame_samples - kPeakHalfWidth - 1 lags; gcc_layout.h).
+  // kPhatCoherence weighs cross pairs with plain PHAT.
+  int cross_pairs_max_sensors = 0;
   // kPhatCoherence: the exponential average's time constant in frames (>= 1; the weight of
   // a frame falls by e after this many frames) and the frames measured with plain PHAT before
   // the averaged coherence is used (>= 1).
@@ -216,6 +228,10 @@ class GccPhatEstimator final : public TdoaEstimator {
   // INVALID_ARGUMENT (naming the value) when frame or out is null, frame_samples differs from
   // options().frame_samples, or a channel holds a non-finite sample; `out` is then untouched.
   Status Estimate(const float* frame, int frame_samples, double t_s, Measurement* out) override;
+  // The last estimated frame's pairs without the reference (GccOptions::cross_pairs_max_sensors;
+  // none for larger arrays or without keep_gcc). Estimate leaves out->cross_pairs empty;
+  // FAILED_PRECONDITION before a frame was estimated (or after one that failed).
+  Status MeasureCrossPairs(Measurement* out) override;
 
   // Forgets what kPhatCoherence learnt (the next frame starts its warm-up): the estimator
   // then answers like a fresh one. A no-op for the other weightings.

@@ -22,10 +22,13 @@ struct GccPhatEstimator::Impl {
   Status Init();
   Status TransformChannel(const float* samples, int channel);
   float WeighCrossSpectrum(int pair);
+  float WeighSensors(int ref, int sensor, int pair);
   // S / sqrt(the noise-only variance of S R) for the weights in `weighed`: 1 / (R's noise-only
   // standard deviation), for weights that are not PHAT's unit ones; times the taper's factor (gcc_layout.h).
   float WeighedNoiseFloorInverse(float norm) const;
   void MeasurePair(int pair, PairMeasurement* out);
+  // Cross pair `index` of layout.cross_sensors: its GCC over its window and noise scale.
+  void MeasureCrossPair(int index, CrossPairGcc* out);
   void GatherWindow(int max_lag, float scale);
   float LargestSidelobe(std::span<const float> searched, int peak, int peak_lag, float scale) const;
   // The moments of the kept cross-spectrum at the measured delay (delay_statistics.h).
@@ -53,6 +56,7 @@ struct GccPhatEstimator::Impl {
   std::vector<int> coherence_frames;
   std::vector<char> coherence_usable;
   std::vector<WindowExtremum> extrema;  // scratch for PickDelayCandidates
+  bool have_spectra = false;            // `spectra` hold the last frame Estimate took (MeasureCrossPairs)
   FftwPlan forward;
   FftwPlan inverse;
 };

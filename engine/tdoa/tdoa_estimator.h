@@ -16,6 +16,15 @@ class TdoaEstimator {
   // out->t_s. `out` is overwritten; its vectors are reused so a steady stream allocates
   // nothing. Not thread-safe: one estimator per session (they hold FFT buffers).
   virtual Status Estimate(const float* frame, int frame_samples, double t_s, Measurement* out) = 0;
+
+  // The pairs without the reference sensor of the frame last given to Estimate, into
+  // out->cross_pairs (Measurement::cross_pairs), for an estimator that measures them; the
+  // others (the default) leave out->cross_pairs empty. Measured on demand, not by Estimate,
+  // because only acquisition's search reads them: a tracking frame pays nothing.
+  virtual Status MeasureCrossPairs(Measurement* out) {
+    out->cross_pairs.clear();
+    return Status::Ok();
+  }
 };
 
 }  // namespace localizer::engine

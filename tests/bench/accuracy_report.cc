@@ -1,11 +1,12 @@
 // Accuracy over seeds: every named scenario, both likelihoods, seeds 1..N; prints each run
 // and the median RMSE / per-frame CRLB and p95 / RMSE per scenario (BENCHMARKS.md).
 // Run: build/tests/bench/accuracy_report [N=5] [--one-std] [--levels FLOOR,CEILING,HZ]
-//        [--turns MAX] [--speed-changes MAX]
+//        [--turns MAX] [--speed-changes MAX] [--cross-pairs N]
 // --one-std: the particle filter with one acceleration std, no turn rates and no speed changes
 // (SetSingleMotion); --levels: these acceleration levels instead of the defaults
 // (particle_filter.h); --turns: per-particle turn rates up to MAX rad/s; --speed-changes:
-// per-particle speed changes up to MAX m/s^2 (ParticleFilterOptions).
+// per-particle speed changes up to MAX m/s^2 (ParticleFilterOptions); --cross-pairs: the
+// session's cross_pairs_max_sensors (0: acquisition searches the reference pairs only).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
   int seeds = 5;
   bool one_std = false;
   double floor = -1.0, ceiling = -1.0, switch_hz = -1.0, turns = -1.0, speed_changes = -1.0;
+  int cross_pairs = -1;  // < 0: the session's default
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -48,12 +50,14 @@ int main(int argc, char** argv) {
       turns = std::strtod(argv[++i], nullptr);
     } else if (arg == "--speed-changes" && has_value) {
       speed_changes = std::strtod(argv[++i], nullptr);
+    } else if (arg == "--cross-pairs" && has_value) {
+      cross_pairs = std::atoi(argv[++i]);
     } else {
       const auto n = localizer::ParseInteger(arg);
       if (!n.ok() || *n < 1 || *n > 1000000) {
         std::fprintf(stderr,
                      "usage: accuracy_report [N=5] [--one-std] [--levels FLOOR,CEILING,HZ] [--turns MAX] "
-                     "[--speed-changes MAX]\n(N must be an integer in [1, 1000000], got \"%s\")\n",
+                     "[--speed-changes MAX] [--cross-pairs N]\n(N must be an integer in [1, 1000000], got \"%s\")\n",
                      arg.c_str());
         return 2;
       }
@@ -74,6 +78,7 @@ int main(int argc, char** argv) {
                 std::tuple(floor, ceiling, switch_hz);
           if (turns >= 0.0) p.turn_rate_max_radps = turns;
           if (speed_changes >= 0.0) p.speed_change_max_mps2 = speed_changes;
+          if (cross_pairs >= 0) c->cross_pairs_max_sensors = cross_pairs;
         };
         const TrackScore s = TrackScenario(name, static_cast<uint64_t>(seed), likelihood, BackendChoice::kCpu,
                                            FilterKind::kPf, MotionModelKind::kCv, adjust)

@@ -53,6 +53,9 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   // Third argument 1: the default motion (acceleration levels, turn rates and speed changes:
   // ACCURACY.md, "Nineteenth pass"); 0: one std, the GPU filter's (the default before it).
   if (state.range(2) == 0) config.tracker.particle.SetSingleMotion();
+  // Fourth: cross_pairs_max_sensors (4, the default: this 4-sensor array also measures its
+  // three pairs without the reference; 0: off, the cost before them).
+  config.cross_pairs_max_sensors = static_cast<int>(state.range(3));
   // 0.1 s blocks, as a streaming client would send them.
   const int64_t block = 4410;
   const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
@@ -71,9 +74,10 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   state.counters["tdoa_us_per_frame"] = 1e6 * totals.tdoa_s / static_cast<double>(totals.frames);
   state.counters["filter_us_per_frame"] = 1e6 * totals.filter_s / static_cast<double>(totals.frames);
   state.SetLabel(std::string(LikelihoodName(config.tracker.particle.likelihood)) +
-                 (config.tracker.particle.single_motion() ? " one-std" : " levels+turns+speed"));
+                 (config.tracker.particle.single_motion() ? " one-std" : " levels+turns+speed") +
+                 (config.cross_pairs_max_sensors >= 4 ? " cross-pairs" : ""));
 }
-BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}, {0, 1}, {0, 4}})->Unit(benchmark::kMillisecond);
 
 // Several sessions fed in turn, one 4096-sample block each, as the server's workers take
 // them: each block finds its session's state (particles, filter scratch, transform buffers)

@@ -48,9 +48,10 @@ struct Args {
   double level_floor = -1.0, level_ceiling = -1.0, level_switch_hz = -1.0;  // < 0: the default
   double turn_rate_max_radps = -1.0;                                        // < 0: the session default
   double speed_change_max_mps2 = -1.0;                                      // < 0: the session default
-  int frame_samples = 0;   // --frame-samples: every scene's frame (hop half of it); 0: the campaign's
-  bool band_hint = false;  // --band-hint: the session gets the scene's true band
-  bool help = false;       // --help: print the usage and exit 0
+  int frame_samples = 0;             // --frame-samples: every scene's frame (hop half of it); 0: the campaign's
+  bool band_hint = false;            // --band-hint: the session gets the scene's true band
+  int cross_pairs_max_sensors = -1;  // --cross-pairs N; < 0: the session default
+  bool help = false;                 // --help: print the usage and exit 0
 };
 
 // The flags' changes to the campaign's default session config (`scene`: the one it runs).
@@ -66,6 +67,7 @@ void Adjust(const Args& a, const RandomSceneOptions& scene_options, AudioSession
     c->frame_samples = a.frame_samples;
     c->hop_samples = a.frame_samples / 2;
   }
+  if (a.cross_pairs_max_sensors >= 0) c->cross_pairs_max_sensors = a.cross_pairs_max_sensors;
   if (a.filter) c->tracker.kind = *a.filter;
   if (a.particles > 0) c->tracker.particle.particles = a.particles;
   if (a.manoeuvre_share >= 0.0) c->tracker.particle.manoeuvre_share = a.manoeuvre_share;
@@ -98,7 +100,8 @@ void Usage(FILE* out) {
       "                      [--tempering-ess F]\n"
       "                      [--likelihood peak|gcc|mixture] [--outlier-probability EPS]\n"
       "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--turn-rates MAX]\n"
-      "                      [--speed-changes MAX] [--band-hint] [--frame-samples N] [--trace SEED]\n"
+      "                      [--speed-changes MAX] [--band-hint] [--frame-samples N] [--cross-pairs N]\n"
+      "                      [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
       "within 3 x CRLB to the end), RMSE/CRLB and median NEES/dim after acquisition, lost frames\n"
@@ -122,6 +125,8 @@ void Usage(FILE* out) {
       "--frame-samples N gives every session frames of N samples, hop N/2 (the service's default is\n"
       "4096 at any rate); without it the campaign uses about a quarter second per frame: 4096 up to\n"
       "16 kHz, 16384 at 48 kHz. The per-frame CRLB is that of the frames the session uses.\n"
+      "--cross-pairs N: arrays of at most N sensors also measure the pairs without the reference\n"
+      "(0: never; the session's default is 4; session_config.h, cross_pairs_max_sensors).\n"
       "--band-hint gives each session its scene's true source band (an oracle: what a perfect band\n"
       "estimate from the data would give; the campaign's default gives none).\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
@@ -232,6 +237,10 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->frame_samples = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->frame_samples < 64 || a->frame_samples > (1 << 20))
         return std::fprintf(stderr, "scene_campaign: --frame-samples must be in [64, 2^20]\n"), false;
+    } else if (flag == "--cross-pairs") {
+      a->cross_pairs_max_sensors = static_cast<int>(std::strtol(value.c_str(), &end, 10));
+      if (*end != '\0' || a->cross_pairs_max_sensors < 0 || a->cross_pairs_max_sensors > 16)
+        return std::fprintf(stderr, "scene_campaign: --cross-pairs must be in [0, 16]\n"), false;
     } else if (flag == "--jobs") {
       a->jobs = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->jobs < 1) return std::fprintf(stderr, "scene_campaign: --jobs must be >= 1\n"), false;
