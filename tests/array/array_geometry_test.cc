@@ -42,6 +42,25 @@ TEST(ArrayGeometry, KnownGeometryGivesKnownDelays) {
   EXPECT_NEAR(g->max_delay_s(0), 2.0 / 1500.0, 1e-15);
 }
 
+// pair_of_sensor inverts sensor_of_pair whatever the reference, and a pair of two
+// non-reference sensors (a, b) has the delay Tdoa(pair of b) - Tdoa(pair of a) = t_b - t_a
+// (how acquisition reads the cross pairs, lag_field.h).
+TEST(ArrayGeometry, PairOfSensorInvertsSensorOfPairForAnyReference) {
+  for (int ref = 0; ref < 4; ++ref) {
+    const auto g = *ArrayGeometry::Create(Tetrahedron(), 1500.0, ref);
+    EXPECT_EQ(g.pair_of_sensor(ref), -1);
+    for (int p = 0; p < g.pair_count(); ++p) EXPECT_EQ(g.pair_of_sensor(g.sensor_of_pair(p)), p);
+    const Vec3 s(3.0, -1.0, 2.5);
+    const Eigen::VectorXd h = g.Tdoa(s);
+    for (int a = 0; a < 4; ++a) {
+      for (int b = 0; b < 4; ++b) {
+        if (a == ref || b == ref) continue;
+        EXPECT_NEAR(h(g.pair_of_sensor(b)) - h(g.pair_of_sensor(a)), g.TravelTime(s, b) - g.TravelTime(s, a), 1e-12);
+      }
+    }
+  }
+}
+
 TEST(ArrayGeometry, JacobianMatchesFiniteDifferences) {
   auto g = ArrayGeometry::Create(Tetrahedron(), 343.0, 2);
   ASSERT_TRUE(g.ok());
