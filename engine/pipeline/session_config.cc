@@ -95,10 +95,6 @@ Status AudioSessionConfig::Validate() const {
   if (!(search_radius_m >= 0.0) || search_radius_m > 1e7) {
     return InvalidArgument("search_radius_m must be in [0, 1e7], got " + Num(search_radius_m));
   }
-  if (cross_pairs_max_sensors < 0 || cross_pairs_max_sensors > 16) {
-    return InvalidArgument("cross_pairs_max_sensors must be in [0, 16], got " +
-                           std::to_string(cross_pairs_max_sensors));
-  }
   if (!(presence_false_alarm > 0.0) || presence_false_alarm > 0.1) {
     return InvalidArgument("presence_false_alarm must be in (0, 0.1], got " + Num(presence_false_alarm));
   }

@@ -184,6 +184,10 @@ TEST(Session, ConfigurationErrorsNameTheField) {
   c.sample_rate_hz = -1;
   EXPECT_NE(Session::Create(c).status().message().find("sample_rate_hz"), std::string::npos);
   c = ConfigFor(f.scenario);
+  c.cross_pairs_max_sensors = 17;  // checked with the front end's options (GccOptions::Validate)
+  EXPECT_EQ(Session::Create(c).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(Session::Create(c).status().message().find("cross_pairs_max_sensors"), std::string::npos);
+  c = ConfigFor(f.scenario);
   c.sensors_m[3] = (c.sensors_m[0] + c.sensors_m[1]) / 2.0;  // three collinear, four coplanar
   c.localization = Localization::kPosition;
   EXPECT_NE(Session::Create(c).status().message().find("planar"), std::string::npos);
