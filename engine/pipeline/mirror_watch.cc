@@ -1,8 +1,10 @@
 #include "engine/pipeline/mirror_watch.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <utility>
 #include <vector>
 
 #include "engine/array/multilateration.h"
@@ -23,9 +25,50 @@ bool Inside(const Vec3& p, const MirrorWatch::Region& region) {
 }  // namespace
 
 void MirrorWatch::Reset() {
-  following_ = false;
-  frames_ = 0;
+  mirror_ = Follower{};
+  track_ = Follower{};
   distinct_ = false;
+}
+
+void MirrorWatch::Follower::Start(double at_t_s, const Vec3& at_m, const Mat3& noise_m2) {
+  following = true;
+  t_s = at_t_s;
+  mean << at_m, Vec3::Zero();
+  cov.setZero();
+  cov.topLeftCorner<3, 3>() = noise_m2;
+  cov.bottomRightCorner<3, 3>() = kStartSpeedSigmaMps * kStartSpeedSigmaMps * Mat3::Identity();
+  frames = 0;
+}
+
+void MirrorWatch::Follower::Predict(double to_t_s, double accel_noise_mps2) {
+  // Constant velocity, white acceleration (Bar-Shalom's piecewise-constant discretisation).
+  const double dt = std::max(0.0, to_t_s - t_s);
+  t_s = to_t_s;
+  Mat6 f = Mat6::Identity();
+  f.topRightCorner<3, 3>() = dt * Mat3::Identity();
+  const double q = accel_noise_mps2 * accel_noise_mps2;
+  Mat6 process = Mat6::Zero();
+  process.topLeftCorner<3, 3>() = q * dt * dt * dt * dt / 4.0 * Mat3::Identity();
+  process.topRightCorner<3, 3>() = process.bottomLeftCorner<3, 3>() = q * dt * dt * dt / 2.0 * Mat3::Identity();
+  process.bottomRightCorner<3, 3>() = q * dt * dt * Mat3::Identity();
+  mean = f * mean;
+  cov = f * cov * f.transpose() + process;
+}
+
+double MirrorWatch::Follower::Distance2(const Vec3& at_m, const Mat3& noise_m2) const {
+  const Vec3 innovation_m = at_m - mean.head<3>();
+  return innovation_m.dot((cov.topLeftCorner<3, 3>() + noise_m2).ldlt().solve(innovation_m));
+}
+
+void MirrorWatch::Follower::Update(const Vec3& at_m, const Mat3& noise_m2) {
+  const Vec3 innovation_m = at_m - mean.head<3>();
+  const Eigen::LDLT<Mat3> s_ldlt(cov.topLeftCorner<3, 3>() + noise_m2);
+  nis[static_cast<size_t>(frames % kWindowFrames)] = innovation_m.dot(s_ldlt.solve(innovation_m));
+  ++frames;
+  const Eigen::Matrix<double, 6, 3> gain = cov.leftCols<3>() * s_ldlt.solve(Mat3::Identity());
+  mean += gain * innovation_m;
+  cov -= gain * cov.topRows<3>();
+  cov = 0.5 * (cov + cov.transpose());
 }
 
 void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& track_m, const Mat3& track_cov_m2,
@@ -56,44 +99,25 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
   last_bound_m2_ = bound_m2;
   last_root_m_ = *mirror;
 
-  if (!following_) {
-    following_ = true;
-    t_s_ = t_s;
-    mean_ << *mirror, Vec3::Zero();
-    cov_.setZero();
-    cov_.topLeftCorner<3, 3>() = bound_m2;
-    cov_.bottomRightCorner<3, 3>() = kStartSpeedSigmaMps * kStartSpeedSigmaMps * Mat3::Identity();
-    frames_ = 0;
+  if (!mirror_.following || !track_.following) {
+    mirror_.Start(t_s, *mirror, bound_m2);
+    track_.Start(t_s, track_m, track_cov_m2);
     return;
   }
-  // Constant velocity, white acceleration (Bar-Shalom's piecewise-constant discretisation).
-  const double dt = std::max(0.0, t_s - t_s_);
-  t_s_ = t_s;
-  Mat6 f = Mat6::Identity();
-  f.topRightCorner<3, 3>() = dt * Mat3::Identity();
-  const double q = accel_noise_mps2_ * accel_noise_mps2_;
-  Mat6 process = Mat6::Zero();
-  process.topLeftCorner<3, 3>() = q * dt * dt * dt * dt / 4.0 * Mat3::Identity();
-  process.topRightCorner<3, 3>() = process.bottomLeftCorner<3, 3>() = q * dt * dt * dt / 2.0 * Mat3::Identity();
-  process.bottomRightCorner<3, 3>() = q * dt * dt * Mat3::Identity();
-  mean_ = f * mean_;
-  cov_ = f * cov_ * f.transpose() + process;
-
-  const Vec3 innovation_m = *mirror - mean_.head<3>();
-  const Mat3 s = cov_.topLeftCorner<3, 3>() + bound_m2;
-  const Eigen::LDLT<Mat3> s_ldlt(s);
-  nis_[static_cast<size_t>(frames_ % kWindowFrames)] = innovation_m.dot(s_ldlt.solve(innovation_m));
-  ++frames_;
-  const Eigen::Matrix<double, 6, 3> gain = cov_.leftCols<3>() * s_ldlt.solve(Mat3::Identity());
-  mean_ += gain * innovation_m;
-  cov_ -= gain * cov_.topRows<3>();
-  cov_ = 0.5 * (cov_ + cov_.transpose());
+  mirror_.Predict(t_s, accel_noise_mps2_);
+  track_.Predict(t_s, accel_noise_mps2_);
+  // The track jumped onto the mirror's branch: each filter now follows the other branch.
+  const double kept2 = mirror_.Distance2(*mirror, bound_m2) + track_.Distance2(track_m, track_cov_m2);
+  const double swapped2 = track_.Distance2(*mirror, bound_m2) + mirror_.Distance2(track_m, track_cov_m2);
+  if (swapped2 < kept2) std::swap(mirror_, track_);
+  mirror_.Update(*mirror, bound_m2);
+  track_.Update(track_m, track_cov_m2);
 }
 
 std::optional<MirrorWatch::Mirror> MirrorWatch::Live() const {
-  if (!following_ || !distinct_ || frames_ < kWindowFrames) return std::nullopt;
-  // The window holds the last kWindowFrames NIS values once frames_ >= kWindowFrames.
-  const double window_nis = std::accumulate(nis_.begin(), nis_.end(), 0.0);
+  if (!mirror_.following || !distinct_ || mirror_.frames < kWindowFrames) return std::nullopt;
+  // The window holds the last kWindowFrames NIS values once frames >= kWindowFrames.
+  const double window_nis = std::accumulate(mirror_.nis.begin(), mirror_.nis.end(), 0.0);
   if (!(window_nis <= kWindowNisMax)) return std::nullopt;
   return Mirror{last_root_m_, last_bound_m2_};
 }

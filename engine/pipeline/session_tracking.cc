@@ -150,11 +150,9 @@ void Session::Impl::UpdateAndWatch(const TrackState& predicted, Estimate* e) {
 }
 
 void Session::Impl::WatchMirror(double t_s, double fallback_sigma_s) {
+  // With several hypotheses the watch follows the heaviest one's mirror, so that it has seen the
+  // mirror move by the time one is left (Report uses it only then).
   const std::vector<WeightedBelief> hypotheses = components.tracker->Hypotheses();
-  if (hypotheses.size() != 1) {
-    mirror.Reset();  // the tracker holds several solutions itself
-    return;
-  }
   MirrorWatch::Region region;
   region.bounds_min_m = config.bounds_min_m;
   region.bounds_max_m = config.bounds_max_m;

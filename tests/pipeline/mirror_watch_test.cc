@@ -1,7 +1,7 @@
 // The mirror watch (mirror_watch.h): the other exact solution of a 4-sensor array's TDOAs is
 // followed and called live while it moves as a source can, inside the allowed region and
-// apart from the track; a mirror that jumps, one outside the region, and arrays of other
-// sizes are not.
+// apart from the track, also after the track jumps onto it; a mirror that jumps, one outside
+// the region, and arrays of other sizes are not.
 #include "engine/pipeline/mirror_watch.h"
 
 #include <gtest/gtest.h>
@@ -95,6 +95,22 @@ TEST(MirrorWatch, AMirrorThatRacesAwayIsNotLive) {
   const double mirror_speed_mps = (*OtherRoot(w.array, at(1)) - *OtherRoot(w.array, at(0))).norm() / kHopS;
   ASSERT_GT(mirror_speed_mps, 20.0) << "the geometry changed: the mirror no longer races away";
   for (const auto& live : Follow(w.array, 30, at)) EXPECT_FALSE(live);
+}
+
+// A still source whose track jumps onto its mirror and back (the tracker's heaviest mode
+// changed): each jump lands where the other branch was, so the watch swaps its two filters
+// and the branch the track left is live at once, every frame after the first window (before,
+// each jump dropped the mirror for a window: a sure track 14-22 m off for 1 s).
+TEST(MirrorWatch, ATrackThatJumpsOntoItsMirrorKeepsTheOtherBranchLive) {
+  const Walk w = FindWalk();
+  const Vec3 mirror = *OtherRoot(w.array, w.start_m);
+  const auto flipping = [&](int f) { return (f / 12) % 2 == 0 ? w.start_m : mirror; };
+  const auto live = Follow(w.array, 48, flipping);
+  for (int f = MirrorWatch::kWindowFrames; f < 48; ++f) {
+    ASSERT_TRUE(live[f]) << "frame " << f;
+    const Vec3 other = (f / 12) % 2 == 0 ? mirror : w.start_m;
+    EXPECT_LT((live[f]->position_m - other).norm(), 1e-3) << "frame " << f;
+  }
 }
 
 TEST(MirrorWatch, AMirrorOutsideTheRegionIsNeverLive) {
