@@ -89,6 +89,10 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
   flags.Int("cross-pairs", &c.cross_pairs_max_sensors, "N", "sensors",
             "arrays of at most N sensors also measure the pairs without the reference sensor, which "
             "acquisition and presence check each position against (0: never; in [0, 16])");
+  flags.Bool("delay-rates", &f->delay_rates,
+             "where the track predicts a pair's peak to move by a sample or more within a frame (a fast "
+             "source, long frames), also read the pair's channel along the predicted delay and keep the "
+             "taller peak (default: off)");
   flags.String("localization", &f->localization, "NAME",
                "what is reported: position (3-D from 4+ sensors off a common plane; per source from a "
                "planar array with --source-side, or a linear one with --source-plane and --source-side) | "
@@ -235,6 +239,7 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   auto backend = engine::ParseBackendChoice(f.backend, "backend");
   if (!backend.ok()) return backend.status();
   base.backend = *backend;
+  if (f.delay_rates) base.delay_rate_compensation = true;
   // The session file's settings where no flag was given: where the flag would have put them,
   // before the couplings below, so that a setting means the same from either.
   io::ApplySessionSettings(

@@ -82,6 +82,7 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
   e.t_s = FrameCentre_s(first_sample, config);
 
   const auto tdoa_start = std::chrono::steady_clock::now();
+  PredictDelayRates(e.t_s);
   if (despike.despike_k > 0.0) {
     despiked.assign(frame, frame + static_cast<size_t>(array.sensor_count()) * config.frame_samples);
     (void)Despike(despike, despiked.data(), array.sensor_count(), config.frame_samples, &despike_scratch);

@@ -66,13 +66,19 @@ struct Session::Impl {
   void UpdateAndWatch(const TrackState& predicted, Estimate* e);
   // The estimate's state: the strongest hypothesis, with a covariance that covers all of
   // them; and whether this frame's TDOAs bound its range (range_observability.h).
-  void Report(Estimate* e) const;
+  void Report(Estimate* e);
   // Multipath: a pair whose main peak is far from where the track predicts it, while its GCC
   // has another peak (a local maximum at least kCandidateShare of the main peak's height)
   // within kAssociationGate predicted sigmas, is measured at that peak instead (the tallest
   // in the gate; returns how many pairs were changed). Only while the tracker holds one
   // hypothesis (`hypotheses`, the tracker's count): the measurement is shared by all of them.
   int AssociateCandidates(const TrackState& predicted, size_t hypotheses);
+
+  // Before the frame centred at t_s: the delay rates the last reported track predicts for
+  // its pairs, handed to the front end when some pair's peak would move by a sample or more
+  // over the frame, else none (AudioSessionConfig::delay_rate_compensation).
+  // Only for a fixed array and a tracker holding one hypothesis.
+  void PredictDelayRates(double t_s);
 
   // Moving arrays: moves `array` and the tracker to the platform's pose at t_s; false
   // when there is no pose yet (no IMU sample).
@@ -99,6 +105,9 @@ struct Session::Impl {
   MirrorWatch mirror;                 // 4-sensor arrays: the track's other exact solution
   Measurement measurement;
   Eigen::VectorXd delays;
+  bool single_track = false;  // the last Report's tracker held one hypothesis, reported_track
+  TrackState reported_track;
+  std::vector<double> delay_rates;  // per pair, handed to the front end (empty: none)
   bool have_sequence = false;
   uint64_t last_sequence = 0;
   uint64_t frames = 0;

@@ -15,16 +15,18 @@ namespace {
 // LOCALIZER_MEMORY_PROBE=1) and given a margin of about 1.4: the particle filter held ~115
 // bytes a particle, the multiple-model one ~585 (a cloud per motion model), an audio
 // session ~42 bytes per channel per frame sample (frame, despiked copy, spectra, pair
-// cross-spectra and GCC, FFT plans), a detection session ~4.8 KB a track with every gate
+// cross-spectra and GCC, FFT plans; since, about 12 bytes per frame sample more for a
+// channel read along its delay rate and the plain spectrum kept meanwhile, delay_warp.h),
+// a detection session ~4.8 KB a track with every gate
 // saturated (64 gate pairs a track, with their sorted and greedy copies and the vectors'
 // growth).
 constexpr int64_t kAudioBaseBytes = int64_t{2} << 20;
 constexpr int64_t kParticleBytes = 160;
 constexpr int64_t kMultiModelParticleBytes = 896;
 constexpr int64_t kChannelSampleBytes = 56;
-constexpr int64_t kTrackBytes = 1024;   // a track, its report, its history
-constexpr int64_t kEdgeBytes = 16 * 6;  // a gate pair: edges, sorted and greedy copies, x2 growth
-constexpr int64_t kPlotBytes = 256;     // a converted plot and its grid cell
+constexpr int64_t kTrackBytes = 1024;          // a track, its report, its history
+constexpr int64_t kEdgeBytes = 16 * 6;         // a gate pair: edges, sorted and greedy copies, x2 growth
+constexpr int64_t kPlotBytes = 256;            // a converted plot and its grid cell
 constexpr int64_t kPairBinBytes = 16 * 3 / 2;  // a pair's complex double per bin, with a margin
 constexpr int64_t kPairLagBytes = 64;          // a pair's lag-field entry (GCC float, field double, ...)
 
@@ -53,8 +55,7 @@ int64_t DirectionSessionBytes(const AudioSessionConfig& config, bool positions) 
   const double aperture_m = shape.ok() ? shape->aperture_m : 0.0;
   const int64_t frame = std::max(config.frame_samples, 64);
   const auto max_lag =
-      static_cast<int64_t>(std::ceil(aperture_m / std::max(config.sound_speed_mps, 1e-9) * config.sample_rate_hz)) +
-      3;
+      static_cast<int64_t>(std::ceil(aperture_m / std::max(config.sound_speed_mps, 1e-9) * config.sample_rate_hz)) + 3;
   const int64_t transform = (frame + max_lag + 1) * 5 / 4;  // NextFastFftSize rounds up by less
   const int64_t rise_frames = (frame + std::max(config.hop_samples, 1) - 1) / std::max(config.hop_samples, 1);
   const int64_t spectra = kPairBinBytes * pairs * (transform / 2) * (rise_frames + 2);

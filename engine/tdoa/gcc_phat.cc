@@ -12,12 +12,17 @@
 #include <vector>
 
 #include "engine/tdoa/cross_spectrum.h"
+#include "engine/tdoa/delay_warp.h"
 #include "engine/tdoa/fftw_util.h"
 #include "engine/tdoa/gcc_layout.h"
 #include "engine/tdoa/gcc_phat_impl.h"
 
 namespace localizer::engine {
 namespace {
+
+// SetDelayRates' bound: 2 v / c for 8.6 m/s in air or 37 m/s in water, beyond what a
+// tracked acoustic source does; a larger rate is a caller's error.
+constexpr double kMaxDelayRate = 0.05;
 
 // Copies one channel into the zero-padded transform input, times the frame's taper when
 // `window` holds its n gains (gcc_math.h's TaperGain; empty: a plain copy), and returns the
@@ -73,8 +78,10 @@ Status GccPhatEstimator::Impl::Init() {
   if (!computed.ok()) return computed.status();
   layout = std::move(computed).value();
   taper_gains = TaperGains(options.frame_samples, options.taper_fraction);
+  warped.assign(options.frame_samples, 0.0f);
   const int fft_size = layout.fft_size;
   spectrum_stride = (2 * layout.bin_count + 15) / 16 * 16;
+  kept_spectrum.assign(spectrum_stride, 0.0f);
   const int widest_lag = layout.widest_lag();
   window.assign(2 * (widest_lag + kPeakHalfWidth) + 1, 0.0f);
   energy.assign(array.sensor_count(), 0.0);
@@ -114,6 +121,30 @@ Status GccPhatEstimator::Impl::TransformChannel(const float* samples, int channe
   float* spectrum = spectra.get() + static_cast<std::size_t>(channel) * spectrum_stride;
   fftwf_execute_dft_r2c(forward.get(), padded.get(), AsComplex(spectrum));
   return Status::Ok();
+}
+
+void GccPhatEstimator::Impl::MeasureWarpedPairs(const float* frame, Measurement* out) {
+  // kPhatCoherence learns from every measured pair: measuring one twice would count it twice.
+  if (options.weighting == Weighting::kPhatCoherence) return;
+  const int n = options.frame_samples;
+  for (int p = 0; p < array.pair_count(); ++p) {
+    const int sensor = array.sensor_of_pair(p);
+    const double rate = sensor_rate[sensor];
+    if (rate == 0.0) continue;
+    float* spectrum = spectra.get() + static_cast<std::size_t>(sensor) * spectrum_stride;
+    std::memcpy(kept_spectrum.data(), spectrum, sizeof(float) * spectrum_stride);
+    const double kept_energy = energy[sensor];
+    WarpChannel(frame + static_cast<std::size_t>(sensor) * n, n, rate, warped.data());
+    if (TransformChannel(warped.data(), sensor).ok()) {  // finite: the plain channel was
+      MeasurePair(p, &warped_pair);
+      if (warped_pair.peak_value > out->pairs[p].peak_value) {
+        std::swap(out->pairs[p], warped_pair);
+        continue;
+      }
+    }
+    std::memcpy(spectrum, kept_spectrum.data(), sizeof(float) * spectrum_stride);
+    energy[sensor] = kept_energy;
+  }
 }
 
 float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
@@ -316,6 +347,7 @@ Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double 
   out->sample_rate_hz = s.options.sample_rate_hz;
   out->pairs.resize(s.array.pair_count());
   for (int p = 0; p < s.array.pair_count(); ++p) s.MeasurePair(p, &out->pairs[p]);
+  if (!s.sensor_rate.empty()) s.MeasureWarpedPairs(frame, out);
   out->cross_pairs.clear();  // measured on request, from these spectra (MeasureCrossPairs)
   s.have_spectra = true;
   return Status::Ok();
@@ -328,6 +360,27 @@ Status GccPhatEstimator::MeasureCrossPairs(Measurement* out) {
   out->cross_pairs.resize(s.layout.cross_sensors.size());
   for (std::size_t q = 0; q < out->cross_pairs.size(); ++q)
     s.MeasureCrossPair(static_cast<int>(q), &out->cross_pairs[q]);
+  return Status::Ok();
+}
+
+Status GccPhatEstimator::SetDelayRates(std::span<const double> rate_per_pair) {
+  Impl& s = *impl_;
+  if (rate_per_pair.empty()) {
+    s.sensor_rate.clear();
+    return Status::Ok();
+  }
+  if (static_cast<int>(rate_per_pair.size()) != s.array.pair_count()) {
+    return InvalidArgument("delay rates: " + std::to_string(rate_per_pair.size()) + " given for " +
+                           std::to_string(s.array.pair_count()) + " pairs");
+  }
+  for (std::size_t p = 0; p < rate_per_pair.size(); ++p) {
+    if (!(std::abs(rate_per_pair[p]) < kMaxDelayRate)) {
+      return InvalidArgument("delay rate of pair " + std::to_string(p) + " is " + std::to_string(rate_per_pair[p]) +
+                             "; must be finite with magnitude below 0.05");
+    }
+  }
+  s.sensor_rate.assign(s.array.sensor_count(), 0.0);
+  for (int p = 0; p < s.array.pair_count(); ++p) s.sensor_rate[s.array.sensor_of_pair(p)] = rate_per_pair[p];
   return Status::Ok();
 }
 

@@ -232,6 +232,15 @@ class GccPhatEstimator final : public TdoaEstimator {
   // none for larger arrays or without keep_gcc). Estimate leaves out->cross_pairs empty;
   // FAILED_PRECONDITION before a frame was estimated (or after one that failed).
   Status MeasureCrossPairs(Measurement* out) override;
+  // From the next Estimate on, each pair with a rate other than 0 is measured twice: as the
+  // frame is, and with its sensor's channel read along the rate (delay_warp.h); it keeps the
+  // reading whose peak is higher (a right rate sharpens a migrating peak, a wrong one smears
+  // it further), and the cross pairs use the kept readings' spectra. The extra cost is one
+  // forward transform and one pair's weighing per such pair, on those frames only. Ignored
+  // with kPhatCoherence (which learns from each pair it measures). INVALID_ARGUMENT (nothing
+  // changed) unless empty or one finite rate per pair with |rate| < 0.05 (2 v / c for
+  // 8.6 m/s in air, 37 m/s in water).
+  Status SetDelayRates(std::span<const double> rate_per_pair) override;
 
   // Forgets what kPhatCoherence learnt (the next frame starts its warm-up): the estimator
   // then answers like a fresh one. A no-op for the other weightings.

@@ -21,6 +21,10 @@ struct GccPhatEstimator::Impl {
 
   Status Init();
   Status TransformChannel(const float* samples, int channel);
+  // After the plain pairs: each pair whose sensor has a delay rate is measured again with
+  // that channel read along it (delay_warp.h) and keeps the reading whose peak is higher; the
+  // spectra are left as the kept readings'.
+  void MeasureWarpedPairs(const float* frame, Measurement* out);
   float WeighCrossSpectrum(int pair);
   float WeighSensors(int ref, int sensor, int pair);
   // S / sqrt(the noise-only variance of S R) for the weights in `weighed`: 1 / (R's noise-only
@@ -39,15 +43,19 @@ struct GccPhatEstimator::Impl {
   GccOptions options;
   // N, bins, band, noise floor and L_p per pair (gcc_layout.h).
   GccLayout layout;
-  int spectrum_stride = 0;         // floats from one channel's spectrum to the next (64-byte multiple)
-  std::vector<float> taper_gains;  // the frame's taper, TaperGain per sample; empty without one
-  std::vector<double> energy;      // sum of squares per channel, this frame
-  std::vector<float> window;       // scaled R at lags -(L + K) .. L + K, K = kPeakHalfWidth
-  FftwFloats padded;               // N: one channel, zero padded
-  FftwFloats spectra;              // channels * spectrum_stride: interleaved X per channel
-  FftwFloats cross;                // 2 * bin_count: weighted cross-spectrum (c2r input)
-  FftwFloats corr;                 // N: inverse transform output, lag l at index l mod N
-  FftwFloats weighed;              // 2 * bin_count: `cross` kept before c2r destroys it
+  int spectrum_stride = 0;           // floats from one channel's spectrum to the next (64-byte multiple)
+  std::vector<float> taper_gains;    // the frame's taper, TaperGain per sample; empty without one
+  std::vector<double> energy;        // sum of squares per channel, this frame
+  std::vector<double> sensor_rate;   // SetDelayRates per sensor (the reference's 0); empty: none
+  std::vector<float> warped;         // frame_samples: one channel read along its delay rate
+  std::vector<float> kept_spectrum;  // spectrum_stride: a channel's plain spectrum while its warped one is tried
+  PairMeasurement warped_pair;       // a pair measured with its sensor's channel warped
+  std::vector<float> window;         // scaled R at lags -(L + K) .. L + K, K = kPeakHalfWidth
+  FftwFloats padded;                 // N: one channel, zero padded
+  FftwFloats spectra;                // channels * spectrum_stride: interleaved X per channel
+  FftwFloats cross;                  // 2 * bin_count: weighted cross-spectrum (c2r input)
+  FftwFloats corr;                   // N: inverse transform output, lag l at index l mod N
+  FftwFloats weighed;                // 2 * bin_count: `cross` kept before c2r destroys it
   // kPhatCoherence, per pair (pair * bin_count + bin): the running average of the aligned
   // coherence (not yet bias corrected), the weight w it gives the next frame, the frames
   // averaged, and whether the weights hold anything (else the pair falls back to PHAT).

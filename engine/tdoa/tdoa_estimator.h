@@ -1,6 +1,8 @@
 // The TDOA front end's interface: one multichannel frame in, one Measurement out.
 #pragma once
 
+#include <span>
+
 #include "engine/core/measurement.h"
 #include "engine/core/status.h"
 
@@ -23,6 +25,17 @@ class TdoaEstimator {
   // because only acquisition's search reads them: a tracking frame pays nothing.
   virtual Status MeasureCrossPairs(Measurement* out) {
     out->cross_pairs.clear();
+    return Status::Ok();
+  }
+
+  // The rate (seconds per second) at which each pair's delay is predicted to change during
+  // the next frames, one per pair; empty: none (the default). An estimator that compensates
+  // (GccPhatEstimator) also measures each such pair with its sensor's channel read along the
+  // predicted delay (delay_warp.h), so that a moving source's peak does not smear over the
+  // frame, and keeps the reading whose peak is higher; the others (the default) ignore them.
+  // Kept until the next call.
+  virtual Status SetDelayRates(std::span<const double> rate_per_pair) {
+    (void)rate_per_pair;
     return Status::Ok();
   }
 };

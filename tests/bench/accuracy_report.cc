@@ -1,12 +1,13 @@
 // Accuracy over seeds: every named scenario, both likelihoods, seeds 1..N; prints each run
 // and the median RMSE / per-frame CRLB and p95 / RMSE per scenario (BENCHMARKS.md).
 // Run: build/tests/bench/accuracy_report [N=5] [--one-std] [--levels FLOOR,CEILING,HZ]
-//        [--turns MAX] [--speed-changes MAX] [--cross-pairs N]
+//        [--turns MAX] [--speed-changes MAX] [--cross-pairs N] [--delay-rates 0|1]
 // --one-std: the particle filter with one acceleration std, no turn rates and no speed changes
 // (SetSingleMotion); --levels: these acceleration levels instead of the defaults
 // (particle_filter.h); --turns: per-particle turn rates up to MAX rad/s; --speed-changes:
 // per-particle speed changes up to MAX m/s^2 (ParticleFilterOptions); --cross-pairs: the
-// session's cross_pairs_max_sensors (0: acquisition searches the reference pairs only).
+// session's cross_pairs_max_sensors (0: acquisition searches the reference pairs only);
+// --delay-rates: the session's delay_rate_compensation (0: channels read as they are).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -36,6 +37,7 @@ int main(int argc, char** argv) {
   bool one_std = false;
   double floor = -1.0, ceiling = -1.0, switch_hz = -1.0, turns = -1.0, speed_changes = -1.0;
   int cross_pairs = -1;  // < 0: the session's default
+  int delay_rates = -1;  // < 0: the session's default
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -52,12 +54,15 @@ int main(int argc, char** argv) {
       speed_changes = std::strtod(argv[++i], nullptr);
     } else if (arg == "--cross-pairs" && has_value) {
       cross_pairs = std::atoi(argv[++i]);
+    } else if (arg == "--delay-rates" && has_value) {
+      delay_rates = std::atoi(argv[++i]) != 0 ? 1 : 0;
     } else {
       const auto n = localizer::ParseInteger(arg);
       if (!n.ok() || *n < 1 || *n > 1000000) {
         std::fprintf(stderr,
                      "usage: accuracy_report [N=5] [--one-std] [--levels FLOOR,CEILING,HZ] [--turns MAX] "
-                     "[--speed-changes MAX] [--cross-pairs N]\n(N must be an integer in [1, 1000000], got \"%s\")\n",
+                     "[--speed-changes MAX] [--cross-pairs N] [--delay-rates 0|1]\n(N must be an integer in [1, "
+                     "1000000], got \"%s\")\n",
                      arg.c_str());
         return 2;
       }
@@ -79,6 +84,7 @@ int main(int argc, char** argv) {
           if (turns >= 0.0) p.turn_rate_max_radps = turns;
           if (speed_changes >= 0.0) p.speed_change_max_mps2 = speed_changes;
           if (cross_pairs >= 0) c->cross_pairs_max_sensors = cross_pairs;
+          if (delay_rates >= 0) c->delay_rate_compensation = delay_rates == 1;
         };
         const TrackScore s = TrackScenario(name, static_cast<uint64_t>(seed), likelihood, BackendChoice::kCpu,
                                            FilterKind::kPf, MotionModelKind::kCv, adjust)

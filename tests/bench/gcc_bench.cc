@@ -11,6 +11,9 @@
 //                                   steady state: the per-bin weights and the coherence update.
 //   BM_Despike/<coincidence>        Despike (despike.h) on the same 4 x 4096 frame, k = 5, with
 //                                   the coincidence gate off (0) or at 20 samples.
+//   BM_GccPhatDelayRates/<fs>       Estimate with a delay rate on every pair (SetDelayRates: each
+//                                   pair also measured with its channel warped, delay_warp.h):
+//                                   a compensated frame's cost, against BM_GccPhatStage.
 // Estimate includes delay_sigma_s (one pass over the in-band bins per pair) and 4 candidates.
 // <measure> 0 plans with FFTW_ESTIMATE (the default), 1 with FFTW_MEASURE. The goal is
 // Estimate / bare FFTW <= 1.15. Run:
@@ -177,6 +180,22 @@ void BM_GccPhatCoherence(benchmark::State& state) {
   SetCounters(state);
 }
 
+void BM_GccPhatDelayRates(benchmark::State& state) {
+  const ArrayGeometry array = BenchArray();
+  auto gcc = MakeStage(state, array);
+  if (!gcc) return;
+  const std::vector<float> frame = BenchFrame(static_cast<double>(state.range(0)), array);
+  const std::vector<double> rates(array.pair_count(), 2e-3);  // 8 samples over the frame
+  if (!gcc->SetDelayRates(rates).ok()) return state.SkipWithError("SetDelayRates failed");
+  Measurement m;
+  for (auto _ : state) {
+    const Status status = gcc->Estimate(frame.data(), kFrameSamples, 0.0, &m);
+    benchmark::DoNotOptimize(status.ok());
+    benchmark::DoNotOptimize(m.pairs.data());
+  }
+  SetCounters(state);
+}
+
 void BM_Despike(benchmark::State& state) {
   const ArrayGeometry array = BenchArray();
   const std::vector<float> source = BenchFrame(11025.0, array);
@@ -209,6 +228,7 @@ BENCHMARK(BM_GccPhatStage)->Apply(EstimatePlans);
 BENCHMARK(BM_StageOverBare)->Apply(EstimatePlans);
 BENCHMARK(BM_GccPhatCoherence)->Arg(11025)->Arg(44100)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Despike)->Arg(0)->Arg(20)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GccPhatDelayRates)->Apply(EstimatePlans);
 BENCHMARK(BM_BareFftw)->Apply(MeasuredPlans);
 BENCHMARK(BM_GccPhatStage)->Apply(MeasuredPlans);
 BENCHMARK(BM_StageOverBare)->Apply(MeasuredPlans);

@@ -51,6 +51,7 @@ struct Args {
   int frame_samples = 0;             // --frame-samples: every scene's frame (hop half of it); 0: the campaign's
   bool band_hint = false;            // --band-hint: the session gets the scene's true band
   int cross_pairs_max_sensors = -1;  // --cross-pairs N; < 0: the session default
+  int delay_rates = -1;              // --delay-rates 0|1; < 0: the session default
   bool help = false;                 // --help: print the usage and exit 0
 };
 
@@ -68,6 +69,7 @@ void Adjust(const Args& a, const RandomSceneOptions& scene_options, AudioSession
     c->hop_samples = a.frame_samples / 2;
   }
   if (a.cross_pairs_max_sensors >= 0) c->cross_pairs_max_sensors = a.cross_pairs_max_sensors;
+  if (a.delay_rates >= 0) c->delay_rate_compensation = a.delay_rates == 1;
   if (a.filter) c->tracker.kind = *a.filter;
   if (a.particles > 0) c->tracker.particle.particles = a.particles;
   if (a.manoeuvre_share >= 0.0) c->tracker.particle.manoeuvre_share = a.manoeuvre_share;
@@ -101,6 +103,7 @@ void Usage(FILE* out) {
       "                      [--likelihood peak|gcc|mixture] [--outlier-probability EPS]\n"
       "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--turn-rates MAX]\n"
       "                      [--speed-changes MAX] [--band-hint] [--frame-samples N] [--cross-pairs N]\n"
+      "                      [--delay-rates 0|1]\n"
       "                      [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
@@ -127,6 +130,9 @@ void Usage(FILE* out) {
       "16 kHz, 16384 at 48 kHz. The per-frame CRLB is that of the frames the session uses.\n"
       "--cross-pairs N: arrays of at most N sensors also measure the pairs without the reference\n"
       "(0: never; the session's default is 4; session_config.h, cross_pairs_max_sensors).\n"
+      "--delay-rates 0|1: a track's predicted delay rates read each channel along its pair's delay\n"
+      "when a peak would move by a sample or more in a frame (session_config.h,\n"
+      "delay_rate_compensation; the session's default is 0).\n"
       "--band-hint gives each session its scene's true source band (an oracle: what a perfect band\n"
       "estimate from the data would give; the campaign's default gives none).\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
@@ -237,6 +243,10 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       a->frame_samples = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->frame_samples < 64 || a->frame_samples > (1 << 20))
         return std::fprintf(stderr, "scene_campaign: --frame-samples must be in [64, 2^20]\n"), false;
+    } else if (flag == "--delay-rates") {
+      if (value != "0" && value != "1")
+        return std::fprintf(stderr, "scene_campaign: --delay-rates must be 0 or 1\n"), false;
+      a->delay_rates = value == "1" ? 1 : 0;
     } else if (flag == "--cross-pairs") {
       a->cross_pairs_max_sensors = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->cross_pairs_max_sensors < 0 || a->cross_pairs_max_sensors > 16)
