@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "engine/acquisition/acquisition.h"
@@ -65,7 +66,8 @@ struct Session::Impl {
   // track's own prediction (`predicted`), equally weighted.
   void UpdateAndWatch(const TrackState& predicted, Estimate* e);
   // The estimate's state: the strongest hypothesis, with a covariance that covers all of
-  // them; and whether this frame's TDOAs bound its range (range_observability.h).
+  // them, a live mirror and an audit's contender; and whether this frame's TDOAs bound its
+  // range (range_observability.h).
   void Report(Estimate* e);
   // Multipath: a pair whose main peak is far from where the track predicts it, while its GCC
   // has another peak (a local maximum at least kCandidateShare of the main peak's height)
@@ -93,8 +95,13 @@ struct Session::Impl {
   bool live = false;           // the tracker holds a track (not dropped)
   int frames_since_audit = 0;  // see Audit
   int outscored = 0;           // audits in a row that found the frame better explained elsewhere
-  double silent_s = 0.0;       // time since the source was last heard near the track
-  int heard_elsewhere = 0;     // consecutive frames with the source present away from the track
+  // The best mode of the last audit that found the track outscored (cleared by an audit that
+  // finds the track's own, by a restart, and after kContenderFrames reports): Report covers
+  // it, as it covers a live mirror, and says the estimate is ambiguous.
+  std::optional<PositionMode> contender;
+  int contender_frames = 0;
+  double silent_s = 0.0;    // time since the source was last heard near the track
+  int heard_elsewhere = 0;  // consecutive frames with the source present away from the track
   Framer framer;
   DespikeOptions despike;
   DespikeScratch despike_scratch;

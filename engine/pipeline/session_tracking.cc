@@ -14,6 +14,9 @@ constexpr double kAssociationGate = 3.0;
 constexpr double kAuditMargin = 3.0;  // x sqrt(P): the acquisition's mode margin
 constexpr int kAuditSpacingFrames = 8;
 constexpr int kOutscoredAudits = 2;
+// Reported frames an audit's outscoring mode stays in the estimate's covariance without an
+// audit judging again: two audits' spacing.
+constexpr int kContenderFrames = 2 * kAuditSpacingFrames;
 // A live mirror's weight in the reported covariance (mirror_watch.h): the heaviest mode's own
 // is 1, so a mirror at d from the track is covered at about d / sqrt(kMirrorWeight) sds, as a
 // contender of the particle filter is (particle_set.h, kContenderShare).
@@ -56,9 +59,14 @@ void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& nea
   for (const PositionMode& mode : found.modes) {
     if (NearTrack(predicted, mode) && mode.score >= best - kAuditMargin * std::sqrt(pairs)) {
       outscored = 0;
+      contender.reset();
       return;
     }
   }
+  // Until the next audit judges again (or a restart), the estimate covers the mode that
+  // outscored the track: a track the data no longer favour is not reported as sure.
+  contender = found.modes.front();
+  contender_frames = 0;
   if (++outscored < kOutscoredAudits) return;
   outscored = 0;
   // Restart from every mode and the track's own position: the data decide.
@@ -127,6 +135,7 @@ bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
   silent_s = 0.0;
   heard_elsewhere = 0;
   outscored = 0;
+  contender.reset();
   mirror.Reset();
   frames_since_audit = 0;
   monitor.Reset();
@@ -238,6 +247,12 @@ void Session::Impl::Report(Estimate* e) {
     const Vec6 offset = h.belief.mean - best.mean;
     covariance += h.weight * (h.belief.covariance + offset * offset.transpose());
     modes += h.weight >= 0.01;
+  }
+  if (contender && ++contender_frames > kContenderFrames) contender.reset();
+  if (contender) {
+    const Vec3 offset = contender->position_m - best.mean.head<3>();
+    covariance.topLeftCorner<3, 3>() += kMirrorWeight * (contender->covariance_m2 + offset * offset.transpose());
+    ++modes;
   }
   if (const std::optional<MirrorWatch::Mirror> m = mirror.Live(); m && hypotheses.size() == 1) {
     const Vec3 offset = m->position_m - best.mean.head<3>();
