@@ -83,9 +83,9 @@ struct Estimate {
   double presence_statistic = 0.0;
   double presence_threshold = 0.0;
   // Several position hypotheses fit the data (e.g. the two exact TDOA solutions of a
-  // 4-sensor array): `state` is the strongest, `covariance` covers all of them (their
-  // spread about `state` included), `modes` counts them. modes = 1 when resolved, 0 when
-  // not initialised.
+  // 4-sensor array, or a position an audit's volume search found better than the track):
+  // `state` is the strongest, `covariance` covers all of them (their spread about `state`
+  // included), `modes` counts them. modes = 1 when resolved, 0 when not initialised.
   bool ambiguous = false;
   int modes = 0;
   // Range observability (position sessions): range_sd_m is the standard deviation of the

@@ -17,7 +17,10 @@
 // anchored normalised innovations far above its chi-square bound (pair_noise.h,
 // divergence_monitor.h) restarts the track through acquisition.
 // Each estimate says whether the frame held a source, reports the strongest hypothesis with
-// a covariance covering all live ones, and flags the estimate ambiguous while several live.
+// a covariance covering all live ones, and flags the estimate ambiguous while several live:
+// the tracker's own modes, a 4-sensor track's mirror that moves as a source can
+// (mirror_watch.h), and a mode that outscored the track at the last audit (until an audit
+// finds the track's own, or a restart).
 // Every block is validated first (sequence increasing, channel count, length, finite
 // values); a rejected block leaves the session exactly as it was.
 // A moving array (config.array_in_body_frame) is moved, every frame, to where its platform's
