@@ -112,9 +112,8 @@ struct Session::Impl {
   MirrorWatch mirror;                 // 4-sensor arrays: the track's other exact solution
   Measurement measurement;
   Eigen::VectorXd delays;
-  bool single_track = false;  // the last Report's tracker held one hypothesis, reported_track
-  TrackState reported_track;
-  std::vector<double> delay_rates;  // per pair, handed to the front end (empty: none)
+  std::optional<Vec6> single_track_mean;  // the last Report's track, when the tracker held one hypothesis
+  std::vector<double> delay_rates;        // per pair, handed to the front end (empty: none)
   bool have_sequence = false;
   uint64_t last_sequence = 0;
   uint64_t frames = 0;

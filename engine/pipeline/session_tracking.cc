@@ -22,10 +22,9 @@ constexpr int kContenderFrames = 2 * kAuditSpacingFrames;
 // contender of the particle filter is (particle_set.h, kContenderShare).
 constexpr double kMirrorWeight = 0.1;
 // Delay rates are handed to the front end when some pair's peak would move by this many
-// samples over a frame (a slower track's frames are read as they are, bit for bit), and only
-// below GccPhatEstimator's bound on a rate (2 v / c for 8.6 m/s in air).
+// samples over a frame (a slower track's frames are read as they are, bit for bit). Rates the
+// front end refuses (GccPhatEstimator's bound) leave the frame read as it is.
 constexpr double kMinMigrationSamples = 1.0;
-constexpr double kMaxDelayRate = 0.05;
 
 // The mode lies within the track's and its own uncertainty (Mahalanobis distance < 4).
 bool NearTrack(const TrackState& predicted, const PositionMode& mode) {
@@ -239,8 +238,7 @@ void Session::Impl::AcquireFrame(bool measured, Estimate* e) {
 void Session::Impl::Report(Estimate* e) {
   const std::vector<WeightedBelief> hypotheses = components.tracker->Hypotheses();
   const TrackState& best = hypotheses.front().belief;
-  single_track = hypotheses.size() == 1;
-  reported_track = best;
+  single_track_mean = hypotheses.size() == 1 ? std::optional<Vec6>(best.mean) : std::nullopt;
   Mat6 covariance = Mat6::Zero();
   int modes = 0;
   for (const WeightedBelief& h : hypotheses) {
@@ -248,16 +246,16 @@ void Session::Impl::Report(Estimate* e) {
     covariance += h.weight * (h.belief.covariance + offset * offset.transpose());
     modes += h.weight >= 0.01;
   }
+  // A position beside the tracker's own hypotheses, covered with kMirrorWeight.
+  const auto cover = [&](const Vec3& position_m, const Mat3& covariance_m2) {
+    const Vec3 offset = position_m - best.mean.head<3>();
+    covariance.topLeftCorner<3, 3>() += kMirrorWeight * (covariance_m2 + offset * offset.transpose());
+    ++modes;
+  };
   if (contender && ++contender_frames > kContenderFrames) contender.reset();
-  if (contender) {
-    const Vec3 offset = contender->position_m - best.mean.head<3>();
-    covariance.topLeftCorner<3, 3>() += kMirrorWeight * (contender->covariance_m2 + offset * offset.transpose());
-    ++modes;
-  }
+  if (contender) cover(contender->position_m, contender->covariance_m2);
   if (const std::optional<MirrorWatch::Mirror> m = mirror.Live(); m && hypotheses.size() == 1) {
-    const Vec3 offset = m->position_m - best.mean.head<3>();
-    covariance.topLeftCorner<3, 3>() += kMirrorWeight * (m->covariance_m2 + offset * offset.transpose());
-    ++modes;
+    cover(m->position_m, m->covariance_m2);
   }
   e->initialised = true;
   e->state = best.mean;
@@ -275,17 +273,16 @@ void Session::Impl::Report(Estimate* e) {
 }
 
 void Session::Impl::PredictDelayRates(double t_s) {
-  const bool predicted = config.delay_rate_compensation && live && components.tracker->initialised() && single_track &&
-                         platform == nullptr;
+  const bool predicted = config.delay_rate_compensation && live && components.tracker->initialised() &&
+                         single_track_mean && platform == nullptr;
   if (predicted) {
-    const Vec3 velocity_mps = reported_track.mean.tail<3>();
-    const Vec3 at_m = reported_track.mean.head<3>() + (t_s - last_t_s) * velocity_mps;
+    const Vec3 velocity_mps = single_track_mean->tail<3>();
+    const Vec3 at_m = single_track_mean->head<3>() + (t_s - last_t_s) * velocity_mps;
     // The mean rate, not one shrunk by the velocity's uncertainty: the mean leaves the least
     // expected migration (and measured better: ACCURACY.md, twenty-third pass); a wrong one
     // loses to the plain reading in the front end.
     const Eigen::VectorXd rates = array.TdoaJacobian(at_m) * velocity_mps;
-    if (rates.allFinite() && rates.cwiseAbs().maxCoeff() * config.frame_samples >= kMinMigrationSamples &&
-        rates.cwiseAbs().maxCoeff() < kMaxDelayRate) {
+    if (rates.allFinite() && rates.cwiseAbs().maxCoeff() * config.frame_samples >= kMinMigrationSamples) {
       delay_rates.assign(rates.data(), rates.data() + rates.size());
       if (components.estimator->SetDelayRates(delay_rates).ok()) return;
     }
