@@ -84,6 +84,10 @@ struct AudioSessionConfig {
   // (GccOptions::cross_pairs_max_sensors): a 4-sensor array's three reference pairs cannot
   // outvote one that locked on an echo or a noise peak.
   int cross_pairs_max_sensors = 4;
+  // true: on such arrays every tracked frame also measures the pairs without the reference,
+  // and a reference pair whose peak they contradict is measured where they agree
+  // (pair_closure.h): a 4-sensor array's track cannot otherwise see one pair locked on an echo.
+  bool pair_closure = true;
   // true: a track's predicted delay rates (one hypothesis, a fixed array) are handed to the
   // front end (TdoaEstimator::SetDelayRates, delay_warp.h) on frames where some pair's peak
   // would otherwise move by a sample or more: a fast source near the array, whose peak smears

@@ -75,6 +75,9 @@ struct Session::Impl {
   // in the gate; returns how many pairs were changed). Only while the tracker holds one
   // hypothesis (`hypotheses`, the tracker's count): the measurement is shared by all of them.
   int AssociateCandidates(const TrackState& predicted, size_t hypotheses);
+  // Small arrays (AudioSessionConfig::pair_closure, cross_pairs_max_sensors): measures the
+  // pairs without the reference and moves a reference pair they contradict (pair_closure.h).
+  void CheckClosure();
 
   // Before the frame centred at t_s: the delay rates the last reported track predicts for
   // its pairs, handed to the front end when some pair's peak would move by a sample or more
@@ -100,8 +103,9 @@ struct Session::Impl {
   // it, as it covers a live mirror, and says the estimate is ambiguous.
   std::optional<PositionMode> contender;
   int contender_frames = 0;
-  double silent_s = 0.0;    // time since the source was last heard near the track
-  int heard_elsewhere = 0;  // consecutive frames with the source present away from the track
+  uint64_t closure_repairs = 0;  // frames whose reference pair CheckClosure moved
+  double silent_s = 0.0;         // time since the source was last heard near the track
+  int heard_elsewhere = 0;       // consecutive frames with the source present away from the track
   Framer framer;
   DespikeOptions despike;
   DespikeScratch despike_scratch;

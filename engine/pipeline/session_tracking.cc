@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/acquisition/pair_closure.h"
 #include "engine/pipeline/session_impl.h"
 
 namespace localizer::engine {
@@ -191,6 +192,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     silent_s = 0.0;
     heard_elsewhere = 0;
     AssociateCandidates(predicted, prior.size());
+    CheckClosure();
     UpdateAndWatch(predicted, e);
     if (!e->reinitialised) Audit(predicted, near, e);
     return;
@@ -208,6 +210,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
       if (NearTrack(predicted, mode)) {
         heard_elsewhere = 0;
         AssociateCandidates(predicted, prior.size());
+        CheckClosure();
         UpdateAndWatch(predicted, e);
         return;
       }
@@ -218,6 +221,13 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
   heard_elsewhere = 0;
   silent_s += dt_s;
   if (silent_s >= config.source_timeout_s) live = false;  // dropped: acquisition restarts
+}
+
+void Session::Impl::CheckClosure() {
+  if (!config.pair_closure || array.sensor_count() > config.cross_pairs_max_sensors) return;
+  // A failed request leaves the cross pairs empty: nothing is checked.
+  if (measurement.cross_pairs.empty()) (void)components.estimator->MeasureCrossPairs(&measurement);
+  if (RepairByClosure(&measurement).pair >= 0) ++closure_repairs;
 }
 
 AcquisitionResult Session::Impl::SearchAllPairs() {
