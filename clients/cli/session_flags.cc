@@ -89,6 +89,10 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
   flags.Int("cross-pairs", &c.cross_pairs_max_sensors, "N", "sensors",
             "arrays of at most N sensors also measure the pairs without the reference sensor, which "
             "acquisition and presence check each position against (0: never; in [0, 16])");
+  flags.Bool("no-closure", &f->no_closure,
+             "do not check the reference pairs against the pairs without the reference on tracked frames "
+             "(arrays of at most --cross-pairs sensors; by default a reference pair they contradict is read "
+             "where they agree)");
   flags.Bool("delay-rates", &f->delay_rates,
              "where the track predicts a pair's peak to move by a sample or more within a frame (a fast "
              "source, long frames), also read the pair's channel along the predicted delay and keep the "
@@ -240,6 +244,7 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   if (!backend.ok()) return backend.status();
   base.backend = *backend;
   if (f.delay_rates) base.delay_rate_compensation = true;
+  if (f.no_closure) base.pair_closure = false;
   // The session file's settings where no flag was given: where the flag would have put them,
   // before the couplings below, so that a setting means the same from either.
   io::ApplySessionSettings(

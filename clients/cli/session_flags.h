@@ -39,6 +39,7 @@ struct SessionFlags {
   std::string source_side;         // --source-side X,Y,Z ("" = the array file's, else unstated)
   std::string source_plane;        // --source-plane PX,PY,PZ,NX,NY,NZ ("" = the array file's)
   bool delay_rates = false;        // --delay-rates: delay_rate_compensation on
+  bool no_closure = false;         // --no-closure: pair_closure off
   // Flags the caller counts as given although FlagSet::seen does not (track's deprecated
   // --seed stands for --filter-seed), so that the session file does not override them.
   std::set<std::string> also_given;
@@ -48,7 +49,7 @@ struct SessionFlags {
 void RegisterGccFlags(FlagSet& flags, SessionFlags* f);
 // --frame, --hop, --filter, --motion-model, --imm-modes, --imm-variant, --robust,
 // --particles, --likelihood, --outlier-probability, --SEED_FLAG, --tdoa-sigma-us,
-// --accel-noise, --backend, --despike-k, --cross-pairs, --delay-rates; source presence
+// --accel-noise, --backend, --despike-k, --cross-pairs, --no-closure, --delay-rates; source presence
 // and bounds: --bounds-min, --bounds-max, --surface-z, --bottom-z, --search-radius,
 // --presence-false-alarm, --source-timeout; what is reported: --localization,
 // --max-sources, --source-side.

@@ -103,9 +103,8 @@ struct Session::Impl {
   // it, as it covers a live mirror, and says the estimate is ambiguous.
   std::optional<PositionMode> contender;
   int contender_frames = 0;
-  uint64_t closure_repairs = 0;  // frames whose reference pair CheckClosure moved
-  double silent_s = 0.0;         // time since the source was last heard near the track
-  int heard_elsewhere = 0;       // consecutive frames with the source present away from the track
+  double silent_s = 0.0;    // time since the source was last heard near the track
+  int heard_elsewhere = 0;  // consecutive frames with the source present away from the track
   Framer framer;
   DespikeOptions despike;
   DespikeScratch despike_scratch;

@@ -227,7 +227,7 @@ void Session::Impl::CheckClosure() {
   if (!config.pair_closure || array.sensor_count() > config.cross_pairs_max_sensors) return;
   // A failed request leaves the cross pairs empty: nothing is checked.
   if (measurement.cross_pairs.empty()) (void)components.estimator->MeasureCrossPairs(&measurement);
-  if (RepairByClosure(&measurement).pair >= 0) ++closure_repairs;
+  (void)RepairByClosure(&measurement);
 }
 
 AcquisitionResult Session::Impl::SearchAllPairs() {

@@ -56,6 +56,9 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   // Fourth: cross_pairs_max_sensors (4, the default: this 4-sensor array also measures its
   // three pairs without the reference; 0: off, the cost before them).
   config.cross_pairs_max_sensors = static_cast<int>(state.range(3));
+  // Fifth: pair_closure (1, the default: with the cross pairs on, every tracked frame measures
+  // them and checks its reference pairs against them; 0: only searching frames measure them).
+  config.pair_closure = state.range(4) == 1;
   // 0.1 s blocks, as a streaming client would send them.
   const int64_t block = 4410;
   const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
@@ -75,9 +78,12 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   state.counters["filter_us_per_frame"] = 1e6 * totals.filter_s / static_cast<double>(totals.frames);
   state.SetLabel(std::string(LikelihoodName(config.tracker.particle.likelihood)) +
                  (config.tracker.particle.single_motion() ? " one-std" : " levels+turns+speed") +
-                 (config.cross_pairs_max_sensors >= 4 ? " cross-pairs" : ""));
+                 (config.cross_pairs_max_sensors >= 4 ? " cross-pairs" : "") +
+                 (config.cross_pairs_max_sensors >= 4 && config.pair_closure ? " closure" : ""));
 }
-BENCHMARK(BM_PipelinePerAudioSecond)->ArgsProduct({{4096}, {0, 1}, {0, 1}, {0, 4}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PipelinePerAudioSecond)
+    ->ArgsProduct({{4096}, {0, 1}, {0, 1}, {0, 4}, {0, 1}})
+    ->Unit(benchmark::kMillisecond);
 
 // Several sessions fed in turn, one 4096-sample block each, as the server's workers take
 // them: each block finds its session's state (particles, filter scratch, transform buffers)

@@ -237,5 +237,17 @@ TEST(SessionFileFlags, ABadFileNamesTheFileAndTheKey) {
       << range.status().message();
 }
 
+// The closure check is on unless --no-closure; --delay-rates turns the delay-rate reading on.
+TEST(SessionFlags, NoClosureAndDelayRatesSetTheirSessionFields) {
+  const auto defaults = Build({}, ArrayText(""));
+  ASSERT_TRUE(defaults.ok()) << defaults.status().ToString();
+  EXPECT_TRUE(defaults->pair_closure);
+  EXPECT_FALSE(defaults->delay_rate_compensation);
+  const auto flagged = Build({"--no-closure", "--delay-rates"}, ArrayText(""));
+  ASSERT_TRUE(flagged.ok()) << flagged.status().ToString();
+  EXPECT_FALSE(flagged->pair_closure);
+  EXPECT_TRUE(flagged->delay_rate_compensation);
+}
+
 }  // namespace
 }  // namespace localizer::cli
