@@ -3,7 +3,8 @@
 // configuration (4 channels, 44.1 kHz, 4096-sample frames, 50 % hop, 4096 particles, peak
 // likelihood), with the stage split per frame so that the dominant term shows.
 //   particles:  256 ... 65536
-//   sensors:    4, 8, 16, 32 (reference pairs grow as sensors - 1; the GCC's FFTs as sensors)
+//   sensors:    4, 8, 16, 32 (reference pairs grow as sensors - 1; the GCC's FFTs as sensors);
+//               and 4, 6, 8 with every pair measured (BM_CostWithEveryPair)
 //   frame:      256 ... 8192 samples (hop = frame / 2, so frames per second grow as 1 / frame)
 //   rate:       8 ... 96 kHz (frame fixed at 4096: frames per second grow with the rate)
 // The sensors sit on a Fibonacci lattice over a 0.25 m-radius sphere (volumetric for every
@@ -30,6 +31,7 @@ struct Point {
   int sensors = 4;
   int frame_samples = 4096;
   double sample_rate_hz = 44100.0;
+  int cross_pairs_max_sensors = -1;  // < 0: the session's default
 };
 
 std::vector<Vec3> FibonacciSphere(int n, double radius_m) {
@@ -70,6 +72,7 @@ void Run(benchmark::State& state, const Point& p) {
   config.hop_samples = p.frame_samples / 2;
   config.tracker.particle.particles = p.particles;
   config.tracker.particle.likelihood = Likelihood::kPeak;
+  if (p.cross_pairs_max_sensors >= 0) config.cross_pairs_max_sensors = p.cross_pairs_max_sensors;
   // 0.1 s blocks, as a streaming client sends them.
   const int64_t block = static_cast<int64_t>(std::lround(0.1 * sim.sample_rate_hz));
   const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
@@ -108,6 +111,18 @@ void BM_CostVsSensors(benchmark::State& state) {
   Run(state, p);
 }
 BENCHMARK(BM_CostVsSensors)->Arg(4)->Arg(8)->Arg(16)->Arg(32)->Unit(benchmark::kMillisecond);
+
+// Every pair measured (cross_pairs_max_sensors = sensors): the pairs without the reference on
+// every tracked frame (pair_closure.h) and in every search, against BM_CostVsSensors' default
+// (4: larger arrays measure only their reference pairs).
+void BM_CostWithEveryPair(benchmark::State& state) {
+  Point p;
+  p.sensors = static_cast<int>(state.range(0));
+  p.cross_pairs_max_sensors = p.sensors;
+  Run(state, p);
+}
+BENCHMARK(BM_CostWithEveryPair)->Arg(4)->Arg(6)->Arg(8)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CostVsSensors)->Arg(6)->Unit(benchmark::kMillisecond);
 
 void BM_CostVsFrame(benchmark::State& state) {
   Point p;
