@@ -4,8 +4,6 @@
 #include <cmath>
 #include <vector>
 
-#include "engine/acquisition/lag_field.h"
-
 namespace localizer::engine {
 namespace {
 
@@ -69,14 +67,25 @@ bool OwnPeakNear(const LagField& field, int p, int x, double* lag_samples) {
 
 }  // namespace
 
-ClosureRepair RepairByClosure(Measurement* m) {
+ClosureRepair PairClosure::Repair(Measurement* m) {
   ClosureRepair none;
   if (m == nullptr || m->cross_pairs.empty() || !(m->sample_rate_hz > 0.0)) return none;
-  LagField field;
+  LagField& field = field_;
   field.Build(*m, /*with_levels=*/false);
   const double fs = m->sample_rate_hz;
-  std::vector<double> lags(m->pairs.size());
+  std::vector<double>& lags = lags_;
+  lags.resize(m->pairs.size());
   for (size_t p = 0; p < m->pairs.size(); ++p) lags[p] = m->pairs[p].delay_s * fs;
+  // Each pair's largest normalised value: S_p cannot exceed the sum of its terms' maxima, so a
+  // pair whose witnesses read near theirs at its peak cannot be contradicted (no scan needed).
+  std::vector<double>& largest = largest_;
+  largest.assign(static_cast<size_t>(field.pair_count()), 0.0);
+  for (int q = 0; q < field.pair_count(); ++q) {
+    if (!field.usable(q)) continue;
+    const std::vector<float>& g = field.values(q);
+    // At least 0: a lag outside the window reads 0.
+    largest[static_cast<size_t>(q)] = std::max(0.0, static_cast<double>(*std::max_element(g.begin(), g.end())));
+  }
 
   ClosureRepair found;
   int contradicted = 0;
@@ -85,6 +94,10 @@ ClosureRepair RepairByClosure(Measurement* m) {
     const std::vector<Witness> witnesses = WitnessesOf(*m, field, p);
     if (witnesses.size() < 2) continue;
     const double at_peak = Consensus(field, p, witnesses, lags, lags[static_cast<size_t>(p)]);
+    const double margin = kClosureMargin * std::sqrt(1.0 + static_cast<double>(witnesses.size()));
+    double bound = largest[static_cast<size_t>(p)];
+    for (const Witness& w : witnesses) bound += largest[static_cast<size_t>(w.field_pair)];
+    if (bound - at_peak <= margin) continue;
     double best = at_peak;
     int best_x = 0;
     for (int x = field.first_lag(p); x <= field.last_lag(p); ++x) {
@@ -95,7 +108,6 @@ ClosureRepair RepairByClosure(Measurement* m) {
         best_x = x;
       }
     }
-    const double margin = kClosureMargin * std::sqrt(1.0 + static_cast<double>(witnesses.size()));
     if (best - at_peak <= margin) continue;
     ++contradicted;
     found.pair = p;

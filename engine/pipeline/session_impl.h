@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "engine/acquisition/acquisition.h"
+#include "engine/acquisition/pair_closure.h"
 #include "engine/filters/divergence_monitor.h"
 #include "engine/pipeline/backend.h"
 #include "engine/pipeline/framer.h"
@@ -113,6 +114,7 @@ struct Session::Impl {
   PairSigmaHistory pair_sigmas;       // the recent frames' delay sigmas, for Estimate::far_field
   InnovationConsistency consistency;  // the recent frames' NIS, for Estimate::covariance
   MirrorWatch mirror;                 // 4-sensor arrays: the track's other exact solution
+  PairClosure closure;                // small arrays: reference pairs checked by the cross pairs
   Measurement measurement;
   Eigen::VectorXd delays;
   std::optional<Vec6> single_track_mean;  // the last Report's track, when the tracker held one hypothesis

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/acquisition/pair_closure.h"
 #include "engine/pipeline/session_impl.h"
 
 namespace localizer::engine {
@@ -227,7 +226,7 @@ void Session::Impl::CheckClosure() {
   if (!config.pair_closure || array.sensor_count() > config.cross_pairs_max_sensors) return;
   // A failed request leaves the cross pairs empty: nothing is checked.
   if (measurement.cross_pairs.empty()) (void)components.estimator->MeasureCrossPairs(&measurement);
-  (void)RepairByClosure(&measurement);
+  (void)closure.Repair(&measurement);
 }
 
 AcquisitionResult Session::Impl::SearchAllPairs() {

@@ -54,7 +54,7 @@ TEST(PairClosure, MovesAPairOnCrosstalkToWhereTheOtherPairsAgree) {
   ASSERT_GT(std::abs(lags[3]), 4.0) << "pair (0, 3)'s true lag must lie away from the crosstalk's 0";
   ASSERT_NEAR(m.pairs[2].delay_s * fs, 0.0, 0.5) << "the crosstalk leads pair (0, 3)";
   const Measurement before = m;
-  const ClosureRepair r = RepairByClosure(&m);
+  const ClosureRepair r = PairClosure().Repair(&m);
   ASSERT_EQ(r.pair, 2);
   EXPECT_TRUE(r.own_peak);
   EXPECT_NEAR(m.pairs[2].delay_s * fs, lags[3], 0.3);
@@ -69,7 +69,7 @@ TEST(PairClosure, LeavesAFrameWhosePairsAgreeAsItWas) {
   std::vector<double> lags;
   Measurement m = TetrahedronFrame(Vec3(5.0, 3.0, -1.0), 0.0, &lags);
   const Measurement before = m;
-  EXPECT_EQ(RepairByClosure(&m).pair, -1);
+  EXPECT_EQ(PairClosure().Repair(&m).pair, -1);
   for (size_t p = 0; p < m.pairs.size(); ++p) {
     EXPECT_EQ(m.pairs[p].delay_s, before.pairs[p].delay_s);
     EXPECT_EQ(m.pairs[p].delay_sigma_s, before.pairs[p].delay_sigma_s);
@@ -82,7 +82,7 @@ TEST(PairClosure, WithoutCrossPairsNothingIsChecked) {
   std::vector<double> lags;
   Measurement m = TetrahedronFrame(Vec3(5.0, 3.0, -1.0), 1.5, &lags);
   m.cross_pairs.clear();
-  EXPECT_EQ(RepairByClosure(&m).pair, -1);
+  EXPECT_EQ(PairClosure().Repair(&m).pair, -1);
   EXPECT_NEAR(m.pairs[2].delay_s * m.sample_rate_hz, 0.0, 0.5);
 }
 
@@ -142,7 +142,7 @@ Measurement SyntheticFrame(const std::vector<double>& true_lags,
 TEST(PairClosure, APairWithoutAPathOfItsOwnIsReadThroughItsWitnesses) {
   const std::vector<double> truth = {-20.0, 12.4, 33.7};
   Measurement m = SyntheticFrame(truth, {{{-20.0, 0.3}}, {{12.4, 0.3}}, {{-41.0, 0.2}}});
-  const ClosureRepair r = RepairByClosure(&m);
+  const ClosureRepair r = PairClosure().Repair(&m);
   ASSERT_EQ(r.pair, 2);
   EXPECT_FALSE(r.own_peak);
   EXPECT_NEAR(m.pairs[2].delay_s * kFs, 33.7, 0.3);
@@ -156,7 +156,7 @@ TEST(PairClosure, APairWithoutAPathOfItsOwnIsReadThroughItsWitnesses) {
 TEST(PairClosure, APairOnItsEchoIsMovedOntoItsOwnDirectPath) {
   const std::vector<double> truth = {-20.0, 12.4, 33.7};
   Measurement m = SyntheticFrame(truth, {{{-20.0, 0.3}}, {{12.4, 0.3}}, {{-41.0, 0.25}, {33.7, 0.12}}});
-  const ClosureRepair r = RepairByClosure(&m);
+  const ClosureRepair r = PairClosure().Repair(&m);
   ASSERT_EQ(r.pair, 2);
   EXPECT_TRUE(r.own_peak);
   EXPECT_NEAR(m.pairs[2].delay_s * kFs, 33.7, 0.4);
@@ -167,7 +167,7 @@ TEST(PairClosure, APairOnItsEchoIsMovedOntoItsOwnDirectPath) {
 TEST(PairClosure, TwoContradictedPairsAreLeftAlone) {
   const std::vector<double> truth = {-20.0, 12.4, 33.7};
   Measurement m = SyntheticFrame(truth, {{{-20.0, 0.3}}, {{50.0, 0.3}, {12.4, 0.1}}, {{-41.0, 0.25}, {33.7, 0.12}}});
-  EXPECT_EQ(RepairByClosure(&m).pair, -1);
+  EXPECT_EQ(PairClosure().Repair(&m).pair, -1);
   EXPECT_NEAR(m.pairs[1].delay_s * kFs, 50.0, 1e-9);
   EXPECT_NEAR(m.pairs[2].delay_s * kFs, -41.0, 1e-9);
 }
