@@ -14,16 +14,21 @@
 // when the best x lies more than kMinMoveSamples from its peak and S_p there beats S_p at the
 // peak by more than kClosureMargin sqrt(1 + witnesses) (the sum's noise-only standard
 // deviation). A pair is moved only when it is the frame's one contradicted pair (two
-// contradicted pairs leave no majority of witnesses to trust), and only onto a peak of its own
-// GCC (a local maximum within 2 samples of x, at least kMinOwnPeak noise sds), refined by a
-// parabola; its delay sigma is then cleared (the filters take it from that peak's curvature)
-// and it is marked confirmed (measurement.h).
+// contradicted pairs leave no majority of witnesses to trust):
+//   - onto a peak of its own GCC near x (a local maximum within 2 samples, at least 3 noise
+//     sds), refined by a parabola; its delay sigma is cleared (the filters take it from that
+//     peak's curvature);
+//   - else (its own peak smeared by the source's motion, or masked) onto the consensus's peak,
+//     refined by a parabola, with sqrt(2) x the smallest witness's reference-pair sigma (the
+//     witness's pair and its cross pair taken as equally precise); not moved when no witness
+//     has a sigma.
+// The moved pair is marked confirmed (measurement.h).
 //
 // A frame whose pairs agree is left exactly as it was. Cost: O(window) per pair to find each
 // one's largest value; a reference pair is scanned (O(window x (1 + witnesses))) only when the
 // sum of its terms' largest values could beat S_p at its peak by the margin. A few
 // microseconds for a 4-sensor array; the cross pairs' measurement (one weighting and inverse
-// FFT each, ~11 us for 4 x 4096) is the caller's.
+// FFT each) is the caller's: with it, 12-17 us per 4 x 4096 frame (BENCHMARKS.md).
 #pragma once
 
 #include <vector>
