@@ -10,7 +10,9 @@
 // filters take the strongest).
 // With a track, the tracker predicts to the frame's instant; the presence test runs about
 // the predicted position: present, the tracker updates (a pair whose main peak is far from
-// the prediction while another of its candidate peaks is near is measured there: multipath);
+// the prediction while another of its candidate peaks is near is measured there: multipath;
+// on small arrays, a reference pair that the pairs without the reference contradict is read
+// where they agree: pair_closure.h, AudioSessionConfig::pair_closure);
 // absent, the volume is searched — a
 // source heard elsewhere for 3 frames in a row restarts the track there; none heard, the
 // track coasts (predicts, no update) and is dropped after source_timeout_s. A window of
