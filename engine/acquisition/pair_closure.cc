@@ -12,16 +12,12 @@ constexpr double kMinMoveSamples = 2.0;  // a closer consensus is the same peak
 constexpr double kMinOwnPeak = 3.0;      // noise sds: the pair's own GCC must show the path
 constexpr int kOwnPeakReach = 2;         // samples between the consensus and the pair's own peak
 
-// A cross pair joining reference pair p's sensor to reference pair `other`'s. Its lag for p at
-// lag x is sign * (x - lag_other): +1 when p's sensor is the cross pair's b, -1 when it is a.
-struct Witness {
-  int field_pair = 0;
-  int other = 0;
-  double sign = 1.0;
-};
+using Witness = PairClosure::Witness;
 
-std::vector<Witness> WitnessesOf(const Measurement& m, const LagField& field, int p) {
-  std::vector<Witness> out;
+// Fills `out` with reference pair p's witnesses.
+void WitnessesOf(const Measurement& m, const LagField& field, int p, std::vector<Witness>* witnesses) {
+  std::vector<Witness>& out = *witnesses;
+  out.clear();
   const int sensor = m.pairs[static_cast<size_t>(p)].sensor;
   for (int q = field.reference_pairs(); q < field.pair_count(); ++q) {
     const int a = field.cross_sensor_a(q), b = field.cross_sensor_b(q);
@@ -33,7 +29,6 @@ std::vector<Witness> WitnessesOf(const Measurement& m, const LagField& field, in
       }
     }
   }
-  return out;
 }
 
 double Consensus(const LagField& field, int p, const std::vector<Witness>& witnesses, const std::vector<double>& lags,
@@ -41,6 +36,13 @@ double Consensus(const LagField& field, int p, const std::vector<Witness>& witne
   double s = field.At(p, x);
   for (const Witness& w : witnesses) s += field.At(w.field_pair, w.sign * (x - lags[static_cast<size_t>(w.other)]));
   return s;
+}
+
+// The vertex of the parabola through (-1, a), (0, b), (1, c), within half a sample (0 when
+// b is not above the chord).
+double VertexOffset(double a, double b, double c) {
+  const double denom = a - 2.0 * b + c;
+  return denom < 0.0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0;
 }
 
 // Pair p's own peak within kOwnPeakReach samples of integer lag x: a local maximum of its
@@ -59,9 +61,7 @@ bool OwnPeakNear(const LagField& field, int p, int x, double* lag_samples) {
   }
   if (best < 0) return false;
   const size_t k = static_cast<size_t>(best);
-  const double a = g[k - 1], b = g[k], c = g[k + 1], denom = a - 2.0 * b + c;
-  const double offset = denom < 0.0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0;
-  *lag_samples = field.first_lag(p) + best + offset;
+  *lag_samples = field.first_lag(p) + best + VertexOffset(g[k - 1], g[k], g[k + 1]);
   return true;
 }
 
@@ -91,7 +91,8 @@ ClosureRepair PairClosure::Repair(Measurement* m) {
   int contradicted = 0;
   for (int p = 0; p < field.reference_pairs(); ++p) {
     if (!field.usable(p)) continue;
-    const std::vector<Witness> witnesses = WitnessesOf(*m, field, p);
+    WitnessesOf(*m, field, p, &witnesses_);
+    const std::vector<Witness>& witnesses = witnesses_;
     if (witnesses.size() < 2) continue;
     const double at_peak = Consensus(field, p, witnesses, lags, lags[static_cast<size_t>(p)]);
     const double margin = kClosureMargin * std::sqrt(1.0 + static_cast<double>(witnesses.size()));
@@ -119,10 +120,8 @@ ClosureRepair PairClosure::Repair(Measurement* m) {
     if (!found.own_peak) {
       // No path of its own where the others agree (its peak smeared or masked): the
       // consensus's peak, refined by a parabola, read through the witnesses' reference pairs.
-      const double a = Consensus(field, p, witnesses, lags, best_x - 1.0);
-      const double c = Consensus(field, p, witnesses, lags, best_x + 1.0);
-      const double denom = a - 2.0 * best + c;
-      lag = best_x + (denom < 0.0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0);
+      lag = best_x + VertexOffset(Consensus(field, p, witnesses, lags, best_x - 1.0), best,
+                                  Consensus(field, p, witnesses, lags, best_x + 1.0));
       double witness_sigma = 0.0;
       for (const Witness& w : witnesses) {
         const double s = m->pairs[static_cast<size_t>(w.other)].delay_sigma_s;

@@ -54,10 +54,20 @@ class PairClosure {
   // measured (none: nothing to check, returns pair -1).
   ClosureRepair Repair(Measurement* m);
 
+  // A cross pair (field pair `field_pair`) joining a reference pair's sensor to reference pair
+  // `other`'s. Its lag at the reference pair's lag x is sign * (x - lag_other): +1 when the
+  // reference pair's sensor is the cross pair's b, -1 when it is a.
+  struct Witness {
+    int field_pair = 0;
+    int other = 0;
+    double sign = 1.0;
+  };
+
  private:
   LagField field_;
-  std::vector<double> lags_;     // reference pairs' peaks, samples
-  std::vector<double> largest_;  // each field pair's largest normalised value
+  std::vector<double> lags_;        // reference pairs' peaks, samples
+  std::vector<double> largest_;     // each field pair's largest normalised value
+  std::vector<Witness> witnesses_;  // the reference pair being checked
 };
 
 }  // namespace localizer::engine

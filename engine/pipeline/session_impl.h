@@ -79,6 +79,9 @@ struct Session::Impl {
   // Small arrays (AudioSessionConfig::pair_closure, cross_pairs_max_sensors): measures the
   // pairs without the reference and moves a reference pair they contradict (pair_closure.h).
   void CheckClosure();
+  // The frame's pairs without the reference, measured at most once per frame (the front end
+  // clears them with each Estimate; arrays it measures none for keep none).
+  void MeasureCrossPairsOnce();
 
   // Before the frame centred at t_s: the delay rates the last reported track predicts for
   // its pairs, handed to the front end when some pair's peak would move by a sample or more

@@ -224,14 +224,17 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
 
 void Session::Impl::CheckClosure() {
   if (!config.pair_closure || array.sensor_count() > config.cross_pairs_max_sensors) return;
-  // A failed request leaves the cross pairs empty: nothing is checked.
-  if (measurement.cross_pairs.empty()) (void)components.estimator->MeasureCrossPairs(&measurement);
+  MeasureCrossPairsOnce();  // none measured: nothing is checked
   (void)closure.Repair(&measurement);
 }
 
-AcquisitionResult Session::Impl::SearchAllPairs() {
-  // A failed request leaves the cross pairs empty: the search then uses the reference pairs.
+void Session::Impl::MeasureCrossPairsOnce() {
+  // A failed request leaves them empty: the callers then use the reference pairs alone.
   if (measurement.cross_pairs.empty()) (void)components.estimator->MeasureCrossPairs(&measurement);
+}
+
+AcquisitionResult Session::Impl::SearchAllPairs() {
+  MeasureCrossPairsOnce();
   return acquisition.Search(measurement);
 }
 
