@@ -394,7 +394,7 @@ v1::SessionConfig ConfigToProto(const engine::AudioSessionConfig& c, const std::
   p.set_source_timeout_s(c.source_timeout_s);
   p.set_despike_k(c.despike_k);
   p.set_localization(engine::LocalizationName(c.localization));
-  p.set_max_sources(static_cast<uint32_t>(c.max_sources));
+  if (c.max_sources > 0) p.set_max_sources(static_cast<uint32_t>(c.max_sources));
   if (c.source_side != Vec3::Zero()) ToProto(c.source_side, p.mutable_source_side());
   if (c.source_plane_normal != Vec3::Zero()) {
     ToProto(c.source_plane_point_m, p.mutable_source_plane()->mutable_point_m());

@@ -102,8 +102,9 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "planar array with --source-side, or a linear one with --source-plane and --source-side) | "
                "direction (up to --max-sources sources, any array) | auto (position for a volumetric array "
                "or a linear one with --source-plane, else direction) (default: the array file's, else auto)");
-  flags.OptionalInt("max-sources", &f->max_sources, "K", "the array file's, else 4",
-                    "direction: sources per frame, 1..16");
+  flags.OptionalInt("max-sources", &f->max_sources, "K", "the array file's, else 4 for directions",
+                    "sources per frame, 1..16; with 2 or more a volumetric array's positions follow that "
+                    "many sources (one per CSV row, each with its position) instead of one");
   flags.String("source-side", &f->source_side, "X,Y,Z",
                "planar and linear arrays: the sources lie where (p - array centre) . (X,Y,Z) > 0 "
                "(default: the array file's source_side, else not stated: mirror images)");

@@ -24,7 +24,10 @@
 //                                              side; a linear one's within source_plane)
 //     "source_plane": {"point_m": [0, 0, 1.5], optional, a linear array's positions: the
 //                      "normal": [0, 0, 1]},   plane that holds the array and the sources
-//     "max_sources": 4,                        optional, directions: sources per frame, 1..16
+//     "max_sources": 4,                        optional: sources per frame, 1..16 (unset: 4 for
+//                                              directions, one tracked source for a volumetric
+//                                              array's positions; 2 or more: that many, each
+//                                              with its position)
 //     "geodetic_origin": {"latitude_deg": 49.49,  optional: where the array frame's origin is
 //       "longitude_deg": -124.66,               (WGS84) and heading_deg, the bearing of its
 //       "altitude_m": 0, "heading_deg": 30}     +y axis from true north (geodetic.h); for

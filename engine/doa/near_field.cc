@@ -48,8 +48,11 @@ StatusOr<NearFieldLocator> NearFieldLocator::Create(const std::vector<Vec3>& sen
   const Vec3& c = shape->centroid_m;
   switch (shape->shape) {
     case ArrayShape::kVolumetric:
-      return InvalidArgument("near-field positions from directions are for planar and linear arrays; a volumetric "
-                             "array's positions come from its tracker");
+      // Every direction and range is observable; a stated side only narrows the search.
+      out.side_ = options.source_side.norm() > 0.0 ? Vec3(options.source_side.normalized()) : Vec3::Zero();
+      out.free_ = 3;
+      out.basis_ = Eigen::Matrix3d::Identity();
+      break;
     case ArrayShape::kPlanar: {
       if (options.source_side.norm() == 0.0) {
         return InvalidArgument("a planar array needs source_side for position (the side of its plane the sources are on)");
@@ -130,7 +133,7 @@ void NearFieldLocator::Pin(Eigen::Matrix3d* m, double diagonal) const {
 }
 
 bool NearFieldLocator::OnSide(const Vec3& position_m) const {
-  return (position_m - shape_.centroid_m).dot(side_) > 0.0;
+  return !sided() || (position_m - shape_.centroid_m).dot(side_) > 0.0;
 }
 
 double NearFieldLocator::Lag(int i, int j, const Vec3& position_m, Vec3* gradient) const {
@@ -230,7 +233,7 @@ std::vector<Vec3> NearFieldLocator::CandidateDirections(const Vec3& u) const {
     for (int b = -kPlanarWindowSteps; b <= kPlanarWindowSteps; ++b) {
       if (a == 0 && b == 0) continue;
       const Vec3 v = (u + kPlanarStep_rad * (a * e1 + b * e2)).normalized();
-      if (v.dot(side_) > 0.0) out.push_back(v);
+      if (!sided() || v.dot(side_) > 0.0) out.push_back(v);
     }
   }
   return out;
@@ -244,7 +247,7 @@ NearFieldFix NearFieldLocator::Locate(const PairSpectra& spectra, const Measurem
     return NearFieldFix{};
   }
   u.normalize();
-  if (u.dot(side_) <= 0.0) u = (u + (1e-3 - u.dot(side_)) * side_).normalized();
+  if (sided() && u.dot(side_) <= 0.0) u = (u + (1e-3 - u.dot(side_)) * side_).normalized();
 
   // 1. The coarse grid: ranges along each direction of the window, from the sampled field.
   // Starts: the best point on the direction itself and the best anywhere in the window.

@@ -1,5 +1,6 @@
 // Positions for the sources a direction search found, where the array's wavefront curvature
-// tells the range (issue 18): a planar array with the sources' side stated gives 3-D
+// tells the range (issue 18): a volumetric array gives 3-D positions (a stated side, if any,
+// only narrows the search); a planar array with the sources' side stated gives 3-D
 // positions; a linear array gives 2-D positions in a stated plane that holds it, on the side
 // stated within that plane.
 //
@@ -55,8 +56,9 @@ namespace localizer::engine {
 struct NearFieldOptions {
   double sample_rate_hz = 16000.0;
   double sound_speed_mps = 343.0;
-  // The sources' side: they lie where (p - centroid).source_side > 0. Required. Planar
-  // arrays: not in the array plane. Linear arrays: in source_plane, not along the axis.
+  // The sources' side: they lie where (p - centroid).source_side > 0. Required for planar
+  // and linear arrays (zero: not stated; a volumetric array needs none). Planar arrays: not
+  // in the array plane. Linear arrays: in source_plane, not along the axis.
   Vec3 source_side = Vec3::Zero();
   // Linear arrays: the plane that holds the array and the sources (a point on it and its
   // normal; the array's axis must lie in it, within 1e-3 rad, and its centroid within 1 %
@@ -71,7 +73,7 @@ struct NearFieldOptions {
 // One source's near-field fit.
 struct NearFieldFix {
   static constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
-  bool near_field = false;             // the range is bounded: position_m holds
+  bool near_field = false;                 // the range is bounded: position_m holds
   Vec3 position_m = Vec3::Constant(kNan);  // NaN when far field
   Mat3 covariance_m2 = Mat3::Constant(kNan);
   double range_m = kNan;     // of the fit from the centroid (also when far field)
@@ -80,8 +82,8 @@ struct NearFieldFix {
 
 class NearFieldLocator {
  public:
-  // INVALID_ARGUMENT naming what is missing or wrong: a volumetric array (its positions come
-  // from the tracker), no source_side, a linear array without source_plane, a plane that does
+  // INVALID_ARGUMENT naming what is missing or wrong: no source_side for a planar or linear
+  // array, a linear array without source_plane, a plane that does
   // not hold the array, a side in a planar array's plane or along a linear array's axis.
   static StatusOr<NearFieldLocator> Create(const std::vector<Vec3>& sensors_m, const NearFieldOptions& options);
 
@@ -100,7 +102,8 @@ class NearFieldLocator {
   NearFieldLocator() = default;
   Vec3 PositionOf(const Eigen::Vector3d& x) const;  // free coordinates -> position
   Eigen::Vector3d CoordinatesOf(const Vec3& position_m) const;
-  bool OnSide(const Vec3& position_m) const;
+  bool OnSide(const Vec3& position_m) const;  // true everywhere when no side is stated
+  bool sided() const { return side_ != Vec3::Zero(); }
   // One pair at a probed position: d lag / d free coordinates, R_p and R_p''.
   struct PairTerm {
     Eigen::Vector3d lag_gradient = Eigen::Vector3d::Zero();
@@ -118,7 +121,7 @@ class NearFieldLocator {
   };
   Probe ProbeAt(const PairSpectra& spectra, const Vec3& position_m) const;
   double CoarseSpectrum(const PairSpectra& spectra, const Measurement& field, const Vec3& position_m) const;
-  std::vector<Vec3> CandidateDirections(const Vec3& u) const;  // u first, then its window
+  std::vector<Vec3> CandidateDirections(const Vec3& u) const;              // u first, then its window
   double Lag(int i, int j, const Vec3& position_m, Vec3* gradient) const;  // samples; d lag / d position
   NearFieldFix Bound(const PairSpectra& spectra, const Probe& fit) const;
   // In the plane (2 free coordinates): the normal's row and column of a 3 x 3 matrix over
@@ -130,7 +133,7 @@ class NearFieldLocator {
   std::vector<Vec3> sensors_m_;
   int free_ = 3;                                         // free coordinates: 3, or 2 in the plane
   Eigen::Matrix3d basis_ = Eigen::Matrix3d::Identity();  // columns: the free axes (p = c + B x)
-  Vec3 side_ = Vec3::Zero();                             // unit; linear: in the plane, across the axis
+  Vec3 side_ = Vec3::Zero();  // unit; linear: in the plane, across the axis; zero: none (volumetric)
   double min_range_m_ = 0.0, max_range_m_ = 0.0;
 };
 

@@ -41,7 +41,7 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
   srp.frame_samples = config.frame_samples;
   srp.band_low_hz = config.band_low_hz;
   srp.band_high_hz = config.band_high_hz;
-  srp.max_sources = config.max_sources;
+  srp.max_sources = config.EffectiveMaxSources();
   srp.false_alarm = config.presence_false_alarm;
   srp.source_side = config.source_side;
   srp.hop_samples = config.hop_samples;  // onsets: the rise against the last frame not overlapping

@@ -1,5 +1,6 @@
 // The frame step of a session that follows sources by direction (AudioSessionConfig::
-// localization resolved to direction, or to position with a planar or linear array): each
+// localization resolved to direction, or to position with a planar or linear array, or with a
+// volumetric one whose config states max_sources >= 2): each
 // frame's SRP-PHAT peaks (engine/doa/srp_phat.h) go to a direction tracker
 // (engine/doa/direction_tracker.h), and the estimate lists the sources it follows. With
 // positions, each source heard in the frame also gets a near-field fit near its direction

@@ -151,6 +151,13 @@ StatusOr<Resolved> Resolve(const AudioSessionConfig& config) {
     const bool plane_stated = config.source_plane_normal != Vec3::Zero();
     localization = volumetric || (linear && plane_stated) ? Localization::kPosition : Localization::kDirection;
   }
+  // A volumetric array follows one source with its tracker unless the config states
+  // several (max_sources >= 2): then each source by direction, with its own position.
+  const bool several = volumetric && localization == Localization::kPosition && config.max_sources >= 2;
+  if (several) {
+    auto locator = NearFieldLocator::Create(config.sensors_m, NearFieldOptionsFor(config));
+    if (!locator.ok()) return InvalidArgument(locator.status().message());
+  }
   if (localization == Localization::kPosition && !volumetric) {
     const size_t needed = linear ? 3 : 4;
     if (config.sensors_m.size() < needed) {
@@ -161,7 +168,7 @@ StatusOr<Resolved> Resolve(const AudioSessionConfig& config) {
     auto locator = NearFieldLocator::Create(config.sensors_m, NearFieldOptionsFor(config));
     if (!locator.ok()) return InvalidArgument(locator.status().message() + " (or use localization direction)");
   }
-  return Resolved{*shape, localization, localization == Localization::kDirection || !volumetric};
+  return Resolved{*shape, localization, localization == Localization::kDirection || !volumetric || several};
 }
 
 }  // namespace

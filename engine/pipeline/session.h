@@ -28,7 +28,8 @@
 // A moving array (config.array_in_body_frame) is moved, every frame, to where its platform's
 // attitude (from the IMU samples given with AddImu) puts it; until the first IMU sample its
 // frames are measured but not tracked (the array's pose is unknown).
-// Direction sessions (config.localization direction, or auto with a planar or linear array):
+// Direction sessions (config.localization direction, or auto with a planar or linear array, or
+// positions from a volumetric array whose config states max_sources >= 2):
 // the same framing and block checks, and each frame goes to a DirectionStage
 // (direction_stage.h: SRP-PHAT peaks, a direction tracker); estimates list the sources.
 // A pure function of its config (seed included) and the blocks (and IMU samples) it was given.
@@ -91,7 +92,8 @@ class Session {
   // What the session reports: config.localization with auto resolved; and its array's shape.
   Localization localization() const { return localization_; }
   // Whether its estimates list sources (Estimate::sources: directions, and positions from a
-  // planar or linear array) rather than the tracker's one position.
+  // planar or linear array, or from a volumetric one stating max_sources >= 2) rather than the
+  // tracker's one position.
   bool reports_sources() const { return direction_ != nullptr; }
   const ArrayShapeInfo& shape() const { return shape_; }
   int sensor_count() const { return static_cast<int>(config().sensors_m.size()); }

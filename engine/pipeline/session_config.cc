@@ -44,8 +44,8 @@ Status AudioSessionConfig::Validate() const {
     return InvalidArgument("array.sensors_m has " + std::to_string(sensors_m.size()) +
                            " sensors; at least 2 are needed");
   }
-  if (max_sources < 1 || max_sources > 16) {
-    return InvalidArgument("max_sources must be in [1, 16], got " + std::to_string(max_sources));
+  if (max_sources < 0 || max_sources > 16) {
+    return InvalidArgument("max_sources must be in [1, 16] (0: not stated), got " + std::to_string(max_sources));
   }
   if (!source_side.allFinite()) return InvalidArgument("source_side must be finite");
   if (!source_plane_point_m.allFinite() || !source_plane_normal.allFinite()) {

@@ -44,7 +44,9 @@ namespace localizer::engine {
 //   linear (3 or more sensors), with source_plane (a plane holding the array and the
 //     sources) and source_side (which side of the array in that plane): 2-D positions;
 // the last two follow sources by direction (Estimate::sources) and give each a position
-// where the frame bounds its range (engine/doa/near_field.h), the direction otherwise.
+// where the frame bounds its range (engine/doa/near_field.h), the direction otherwise. So
+// does a volumetric array whose config states max_sources >= 2: several sources, each with
+// its own track and 3-D position (no side needed), in place of the one-source tracker.
 // auto: position for a volumetric array and for a linear one with source_plane stated,
 // direction otherwise (a planar array's source_side also serves directions: ask for
 // position to have its near-field positions).
@@ -59,11 +61,14 @@ struct AudioSessionConfig {
   double sound_speed_mps = 1500.0;  // > 0 (1500 water, 343 air)
   int reference_sensor = 0;
   double sample_rate_hz = 0.0;  // > 0
-  // What the session reports (above) and, for directions, how many sources per frame
-  // (in [1, 16]) and on which side of a planar array they lie: where
+  // What the session reports (above) and how many sources per frame, in [0, 16]: 0 (not
+  // stated) is 4 for sessions that follow sources by direction, and one source with the
+  // tracker for a volumetric array's positions; stated as 2 or more, a volumetric array's
+  // positions follow that many sources by direction, each with a near-field position
+  // (EffectiveMaxSources()). And on which side of a planar array the sources lie: where
   // (p - centroid).source_side > 0 (zero: not stated; then each direction has a mirror).
   Localization localization = Localization::kAuto;
-  int max_sources = 4;
+  int max_sources = 0;
   Vec3 source_side = Vec3::Zero();
   // Linear arrays, positions: the plane holding the array and the sources, a point on it and
   // its normal (zero normal: not stated).
@@ -145,6 +150,9 @@ struct AudioSessionConfig {
   // other than cv for a filter kind other than ekf and ukf, the particle options (checked
   // whatever the kind), the attitude options of a moving array.
   Status Validate() const;
+  // max_sources, or 4 where it is not stated (0).
+  int EffectiveMaxSources() const { return max_sources > 0 ? max_sources : kDefaultMaxSources; }
+  static constexpr int kDefaultMaxSources = 4;
   // The TDOA front end's options: frame length, sample rate, weighting, band, the frames'
   // taper (FramingTaperFraction below); the GCC function is kept (acquisition, presence and
   // multipath association read it).

@@ -36,7 +36,7 @@ int64_t EstimateResponseBytes(const engine::AudioSessionConfig& config) {
     source.direction = engine::Vec3::UnitX();
     source.position_m = engine::Vec3::Zero();
     source.position_covariance_m2 = engine::Mat3::Identity();
-    e.sources.assign(static_cast<size_t>(std::max(config.max_sources, 0)), source);
+    e.sources.assign(static_cast<size_t>(config.EffectiveMaxSources()), source);
   }
   v1::TrackResponse response;
   wire::EstimateToProto(e, config.reference_sensor, "cuda", response.mutable_estimate());

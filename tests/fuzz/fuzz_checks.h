@@ -51,7 +51,7 @@ inline void CheckAcceptedConfig(const engine::SessionConfig& config, const wire:
     // Directions take any 2 or more sensors; a position needs 4 (engine/pipeline/session.h).
     const int min_sensors = audio->localization == engine::Localization::kPosition ? 4 : 2;
     FUZZ_CHECK(sensors >= min_sensors && sensors <= policy.max_channels, std::to_string(sensors));
-    FUZZ_CHECK(audio->max_sources >= 1 && audio->max_sources <= 16, std::to_string(audio->max_sources));
+    FUZZ_CHECK(audio->max_sources >= 0 && audio->max_sources <= 16, std::to_string(audio->max_sources));
     FUZZ_CHECK(audio->source_side.allFinite(), "non-finite source_side accepted");
     FUZZ_CHECK(audio->reference_sensor >= 0 && audio->reference_sensor < sensors,
                std::to_string(audio->reference_sensor));

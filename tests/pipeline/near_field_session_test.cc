@@ -127,8 +127,8 @@ TEST(NearFieldSession, ReverberantLineMatchesALeastSquaresFixOnAllPairs) {
   const auto estimates = StreamThrough(session->get(), samples, 8);
   const Positions p = Score(estimates, scene.sources_m);
   std::vector<double> ls_errors_m;
-  for (const Vec3& fix : LeastSquaresFixes(samples, config.sensors_m, 16000.0, 343.0, kFrame, kHop,
-                                           scene.sources_m[0], Vec3::UnitZ())) {
+  for (const Vec3& fix :
+       LeastSquaresFixes(samples, config.sensors_m, 16000.0, 343.0, kFrame, kHop, scene.sources_m[0], Vec3::UnitZ())) {
     ls_errors_m.push_back((fix - scene.sources_m[0]).norm());
   }
   std::printf("RT60 0.4 s: positions in %zu of %zu frames; median error %.4f m; least squares %.4f m\n",
@@ -187,7 +187,7 @@ TEST(NearFieldSession, AFarSourceGetsADirectionAndNoPosition) {
   scene.room.rt60_s = 0.0;
   scene.sensors_m = config.sensors_m;
   scene.sources_m = {Vec3(9.0, 30.0, 1.5)};  // 30 m: 330 apertures
-  scene.snr_db = 45.0;  // 30 dB at the array after spreading
+  scene.snr_db = 45.0;                       // 30 dB at the array after spreading
   scene.seed = 17;
   const auto estimates = StreamThrough(session->get(), RenderNearFieldScene(scene), 4);
   size_t heard = 0, positions = 0;
@@ -223,6 +223,69 @@ TEST(NearFieldSession, PlanarArrayOnAStatedSideGivesThreeDimensionalPositions) {
               p.errors_m.size(), p.frames, Median(p.errors_m), Median(p.range_sds_m));
   EXPECT_GE(p.errors_m.size(), p.frames * 6 / 10);
   EXPECT_LT(Median(p.errors_m), 0.05);
+}
+
+// A regular tetrahedron with 0.5-m edges, its centre 1.2 m above the floor.
+std::vector<Vec3> Tetrahedron() {
+  const Vec3 c(3.0, 2.5, 1.2);
+  const double a = 0.5 / (2.0 * std::sqrt(2.0));  // alternate cube corners: edge 2 sqrt(2) a
+  return {c + Vec3(a, a, a), c + Vec3(a, -a, -a), c + Vec3(-a, a, -a), c + Vec3(-a, -a, a)};
+}
+
+// A volumetric array follows one source with its tracker (today's sessions) unless the
+// config states several: then each source by direction, each with its own 3-D position.
+TEST(NearFieldSession, AVolumetricArrayStatingSeveralSourcesGivesEachItsPosition) {
+  AudioSessionConfig one = Config(Tetrahedron());
+  one.max_sources = 0;  // not stated
+  auto tracker = Session::Create(one);
+  ASSERT_TRUE(tracker.ok()) << tracker.status().message();
+  EXPECT_EQ((*tracker)->localization(), Localization::kPosition);
+  EXPECT_FALSE((*tracker)->reports_sources());
+  one.max_sources = 1;
+  EXPECT_FALSE((*Session::Create(one))->reports_sources());
+
+  AudioSessionConfig config = Config(Tetrahedron());  // max_sources 2, auto
+  auto session = Session::Create(config);
+  ASSERT_TRUE(session.ok()) << session.status().message();
+  EXPECT_EQ((*session)->localization(), Localization::kPosition);
+  EXPECT_TRUE((*session)->reports_sources());
+  NearFieldScene scene;
+  scene.room.rt60_s = 0.2;
+  scene.sensors_m = config.sensors_m;
+  // Two equally loud sources 0.9 m away (1.8 apertures), 110 degrees apart. (One source's
+  // tracker follows neither: it wanders between them.)
+  scene.sources_m = {Vec3(3.8, 2.8, 1.5), Vec3(2.6, 3.3, 1.0)};
+  scene.seconds = 3.0;
+  scene.seed = 23;
+  const auto estimates = StreamThrough(session->get(), RenderNearFieldScene(scene), 4);
+  std::set<uint64_t> ids_near[2];
+  std::vector<double> errors_m[2], sds_m[2];
+  size_t heard = 0;
+  for (const Estimate& e : estimates) {
+    for (const SourceEstimate& s : e.sources) {
+      if (s.source_present) ++heard;
+      if (!s.position_m.allFinite()) continue;
+      const int k = (s.position_m - scene.sources_m[0]).norm() < (s.position_m - scene.sources_m[1]).norm() ? 0 : 1;
+      ids_near[k].insert(s.source_id);
+      errors_m[k].push_back((s.position_m - scene.sources_m[static_cast<size_t>(k)]).norm());
+      sds_m[k].push_back(s.range_sd_m);
+    }
+  }
+  std::printf(
+      "tetrahedron, two sources: heard %zu of %zu source-frames; %zu and %zu positions, median errors "
+      "%.4f and %.4f m, range sd %.4f and %.4f m\n",
+      heard, 2 * estimates.size(), errors_m[0].size(), errors_m[1].size(), Median(errors_m[0]), Median(errors_m[1]),
+      Median(sds_m[0]), Median(sds_m[1]));
+  EXPECT_GE(heard, 2 * estimates.size() * 9 / 10);
+  for (int k = 0; k < 2; ++k) {
+    // Each frame's fit on its own: a 4-sensor array bounds these ranges in some frames only.
+    EXPECT_GE(errors_m[k].size(), estimates.size() / 5) << "source " << k;
+    EXPECT_LT(Median(errors_m[k]), 3.0 * Median(sds_m[k])) << "source " << k;
+    EXPECT_EQ(ids_near[k].size(), 1u) << "source " << k;
+  }
+  if (!ids_near[0].empty() && !ids_near[1].empty()) {
+    EXPECT_NE(*ids_near[0].begin(), *ids_near[1].begin());
+  }
 }
 
 TEST(NearFieldSession, MissingConstraintsAreNamed) {

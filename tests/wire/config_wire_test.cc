@@ -395,7 +395,9 @@ TEST(ConfigWire, LocalizationFieldsRoundTripAndBadOnesAreNamed) {
   auto config = AudioFromProto(p, {});
   ASSERT_TRUE(config.ok());
   EXPECT_EQ(config->localization, engine::Localization::kAuto);
-  EXPECT_EQ(config->max_sources, 4);
+  EXPECT_EQ(config->max_sources, 0);  // not stated
+  EXPECT_EQ(config->EffectiveMaxSources(), 4);
+  EXPECT_FALSE(ConfigToProto(*config, "").has_max_sources());  // echoed only when stated
   EXPECT_TRUE(config->source_side.isZero());
   p.set_localization("direction");
   p.set_max_sources(2);

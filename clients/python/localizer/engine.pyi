@@ -40,7 +40,7 @@ class Session:
     sensors_m: (N, 3) metres; sample_rate_hz > 0. Options (keyword, None = the default;
     ``Session.default_options()`` lists them with their values): the fields of
     engine::AudioSessionConfig under the same names, except filter (tracker.kind), particles,
-    likelihood, outlier_probability, tdoa_sigma_s (0: adaptive), accel_noise_mps2 and the
+    likelihood, outlier_probability, tdoa_sigma_s (0: adaptive), max_sources (0: not stated), accel_noise_mps2 and the
     accel_level_* / manoeuvre_* particle options (tracker.particle.*), motion_model and
     robust (tracker.kalman.*), imm_modes ("cv,ct"), imm_variant. As the CLI: accel_noise_mps2
     and tdoa_sigma_s drive every filter kind, and frame_samples / hop_samples default to
@@ -69,7 +69,7 @@ class Session:
                  search_radius_m: float = 0.0, presence_false_alarm: float = 0.001,
                  source_timeout_s: float = 2.0,
                  localization: Literal["auto", "position", "direction"] = "auto",
-                 max_sources: int = 4, source_side: Vec3 | None = None,
+                 max_sources: int = 0, source_side: Vec3 | None = None,
                  source_plane_point_m: Vec3 | None = None, source_plane_normal: Vec3 | None = None,
                  backend: Literal["cpu", "gpu", "auto"] = "cpu") -> None: ...
 

@@ -39,7 +39,8 @@ def session_config(sensors_m: npt.ArrayLike, sample_rate_hz: float, *,
     localization: "position", "direction" or "auto" / "" (position for a volumetric array,
     directions for a planar or linear one: SessionOpened.localization says which; each
     estimate's ``sources`` then lists the sources followed, ``localizer.Source``). max_sources:
-    direction sessions' sources per frame, 1..16 (None: 4). source_side: (x, y, z), a planar
+    sources per frame, 1..16 (None: 4 for directions, one tracked source for a volumetric
+    array's positions; 2 or more there: that many sources, each with its position). source_side: (x, y, z), a planar
     array's side that holds the sources (None: not stated; mirror images); with a linear array,
     the side within source_plane. source_plane: ((x, y, z) point, (nx, ny, nz) normal), the
     plane holding a linear array and its sources: positions per source (localization
