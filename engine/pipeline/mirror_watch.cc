@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <utility>
 #include <vector>
@@ -72,7 +73,8 @@ void MirrorWatch::Follower::Update(const Vec3& at_m, const Mat3& noise_m2) {
 }
 
 void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& track_m, const Mat3& track_cov_m2,
-                         const Eigen::VectorXd& pair_sigma_s, double fallback_sigma_s, const Region& region) {
+                         const Eigen::VectorXd& measured_tdoa_s, const Eigen::VectorXd& pair_sigma_s,
+                         double fallback_sigma_s, const Region& region) {
   if (array.pair_count() != 3) return;
   Eigen::VectorXd sigma_s = pair_sigma_s;
   if (sigma_s.size() != 3) sigma_s = Eigen::VectorXd::Constant(3, fallback_sigma_s);
@@ -81,14 +83,57 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
   }
   if (!(sigma_s.minCoeff() > 0.0)) return;
 
-  // The track's TDOAs and their other exact root.
-  const Eigen::VectorXd tdoa_s = array.Tdoa(track_m);
+  // The other exact root: of the frame's measured TDOAs when given (of those apart from the
+  // track, the one nearest where the mirror's filter predicts it, or at a start the one
+  // farther from the track), else of the track's predicted TDOAs (the one farther from the
+  // track). The measured roots carry the
+  // pairs' noise that bound_m2 describes; the track's predicted TDOAs carry the track's own
+  // error, which near the branch point moves their other root by metres (campaign scene
+  // 33000075: that root 2.5 m from the truth, so the mirror was dropped as no longer
+  // distinct from a track 5.5 m off).
+  const auto exact_roots = [&](const Eigen::VectorXd& tdoa_s) {
+    std::vector<Vec3> out;
+    for (const Vec3& root : ClosedFormCandidates(array, tdoa_s)) {
+      if (!root.allFinite()) continue;
+      if ((array.Tdoa(root) - tdoa_s).cwiseAbs().maxCoeff() > kExactShare * sigma_s.minCoeff()) continue;
+      out.push_back(root);
+    }
+    return out;
+  };
+  const auto farthest_from_track = [&](const std::vector<Vec3>& roots) {
+    std::optional<Vec3> out;
+    for (const Vec3& root : roots) {
+      if (!out || (root - track_m).norm() > (*out - track_m).norm()) out = root;
+    }
+    return out;
+  };
   std::optional<Vec3> mirror;
-  for (const Vec3& root : ClosedFormCandidates(array, tdoa_s)) {
-    if (!root.allFinite()) continue;
-    if ((array.Tdoa(root) - tdoa_s).cwiseAbs().maxCoeff() > kExactShare * sigma_s.minCoeff()) continue;
-    if (!mirror || (root - track_m).norm() > (*mirror - track_m).norm()) mirror = root;
+  if (measured_tdoa_s.size() == 3 && measured_tdoa_s.allFinite()) {
+    // The measured roots apart from the track's own (within 4 sds of it).
+    std::vector<Vec3> roots;
+    for (const Vec3& root : exact_roots(measured_tdoa_s)) {
+      const Vec3 apart_m = root - track_m;
+      const Mat3 both_m2 = track_cov_m2 + TdoaPositionCrlb(array, root, sigma_s);
+      if (apart_m.dot(both_m2.ldlt().solve(apart_m)) > kDistinctMahalanobis2) roots.push_back(root);
+    }
+    if (mirror_.following && track_.following && !roots.empty()) {
+      // Nearest in metres: a root's own bound grows without limit far out, so a Mahalanobis
+      // distance would favour a root a kilometre away.
+      Follower predicted = mirror_;
+      predicted.Predict(t_s, accel_noise_mps2_);
+      double best_m = std::numeric_limits<double>::infinity();
+      for (const Vec3& root : roots) {
+        const double d_m = (root - predicted.mean.head<3>()).norm();
+        if (d_m < best_m) {
+          best_m = d_m;
+          mirror = root;
+        }
+      }
+    } else {
+      mirror = farthest_from_track(roots);
+    }
   }
+  if (!mirror) mirror = farthest_from_track(exact_roots(array.Tdoa(track_m)));
   if (!mirror || !Inside(*mirror, region)) {
     Reset();
     return;

@@ -8,8 +8,17 @@
 // 3-11 m off for 6 s at NIS ~1 claiming 2-20 cm). The particle filter resolves the pair when
 // it holds both from a start; this watch covers the rest.
 //
-// Each updated frame, Update takes the closed form's other exact root of the TDOAs the track
-// predicts at its own mean and follows it with a constant-velocity Kalman filter (the
+// Each updated frame, Update takes the other exact root of the frame's measured TDOAs when it
+// is given them (the update used all three pairs): of the exact roots more than 4 sds from the
+// track, the one nearest (in metres) where the mirror's filter predicts it, or at a start the
+// one farther from the track. Else, or when no measured root qualifies, it takes the other
+// exact root of the TDOAs the track predicts at its own mean. The measured roots carry the
+// pairs' noise, which the mirror's bound below describes; the track's predicted TDOAs carry
+// its own error, which near the branch point moves their other root by metres (campaign scene
+// 33000075: 2.5 m from the source, so the mirror was dropped as no longer distinct from a
+// track 5.5 m off). But pairs on echoes or a fast source make the measured root jump
+// (27000182), so a session runs one watch of each kind and reports whichever is live
+// (session_impl.h). The root is followed with a constant-velocity Kalman filter (the
 // particle filter's white acceleration, accel_noise_mps2), each root measured with the
 // position covariance the pairs' recent delay sigmas allow there. A second such filter
 // follows the track's own mean. When the track jumps onto its mirror's branch (the tracker's
@@ -61,8 +70,10 @@ class MirrorWatch {
   // One updated frame at t_s: the track's mean and position covariance, each pair's recent
   // delay sigma (s; 0 or non-finite: unknown, the fallback is used), the allowed region.
   // Arrays other than 4 sensors (3 pairs) are ignored.
+  // measured_tdoa_s: the frame's three delays when the update used all three (else empty).
   void Update(const ArrayGeometry& array, double t_s, const Vec3& track_m, const Mat3& track_cov_m2,
-              const Eigen::VectorXd& pair_sigma_s, double fallback_sigma_s, const Region& region);
+              const Eigen::VectorXd& measured_tdoa_s, const Eigen::VectorXd& pair_sigma_s, double fallback_sigma_s,
+              const Region& region);
   // The mirror's position and covariance while it is live (above); nothing otherwise.
   struct Mirror {
     Vec3 position_m = Vec3::Zero();

@@ -33,7 +33,8 @@ struct Session::Impl {
         acquisition(std::move(acq)),
         framer(array.sensor_count(), config.frame_samples, config.hop_samples),
         monitor(config.divergence_window),
-        mirror(config.tracker.particle.accel_noise_mps2) {
+        mirror(config.tracker.particle.accel_noise_mps2),
+        measured_mirror(config.tracker.particle.accel_noise_mps2) {
     despike.despike_k = config.despike_k;
     // A coherent impulse reaches every sensor within the aperture's travel time.
     despike.coincidence_samples =
@@ -61,7 +62,7 @@ struct Session::Impl {
   // itself. Catches a track that locked on a wrong position while every test near it passes.
   void Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e);
   // After an updated frame: follows the track's mirror (4-sensor arrays, mirror_watch.h).
-  void WatchMirror(double t_s, double fallback_sigma_s);
+  void WatchMirror(double t_s, double fallback_sigma_s, int pairs_used);
   // Conditions the tracker on this frame, fills e's filter fields, and restarts the tracker
   // through acquisition when the divergence test fires: from the frame's modes and the
   // track's own prediction (`predicted`), equally weighted.
@@ -116,8 +117,14 @@ struct Session::Impl {
   DivergenceMonitor monitor;
   PairSigmaHistory pair_sigmas;       // the recent frames' delay sigmas, for Estimate::far_field
   InnovationConsistency consistency;  // the recent frames' NIS, for Estimate::covariance
-  MirrorWatch mirror;                 // 4-sensor arrays: the track's other exact solution
-  PairClosure closure;                // small arrays: reference pairs checked by the cross pairs
+  // 4-sensor arrays: the track's other exact solution, as the other root of the TDOAs the
+  // track predicts (mirror) and of the frame's measured TDOAs (measured_mirror). Each misses
+  // cases the other covers: near the branch point the track's own error moves its root by
+  // metres (campaign scene 33000075), while pairs on echoes or a fast source make the measured
+  // root jump (27000182). Report covers whichever is live.
+  MirrorWatch mirror;
+  MirrorWatch measured_mirror;
+  PairClosure closure;  // small arrays: reference pairs checked by the cross pairs
   Measurement measurement;
   Eigen::VectorXd delays;
   std::optional<Vec6> single_track_mean;  // the last Report's track, when the tracker held one hypothesis

@@ -136,6 +136,7 @@ bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
   outscored = 0;
   contender.reset();
   mirror.Reset();
+  measured_mirror.Reset();
   frames_since_audit = 0;
   monitor.Reset();
   consistency.Reset();
@@ -152,7 +153,7 @@ void Session::Impl::UpdateAndWatch(const TrackState& predicted, Estimate* e) {
   e->pairs_used = report->pair_count;
   consistency.Add(report->nis, report->pair_count, report->nis_terms);
   if (report->pair_count == 0 || !monitor.Add(report->anchored_nis, report->pair_count, report->anchored_z)) {
-    if (report->pair_count > 0) WatchMirror(e->t_s, report->tdoa_sigma_s);
+    if (report->pair_count > 0) WatchMirror(e->t_s, report->tdoa_sigma_s, report->pair_count);
     return;
   }
   // Diverged: every hypothesis this frame allows, through acquisition (velocity reset too),
@@ -162,7 +163,7 @@ void Session::Impl::UpdateAndWatch(const TrackState& predicted, Estimate* e) {
   if (found.presence.present) e->reinitialised = StartFromModes(WithOwnTrack(found.modes, predicted));
 }
 
-void Session::Impl::WatchMirror(double t_s, double fallback_sigma_s) {
+void Session::Impl::WatchMirror(double t_s, double fallback_sigma_s, int pairs_used) {
   // With several hypotheses the watch follows the heaviest one's mirror, so that it has seen the
   // mirror move by the time one is left (Report uses it only then).
   const std::vector<WeightedBelief> hypotheses = components.tracker->Hypotheses();
@@ -172,8 +173,15 @@ void Session::Impl::WatchMirror(double t_s, double fallback_sigma_s) {
   region.centre_m = array.centroid_m();
   region.radius_m = acquisition.search_radius_m();
   const TrackState& track = hypotheses.front().belief;
-  mirror.Update(array, t_s, track.mean.head<3>(), track.covariance.topLeftCorner<3, 3>(), pair_sigmas.Median(),
-                fallback_sigma_s, region);
+  Eigen::VectorXd measured_s;
+  if (pairs_used == 3 && measurement.pairs.size() == 3) {
+    measured_s.resize(3);
+    for (size_t p = 0; p < 3; ++p) measured_s(static_cast<Eigen::Index>(p)) = measurement.pairs[p].delay_s;
+  }
+  mirror.Update(array, t_s, track.mean.head<3>(), track.covariance.topLeftCorner<3, 3>(), Eigen::VectorXd(),
+                pair_sigmas.Median(), fallback_sigma_s, region);
+  measured_mirror.Update(array, t_s, track.mean.head<3>(), track.covariance.topLeftCorner<3, 3>(), measured_s,
+                         pair_sigmas.Median(), fallback_sigma_s, region);
 }
 
 void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
@@ -266,8 +274,15 @@ void Session::Impl::Report(Estimate* e) {
   };
   if (contender && ++contender_frames > kContenderFrames) contender.reset();
   if (contender) cover(contender->position_m, contender->covariance_m2);
-  if (const std::optional<MirrorWatch::Mirror> m = mirror.Live(); m && hypotheses.size() == 1) {
-    cover(m->position_m, m->covariance_m2);
+  if (hypotheses.size() == 1) {
+    const std::optional<MirrorWatch::Mirror> own = mirror.Live();
+    const std::optional<MirrorWatch::Mirror> measured = measured_mirror.Live();
+    if (own) cover(own->position_m, own->covariance_m2);
+    // The measured one too where it is a position of its own (beyond 4 of the first's sds).
+    if (measured && (!own || (measured->position_m - own->position_m).norm() >
+                                 4.0 * std::sqrt((own->covariance_m2 + measured->covariance_m2).trace()))) {
+      cover(measured->position_m, measured->covariance_m2);
+    }
   }
   e->initialised = true;
   e->state = best.mean;

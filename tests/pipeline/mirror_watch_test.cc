@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <optional>
+#include <random>
 
 #include "engine/array/multilateration.h"
 #include "tests/filters/tdoa_frames.h"
@@ -56,7 +57,7 @@ std::vector<std::optional<MirrorWatch::Mirror>> Follow(const ArrayGeometry& arra
   const Eigen::VectorXd sigma_s = Eigen::VectorXd::Constant(array.pair_count(), kSigmaS);
   for (int f = 0; f < frames; ++f) {
     const Vec3 p = track_at(f);
-    watch.Update(array, f * kHopS, p, TrackCovariance(array, p), sigma_s, kSigmaS, region);
+    watch.Update(array, f * kHopS, p, TrackCovariance(array, p), Eigen::VectorXd(), sigma_s, kSigmaS, region);
     live.push_back(watch.Live());
   }
   return live;
@@ -142,6 +143,33 @@ TEST(MirrorWatch, AMirrorThatJumpsIsNotLive) {
   int live_frames = 0;
   for (const auto& live : Follow(w.array, 40, jumpy)) live_frames += live.has_value();
   EXPECT_EQ(live_frames, 0);
+}
+
+// The frame's measured TDOAs, when given, place the mirror: a track on the wrong branch 3 m
+// further out than the ghost still has its mirror on the source, within a few of the
+// source's bound sds (the measured roots carry the noise that bound describes; the track's own
+// TDOAs carry its error, which near the branch point moves their other root by metres:
+// AcquisitionSession.ATrackMetresOffOnTheOtherBranchKeepsTheSourceAsItsMirror).
+TEST(MirrorWatch, TheMeasuredDelaysPutTheMirrorOnTheSource) {
+  const Walk w = FindWalk();
+  const Vec3 truth_m = w.start_m;
+  const Vec3 ghost_m = *OtherRoot(w.array, truth_m);
+  const Vec3 track_m = ghost_m + 3.0 * ghost_m.normalized();
+  const Eigen::VectorXd sigma_s = Eigen::VectorXd::Constant(3, kSigmaS);
+  const Mat3 bound_m2 = TdoaPositionCrlb(w.array, truth_m, sigma_s);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, kSigmaS);
+  MirrorWatch watch(1.0);
+  for (int f = 0; f < 30; ++f) {
+    Eigen::VectorXd tdoa_s = w.array.Tdoa(truth_m);
+    for (Eigen::Index p = 0; p < 3; ++p) tdoa_s(p) += noise(rng);
+    watch.Update(w.array, f * kHopS, track_m, 4.0 * Mat3::Identity(), tdoa_s, sigma_s, kSigmaS, {});
+    if (f < MirrorWatch::kWindowFrames) continue;
+    const std::optional<MirrorWatch::Mirror> m = watch.Live();
+    ASSERT_TRUE(m) << "frame " << f;
+    const Vec3 off_m = m->position_m - truth_m;
+    EXPECT_LT(off_m.dot(bound_m2.ldlt().solve(off_m)), 25.0) << "frame " << f << ": " << off_m.norm() << " m";
+  }
 }
 
 TEST(MirrorWatch, ArraysOtherThanFourSensorsAreLeftAlone) {
