@@ -82,6 +82,41 @@ Positions Score(const std::vector<Estimate>& estimates, const std::vector<Vec3>&
   return out;
 }
 
+// Two sources' positions, each given to the nearer truth: its ids, errors and range sds, and
+// how many source-frames were heard.
+struct TwoSources {
+  std::set<uint64_t> ids[2];
+  std::vector<double> errors_m[2], sds_m[2];
+  size_t heard = 0;
+};
+
+TwoSources ScoreTwo(const std::vector<Estimate>& estimates, const std::vector<Vec3>& truths_m) {
+  TwoSources out;
+  for (const Estimate& e : estimates) {
+    for (const SourceEstimate& s : e.sources) {
+      if (s.source_present) ++out.heard;
+      if (!s.position_m.allFinite()) continue;
+      const size_t k = (s.position_m - truths_m[0]).norm() < (s.position_m - truths_m[1]).norm() ? 0 : 1;
+      out.ids[k].insert(s.source_id);
+      out.errors_m[k].push_back((s.position_m - truths_m[k]).norm());
+      out.sds_m[k].push_back(s.range_sd_m);
+    }
+  }
+  return out;
+}
+
+// Each source followed under one id of its own, its median error within 3 of its range sds.
+void ExpectTwoIdentitiesWithConsistentPositions(const TwoSources& t, size_t min_positions) {
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_GE(t.errors_m[k].size(), min_positions) << "source " << k;
+    EXPECT_LT(Median(t.errors_m[k]), 3.0 * Median(t.sds_m[k])) << "source " << k;
+    EXPECT_EQ(t.ids[k].size(), 1u) << "source " << k;
+  }
+  if (!t.ids[0].empty() && !t.ids[1].empty()) {
+    EXPECT_NE(*t.ids[0].begin(), *t.ids[1].begin());
+  }
+}
+
 TEST(NearFieldSession, LinearArrayInAStatedPlaneGivesTwoDimensionalPositions) {
   const AudioSessionConfig config = LineConfig();
   auto session = Session::Create(config);
@@ -150,28 +185,11 @@ TEST(NearFieldSession, TwoTalkersGetTwoIdentitiesWithPositions) {
   scene.seconds = 3.0;
   scene.seed = 13;
   const auto estimates = StreamThrough(session->get(), RenderNearFieldScene(scene), 8);
-  std::set<uint64_t> ids_near[2];
-  std::vector<double> errors_m[2], sds_m[2];
-  for (const Estimate& e : estimates) {
-    for (const SourceEstimate& s : e.sources) {
-      if (!s.position_m.allFinite()) continue;
-      const int k = (s.position_m - scene.sources_m[0]).norm() < (s.position_m - scene.sources_m[1]).norm() ? 0 : 1;
-      ids_near[k].insert(s.source_id);
-      errors_m[k].push_back((s.position_m - scene.sources_m[static_cast<size_t>(k)]).norm());
-      sds_m[k].push_back(s.range_sd_m);
-    }
-  }
+  const TwoSources t = ScoreTwo(estimates, scene.sources_m);
   std::printf("two talkers: %zu and %zu positions, median errors %.4f and %.4f m, range sd %.4f and %.4f m\n",
-              errors_m[0].size(), errors_m[1].size(), Median(errors_m[0]), Median(errors_m[1]), Median(sds_m[0]),
-              Median(sds_m[1]));
-  for (int k = 0; k < 2; ++k) {
-    EXPECT_GE(errors_m[k].size(), estimates.size() / 2) << "talker " << k;
-    EXPECT_LT(Median(errors_m[k]), 3.0 * Median(sds_m[k])) << "talker " << k;
-    EXPECT_EQ(ids_near[k].size(), 1u) << "talker " << k;
-  }
-  if (!ids_near[0].empty() && !ids_near[1].empty()) {
-    EXPECT_NE(*ids_near[0].begin(), *ids_near[1].begin());
-  }
+              t.errors_m[0].size(), t.errors_m[1].size(), Median(t.errors_m[0]), Median(t.errors_m[1]),
+              Median(t.sds_m[0]), Median(t.sds_m[1]));
+  ExpectTwoIdentitiesWithConsistentPositions(t, estimates.size() / 2);
 }
 
 // Far beyond the line's reach the frame bounds the direction, not the range: no position,
@@ -258,34 +276,15 @@ TEST(NearFieldSession, AVolumetricArrayStatingSeveralSourcesGivesEachItsPosition
   scene.seconds = 3.0;
   scene.seed = 23;
   const auto estimates = StreamThrough(session->get(), RenderNearFieldScene(scene), 4);
-  std::set<uint64_t> ids_near[2];
-  std::vector<double> errors_m[2], sds_m[2];
-  size_t heard = 0;
-  for (const Estimate& e : estimates) {
-    for (const SourceEstimate& s : e.sources) {
-      if (s.source_present) ++heard;
-      if (!s.position_m.allFinite()) continue;
-      const int k = (s.position_m - scene.sources_m[0]).norm() < (s.position_m - scene.sources_m[1]).norm() ? 0 : 1;
-      ids_near[k].insert(s.source_id);
-      errors_m[k].push_back((s.position_m - scene.sources_m[static_cast<size_t>(k)]).norm());
-      sds_m[k].push_back(s.range_sd_m);
-    }
-  }
+  const TwoSources t = ScoreTwo(estimates, scene.sources_m);
   std::printf(
       "tetrahedron, two sources: heard %zu of %zu source-frames; %zu and %zu positions, median errors "
       "%.4f and %.4f m, range sd %.4f and %.4f m\n",
-      heard, 2 * estimates.size(), errors_m[0].size(), errors_m[1].size(), Median(errors_m[0]), Median(errors_m[1]),
-      Median(sds_m[0]), Median(sds_m[1]));
-  EXPECT_GE(heard, 2 * estimates.size() * 9 / 10);
-  for (int k = 0; k < 2; ++k) {
-    // Each frame's fit on its own: a 4-sensor array bounds these ranges in some frames only.
-    EXPECT_GE(errors_m[k].size(), estimates.size() / 5) << "source " << k;
-    EXPECT_LT(Median(errors_m[k]), 3.0 * Median(sds_m[k])) << "source " << k;
-    EXPECT_EQ(ids_near[k].size(), 1u) << "source " << k;
-  }
-  if (!ids_near[0].empty() && !ids_near[1].empty()) {
-    EXPECT_NE(*ids_near[0].begin(), *ids_near[1].begin());
-  }
+      t.heard, 2 * estimates.size(), t.errors_m[0].size(), t.errors_m[1].size(), Median(t.errors_m[0]),
+      Median(t.errors_m[1]), Median(t.sds_m[0]), Median(t.sds_m[1]));
+  EXPECT_GE(t.heard, 2 * estimates.size() * 9 / 10);
+  // Each frame's fit on its own: a 4-sensor array bounds these ranges in some frames only.
+  ExpectTwoIdentitiesWithConsistentPositions(t, estimates.size() / 5);
 }
 
 TEST(NearFieldSession, MissingConstraintsAreNamed) {
