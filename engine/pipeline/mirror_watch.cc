@@ -139,23 +139,31 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
     return;
   }
   const Mat3 bound_m2 = TdoaPositionCrlb(array, *mirror, sigma_s);
+  // The root's scatter frame to frame follows the TDOA errors the track's filter sees, which
+  // can be far above the pairs' own delay sigmas (impulses, low SNR: campaign scene 22000120,
+  // a root jumping by a metre against a 0.15 m bound, so the mirror never moved "as a source
+  // can"). The follower and the reported mirror use the larger; the distinctness test keeps
+  // the pairs' bound.
+  Eigen::VectorXd seen_sigma_s = sigma_s;
+  for (Eigen::Index p = 0; p < seen_sigma_s.size(); ++p) seen_sigma_s(p) = std::max(seen_sigma_s(p), fallback_sigma_s);
+  const Mat3 noise_m2 = TdoaPositionCrlb(array, *mirror, seen_sigma_s);
   const Vec3 apart_m = *mirror - track_m;
   distinct_ = apart_m.dot((track_cov_m2 + bound_m2).ldlt().solve(apart_m)) > kDistinctMahalanobis2;
-  last_bound_m2_ = bound_m2;
+  last_bound_m2_ = noise_m2;
   last_root_m_ = *mirror;
 
   if (!mirror_.following || !track_.following) {
-    mirror_.Start(t_s, *mirror, bound_m2);
+    mirror_.Start(t_s, *mirror, noise_m2);
     track_.Start(t_s, track_m, track_cov_m2);
     return;
   }
   mirror_.Predict(t_s, accel_noise_mps2_);
   track_.Predict(t_s, accel_noise_mps2_);
   // The track jumped onto the mirror's branch: each filter now follows the other branch.
-  const double kept2 = mirror_.Distance2(*mirror, bound_m2) + track_.Distance2(track_m, track_cov_m2);
-  const double swapped2 = track_.Distance2(*mirror, bound_m2) + mirror_.Distance2(track_m, track_cov_m2);
+  const double kept2 = mirror_.Distance2(*mirror, noise_m2) + track_.Distance2(track_m, track_cov_m2);
+  const double swapped2 = track_.Distance2(*mirror, noise_m2) + mirror_.Distance2(track_m, track_cov_m2);
   if (swapped2 < kept2) std::swap(mirror_, track_);
-  mirror_.Update(*mirror, bound_m2);
+  mirror_.Update(*mirror, noise_m2);
   track_.Update(track_m, track_cov_m2);
 }
 

@@ -67,10 +67,12 @@ class MirrorWatch {
   // Update follows the mirror of whatever track it is given. A session whose tracker holds
   // several hypotheses gives it the heaviest one's, so that the mirror has been seen moving
   // by the time the tracker keeps one hypothesis.
-  // One updated frame at t_s: the track's mean and position covariance, each pair's recent
-  // delay sigma (s; 0 or non-finite: unknown, the fallback is used), the allowed region.
-  // Arrays other than 4 sensors (3 pairs) are ignored.
-  // measured_tdoa_s: the frame's three delays when the update used all three (else empty).
+  // One updated frame at t_s: the track's mean and position covariance, the frame's three
+  // measured delays when the update used all three (else empty), each pair's recent delay
+  // sigma (s; 0 or non-finite: unknown, the fallback is used), the TDOA noise the track's
+  // filter assumes (fallback_sigma_s, s: also a floor on the noise of the mirror's root, which
+  // scatters with the errors the filter sees), the allowed region. Arrays other than 4
+  // sensors (3 pairs) are ignored.
   void Update(const ArrayGeometry& array, double t_s, const Vec3& track_m, const Mat3& track_cov_m2,
               const Eigen::VectorXd& measured_tdoa_s, const Eigen::VectorXd& pair_sigma_s, double fallback_sigma_s,
               const Region& region);

@@ -178,10 +178,11 @@ void Session::Impl::WatchMirror(double t_s, double fallback_sigma_s, int pairs_u
     measured_s.resize(3);
     for (size_t p = 0; p < 3; ++p) measured_s(static_cast<Eigen::Index>(p)) = measurement.pairs[p].delay_s;
   }
-  mirror.Update(array, t_s, track.mean.head<3>(), track.covariance.topLeftCorner<3, 3>(), Eigen::VectorXd(),
-                pair_sigmas.Median(), fallback_sigma_s, region);
-  measured_mirror.Update(array, t_s, track.mean.head<3>(), track.covariance.topLeftCorner<3, 3>(), measured_s,
-                         pair_sigmas.Median(), fallback_sigma_s, region);
+  const Eigen::VectorXd sigma_s = pair_sigmas.Median();
+  mirror.Update(array, t_s, track.mean.head<3>(), track.covariance.topLeftCorner<3, 3>(), Eigen::VectorXd(), sigma_s,
+                fallback_sigma_s, region);
+  measured_mirror.Update(array, t_s, track.mean.head<3>(), track.covariance.topLeftCorner<3, 3>(), measured_s, sigma_s,
+                         fallback_sigma_s, region);
 }
 
 void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
