@@ -111,27 +111,34 @@ TEST_F(AdmissionTest, LocateCallsBeyondTheConcurrencyLimitAreRefusedAtOnce) {
   wire::EncodeBlock(
       {1, s.sim.channel_count, static_cast<int64_t>(samples.size()) / s.sim.channel_count, samples.data()},
       /*pcm16=*/false, request.mutable_block());
-  std::vector<std::future<grpc::Status>> calls;
-  for (int i = 0; i < 8; ++i) {
-    calls.push_back(std::async(std::launch::async, [&] {
-      auto stub = v1::Localizer::NewStub(channel_);
-      grpc::ClientContext context;
-      v1::LocateResponse response;
-      return stub->Locate(&context, request, &response);
-    }));
-  }
-  int ok = 0, refused = 0;
-  for (auto& call : calls) {
-    const grpc::Status status = call.get();
-    if (status.ok()) ++ok;
-    if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
-      ++refused;
-      EXPECT_NE(status.error_message().find("--max-concurrent-locate"), std::string::npos) << status.error_message();
+  // Eight at once against a limit of one. On a loaded machine the eight threads can start so
+  // far apart that each call ends before the next arrives (seen once in a full ctest -j2), so
+  // up to five rounds: every call of every round is answered, and some round refuses one.
+  int refused_rounds = 0;
+  for (int round = 0; round < 5 && refused_rounds == 0; ++round) {
+    std::vector<std::future<grpc::Status>> calls;
+    for (int i = 0; i < 8; ++i) {
+      calls.push_back(std::async(std::launch::async, [&] {
+        auto stub = v1::Localizer::NewStub(channel_);
+        grpc::ClientContext context;
+        v1::LocateResponse response;
+        return stub->Locate(&context, request, &response);
+      }));
     }
+    int ok = 0, refused = 0;
+    for (auto& call : calls) {
+      const grpc::Status status = call.get();
+      if (status.ok()) ++ok;
+      if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
+        ++refused;
+        EXPECT_NE(status.error_message().find("--max-concurrent-locate"), std::string::npos) << status.error_message();
+      }
+    }
+    EXPECT_GE(ok, 1) << "round " << round;
+    EXPECT_EQ(ok + refused, 8) << "round " << round;  // every call answered, none failed otherwise
+    refused_rounds += refused > 0;
   }
-  EXPECT_GE(ok, 1);
-  EXPECT_EQ(ok + refused, 8);  // every call answered, none failed otherwise
-  EXPECT_GE(refused, 1);       // eight at once against a limit of one
+  EXPECT_EQ(refused_rounds, 1);  // the limit refused calls beyond it
 }
 
 }  // namespace
