@@ -83,14 +83,8 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
   }
   if (!(sigma_s.minCoeff() > 0.0)) return;
 
-  // The other exact root: of the frame's measured TDOAs when given (of those apart from the
-  // track, the one nearest where the mirror's filter predicts it, or at a start the one
-  // farther from the track), else of the track's predicted TDOAs (the one farther from the
-  // track). The measured roots carry the
-  // pairs' noise that bound_m2 describes; the track's predicted TDOAs carry the track's own
-  // error, which near the branch point moves their other root by metres (campaign scene
-  // 33000075: that root 2.5 m from the truth, so the mirror was dropped as no longer
-  // distinct from a track 5.5 m off).
+  // The other exact root: of the measured TDOAs when given, else of the track's (the header
+  // says which and why).
   const auto exact_roots = [&](const Eigen::VectorXd& tdoa_s) {
     std::vector<Vec3> out;
     for (const Vec3& root : ClosedFormCandidates(array, tdoa_s)) {
@@ -139,17 +133,16 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
     return;
   }
   const Mat3 bound_m2 = TdoaPositionCrlb(array, *mirror, sigma_s);
-  // The root's scatter frame to frame follows the TDOA errors the track's filter sees, which
-  // can be far above the pairs' own delay sigmas (impulses, low SNR: campaign scene 22000120,
-  // a root jumping by a metre against a 0.15 m bound, so the mirror never moved "as a source
-  // can"). The follower and the reported mirror use the larger; the distinctness test keeps
-  // the pairs' bound.
+  // The root scatters with the TDOA errors the track's filter sees, which can be far above the
+  // pairs' own delay sigmas (impulses, low SNR: campaign scene 22000120, a root jumping by a
+  // metre against a 0.15 m bound). The follower and the reported mirror use the larger; the
+  // distinctness test keeps the pairs' bound.
   Eigen::VectorXd seen_sigma_s = sigma_s;
   for (Eigen::Index p = 0; p < seen_sigma_s.size(); ++p) seen_sigma_s(p) = std::max(seen_sigma_s(p), fallback_sigma_s);
   const Mat3 noise_m2 = TdoaPositionCrlb(array, *mirror, seen_sigma_s);
   const Vec3 apart_m = *mirror - track_m;
   distinct_ = apart_m.dot((track_cov_m2 + bound_m2).ldlt().solve(apart_m)) > kDistinctMahalanobis2;
-  last_bound_m2_ = noise_m2;
+  last_noise_m2_ = noise_m2;
   last_root_m_ = *mirror;
 
   if (!mirror_.following || !track_.following) {
@@ -172,7 +165,7 @@ std::optional<MirrorWatch::Mirror> MirrorWatch::Live() const {
   // The window holds the last kWindowFrames NIS values once frames >= kWindowFrames.
   const double window_nis = std::accumulate(mirror_.nis.begin(), mirror_.nis.end(), 0.0);
   if (!(window_nis <= kWindowNisMax)) return std::nullopt;
-  return Mirror{last_root_m_, last_bound_m2_};
+  return Mirror{last_root_m_, last_noise_m2_};
 }
 
 }  // namespace localizer::engine

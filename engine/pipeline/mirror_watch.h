@@ -104,7 +104,7 @@ class MirrorWatch {
   Follower mirror_;
   Follower track_;
   bool distinct_ = false;
-  Mat3 last_bound_m2_ = Mat3::Zero();
+  Mat3 last_noise_m2_ = Mat3::Zero();
   Vec3 last_root_m_ = Vec3::Zero();
 };
 

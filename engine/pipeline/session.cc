@@ -153,11 +153,8 @@ StatusOr<Resolved> Resolve(const AudioSessionConfig& config) {
   }
   // A volumetric array follows one source with its tracker unless the config states
   // several (max_sources >= 2): then each source by direction, with its own position.
+  // (No side or plane is needed, so nothing more to check here: DirectionStage builds the fit.)
   const bool several = volumetric && localization == Localization::kPosition && config.max_sources >= 2;
-  if (several) {
-    auto locator = NearFieldLocator::Create(config.sensors_m, NearFieldOptionsFor(config));
-    if (!locator.ok()) return InvalidArgument(locator.status().message());
-  }
   if (localization == Localization::kPosition && !volumetric) {
     const size_t needed = linear ? 3 : 4;
     if (config.sensors_m.size() < needed) {

@@ -279,7 +279,8 @@ void Session::Impl::Report(Estimate* e) {
     const std::optional<MirrorWatch::Mirror> own = mirror.Live();
     const std::optional<MirrorWatch::Mirror> measured = measured_mirror.Live();
     if (own) cover(own->position_m, own->covariance_m2);
-    // The measured one too where it is a position of its own (beyond 4 of the first's sds).
+    // The measured one too where it is a position of its own: farther from the first than 4 x
+    // the root of their covariances' summed trace.
     if (measured && (!own || (measured->position_m - own->position_m).norm() >
                                  4.0 * std::sqrt((own->covariance_m2 + measured->covariance_m2).trace()))) {
       cover(measured->position_m, measured->covariance_m2);
