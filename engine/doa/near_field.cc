@@ -147,7 +147,13 @@ double NearFieldLocator::Lag(int i, int j, const Vec3& position_m, Vec3* gradien
   return (di - dj) * per_m;
 }
 
-NearFieldLocator::Probe NearFieldLocator::ProbeAt(const PairSpectra& spectra, const Vec3& position_m) const {
+double NearFieldLocator::PairLag(const PairSpectra& spectra, int p, const Vec3& position_m) const {
+  const auto [i, j] = spectra.sensors_of(p);
+  return Lag(i, j, position_m, nullptr);
+}
+
+NearFieldLocator::Probe NearFieldLocator::ProbeAt(const PairSpectra& spectra, const Vec3& position_m,
+                                                  Spectrum read) const {
   Probe out;
   out.position_m = position_m;
   out.pairs.reserve(static_cast<size_t>(spectra.pair_count()));
@@ -155,7 +161,7 @@ NearFieldLocator::Probe NearFieldLocator::ProbeAt(const PairSpectra& spectra, co
     const auto [i, j] = spectra.sensors_of(p);
     Vec3 gradient_m;
     const double lag = Lag(i, j, position_m, &gradient_m);
-    const PairSpectra::Value v = spectra.WholeValueAt(p, lag);
+    const PairSpectra::Value v = read == Spectrum::kWhole ? spectra.WholeValueAt(p, lag) : spectra.At(p, lag);
     const Eigen::Vector3d g = basis_.transpose() * gradient_m;
     out.value += v.r;
     out.gradient += v.dr * g;
@@ -167,6 +173,7 @@ NearFieldLocator::Probe NearFieldLocator::ProbeAt(const PairSpectra& spectra, co
 
 NearFieldFix NearFieldLocator::Bound(const PairSpectra& spectra, const Probe& fit) const {
   NearFieldFix fix;
+  fix.fitted_m = fit.position_m;
   const Vec3 line_m = fit.position_m - shape_.centroid_m;
   fix.range_m = line_m.norm();
   const double noise_var = spectra.noise_sigma() * spectra.noise_sigma();
@@ -239,11 +246,11 @@ std::vector<Vec3> NearFieldLocator::CandidateDirections(const Vec3& u) const {
   return out;
 }
 
-NearFieldFix NearFieldLocator::Locate(const PairSpectra& spectra, const Measurement& whole_field,
-                                      const Vec3& direction) const {
+NearFieldFix NearFieldLocator::Locate(const PairSpectra& spectra, const Measurement& field, const Vec3& direction,
+                                      Spectrum read) const {
   Vec3 u = direction;
   if (free_ == 2) u = u - u.dot(basis_.col(2)) * basis_.col(2);  // into the plane
-  if (!(u.norm() > 0.0) || !u.allFinite() || whole_field.pairs.size() != static_cast<size_t>(spectra.pair_count())) {
+  if (!(u.norm() > 0.0) || !u.allFinite() || field.pairs.size() != static_cast<size_t>(spectra.pair_count())) {
     return NearFieldFix{};
   }
   u.normalize();
@@ -259,7 +266,7 @@ NearFieldFix NearFieldLocator::Locate(const PairSpectra& spectra, const Measurem
     double range_m = min_range_m_;
     for (int k = 0; k < kRaySteps; ++k, range_m *= ratio) {
       const Vec3 p_m = shape_.centroid_m + range_m * directions[d];
-      const double value = CoarseSpectrum(spectra, whole_field, p_m);
+      const double value = CoarseSpectrum(spectra, field, p_m);
       for (int s = d == 0 ? 0 : 1; s < 2; ++s) {
         if (value > best_coarse[s]) {
           best_coarse[s] = value;
@@ -275,7 +282,7 @@ NearFieldFix NearFieldLocator::Locate(const PairSpectra& spectra, const Measurem
   best.value = -std::numeric_limits<double>::infinity();
   const int starts = (starts_m[0] - starts_m[1]).norm() > 1e-9 ? 2 : 1;  // the window's best may be on u
   for (int k = 0; k < starts; ++k) {
-    Probe here = ProbeAt(spectra, starts_m[k]);
+    Probe here = ProbeAt(spectra, starts_m[k], read);
     for (int iteration = 0; iteration < kIterations; ++iteration) {
       Eigen::Matrix3d hessian = here.hessian;
       Eigen::Vector3d gradient = here.gradient;
@@ -294,7 +301,7 @@ NearFieldFix NearFieldLocator::Locate(const PairSpectra& spectra, const Measurem
       for (int halving = 0; halving < 6 && !moved; ++halving, step *= 0.5) {
         const Vec3 next_m = PositionOf(CoordinatesOf(here.position_m) + step);
         if (!OnSide(next_m)) continue;
-        Probe there = ProbeAt(spectra, next_m);
+        Probe there = ProbeAt(spectra, next_m, read);
         if (there.value >= here.value) {
           here = std::move(there);
           moved = true;

@@ -7,8 +7,9 @@
 // Model. A source at p reaches sensor m after |p - m| / c, so pair (i, j) (PairSpectra's
 // order) peaks at lag_p(p) = (|p - m_i| - |p - m_j|) fs / c samples. The near-field
 // spectrum S(p) = sum_p R_p(lag_p(p)), R_p the pair's GCC-PHAT from the frame's whole
-// spectrum (PairSpectra::WholeAt: no source removed), is maximised near the direction u the
-// far-field search gave (from the array's centroid c):
+// spectrum (PairSpectra::WholeAt: no source removed) or, for one source among several, from
+// the spectrum with the others removed (Spectrum::kCurrent), is maximised near the direction
+// u the far-field search gave (from the array's centroid c):
 //   1. a coarse grid, from the frame's sampled GCC (linear interpolation between lags): at
 //      32 ranges, geometric from min_range_m to max_range_m, along u and along every
 //      direction of a window about it (linear arrays: cone angles within 30 degrees, 2
@@ -78,6 +79,9 @@ struct NearFieldFix {
   Mat3 covariance_m2 = Mat3::Constant(kNan);
   double range_m = kNan;     // of the fit from the centroid (also when far field)
   double range_sd_m = kNan;  // its standard deviation (above); NaN when it cannot be computed
+  // Where the fit ended, also when far field (NaN when there was no fit): the lags there are
+  // the ones that best describe the source's peaks in this frame (PairLag).
+  Vec3 fitted_m = Vec3::Constant(kNan);
 };
 
 class NearFieldLocator {
@@ -92,11 +96,24 @@ class NearFieldLocator {
   // the stated side.
   Vec3 DirectionAt(double cone_angle_rad) const;
 
+  // Which spectrum a fit reads.
+  enum class Spectrum {
+    kWhole,    // the frame's whole spectrum (PairSpectra::WholeValueAt): no source removed
+    kCurrent,  // the spectra as they are now (PairSpectra::At): the caller removed the other
+               // sources heard in the frame, so that their peaks do not add to this one's S
+               // (two sources 1.8 apertures away: each fit summed the other's GCC, and its
+               // range sd was optimistic by about 2x; ACCURACY.md)
+  };
+
   // The source heard near unit direction `direction` (from the centroid) in `spectra`'s last
-  // analysed frame, which must be of this array's sensors in the same order; `whole_field`
-  // that frame's sampled GCC (SrpPhat::whole_field). No fit (all NaN) when the field does
-  // not match the spectra or the direction is not finite.
-  NearFieldFix Locate(const PairSpectra& spectra, const Measurement& whole_field, const Vec3& direction) const;
+  // analysed frame, which must be of this array's sensors in the same order; `field` the
+  // sampled GCC of the spectrum read (kWhole: SrpPhat::whole_field; kCurrent: what
+  // PairSpectra::FillFields gives). No fit (all NaN) when the field does not match the
+  // spectra or the direction is not finite.
+  NearFieldFix Locate(const PairSpectra& spectra, const Measurement& field, const Vec3& direction,
+                      Spectrum read = Spectrum::kWhole) const;
+  // Pair p's lag (samples, PairSpectra's order and sign) for a source at position_m.
+  double PairLag(const PairSpectra& spectra, int p, const Vec3& position_m) const;
 
  private:
   NearFieldLocator() = default;
@@ -119,7 +136,7 @@ class NearFieldLocator {
     Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
     std::vector<PairTerm> pairs;
   };
-  Probe ProbeAt(const PairSpectra& spectra, const Vec3& position_m) const;
+  Probe ProbeAt(const PairSpectra& spectra, const Vec3& position_m, Spectrum read) const;
   double CoarseSpectrum(const PairSpectra& spectra, const Measurement& field, const Vec3& position_m) const;
   std::vector<Vec3> CandidateDirections(const Vec3& u) const;              // u first, then its window
   double Lag(int i, int j, const Vec3& position_m, Vec3* gradient) const;  // samples; d lag / d position

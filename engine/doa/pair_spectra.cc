@@ -312,6 +312,12 @@ void PairSpectra::RestoreDelay(int p, double lag_samples, const std::vector<std:
   }
 }
 
+void PairSpectra::ResetToWhole() {
+  if (frames_analysed_ == 0) return;
+  const std::vector<std::vector<std::complex<double>>>& whole = history_[newest_];
+  for (size_t p = 0; p < g_.size(); ++p) std::copy(whole[p].begin(), whole[p].end(), g_[p].begin());
+}
+
 double PairSpectra::WholeAt(int p, double lag_samples, bool previous) const {
   const size_t back = previous ? history_.size() - 1 : 0;
   if (frames_analysed_ <= static_cast<int64_t>(back)) return 0.0;

@@ -75,6 +75,10 @@ class PairSpectra {
   void RemoveDelay(int p, double lag_samples, std::vector<std::complex<double>>* taken);
   // Adds back a component RemoveDelay took (the same lag and amplitudes).
   void RestoreDelay(int p, double lag_samples, const std::vector<std::complex<double>>& taken);
+  // Every pair's spectrum back to the last analysed frame's whole one (no source removed),
+  // so that a caller can remove a chosen set of sources (near-field fits of one source among
+  // several, near_field.h). No-op before the first frame.
+  void ResetToWhole();
   // Rewrites `field` (as Analyse filled it) from the current spectra: one inverse FFT per pair.
   void FillFields(Measurement* field);
   // The last analysed frame's in-band power: the mean of |X_c(k)|^2 over the sensors and the

@@ -149,6 +149,9 @@ class SrpPhat {
   double band_power() const { return spectra_.band_power(); }
   // The pair spectra of the last analysed frame (near-field fits read its whole spectrum).
   const PairSpectra& spectra() const { return spectra_; }
+  // The same, to remove chosen sources from (near-field fits of one source among several).
+  // What the caller changes is what Statistic() reads until the next Analyse.
+  PairSpectra& mutable_spectra() { return spectra_; }
   // With SrpOptions::keep_whole_field, the last analysed frame's GCC of every pair at
   // integer lags before any source was removed (PairSpectra::Analyse's field): near-field
   // fits' coarse search reads it. Empty otherwise.

@@ -65,10 +65,11 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
       new DirectionStage(std::move(made).value(), std::move(tracker).value(), std::move(near)));
 }
 
-void DirectionStage::Locate(SourceEstimate* source) const {
-  const Vec3 direction =
-      std::isfinite(source->cone_angle_rad) ? near_->DirectionAt(source->cone_angle_rad) : source->direction;
-  const NearFieldFix fix = near_->Locate(srp_.spectra(), srp_.whole_field(), direction);
+Vec3 DirectionStage::FitDirection(const SourceEstimate& source) const {
+  return std::isfinite(source.cone_angle_rad) ? near_->DirectionAt(source.cone_angle_rad) : source.direction;
+}
+
+void DirectionStage::Apply(const NearFieldFix& fix, SourceEstimate* source) const {
   source->range_sd_m = fix.range_sd_m;
   if (!fix.near_field) return;
   source->position_m = fix.position_m;
@@ -83,6 +84,43 @@ void DirectionStage::Locate(SourceEstimate* source) const {
     source->direction = u;
     source->azimuth_rad = AzimuthRad(u);
     source->elevation_rad = ElevationRad(u);
+  }
+}
+
+void DirectionStage::LocateHeard(Estimate* e, size_t first) {
+  heard_.clear();
+  directions_.clear();
+  fixes_.clear();
+  for (size_t j = first; j < e->sources.size(); ++j) {
+    if (!e->sources[j].source_present) continue;
+    heard_.push_back(j);
+    directions_.push_back(FitDirection(e->sources[j]));
+    fixes_.push_back(near_->Locate(srp_.spectra(), srp_.whole_field(), directions_.back()));
+  }
+  if (heard_.size() >= 2) RefitAmongOthers();
+  for (size_t k = 0; k < heard_.size(); ++k) Apply(fixes_[k], &e->sources[heard_[k]]);
+}
+
+void DirectionStage::RefitAmongOthers() {
+  PairSpectra& spectra = srp_.mutable_spectra();
+  const int pairs = spectra.pair_count();
+  const Vec3& centroid_m = near_->shape().centroid_m;
+  // Each source's lags from its first fit's end point (its direction's plane wave without a fit).
+  lags_.assign(heard_.size() * static_cast<size_t>(pairs), 0.0);
+  for (size_t k = 0; k < heard_.size(); ++k) {
+    const Vec3 at_m =
+        fixes_[k].fitted_m.allFinite() ? fixes_[k].fitted_m : Vec3(centroid_m + kPlaneWaveRange_m * directions_[k]);
+    for (int p = 0; p < pairs; ++p) lags_[k * pairs + p] = near_->PairLag(spectra, p, at_m);
+  }
+  residual_field_ = srp_.whole_field();  // FillFields rewrites its pairs' lags (same sizes every frame)
+  for (size_t k = 0; k < heard_.size(); ++k) {
+    spectra.ResetToWhole();
+    for (size_t other = 0; other < heard_.size(); ++other) {
+      if (other == k) continue;
+      for (int p = 0; p < pairs; ++p) spectra.RemoveDelay(p, lags_[other * pairs + p], &taken_);
+    }
+    spectra.FillFields(&residual_field_);
+    fixes_[k] = near_->Locate(spectra, residual_field_, directions_[k], NearFieldLocator::Spectrum::kCurrent);
   }
 }
 
@@ -123,10 +161,7 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
       }
     }
   }
-  if (!near_) return;
-  for (size_t j = first; j < e->sources.size(); ++j) {
-    if (e->sources[j].source_present) Locate(&e->sources[j]);
-  }
+  if (near_) LocateHeard(e, first);
 }
 
 }  // namespace localizer::engine

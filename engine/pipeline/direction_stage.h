@@ -5,6 +5,9 @@
 // (engine/doa/direction_tracker.h), and the estimate lists the sources it follows. With
 // positions, each source heard in the frame also gets a near-field fit near its direction
 // (engine/doa/near_field.h): SourceEstimate::position_m where the frame bounds its range.
+// With several sources heard in a frame, each is fitted again on the spectrum with the others
+// removed at the lags of their first fits (PairSpectra::RemoveDelay): on the whole spectrum a
+// fit also sums the other sources' peaks.
 //
 // Per frame: up to config.max_sources peaks, each above the threshold set by
 // config.presence_false_alarm per search; the tracker associates them with its tracks
@@ -19,6 +22,7 @@
 // board) plus the tracker's, tens of microseconds for a few tracks. Not thread-safe.
 #pragma once
 
+#include <complex>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -52,11 +56,31 @@ class DirectionStage {
  private:
   DirectionStage(SrpPhat srp, DirectionTracker tracker, std::optional<NearFieldLocator> near)
       : srp_(std::move(srp)), tracker_(std::move(tracker)), near_(std::move(near)) {}
-  void Locate(SourceEstimate* source) const;  // near-field fit of a heard source
+  // Where a heard source's near-field fit looks (linear arrays: the cone angle's direction in
+  // the plane).
+  Vec3 FitDirection(const SourceEstimate& source) const;
+  void Apply(const NearFieldFix& fix, SourceEstimate* source) const;
+  // Near-field fits of the heard sources among e->sources[first...]: on the whole spectrum,
+  // then, with two or more, RefitAmongOthers.
+  void LocateHeard(Estimate* e, size_t first);
+  // Each heard source fitted again with the others removed from the spectrum.
+  void RefitAmongOthers();
+
+  // A source without a fit is removed at the lags of a plane wave: a point this far along
+  // its direction gives them to well under 1e-6 samples for any array that fits in a room.
+  static constexpr double kPlaneWaveRange_m = 1e5;
+
   SrpPhat srp_;
   DirectionTracker tracker_;
   std::optional<NearFieldLocator> near_;  // sessions with positions
   std::vector<SourceTrack> tracks_;
+  // Per frame scratch of LocateHeard (heard_[k]: the index in Estimate::sources).
+  std::vector<size_t> heard_;
+  std::vector<Vec3> directions_;
+  std::vector<NearFieldFix> fixes_;
+  std::vector<double> lags_;  // source k, pair p: lags_[k * pairs + p]
+  Measurement residual_field_;
+  std::vector<std::complex<double>> taken_;
 };
 
 }  // namespace localizer::engine

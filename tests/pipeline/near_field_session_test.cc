@@ -284,7 +284,9 @@ TEST(NearFieldSession, AVolumetricArrayStatingSeveralSourcesGivesEachItsPosition
       Median(t.errors_m[1]), Median(t.sds_m[0]), Median(t.sds_m[1]));
   EXPECT_GE(t.heard, 2 * estimates.size() * 9 / 10);
   // Each frame's fit on its own: a 4-sensor array bounds these ranges in some frames only.
-  ExpectTwoIdentitiesWithConsistentPositions(t, estimates.size() / 5);
+  // Fitted on the whole spectrum (the other source's peaks summed in), the second source had a
+  // position in 27 of 87 frames; fitted with the other removed, in 57.
+  ExpectTwoIdentitiesWithConsistentPositions(t, estimates.size() / 3);
 }
 
 TEST(NearFieldSession, MissingConstraintsAreNamed) {
