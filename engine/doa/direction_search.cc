@@ -15,10 +15,19 @@ constexpr int kRefineIterations = 8;  // Newton takes 3-4 on a peak
 constexpr int kHalvings = 3;
 constexpr double kConverged_rad = 1e-5;  // far below any array's direction bound
 constexpr int kReestimations = 2;
+// Search starts closer than this to an end point already reached are not refined (about
+// three root radii of the 8192 roots).
+constexpr double kSameStartRad = 0.12;
 
 }  // namespace
 
+double SrpPhat::Apart(const Cell& a, const Cell& b) const {
+  if (linear()) return std::abs(a.theta_rad - b.theta_rad);
+  return std::atan2(a.u.cross(b.u).norm(), a.u.dot(b.u));
+}
+
 bool SrpPhat::Search(Cell* best) {
+  starts_.clear();
   const std::vector<Cell>& roots = roots_;
   if (!roots.empty() && Leaf(roots.front())) {  // a plain grid: every root is a leaf
     double best_value = -std::numeric_limits<double>::infinity();
@@ -67,6 +76,11 @@ bool SrpPhat::Search(Cell* best) {
   if (!found && !open.empty()) {  // out of budget before any leaf: the most promising cell
     *best = open.top();
     found = true;
+    open.pop();
+    while (!open.empty() && static_cast<int>(starts_.size()) + 1 < options_.search_starts) {
+      starts_.push_back(open.top());
+      open.pop();
+    }
   }
   return found;
 }
@@ -226,6 +240,24 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
     if (!Search(&best)) break;
     double statistic = 0.0;
     best = Refine(best, &statistic);
+    ends_.assign(1, best);
+    for (const Cell& start : starts_) {  // in decreasing bound
+      // No point of this cell (nor of the later ones) can beat the statistic: its bound, on
+      // the sampled field, times the margin the continuous GCC can exceed its samples by.
+      if (start.bound * interpolation_margin_ <= statistic) break;
+      // The largest bounds crowd about a peak: a start beside an end point already reached
+      // would climb to it again.
+      if (std::any_of(ends_.begin(), ends_.end(), [&](const Cell& end) { return Apart(start, end) < kSameStartRad; }))
+        continue;
+      double other = 0.0;
+      const Cell refined = Refine(start, &other);
+      ends_.push_back(refined);
+      if (other > statistic) {
+        statistic = other;
+        best = refined;
+      }
+    }
+    starts_.clear();
     if (!(statistic >= threshold_)) break;
     if (!found.empty() && statistic < options_.min_relative_statistic * found.front().statistic) break;
     found.push_back({best, found.size(), statistic, found.empty()});

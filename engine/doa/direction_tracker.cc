@@ -33,6 +33,7 @@ Status DirectionTrackerOptions::Validate() const {
     return InvalidArgument("remember_identity_s must be finite and >= 0");
   if (!(min_lead_share >= 0.0 && min_lead_share <= 1.0)) return InvalidArgument("min_lead_share must be in [0, 1]");
   if (persistent_leader_frames < 0) return InvalidArgument("persistent_leader_frames must be >= 0");
+  if (!(co_lead_share >= 0.0 && co_lead_share <= 1.0)) return InvalidArgument("co_lead_share must be in [0, 1]");
   if (!(coast_rate_decay_s >= 0.0) || !std::isfinite(coast_rate_decay_s))
     return InvalidArgument("coast_rate_decay_s must be finite and >= 0");
   return Status::Ok();  // confirm_hits / confirm_window: TwsOptions::Validate names them
@@ -124,10 +125,13 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
   const Vec3 riser_u = riser ? UnitOf(*riser) : Vec3::Zero();
   uint64_t riser_track = 0;
   double riser_d2 = kSameSourceGate;
-  // The track that took the frame's strongest peak (plots_ keep the peaks' order: strongest
-  // first): the hit track nearest it.
-  uint64_t leader = 0;
-  double leader_d2 = kSameSourceGate;
+  // The tracks that led: for the frame's strongest peak (plots_ keep the peaks' order:
+  // strongest first) and each peak of at least co_lead_share of its statistic, the hit track
+  // nearest it.
+  std::vector<uint64_t>& leaders = leaders_;
+  leaders.assign(plots_.size(), 0);
+  std::vector<double>& leader_d2 = leader_d2_;
+  leader_d2.assign(plots_.size(), kSameSourceGate);
   for (const tws::TrackReport& r : reports_) {
     Lineage& l = lineage_[r.id];
     const bool born = l.reported_id == 0;
@@ -142,13 +146,18 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
       const double d2 = SameSourceD2(u, riser_u);
       if (d2 < riser_d2) riser_d2 = d2, riser_track = r.id;
     }
-    if (hit && !plots_.empty()) {
-      const double d2 = SameSourceD2(u, plots_.front().position_m);
-      if (d2 < leader_d2) leader_d2 = d2, leader = r.id;
+    for (size_t k = 0; hit && k < plots_.size(); ++k) {
+      if (k > 0 && !(options_.co_lead_share > 0.0 && plot_share_[k] >= options_.co_lead_share)) continue;
+      const double d2 = SameSourceD2(u, plots_[k].position_m);
+      if (d2 < leader_d2[k]) leader_d2[k] = d2, leaders[k] = r.id;
     }
   }
   if (riser_track != 0) lineage_[riser_track].anchor = riser_u, lineage_[riser_track].anchor_s = t_s;
-  if (leader != 0) ++lineage_[leader].leads;
+  std::sort(leaders.begin(), leaders.end());
+  leaders.erase(std::unique(leaders.begin(), leaders.end()), leaders.end());
+  for (uint64_t id : leaders) {
+    if (id != 0) ++lineage_[id].leads;
+  }
   // A track confirmed now, where another's source was last heard, is that source resuming:
   // it joins that track's identity.
   for (const tws::TrackReport& r : reports_) {
@@ -218,6 +227,20 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   leader_u_ = first_u;
   const bool persistent =
       options_.persistent_leader_frames > 0 && leader_run_ >= options_.persistent_leader_frames && may_start;
+  // The same for the frame's second peak while it holds at least co_lead_share of the
+  // strongest's statistic: a steady source beside a louder one ("Leading").
+  const bool second_counts = options_.co_lead_share > 0.0 && peaks.size() > 1 && peaks.front().statistic > 0.0 &&
+                             peaks[1].statistic >= options_.co_lead_share * peaks.front().statistic;
+  const Vec3 second_u = second_counts ? UnitOf(peaks[1]) : Vec3::Constant(DirectionPeak::kNan);
+  const bool same_second = second_run_ > 0 && SameSourceD2(second_u_, second_u) < kSameSourceGate;
+  second_run_ = !second_u.allFinite() ? 0 : same_second ? second_run_ + 1 : 1;
+  second_u_ = second_u;
+  const bool persistent_second =
+      options_.persistent_leader_frames > 0 && second_run_ >= options_.persistent_leader_frames && may_start;
+  const bool persistent_second_starts =
+      persistent_second && std::none_of(reports_.begin(), reports_.end(), [&](const tws::TrackReport& r) {
+        return r.position_m.norm() > 0.0 && SameSourceD2(r.position_m.normalized(), second_u) < 4.0 * kSameSourceGate;
+      });
   // It may resume a silent track, and start one only where no track of the last frame
   // (tentative too) lies within twice the gate.
   const bool persistent_starts =
@@ -225,12 +248,15 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
         return r.position_m.norm() > 0.0 && SameSourceD2(r.position_m.normalized(), first_u) < 4.0 * kSameSourceGate;
       });
   plots_.clear();
+  plot_share_.clear();
   for (const DirectionPeak& peak : peaks) {
+    plot_share_.push_back(peaks.front().statistic > 0.0 ? peak.statistic / peaks.front().statistic : 0.0);
     const Vec3 u = UnitOf(peak);
     if (!u.allFinite()) return InvalidArgument("a peak without a direction for this array's shape");
     tws::CartesianPlot plot;
     plot.position_m = u;
     const bool first = &peak == &peaks.front();
+    const bool second = peaks.size() > 1 && &peak == &peaks[1];
     // A source that sounds on without onsets (a steady one whose track was lost) is still
     // the frame's strongest peak: when no confirmed track has been heard for
     // lost_source_after_s, it may start a track on a frame whose power did not fall.
@@ -238,9 +264,9 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     plot.may_start_track =
         !options_.start_at_onsets_only ||
         (may_start && ((!echo_blocks && &peak == riser && peak.rise >= peak.threshold) || strongest)) ||
-        (first && persistent_starts);
+        (first && persistent_starts) || (second && persistent_second_starts);
     // Read only when resume_after_s > 0.
-    plot.may_resume_track = peak.rise >= peak.threshold || (first && persistent);
+    plot.may_resume_track = peak.rise >= peak.threshold || (first && persistent) || (second && persistent_second);
     if (linear) {
       const Mat3 radial = u * u.transpose();
       plot.covariance_m2 = s2 * (Mat3::Identity() - radial) + kRadialShare * kRadialShare * s2 * radial;

@@ -120,6 +120,17 @@
 // 1.7 -> 0.9 (square), 11.6 -> 1.9 (circle), 37 -> 10 (line), heard share -0.4, -1.8 and
 // -6.8 points; a share of 0.2 cost a talker on the three-talker line half its frames.
 //
+// Co-leaders (co_lead_share, off by default). Two steady sources that start together and
+// never pause have no onset apart, and only the stronger ever leads: the weaker is never
+// started (a 0.5-m tetrahedron, two sources 0.9 m away, 16 kHz: one heard in each frame).
+// With co_lead_share 0.5 a peak of at least half the strongest's statistic counts as a lead,
+// and the second peak that holds that share 3 frames in a row at one direction may start a
+// track. Measured (ACCURACY.md, "Large arrays"): two sources around that tetrahedron, 12
+// seeded scenes each, source-frames heard within 10 degrees 1067 -> 1426 (free field, 0.6-2 m)
+// and 1318 -> 1878 (6-9 m); but on the 4- and 7-microphone boards' room campaigns false
+// track time went 1.4 -> 8.8 and 2.0 -> 11.4 s per minute (a board's reflections hold half
+// the direct peak's statistic often enough), for 2-3 points of heard share. Hence off.
+//
 // Persistent leaders. The rules above start and resume tracks on rises, and a talker that
 // resumes while another talks on often does not rise past the threshold (the room is full of
 // the other's sound). Its track then coasts beside its peaks without taking them, is deleted
@@ -195,6 +206,12 @@ struct DirectionTrackerOptions {
   // least max(min_lead_frames, min_lead_share x its hits) frames (0, 0: off). See "Leading".
   int min_lead_frames = 1;
   double min_lead_share = 0.1;
+  // Co-leaders (0: off, only the frame's strongest peak leads; in [0, 1]): a peak whose
+  // statistic is at least this share of the frame's strongest also counts as a lead for the
+  // track that took it, and the frame's second peak, when it holds this share for
+  // persistent_leader_frames frames in a row at one direction, may start and resume tracks
+  // as a persistent leader does. See "Co-leaders".
+  double co_lead_share = 0.0;
   // The frame's strongest peak, when the strongest peak of this many frames in a row has been
   // within the same-source gate of the one before (0: off), on a frame whose power did not
   // fall, may start a track (where no track lies within twice the gate) and resume a silent
@@ -255,6 +272,9 @@ class DirectionTracker {
   // within the same-source gate ("Persistent leaders").
   Vec3 leader_u_ = Vec3::Constant(DirectionPeak::kNan);
   int leader_run_ = 0;
+  // The same for the frame's second peak while it holds co_lead_share of the strongest's statistic.
+  Vec3 second_u_ = Vec3::Constant(DirectionPeak::kNan);
+  int second_run_ = 0;
   // Per track of the tws tracker (by its id).
   struct Lineage {
     uint64_t reported_id = 0;  // the identity it reports: its own, or the one it continues
@@ -273,6 +293,9 @@ class DirectionTracker {
   bool Leads(const Lineage& l) const;
   std::map<uint64_t, Lineage> lineage_;
   std::vector<tws::CartesianPlot> plots_;
+  std::vector<double> plot_share_;  // per plot: its peak's statistic over the frame's strongest
+  std::vector<uint64_t> leaders_;   // UpdateLineages' scratch: per plot, the track that led on it
+  std::vector<double> leader_d2_;
   struct Departed {  // a deleted track's lineage, remembered until until_s (remember_identity_s)
     Lineage lineage;
     double until_s;

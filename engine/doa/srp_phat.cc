@@ -32,6 +32,7 @@ Status SrpOptions::Validate() const {
   if (hop_samples < 0 || (hop_samples > 0 && (frame_samples + hop_samples - 1) / hop_samples > 64))
     return InvalidArgument("hop_samples must be 0 or in [frame_samples / 64, ...)");
   if (cell_budget < 64 || cell_budget > (1 << 20)) return InvalidArgument("cell_budget must be in [64, 2^20]");
+  if (search_starts < 1 || search_starts > 64) return InvalidArgument("search_starts must be in [1, 64]");
   if (!(min_relative_statistic >= 0.0) || !(min_relative_statistic < 1.0))
     return InvalidArgument("min_relative_statistic must be in [0, 1)");
   return Status::Ok();

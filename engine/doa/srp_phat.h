@@ -22,8 +22,17 @@
 // pair (radius 0.5 / max_p g_p). When at most 8192 leaves cover the domain (a sphere needs
 // (6 g)^2 of them, g = max_p g_p: arrays whose longest pair spans at most 15 samples, 32 cm
 // at 16 kHz in air), the roots are the leaves: a plain grid, each scored by z at its centre. Otherwise, branch and
-// bound (as acquisition.h does over positions) from 8192 roots. Roots are Fibonacci-lattice caps on the sphere (those
-// reaching the searched hemisphere when planar), or arcs of theta. A cell of angular radius r
+// bound (as acquisition.h does over positions) from 8192 roots (about half of them for a
+// planar array's hemisphere). The roots count against cell_budget, so at the default budget
+// (4096) no cell is split: Newton's method refines the root with the largest bound
+// (search_starts more of them, option). Measured on a 0.5-m tetrahedron at 16 kHz with two
+// sources (ACCURACY.md, "Large arrays"): one start left frames with no peak though both
+// sources held z ~20; splitting to 4096 cells past the roots cost 30-80 % more per frame and
+// found fewer sources near the array; 8 starts found 17 % more source-frames within 10
+// degrees for 6-10 % more, but changed which of two steady sources leads, which the tracker's
+// start rules turn on (direction_tracker.h, "Co-leaders"), so it is not the default yet.
+// Roots are Fibonacci-lattice caps on the sphere (those reaching the searched hemisphere
+// when planar), or arcs of theta. A cell of angular radius r
 // centred on c cannot hold a lag further than g_p r from lag_p(c), g_p = |D_p| (|D_p.axis|
 // for arcs), so
 //     U(cell) = sum_p max{ n_p(l) : |l - lag_p(c)| <= g_p r + 0.5 } / sqrt(P)
@@ -89,7 +98,12 @@ struct SrpOptions {
   // Planar arrays: sources lie where u.source_side > 0 (zero: not stated). Must not lie in
   // the array plane. Ignored for other shapes.
   Vec3 source_side = Vec3::Zero();
-  int cell_budget = 4096;  // cells bounded per source search, in [64, 2^20]
+  int cell_budget = 4096;  // cells bounded per source search, the roots included, in [64, 2^20]
+  // When the budget runs out before any leaf (at the default budget, always so for a large
+  // array's 8192 roots: "Search" above), Newton's method starts from this many of the cells
+  // with the largest bounds (skipping those beside an end point already reached) and the best
+  // end point is kept; in [1, 64].
+  int search_starts = 1;
   // A later source is reported only when its statistic is at least this share of the
   // frame's strongest (0: off, in [0, 1)). In a room, reflections are coherent sources in
   // other directions that pass the noise threshold; a source 10 dB below another has ~0.1
@@ -178,10 +192,15 @@ class SrpPhat {
   // Centre(roots_[r]) for every root into grid_sums_ (times sqrt(P)) from the grid's taps,
   // when every pair is usable: the same values. False when the grid has no taps.
   bool GridCentres();
-  std::vector<Cell> Roots() const;        // computed once, into roots_
+  std::vector<Cell> Roots() const;  // computed once, into roots_
   void Split(const Cell& cell, std::vector<Cell>* children) const;
   bool Leaf(const Cell& cell) const;
+  // The best cell; when the budget ran out before any leaf, starts_ gets the next
+  // search_starts - 1 cells by bound.
   bool Search(Cell* best);
+  std::vector<Cell> starts_;
+  std::vector<Cell> ends_;                           // Analyse's scratch: the starts' end points
+  double Apart(const Cell& a, const Cell& b) const;  // angle between centres (cone angles for arcs)
   struct Probe {
     double value = 0.0;  // sum_p R_p at the centre
     Eigen::Vector2d gradient = Eigen::Vector2d::Zero();

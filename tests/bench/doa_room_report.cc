@@ -273,6 +273,9 @@ int main(int argc, char** argv) {
   flags.Int("persist", &tracking.persistent_leader_frames, "N", "frames",
             "DirectionTrackerOptions::persistent_leader_frames: the strongest peak at one direction this many "
             "frames in a row may start or resume a track (0: off)");
+  flags.Double("co-lead-share", &tracking.co_lead_share, "F", "",
+               "DirectionTrackerOptions::co_lead_share: a peak of at least this share of the frame's strongest "
+               "statistic also leads, and a steady second peak may start a track (0: off)");
   flags.Double("remember", &tracking.remember_identity_s, "S", "s",
                "DirectionTrackerOptions::remember_identity_s: a deleted track's identity is remembered this long "
                "(0: off)");
