@@ -30,7 +30,8 @@
 // sources held z ~20; splitting to 4096 cells past the roots cost 30-80 % more per frame and
 // found fewer sources near the array; 8 starts found 17 % more source-frames within 10
 // degrees for 6-10 % more, but changed which of two steady sources leads, which the tracker's
-// start rules turn on (direction_tracker.h, "Co-leaders"), so it is not the default yet.
+// start rules turn on (direction_tracker.h, "Co-leaders"), so it is not the default yet
+// (tests/bench/two_source_report measures it; AudioSessionConfig::direction_search_starts).
 // Roots are Fibonacci-lattice caps on the sphere (those reaching the searched hemisphere
 // when planar), or arcs of theta. A cell of angular radius r
 // centred on c cannot hold a lag further than g_p r from lag_p(c), g_p = |D_p| (|D_p.axis|

@@ -46,10 +46,12 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
   srp.source_side = config.source_side;
   srp.hop_samples = config.hop_samples;  // onsets: the rise against the last frame not overlapping
   srp.keep_whole_field = positions;      // the near-field fits' coarse grid reads it
+  srp.search_starts = config.direction_search_starts;
   auto made = SrpPhat::Create(config.sensors_m, srp);
   if (!made.ok()) return made.status();
   DirectionTrackerOptions options;
   options.frame_period_s = config.hop_samples / config.sample_rate_hz;
+  options.co_lead_share = config.direction_co_lead_share;
   // Onsets compare with the recent past, which must span at least one frame (long hops:
   // underwater frames of thousands of samples).
   options.onset_memory_s = std::max(options.onset_memory_s, options.frame_period_s);

@@ -95,6 +95,13 @@ Status AudioSessionConfig::Validate() const {
   if (!(search_radius_m >= 0.0) || search_radius_m > 1e7) {
     return InvalidArgument("search_radius_m must be in [0, 1e7], got " + Num(search_radius_m));
   }
+  if (direction_search_starts < 1 || direction_search_starts > 64) {
+    return InvalidArgument("direction_search_starts must be in [1, 64], got " +
+                           std::to_string(direction_search_starts));
+  }
+  if (!(direction_co_lead_share >= 0.0 && direction_co_lead_share <= 1.0)) {
+    return InvalidArgument("direction_co_lead_share must be in [0, 1], got " + Num(direction_co_lead_share));
+  }
   if (!(presence_false_alarm > 0.0) || presence_false_alarm > 0.1) {
     return InvalidArgument("presence_false_alarm must be in (0, 0.1], got " + Num(presence_false_alarm));
   }

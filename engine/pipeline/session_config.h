@@ -135,6 +135,12 @@ struct AudioSessionConfig {
   // acquisition restarts (> 0).
   double presence_false_alarm = 1e-3;
   double source_timeout_s = 2.0;
+  // Direction sessions' search and tracker, engine-only tuning (not on the wire or the CLI):
+  // SrpOptions::search_starts, in [1, 64], and DirectionTrackerOptions::co_lead_share, in
+  // [0, 1]. Both measured in ACCURACY.md ("Large arrays and several sources") with
+  // tests/bench/two_source_report; the defaults keep each off.
+  int direction_search_starts = 1;
+  double direction_co_lead_share = 0.0;
   // Moving array (platform_pose.h): sensors_m are in the platform's body frame (the IMU's
   // axes) and the session is fed IMU samples (AddImu); each frame's TDOA model uses the
   // sensors rotated by the platform's attitude at that frame and moved to its origin.

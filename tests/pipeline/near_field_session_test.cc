@@ -5,9 +5,12 @@
 // method) with sensor noise 20 dB below the direct sound at 1 m (tests/doa/near_field_scene.h).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "engine/pipeline/session.h"
@@ -287,6 +290,56 @@ TEST(NearFieldSession, AVolumetricArrayStatingSeveralSourcesGivesEachItsPosition
   // Fitted on the whole spectrum (the other source's peaks summed in), the second source had a
   // position in 27 of 87 frames; fitted with the other removed, in 57.
   ExpectTwoIdentitiesWithConsistentPositions(t, estimates.size() / 3);
+}
+
+// The large-array search and tracker tuning reach the session (AudioSessionConfig::
+// direction_search_starts, direction_co_lead_share; srp_phat.h "Search", direction_tracker.h
+// "Co-leaders"), and out-of-range values are refused by name. The scene of
+// SrpPhat.MoreStartsFindBothSourcesAroundALargeArray (a 0.5-m tetrahedron, two sources 1.7 m
+// away, free field, two steady sources that start together): rows heard within 10 degrees of
+// a source, with the defaults (one start, no co-leaders: the weaker source is never started)
+// against eight starts and co-leaders at 0.5 (both followed).
+TEST(NearFieldSession, TheLargeArraySearchOptionsReachTheSession) {
+  AudioSessionConfig config = Config({Vec3(3.2972, 2.3645, 1.1498), Vec3(3.5730, 2.2943, 1.5609),
+                                      Vec3(3.0808, 2.3729, 1.6005), Vec3(3.3832, 2.7460, 1.4613)});
+  config.direction_search_starts = 0;
+  EXPECT_EQ(Session::Create(config).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(Session::Create(config).status().message().find("direction_search_starts"), std::string::npos);
+  config.direction_search_starts = 1;
+  config.direction_co_lead_share = 1.5;
+  EXPECT_NE(Session::Create(config).status().message().find("direction_co_lead_share"), std::string::npos);
+  config.direction_co_lead_share = 0.0;
+  NearFieldScene scene;
+  scene.room.rt60_s = 0.0;
+  scene.sensors_m = config.sensors_m;
+  scene.sources_m = {Vec3(2.5734, 0.9853, 1.0670), Vec3(3.3711, 4.1256, 1.1032)};
+  scene.seconds = 3.0;
+  scene.seed = 52;
+  const std::vector<float> samples = RenderNearFieldScene(scene);
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& m : config.sensors_m) centroid += m / 4.0;
+  int heard[2] = {0, 0};
+  for (int starts : {1, 8}) {
+    config.direction_search_starts = starts;
+    config.direction_co_lead_share = starts == 8 ? 0.5 : 0.0;
+    auto session = Session::Create(config);
+    ASSERT_TRUE(session.ok()) << session.status().message();
+    for (const Estimate& e : StreamThrough(session->get(), samples, 4)) {
+      for (const SourceEstimate& s : e.sources) {
+        if (!s.source_present) continue;
+        for (const Vec3& source : scene.sources_m) {
+          if (std::acos(std::clamp(s.direction.dot((source - centroid).normalized()), -1.0, 1.0)) <
+              10.0 * std::numbers::pi / 180) {
+            ++heard[starts == 8];
+            break;
+          }
+        }
+      }
+    }
+  }
+  std::printf("rows heard within 10 degrees of a source: %d at the defaults, %d with 8 starts and co-leaders\n",
+              heard[0], heard[1]);
+  EXPECT_GT(heard[1], heard[0] * 3 / 2);
 }
 
 TEST(NearFieldSession, MissingConstraintsAreNamed) {
