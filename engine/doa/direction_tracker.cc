@@ -228,7 +228,7 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   const bool persistent =
       options_.persistent_leader_frames > 0 && leader_run_ >= options_.persistent_leader_frames && may_start;
   // The same for the frame's second peak while it holds at least co_lead_share of the
-  // strongest's statistic: a steady source beside a louder one ("Leading").
+  // strongest's statistic: a steady source beside a louder one ("Co-leaders").
   const bool second_counts = options_.co_lead_share > 0.0 && peaks.size() > 1 && peaks.front().statistic > 0.0 &&
                              peaks[1].statistic >= options_.co_lead_share * peaks.front().statistic;
   const Vec3 second_u = second_counts ? UnitOf(peaks[1]) : Vec3::Constant(DirectionPeak::kNan);
