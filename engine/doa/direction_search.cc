@@ -215,6 +215,27 @@ DirectionPeak SrpPhat::Describe(const Cell& cell, double statistic, bool statist
   return peak;
 }
 
+SrpPhat::Cell SrpPhat::RefineOtherStarts(Cell best, double* statistic) {
+  ends_.assign(1, best);
+  for (const Cell& start : starts_) {  // in decreasing bound
+    // No point of this cell (nor of the later ones) can beat the statistic: its bound, on
+    // the sampled field, times the margin the continuous GCC can exceed its samples by.
+    if (start.bound * interpolation_margin_ <= *statistic) break;
+    // The largest bounds crowd about a peak: a start beside an end point already reached
+    // would climb to it again.
+    if (std::any_of(ends_.begin(), ends_.end(), [&](const Cell& end) { return Apart(start, end) < kSameStartRad; }))
+      continue;
+    double other = 0.0;
+    const Cell refined = Refine(start, &other);
+    ends_.push_back(refined);
+    if (other > *statistic) {
+      *statistic = other;
+      best = refined;
+    }
+  }
+  return best;
+}
+
 StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
   LOCALIZER_RETURN_IF_ERROR(spectra_.Analyse(frame, &field_input_));
   if (options_.keep_whole_field) whole_field_ = field_input_;  // same sizes every frame: allocates once
@@ -240,24 +261,7 @@ StatusOr<std::vector<DirectionPeak>> SrpPhat::Analyse(const float* frame) {
     if (!Search(&best)) break;
     double statistic = 0.0;
     best = Refine(best, &statistic);
-    ends_.assign(1, best);
-    for (const Cell& start : starts_) {  // in decreasing bound
-      // No point of this cell (nor of the later ones) can beat the statistic: its bound, on
-      // the sampled field, times the margin the continuous GCC can exceed its samples by.
-      if (start.bound * interpolation_margin_ <= statistic) break;
-      // The largest bounds crowd about a peak: a start beside an end point already reached
-      // would climb to it again.
-      if (std::any_of(ends_.begin(), ends_.end(), [&](const Cell& end) { return Apart(start, end) < kSameStartRad; }))
-        continue;
-      double other = 0.0;
-      const Cell refined = Refine(start, &other);
-      ends_.push_back(refined);
-      if (other > statistic) {
-        statistic = other;
-        best = refined;
-      }
-    }
-    starts_.clear();
+    if (!starts_.empty()) best = RefineOtherStarts(best, &statistic);
     if (!(statistic >= threshold_)) break;
     if (!found.empty() && statistic < options_.min_relative_statistic * found.front().statistic) break;
     found.push_back({best, found.size(), statistic, found.empty()});

@@ -84,6 +84,19 @@ Mat3 DirectionTracker::PeakCovariance(const Vec3& u) const {
   return s2 * step * plane * step.transpose() + radial_part;
 }
 
+bool DirectionTracker::Persists(PeakRun* run, const Vec3& u) const {
+  const bool same = run->frames > 0 && SameSourceD2(run->u, u) < kSameSourceGate;
+  run->frames = !u.allFinite() ? 0 : same ? run->frames + 1 : 1;
+  run->u = u;
+  return options_.persistent_leader_frames > 0 && run->frames >= options_.persistent_leader_frames;
+}
+
+bool DirectionTracker::NoTrackNear(const Vec3& u) const {
+  return std::none_of(reports_.begin(), reports_.end(), [&](const tws::TrackReport& r) {
+    return r.position_m.norm() > 0.0 && SameSourceD2(r.position_m.normalized(), u) < 4.0 * kSameSourceGate;
+  });
+}
+
 double DirectionTracker::SameSourceD2(const Vec3& a, const Vec3& b) const {
   Vec3 pa = a, pb = b;
   // A planar array compares azimuths: near its plane it sees elevation through cos(elevation),
@@ -222,31 +235,17 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   // Persistent leaders: the strongest peak at one direction frame after frame is a source,
   // whether or not it rose; a reflection seldom leads even one frame while its source sounds.
   const Vec3 first_u = peaks.empty() ? Vec3::Constant(DirectionPeak::kNan) : UnitOf(peaks.front());
-  const bool same_leader = leader_run_ > 0 && SameSourceD2(leader_u_, first_u) < kSameSourceGate;
-  leader_run_ = !first_u.allFinite() ? 0 : same_leader ? leader_run_ + 1 : 1;
-  leader_u_ = first_u;
-  const bool persistent =
-      options_.persistent_leader_frames > 0 && leader_run_ >= options_.persistent_leader_frames && may_start;
+  const bool persistent = Persists(&leader_, first_u) && may_start;
   // The same for the frame's second peak while it holds at least co_lead_share of the
   // strongest's statistic: a steady source beside a louder one ("Co-leaders").
   const bool second_counts = options_.co_lead_share > 0.0 && peaks.size() > 1 && peaks.front().statistic > 0.0 &&
                              peaks[1].statistic >= options_.co_lead_share * peaks.front().statistic;
   const Vec3 second_u = second_counts ? UnitOf(peaks[1]) : Vec3::Constant(DirectionPeak::kNan);
-  const bool same_second = second_run_ > 0 && SameSourceD2(second_u_, second_u) < kSameSourceGate;
-  second_run_ = !second_u.allFinite() ? 0 : same_second ? second_run_ + 1 : 1;
-  second_u_ = second_u;
-  const bool persistent_second =
-      options_.persistent_leader_frames > 0 && second_run_ >= options_.persistent_leader_frames && may_start;
-  const bool persistent_second_starts =
-      persistent_second && std::none_of(reports_.begin(), reports_.end(), [&](const tws::TrackReport& r) {
-        return r.position_m.norm() > 0.0 && SameSourceD2(r.position_m.normalized(), second_u) < 4.0 * kSameSourceGate;
-      });
+  const bool persistent_second = Persists(&second_, second_u) && may_start;
   // It may resume a silent track, and start one only where no track of the last frame
   // (tentative too) lies within twice the gate.
-  const bool persistent_starts =
-      persistent && std::none_of(reports_.begin(), reports_.end(), [&](const tws::TrackReport& r) {
-        return r.position_m.norm() > 0.0 && SameSourceD2(r.position_m.normalized(), first_u) < 4.0 * kSameSourceGate;
-      });
+  const bool persistent_starts = persistent && NoTrackNear(first_u);
+  const bool persistent_second_starts = persistent_second && NoTrackNear(second_u);
   plots_.clear();
   plot_share_.clear();
   for (const DirectionPeak& peak : peaks) {

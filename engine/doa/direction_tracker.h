@@ -268,13 +268,20 @@ class DirectionTracker {
   double echo_until_s_ = -1e300;
   double echo_statistic_ = 0.0;
   double unheard_s_ = 1e300;  // since a reported confirmed track last took a peak (none yet: forever)
-  // The strongest peak of the frames before, and for how many frames in a row it has stayed
-  // within the same-source gate ("Persistent leaders").
-  Vec3 leader_u_ = Vec3::Constant(DirectionPeak::kNan);
-  int leader_run_ = 0;
-  // The same for the frame's second peak while it holds co_lead_share of the strongest's statistic.
-  Vec3 second_u_ = Vec3::Constant(DirectionPeak::kNan);
-  int second_run_ = 0;
+  // A run of frames whose peak (the strongest, or the second while it holds co_lead_share of
+  // the strongest's statistic) stayed within the same-source gate of the frame before's
+  // ("Persistent leaders", "Co-leaders").
+  struct PeakRun {
+    Vec3 u = Vec3::Constant(DirectionPeak::kNan);
+    int frames = 0;
+  };
+  // Extends *run with this frame's peak u (NaN: none); true once it has lasted
+  // persistent_leader_frames frames.
+  bool Persists(PeakRun* run, const Vec3& u) const;
+  // No track of the last frame (tentative too) within twice the same-source gate of u.
+  bool NoTrackNear(const Vec3& u) const;
+  PeakRun leader_;
+  PeakRun second_;
   // Per track of the tws tracker (by its id).
   struct Lineage {
     uint64_t reported_id = 0;  // the identity it reports: its own, or the one it continues

@@ -200,7 +200,10 @@ class SrpPhat {
   // search_starts - 1 cells by bound.
   bool Search(Cell* best);
   std::vector<Cell> starts_;
-  std::vector<Cell> ends_;                           // Analyse's scratch: the starts' end points
+  // Refines starts_ (Search's other cells) and returns the best end point of them and `best`
+  // (already refined, at *statistic), which *statistic then holds.
+  Cell RefineOtherStarts(Cell best, double* statistic);
+  std::vector<Cell> ends_;                           // RefineOtherStarts' scratch: the end points
   double Apart(const Cell& a, const Cell& b) const;  // angle between centres (cone angles for arcs)
   struct Probe {
     double value = 0.0;  // sum_p R_p at the centre

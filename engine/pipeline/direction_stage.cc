@@ -114,7 +114,8 @@ void DirectionStage::RefitAmongOthers() {
         fixes_[k].fitted_m.allFinite() ? fixes_[k].fitted_m : Vec3(centroid_m + kPlaneWaveRange_m * directions_[k]);
     for (int p = 0; p < pairs; ++p) lags_[k * pairs + p] = near_->PairLag(spectra, p, at_m);
   }
-  residual_field_ = srp_.whole_field();  // FillFields rewrites its pairs' lags (same sizes every frame)
+  // FillFields rewrites every pair's lags; the field's shape is the whole field's.
+  if (residual_field_.pairs.size() != srp_.whole_field().pairs.size()) residual_field_ = srp_.whole_field();
   for (size_t k = 0; k < heard_.size(); ++k) {
     spectra.ResetToWhole();
     for (size_t other = 0; other < heard_.size(); ++other) {
