@@ -129,6 +129,9 @@ GccOptions AudioSessionConfig::GccOptionsFor() const {
   gcc.keep_gcc = true;     // acquisition, presence, multipath association and the noise anchor read it
   gcc.max_candidates = 1;  // the session looks for other peaks in the kept GCC, near its track
   gcc.cross_pairs_max_sensors = cross_pairs_max_sensors;
+  // The closure check reads them on every frame (session_tracking.cc: CheckClosure, or the
+  // acquisition search): measured with the frame's pairs, their transforms packed together.
+  gcc.cross_pairs_with_frame = pair_closure;
   return gcc;
 }
 

@@ -9,7 +9,7 @@
 //      into planar (re[], im[]) scratch, and the normalising sum of |G| kept in kLanes
 //      partial sums (GCC will not vectorise a single float accumulator without
 //      -fassociative-math);
-//   2. interleave the scratch into the c2r input.
+//   2. interleave the scratch into the inverse transform's input (packed_transforms.h).
 // Why planar scratch rather than storing interleaved pairs from pass 1: GCC vectorises a
 // loop that stores (re, im) pairs by keeping re and im in alternate lanes, so the sqrt and
 // divide ran on every value twice. Measured on the Zen 4 build machine (AVX-512), PHAT over

@@ -15,7 +15,7 @@ std::mutex& FftwPlannerMutex() {
 
 namespace {
 
-// One size's wisdom: everything FFTW needs to plan that size's r2c and c2r transforms.
+// One size's wisdom: everything FFTW needs to plan that size's r2c, c2r and complex transforms.
 struct SizeWisdom {
   int n;
   const char* wisdom;
@@ -109,6 +109,12 @@ FftwPlan PlanRealInverse(int n, float* in_interleaved, float* out, unsigned flag
   std::lock_guard<std::mutex> lock(FftwPlannerMutex());
   ImportSizeOnceLocked(n);
   return FftwPlan(fftwf_plan_dft_c2r_1d(n, AsComplex(in_interleaved), out, flags));
+}
+
+FftwPlan PlanComplex(int n, float* in_interleaved, float* out_interleaved, int sign, unsigned flags) {
+  std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  ImportSizeOnceLocked(n);
+  return FftwPlan(fftwf_plan_dft_1d(n, AsComplex(in_interleaved), AsComplex(out_interleaved), sign, flags));
 }
 
 int NextFastFftSize(int n) {

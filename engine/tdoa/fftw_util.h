@@ -8,17 +8,18 @@
 // Buffers come from fftwf_malloc (SIMD-aligned) and are zero-filled on allocation. Complex
 // data is stored interleaved (re, im) as floats, bit-compatible with fftwf_complex.
 //
-// Built-in wisdom: before a size's first plan in the process, PlanRealForward/Inverse import
-// that size's FFTW wisdom, generated at build time (engine/tdoa/wisdom_gen) for the
-// FFTW_ESTIMATE plans of every size NextFastFftSize returns from 64 to 2^21, one entry per
-// size. FFTW then takes a plan from it in about 0.1 ms instead of estimating one (2-10 ms per
-// size, the larger part of `localizer-cli track`'s start-up after library loading); importing
-// only the sizes planned, not all 46, saves ~0.9 ms of a short track's start-up. The plans are the
-// ones FFTW_ESTIMATE picks without wisdom on the build machine (tests/tdoa/fftw_wisdom_test),
-// so results do not change. Wisdom FFTW cannot use (another FFTW version, a solver the CPU
-// lacks) is refused or ignored by FFTW, which then estimates as before. Every engine user in
-// the process (CLI, server, Python bindings) plans from the same wisdom, so their results stay
-// bit-identical. FFTW_MEASURE requests are not satisfied by it and are measured as before.
+// Built-in wisdom: before a size's first plan in the process, PlanRealForward/Inverse and
+// PlanComplex import that size's FFTW wisdom, generated at build time (engine/tdoa/wisdom_gen)
+// for the FFTW_ESTIMATE plans (r2c, c2r and both complex directions) of every size
+// NextFastFftSize returns from 64 to 2^21, one entry per size. FFTW then takes a plan from it
+// in about 0.1 ms instead of estimating one (2-10 ms per size, the larger part of
+// `localizer-cli track`'s start-up after library loading); importing only the sizes planned,
+// not all 46, saves ~0.9 ms of a short track's start-up. The plans are the ones FFTW_ESTIMATE
+// picks without wisdom on the build machine (tests/tdoa/fftw_wisdom_test), so results do not
+// change. Wisdom FFTW cannot use (another FFTW version, a solver the CPU lacks) is refused or
+// ignored by FFTW, which then estimates as before. Every engine user in the process (CLI,
+// server, Python bindings) plans from the same wisdom, so their results stay bit-identical.
+// FFTW_MEASURE requests are not satisfied by it and are measured as before.
 #pragma once
 
 #include <fftw3.h>
@@ -76,6 +77,9 @@ void ForgetFftwWisdom();
 // A null plan means FFTW could not plan the transform.
 FftwPlan PlanRealForward(int n, float* in, float* out_interleaved, unsigned flags);
 FftwPlan PlanRealInverse(int n, float* in_interleaved, float* out, unsigned flags);
+// A complex 1-D plan of size n, out of place (it then preserves its input); sign is
+// FFTW_FORWARD or FFTW_BACKWARD (packed_transforms.h packs two real transforms into one).
+FftwPlan PlanComplex(int n, float* in_interleaved, float* out_interleaved, int sign, unsigned flags);
 
 // Smallest n' >= n (n >= 1) of the form 2^a, 3 * 2^a or 5 * 2^a. With FFTW_ESTIMATE plans
 // these ran fastest here: an r2c + c2r pair took 12.9 us at 5120, 14.6 at 4608, 17.8 at

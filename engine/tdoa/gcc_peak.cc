@@ -16,14 +16,13 @@ namespace localizer::engine {
 // the bins that stand for a conjugate pair and 1 for DC and Nyquist. With kPhatCoherence it
 // also folds this frame's aligned coherence Re(X_k X_r* e^{j w_k d}) / |X_k X_r*| into the
 // pair's running average.
-SpectrumMoments GccPhatEstimator::Impl::AnalyseSpectrum(int pair, double delay_samples) {
+SpectrumMoments GccPhatEstimator::Impl::AnalyseSpectrum(int pair, double delay_samples, const float* g) {
   const int n = layout.fft_size;
   const int lo = layout.band_first_bin;
   const int hi = layout.band_end_bin;
   const double bin_rate = 2.0 * std::numbers::pi / n;
-  const float* g = weighed.get();
-  const float* xr = spectra.get() + static_cast<std::size_t>(array.reference_sensor()) * spectrum_stride;
-  const float* xk = spectra.get() + static_cast<std::size_t>(array.sensor_of_pair(pair)) * spectrum_stride;
+  const float* xr = SpectrumOf(array.reference_sensor());
+  const float* xk = SpectrumOf(array.sensor_of_pair(pair));
   const bool learn = options.weighting == Weighting::kPhatCoherence;
   float* average = learn ? coherence.data() + static_cast<std::size_t>(pair) * layout.bin_count : nullptr;
   const float alpha = static_cast<float>(1.0 / options.coherence_time_constant_frames);

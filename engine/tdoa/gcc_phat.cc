@@ -9,6 +9,7 @@
 #include <numbers>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/tdoa/cross_spectrum.h"
@@ -24,30 +25,42 @@ namespace {
 // tracked acoustic source does; a larger rate is a caller's error.
 constexpr double kMaxDelayRate = 0.05;
 
-// Copies one channel into the zero-padded transform input, times the frame's taper when
-// `window` holds its n gains (gcc_math.h's TaperGain; empty: a plain copy), and returns the
-// copy's energy (sum of squares, double so that no finite input overflows). One pass; partial
-// sums in kLanes lanes let the compiler vectorise the reduction without reassociating a
-// single float sum.
-double CopyChannel(const float* src, int n, std::span<const float> window, float* dst) {
+// Copies channels a and b into the zero-padded transform input, interleaved (a(i) at dst[2i],
+// b(i) at dst[2i + 1]: packed_transforms.h's real and imaginary parts; b null: zeros), each
+// times the frame's taper when `window` holds its n gains (gcc_math.h's TaperGain; empty: a
+// plain copy), and returns the copies' energies (sums of squares, double so that no finite
+// input overflows). One pass; partial sums in kLanes lanes let the compiler vectorise the
+// reductions without reassociating a single float sum.
+std::pair<double, double> CopyChannels(const float* a, const float* b, int n, std::span<const float> window,
+                                       float* dst) {
   const bool windowed = !window.empty();
-  double lanes[kLanes] = {};
+  const auto tapered = [&](const float* src, int i) {
+    return windowed ? src[i] * window[static_cast<std::size_t>(i)] : src[i];
+  };
+  double lanes_a[kLanes] = {}, lanes_b[kLanes] = {};
   int i = 0;
   for (; i + kLanes <= n; i += kLanes) {
     for (int j = 0; j < kLanes; ++j) {
-      const float v = windowed ? src[i + j] * window[static_cast<std::size_t>(i + j)] : src[i + j];
-      dst[i + j] = v;
-      lanes[j] += static_cast<double>(v) * v;
+      const float va = tapered(a, i + j);
+      const float vb = b != nullptr ? tapered(b, i + j) : 0.0f;
+      dst[2 * (i + j)] = va;
+      dst[2 * (i + j) + 1] = vb;
+      lanes_a[j] += static_cast<double>(va) * va;
+      lanes_b[j] += static_cast<double>(vb) * vb;
     }
   }
-  double energy = 0.0;
+  double energy_a = 0.0, energy_b = 0.0;
   for (; i < n; ++i) {
-    const float v = windowed ? src[i] * window[static_cast<std::size_t>(i)] : src[i];
-    dst[i] = v;
-    energy += static_cast<double>(v) * v;
+    const float va = tapered(a, i);
+    const float vb = b != nullptr ? tapered(b, i) : 0.0f;
+    dst[2 * i] = va;
+    dst[2 * i + 1] = vb;
+    energy_a += static_cast<double>(va) * va;
+    energy_b += static_cast<double>(vb) * vb;
   }
-  for (double lane : lanes) energy += lane;
-  return energy;
+  for (double lane : lanes_a) energy_a += lane;
+  for (double lane : lanes_b) energy_b += lane;
+  return {energy_a, energy_b};
 }
 
 int ArgMax(std::span<const float> r) { return static_cast<int>(std::max_element(r.begin(), r.end()) - r.begin()); }
@@ -59,9 +72,10 @@ float MaxAbs(std::span<const float> r) {
 }
 
 // The fallback for a window that is all main lobe: the same lobe rule on the full circular
-// correlation of length n (gcc_math.h), and the largest |R| outside it.
+// correlation of length n (gcc_math.h; lag l at corr[2 (l mod n)]), and the largest |R|
+// outside it.
 float LargestOutsideLobe(const float* corr, int n, int peak_lag) {
-  const auto at = [&](int lag) { return corr[WrapLag(lag, n)]; };
+  const auto at = [&](int lag) { return corr[2 * WrapLag(lag, n)]; };
   int first, last;
   CircularMainLobe(at, n, peak_lag, &first, &last);
   float best = 0.0f;
@@ -86,11 +100,10 @@ Status GccPhatEstimator::Impl::Init() {
   window.assign(2 * (widest_lag + kPeakHalfWidth) + 1, 0.0f);
   energy.assign(array.sensor_count(), 0.0);
 
-  padded = AllocateFftwFloats(fft_size);
-  spectra = AllocateFftwFloats(static_cast<std::size_t>(spectrum_stride) * array.sensor_count());
+  // One more channel slot than sensors: the partner of a channel transformed alone.
+  spectra = AllocateFftwFloats(static_cast<std::size_t>(spectrum_stride) * (array.sensor_count() + 1));
   cross = AllocateFftwFloats(2 * layout.bin_count);
-  corr = AllocateFftwFloats(fft_size);
-  weighed = AllocateFftwFloats(2 * layout.bin_count);
+  cross_b = AllocateFftwFloats(2 * layout.bin_count);
   if (options.weighting == Weighting::kPhatCoherence) {
     const std::size_t cells = static_cast<std::size_t>(array.pair_count()) * layout.bin_count;
     coherence.assign(cells, 0.0f);
@@ -100,26 +113,30 @@ Status GccPhatEstimator::Impl::Init() {
   }
   extrema.reserve(2 * widest_lag + 1);
   const unsigned flags = options.measure_fft_plans ? FFTW_MEASURE : FFTW_ESTIMATE;
-  forward = PlanRealForward(fft_size, padded.get(), spectra.get(), flags);
-  inverse = PlanRealInverse(fft_size, cross.get(), corr.get(), flags);
-  if (!forward || !inverse) {
-    return Internal("FFTW could not plan real transforms of size " + std::to_string(fft_size));
+  if (!packed.Init(fft_size, layout.band_first_bin, layout.band_end_bin, flags)) {
+    return Internal("FFTW could not plan complex transforms of size " + std::to_string(fft_size));
   }
-  // FFTW_MEASURE scribbles on the arrays while planning; the padding must start at zero.
-  std::memset(padded.get(), 0, sizeof(float) * fft_size);
   return Status::Ok();
 }
 
-// r2c of one channel into its slot in `spectra`. The padded tail stays zero: out-of-place
-// r2c preserves its input, and only the first frame_samples are ever written.
-Status GccPhatEstimator::Impl::TransformChannel(const float* samples, int channel) {
-  const double e = CopyChannel(samples, options.frame_samples, taper_gains, padded.get());
-  if (!std::isfinite(e)) {
-    return InvalidArgument("channel " + std::to_string(channel) + " holds a non-finite sample (NaN or Inf)");
+float* GccPhatEstimator::Impl::SpectrumOf(int channel) {
+  return spectra.get() + static_cast<std::size_t>(channel) * spectrum_stride;
+}
+
+// Channels a and b (b < 0: a alone) through one packed forward transform into their slots in
+// `spectra`. The padded tail stays zero: the transform preserves its input, and only the
+// first frame_samples of each part are ever written.
+Status GccPhatEstimator::Impl::TransformChannels(const float* samples_a, int a, const float* samples_b, int b) {
+  const auto [e_a, e_b] =
+      CopyChannels(samples_a, b >= 0 ? samples_b : nullptr, options.frame_samples, taper_gains, packed.forward_input());
+  for (const auto& [e, channel] : {std::pair{e_a, a}, std::pair{e_b, b}}) {
+    if (!std::isfinite(e)) {
+      return InvalidArgument("channel " + std::to_string(channel) + " holds a non-finite sample (NaN or Inf)");
+    }
   }
-  energy[channel] = e;
-  float* spectrum = spectra.get() + static_cast<std::size_t>(channel) * spectrum_stride;
-  fftwf_execute_dft_r2c(forward.get(), padded.get(), AsComplex(spectrum));
+  energy[a] = e_a;
+  if (b >= 0) energy[b] = e_b;
+  packed.Forward(SpectrumOf(a), SpectrumOf(b >= 0 ? b : array.sensor_count()));
   return Status::Ok();
 }
 
@@ -131,12 +148,12 @@ void GccPhatEstimator::Impl::MeasureWarpedPairs(const float* frame, Measurement*
     const int sensor = array.sensor_of_pair(p);
     const double rate = sensor_rate[sensor];
     if (rate == 0.0) continue;
-    float* spectrum = spectra.get() + static_cast<std::size_t>(sensor) * spectrum_stride;
+    float* spectrum = SpectrumOf(sensor);
     std::memcpy(kept_spectrum.data(), spectrum, sizeof(float) * spectrum_stride);
     const double kept_energy = energy[sensor];
     WarpChannel(frame + static_cast<std::size_t>(sensor) * n, n, rate, warped.data());
-    if (TransformChannel(warped.data(), sensor).ok()) {  // finite: the plain channel was
-      MeasurePair(p, &warped_pair);
+    if (TransformChannels(warped.data(), sensor, nullptr, -1).ok()) {  // finite: the plain channel was
+      MeasureOnePair(p, &warped_pair);
       if (warped_pair.peak_value > out->pairs[p].peak_value) {
         std::swap(out->pairs[p], warped_pair);
         continue;
@@ -147,17 +164,16 @@ void GccPhatEstimator::Impl::MeasureWarpedPairs(const float* frame, Measurement*
   }
 }
 
-float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair) {
-  return WeighSensors(array.reference_sensor(), array.sensor_of_pair(pair), pair);
+float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair, float* g) {
+  return WeighSensors(array.reference_sensor(), array.sensor_of_pair(pair), pair, g);
 }
 
-// Fills `cross` with G = W X_k conj(X_r) B for sensors r = ref, k = sensor and returns S, the
-// sum of |G| over all N bins. `pair` picks kPhatCoherence's learnt weights (-1: plain PHAT).
-float GccPhatEstimator::Impl::WeighSensors(int ref, int sensor, int pair) {
-  const float* xr = spectra.get() + static_cast<std::size_t>(ref) * spectrum_stride;
-  const float* xk = spectra.get() + static_cast<std::size_t>(sensor) * spectrum_stride;
-  float* g = cross.get();
-  // Out-of-band bins are zeroed every time: c2r destroys its input.
+// Fills g with G = W X_k conj(X_r) B for sensors r = ref, k = sensor and returns S, the sum
+// of |G| over all N bins. `pair` picks kPhatCoherence's learnt weights (-1: plain PHAT).
+float GccPhatEstimator::Impl::WeighSensors(int ref, int sensor, int pair, float* g) {
+  const float* xr = SpectrumOf(ref);
+  const float* xk = SpectrumOf(sensor);
+  // Out-of-band bins are zeroed every time: the sum below reads DC and Nyquist.
   const int bin_count = layout.bin_count;
   std::memset(g, 0, sizeof(float) * 2 * layout.band_first_bin);
   std::memset(g + 2 * layout.band_end_bin, 0, sizeof(float) * 2 * (bin_count - layout.band_end_bin));
@@ -198,9 +214,8 @@ float GccPhatEstimator::Impl::WeighSensors(int ref, int sensor, int pair) {
 // variance (sum over interior bins of 2 |G_k|^2 + |G_0|^2 + |G_N/2|^2) / S^2: 1 / (2 B) for
 // PHAT's B unit bins (the layout's constant), 1 / (2 B_eff) with B_eff = (sum w)^2 / sum w^2
 // for learnt weights, which gather on a few bins and would otherwise read noise as a source
-// many times over. Reads the kept cross-spectrum `weighed`.
-float GccPhatEstimator::Impl::WeighedNoiseFloorInverse(float norm) const {
-  const float* g = weighed.get();
+// many times over. Reads the pair's cross-spectrum g.
+float GccPhatEstimator::Impl::WeighedNoiseFloorInverse(float norm, const float* g) const {
   const int lo = layout.band_first_bin;
   const int hi = layout.band_end_bin;
   const int last = layout.bin_count - 1;
@@ -223,54 +238,95 @@ float GccPhatEstimator::Impl::WeighedNoiseFloorInverse(float norm) const {
 }
 
 // window[i] = R(i - L - K) * scale: the searched lags plus kPeakHalfWidth either side for
-// the interpolator. Lags wrap modulo N; L + K < N keeps both runs inside `corr`.
-void GccPhatEstimator::Impl::GatherWindow(int max_lag, float scale) {
+// the interpolator. Lags wrap modulo N; L + K < N keeps both runs inside the correlation
+// (lag l at corr[2 (l mod N)]: packed_transforms.h's output).
+void GccPhatEstimator::Impl::GatherWindow(const float* corr, int max_lag, float scale) {
   const int reach = max_lag + kPeakHalfWidth;
-  const float* negative = corr.get() + layout.fft_size - reach;  // lags -reach .. -1
+  const float* negative = corr + 2 * (layout.fft_size - reach);  // lags -reach .. -1
   float* w = window.data();
-  for (int i = 0; i < reach; ++i) w[i] = negative[i] * scale;
-  const float* positive = corr.get();  // lags 0 .. reach
-  for (int i = 0; i <= reach; ++i) w[reach + i] = positive[i] * scale;
+  for (int i = 0; i < reach; ++i) w[i] = negative[2 * i] * scale;
+  for (int i = 0; i <= reach; ++i) w[reach + i] = corr[2 * i] * scale;  // lags 0 .. reach
 }
 
 // Largest |R| outside the main lobe within the window, or, when the lobe fills the window,
 // outside it in the whole correlation (scaled like the window).
-float GccPhatEstimator::Impl::LargestSidelobe(std::span<const float> searched, int peak, int peak_lag,
-                                              float scale) const {
+float GccPhatEstimator::Impl::LargestSidelobe(const float* corr, std::span<const float> searched, int peak,
+                                              int peak_lag, float scale) const {
   int first, last;
   MainLobe([&](int i) { return searched[i]; }, static_cast<int>(searched.size()), peak, &first, &last);
   if (first > 0 || last + 1 < static_cast<int>(searched.size())) {
     return std::max(MaxAbs(searched.first(first)), MaxAbs(searched.subspan(last + 1)));
   }
-  return scale * LargestOutsideLobe(corr.get(), layout.fft_size, peak_lag);
+  return scale * LargestOutsideLobe(corr, layout.fft_size, peak_lag);
 }
 
-void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
+void GccPhatEstimator::Impl::MeasureWithoutEnergy(int pair, PairMeasurement* out) const {
+  const int max_lag = layout.max_lag_samples[pair];
+  out->sensor = array.sensor_of_pair(pair);
+  out->first_lag_samples = -max_lag;
+  out->delay_s = 0.0;
+  out->quality = 0.0;
+  out->peak_value = 0.0;
+  out->peak_snr = 0.0;
+  out->delay_sigma_s = SigmaCapSamples(max_lag) / options.sample_rate_hz;
+  out->candidates.clear();
+  if (options.keep_gcc)
+    out->gcc.assign(2 * max_lag + 1, 0.0f);
+  else
+    out->gcc.clear();
+}
+
+float GccPhatEstimator::Impl::WeighItem(int item, float* g) {
+  const int pairs = array.pair_count();
+  if (item < pairs) return WeighCrossSpectrum(item, g);
+  const auto [a, b] = layout.cross_sensors[static_cast<std::size_t>(item - pairs)];
+  return WeighSensors(a, b, /*pair=*/-1, g);
+}
+
+void GccPhatEstimator::Impl::ReadItem(int item, float norm, const float* g, const float* corr, Measurement* out) {
+  const int pairs = array.pair_count();
+  if (item >= pairs) {
+    ReadCrossPair(item - pairs, norm, corr, &out->cross_pairs[static_cast<std::size_t>(item - pairs)]);
+  } else if (norm > 0.0f) {
+    ReadPair(item, norm, g, corr, &out->pairs[static_cast<std::size_t>(item)]);
+  } else {  // no energy in the band: nothing to measure
+    MeasureWithoutEnergy(item, &out->pairs[static_cast<std::size_t>(item)]);
+  }
+}
+
+void GccPhatEstimator::Impl::MeasureItems(int first, int end, Measurement* out) {
+  for (int a = first; a < end; a += 2) {
+    const int b = a + 1 < end ? a + 1 : -1;
+    const float norm_a = WeighItem(a, cross.get());
+    const float norm_b = b >= 0 ? WeighItem(b, cross_b.get()) : 0.0f;
+    const bool heard_a = norm_a > 0.0f;
+    const bool heard_b = norm_b > 0.0f;
+    if (heard_a || heard_b) packed.Inverse(heard_a ? cross.get() : nullptr, heard_b ? cross_b.get() : nullptr);
+    const float* corr = packed.inverse_output();
+    ReadItem(a, heard_a ? norm_a : 0.0f, cross.get(), corr, out);
+    if (b >= 0) ReadItem(b, heard_b ? norm_b : 0.0f, cross_b.get(), corr + 1, out);
+  }
+}
+
+void GccPhatEstimator::Impl::MeasureOnePair(int pair, PairMeasurement* out) {
+  const float norm = WeighCrossSpectrum(pair, cross.get());
+  if (!(norm > 0.0f)) {
+    MeasureWithoutEnergy(pair, out);
+    return;
+  }
+  packed.Inverse(cross.get(), nullptr);
+  ReadPair(pair, norm, cross.get(), packed.inverse_output(), out);
+}
+
+void GccPhatEstimator::Impl::ReadPair(int pair, float norm, const float* g, const float* corr, PairMeasurement* out) {
   const int max_lag = layout.max_lag_samples[pair];
   const int searched_count = 2 * max_lag + 1;
   out->sensor = array.sensor_of_pair(pair);
   out->first_lag_samples = -max_lag;
-
-  const float norm = WeighCrossSpectrum(pair);
-  if (!(norm > 0.0f)) {  // no energy in the band: nothing to measure
-    out->delay_s = 0.0;
-    out->quality = 0.0;
-    out->peak_value = 0.0;
-    out->peak_snr = 0.0;
-    out->delay_sigma_s = SigmaCapSamples(max_lag) / options.sample_rate_hz;
-    out->candidates.clear();
-    if (options.keep_gcc)
-      out->gcc.assign(searched_count, 0.0f);
-    else
-      out->gcc.clear();
-    return;
-  }
-  std::memcpy(weighed.get(), cross.get(), sizeof(float) * 2 * layout.bin_count);
   const bool learnt = options.weighting == Weighting::kPhatCoherence && coherence_usable[pair];
-  const float noise_floor_inverse = learnt ? WeighedNoiseFloorInverse(norm) : layout.noise_floor_inverse;
-  fftwf_execute(inverse.get());
+  const float noise_floor_inverse = learnt ? WeighedNoiseFloorInverse(norm, g) : layout.noise_floor_inverse;
   const float scale = 1.0f / norm;
-  GatherWindow(max_lag, scale);
+  GatherWindow(corr, max_lag, scale);
 
   const std::span<const float> searched(window.data() + kPeakHalfWidth, searched_count);
   const int peak = ArgMax(searched);
@@ -283,11 +339,11 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
   out->delay_s = delay_samples / options.sample_rate_hz;
   out->peak_value = peak_value;
   out->peak_snr = peak_value * noise_floor_inverse;
-  out->quality = QualityRatio(peak_value, LargestSidelobe(searched, peak, peak_lag, scale));
+  out->quality = QualityRatio(peak_value, LargestSidelobe(corr, searched, peak, peak_lag, scale));
 
   const double padding_factor = static_cast<double>(layout.fft_size) / static_cast<double>(options.frame_samples);
   const DelaySpread spread =
-      SpreadFromMoments(AnalyseSpectrum(pair, delay_samples), norm, padding_factor,
+      SpreadFromMoments(AnalyseSpectrum(pair, delay_samples, g), norm, padding_factor,
                         InterpolationErrorSamples(options.interpolation, around, offset_samples), max_lag);
   out->delay_sigma_s = spread.sigma_samples / options.sample_rate_hz;
   if (options.weighting == Weighting::kPhatCoherence) LearnCoherence(pair);
@@ -300,21 +356,19 @@ void GccPhatEstimator::Impl::MeasurePair(int pair, PairMeasurement* out) {
     out->gcc.clear();
 }
 
-void GccPhatEstimator::Impl::MeasureCrossPair(int index, CrossPairGcc* out) {
+void GccPhatEstimator::Impl::ReadCrossPair(int index, float norm, const float* corr, CrossPairGcc* out) {
   const auto [a, b] = layout.cross_sensors[static_cast<std::size_t>(index)];
   const int max_lag = layout.cross_max_lag_samples[static_cast<std::size_t>(index)];
   out->sensor_a = a;
   out->sensor_b = b;
   out->first_lag_samples = -max_lag;
-  const float norm = WeighSensors(a, b, /*pair=*/-1);
   if (!(norm > 0.0f)) {
     out->noise_floor_inverse = 0.0;
     out->gcc.assign(2 * max_lag + 1, 0.0f);
     return;
   }
   out->noise_floor_inverse = layout.noise_floor_inverse;
-  fftwf_execute(inverse.get());
-  GatherWindow(max_lag, 1.0f / norm);
+  GatherWindow(corr, max_lag, 1.0f / norm);
   const float* searched = window.data() + kPeakHalfWidth;
   out->gcc.assign(searched, searched + 2 * max_lag + 1);
 }
@@ -340,15 +394,22 @@ Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double 
         "; the estimator was created for frame_samples = " + std::to_string(s.options.frame_samples));
   }
   s.have_spectra = false;
-  for (int ch = 0; ch < s.array.sensor_count(); ++ch) {
-    LOCALIZER_RETURN_IF_ERROR(s.TransformChannel(frame + static_cast<std::size_t>(ch) * frame_samples, ch));
+  const int sensors = s.array.sensor_count();
+  const auto channel = [&](int ch) { return frame + static_cast<std::size_t>(ch) * frame_samples; };
+  for (int ch = 0; ch < sensors; ch += 2) {
+    const int partner = ch + 1 < sensors ? ch + 1 : -1;
+    LOCALIZER_RETURN_IF_ERROR(s.TransformChannels(channel(ch), ch, partner >= 0 ? channel(partner) : nullptr, partner));
   }
   out->t_s = t_s;
   out->sample_rate_hz = s.options.sample_rate_hz;
-  out->pairs.resize(s.array.pair_count());
-  for (int p = 0; p < s.array.pair_count(); ++p) s.MeasurePair(p, &out->pairs[p]);
+  const int pairs = s.array.pair_count();
+  out->pairs.resize(pairs);
+  // The cross pairs along with the frame's when asked for, unless warped readings may still
+  // replace a channel's spectrum (they are measured from the kept readings').
+  const bool with_cross = s.options.cross_pairs_with_frame && s.sensor_rate.empty();
+  out->cross_pairs.resize(with_cross ? s.layout.cross_sensors.size() : 0);
+  s.MeasureItems(0, pairs + static_cast<int>(out->cross_pairs.size()), out);
   if (!s.sensor_rate.empty()) s.MeasureWarpedPairs(frame, out);
-  out->cross_pairs.clear();  // measured on request, from these spectra (MeasureCrossPairs)
   s.have_spectra = true;
   return Status::Ok();
 }
@@ -357,9 +418,10 @@ Status GccPhatEstimator::MeasureCrossPairs(Measurement* out) {
   Impl& s = *impl_;
   if (out == nullptr) return InvalidArgument("out (the Measurement to fill) is null");
   if (!s.have_spectra) return FailedPrecondition("MeasureCrossPairs needs a frame estimated first");
-  out->cross_pairs.resize(s.layout.cross_sensors.size());
-  for (std::size_t q = 0; q < out->cross_pairs.size(); ++q)
-    s.MeasureCrossPair(static_cast<int>(q), &out->cross_pairs[q]);
+  const int count = static_cast<int>(s.layout.cross_sensors.size());
+  out->cross_pairs.resize(count);
+  const int pairs = s.array.pair_count();
+  s.MeasureItems(pairs, pairs + count, out);
   return Status::Ok();
 }
 

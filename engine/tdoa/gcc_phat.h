@@ -126,9 +126,11 @@
 // the weight array read in the weighing pass plus one O(bins) update per pair and frame:
 // BM_GccPhatCoherence 133 us per 4 x 4096 frame against 91-96 us for PHAT (same run).
 //
-// Cost per frame: (channels) real FFTs of N plus (channels - 1) inverse FFTs of N (and one
-// more weighing and inverse FFT per cross pair, GccOptions::cross_pairs_max_sensors), O(N) for
-// the spectra (one vectorised pass per pair, cross_spectrum.h), O(L_p) for the peak and
+// Cost per frame: ceil(channels / 2) complex FFTs of N (two channels in one, packed_transforms.h)
+// plus ceil((channels - 1) / 2) complex inverse FFTs of N (two pairs in one; the cross pairs,
+// GccOptions::cross_pairs_max_sensors, add one weighing each and share the inverse transforms),
+// O(N) to pack and unpack them, O(N) for the spectra (one vectorised pass per pair,
+// cross_spectrum.h), O(L_p) for the peak and
 // ~0.2 us per pair for the sinc refinement; plans are made once in Create and reused, so
 // Estimate allocates nothing after the first call (which sizes out->pairs and each pair's
 // gcc). tests/bench/gcc_bench.cc compares Estimate with the bare transforms.
@@ -204,6 +206,12 @@ struct GccOptions {
   // correlation would alias (N - frame_samples - kPeakHalfWidth - 1 lags; gcc_layout.h).
   // kPhatCoherence weighs cross pairs with plain PHAT.
   int cross_pairs_max_sensors = 0;
+  // Estimate measures the cross pairs too (when the array has them and no delay rates are
+  // set; else they stay on request), their inverse transforms packed with the reference
+  // pairs' (packed_transforms.h): for 4 sensors three complex inverse transforms per frame
+  // instead of four. For a caller that reads them on every frame (a session with
+  // pair_closure).
+  bool cross_pairs_with_frame = false;
   // kPhatCoherence: the exponential average's time constant in frames (>= 1; the weight of
   // a frame falls by e after this many frames) and the frames measured with plain PHAT before
   // the averaged coherence is used (>= 1).
@@ -229,8 +237,9 @@ class GccPhatEstimator final : public TdoaEstimator {
   // options().frame_samples, or a channel holds a non-finite sample; `out` is then untouched.
   Status Estimate(const float* frame, int frame_samples, double t_s, Measurement* out) override;
   // The last estimated frame's pairs without the reference (GccOptions::cross_pairs_max_sensors;
-  // none for larger arrays or without keep_gcc). Estimate leaves out->cross_pairs empty;
-  // FAILED_PRECONDITION before a frame was estimated (or after one that failed).
+  // none for larger arrays or without keep_gcc). Estimate leaves out->cross_pairs empty
+  // unless cross_pairs_with_frame; FAILED_PRECONDITION before a frame was estimated (or after
+  // one that failed).
   Status MeasureCrossPairs(Measurement* out) override;
   // From the next Estimate on, each pair with a rate other than 0 is measured twice: as the
   // frame is, and with its sensor's channel read along the rate (delay_warp.h); it keeps the

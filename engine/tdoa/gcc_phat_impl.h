@@ -13,6 +13,7 @@
 #include "engine/tdoa/fftw_util.h"
 #include "engine/tdoa/gcc_layout.h"
 #include "engine/tdoa/gcc_phat.h"
+#include "engine/tdoa/packed_transforms.h"
 
 namespace localizer::engine {
 
@@ -20,23 +21,36 @@ struct GccPhatEstimator::Impl {
   Impl(const ArrayGeometry& geometry, const GccOptions& opts) : array(geometry), options(opts) {}
 
   Status Init();
-  Status TransformChannel(const float* samples, int channel);
+  float* SpectrumOf(int channel);  // interleaved X of `channel`; slot sensor_count() is scratch
+  // Channels a and b (b < 0: a alone, samples_b unused) through one packed forward transform.
+  Status TransformChannels(const float* samples_a, int a, const float* samples_b, int b);
   // After the plain pairs: each pair whose sensor has a delay rate is measured again with
   // that channel read along it (delay_warp.h) and keeps the reading whose peak is higher; the
   // spectra are left as the kept readings'.
   void MeasureWarpedPairs(const float* frame, Measurement* out);
-  float WeighCrossSpectrum(int pair);
-  float WeighSensors(int ref, int sensor, int pair);
-  // S / sqrt(the noise-only variance of S R) for the weights in `weighed`: 1 / (R's noise-only
+  float WeighCrossSpectrum(int pair, float* g);
+  float WeighSensors(int ref, int sensor, int pair, float* g);
+  // S / sqrt(the noise-only variance of S R) for the weights in g: 1 / (R's noise-only
   // standard deviation), for weights that are not PHAT's unit ones; times the taper's factor (gcc_layout.h).
-  float WeighedNoiseFloorInverse(float norm) const;
-  void MeasurePair(int pair, PairMeasurement* out);
-  // Cross pair `index` of layout.cross_sensors: its GCC over its window and noise scale.
-  void MeasureCrossPair(int index, CrossPairGcc* out);
-  void GatherWindow(int max_lag, float scale);
-  float LargestSidelobe(std::span<const float> searched, int peak, int peak_lag, float scale) const;
-  // The moments of the kept cross-spectrum at the measured delay (delay_statistics.h).
-  SpectrumMoments AnalyseSpectrum(int pair, double delay_samples);
+  float WeighedNoiseFloorInverse(float norm, const float* g) const;
+  // Items [first, end) into out: item i is reference pair i (< pair_count, into out->pairs)
+  // or cross pair i - pair_count (into out->cross_pairs, sized by the caller); two items'
+  // inverse transforms are packed into one.
+  void MeasureItems(int first, int end, Measurement* out);
+  float WeighItem(int item, float* g);
+  void ReadItem(int item, float norm, const float* g, const float* corr, Measurement* out);
+  void MeasureOnePair(int pair, PairMeasurement* out);
+  // One pair from its cross-spectrum g (sum of |G| `norm` > 0) and correlation corr (lag l at
+  // corr[2 (l mod N)]).
+  void ReadPair(int pair, float norm, const float* g, const float* corr, PairMeasurement* out);
+  void MeasureWithoutEnergy(int pair, PairMeasurement* out) const;
+  // Cross pair `index` of layout.cross_sensors: its GCC over its window and noise scale
+  // (norm 0: no energy in the band).
+  void ReadCrossPair(int index, float norm, const float* corr, CrossPairGcc* out);
+  void GatherWindow(const float* corr, int max_lag, float scale);
+  float LargestSidelobe(const float* corr, std::span<const float> searched, int peak, int peak_lag, float scale) const;
+  // The moments of the pair's cross-spectrum g at the measured delay (delay_statistics.h).
+  SpectrumMoments AnalyseSpectrum(int pair, double delay_samples, const float* g);
   void LearnCoherence(int pair);
 
   ArrayGeometry array;
@@ -51,11 +65,9 @@ struct GccPhatEstimator::Impl {
   std::vector<float> kept_spectrum;  // spectrum_stride: a channel's plain spectrum while its warped one is tried
   PairMeasurement warped_pair;       // a pair measured with its sensor's channel warped
   std::vector<float> window;         // scaled R at lags -(L + K) .. L + K, K = kPeakHalfWidth
-  FftwFloats padded;                 // N: one channel, zero padded
-  FftwFloats spectra;                // channels * spectrum_stride: interleaved X per channel
-  FftwFloats cross;                  // 2 * bin_count: weighted cross-spectrum (c2r input)
-  FftwFloats corr;                   // N: inverse transform output, lag l at index l mod N
-  FftwFloats weighed;                // 2 * bin_count: `cross` kept before c2r destroys it
+  FftwFloats spectra;                // (channels + 1) * spectrum_stride: interleaved X per channel (band bins)
+  FftwFloats cross;                  // 2 * bin_count: one pair's weighted cross-spectrum
+  FftwFloats cross_b;                // 2 * bin_count: the pair inverted with it
   // kPhatCoherence, per pair (pair * bin_count + bin): the running average of the aligned
   // coherence (not yet bias corrected), the weight w it gives the next frame, the frames
   // averaged, and whether the weights hold anything (else the pair falls back to PHAT).
@@ -65,8 +77,8 @@ struct GccPhatEstimator::Impl {
   std::vector<char> coherence_usable;
   std::vector<WindowExtremum> extrema;  // scratch for PickDelayCandidates
   bool have_spectra = false;            // `spectra` hold the last frame Estimate took (MeasureCrossPairs)
-  FftwPlan forward;
-  FftwPlan inverse;
+  // Two channels per forward transform, two pairs per inverse (packed_transforms.h).
+  PackedTransforms packed;
 };
 
 }  // namespace localizer::engine

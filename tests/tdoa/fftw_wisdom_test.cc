@@ -25,7 +25,7 @@ std::string Describe(const FftwPlan& plan) {
 }
 
 struct Plans {
-  std::string forward, inverse;
+  std::string forward, inverse, packed_forward, packed_inverse;
 };
 
 // Forgets all wisdom, then (with_wisdom) imports size n's built-in entry alone, and plans
@@ -37,8 +37,12 @@ Plans PlanFresh(int n, bool with_wisdom) {
   }
   FftwFloats real = AllocateFftwFloats(n);
   FftwFloats complex = AllocateFftwFloats(2 * (n / 2 + 1));
+  FftwFloats packed_in = AllocateFftwFloats(2 * n);
+  FftwFloats packed_out = AllocateFftwFloats(2 * n);
   return {Describe(PlanRealForward(n, real.get(), complex.get(), FFTW_ESTIMATE)),
-          Describe(PlanRealInverse(n, complex.get(), real.get(), FFTW_ESTIMATE))};
+          Describe(PlanRealInverse(n, complex.get(), real.get(), FFTW_ESTIMATE)),
+          Describe(PlanComplex(n, packed_in.get(), packed_out.get(), FFTW_FORWARD, FFTW_ESTIMATE)),
+          Describe(PlanComplex(n, packed_in.get(), packed_out.get(), FFTW_BACKWARD, FFTW_ESTIMATE))};
 }
 
 std::vector<int> CoveredSizes() {
@@ -59,6 +63,8 @@ TEST(BuiltinFftwWisdom, GivesThePlansEstimateMakesWithoutIt) {
     ASSERT_FALSE(estimated.forward.empty()) << n;
     EXPECT_EQ(from_wisdom.forward, estimated.forward) << "r2c of size " << n;
     EXPECT_EQ(from_wisdom.inverse, estimated.inverse) << "c2r of size " << n;
+    EXPECT_EQ(from_wisdom.packed_forward, estimated.packed_forward) << "forward c2c of size " << n;
+    EXPECT_EQ(from_wisdom.packed_inverse, estimated.packed_inverse) << "backward c2c of size " << n;
     // The size's entry alone plans it: the engine's problems (alignment, out of place) are
     // the covered ones.
     ForgetFftwWisdom();
@@ -67,6 +73,11 @@ TEST(BuiltinFftwWisdom, GivesThePlansEstimateMakesWithoutIt) {
     FftwFloats complex = AllocateFftwFloats(2 * (n / 2 + 1));
     EXPECT_TRUE(PlanRealForward(n, real.get(), complex.get(), FFTW_ESTIMATE | FFTW_WISDOM_ONLY)) << n;
     EXPECT_TRUE(PlanRealInverse(n, complex.get(), real.get(), FFTW_ESTIMATE | FFTW_WISDOM_ONLY)) << n;
+    FftwFloats packed_in = AllocateFftwFloats(2 * n);
+    FftwFloats packed_out = AllocateFftwFloats(2 * n);
+    for (int sign : {FFTW_FORWARD, FFTW_BACKWARD}) {
+      EXPECT_TRUE(PlanComplex(n, packed_in.get(), packed_out.get(), sign, FFTW_ESTIMATE | FFTW_WISDOM_ONLY)) << n;
+    }
   }
   ImportBuiltinFftwWisdom();  // leave the process as the engine would
 }

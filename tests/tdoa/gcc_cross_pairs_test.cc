@@ -96,6 +96,35 @@ TEST(CrossPairs, OnlySmallArraysThatKeepTheirGcc) {
   }
 }
 
+// cross_pairs_with_frame: Estimate measures them, packed with the reference pairs' transforms
+// (packed_transforms.h), to float rounding what a request measures; with delay rates set they
+// stay on request (a warped reading may still replace a channel's spectrum).
+TEST(CrossPairs, MeasuredWithTheFrameWhenAskedAsOnRequest) {
+  const SignalSpec spec;
+  const ArrayGeometry tetra = testing::TetrahedronArray();
+  const std::vector<float> frame =
+      DelayedNoiseFrame(spec, ChannelDelaysSamples(tetra, Vec3(-2, 3, 1), spec.sample_rate_hz), 5.0, 9);
+  const Measurement requested = MeasureFrame(tetra, CrossOptions(spec, 4), frame);
+  GccOptions eager = CrossOptions(spec, 4);
+  eager.cross_pairs_with_frame = true;
+  auto estimator = *GccPhatEstimator::Create(tetra, eager);
+  Measurement m;
+  ASSERT_TRUE(estimator->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
+  ASSERT_EQ(m.cross_pairs.size(), requested.cross_pairs.size());
+  ASSERT_EQ(m.cross_pairs.size(), 3u);
+  for (size_t q = 0; q < m.cross_pairs.size(); ++q) {
+    ASSERT_EQ(m.cross_pairs[q].gcc.size(), requested.cross_pairs[q].gcc.size());
+    for (size_t i = 0; i < m.cross_pairs[q].gcc.size(); ++i) {
+      EXPECT_NEAR(m.cross_pairs[q].gcc[i], requested.cross_pairs[q].gcc[i], 1e-5) << q << " " << i;
+    }
+  }
+  ASSERT_TRUE(estimator->SetDelayRates(std::vector<double>{1e-4, 0.0, 0.0}).ok());
+  ASSERT_TRUE(estimator->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
+  EXPECT_TRUE(m.cross_pairs.empty()) << "on request while delay rates are set";
+  ASSERT_TRUE(estimator->MeasureCrossPairs(&m).ok());
+  EXPECT_EQ(m.cross_pairs.size(), 3u);
+}
+
 TEST(CrossPairs, AskedBeforeAFrameIsAFailedPrecondition) {
   const SignalSpec spec;
   auto estimator = *GccPhatEstimator::Create(testing::TetrahedronArray(), CrossOptions(spec, 4));
