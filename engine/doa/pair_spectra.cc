@@ -87,14 +87,13 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
   s.g_.assign(s.pairs_.size(), std::vector<std::complex<double>>(s.bins_.size()));
   s.history_.assign(static_cast<size_t>(o.rise_lag_frames) + 1, s.g_);
 
-  const int time_stride = Stride(s.fft_size_), spectrum_stride = Stride(2 * (half + 1));
-  s.time_ = AllocateFftwFloats(static_cast<size_t>(time_stride) * o.sensors);
-  s.spectra_ = AllocateFftwFloats(static_cast<size_t>(spectrum_stride) * o.sensors);
+  const int spectrum_stride = Stride(2 * (half + 1));
+  // One more channel slot than sensors: the partner of a channel transformed alone.
+  s.spectra_ = AllocateFftwFloats(static_cast<size_t>(spectrum_stride) * (o.sensors + 1));
   s.cross_ = AllocateFftwFloats(static_cast<size_t>(spectrum_stride));
-  s.gcc_ = AllocateFftwFloats(static_cast<size_t>(time_stride));
-  s.forward_ = PlanRealForward(s.fft_size_, s.time_.get(), s.spectra_.get(), FFTW_ESTIMATE);
-  s.inverse_ = PlanRealInverse(s.fft_size_, s.cross_.get(), s.gcc_.get(), FFTW_ESTIMATE);
-  if (!s.forward_ || !s.inverse_) return Internal("FFTW could not plan a transform of " + std::to_string(s.fft_size_));
+  s.cross_b_ = AllocateFftwFloats(static_cast<size_t>(spectrum_stride));
+  if (!s.packed_.Init(s.fft_size_, s.bins_.front(), s.bins_.back() + 1, FFTW_ESTIMATE))
+    return Internal("FFTW could not plan a transform of " + std::to_string(s.fft_size_));
   return s;
 }
 
@@ -127,19 +126,28 @@ void PairSpectra::FindSignalShare() {
 }
 
 Status PairSpectra::Analyse(const float* frame, Measurement* field) {
-  const int n = options_.frame_samples, m = fft_size_, half = m / 2;
-  const int time_stride = Stride(m), spectrum_stride = Stride(2 * (half + 1));
-  for (int c = 0; c < options_.sensors; ++c) {
-    const float* in = frame + static_cast<size_t>(c) * n;
-    float* t = time_.get() + static_cast<size_t>(c) * time_stride;
-    uint32_t non_finite = 0;  // an all-ones exponent: inf or NaN (integer ops, so the loop vectorises)
-    for (int i = 0; i < n; ++i) {
-      t[i] = in[i];
-      non_finite |= static_cast<uint32_t>((std::bit_cast<uint32_t>(in[i]) & 0x7f800000u) == 0x7f800000u);
+  const int n = options_.frame_samples, half = fft_size_ / 2;
+  const int spectrum_stride = Stride(2 * (half + 1));
+  const auto spectrum = [&](int c) { return spectra_.get() + static_cast<size_t>(c) * spectrum_stride; };
+  // Channels c and c + 1 as the real and imaginary parts of one transform's input (its
+  // zero-padded tail stays zero: the transform preserves its input).
+  for (int c = 0; c < options_.sensors; c += 2) {
+    const bool two = c + 1 < options_.sensors;
+    float* t = packed_.forward_input();
+    for (int part = 0; part < 2; ++part) {
+      const float* in = frame + static_cast<size_t>(c + part) * n;
+      uint32_t non_finite = 0;  // an all-ones exponent: inf or NaN (integer ops, so the loop vectorises)
+      if (part == 1 && !two) {
+        for (int i = 0; i < n; ++i) t[2 * i + 1] = 0.0f;
+        continue;
+      }
+      for (int i = 0; i < n; ++i) {
+        t[2 * i + part] = in[i];
+        non_finite |= static_cast<uint32_t>((std::bit_cast<uint32_t>(in[i]) & 0x7f800000u) == 0x7f800000u);
+      }
+      if (non_finite != 0) return InvalidArgument("sensor " + std::to_string(c + part) + " has a non-finite sample");
     }
-    if (non_finite != 0) return InvalidArgument("sensor " + std::to_string(c) + " has a non-finite sample");
-    std::fill(t + n, t + m, 0.0f);
-    fftwf_execute_dft_r2c(forward_.get(), t, AsComplex(spectra_.get() + static_cast<size_t>(c) * spectrum_stride));
+    packed_.Forward(spectrum(c), spectrum(two ? c + 1 : options_.sensors));
   }
   // The in-band bins of every channel as doubles (re, im apart), their powers summed over
   // the channels (FindSignalShare) and the band's mean power, in one pass.
@@ -184,29 +192,39 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
       g[2 * b + 1] = kept ? ci / magnitude : 0.0;
     }
     history_[newest_][p] = g_[p];
-    FillField(static_cast<int>(p), &field->pairs[p]);
   }
+  FillFields(field);
   ++frames_analysed_;
   return Status::Ok();
 }
 
-void PairSpectra::FillField(int p, PairMeasurement* out) {
-  const int m = fft_size_, half = m / 2, max_lag = options_.max_lag_samples;
-  const std::vector<std::complex<double>>& g = g_[static_cast<size_t>(p)];
-  std::fill(cross_.get(), cross_.get() + 2 * (half + 1), 0.0f);
-  for (size_t b = 0; b < bins_.size(); ++b) {
-    cross_[2 * static_cast<size_t>(bins_[b])] = static_cast<float>(g[b].real());
-    cross_[2 * static_cast<size_t>(bins_[b]) + 1] = static_cast<float>(g[b].imag());
-  }
-  fftwf_execute(inverse_.get());
-  const double scale = 1.0 / (2.0 * static_cast<double>(bins_.size()));  // the c2r output is 2 B R
+void PairSpectra::FillTwoFields(int p, int q, Measurement* field) {
+  // Each pair's in-band bins as floats; the packed inverse reads no others.
+  const auto load = [&](int pair, float* cross) {
+    const std::vector<std::complex<double>>& g = g_[static_cast<size_t>(pair)];
+    for (size_t b = 0; b < bins_.size(); ++b) {
+      cross[2 * static_cast<size_t>(bins_[b])] = static_cast<float>(g[b].real());
+      cross[2 * static_cast<size_t>(bins_[b]) + 1] = static_cast<float>(g[b].imag());
+    }
+  };
+  load(p, cross_.get());
+  if (q >= 0) load(q, cross_b_.get());
+  packed_.Inverse(cross_.get(), q >= 0 ? cross_b_.get() : nullptr);
+  FillField(p, packed_.inverse_output(), &field->pairs[static_cast<size_t>(p)]);
+  if (q >= 0) FillField(q, packed_.inverse_output() + 1, &field->pairs[static_cast<size_t>(q)]);
+}
+
+// correlation: the pair's inverse transform, lag l at correlation[2 (l mod M)].
+void PairSpectra::FillField(int p, const float* correlation, PairMeasurement* out) {
+  const int m = fft_size_, max_lag = options_.max_lag_samples;
+  const double scale = 1.0 / (2.0 * static_cast<double>(bins_.size()));  // the inverse's output is 2 B R
   out->sensor = pairs_[static_cast<size_t>(p)].second;
   out->first_lag_samples = -max_lag;
   const int window = 2 * max_lag + 1;
   out->gcc.resize(static_cast<size_t>(window));
   for (int i = 0; i < window; ++i) {
     const int wrapped = (i - max_lag + m) % m;  // lag i - max_lag, modulo the transform
-    out->gcc[static_cast<size_t>(i)] = static_cast<float>(gcc_[static_cast<size_t>(wrapped)] * scale);
+    out->gcc[static_cast<size_t>(i)] = static_cast<float>(correlation[2 * static_cast<size_t>(wrapped)] * scale);
   }
   out->peak_value = noise_sigma_;
   out->peak_snr = 1.0;
@@ -294,7 +312,8 @@ void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::comple
 }
 
 void PairSpectra::FillFields(Measurement* field) {
-  for (size_t p = 0; p < pairs_.size(); ++p) FillField(static_cast<int>(p), &field->pairs[p]);
+  const auto pairs = static_cast<int>(pairs_.size());
+  for (int p = 0; p < pairs; p += 2) FillTwoFields(p, p + 1 < pairs ? p + 1 : -1, field);
 }
 
 void PairSpectra::RestoreDelay(int p, double lag_samples, const std::vector<std::complex<double>>& taken) {

@@ -28,8 +28,9 @@
 // A bin where either channel is silent (|X_i conj(X_j)| below 1e-12 of the frame's mean
 // power) contributes 0.
 //
-// Cost per frame: `sensors` real FFTs of M, P = sensors (sensors - 1) / 2 products over the
-// band and P inverse FFTs of M (BENCHMARKS.md, doa_bench). Not thread-safe; one per analyser.
+// Cost per frame: ceil(sensors / 2) complex FFTs of M (two channels in one), P = sensors
+// (sensors - 1) / 2 products over the band and ceil(P / 2) complex inverse FFTs of M (two
+// pairs in one; engine/tdoa/packed_transforms.h) (BENCHMARKS.md, doa_bench). Not thread-safe; one per analyser.
 #pragma once
 
 #include <complex>
@@ -39,6 +40,7 @@
 #include "engine/core/status.h"
 #include "engine/core/types.h"
 #include "engine/tdoa/fftw_util.h"
+#include "engine/tdoa/packed_transforms.h"
 
 namespace localizer::engine {
 
@@ -102,7 +104,9 @@ class PairSpectra {
 
  private:
   PairSpectra() = default;
-  void FillField(int p, PairMeasurement* out);
+  // Pairs p and q (q < 0: p alone) into out->pairs, their inverse transforms packed into one.
+  void FillTwoFields(int p, int q, Measurement* out);
+  void FillField(int p, const float* correlation, PairMeasurement* out);
   // kDerivatives false: only r (the same value), dr = d2r = 0.
   template <bool kDerivatives = true>
   Value Evaluate(const std::vector<std::complex<double>>& g, double lag_samples) const;
@@ -128,8 +132,8 @@ class PairSpectra {
   std::vector<std::vector<std::vector<std::complex<double>>>> history_;
   size_t newest_ = 0;
   int64_t frames_analysed_ = 0;
-  FftwFloats time_, spectra_, cross_, gcc_;
-  FftwPlan forward_, inverse_;
+  FftwFloats spectra_, cross_, cross_b_;
+  PackedTransforms packed_;  // two channels per forward transform, two pairs per inverse
 };
 
 }  // namespace localizer::engine

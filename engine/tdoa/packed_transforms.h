@@ -1,4 +1,5 @@
-// Two real transforms for the price of one complex one (internal to engine/tdoa).
+// Two real transforms for the price of one complex one (the GCC stage's, gcc_phat.h, and the
+// direction finder's pair spectra, engine/doa/pair_spectra.h).
 //
 // Why. With FFTW_ESTIMATE plans (the engine's: they replay bit for bit on every build
 // machine, fftw_util.h) a real transform of 5120 points costs about as much as a complex one:
@@ -16,8 +17,7 @@
 //
 // Exact in exact arithmetic; in float the results differ from r2c / c2r in the last bits
 // (the unpacking adds one rounding). Only the bins [first_bin, end_bin) are unpacked or read:
-// the GCC stage uses no others (its band, gcc_layout.h); the rest of the inverse's input
-// stays zero.
+// the callers use no others (their band); the rest of the inverse's input stays zero.
 #pragma once
 
 #include "engine/tdoa/fftw_util.h"
