@@ -236,10 +236,13 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   // whether or not it rose; a reflection seldom leads even one frame while its source sounds.
   const Vec3 first_u = peaks.empty() ? Vec3::Constant(DirectionPeak::kNan) : UnitOf(peaks.front());
   const bool persistent = Persists(&leader_, first_u) && may_start;
+  plot_share_.clear();  // per peak: its statistic over the frame's strongest
+  for (const DirectionPeak& peak : peaks)
+    plot_share_.push_back(peaks.front().statistic > 0.0 ? peak.statistic / peaks.front().statistic : 0.0);
   // The same for the frame's second peak while it holds at least co_lead_share of the
   // strongest's statistic: a steady source beside a louder one ("Co-leaders").
-  const bool second_counts = options_.co_lead_share > 0.0 && peaks.size() > 1 && peaks.front().statistic > 0.0 &&
-                             peaks[1].statistic >= options_.co_lead_share * peaks.front().statistic;
+  const bool second_counts =
+      options_.co_lead_share > 0.0 && plot_share_.size() > 1 && plot_share_[1] >= options_.co_lead_share;
   const Vec3 second_u = second_counts ? UnitOf(peaks[1]) : Vec3::Constant(DirectionPeak::kNan);
   const bool persistent_second = Persists(&second_, second_u) && may_start;
   // It may resume a silent track, and start one only where no track of the last frame
@@ -247,9 +250,7 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
   const bool persistent_starts = persistent && NoTrackNear(first_u);
   const bool persistent_second_starts = persistent_second && NoTrackNear(second_u);
   plots_.clear();
-  plot_share_.clear();
   for (const DirectionPeak& peak : peaks) {
-    plot_share_.push_back(peaks.front().statistic > 0.0 ? peak.statistic / peaks.front().statistic : 0.0);
     const Vec3 u = UnitOf(peak);
     if (!u.allFinite()) return InvalidArgument("a peak without a direction for this array's shape");
     tws::CartesianPlot plot;

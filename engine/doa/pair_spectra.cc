@@ -129,23 +129,26 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
   const int n = options_.frame_samples, half = fft_size_ / 2;
   const int spectrum_stride = Stride(2 * (half + 1));
   const auto spectrum = [&](int c) { return spectra_.get() + static_cast<size_t>(c) * spectrum_stride; };
-  // Channels c and c + 1 as the real and imaginary parts of one transform's input (its
-  // zero-padded tail stays zero: the transform preserves its input).
+  // Sensor c's samples into part `part` (0: real, 1: imaginary) of the packed transform's
+  // input; false when one is not finite.
+  const auto load = [&](int c, int part) {
+    const float* in = frame + static_cast<size_t>(c) * n;
+    float* t = packed_.forward_input() + part;
+    uint32_t non_finite = 0;  // an all-ones exponent: inf or NaN (integer ops, so the loop vectorises)
+    for (int i = 0; i < n; ++i) {
+      t[2 * i] = in[i];
+      non_finite |= static_cast<uint32_t>((std::bit_cast<uint32_t>(in[i]) & 0x7f800000u) == 0x7f800000u);
+    }
+    return non_finite == 0;
+  };
+  // Sensors c and c + 1 through one transform (its zero-padded tail stays zero: the transform
+  // preserves its input); a last sensor alone with a zero imaginary part.
   for (int c = 0; c < options_.sensors; c += 2) {
     const bool two = c + 1 < options_.sensors;
-    float* t = packed_.forward_input();
-    for (int part = 0; part < 2; ++part) {
-      const float* in = frame + static_cast<size_t>(c + part) * n;
-      uint32_t non_finite = 0;  // an all-ones exponent: inf or NaN (integer ops, so the loop vectorises)
-      if (part == 1 && !two) {
-        for (int i = 0; i < n; ++i) t[2 * i + 1] = 0.0f;
-        continue;
-      }
-      for (int i = 0; i < n; ++i) {
-        t[2 * i + part] = in[i];
-        non_finite |= static_cast<uint32_t>((std::bit_cast<uint32_t>(in[i]) & 0x7f800000u) == 0x7f800000u);
-      }
-      if (non_finite != 0) return InvalidArgument("sensor " + std::to_string(c + part) + " has a non-finite sample");
+    if (!load(c, 0)) return InvalidArgument("sensor " + std::to_string(c) + " has a non-finite sample");
+    if (two && !load(c + 1, 1)) return InvalidArgument("sensor " + std::to_string(c + 1) + " has a non-finite sample");
+    if (!two) {
+      for (int i = 0; i < n; ++i) packed_.forward_input()[2 * i + 1] = 0.0f;
     }
     packed_.Forward(spectrum(c), spectrum(two ? c + 1 : options_.sensors));
   }

@@ -303,8 +303,8 @@ void GccPhatEstimator::Impl::MeasureItems(int first, int end, Measurement* out) 
     const bool heard_b = norm_b > 0.0f;
     if (heard_a || heard_b) packed.Inverse(heard_a ? cross.get() : nullptr, heard_b ? cross_b.get() : nullptr);
     const float* corr = packed.inverse_output();
-    ReadItem(a, heard_a ? norm_a : 0.0f, cross.get(), corr, out);
-    if (b >= 0) ReadItem(b, heard_b ? norm_b : 0.0f, cross_b.get(), corr + 1, out);
+    ReadItem(a, norm_a, cross.get(), corr, out);  // a norm not above 0 reads as no energy
+    if (b >= 0) ReadItem(b, norm_b, cross_b.get(), corr + 1, out);
   }
 }
 
