@@ -23,15 +23,31 @@ Status DespikeOptions::Validate() const {
 
 namespace {
 
+// The largest |x[i]| (0 for n = 0). A maximum is exact in any order, so 32 independent
+// lanes (four 256-bit vectors) let the loads run ahead of the max's latency: one running
+// maximum (what an `omp simd reduction(max)` compiled to) waited on it every vector, and the
+// two scans over each channel cost about 4 % of the pipeline (BENCHMARKS.md, issue 20).
+float LargestMagnitude(const float* x, int n) {
+  constexpr int kMaxLanes = 32;
+  float lanes[kMaxLanes] = {};
+  int i = 0;
+  for (; i + kMaxLanes <= n; i += kMaxLanes) {
+#pragma omp simd
+    for (int l = 0; l < kMaxLanes; ++l) lanes[l] = std::max(lanes[l], std::abs(x[i + l]));
+  }
+  float largest = 0.0f;
+  for (; i < n; ++i) largest = std::max(largest, std::abs(x[i]));
+  for (float lane : lanes) largest = std::max(largest, lane);
+  return largest;
+}
+
 // The median of n >= 1 non-negative values to within max / 2^20 (max their largest): a
 // bisection on the value whose counts are branch-free (they vectorise). std::nth_element on
 // 256 values mispredicts about every other comparison and took 2-4 us per channel; this
 // takes a fraction of that. The clip level needs the median to a few per cent; an impulse
 // 1e4 x the median still leaves it to 1 %.
 float ApproximateMedian(const float* values, int n) {
-  float hi = 0.0f;
-#pragma omp simd reduction(max : hi)
-  for (int i = 0; i < n; ++i) hi = std::max(hi, values[i]);
+  float hi = LargestMagnitude(values, n);  // the values are magnitudes already
   float lo = 0.0f;
   const int half = (n + 1) / 2;  // the lower median's rank
   for (int iteration = 0; iteration < 20; ++iteration) {
@@ -80,10 +96,7 @@ Status Despike(const DespikeOptions& options, float* frame, int channels, int sa
   // Most frames have nothing to clip: one vectorised pass per channel says so.
   bool any = false;
   for (int c = 0; c < channels && !any; ++c) {
-    const float* x = frame + static_cast<std::size_t>(c) * samples;
-    float peak = 0.0f;
-#pragma omp simd reduction(max : peak)
-    for (int i = 0; i < samples; ++i) peak = std::max(peak, std::abs(x[i]));
+    const float peak = LargestMagnitude(frame + static_cast<std::size_t>(c) * samples, samples);
     any = limits[c] > 0.0f && peak > limits[c];
   }
   if (!any) return Status::Ok();
@@ -144,10 +157,7 @@ Status Despike(const DespikeOptions& options, float* frame, int channels, int sa
     float* x = frame + static_cast<std::size_t>(c) * samples;
     const float limit = limits[c];
     if (!(limit > 0.0f)) continue;  // a silent (or mostly zero) channel: nothing to scale by
-    float peak = 0.0f;              // most frames have nothing to clip: one vectorised pass says so
-#pragma omp simd reduction(max : peak)
-    for (int i = 0; i < samples; ++i) peak = std::max(peak, std::abs(x[i]));
-    if (!(peak > limit)) continue;
+    if (!(LargestMagnitude(x, samples) > limit)) continue;  // most channels have nothing to clip
     for (int i = 0; i < samples; ++i) {
       const float v = x[i];
       if (!(std::abs(v) > limit)) continue;
