@@ -83,10 +83,10 @@ void Session::Impl::ProcessFrame(const float* frame, int64_t first_sample, uint6
 
   const auto tdoa_start = std::chrono::steady_clock::now();
   PredictDelayRates(e.t_s);
-  if (despike.despike_k > 0.0) {
-    despiked.assign(frame, frame + static_cast<size_t>(array.sensor_count()) * config.frame_samples);
-    (void)Despike(despike, despiked.data(), array.sensor_count(), config.frame_samples, &despike_scratch);
-    frame = despiked.data();
+  if (despike.despike_k > 0.0) {  // a frame with nothing to clip is read where it is
+    const auto despiked_frame =
+        DespikedFrame(despike, frame, array.sensor_count(), config.frame_samples, &despike_scratch, &despiked);
+    if (despiked_frame.ok()) frame = *despiked_frame;
   }
   const bool measured = components.estimator->Estimate(frame, config.frame_samples, e.t_s, &measurement).ok();
   e.timings.tdoa_s = SecondsSince(tdoa_start);

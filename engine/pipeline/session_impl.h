@@ -113,7 +113,7 @@ struct Session::Impl {
   Framer framer;
   DespikeOptions despike;
   DespikeScratch despike_scratch;
-  std::vector<float> despiked;  // the frame as the estimator sees it, when despiking
+  std::vector<float> despiked;  // a frame with samples clipped (DespikedFrame), when despiking
   DivergenceMonitor monitor;
   PairSigmaHistory pair_sigmas;       // the recent frames' delay sigmas, for Estimate::far_field
   InnovationConsistency consistency;  // the recent frames' NIS, for Estimate::covariance

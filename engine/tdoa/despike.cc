@@ -64,26 +64,23 @@ float ApproximateMedian(const float* values, int n) {
   return hi;
 }
 
-}  // namespace
-
-Status Despike(const DespikeOptions& options, float* frame, int channels, int samples, DespikeScratch* scratch,
-               DespikeStats* stats) {
+Status CheckArguments(const DespikeOptions& options, const float* frame, int channels, int samples) {
   if (Status s = options.Validate(); !s.ok()) return s;
   if (frame == nullptr) return InvalidArgument("frame is null");
   if (channels < 1) return InvalidArgument("channels is " + std::to_string(channels) + "; must be >= 1");
   if (samples < 1) return InvalidArgument("samples is " + std::to_string(samples) + "; must be >= 1");
-  if (stats != nullptr) stats->clipped_samples = 0;
-  if (options.despike_k == 0.0) return Status::Ok();
-  DespikeScratch local;
-  DespikeScratch& buffers = scratch != nullptr ? *scratch : local;
+  return Status::Ok();
+}
+
+// Each channel's clip level into buffers.limits; true when some sample exceeds its channel's.
+bool ClipLimits(const DespikeOptions& options, const float* frame, int channels, int samples,
+                DespikeScratch& buffers) {
   std::vector<float>& magnitudes = buffers.magnitudes;
   magnitudes.resize(samples);
   constexpr float kMadToSigma = 1.4826f;
   constexpr int kMedianSamples = 256;  // the median to ~8 %: the clip level to ~0.4 sigma
-  const int window = options.coincidence_samples;
-  const std::size_t stride = static_cast<std::size_t>(samples) + 1;
-  std::vector<float> limits(channels);  // small; channels is the array's sensor count
-  if (window > 0) buffers.outliers_before.resize(stride * channels);
+  std::vector<float>& limits = buffers.limits;
+  limits.assign(channels, 0.0f);
   for (int c = 0; c < channels; ++c) {
     const float* x = frame + static_cast<std::size_t>(c) * samples;
     // The median of |x| from at most kMedianSamples evenly spaced samples: a scale to set a
@@ -94,13 +91,20 @@ Status Despike(const DespikeOptions& options, float* frame, int channels, int sa
     limits[c] = static_cast<float>(options.despike_k) * kMadToSigma * ApproximateMedian(magnitudes.data(), n);
   }
   // Most frames have nothing to clip: one vectorised pass per channel says so.
-  bool any = false;
-  for (int c = 0; c < channels && !any; ++c) {
+  for (int c = 0; c < channels; ++c) {
     const float peak = LargestMagnitude(frame + static_cast<std::size_t>(c) * samples, samples);
-    any = limits[c] > 0.0f && peak > limits[c];
+    if (limits[c] > 0.0f && peak > limits[c]) return true;
   }
-  if (!any) return Status::Ok();
+  return false;
+}
+
+// Clips the outliers of a frame whose limits ClipLimits set; returns how many.
+int ClipOutliers(const DespikeOptions& options, float* frame, int channels, int samples, DespikeScratch& buffers) {
+  const std::vector<float>& limits = buffers.limits;
+  const int window = options.coincidence_samples;
+  const std::size_t stride = static_cast<std::size_t>(samples) + 1;
   if (window > 0) {
+    buffers.outliers_before.resize(stride * channels);
     for (int c = 0; c < channels; ++c) {
       const float* x = frame + static_cast<std::size_t>(c) * samples;
       int* before = buffers.outliers_before.data() + stride * c;
@@ -166,8 +170,37 @@ Status Despike(const DespikeOptions& options, float* frame, int channels, int sa
       ++clipped;
     }
   }
+  return clipped;
+}
+
+}  // namespace
+
+Status Despike(const DespikeOptions& options, float* frame, int channels, int samples, DespikeScratch* scratch,
+               DespikeStats* stats) {
+  LOCALIZER_RETURN_IF_ERROR(CheckArguments(options, frame, channels, samples));
+  if (stats != nullptr) stats->clipped_samples = 0;
+  if (options.despike_k == 0.0) return Status::Ok();
+  DespikeScratch local;
+  DespikeScratch& buffers = scratch != nullptr ? *scratch : local;
+  if (!ClipLimits(options, frame, channels, samples, buffers)) return Status::Ok();
+  const int clipped = ClipOutliers(options, frame, channels, samples, buffers);
   if (stats != nullptr) stats->clipped_samples = clipped;
   return Status::Ok();
+}
+
+StatusOr<const float*> DespikedFrame(const DespikeOptions& options, const float* frame, int channels, int samples,
+                                     DespikeScratch* scratch, std::vector<float>* clipped, DespikeStats* stats) {
+  LOCALIZER_RETURN_IF_ERROR(CheckArguments(options, frame, channels, samples));
+  if (clipped == nullptr) return InvalidArgument("clipped (the copy's buffer) is null");
+  if (stats != nullptr) stats->clipped_samples = 0;
+  if (options.despike_k == 0.0) return frame;
+  DespikeScratch local;
+  DespikeScratch& buffers = scratch != nullptr ? *scratch : local;
+  if (!ClipLimits(options, frame, channels, samples, buffers)) return frame;
+  clipped->assign(frame, frame + static_cast<std::size_t>(channels) * samples);
+  const int count = ClipOutliers(options, clipped->data(), channels, samples, buffers);
+  if (stats != nullptr) stats->clipped_samples = count;
+  return static_cast<const float*>(clipped->data());
 }
 
 }  // namespace localizer::engine

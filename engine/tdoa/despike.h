@@ -73,6 +73,7 @@ struct DespikeStats {
 struct DespikeScratch {  // reused buffers; a caller that keeps one allocates nothing per frame
   std::vector<float> magnitudes;
   std::vector<int> outliers_before;  // per channel, prefix counts of outliers
+  std::vector<float> limits;         // per channel, the clip level
 };
 
 // Clips frame[c * samples + i] in place as above. `scratch` may be null (then buffers are
@@ -82,5 +83,13 @@ struct DespikeScratch {  // reused buffers; a caller that keeps one allocates no
 // median ignores nothing: a NaN channel's scale is unspecified but the call is safe).
 Status Despike(const DespikeOptions& options, float* frame, int channels, int samples, DespikeScratch* scratch,
                DespikeStats* stats = nullptr);
+
+// The same without touching `frame`: returns `frame` itself when no sample exceeds its
+// channel's clip level (most frames: no copy), else *clipped, a copy of the frame clipped as
+// Despike would (bit for bit). The pointer is valid until *clipped changes. INVALID_ARGUMENT
+// as Despike, and when clipped is null.
+StatusOr<const float*> DespikedFrame(const DespikeOptions& options, const float* frame, int channels, int samples,
+                                     DespikeScratch* scratch, std::vector<float>* clipped,
+                                     DespikeStats* stats = nullptr);
 
 }  // namespace localizer::engine

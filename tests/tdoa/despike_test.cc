@@ -116,6 +116,44 @@ TEST(Despike, ClipsAtKRobustStandardDeviationsPerChannel) {
   EXPECT_EQ(stats.clipped_samples, 0);
 }
 
+// DespikedFrame reads a frame with nothing to clip where it is, and otherwise hands back a
+// copy clipped exactly as Despike clips in place, leaving the input as it was.
+TEST(Despike, DespikedFrameCopiesOnlyAFrameWithSomethingToClip) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  const int channels = 4, n = 4096;
+  std::vector<float> frame(static_cast<size_t>(channels) * n);
+  for (float& x : frame) x = gauss(rng);
+  const DespikeOptions options{8.0};  // 8 sigma: no Gaussian sample of these reaches it
+  DespikeScratch scratch;
+  std::vector<float> clipped;
+  DespikeStats stats;
+  auto read = DespikedFrame(options, frame.data(), channels, n, &scratch, &clipped, &stats);
+  ASSERT_TRUE(read.ok());
+  EXPECT_EQ(*read, frame.data());
+  EXPECT_TRUE(clipped.empty());
+  EXPECT_EQ(stats.clipped_samples, 0);
+
+  AddImpulses(&frame, 0.01, 30.0, 12);
+  const std::vector<float> input = frame;
+  read = DespikedFrame(options, frame.data(), channels, n, &scratch, &clipped, &stats);
+  ASSERT_TRUE(read.ok());
+  EXPECT_EQ(*read, clipped.data());
+  EXPECT_EQ(frame, input);  // untouched
+  std::vector<float> in_place = input;
+  DespikeStats in_place_stats;
+  ASSERT_TRUE(Despike(options, in_place.data(), channels, n, &scratch, &in_place_stats).ok());
+  EXPECT_EQ(clipped, in_place);
+  EXPECT_EQ(stats.clipped_samples, in_place_stats.clipped_samples);
+  EXPECT_GT(stats.clipped_samples, 0);
+
+  EXPECT_EQ(DespikedFrame(options, frame.data(), channels, n, &scratch, nullptr).status().code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(DespikedFrame(options, nullptr, channels, n, &scratch, &clipped).status().code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(DespikedFrame(DespikeOptions{0.0}, frame.data(), channels, n, &scratch, &clipped).value(), frame.data());
+}
+
 // On Gaussian frames the despiker changes nothing that matters: the spread moves < 5 %.
 TEST(Despike, GaussianSceneIsUnchanged) {
   const Errors without = Measure(false, false, 30);
