@@ -73,8 +73,7 @@ Status CheckArguments(const DespikeOptions& options, const float* frame, int cha
 }
 
 // Each channel's clip level into buffers.limits; true when some sample exceeds its channel's.
-bool ClipLimits(const DespikeOptions& options, const float* frame, int channels, int samples,
-                DespikeScratch& buffers) {
+bool ClipLimits(const DespikeOptions& options, const float* frame, int channels, int samples, DespikeScratch& buffers) {
   std::vector<float>& magnitudes = buffers.magnitudes;
   magnitudes.resize(samples);
   constexpr float kMadToSigma = 1.4826f;
@@ -161,7 +160,8 @@ int ClipOutliers(const DespikeOptions& options, float* frame, int channels, int 
     float* x = frame + static_cast<std::size_t>(c) * samples;
     const float limit = limits[c];
     if (!(limit > 0.0f)) continue;  // a silent (or mostly zero) channel: nothing to scale by
-    if (!(LargestMagnitude(x, samples) > limit)) continue;  // most channels have nothing to clip
+    // Most channels have nothing to clip.
+    if (!(LargestMagnitude(x, samples) > limit)) continue;
     for (int i = 0; i < samples; ++i) {
       const float v = x[i];
       if (!(std::abs(v) > limit)) continue;
