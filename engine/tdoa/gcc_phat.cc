@@ -173,10 +173,9 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair, float* g) {
 float GccPhatEstimator::Impl::WeighSensors(int ref, int sensor, int pair, float* g) {
   const float* xr = SpectrumOf(ref);
   const float* xk = SpectrumOf(sensor);
-  // Out-of-band bins are zeroed every time: the sum below reads DC and Nyquist.
+  // g's out-of-band bins stay zero from allocation (WeighBins writes only the band, the
+  // packed inverse only reads): the sum below reads DC and Nyquist whether or not in band.
   const int bin_count = layout.bin_count;
-  std::memset(g, 0, sizeof(float) * 2 * layout.band_first_bin);
-  std::memset(g + 2 * layout.band_end_bin, 0, sizeof(float) * 2 * (bin_count - layout.band_end_bin));
 
   const double e_ref = energy[ref];
   const double e_sensor = energy[sensor];

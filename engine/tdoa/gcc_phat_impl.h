@@ -66,8 +66,8 @@ struct GccPhatEstimator::Impl {
   PairMeasurement warped_pair;       // a pair measured with its sensor's channel warped
   std::vector<float> window;         // scaled R at lags -(L + K) .. L + K, K = kPeakHalfWidth
   FftwFloats spectra;                // (channels + 1) * spectrum_stride: interleaved X per channel (band bins)
-  FftwFloats cross;                  // 2 * bin_count: one pair's weighted cross-spectrum
-  FftwFloats cross_b;                // 2 * bin_count: the pair inverted with it
+  FftwFloats cross;                  // 2 * bin_count: one pair's weighted cross-spectrum (0 out of band)
+  FftwFloats cross_b;                // 2 * bin_count: the pair inverted with it (0 out of band)
   // kPhatCoherence, per pair (pair * bin_count + bin): the running average of the aligned
   // coherence (not yet bias corrected), the weight w it gives the next frame, the frames
   // averaged, and whether the weights hold anything (else the pair falls back to PHAT).
