@@ -93,6 +93,10 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
              "do not check the reference pairs against the pairs without the reference on tracked frames "
              "(arrays of at most --cross-pairs sensors; by default a reference pair they contradict is read "
              "where they agree)");
+  flags.Bool("no-fusion", &f->no_fusion,
+             "do not fold the pairs without the reference into the reference pairs' delays on tracked frames "
+             "(arrays of at most --cross-pairs sensors; by default each reference pair's delay is the sensors' "
+             "least-squares delay over every pair's peak)");
   flags.Bool("delay-rates", &f->delay_rates,
              "where the track predicts a pair's peak to move by a sample or more within a frame (a fast "
              "source, long frames), also read the pair's channel along the predicted delay and keep the "
@@ -246,6 +250,7 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   base.backend = *backend;
   if (f.delay_rates) base.delay_rate_compensation = true;
   if (f.no_closure) base.pair_closure = false;
+  if (f.no_fusion) base.pair_fusion = false;
   // The session file's settings where no flag was given: where the flag would have put them,
   // before the couplings below, so that a setting means the same from either.
   io::ApplySessionSettings(

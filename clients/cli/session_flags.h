@@ -40,6 +40,7 @@ struct SessionFlags {
   std::string source_plane;        // --source-plane PX,PY,PZ,NX,NY,NZ ("" = the array file's)
   bool delay_rates = false;        // --delay-rates: delay_rate_compensation on
   bool no_closure = false;         // --no-closure: pair_closure off
+  bool no_fusion = false;          // --no-fusion: pair_fusion off
   // Flags the caller counts as given although FlagSet::seen does not (track's deprecated
   // --seed stands for --filter-seed), so that the session file does not override them.
   std::set<std::string> also_given;

@@ -67,6 +67,10 @@ struct CrossPairGcc {
   double noise_floor_inverse = 0.0;
   int first_lag_samples = 0;
   std::vector<float> gcc;
+  // The K lags on either side of the window, normalised as gcc (K = size / 2; the CPU front end's
+  // kPeakHalfWidth, 8): the K below first_lag_samples, then the K above the window's last lag,
+  // so a peak near the window's end can be refined like one inside (pair_fusion.h).
+  std::vector<float> gcc_beyond;
 };
 
 struct Measurement {

@@ -131,7 +131,7 @@ GccOptions AudioSessionConfig::GccOptionsFor() const {
   gcc.cross_pairs_max_sensors = cross_pairs_max_sensors;
   // The closure check reads them on every frame (session_tracking.cc: CheckClosure, or the
   // acquisition search): measured with the frame's pairs, their transforms packed together.
-  gcc.cross_pairs_with_frame = pair_closure;
+  gcc.cross_pairs_with_frame = pair_closure || pair_fusion;
   return gcc;
 }
 

@@ -85,14 +85,21 @@ struct AudioSessionConfig {
   double band_low_hz = 0.0;
   double band_high_hz = 0.0;  // 0: Nyquist
   // Arrays of at most this many sensors (in [0, 16]; 0: never) also measure the pairs without
-  // the reference, which acquisition and presence check every position against
-  // (GccOptions::cross_pairs_max_sensors): a 4-sensor array's three reference pairs cannot
-  // outvote one that locked on an echo or a noise peak.
-  int cross_pairs_max_sensors = 4;
+  // the reference (GccOptions::cross_pairs_max_sensors): acquisition and presence check every
+  // position against them (a 4-sensor array's three reference pairs cannot outvote one that
+  // locked on an echo or a noise peak), and tracked frames fold them into the reference pairs'
+  // delays (pair_fusion). 8 since the fusion (ACCURACY.md, "Twenty-eighth pass"): every pair
+  // costs +40 % of the pipeline at 6 sensors and +70 % at 8 (BENCHMARKS.md).
+  int cross_pairs_max_sensors = 8;
   // true: on such arrays every tracked frame also measures the pairs without the reference,
   // and a reference pair whose peak they contradict is measured where they agree
   // (pair_closure.h): a 4-sensor array's track cannot otherwise see one pair locked on an echo.
   bool pair_closure = true;
+  // true: on such arrays every tracked frame folds the cross pairs' peaks into the reference
+  // pairs' delays, after the closure check: each becomes the sensors' least-squares delay over
+  // every pair, with its sigma (pair_fusion.h). The filters then read M (M - 1) / 2 pairs'
+  // evidence through M - 1 delays. Estimate::delay_s keeps the reference pairs' own peaks.
+  bool pair_fusion = true;
   // true: a track's predicted delay rates (one hypothesis, a fixed array) are handed to the
   // front end (TdoaEstimator::SetDelayRates, delay_warp.h) on frames where some pair's peak
   // would otherwise move by a sample or more: a fast source near the array, whose peak smears

@@ -19,6 +19,7 @@
 #include "engine/pipeline/range_observability.h"
 #include "engine/pipeline/session.h"
 #include "engine/tdoa/despike.h"
+#include "engine/tdoa/pair_fusion.h"
 
 namespace localizer::engine {
 
@@ -80,6 +81,10 @@ struct Session::Impl {
   // Small arrays (AudioSessionConfig::pair_closure, cross_pairs_max_sensors): measures the
   // pairs without the reference and moves a reference pair they contradict (pair_closure.h).
   void CheckClosure();
+  // Arrays that measure the pairs without the reference (AudioSessionConfig::pair_fusion): the
+  // reference pairs' delays from every pair's peak (pair_fusion.h), each cross pair moved to
+  // its reference pairs' instants by the rates `predicted` gives.
+  void FusePairs(const TrackState& predicted);
   // The frame's pairs without the reference, measured at most once per frame (the front end
   // clears them with each Estimate; arrays it measures none for keep none).
   void MeasureCrossPairsOnce();
@@ -124,7 +129,9 @@ struct Session::Impl {
   // root jump (27000182). Report covers whichever is live.
   MirrorWatch mirror;
   MirrorWatch measured_mirror;
-  PairClosure closure;  // small arrays: reference pairs checked by the cross pairs
+  PairClosure closure;               // small arrays: reference pairs checked by the cross pairs
+  PairFusion fusion;                 // the reference pairs' delays from every pair
+  std::vector<double> fusion_rates;  // per pair, s/s (empty: none)
   Measurement measurement;
   Eigen::VectorXd delays;
   std::optional<Vec6> single_track_mean;  // the last Report's track, when the tracker held one hypothesis

@@ -201,6 +201,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
     heard_elsewhere = 0;
     AssociateCandidates(predicted, prior.size());
     CheckClosure();
+    FusePairs(predicted);
     UpdateAndWatch(predicted, e);
     if (!e->reinitialised) Audit(predicted, near, e);
     return;
@@ -219,6 +220,7 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
         heard_elsewhere = 0;
         AssociateCandidates(predicted, prior.size());
         CheckClosure();
+        FusePairs(predicted);
         UpdateAndWatch(predicted, e);
         return;
       }
@@ -235,6 +237,24 @@ void Session::Impl::CheckClosure() {
   if (!config.pair_closure || array.sensor_count() > config.cross_pairs_max_sensors) return;
   MeasureCrossPairsOnce();  // none measured: nothing is checked
   (void)closure.Repair(&measurement);
+}
+
+void Session::Impl::FusePairs(const TrackState& predicted) {
+  // The GCC likelihood reads each reference pair's GCC function, not its peak: a fused delay
+  // would only narrow the width it is read with.
+  if (!config.pair_fusion || array.sensor_count() > config.cross_pairs_max_sensors ||
+      config.tracker.particle.likelihood == Likelihood::kGcc) {
+    return;
+  }
+  MeasureCrossPairsOnce();
+  // The track's delay rates put each cross pair at its reference pairs' instants (a fixed
+  // array: a moving one's rates also hold its own motion, not modelled here).
+  fusion_rates.clear();
+  if (platform == nullptr) {
+    const Eigen::VectorXd rates = array.TdoaJacobian(predicted.mean.head<3>()) * predicted.mean.tail<3>();
+    if (rates.allFinite()) fusion_rates.assign(rates.data(), rates.data() + rates.size());
+  }
+  (void)fusion.Fuse(&measurement, fusion_rates);
 }
 
 void Session::Impl::MeasureCrossPairsOnce() {

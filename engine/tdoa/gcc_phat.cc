@@ -364,12 +364,16 @@ void GccPhatEstimator::Impl::ReadCrossPair(int index, float norm, const float* c
   if (!(norm > 0.0f)) {
     out->noise_floor_inverse = 0.0;
     out->gcc.assign(2 * max_lag + 1, 0.0f);
+    out->gcc_beyond.assign(2 * kPeakHalfWidth, 0.0f);
     return;
   }
   out->noise_floor_inverse = layout.noise_floor_inverse;
   GatherWindow(corr, max_lag, 1.0f / norm);
   const float* searched = window.data() + kPeakHalfWidth;
   out->gcc.assign(searched, searched + 2 * max_lag + 1);
+  out->gcc_beyond.assign(window.data(), window.data() + kPeakHalfWidth);
+  out->gcc_beyond.insert(out->gcc_beyond.end(), searched + 2 * max_lag + 1,
+                         searched + 2 * max_lag + 1 + kPeakHalfWidth);
 }
 
 GccPhatEstimator::GccPhatEstimator(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}

@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "engine/tdoa/gcc_phat.h"
+#include "tests/tdoa/cross_pair_frames.h"
 #include "tests/tdoa/tdoa_test_signals.h"
 
 namespace localizer::engine {
@@ -32,16 +32,7 @@ Measurement TetrahedronFrame(const Vec3& source_m, double crosstalk_gain, std::v
         MultipathFrame(spec, {{Path{0.0, 1.0}}, {}, {}, {Path{0.0, 1.0}}}, testing::kNoiseless, /*seed=*/32);
     for (size_t i = 0; i < frame.size(); ++i) frame[i] += static_cast<float>(crosstalk_gain) * crosstalk[i];
   }
-  GccOptions gcc;
-  gcc.frame_samples = spec.frame_samples;
-  gcc.sample_rate_hz = spec.sample_rate_hz;
-  gcc.keep_gcc = true;
-  gcc.cross_pairs_max_sensors = 4;
-  auto estimator = *GccPhatEstimator::Create(array, gcc);
-  Measurement m;
-  EXPECT_TRUE(estimator->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
-  EXPECT_TRUE(estimator->MeasureCrossPairs(&m).ok());
-  return m;
+  return testing::MeasureWithCrossPairs(array, spec, frame, 4);
 }
 
 // Crosstalk louder than the source makes pair (0, 3) peak at lag 0, through which the three

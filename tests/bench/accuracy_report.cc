@@ -2,7 +2,7 @@
 // and the median RMSE / per-frame CRLB and p95 / RMSE per scenario (BENCHMARKS.md).
 // Run: build/tests/bench/accuracy_report [N=5] [--one-std] [--levels FLOOR,CEILING,HZ]
 //        [--turns MAX] [--speed-changes MAX] [--cross-pairs N] [--delay-rates 0|1]
-//        [--closure 0|1]
+//        [--closure 0|1] [--fusion 0|1]
 // --one-std: the particle filter with one acceleration std, no turn rates and no speed changes
 // (SetSingleMotion); --levels: these acceleration levels instead of the defaults
 // (particle_filter.h); --turns: per-particle turn rates up to MAX rad/s; --speed-changes:
@@ -10,6 +10,7 @@
 // session's cross_pairs_max_sensors (0: acquisition searches the reference pairs only);
 // --delay-rates: the session's delay_rate_compensation (0: channels read as they are);
 // --closure: the session's pair_closure (0: tracked frames use the reference pairs as measured).
+// --fusion: the session's pair_fusion (0: the reference pairs' delays are not fused with the others).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
   int cross_pairs = -1;  // < 0: the session's default
   int delay_rates = -1;  // < 0: the session's default
   int closure = -1;      // < 0: the session's default
+  int fusion = -1;       // < 0: the session's default
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -61,13 +63,15 @@ int main(int argc, char** argv) {
       delay_rates = std::atoi(argv[++i]) != 0 ? 1 : 0;
     } else if (arg == "--closure" && has_value) {
       closure = std::atoi(argv[++i]) != 0 ? 1 : 0;
+    } else if (arg == "--fusion" && has_value) {
+      fusion = std::atoi(argv[++i]) != 0 ? 1 : 0;
     } else {
       const auto n = localizer::ParseInteger(arg);
       if (!n.ok() || *n < 1 || *n > 1000000) {
         std::fprintf(
             stderr,
             "usage: accuracy_report [N=5] [--one-std] [--levels FLOOR,CEILING,HZ] [--turns MAX] "
-            "[--speed-changes MAX] [--cross-pairs N] [--delay-rates 0|1] [--closure 0|1]\n(N must be an integer in [1, "
+            "[--speed-changes MAX] [--cross-pairs N] [--delay-rates 0|1] [--closure 0|1] [--fusion 0|1]\n(N must be an integer in [1, "
             "1000000], got \"%s\")\n",
             arg.c_str());
         return 2;
@@ -92,6 +96,7 @@ int main(int argc, char** argv) {
           if (cross_pairs >= 0) c->cross_pairs_max_sensors = cross_pairs;
           if (delay_rates >= 0) c->delay_rate_compensation = delay_rates == 1;
           if (closure >= 0) c->pair_closure = closure == 1;
+          if (fusion >= 0) c->pair_fusion = fusion == 1;
         };
         const TrackScore s = TrackScenario(name, static_cast<uint64_t>(seed), likelihood, BackendChoice::kCpu,
                                            FilterKind::kPf, MotionModelKind::kCv, adjust)

@@ -53,12 +53,15 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   // Third argument 1: the default motion (acceleration levels, turn rates and speed changes:
   // ACCURACY.md, "Nineteenth pass"); 0: one std, the GPU filter's (the default before it).
   if (state.range(2) == 0) config.tracker.particle.SetSingleMotion();
-  // Fourth: cross_pairs_max_sensors (4, the default: this 4-sensor array also measures its
+  // Fourth: cross_pairs_max_sensors (4 or more, the default 8: this 4-sensor array also measures its
   // three pairs without the reference; 0: off, the cost before them).
   config.cross_pairs_max_sensors = static_cast<int>(state.range(3));
   // Fifth: pair_closure (1, the default: with the cross pairs on, every tracked frame measures
   // them and checks its reference pairs against them; 0: only searching frames measure them).
   config.pair_closure = state.range(4) == 1;
+  // Sixth: pair_fusion (1, the default: tracked frames fold the cross pairs into the reference
+  // pairs' delays, pair_fusion.h; 0: the cost before it).
+  config.pair_fusion = state.range(5) == 1;
   // 0.1 s blocks, as a streaming client would send them.
   const int64_t block = 4410;
   const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
@@ -79,10 +82,11 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   state.SetLabel(std::string(LikelihoodName(config.tracker.particle.likelihood)) +
                  (config.tracker.particle.single_motion() ? " one-std" : " levels+turns+speed") +
                  (config.cross_pairs_max_sensors >= 4 ? " cross-pairs" : "") +
-                 (config.cross_pairs_max_sensors >= 4 && config.pair_closure ? " closure" : ""));
+                 (config.cross_pairs_max_sensors >= 4 && config.pair_closure ? " closure" : "") +
+                 (config.cross_pairs_max_sensors >= 4 && config.pair_fusion ? " fusion" : ""));
 }
 BENCHMARK(BM_PipelinePerAudioSecond)
-    ->ArgsProduct({{4096}, {0, 1}, {0, 1}, {0, 4}, {0, 1}})
+    ->ArgsProduct({{4096}, {0, 1}, {0, 1}, {0, 4}, {0, 1}, {0, 1}})
     ->Unit(benchmark::kMillisecond);
 
 // Several sessions fed in turn, one 4096-sample block each, as the server's workers take

@@ -53,6 +53,7 @@ struct Args {
   int cross_pairs_max_sensors = -1;  // --cross-pairs N; < 0: the session default
   int delay_rates = -1;              // --delay-rates 0|1; < 0: the session default
   int closure = -1;                  // --closure 0|1; < 0: the session default
+  int fusion = -1;                   // --fusion 0|1; < 0: the session default
   bool help = false;                 // --help: print the usage and exit 0
 };
 
@@ -72,6 +73,7 @@ void Adjust(const Args& a, const RandomSceneOptions& scene_options, AudioSession
   if (a.cross_pairs_max_sensors >= 0) c->cross_pairs_max_sensors = a.cross_pairs_max_sensors;
   if (a.delay_rates >= 0) c->delay_rate_compensation = a.delay_rates == 1;
   if (a.closure >= 0) c->pair_closure = a.closure == 1;
+  if (a.fusion >= 0) c->pair_fusion = a.fusion == 1;
   if (a.filter) c->tracker.kind = *a.filter;
   if (a.particles > 0) c->tracker.particle.particles = a.particles;
   if (a.manoeuvre_share >= 0.0) c->tracker.particle.manoeuvre_share = a.manoeuvre_share;
@@ -105,7 +107,7 @@ void Usage(FILE* out) {
       "                      [--likelihood peak|gcc|mixture] [--outlier-probability EPS]\n"
       "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--turn-rates MAX]\n"
       "                      [--speed-changes MAX] [--band-hint] [--frame-samples N] [--cross-pairs N]\n"
-      "                      [--delay-rates 0|1] [--closure 0|1]\n"
+      "                      [--delay-rates 0|1] [--closure 0|1] [--fusion 0|1]\n"
       "                      [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
@@ -131,12 +133,14 @@ void Usage(FILE* out) {
       "4096 at any rate); without it the campaign uses about a quarter second per frame: 4096 up to\n"
       "16 kHz, 16384 at 48 kHz. The per-frame CRLB is that of the frames the session uses.\n"
       "--cross-pairs N: arrays of at most N sensors also measure the pairs without the reference\n"
-      "(0: never; the session's default is 4; session_config.h, cross_pairs_max_sensors).\n"
+      "(0: never; the session's default is 8; session_config.h, cross_pairs_max_sensors).\n"
       "--delay-rates 0|1: a track's predicted delay rates read each channel along its pair's delay\n"
       "when a peak would move by a sample or more in a frame (session_config.h,\n"
       "delay_rate_compensation; the session's default is 0).\n"
       "--closure 0|1: small arrays' tracked frames also measure the pairs without the reference and\n"
       "move a reference pair they contradict (session_config.h, pair_closure; default 1).\n"
+      "--fusion 0|1: arrays that measure the pairs without the reference fold every pair's peak\n"
+      "into the reference pairs' delays on tracked frames (session_config.h, pair_fusion; default 1).\n"
       "--band-hint gives each session its scene's true source band (an oracle: what a perfect band\n"
       "estimate from the data would give; the campaign's default gives none).\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
@@ -255,6 +259,9 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       if (value != "0" && value != "1")
         return std::fprintf(stderr, "scene_campaign: --closure must be 0 or 1\n"), false;
       a->closure = value == "1" ? 1 : 0;
+    } else if (flag == "--fusion") {
+      if (value != "0" && value != "1") return std::fprintf(stderr, "scene_campaign: --fusion must be 0 or 1\n"), false;
+      a->fusion = value == "1" ? 1 : 0;
     } else if (flag == "--cross-pairs") {
       a->cross_pairs_max_sensors = static_cast<int>(std::strtol(value.c_str(), &end, 10));
       if (*end != '\0' || a->cross_pairs_max_sensors < 0 || a->cross_pairs_max_sensors > 16)
