@@ -110,11 +110,11 @@ namespace localizer::engine {
 namespace {
 
 // The Kalman filters through the same sessions: below half the per-frame CRLB on the
-// Gaussian scenes, in the median of seeds 1-3 (one seed's ratio moves with the noise: since
-// the reference pairs' delays fold in every pair's peak (pair_fusion.h), tetra-air's seed 1
-// gives EKF cv 0.51 and UKF cv 0.53 where seeds 2-5 give 0.23-0.42; without the fusion 0.38 /
-// 0.40 and 0.22-0.35). Measured, median of seeds 1-3 with the fusion: tetra-water EKF / UKF
-// 0.36-0.37, tetra-air cv 0.35 / 0.38, ct 0.23 / 0.23.
+// Gaussian scenes, in the median of seeds 1-3 (one seed's ratio moves with the noise: a first
+// version of the pair fusion, pair_fusion.h, gave tetra-air's seed 1 0.51 / 0.53 for EKF / UKF
+// cv). Measured with the fusion, seeds 1-3: tetra-water EKF cv 0.30 0.38 0.35, UKF cv 0.30 0.40
+// 0.35, ct within 0.01 of cv; tetra-air EKF cv 0.41 0.31 0.29, ct 0.28 0.20 0.17, UKF cv 0.43 0.33
+// 0.31, ct 0.28 0.20 0.16 (without it 0.38 0.31 0.29, ct 0.26 0.20 0.18 for the EKF).
 TEST(Accuracy, KalmanFiltersBeatHalfThePerFrameCrlbOnGaussianScenes) {
   for (const char* scene : {"tetra-water", "tetra-air"}) {
     for (const FilterKind filter_kind : {FilterKind::kEkf, FilterKind::kUkf}) {

@@ -29,8 +29,7 @@ double SilentSeconds(uint64_t seed, bool pair_closure, SceneRow* row) {
 // track near a branch point is chaotic), so the three are asserted together: they still fail
 // without the check, and the check removes most of it. The check alone is tested: the fusion
 // of every pair into the reference pairs (pair_fusion.h, the default since) also reads the
-// cross pairs, and with it these scenes give 0.00, 1.71 and 0.34 s with the check, 0.85, 0.85
-// and 1.19 s without.
+// cross pairs, and with both (the defaults) these scenes give 0.00, 1.71 and 0.00 s.
 TEST(PairClosureSession, APairThatLeavesTheSourceIsReadWhereTheOtherPairsAgree) {
   double with_total_s = 0.0, without_total_s = 0.0;
   for (const uint64_t seed : {16000031u, 19000095u, 8000058u}) {
