@@ -11,6 +11,7 @@
 
 #include "engine/acquisition/presence.h"
 #include "engine/tdoa/gcc_phat.h"
+#include "tests/tdoa/cross_pair_frames.h"
 #include "tests/tdoa/tdoa_test_signals.h"
 
 namespace localizer::engine {
@@ -156,15 +157,7 @@ TEST(Acquisition, PairsWithoutTheReferenceOutvoteOnePairOnCrosstalk) {
   for (size_t i = 0; i < frame.size(); ++i) frame[i] += 1.5f * crosstalk[i];
 
   auto best_mode = [&](int cross_pairs_max_sensors) {
-    GccOptions gcc;
-    gcc.frame_samples = spec.frame_samples;
-    gcc.sample_rate_hz = spec.sample_rate_hz;
-    gcc.keep_gcc = true;
-    gcc.cross_pairs_max_sensors = cross_pairs_max_sensors;
-    auto estimator = *GccPhatEstimator::Create(array, gcc);
-    Measurement m;
-    EXPECT_TRUE(estimator->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
-    EXPECT_TRUE(estimator->MeasureCrossPairs(&m).ok());
+    const Measurement m = testing::MeasureWithCrossPairs(array, spec, frame, cross_pairs_max_sensors);
     EXPECT_NEAR(m.pairs[2].delay_s * spec.sample_rate_hz, 0.0, 0.5) << "the crosstalk leads pair (0, 3)";
     auto acquisition = *Acquisition::Create(array, AcquisitionOptions{});
     const AcquisitionResult result = acquisition.Search(m);
