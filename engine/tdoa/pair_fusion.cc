@@ -44,35 +44,42 @@ struct Window {
   }
 };
 
-// The peak at index i of the window, sinc-refined; false when it is not a maximum or lies
-// within kPeakHalfWidth samples of what the window (and the lags beyond it) hold: a parabola
-// there is biased by up to 0.06 sample, as much as the pairs' scatter at 10 dB, and such a
-// bias moves the fused delays as one.
-bool Refine(const Window& w, int i, RefinedPeak* out) {
+// The kPeakSamples samples of the window centred on index i; false when they run past what the
+// window (and the lags beyond it) hold.
+bool SamplesAround(const Window& w, int i, std::array<float, kPeakSamples>* s) {
   if (i - kPeakHalfWidth < -w.reach() || i + kPeakHalfWidth >= w.size() + w.reach()) return false;
-  std::array<float, kPeakSamples> s;
-  for (int m = 0; m < kPeakSamples; ++m) s[static_cast<size_t>(m)] = static_cast<float>(w.At(i - kPeakHalfWidth + m));
+  for (int m = 0; m < kPeakSamples; ++m)
+    (*s)[static_cast<size_t>(m)] = static_cast<float>(w.At(i - kPeakHalfWidth + m));
+  return true;
+}
+
+// The peak at lag first_lag + i + x: its height and curvature from the samples around i; false
+// when it is not a maximum.
+bool ShapeOf(const Window& w, int i, const std::array<float, kPeakSamples>& s, double x, RefinedPeak* out) {
   const std::span<const float, kPeakSamples> samples(s);
-  const double x = InterpolatePeak(PeakInterpolation::kSinc, samples);
   out->lag = w.first_lag + i + x;
   out->height = SincReconstruct(samples, x);
   out->curvature = SincCurvature(samples, x);
   return out->curvature < 0.0 && out->height > 0.0;
 }
 
+// The peak at index i of the window, sinc-refined; false when it is not a maximum or lies
+// within kPeakHalfWidth samples of what the window (and the lags beyond it) hold: a parabola
+// there is biased by up to 0.06 sample, as much as the pairs' scatter at 10 dB, and such a
+// bias moves the fused delays as one.
+bool Refine(const Window& w, int i, RefinedPeak* out) {
+  std::array<float, kPeakSamples> s;
+  if (!SamplesAround(w, i, &s)) return false;
+  return ShapeOf(w, i, s, InterpolatePeak(PeakInterpolation::kSinc, std::span<const float, kPeakSamples>(s)), out);
+}
+
 // A peak already refined (a reference pair's, at `lag` samples): its height and curvature
 // there; false within kPeakHalfWidth samples of the window's end or when not a maximum.
 bool ShapeAt(const Window& w, double lag, RefinedPeak* out) {
   const int i = static_cast<int>(std::lround(lag)) - w.first_lag;
-  if (i - kPeakHalfWidth < -w.reach() || i + kPeakHalfWidth >= w.size() + w.reach()) return false;
   std::array<float, kPeakSamples> s;
-  for (int m = 0; m < kPeakSamples; ++m) s[static_cast<size_t>(m)] = static_cast<float>(w.At(i - kPeakHalfWidth + m));
-  const std::span<const float, kPeakSamples> samples(s);
-  const double x = lag - (w.first_lag + i);
-  out->lag = lag;
-  out->height = SincReconstruct(samples, x);
-  out->curvature = SincCurvature(samples, x);
-  return out->curvature < 0.0 && out->height > 0.0;
+  if (!SamplesAround(w, i, &s)) return false;
+  return ShapeOf(w, i, s, lag - (w.first_lag + i), out);
 }
 
 // The largest local maximum of the window within lags [lo, hi] at or above min_value noise sds.
@@ -141,7 +148,7 @@ FusionReport PairFusion::Fuse(Measurement* m, std::span<const double> delay_rate
     if (ShapeAt(window, lag, &own)) calibration.push_back(sigma / PeakShape(own));
   }
   const int nodes = static_cast<int>(pair_of_node_.size());
-  if (nodes < 2) return report;
+  if (nodes < 2 || nodes > kMaxNodes) return report;
   // A cross pair's sigma is scale x PeakShape; the scale from the reference pairs whose peak
   // lies inside their window (none: a cross pair takes the rms of its two reference pairs').
   const double scale = calibration.empty() ? 0.0 : Median(&calibration);
@@ -167,7 +174,6 @@ FusionReport PairFusion::Fuse(Measurement* m, std::span<const double> delay_rate
   }
   if (report.cross_edges == 0) return report;
 
-  if (nodes > kMaxNodes) return report;
   // At most kMaxNodes: fixed-capacity storage, nothing allocated per frame.
   using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxNodes, kMaxNodes>;
   using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxNodes, 1>;
@@ -175,6 +181,7 @@ FusionReport PairFusion::Fuse(Measurement* m, std::span<const double> delay_rate
   Vector rhs(nodes), x(nodes);
   Eigen::LDLT<Matrix> solver(nodes);
   std::array<char, kMaxNodes> tied{};
+  const auto residual = [&x](const Edge& e) { return e.d - (x(e.b) - (e.a >= 0 ? x(e.a) : 0.0)); };
   for (int round = 0; round < 4; ++round) {
     normal.setZero();
     rhs.setZero();
@@ -205,8 +212,7 @@ FusionReport PairFusion::Fuse(Measurement* m, std::span<const double> delay_rate
     bool dropped = false;
     for (Edge& e : edges_) {
       if (!e.kept) continue;
-      const double fitted = x(e.b) - (e.a >= 0 ? x(e.a) : 0.0);
-      if (std::abs(e.d - fitted) * std::sqrt(e.w) > kOutlierSigmas) {
+      if (std::abs(residual(e)) * std::sqrt(e.w) > kOutlierSigmas) {
         e.kept = false;
         dropped = true;
         ++report.dropped_edges;
@@ -220,7 +226,7 @@ FusionReport PairFusion::Fuse(Measurement* m, std::span<const double> delay_rate
   int kept = 0;
   for (const Edge& e : edges_) {
     if (!e.kept) continue;
-    const double r = e.d - (x(e.b) - (e.a >= 0 ? x(e.a) : 0.0));
+    const double r = residual(e);
     chi2 += e.w * r * r;
     ++kept;
   }
