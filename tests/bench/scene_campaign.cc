@@ -358,7 +358,8 @@ void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s)
         "\"crlb_median_m\": %s, "
         "\"crlb_theory_median_m\": %s, \"rmse_over_crlb\": %s, \"rmse_over_crlb_theory\": %s, \"median_error_m\": %s, "
         "\"median_nees_per_dim\": %s, \"lost_frames\": %d, \"silent_failure_s\": %s, "
-        "\"silent_failure\": %s, \"wall_s\": %s}%s\n",
+        "\"silent_failure\": %s, \"silent_failure_reported_s\": %s, \"silent_failure_reported\": %s, "
+        "\"wall_s\": %s}%s\n",
         r.seed, JsonString(SceneClassName(r.scene_class)).c_str(), JsonString(r.description).c_str(),
         JsonString(r.error).c_str(), c.frames, c.initialised_frames, c.acquired ? "true" : "false",
         c.acquired_bearing ? "true" : "false", c.acquired_reported ? "true" : "false", c.far_field_frames,
@@ -368,7 +369,8 @@ void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s)
         JsonNum(c.crlb_theory_median_m).c_str(), JsonNum(c.rmse_over_crlb).c_str(),
         JsonNum(c.rmse_over_crlb_theory).c_str(), JsonNum(c.median_error_m).c_str(),
         JsonNum(c.median_nees_per_dim).c_str(), c.lost_frames, JsonNum(c.silent_failure_s).c_str(),
-        c.silent_failure ? "true" : "false", JsonNum(r.wall_s).c_str(), i + 1 < s.rows.size() ? "," : "");
+        c.silent_failure ? "true" : "false", JsonNum(c.silent_failure_reported_s).c_str(),
+        c.silent_failure_reported ? "true" : "false", JsonNum(r.wall_s).c_str(), i + 1 < s.rows.size() ? "," : "");
   }
   std::fprintf(f, "  ]\n}\n");
   std::fclose(f);
