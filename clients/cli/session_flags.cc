@@ -97,6 +97,10 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
              "do not fold the pairs without the reference into the reference pairs' delays on tracked frames "
              "(arrays of at most --cross-pairs sensors; by default each reference pair's delay is the sensors' "
              "least-squares delay over every pair's peak)");
+  flags.Bool("echo-test", &f->echo_test,
+             "direction sessions: do not report a track whose beam holds a louder heard track's signal, "
+             "delayed, and whose power rises and falls with it (a room's reflection of that source; "
+             "engine/doa/echo_watch.h; default: off)");
   flags.Bool("delay-rates", &f->delay_rates,
              "where the track predicts a pair's peak to move by a sample or more within a frame (a fast "
              "source, long frames), also read the pair's channel along the predicted delay and keep the "
@@ -251,6 +255,7 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   if (f.delay_rates) base.delay_rate_compensation = true;
   if (f.no_closure) base.pair_closure = false;
   if (f.no_fusion) base.pair_fusion = false;
+  if (f.echo_test) base.direction_echo_test = true;
   // The session file's settings where no flag was given: where the flag would have put them,
   // before the couplings below, so that a setting means the same from either.
   io::ApplySessionSettings(
@@ -313,6 +318,17 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
     if (!hop_given) config.hop_samples = config.frame_samples / 2;
   }
   if (runs == Runs::kOnServer) {
+    // Engine-only settings the wire does not carry: a server session would silently run
+    // without them.
+    for (const auto& [flag, set] : {std::pair<const char*, bool>{"echo-test", f.echo_test},
+                                    {"no-fusion", f.no_fusion},
+                                    {"no-closure", f.no_closure},
+                                    {"delay-rates", f.delay_rates}}) {
+      if (set) {
+        return InvalidArgument(std::string("--") + flag +
+                               " is not carried to a server (the wire has no such setting); run locally");
+      }
+    }
     // The wire reads these zeros as "the server's default" (wire/config_wire.cc), so a 0 asked
     // for here would silently become the default there: refused instead.
     for (const auto& [flag, value] :

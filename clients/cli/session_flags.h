@@ -41,6 +41,7 @@ struct SessionFlags {
   bool delay_rates = false;        // --delay-rates: delay_rate_compensation on
   bool no_closure = false;         // --no-closure: pair_closure off
   bool no_fusion = false;          // --no-fusion: pair_fusion off
+  bool echo_test = false;          // --echo-test: direction_echo_test on
   // Flags the caller counts as given although FlagSet::seen does not (track's deprecated
   // --seed stands for --filter-seed), so that the session file does not override them.
   std::set<std::string> also_given;
@@ -50,7 +51,8 @@ struct SessionFlags {
 void RegisterGccFlags(FlagSet& flags, SessionFlags* f);
 // --frame, --hop, --filter, --motion-model, --imm-modes, --imm-variant, --robust,
 // --particles, --likelihood, --outlier-probability, --SEED_FLAG, --tdoa-sigma-us,
-// --accel-noise, --backend, --despike-k, --cross-pairs, --no-closure, --delay-rates; source presence
+// --accel-noise, --backend, --despike-k, --cross-pairs, --no-closure, --no-fusion, --delay-rates,
+// --echo-test; source presence
 // and bounds: --bounds-min, --bounds-max, --surface-z, --bottom-z, --search-radius,
 // --presence-false-alarm, --source-timeout; what is reported: --localization,
 // --max-sources, --source-side.

@@ -63,8 +63,20 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
     if (!locator.ok()) return locator.status();
     near = std::move(locator).value();
   }
+  std::optional<EchoWatch> echoes;
+  if (config.direction_echo_test) {
+    EchoWatchOptions watch;
+    watch.test.sample_rate_hz = config.sample_rate_hz;
+    watch.test.sound_speed_mps = config.sound_speed_mps;
+    watch.test.frame_samples = config.frame_samples;
+    watch.test.band_low_hz = config.band_low_hz;
+    watch.test.band_high_hz = config.band_high_hz;
+    auto made_watch = EchoWatch::Create(config.sensors_m, made->shape(), watch);
+    if (!made_watch.ok()) return made_watch.status();
+    echoes = std::move(made_watch).value();
+  }
   return std::unique_ptr<DirectionStage>(
-      new DirectionStage(std::move(made).value(), std::move(tracker).value(), std::move(near)));
+      new DirectionStage(std::move(made).value(), std::move(tracker).value(), std::move(near), std::move(echoes)));
 }
 
 Vec3 DirectionStage::FitDirection(const SourceEstimate& source) const {
@@ -134,6 +146,16 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
   e->presence_statistic = peaks->empty() ? 0.0 : peaks->front().statistic;
   e->presence_threshold = srp_.threshold();
   if (!tracker_.Update(t_s, *peaks, srp_.band_power(), &tracks_).ok()) tracks_.clear();
+  if (echoes_) {
+    // A confirmed track took a peak this frame (a miss makes it coasting).
+    heard_tracks_.assign(tracks_.size(), 0);
+    for (size_t j = 0; j < tracks_.size(); ++j)
+      heard_tracks_[j] = tracks_[j].status == TrackStatus::kConfirmed && !peaks->empty();
+    echoes_->Frame(frame, tracks_, heard_tracks_);
+    tracks_.erase(
+        std::remove_if(tracks_.begin(), tracks_.end(), [&](const SourceTrack& t) { return echoes_->IsEcho(t.id); }),
+        tracks_.end());
+  }
   const size_t first = e->sources.size();
   for (const SourceTrack& track : tracks_) {
     SourceEstimate s;

@@ -148,6 +148,10 @@ struct AudioSessionConfig {
   // tests/bench/two_source_report; the defaults keep each off.
   int direction_search_starts = 1;
   double direction_co_lead_share = 0.0;
+  // Direction sessions: a track whose beam carries another heard track's signal delayed (a
+  // room's reflection of that source: engine/doa/echo_watch.h) is not reported. Off by
+  // default (measured in ACCURACY.md, "Reflections heard as sources"); `track --echo-test`.
+  bool direction_echo_test = false;
   // Moving array (platform_pose.h): sensors_m are in the platform's body frame (the IMU's
   // axes) and the session is fed IMU samples (AddImu); each frame's TDOA model uses the
   // sensors rotated by the platform's attitude at that frame and moved to its origin.

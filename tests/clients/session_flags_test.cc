@@ -212,6 +212,21 @@ TEST(SessionFileFlags, AZeroTheWireReadsAsTheDefaultIsRefusedForAServer) {
   EXPECT_TRUE(Build({"--accel-noise", "1e-6"}, ArrayText(""), {}, Runs::kOnServer).ok());
 }
 
+// Engine-only switches the wire does not carry: a server session would run without them.
+TEST(SessionFileFlags, AnEngineOnlySwitchIsRefusedForAServerNamingIt) {
+  for (const std::string flag : {"--echo-test", "--no-fusion", "--no-closure", "--delay-rates"}) {
+    const auto local = Build({flag}, ArrayText(""));
+    EXPECT_TRUE(local.ok()) << flag << ": " << local.status().ToString();
+    const auto remote = Build({flag}, ArrayText(""), {}, Runs::kOnServer);
+    ASSERT_FALSE(remote.ok()) << flag;
+    EXPECT_EQ(remote.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(remote.status().message().find(flag + " is not carried to a server"), std::string::npos)
+        << remote.status().message();
+  }
+  EXPECT_TRUE(Build({"--echo-test"}, ArrayText(""))->direction_echo_test);
+  EXPECT_FALSE(Build({}, ArrayText(""))->direction_echo_test);
+}
+
 TEST(SessionFileFlags, ABadFileNamesTheFileAndTheKey) {
   TempDir dir;
   const auto write = [&](const std::string& session) {

@@ -21,9 +21,19 @@ std::vector<float> PlaneWaveFrame(const PlaneWaveScene& scene, const std::vector
     return k > 0 && k < length / 2 && f >= scene.band_low_hz && f <= scene.band_high_hz;
   };
   std::vector<std::vector<std::complex<double>>> signal(sources.size(), std::vector<std::complex<double>>(bins));
-  for (size_t s = 0; s < sources.size(); ++s)
-    for (int k = 0; k < bins; ++k)
-      if (in_band(k)) signal[s][k] = std::sqrt(sources[s].power) * std::complex<double>(normal(rng), normal(rng));
+  for (size_t s = 0; s < sources.size(); ++s) {
+    const int of = sources[s].echo_of;
+    for (int k = 0; k < bins; ++k) {
+      if (!in_band(k)) continue;
+      if (of >= 0 && static_cast<size_t>(of) < s) {
+        const double w = 2.0 * std::numbers::pi * k / length;  // rad per sample
+        signal[s][k] =
+            sources[s].gain * signal[static_cast<size_t>(of)][k] * std::polar(1.0, -w * sources[s].delay_samples);
+      } else {
+        signal[s][k] = std::sqrt(sources[s].power) * std::complex<double>(normal(rng), normal(rng));
+      }
+    }
+  }
 
   FftwFloats spectrum = AllocateFftwFloats(2 * static_cast<size_t>(bins));
   FftwFloats record = AllocateFftwFloats(static_cast<size_t>(length));

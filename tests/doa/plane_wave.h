@@ -19,6 +19,11 @@ namespace localizer::engine::testing {
 struct PlaneSource {
   Vec3 direction = Vec3::UnitX();  // unit, from the array towards the source
   double power = 1.0;              // per in-band bin
+  // A reflection: when >= 0 (an earlier source's index), this source carries that source's
+  // signal scaled by `gain` and delayed by `delay_samples` (power unused, no draw of its own).
+  int echo_of = -1;
+  double gain = 1.0;
+  double delay_samples = 0.0;
 };
 
 struct PlaneWaveScene {
