@@ -17,7 +17,9 @@ Status EchoTestOptions::Validate() const {
     return InvalidArgument("sample_rate_hz must be positive and finite");
   if (!(sound_speed_mps > 0.0) || !std::isfinite(sound_speed_mps))
     return InvalidArgument("sound_speed_mps must be positive and finite");
-  if (frame_samples < 16) return InvalidArgument("frame_samples must be at least 16");
+  if (frame_samples < 16 || frame_samples > kMaxFrameSamples)
+    return InvalidArgument("frame_samples must be in [16, " + std::to_string(kMaxFrameSamples) +
+                           "] for the echo test (its spectra are kept per sensor)");
   const double nyquist_hz = 0.5 * sample_rate_hz;
   const double high_hz = band_high_hz > 0.0 ? band_high_hz : nyquist_hz;
   if (!(band_low_hz >= 0.0) || !(high_hz > band_low_hz) || high_hz > nyquist_hz)

@@ -46,6 +46,9 @@
 namespace localizer::engine {
 
 struct EchoTestOptions {
+  // The longest frame tested: every sensor's spectrum is kept (at most 2^17 + 16 floats,
+  // about 512 KiB, per sensor).
+  static constexpr int kMaxFrameSamples = 65536;
   double sample_rate_hz = 16000.0;
   double sound_speed_mps = 343.0;
   int frame_samples = 512;

@@ -132,6 +132,9 @@ TEST(EchoTest, OptionsOutOfRangeAreRefusedByName) {
   o.max_delay_s = 0.0;
   EXPECT_NE(EchoTest::Create(Line(), o).status().message().find("max_delay_s"), std::string::npos);
   o = TestOptions();
+  o.frame_samples = 1 << 20;  // its spectra would be kept per sensor: refused, not allocated
+  EXPECT_NE(EchoTest::Create(Line(), o).status().message().find("frame_samples"), std::string::npos);
+  o = TestOptions();
   o.band_high_hz = 9000.0;  // beyond Nyquist at 16 kHz
   EXPECT_EQ(EchoTest::Create(Line(), o).status().code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(EchoTest::Create({Vec3::Zero()}, TestOptions()).status().code(), StatusCode::kInvalidArgument);
