@@ -12,7 +12,8 @@ defaults (plus --track-arg) and scored by room_scene_score.score (a talker's sou
 is heard when a row within 15 degrees has source_present 1).
 
 Prints one line per scene, then the pooled heard share, the median per-talker heard share,
-the false time (heard rows beyond 15 degrees of every talker) and the identities per talker.
+the false time (heard rows beyond 15 degrees of every talker), the lingering time (heard rows
+near talkers that are all silent) and the identities per talker.
 
 usage: /usr/bin/python3 room_scene_campaign.py --array scenes/arrays/square4.json
            [--scenes 20] [--seed 1] [--line] [--max-talkers 3] [--snr-db LO HI] [--signal speech] [--cli build/clients/localizer-cli]
@@ -148,6 +149,7 @@ def main():
     pooled = sum(t['heard'] for t in talkers) / max(1, sum(t['sounding'] for t in talkers))
     shares = [s for r in records for s in r['heard_shares']]
     false = [r['scores']['false_s_per_min'] for r in records]
+    lingering = [r['scores']['lingering_s_per_min'] for r in records]
     errors = sorted(e for t in talkers for e in t['errors_deg'])
     alone = sum(t['alone'] for t in talkers)
     heard_alone = sum(t['heard_alone'] for t in talkers)
@@ -158,6 +160,7 @@ def main():
           f'median talker {100 * statistics.median(shares):.0f} %, talkers under 95 %: '
           f'{sum(s < 0.95 for s in shares)}); false {statistics.mean(false):.2f} s/min mean, '
           f'{statistics.median(false):.2f} median, scenes over 1 s/min: {sum(f > 1.0 for f in false)}; '
+          f'lingering {statistics.mean(lingering):.2f} s/min mean; '
           f'ids per talker {statistics.mean(len(t["ids"]) for t in talkers):.2f}; median error of heard rows '
           + (f'{errors[len(errors) // 2]:.1f} deg' if errors else '-'))
     if args.json:

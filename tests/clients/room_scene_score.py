@@ -11,7 +11,9 @@ Per talker: its sounding frames, the share covered by a heard row, the share wit
 reported row (heard or coasting) within the tolerance, the same heard share over the frames in
 which no other talker sounds (alone), the identities that were heard on it
 in at least 5 frames, and the median error of its heard rows. Then false time: heard rows
-farther than the tolerance from every talker, in seconds per minute of audio.
+farther than the tolerance from every talker, in seconds per minute of audio; and lingering
+time: heard rows within the tolerance of talkers that are all silent (more than 0.1 s after
+their last stop), which the false time does not count.
 
 usage: /usr/bin/python3 room_scene_score.py SCENE_DIR TRACK_CSV [--tolerance-deg 15] [--line]
 (--line: score cone angles; the default is azimuths)
@@ -20,6 +22,12 @@ import argparse
 import collections
 import csv
 import math
+
+
+# A talker's direction may still be heard this long after it stops (its frame, 32 ms at the
+# direction sessions' default, and the room's first reflections) before a present row there
+# counts as lingering.
+LINGER_GRACE_S = 0.1
 
 
 def separation(a, b, line=False):
@@ -77,15 +85,22 @@ def score(scene_dir, track_csv, line=False, tolerance_deg=15.0):
                                   'alone': alone, 'heard_alone': heard_alone, 'ids': steady,
                                   'errors_deg': sorted(errors)})
 
-    false_rows = 0
+    false_rows = lingering_rows = 0
     for t in frames:
         for r in by_frame[t]:
             if r['source_present'] != '1':
                 continue
-            if all(separation(float(r[key]), float(s[key]), line) >= tolerance for s in talkers):
+            near = [k for k, s in enumerate(talkers) if separation(float(r[key]), float(s[key]), line) < tolerance]
+            if not near:
                 false_rows += 1
+            elif not any(a <= t <= b + LINGER_GRACE_S for k in near for a, b in sounding[k]):
+                lingering_rows += 1
     result['false_rows'] = false_rows
     result['false_s_per_min'] = false_rows * hop_s / minutes
+    # Present where a talker is but while it is silent (past LINGER_GRACE_S after it stopped):
+    # not counted as false above, since a row within the tolerance is that talker's.
+    result['lingering_rows'] = lingering_rows
+    result['lingering_s_per_min'] = lingering_rows * hop_s / minutes
     return result
 
 
@@ -107,6 +122,8 @@ def main():
               f'alone {t["alone"]} frames, heard {alone} of them, reported {100 * t["reported"] / n:.0f} %, ids {len(t["ids"])} {t["ids"]}, median error {median} deg')
     print(f'false: {result["false_rows"]} heard rows beyond {args.tolerance_deg:g} deg of every talker, '
           f'{result["false_s_per_min"]:.1f} s per minute')
+    print(f'lingering: {result["lingering_rows"]} heard rows near talkers that are all silent, '
+          f'{result["lingering_s_per_min"]:.1f} s per minute')
 
 
 if __name__ == '__main__':
