@@ -97,6 +97,10 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
              "do not fold the pairs without the reference into the reference pairs' delays on tracked frames "
              "(arrays of at most --cross-pairs sensors; by default each reference pair's delay is the sensors' "
              "least-squares delay over every pair's peak)");
+  flags.Double("present-drop-db", &c.direction_present_drop_db, "DB", "dB",
+               "direction sessions: a track is present only on frames where its peak is within DB of its "
+               "own running level (when its talker stops it takes the room's weaker sound from near its "
+               "direction; 0: off, the default; in [0, 60])");
   flags.Bool("echo-test", &f->echo_test,
              "direction sessions: do not report a track whose beam holds a louder heard track's signal, "
              "delayed, and whose power rises and falls with it (a room's reflection of that source; "
@@ -321,6 +325,7 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
     // Engine-only settings the wire does not carry: a server session would silently run
     // without them.
     for (const auto& [flag, set] : {std::pair<const char*, bool>{"echo-test", f.echo_test},
+                                    {"present-drop-db", config.direction_present_drop_db != 0.0},
                                     {"no-fusion", f.no_fusion},
                                     {"no-closure", f.no_closure},
                                     {"delay-rates", f.delay_rates}}) {

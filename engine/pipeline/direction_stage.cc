@@ -75,8 +75,10 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
     if (!made_watch.ok()) return made_watch.status();
     echoes = std::move(made_watch).value();
   }
-  return std::unique_ptr<DirectionStage>(
+  auto stage = std::unique_ptr<DirectionStage>(
       new DirectionStage(std::move(made).value(), std::move(tracker).value(), std::move(near), std::move(echoes)));
+  stage->drop_db_ = config.direction_present_drop_db;
+  return stage;
 }
 
 Vec3 DirectionStage::FitDirection(const SourceEstimate& source) const {
@@ -156,6 +158,14 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
         std::remove_if(tracks_.begin(), tracks_.end(), [&](const SourceTrack& t) { return echoes_->IsEcho(t.id); }),
         tracks_.end());
   }
+  if (drop_db_ > 0.0) {  // forget the levels of tracks no longer reported
+    for (auto it = track_level_db_.begin(); it != track_level_db_.end();) {
+      const uint64_t id = it->first;
+      const bool reported =
+          std::any_of(tracks_.begin(), tracks_.end(), [&](const SourceTrack& t) { return t.id == id; });
+      it = reported ? std::next(it) : track_level_db_.erase(it);
+    }
+  }
   const size_t first = e->sources.size();
   for (const SourceTrack& track : tracks_) {
     SourceEstimate s;
@@ -184,6 +194,15 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
         nearest_rad = d;
         heard.power_db = peak.power_db;
       }
+    }
+    if (drop_db_ > 0.0) {
+      // Present only near its own level (AudioSessionConfig::direction_present_drop_db); the
+      // level follows the peaks it is present on, and slowly the others (a source that became
+      // quieter for good is heard again after about 1.6 s at 62.5 frames per second).
+      auto [level, fresh] = track_level_db_.try_emplace(track.id, heard.power_db);
+      const bool far_below = heard.power_db < level->second - drop_db_;
+      if (far_below) heard.source_present = false;
+      level->second += (far_below ? kHiddenLevelWeight : kLevelWeight) * (heard.power_db - level->second);
     }
   }
   if (near_) LocateHeard(e, first);

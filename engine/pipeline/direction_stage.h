@@ -20,12 +20,15 @@
 // presence_threshold the threshold.
 // With config.direction_echo_test, a track the echo watch calls another's reflection
 // (engine/doa/echo_watch.h) is left out of Estimate::sources.
+// With config.direction_present_drop_db, a track whose peak this frame lies that many dB below
+// its own running level is not present (its source stopped; what it took is the room's).
 // Cost: SrpPhat's (srp_phat.h: about 0.1 ms per frame for one source on a 4-microphone
 // board) plus the tracker's, tens of microseconds for a few tracks; the echo watch's, about
 // 45 us on frames where two or more tracks are heard on an 8-microphone line. Not thread-safe.
 #pragma once
 
 #include <complex>
+#include <map>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -80,6 +83,13 @@ class DirectionStage {
   std::optional<NearFieldLocator> near_;  // sessions with positions
   std::optional<EchoWatch> echoes_;       // AudioSessionConfig::direction_echo_test
   std::vector<char> heard_tracks_;        // per track of tracks_: it took a peak this frame
+  // AudioSessionConfig::direction_present_drop_db (0: off), and each reported track's running
+  // level (its peaks' power_db, averaged with kLevelWeight per frame it is present, with
+  // kHiddenLevelWeight per frame it is not).
+  double drop_db_ = 0.0;
+  std::map<uint64_t, double> track_level_db_;
+  static constexpr double kLevelWeight = 0.05;
+  static constexpr double kHiddenLevelWeight = 0.005;
   std::vector<SourceTrack> tracks_;
   // Per frame scratch of LocateHeard (heard_[k]: the index in Estimate::sources).
   std::vector<size_t> heard_;

@@ -152,6 +152,13 @@ struct AudioSessionConfig {
   // room's reflection of that source: engine/doa/echo_watch.h) is not reported. Off by
   // default (measured in ACCURACY.md, "Reflections heard as sources"); `track --echo-test`.
   bool direction_echo_test = false;
+  // Direction sessions: a track is reported present (source_present) only on frames where the
+  // peak it took is within this many dB of its own running level (0: off, in [0, 60]). When a
+  // talker stops, its track goes on taking what the room brings from near its direction (the
+  // other talkers' reflections), far weaker: on seeded rooms that "lingering" time was 1.9-2.8 s
+  // per minute on the 4-microphone square and 12-13 on the 8-microphone line. Off by default
+  // (ACCURACY.md, "A track's own level"); `track --present-drop-db DB`.
+  double direction_present_drop_db = 0.0;
   // Moving array (platform_pose.h): sensors_m are in the platform's body frame (the IMU's
   // axes) and the session is fed IMU samples (AddImu); each frame's TDOA model uses the
   // sensors rotated by the platform's attitude at that frame and moved to its origin.

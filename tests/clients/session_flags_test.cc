@@ -223,6 +223,13 @@ TEST(SessionFileFlags, AnEngineOnlySwitchIsRefusedForAServerNamingIt) {
     EXPECT_NE(remote.status().message().find(flag + " is not carried to a server"), std::string::npos)
         << remote.status().message();
   }
+  EXPECT_DOUBLE_EQ(Build({"--present-drop-db", "6"}, ArrayText(""))->direction_present_drop_db, 6.0);
+  EXPECT_NE(Build({"--present-drop-db", "6"}, ArrayText(""), {}, Runs::kOnServer)
+                .status()
+                .message()
+                .find("--present-drop-db is not carried"),
+            std::string::npos);
+  EXPECT_TRUE(Build({"--present-drop-db", "0"}, ArrayText(""), {}, Runs::kOnServer).ok());
   EXPECT_TRUE(Build({"--echo-test"}, ArrayText(""))->direction_echo_test);
   EXPECT_FALSE(Build({}, ArrayText(""))->direction_echo_test);
 }

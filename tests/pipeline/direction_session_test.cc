@@ -185,6 +185,41 @@ TEST(DirectionSession, ATrackIsHeardExactlyWhenItTookAPeak) {
   EXPECT_GE(coasting, 5);    // the pause
 }
 
+// AudioSessionConfig::direction_present_drop_db: a track whose peak falls far below its own
+// level is not present. The source sounds at per-bin SNR 10 for 40 frames, then at 0.5 (13 dB
+// less power; its PHAT peaks about 9 dB lower) for 40 more, as a room's reflection of another
+// talker from near a talker's direction would after that talker stopped.
+int PresentFrames(double drop_db, int first, int end) {
+  AudioSessionConfig c = DirectionConfig(Square());
+  c.source_side = Vec3::UnitZ();
+  c.direction_present_drop_db = drop_db;
+  auto session = Session::Create(c);
+  EXPECT_TRUE(session.ok()) << session.status().ToString();
+  if (!session.ok()) return -1;
+  const Vec3 truth = FromAzimuthElevation(0.7, 0.3);
+  const auto estimates = Stream(session->get(), 80, [&](int i) {
+    return std::vector<PlaneSource>{{truth, i < 40 ? 1.0 : 0.05}};
+  });
+  int present = 0;
+  for (int i = first; i < end; ++i) {
+    for (const SourceEstimate& s : estimates[static_cast<size_t>(i)].sources) present += s.source_present;
+  }
+  return present;
+}
+
+TEST(DirectionSession, WithALevelDropATrackIsNotPresentOnPeaksFarBelowItsOwnLevel) {
+  // Without the option every frame of the weak part is present (the track takes its peaks).
+  EXPECT_GE(PresentFrames(0.0, 45, 80), 30);
+  // With 6 dB: the strong part as before, the weak part not (its level adapts at 0.005 per
+  // frame: from ~9 dB above, 35 frames take it about 1.5 dB closer).
+  EXPECT_EQ(PresentFrames(6.0, 10, 40), PresentFrames(0.0, 10, 40));
+  EXPECT_LE(PresentFrames(6.0, 45, 80), 3);
+  // Out of range: refused by name.
+  AudioSessionConfig c = DirectionConfig(Square());
+  c.direction_present_drop_db = -1.0;
+  EXPECT_NE(Session::Create(c).status().message().find("direction_present_drop_db"), std::string::npos);
+}
+
 // A line observes the cone angle only.
 TEST(DirectionSession, ALineReportsTheConeAngle) {
   auto session = Session::Create(DirectionConfig(Line()));
