@@ -6,11 +6,6 @@
 #include <string>
 
 namespace localizer::engine {
-namespace {
-// Floats per sensor's spectrum, rounded up so that every one starts as aligned as the first
-// (FFTW's new-array execute needs the alignment the plan was made with).
-int Stride(int floats) { return (floats + 15) / 16 * 16; }
-}  // namespace
 
 Status EchoTestOptions::Validate() const {
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz))
@@ -48,23 +43,28 @@ StatusOr<EchoTest> EchoTest::Create(const std::vector<Vec3>& sensors_m, const Ec
   t.first_bin_ = std::max(1, static_cast<int>(std::ceil(options.band_low_hz * m / options.sample_rate_hz)));
   t.end_bin_ = std::min(half, static_cast<int>(std::floor(high_hz * m / options.sample_rate_hz)) + 1);
   if (t.end_bin_ <= t.first_bin_) return InvalidArgument("the band holds no FFT bin");
-  t.spectrum_stride_ = Stride(2 * (half + 1));
-  t.input_ = AllocateFftwFloats(static_cast<size_t>(m));
-  t.spectra_ = AllocateFftwFloats(static_cast<size_t>(t.spectrum_stride_) * sensors_m.size());
+  t.spectrum_stride_ = 2 * (half + 1);
+  // One more channel slot than sensors: the partner of a channel transformed alone.
+  t.spectra_ = AllocateFftwFloats(static_cast<size_t>(t.spectrum_stride_) * (sensors_m.size() + 1));
   t.cross_ = AllocateFftwFloats(static_cast<size_t>(t.spectrum_stride_));
-  t.correlation_ = AllocateFftwFloats(static_cast<size_t>(m));
-  t.forward_ = PlanRealForward(m, t.input_.get(), t.spectra_.get(), FFTW_ESTIMATE);
-  t.inverse_ = PlanRealInverse(m, t.cross_.get(), t.correlation_.get(), FFTW_ESTIMATE);
-  if (!t.forward_ || !t.inverse_) return Internal("FFTW could not plan a transform of " + std::to_string(m));
+  if (!t.packed_.Init(m, t.first_bin_, t.end_bin_, FFTW_ESTIMATE))
+    return Internal("FFTW could not plan a transform of " + std::to_string(m));
   return t;
 }
 
 void EchoTest::Load(const float* frame) {
-  const int n = options_.frame_samples;
-  float* in = input_.get();  // its zero-padded tail stays zero
-  for (size_t c = 0; c < sensors_m_.size(); ++c) {
-    std::copy(frame + c * static_cast<size_t>(n), frame + (c + 1) * static_cast<size_t>(n), in);
-    fftwf_execute_dft_r2c(forward_.get(), in, AsComplex(spectra_.get() + c * static_cast<size_t>(spectrum_stride_)));
+  // Two channels per complex transform (packed_transforms.h); only the band's bins are read.
+  const int n = options_.frame_samples, sensors = static_cast<int>(sensors_m_.size());
+  const auto spectrum = [&](int c) { return spectra_.get() + static_cast<size_t>(c) * spectrum_stride_; };
+  float* in = packed_.forward_input();  // its zero-padded tail stays zero
+  for (int c = 0; c < sensors; c += 2) {
+    const bool two = c + 1 < sensors;
+    const float* a = frame + static_cast<size_t>(c) * n;
+    for (int i = 0; i < n; ++i) {
+      in[2 * i] = a[i];
+      in[2 * i + 1] = two ? a[n + i] : 0.0f;
+    }
+    packed_.Forward(spectrum(c), spectrum(two ? c + 1 : sensors));
   }
 }
 
@@ -106,8 +106,6 @@ bool EchoTest::Compare(const Vec3& u_i, const Vec3& u_j, EchoEvidence* out) {
   float* cross = cross_.get();
   std::fill(cross, cross + spectrum_stride_, 0.0f);
   double power_i = 0.0, power_j = 0.0;
-  int selective = 0;
-  selected_.clear();
   band_i_.clear();
   band_j_.clear();
   for (int k = first_bin_; k < end_bin_; ++k) {
@@ -129,27 +127,27 @@ bool EchoTest::Compare(const Vec3& u_i, const Vec3& u_j, EchoEvidence* out) {
     }
     const double leakage = std::hypot(lr, li) / static_cast<double>(sensors);
     if (!(leakage < options_.max_leakage)) continue;
-    selected_.push_back(k);
     band_i_.push_back(bir * bir + bii * bii);
     band_j_.push_back(bjr * bjr + bji * bji);
-    ++selective;
     cross[2 * k] = static_cast<float>(bir * bjr + bii * bji);  // B_i conj(B_j)
     cross[2 * k + 1] = static_cast<float>(bii * bjr - bir * bji);
-    power_i += bir * bir + bii * bii;
-    power_j += bjr * bjr + bji * bji;
+    power_i += band_i_.back();
+    power_j += band_j_.back();
   }
+  const size_t selective = band_i_.size();
   if (selective == 0 || selective < options_.min_selective_share * (end_bin_ - first_bin_) || !(power_i > 0.0) ||
       !(power_j > 0.0))
     return false;
-  fftwf_execute(inverse_.get());  // correlation[n] = 2 Re sum_k C_k exp(i 2 pi k n / M)
+  packed_.Inverse(cross, nullptr);  // correlation at [2n] = 2 Re sum_k C_k exp(i 2 pi k n / M)
   const double norm = 1.0 / (2.0 * std::sqrt(power_i * power_j));
-  const float* r = correlation_.get();
+  const float* out_r = packed_.inverse_output();
+  const auto r = [&](int lag) { return out_r[2 * static_cast<size_t>(lag)]; };
   out->min_lag = std::min(max_lag_ + 1, static_cast<int>(std::ceil(spread)) + 2);
   out->lagging.assign(static_cast<size_t>(max_lag_), 0.0);
   out->leading.assign(static_cast<size_t>(max_lag_), 0.0);
   for (int tau = out->min_lag; tau <= max_lag_; ++tau) {
-    out->lagging[static_cast<size_t>(tau - 1)] = r[m - tau] * norm;
-    out->leading[static_cast<size_t>(tau - 1)] = r[tau] * norm;
+    out->lagging[static_cast<size_t>(tau - 1)] = r(m - tau) * norm;
+    out->leading[static_cast<size_t>(tau - 1)] = r(tau) * norm;
   }
   out->power_i = power_i;
   out->power_j = power_j;

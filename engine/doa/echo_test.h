@@ -33,8 +33,9 @@
 // the second's beam holds the first's wall reflection. A single frame's largest rho over 250 lags
 // is 0.14-0.25 by chance, so the evidence is averaged over frames (EchoWatch, echo_watch.h).
 //
-// Cost per frame it is used: S real transforms of M points, and per pair of directions 2 S
-// products over the selective bins and one inverse transform. Not thread-safe.
+// Cost per frame it is used: ceil(S / 2) complex transforms of M points (two channels in one,
+// engine/tdoa/packed_transforms.h), and per pair of directions 2 S products over the selective
+// bins and one inverse transform. Not thread-safe.
 #pragma once
 
 #include <vector>
@@ -42,6 +43,7 @@
 #include "engine/core/status.h"
 #include "engine/core/types.h"
 #include "engine/tdoa/fftw_util.h"
+#include "engine/tdoa/packed_transforms.h"
 
 namespace localizer::engine {
 
@@ -98,13 +100,12 @@ class EchoTest {
   int fft_size_ = 0;
   int max_lag_ = 0;
   int first_bin_ = 0, end_bin_ = 0;  // in-band bins [first, end)
-  FftwFloats input_, spectra_, cross_, correlation_;
-  FftwPlan forward_, inverse_;
+  FftwFloats spectra_, cross_;
+  PackedTransforms packed_;                // two channels per forward transform; the correlation's inverse
   int spectrum_stride_ = 0;                // floats per sensor's spectrum
   std::vector<double> delay_i_, delay_j_;  // per sensor, samples
   std::vector<double> phasors_;            // Compare's scratch: steering phasors and rotations
-  std::vector<int> selected_;              // ... the selective bins
-  std::vector<double> band_i_, band_j_;    // ... and the beams' powers there
+  std::vector<double> band_i_, band_j_;    // ... the beams' powers in each selective bin
 };
 
 }  // namespace localizer::engine

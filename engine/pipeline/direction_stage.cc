@@ -75,10 +75,9 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
     if (!made_watch.ok()) return made_watch.status();
     echoes = std::move(made_watch).value();
   }
-  auto stage = std::unique_ptr<DirectionStage>(
-      new DirectionStage(std::move(made).value(), std::move(tracker).value(), std::move(near), std::move(echoes)));
-  stage->drop_db_ = config.direction_present_drop_db;
-  return stage;
+  return std::unique_ptr<DirectionStage>(new DirectionStage(std::move(made).value(), std::move(tracker).value(),
+                                                            std::move(near), std::move(echoes),
+                                                            config.direction_present_drop_db));
 }
 
 Vec3 DirectionStage::FitDirection(const SourceEstimate& source) const {
@@ -199,10 +198,10 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
       // Present only near its own level (AudioSessionConfig::direction_present_drop_db); the
       // level follows the peaks it is present on, and slowly the others (a source that became
       // quieter for good is heard again after about 1.6 s at 62.5 frames per second).
-      auto [level, fresh] = track_level_db_.try_emplace(track.id, heard.power_db);
-      const bool far_below = heard.power_db < level->second - drop_db_;
+      double& level_db = track_level_db_.try_emplace(track.id, heard.power_db).first->second;
+      const bool far_below = heard.power_db < level_db - drop_db_;
       if (far_below) heard.source_present = false;
-      level->second += (far_below ? kHiddenLevelWeight : kLevelWeight) * (heard.power_db - level->second);
+      level_db += (far_below ? kHiddenLevelWeight : kLevelWeight) * (heard.power_db - level_db);
     }
   }
   if (near_) LocateHeard(e, first);

@@ -62,8 +62,12 @@ class DirectionStage {
 
  private:
   DirectionStage(SrpPhat srp, DirectionTracker tracker, std::optional<NearFieldLocator> near,
-                 std::optional<EchoWatch> echoes)
-      : srp_(std::move(srp)), tracker_(std::move(tracker)), near_(std::move(near)), echoes_(std::move(echoes)) {}
+                 std::optional<EchoWatch> echoes, double drop_db)
+      : srp_(std::move(srp)),
+        tracker_(std::move(tracker)),
+        near_(std::move(near)),
+        echoes_(std::move(echoes)),
+        drop_db_(drop_db) {}
   // Where a heard source's near-field fit looks (linear arrays: the cone angle's direction in
   // the plane).
   Vec3 FitDirection(const SourceEstimate& source) const;
