@@ -101,6 +101,14 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "direction sessions: a track is present only on frames where its peak is within DB of its "
                "own running level (when its talker stops it takes the room's weaker sound from near its "
                "direction; 0: off, the default; in [0, 60])");
+  flags.Double("present-hold", &c.direction_present_hold_s, "S", "s",
+               "direction sessions: a track that led its frames and misses its peak stays present for S after it "
+               "was last heard (gaps between syllables; 0.05 by default; 0: present only on frames it took a peak; "
+               "in [0, 1])");
+  flags.Bool("no-diffuse-weighting", &f->no_diffuse,
+             "direction sessions: weigh every frequency alike (by default each sensor pair's frequencies are weighted "
+             "by how little a room's diffuse sound correlates across the pair: a small array otherwise hears "
+             "reverberation as a source at its normal)");
   flags.Bool("echo-test", &f->echo_test,
              "direction sessions: do not report a track whose beam holds a louder heard track's signal, "
              "delayed, and whose power rises and falls with it (a room's reflection of that source; "
@@ -259,6 +267,7 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   if (f.delay_rates) base.delay_rate_compensation = true;
   if (f.no_closure) base.pair_closure = false;
   if (f.no_fusion) base.pair_fusion = false;
+  if (f.no_diffuse) base.direction_diffuse_weighting = false;
   if (f.echo_test) base.direction_echo_test = true;
   // The session file's settings where no flag was given: where the flag would have put them,
   // before the couplings below, so that a setting means the same from either.
@@ -324,11 +333,14 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   if (runs == Runs::kOnServer) {
     // Engine-only settings the wire does not carry: a server session would silently run
     // without them.
-    for (const auto& [flag, set] : {std::pair<const char*, bool>{"echo-test", f.echo_test},
-                                    {"present-drop-db", config.direction_present_drop_db != 0.0},
-                                    {"no-fusion", f.no_fusion},
-                                    {"no-closure", f.no_closure},
-                                    {"delay-rates", f.delay_rates}}) {
+    for (const auto& [flag, set] :
+         {std::pair<const char*, bool>{"echo-test", f.echo_test},
+          {"present-drop-db", config.direction_present_drop_db != 0.0},
+          {"present-hold", config.direction_present_hold_s != engine::AudioSessionConfig{}.direction_present_hold_s},
+          {"no-fusion", f.no_fusion},
+          {"no-diffuse-weighting", f.no_diffuse},
+          {"no-closure", f.no_closure},
+          {"delay-rates", f.delay_rates}}) {
       if (set) {
         return InvalidArgument(std::string("--") + flag +
                                " is not carried to a server (the wire has no such setting); run locally");

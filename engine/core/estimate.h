@@ -51,7 +51,9 @@ struct SourceEstimate {
   double cone_angle_rad = kNan;  // linear arrays: angle to the array axis, [0, pi]
   double sigma_rad = kNan;       // RMS angular standard deviation of the estimate
   // This frame's peak assigned to the source: heard (present) and its power over the noise
-  // level (dB; NaN when not heard: the direction is a prediction).
+  // level (dB; NaN when not heard: the direction is a prediction). A source that led its
+  // recent frames stays present without a peak for AudioSessionConfig::
+  // direction_present_hold_s (a pause between syllables), with power_db NaN.
   bool source_present = false;
   double power_db = kNan;
   // Positions from a planar or linear array (localization position; engine/doa/near_field.h):

@@ -152,6 +152,8 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
     const bool hit = r.consecutive_misses == 0;
     l.run = hit ? l.run + 1 : 0;
     l.hits += hit;
+    l.hit_bits = (l.hit_bits << 1) | static_cast<uint32_t>(hit);
+    l.led = false;
     if (!(r.position_m.norm() > 0.0)) continue;
     const Vec3 u = r.position_m.normalized();
     if (born || l.run >= options_.steady_hits) l.anchor = u, l.anchor_s = t_s;
@@ -169,7 +171,9 @@ void DirectionTracker::UpdateLineages(double t_s, const DirectionPeak* riser) {
   std::sort(leaders.begin(), leaders.end());
   leaders.erase(std::unique(leaders.begin(), leaders.end()), leaders.end());
   for (uint64_t id : leaders) {
-    if (id != 0) ++lineage_[id].leads;
+    if (id == 0) continue;
+    ++lineage_[id].leads;
+    lineage_[id].led = true;
   }
   // A track confirmed now, where another's source was last heard, is that source resuming:
   // it joins that track's identity.
@@ -290,6 +294,8 @@ Status DirectionTracker::Update(double t_s, const std::vector<DirectionPeak>& pe
     SourceTrack track;
     track.id = l.reported_id;
     track.status = r.status;
+    track.hit_bits = l.hit_bits;
+    track.led = l.led;
     const Vec3 p = r.position_m;
     const double norm = p.norm();
     if (!(norm > 0.0)) continue;

@@ -230,6 +230,10 @@ struct SourceTrack {
   double elevation_rad = kNan;
   double cone_angle_rad = kNan;  // linear arrays
   double sigma_rad = kNan;       // RMS angular standard deviation of the estimate
+  // The frames it took a peak in, bit i for i frames ago (bit 0: this frame), and whether it
+  // took this frame's strongest peak (led: see "Leading").
+  uint32_t hit_bits = 0;
+  bool led = false;
 };
 
 class DirectionTracker {
@@ -290,6 +294,8 @@ class DirectionTracker {
     int run = 0;               // hits in a row
     int hits = 0;              // frames in which it took a peak
     int leads = 0;             // of those, frames in which it took the frame's strongest peak
+    uint32_t hit_bits = 0;     // SourceTrack::hit_bits
+    bool led = false;          // it took this frame's strongest peak
     // Where its source was last heard: its first plot, the latest rising peak it took, or
     // its position after steady_hits hits in a row. NaN before the first.
     Vec3 anchor = Vec3::Constant(DirectionPeak::kNan);

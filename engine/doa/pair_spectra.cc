@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <bit>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <string>
 
@@ -86,6 +86,25 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
     for (int j = i + 1; j < o.sensors; ++j) s.pairs_.emplace_back(i, j);
   s.g_.assign(s.pairs_.size(), std::vector<std::complex<double>>(s.bins_.size()));
   s.history_.assign(static_cast<size_t>(o.rise_lag_frames) + 1, s.g_);
+  if (!o.diffuse_distance_m.empty()) {
+    if (o.diffuse_distance_m.size() != s.pairs_.size() || !(o.sound_speed_mps > 0.0))
+      return InvalidArgument("diffuse weighting needs one distance per pair and a positive sound speed");
+    for (double d_m : o.diffuse_distance_m) {
+      if (!(d_m > 0.0 && std::isfinite(d_m))) return InvalidArgument("a pair's distance must be positive and finite");
+      std::vector<double> v;
+      double sum_squares = 0.0;
+      for (int k : s.bins_) {
+        const double x = 2.0 * std::numbers::pi * (k * o.sample_rate_hz / s.fft_size_) * d_m / o.sound_speed_mps;
+        const double gamma = std::sin(x) / x;
+        v.push_back(1.0 - gamma * gamma);
+        sum_squares += v.back() * v.back();
+      }
+      if (!(sum_squares > 0.0)) return InvalidArgument("diffuse weighting leaves no bin in the band");
+      const double scale = std::sqrt(static_cast<double>(v.size()) / sum_squares);
+      for (double& w : v) w *= scale;
+      s.diffuse_weight_.push_back(std::move(v));
+    }
+  }
 
   const int spectrum_stride = Stride(2 * (half + 1));
   // One more channel slot than sensors: the partner of a channel transformed alone.
@@ -194,6 +213,13 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
       g[2 * b] = kept ? cr / magnitude : 0.0;
       g[2 * b + 1] = kept ? ci / magnitude : 0.0;
     }
+    if (!diffuse_weight_.empty()) {
+      const double* v = diffuse_weight_[p].data();
+      for (size_t b = 0; b < nb; ++b) {
+        g[2 * b] *= v[b];
+        g[2 * b + 1] *= v[b];
+      }
+    }
     history_[newest_][p] = g_[p];
   }
   FillFields(field);
@@ -273,6 +299,17 @@ void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::comple
   StartPhasors(step * lag_samples, bins_.front(), pr, pi, &rr, &ri);
   const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
   const double* w = signal_share_.data();
+  double norm = share_norm_;
+  if (!diffuse_weight_.empty()) {  // the model's bins carry the pair's weights too
+    const std::vector<double>& v = diffuse_weight_[static_cast<size_t>(p)];
+    model_weight_.resize(v.size());
+    norm = 0.0;
+    for (size_t k = 0; k < v.size(); ++k) {
+      model_weight_[k] = signal_share_[k] * v[k];
+      norm += model_weight_[k] * model_weight_[k];
+    }
+    w = model_weight_.data();
+  }
   double* re = phasor_re_.data();
   double* im = phasor_im_.data();
   int b = 0;
@@ -300,7 +337,7 @@ void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::comple
     sum_r += ar[j];
     sum_i += ai[j];
   }
-  const double norm = std::max(share_norm_, 1e-12);
+  norm = std::max(norm, 1e-12);
   const double cr = sum_r / norm, ci = sum_i / norm;
   taken->resize(static_cast<size_t>(n));  // allocates only the first time a vector is used
   double* tv = reinterpret_cast<double*>(taken->data());
@@ -344,7 +381,7 @@ double PairSpectra::WholeAt(int p, double lag_samples, bool previous) const {
   const size_t back = previous ? history_.size() - 1 : 0;
   if (frames_analysed_ <= static_cast<int64_t>(back)) return 0.0;
   return Evaluate<false>(history_[(newest_ + history_.size() - back) % history_.size()][static_cast<size_t>(p)],
-                        lag_samples)
+                         lag_samples)
       .r;
 }
 
@@ -364,7 +401,7 @@ PairSpectra::Value PairSpectra::Evaluate(const std::vector<std::complex<double>>
   const auto n = static_cast<int>(g.size());
   double pr[kLanes], pi[kLanes], cr = 0.0, ci = 0.0, r[kLanes] = {}, dr[kLanes] = {}, d2r[kLanes] = {};
   StartPhasors(step * lag_samples, bins_.front(), pr, pi, &cr, &ci);  // the in-band bins are consecutive
-  const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
+  const double* gv = reinterpret_cast<const double*>(g.data());       // (re, im) pairs
   const double* w = omega_.data();
   const double* w2 = omega_squared_.data();
   int b = 0;

@@ -25,6 +25,17 @@
 // frame. (A band per source, estimated from the aligned spectrum, failed: two sources'
 // interference notches it. A hard occupied band, bins 6 dB over the floor, left weak parts of
 // a source unremoved in reverberant rooms.)
+// Diffuse weighting (PairSpectraOptions::diffuse_distance_m). A room's reverberation is
+// close to a diffuse field, whose cross-spectrum across sensors d apart is real:
+// Gamma(f) = sinc(2 pi f d / c) (Cook et al. 1955) times its power. Where the pair is
+// small against the wavelength Gamma ~ 1, and PHAT turns the reverberation into a phase of 0
+// in every such bin: a peak at lag 0 on every pair, which a planar array reads as its
+// normal (the zenith) and a linear one as broadside, whatever the talkers' directions. The
+// weight v_p = 1 - Gamma_p^2 keeps the bins where the field decorrelates across the pair
+// (longer pairs keep lower frequencies: on an 8.1-cm pair 0.17 at 500 Hz, 0.55 at 1 kHz, 0.99
+// at 2 kHz). 1 - |Gamma| and (1 - |Gamma|)^2 were measured too: each lost more of the
+// talkers (ACCURACY.md, "The room's diffuse sound"). RemoveDelay's model carries the
+// same weights.
 // A bin where either channel is silent (|X_i conj(X_j)| below 1e-12 of the frame's mean
 // power) contributes 0.
 //
@@ -52,6 +63,13 @@ struct PairSpectraOptions {
   double band_high_hz = 0.0;  // 0: up to the Nyquist frequency
   int max_lag_samples = 0;    // the field covers lags [-max_lag, max_lag]
   int rise_lag_frames = 1;    // WholeAt(previous): how many frames back, in [1, 64]
+  // Diffuse weighting (empty: off): per pair, in the pairs' order, the distance between its
+  // sensors (m), and the speed of sound. Each bin of pair p is weighted by
+  // v_p(f) = 1 - sinc^2(2 pi f d_p / c), one less a diffuse field's magnitude-squared
+  // coherence across the pair, scaled so that sum_k v_p(f_k)^2 = B (the noise-only
+  // deviation stays sigma). See "Diffuse weighting" above.
+  std::vector<double> diffuse_distance_m;
+  double sound_speed_mps = 343.0;
 };
 
 class PairSpectra {
@@ -121,9 +139,11 @@ class PairSpectra {
   // Per in-band bin, its share of signal this frame (RemoveDelay), and scratch.
   // bin_power_: the bin's power summed over the sensors (Analyse fills it).
   std::vector<double> signal_share_, bin_power_, smoothed_power_, sorted_power_;
-  std::vector<double> bin_re_, bin_im_;  // per sensor, per in-band bin: the last frame's spectrum
-  double share_norm_ = 0.0;   // sum of signal_share_^2
-  bool share_ready_ = false;  // signal_share_ and share_norm_ are this frame's
+  std::vector<double> bin_re_, bin_im_;              // per sensor, per in-band bin: the last frame's spectrum
+  std::vector<std::vector<double>> diffuse_weight_;  // per pair, per in-band bin: v_p (empty: off)
+  std::vector<double> model_weight_;                 // RemoveDelay's scratch: w_k v_p(k)
+  double share_norm_ = 0.0;                          // sum of signal_share_^2
+  bool share_ready_ = false;                         // signal_share_ and share_norm_ are this frame's
   void FindSignalShare();
   // phasor_re_, phasor_im_ = e^(2 pi i k l / M) for every in-band bin k (RemoveDelay's scratch).
   void Phasors(double lag_samples);

@@ -71,6 +71,12 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
   // or the one before it is absent there.
   po.rise_lag_frames =
       options.hop_samples > 0 ? (options.frame_samples + options.hop_samples - 1) / options.hop_samples : 1;
+  if (options.diffuse_weighting) {
+    po.sound_speed_mps = options.sound_speed_mps;
+    for (size_t i = 0; i < sensors_m.size(); ++i)
+      for (size_t j = i + 1; j < sensors_m.size(); ++j)
+        po.diffuse_distance_m.push_back((sensors_m[i] - sensors_m[j]).norm());
+  }
   StatusOr<PairSpectra> spectra = PairSpectra::Create(po);
   if (!spectra.ok()) return spectra.status();
 
@@ -87,9 +93,9 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
   // (sin(pi f2) - sin(pi f1)) / (pi (f2 - f1)); the margin is its inverse, 10 % more.
   const double f1 = options.band_low_hz / options.sample_rate_hz;
   const double f2 = options.band_high_hz > 0.0 ? options.band_high_hz / options.sample_rate_hz : 0.5;
-  const double kept = f2 > f1 ? (std::sin(std::numbers::pi * f2) - std::sin(std::numbers::pi * f1)) /
-                                    (std::numbers::pi * (f2 - f1))
-                              : 1.0;
+  const double kept =
+      f2 > f1 ? (std::sin(std::numbers::pi * f2) - std::sin(std::numbers::pi * f1)) / (std::numbers::pi * (f2 - f1))
+              : 1.0;
   srp.interpolation_margin_ = 1.1 / std::max(kept, 0.1);
   // Roots as fine as the leaves when that is at most kMaxRoots of them.
   if (linear) {

@@ -113,6 +113,9 @@ struct SrpOptions {
   // Keep each frame's field before any source is removed (whole_field()), for near-field
   // fits (near_field.h); off, a frame copies nothing.
   bool keep_whole_field = false;
+  // Each pair's bins weighted by how little a room's diffuse sound correlates across it
+  // (pair_spectra.h, "Diffuse weighting"); false: every in-band bin alike.
+  bool diffuse_weighting = false;
 
   Status Validate() const;
 };

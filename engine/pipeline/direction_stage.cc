@@ -1,6 +1,7 @@
 #include "engine/pipeline/direction_stage.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -47,6 +48,7 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
   srp.hop_samples = config.hop_samples;  // onsets: the rise against the last frame not overlapping
   srp.keep_whole_field = positions;      // the near-field fits' coarse grid reads it
   srp.search_starts = config.direction_search_starts;
+  srp.diffuse_weighting = config.direction_diffuse_weighting;
   auto made = SrpPhat::Create(config.sensors_m, srp);
   if (!made.ok()) return made.status();
   DirectionTrackerOptions options;
@@ -75,9 +77,9 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
     if (!made_watch.ok()) return made_watch.status();
     echoes = std::move(made_watch).value();
   }
-  return std::unique_ptr<DirectionStage>(new DirectionStage(std::move(made).value(), std::move(tracker).value(),
-                                                            std::move(near), std::move(echoes),
-                                                            config.direction_present_drop_db));
+  return std::unique_ptr<DirectionStage>(
+      new DirectionStage(std::move(made).value(), std::move(tracker).value(), std::move(near), std::move(echoes),
+                         config.direction_present_drop_db, config.direction_present_hold_s));
 }
 
 Vec3 DirectionStage::FitDirection(const SourceEstimate& source) const {
@@ -205,6 +207,32 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
     }
   }
   if (near_) LocateHeard(e, first);
+  if (hold_s_ > 0.0) Hold(t_s, e, first);
+}
+
+void DirectionStage::Hold(double t_s, Estimate* e, size_t first) {
+  for (auto it = last_heard_.begin(); it != last_heard_.end();) {  // forget deleted tracks
+    const uint64_t id = it->first;
+    const bool reported = std::any_of(tracks_.begin(), tracks_.end(), [&](const SourceTrack& t) { return t.id == id; });
+    it = reported ? std::next(it) : last_heard_.erase(it);
+  }
+  for (size_t j = 0; j < tracks_.size(); ++j) {
+    const SourceTrack& track = tracks_[j];
+    SourceEstimate& source = e->sources[first + j];
+    if (source.source_present) {
+      const int recent_hits = std::popcount(track.hit_bits & ((1u << kHoldWindowFrames) - 1u));
+      last_heard_[track.id] = {t_s, track.led && recent_hits >= kHoldHits};
+      continue;
+    }
+    // Coasting through a gap no longer than the hold, after a frame it led among a run of hits
+    // (a talker between syllables; a track on a reflection seldom leads). Not after a level
+    // drop: that frame's peak was the track's, and far below its source.
+    const auto heard = last_heard_.find(track.id);
+    if (heard != last_heard_.end() && heard->second.holds && track.status == TrackStatus::kCoasting &&
+        t_s - heard->second.t_s <= hold_s_ + 1e-9) {
+      source.source_present = true;
+    }
+  }
 }
 
 }  // namespace localizer::engine

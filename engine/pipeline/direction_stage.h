@@ -14,7 +14,11 @@
 // (identities kept through pauses of up to max_coast_s), confirms new ones after M of N
 // frames and deletes silent ones. Estimate::sources gets the confirmed and coasting tracks;
 // a track the tracker gave a peak this frame (status confirmed) is heard (source_present)
-// and reports the power of the peak nearest to it; a coasting one is a prediction.
+// and reports the power of the peak nearest to it; a coasting one is a prediction, present
+// (with power_db NaN) only within config.direction_present_hold_s of a frame on which it took
+// its frame's strongest peak after 4 hits in the last 5 frames: a talker between syllables.
+// The SRP's pairs are weighted against a room's diffuse sound unless
+// config.direction_diffuse_weighting is false (engine/doa/pair_spectra.h).
 // Estimate::source_present says
 // whether any peak passed the threshold; presence_statistic is the strongest peak's statistic (0 when none passed) and
 // presence_threshold the threshold.
@@ -62,12 +66,13 @@ class DirectionStage {
 
  private:
   DirectionStage(SrpPhat srp, DirectionTracker tracker, std::optional<NearFieldLocator> near,
-                 std::optional<EchoWatch> echoes, double drop_db)
+                 std::optional<EchoWatch> echoes, double drop_db, double hold_s)
       : srp_(std::move(srp)),
         tracker_(std::move(tracker)),
         near_(std::move(near)),
         echoes_(std::move(echoes)),
-        drop_db_(drop_db) {}
+        drop_db_(drop_db),
+        hold_s_(hold_s) {}
   // Where a heard source's near-field fit looks (linear arrays: the cone angle's direction in
   // the plane).
   Vec3 FitDirection(const SourceEstimate& source) const;
@@ -77,6 +82,9 @@ class DirectionStage {
   void LocateHeard(Estimate* e, size_t first);
   // Each heard source fitted again with the others removed from the spectrum.
   void RefitAmongOthers();
+  // AudioSessionConfig::direction_present_hold_s: coasting sources among e->sources[first...]
+  // heard within hold_s_ are present.
+  void Hold(double t_s, Estimate* e, size_t first);
 
   // A source without a fit is removed at the lags of a plane wave: a point this far along
   // its direction gives them to well under 1e-6 samples for any array that fits in a room.
@@ -94,6 +102,16 @@ class DirectionStage {
   std::map<uint64_t, double> track_level_db_;
   static constexpr double kLevelWeight = 0.05;
   static constexpr double kHiddenLevelWeight = 0.005;
+  // AudioSessionConfig::direction_present_hold_s (0: off), and when each reported track was
+  // last present.
+  double hold_s_ = 0.0;
+  struct Heard {
+    double t_s = 0.0;
+    bool holds = false;  // it led that frame, with kHoldHits hits in the last kHoldWindowFrames
+  };
+  std::map<uint64_t, Heard> last_heard_;
+  static constexpr int kHoldHits = 4;
+  static constexpr int kHoldWindowFrames = 5;
   std::vector<SourceTrack> tracks_;
   // Per frame scratch of LocateHeard (heard_[k]: the index in Estimate::sources).
   std::vector<size_t> heard_;

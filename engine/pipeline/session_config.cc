@@ -105,6 +105,9 @@ Status AudioSessionConfig::Validate() const {
   if (!(direction_present_drop_db >= 0.0 && direction_present_drop_db <= 60.0)) {
     return InvalidArgument("direction_present_drop_db must be in [0, 60] dB, got " + Num(direction_present_drop_db));
   }
+  if (!(direction_present_hold_s >= 0.0 && direction_present_hold_s <= 1.0)) {
+    return InvalidArgument("direction_present_hold_s must be in [0, 1] s, got " + Num(direction_present_hold_s));
+  }
   if (!(presence_false_alarm > 0.0) || presence_false_alarm > 0.1) {
     return InvalidArgument("presence_false_alarm must be in (0, 0.1], got " + Num(presence_false_alarm));
   }

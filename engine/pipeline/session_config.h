@@ -159,6 +159,19 @@ struct AudioSessionConfig {
   // per minute on the 4-microphone square and 12-13 on the 8-microphone line. Off by default
   // (ACCURACY.md, "A track's own level"); `track --present-drop-db DB`.
   double direction_present_drop_db = 0.0;
+  // Direction sessions: a confirmed track that misses its peak (coasting) stays present for
+  // this long after it was last heard (s, in [0, 1]; 0: present only on frames it took a
+  // peak), when on that frame it took the frame's strongest peak and it took a peak in 4 of the
+  // last 5 frames (a track on a reflection seldom leads). Speech leaves 20-80 ms between
+  // syllables and scatters single frames' peaks; a talker is there through them. Measured in
+  // ACCURACY.md ("A talker between syllables"); `track --present-hold S`.
+  double direction_present_hold_s = 0.05;
+  // Direction sessions: each sensor pair's frequencies weighted by how little a room's diffuse
+  // sound correlates across the pair (engine/doa/pair_spectra.h, "Diffuse weighting"): without
+  // it a small array hears a room's reverberation as a source lifted towards its normal
+  // (planar) or broadside (linear). Measured in ACCURACY.md ("The room's diffuse sound");
+  // `track --no-diffuse-weighting`.
+  bool direction_diffuse_weighting = true;
   // Moving array (platform_pose.h): sensors_m are in the platform's body frame (the IMU's
   // axes) and the session is fed IMU samples (AddImu); each frame's TDOA model uses the
   // sensors rotated by the platform's attitude at that frame and moved to its origin.

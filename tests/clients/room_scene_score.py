@@ -3,7 +3,8 @@
 
 The scene folder holds sources.csv (each talker's azimuth, elevation and cone angle from the
 array's centroid) and sounding.csv (when each talker sounds). Per frame of the track CSV, a
-row is *heard* when its source_present is 1 (the track took a peak this frame); a talker's
+row is *heard* when its source_present is 1 (the track took a peak this frame, or its session
+holds it present through a short gap); a talker's
 sounding frame is covered when a heard row lies within the tolerance of the talker (azimuth,
 or the cone angle for a line array; ACCURACY.md, "Named room scenes through the CLI").
 
