@@ -23,11 +23,7 @@ using testing::FromAzimuthElevation;
 using testing::PlaneSource;
 using testing::PlaneWaveFrame;
 using testing::PlaneWaveScene;
-
-std::vector<Vec3> Respeaker4() {
-  const double a = 0.0405;
-  return {Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
-}
+using testing::Respeaker4;
 
 // `count` plane waves over the sphere (Fibonacci lattice), `total_power` per bin in all.
 std::vector<PlaneSource> DiffuseField(int count, double total_power) {

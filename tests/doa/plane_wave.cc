@@ -97,4 +97,9 @@ Vec3 FromAzimuthElevation(double azimuth_rad, double elevation_rad) {
           std::sin(elevation_rad)};
 }
 
+std::vector<Vec3> Respeaker4() {
+  const double a = 0.0405;
+  return {Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
+}
+
 }  // namespace localizer::engine::testing

@@ -48,6 +48,9 @@ std::vector<float> PlaneWaveFrame(const PlaneWaveScene& scene, const std::vector
 double DirectionCrlbRad(const PlaneWaveScene& scene, const Vec3& direction, double snr, bool cone = false,
                         const Vec3& axis = Vec3::Zero());
 
+// A ReSpeaker-style 4-microphone board: microphones at +-4.05 cm on the x and y axes.
+std::vector<Vec3> Respeaker4();
+
 // Angle between two unit vectors, radians.
 double AngleBetween(const Vec3& a, const Vec3& b);
 

@@ -19,11 +19,8 @@ using testing::FromAzimuthElevation;
 using testing::PlaneSource;
 using testing::PlaneWaveFrame;
 using testing::PlaneWaveScene;
+using testing::Respeaker4;
 
-std::vector<Vec3> Respeaker4() {
-  const double a = 0.0405;
-  return {Vec3(a, 0, 0), Vec3(0, a, 0), Vec3(-a, 0, 0), Vec3(0, -a, 0)};
-}
 std::vector<Vec3> Circle7() {
   std::vector<Vec3> s{Vec3::Zero()};
   for (int k = 0; k < 6; ++k)
@@ -298,7 +295,8 @@ TEST(SrpPhat, ABandLimitedSourceLeavesNoSecondPeak) {
     // The source's in-band power spread over the whole band is its time-domain power; the
     // noise's per-bin level 20 dB below the source's in-band level.
     const double in_band_share = (scene.band_high_hz - scene.band_low_hz) / (0.5 * scene.sample_rate_hz);
-    std::normal_distribution<double> noise(0.0, std::sqrt(power / static_cast<double>(frame.size()) / in_band_share * 0.01));
+    std::normal_distribution<double> noise(0.0,
+                                           std::sqrt(power / static_cast<double>(frame.size()) / in_band_share * 0.01));
     for (float& v : frame) v += static_cast<float>(noise(rng));
     StatusOr<std::vector<DirectionPeak>> peaks = srp->Analyse(frame.data());
     ASSERT_TRUE(peaks.ok());
