@@ -63,7 +63,12 @@ int RunDoa(const std::vector<std::string>& args) {
   flags.String("source-side", &side_text, "X,Y,Z",
                "planar arrays: sources lie where (direction . (X,Y,Z)) > 0, not in the array's plane (default: "
                "the array file's source_side)");
+  bool no_diffuse = false;
+  flags.Bool("no-diffuse-weighting", &no_diffuse,
+             "weigh every frequency alike (by default each sensor pair's frequencies are weighted by how little a "
+             "room's diffuse sound correlates across the pair, as in track)");
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
+  srp.diffuse_weighting = !no_diffuse;
   if (!side_text.empty()) {
     auto side = ParseVector(side_text);
     if (!side.ok()) return UsageError(kCommand, side.status().message());
