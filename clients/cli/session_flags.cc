@@ -103,7 +103,7 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
                "direction; 0: off, the default; in [0, 60])");
   flags.Double("present-hold", &c.direction_present_hold_s, "S", "s",
                "direction sessions: a track that led its frames and misses its peak stays present for S after it "
-               "was last heard (gaps between syllables; 0.05 by default; 0: present only on frames it took a peak; "
+               "was last heard (gaps between syllables; 0: present only on frames it took a peak; "
                "in [0, 1])");
   flags.Bool("no-diffuse-weighting", &f->no_diffuse,
              "direction sessions: weigh every frequency alike (by default each sensor pair's frequencies are weighted "
