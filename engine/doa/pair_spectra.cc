@@ -142,6 +142,20 @@ void PairSpectra::FindSignalShare() {
   }
   share_norm_ = 0.0;
   for (size_t b = 0; b < n; ++b) share_norm_ += signal_share_[b] * signal_share_[b];
+  // With diffuse weighting, each pair's model weights w_k v_p(k) and their norm, once a frame
+  // (RemoveDelay runs per pair for every source found and re-estimated).
+  model_weight_.resize(diffuse_weight_.size() * n);
+  model_norm_.assign(diffuse_weight_.size(), 0.0);
+  for (size_t p = 0; p < diffuse_weight_.size(); ++p) {
+    const double* v = diffuse_weight_[p].data();
+    double* w = model_weight_.data() + p * n;
+    double norm = 0.0;
+    for (size_t k = 0; k < n; ++k) {
+      w[k] = signal_share_[k] * v[k];
+      norm += w[k] * w[k];
+    }
+    model_norm_[p] = norm;
+  }
 }
 
 Status PairSpectra::Analyse(const float* frame, Measurement* field) {
@@ -204,21 +218,16 @@ Status PairSpectra::Analyse(const float* frame, Measurement* field) {
     const double* br = bin_re_.data() + static_cast<size_t>(pairs_[p].second) * nb;
     const double* bi = bin_im_.data() + static_cast<size_t>(pairs_[p].second) * nb;
     double* g = reinterpret_cast<double*>(g_[p].data());  // (re, im) pairs
+    const double* v = diffuse_weight_.empty() ? nullptr : diffuse_weight_[p].data();
     for (size_t b = 0; b < nb; ++b) {
       // X_i conj(X_j) / |X_i conj(X_j)|, 0 where either channel is silent. The products of
       // floats are exact in double, so the sums are rounded once.
       const double cr = ar[b] * br[b] + ai[b] * bi[b], ci = ai[b] * br[b] - ar[b] * bi[b];
       const double magnitude = std::sqrt(cr * cr + ci * ci);  // std::abs calls hypot: 3x slower here
       const bool kept = magnitude > floor && magnitude > 0.0;
-      g[2 * b] = kept ? cr / magnitude : 0.0;
-      g[2 * b + 1] = kept ? ci / magnitude : 0.0;
-    }
-    if (!diffuse_weight_.empty()) {
-      const double* v = diffuse_weight_[p].data();
-      for (size_t b = 0; b < nb; ++b) {
-        g[2 * b] *= v[b];
-        g[2 * b + 1] *= v[b];
-      }
+      const double weight = v ? v[b] : 1.0;  // diffuse weighting (1: exact, as without)
+      g[2 * b] = kept ? cr / magnitude * weight : 0.0;
+      g[2 * b + 1] = kept ? ci / magnitude * weight : 0.0;
     }
     history_[newest_][p] = g_[p];
   }
@@ -298,18 +307,10 @@ void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::comple
   double pr[kLanes], pi[kLanes], rr = 0.0, ri = 0.0, ar[kLanes] = {}, ai[kLanes] = {};
   StartPhasors(step * lag_samples, bins_.front(), pr, pi, &rr, &ri);
   const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
-  const double* w = signal_share_.data();
-  double norm = share_norm_;
-  if (!diffuse_weight_.empty()) {  // the model's bins carry the pair's weights too
-    const std::vector<double>& v = diffuse_weight_[static_cast<size_t>(p)];
-    model_weight_.resize(v.size());
-    norm = 0.0;
-    for (size_t k = 0; k < v.size(); ++k) {
-      model_weight_[k] = signal_share_[k] * v[k];
-      norm += model_weight_[k] * model_weight_[k];
-    }
-    w = model_weight_.data();
-  }
+  // The model's bins carry the pair's diffuse weights too (FindSignalShare).
+  const bool weighted = !diffuse_weight_.empty();
+  const double* w = weighted ? model_weight_.data() + static_cast<size_t>(p) * g.size() : signal_share_.data();
+  double norm = weighted ? model_norm_[static_cast<size_t>(p)] : share_norm_;
   double* re = phasor_re_.data();
   double* im = phasor_im_.data();
   int b = 0;

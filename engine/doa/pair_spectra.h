@@ -141,9 +141,10 @@ class PairSpectra {
   std::vector<double> signal_share_, bin_power_, smoothed_power_, sorted_power_;
   std::vector<double> bin_re_, bin_im_;              // per sensor, per in-band bin: the last frame's spectrum
   std::vector<std::vector<double>> diffuse_weight_;  // per pair, per in-band bin: v_p (empty: off)
-  std::vector<double> model_weight_;                 // RemoveDelay's scratch: w_k v_p(k)
-  double share_norm_ = 0.0;                          // sum of signal_share_^2
-  bool share_ready_ = false;                         // signal_share_ and share_norm_ are this frame's
+  std::vector<double> model_weight_;  // per pair, per in-band bin: w_k v_p(k) (this frame's, with the share)
+  std::vector<double> model_norm_;    // per pair: sum_k (w_k v_p(k))^2
+  double share_norm_ = 0.0;           // sum of signal_share_^2
+  bool share_ready_ = false;          // signal_share_ and share_norm_ are this frame's
   void FindSignalShare();
   // phasor_re_, phasor_im_ = e^(2 pi i k l / M) for every in-band bin k (RemoveDelay's scratch).
   void Phasors(double lag_samples);

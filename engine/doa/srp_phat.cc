@@ -52,11 +52,13 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
   const double per_m = options.sample_rate_hz / options.sound_speed_mps;
   const Vec3 axis = shape->axis;
   std::vector<Vec3> d;
+  std::vector<double> distance_m;  // per pair: its sensors' distance (the diffuse weighting's)
   double spread = 0.0;
   const bool linear = shape->shape == ArrayShape::kLinear;
   for (size_t i = 0; i < sensors_m.size(); ++i) {
     for (size_t j = i + 1; j < sensors_m.size(); ++j) {
       d.emplace_back(-(sensors_m[i] - sensors_m[j]) * per_m);
+      distance_m.push_back((sensors_m[i] - sensors_m[j]).norm());
       spread = std::max(spread, linear ? std::abs(d.back().dot(axis)) : d.back().norm());
     }
   }
@@ -73,9 +75,7 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
       options.hop_samples > 0 ? (options.frame_samples + options.hop_samples - 1) / options.hop_samples : 1;
   if (options.diffuse_weighting) {
     po.sound_speed_mps = options.sound_speed_mps;
-    for (size_t i = 0; i < sensors_m.size(); ++i)
-      for (size_t j = i + 1; j < sensors_m.size(); ++j)
-        po.diffuse_distance_m.push_back((sensors_m[i] - sensors_m[j]).norm());
+    po.diffuse_distance_m = std::move(distance_m);
   }
   StatusOr<PairSpectra> spectra = PairSpectra::Create(po);
   if (!spectra.ok()) return spectra.status();

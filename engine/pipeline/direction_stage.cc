@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 
 namespace localizer::engine {
@@ -15,6 +16,14 @@ constexpr int kMaxRiseFrames = 64;  // PairSpectraOptions::rise_lag_frames' ceil
 double Separation(const SourceTrack& track, const DirectionPeak& peak) {
   if (std::isfinite(track.cone_angle_rad)) return std::abs(track.cone_angle_rad - peak.cone_angle_rad);
   return std::atan2(track.direction.cross(peak.direction).norm(), track.direction.dot(peak.direction));
+}
+
+// Drops the entries of tracks no longer reported (deleted, or hidden as echoes).
+template <typename Value>
+void ForgetUnreported(const std::vector<SourceTrack>& tracks, std::map<uint64_t, Value>* by_id) {
+  std::erase_if(*by_id, [&](const auto& entry) {
+    return std::none_of(tracks.begin(), tracks.end(), [&](const SourceTrack& t) { return t.id == entry.first; });
+  });
 }
 
 }  // namespace
@@ -159,14 +168,7 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
         std::remove_if(tracks_.begin(), tracks_.end(), [&](const SourceTrack& t) { return echoes_->IsEcho(t.id); }),
         tracks_.end());
   }
-  if (drop_db_ > 0.0) {  // forget the levels of tracks no longer reported
-    for (auto it = track_level_db_.begin(); it != track_level_db_.end();) {
-      const uint64_t id = it->first;
-      const bool reported =
-          std::any_of(tracks_.begin(), tracks_.end(), [&](const SourceTrack& t) { return t.id == id; });
-      it = reported ? std::next(it) : track_level_db_.erase(it);
-    }
-  }
+  ForgetUnreported(tracks_, &track_level_db_);
   const size_t first = e->sources.size();
   for (const SourceTrack& track : tracks_) {
     SourceEstimate s;
@@ -211,11 +213,7 @@ void DirectionStage::Frame(const float* frame, double t_s, Estimate* e) {
 }
 
 void DirectionStage::Hold(double t_s, Estimate* e, size_t first) {
-  for (auto it = last_heard_.begin(); it != last_heard_.end();) {  // forget deleted tracks
-    const uint64_t id = it->first;
-    const bool reported = std::any_of(tracks_.begin(), tracks_.end(), [&](const SourceTrack& t) { return t.id == id; });
-    it = reported ? std::next(it) : last_heard_.erase(it);
-  }
+  ForgetUnreported(tracks_, &last_heard_);
   for (size_t j = 0; j < tracks_.size(); ++j) {
     const SourceTrack& track = tracks_[j];
     SourceEstimate& source = e->sources[first + j];

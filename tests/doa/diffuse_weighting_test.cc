@@ -68,10 +68,10 @@ Tally Frames(bool weighted, bool with_source, int frames) {
   if (!srp.ok()) return tally;
   tally.threshold = srp->threshold();
   const Vec3 source = FromAzimuthElevation(1.0, 0.2);  // a talker a little above the board's plane
+  std::vector<PlaneSource> sources;
+  if (with_source) sources.push_back({source, 1.0});  // direct to diffuse 0 dB
+  for (const PlaneSource& s : DiffuseField(256, 1.0)) sources.push_back(s);
   for (int i = 0; i < frames; ++i) {
-    std::vector<PlaneSource> sources;
-    if (with_source) sources.push_back({source, 1.0});  // direct to diffuse 0 dB
-    for (const PlaneSource& s : DiffuseField(256, 1.0)) sources.push_back(s);
     const std::vector<float> frame = PlaneWaveFrame(scene, sources, 500 + static_cast<uint64_t>(i));
     auto peaks = srp->Analyse(frame.data());
     EXPECT_TRUE(peaks.ok());
