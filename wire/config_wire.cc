@@ -315,6 +315,9 @@ StatusOr<engine::AudioSessionConfig> AudioConfigFromProto(const v1::SessionConfi
     c.max_sources = static_cast<int>(p.max_sources());
   }
   if (p.has_source_side()) c.source_side = FromProto(p.source_side());
+  if (p.has_direction_present_hold_s()) c.direction_present_hold_s = p.direction_present_hold_s();
+  if (p.has_direction_diffuse_weighting()) c.direction_diffuse_weighting = p.direction_diffuse_weighting();
+  if (p.has_direction_signal_weighting()) c.direction_signal_weighting = p.direction_signal_weighting();
   if (p.has_source_plane()) {
     c.source_plane_point_m = FromProto(p.source_plane().point_m());
     c.source_plane_normal = FromProto(p.source_plane().normal());
@@ -396,6 +399,9 @@ v1::SessionConfig ConfigToProto(const engine::AudioSessionConfig& c, const std::
   p.set_localization(engine::LocalizationName(c.localization));
   if (c.max_sources > 0) p.set_max_sources(static_cast<uint32_t>(c.max_sources));
   if (c.source_side != Vec3::Zero()) ToProto(c.source_side, p.mutable_source_side());
+  p.set_direction_present_hold_s(c.direction_present_hold_s);
+  p.set_direction_diffuse_weighting(c.direction_diffuse_weighting);
+  if (c.direction_signal_weighting) p.set_direction_signal_weighting(*c.direction_signal_weighting);
   if (c.source_plane_normal != Vec3::Zero()) {
     ToProto(c.source_plane_point_m, p.mutable_source_plane()->mutable_point_m());
     ToProto(c.source_plane_normal, p.mutable_source_plane()->mutable_normal());

@@ -2,11 +2,14 @@
 // an array of any shape (clients/io/doa_runner.h).
 #include <cstdio>
 #include <sstream>
+#include <string>
 #include <utility>
 
 #include "clients/cli/commands.h"
 #include "clients/io/array_json.h"
 #include "clients/io/doa_runner.h"
+#include "engine/doa/array_shape.h"
+#include "engine/doa/srp_phat.h"
 
 namespace localizer::cli {
 namespace {
@@ -67,8 +70,14 @@ int RunDoa(const std::vector<std::string>& args) {
   flags.Bool("no-diffuse-weighting", &no_diffuse,
              "weigh every frequency alike (by default each sensor pair's frequencies are weighted by how little a "
              "room's diffuse sound correlates across the pair, as in track)");
+  std::string signal_weighting;
+  flags.String("signal-weighting", &signal_weighting, "on|off",
+               "weigh each frame's frequencies by their share of signal, or every frequency alike, as in track "
+               "(default: on for planar and volumetric arrays, off for linear ones)");
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
   srp.diffuse_weighting = !no_diffuse;
+  if (!signal_weighting.empty() && signal_weighting != "on" && signal_weighting != "off")
+    return UsageError(kCommand, "--signal-weighting is '" + signal_weighting + "'; give on or off");
   if (!side_text.empty()) {
     auto side = ParseVector(side_text);
     if (!side.ok()) return UsageError(kCommand, side.status().message());
@@ -93,6 +102,13 @@ int RunDoa(const std::vector<std::string>& args) {
                    : array->band_hz.value_or(std::make_pair(0.0, 0.0));
   srp.band_low_hz = band_low_hz.value_or(band.first);
   srp.band_high_hz = band_high_hz.value_or(band.second);
+  if (signal_weighting.empty()) {  // as a track session decides it
+    auto shape = engine::ClassifyArray(array->sensors_m);
+    if (!shape.ok()) return RuntimeError(kCommand, shape.status());
+    srp.signal_weighting = engine::DefaultSignalWeighting(shape->shape);
+  } else {
+    srp.signal_weighting = signal_weighting == "on";
+  }
 
   io::DoaJob job;
   job.wav_paths = wav_paths;

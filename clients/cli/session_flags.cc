@@ -109,6 +109,10 @@ void RegisterTrackerFlags(FlagSet& flags, SessionFlags* f, const std::string& se
              "direction sessions: weigh every frequency alike (by default each sensor pair's frequencies are weighted "
              "by how little a room's diffuse sound correlates across the pair: a small array otherwise hears "
              "reverberation as a source at its normal)");
+  flags.String("signal-weighting", &f->signal_weighting, "on|off",
+               "direction sessions: weigh each frame's frequencies by their share of signal (a talker's harmonics "
+               "count, the noise and reverberation between them less), or every frequency alike (default: on for "
+               "planar and volumetric arrays, off for linear ones)");
   flags.Bool("echo-test", &f->echo_test,
              "direction sessions: do not report a track whose beam holds a louder heard track's signal, "
              "delayed, and whose power rises and falls with it (a room's reflection of that source; "
@@ -268,6 +272,11 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   if (f.no_closure) base.pair_closure = false;
   if (f.no_fusion) base.pair_fusion = false;
   if (f.no_diffuse) base.direction_diffuse_weighting = false;
+  if (!f.signal_weighting.empty()) {
+    if (f.signal_weighting != "on" && f.signal_weighting != "off")
+      return InvalidArgument("--signal-weighting is '" + f.signal_weighting + "'; give on or off");
+    base.direction_signal_weighting = f.signal_weighting == "on";
+  }
   if (f.echo_test) base.direction_echo_test = true;
   // The session file's settings where no flag was given: where the flag would have put them,
   // before the couplings below, so that a setting means the same from either.
@@ -333,14 +342,11 @@ StatusOr<engine::AudioSessionConfig> BuildSessionConfig(const SessionFlags& f, c
   if (runs == Runs::kOnServer) {
     // Engine-only settings the wire does not carry: a server session would silently run
     // without them.
-    for (const auto& [flag, set] :
-         {std::pair<const char*, bool>{"echo-test", f.echo_test},
-          {"present-drop-db", config.direction_present_drop_db != 0.0},
-          {"present-hold", config.direction_present_hold_s != engine::AudioSessionConfig{}.direction_present_hold_s},
-          {"no-fusion", f.no_fusion},
-          {"no-diffuse-weighting", f.no_diffuse},
-          {"no-closure", f.no_closure},
-          {"delay-rates", f.delay_rates}}) {
+    for (const auto& [flag, set] : {std::pair<const char*, bool>{"echo-test", f.echo_test},
+                                    {"present-drop-db", config.direction_present_drop_db != 0.0},
+                                    {"no-fusion", f.no_fusion},
+                                    {"no-closure", f.no_closure},
+                                    {"delay-rates", f.delay_rates}}) {
       if (set) {
         return InvalidArgument(std::string("--") + flag +
                                " is not carried to a server (the wire has no such setting); run locally");

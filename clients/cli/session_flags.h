@@ -42,6 +42,7 @@ struct SessionFlags {
   bool no_closure = false;         // --no-closure: pair_closure off
   bool no_fusion = false;          // --no-fusion: pair_fusion off
   bool no_diffuse = false;         // --no-diffuse-weighting: direction_diffuse_weighting off
+  std::string signal_weighting;    // --signal-weighting on|off ("": by the array's shape)
   bool echo_test = false;          // --echo-test: direction_echo_test on
   // Flags the caller counts as given although FlagSet::seen does not (track's deprecated
   // --seed stands for --filter-seed), so that the session file does not override them.

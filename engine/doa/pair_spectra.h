@@ -36,6 +36,15 @@
 // at 2 kHz). 1 - |Gamma| and (1 - |Gamma|)^2 were measured too: each lost more of the
 // talkers (ACCURACY.md, "The room's diffuse sound"). RemoveDelay's model carries the
 // same weights.
+// Signal weighting (PairSpectraOptions::signal_weighting). PHAT gives every in-band bin the
+// same say, and a talker's voiced sound holds a few harmonics below 3 kHz: the bins between
+// and above them carry only noise and reverberation, which PHAT adds at full weight. Each
+// bin is weighted by its share of signal this frame (w_k below, times the pair's diffuse
+// weight), rescaled per pair so that the sum of squared weights is B: the phases of
+// noise-only bins do not depend on their magnitudes, so the noise-only deviation stays sigma
+// and the presence threshold keeps its false-alarm rate; a frame whose spectrum is flat
+// (white sources, or noise alone) has every share 1 and is weighted as without. Measured on
+// seeded rooms (ACCURACY.md, "A talker's harmonics: bins weighted by their signal").
 // A bin where either channel is silent (|X_i conj(X_j)| below 1e-12 of the frame's mean
 // power) contributes 0.
 //
@@ -70,6 +79,10 @@ struct PairSpectraOptions {
   // deviation stays sigma). See "Diffuse weighting" above.
   std::vector<double> diffuse_distance_m;
   double sound_speed_mps = 343.0;
+  // Signal weighting (false: off): each frame's bins weighted by their share of signal (the
+  // same share RemoveDelay's model uses), scaled per pair so that sum_k weight^2 = B. See
+  // "Signal weighting" above.
+  bool signal_weighting = false;
 };
 
 class PairSpectra {
@@ -141,8 +154,11 @@ class PairSpectra {
   std::vector<double> signal_share_, bin_power_, smoothed_power_, sorted_power_;
   std::vector<double> bin_re_, bin_im_;              // per sensor, per in-band bin: the last frame's spectrum
   std::vector<std::vector<double>> diffuse_weight_;  // per pair, per in-band bin: v_p (empty: off)
-  std::vector<double> model_weight_;  // per pair, per in-band bin: w_k v_p(k) (this frame's, with the share)
-  std::vector<double> model_norm_;    // per pair: sum_k (w_k v_p(k))^2
+  // Per pair, per in-band bin: the weight Analyse gave the bin this frame (signal weighting,
+  // times the diffuse weight; empty without signal weighting: diffuse_weight_ or 1).
+  std::vector<double> applied_weight_;
+  std::vector<double> model_weight_;  // per pair, per in-band bin: w_k times the bin's weight (this frame's)
+  std::vector<double> model_norm_;    // per pair: sum_k (w_k times the bin's weight)^2
   double share_norm_ = 0.0;           // sum of signal_share_^2
   bool share_ready_ = false;          // signal_share_ and share_norm_ are this frame's
   void FindSignalShare();

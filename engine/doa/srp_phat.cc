@@ -77,6 +77,7 @@ StatusOr<SrpPhat> SrpPhat::Create(const std::vector<Vec3>& sensors_m, const SrpO
     po.sound_speed_mps = options.sound_speed_mps;
     po.diffuse_distance_m = std::move(distance_m);
   }
+  po.signal_weighting = options.signal_weighting;
   StatusOr<PairSpectra> spectra = PairSpectra::Create(po);
   if (!spectra.ok()) return spectra.status();
 

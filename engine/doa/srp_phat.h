@@ -116,9 +116,18 @@ struct SrpOptions {
   // Each pair's bins weighted by how little a room's diffuse sound correlates across it
   // (pair_spectra.h, "Diffuse weighting"); false: every in-band bin alike.
   bool diffuse_weighting = false;
+  // Each frame's bins weighted by their share of signal (pair_spectra.h, "Signal weighting");
+  // false: every in-band bin alike (PHAT).
+  bool signal_weighting = false;
 
   Status Validate() const;
 };
+
+// Whether an array of this shape weighs its bins by their signal (SrpOptions::signal_weighting)
+// when its user does not say: planar and volumetric arrays do; linear ones do not, since a
+// line resolves a talker's floor and ceiling images as sources of their own and the weighting
+// lifts them with the talker (ACCURACY.md, "A talker's harmonics").
+inline bool DefaultSignalWeighting(ArrayShape shape) { return shape != ArrayShape::kLinear; }
 
 // One source heard in a frame.
 struct DirectionPeak {

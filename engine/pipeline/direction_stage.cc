@@ -58,6 +58,11 @@ StatusOr<std::unique_ptr<DirectionStage>> DirectionStage::Create(const AudioSess
   srp.keep_whole_field = positions;      // the near-field fits' coarse grid reads it
   srp.search_starts = config.direction_search_starts;
   srp.diffuse_weighting = config.direction_diffuse_weighting;
+  {
+    auto shape = ClassifyArray(config.sensors_m);
+    if (!shape.ok()) return shape.status();
+    srp.signal_weighting = config.direction_signal_weighting.value_or(DefaultSignalWeighting(shape->shape));
+  }
   auto made = SrpPhat::Create(config.sensors_m, srp);
   if (!made.ok()) return made.status();
   DirectionTrackerOptions options;

@@ -21,6 +21,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -172,6 +173,14 @@ struct AudioSessionConfig {
   // (planar) or broadside (linear). Measured in ACCURACY.md ("The room's diffuse sound");
   // `track --no-diffuse-weighting`.
   bool direction_diffuse_weighting = true;
+  // Direction sessions: each frame's frequencies weighted by their share of signal
+  // (engine/doa/pair_spectra.h, "Signal weighting"): a talker's harmonics count, the noise and
+  // reverberation between them less. Unset: on for planar and volumetric arrays, off for
+  // linear ones (a line resolves a talker's floor and ceiling images as sources of their own,
+  // and the weighting lifts them with the talker: on seeded rooms with speech, 3-6 points more
+  // heard share for 2-6 s per minute more false source). Measured in ACCURACY.md ("A talker's
+  // harmonics"); `track --signal-weighting on|off`.
+  std::optional<bool> direction_signal_weighting;
   // Moving array (platform_pose.h): sensors_m are in the platform's body frame (the IMU's
   // axes) and the session is fed IMU samples (AddImu); each frame's TDOA model uses the
   // sensors rotated by the platform's attitude at that frame and moved to its origin.

@@ -52,7 +52,8 @@ struct SceneVariant {
 };
 
 int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, bool diffuse_weighting,
-        const std::string& dump_path, const DirectionTrackerOptions& tracking_flags, const SceneVariant& variant) {
+        bool signal_weighting, const std::string& dump_path, const DirectionTrackerOptions& tracking_flags,
+        const SceneVariant& variant) {
   FILE* dump = dump_path.empty() ? nullptr : std::fopen(dump_path.c_str(), "w");
   if (dump)  // threshold: the peak's (SrpPhat's t, what its rise is held to); 0 on track rows
     std::fprintf(dump, "kind,rt60,frame,on0,on1,energy,onset,rank,id,status,az,el,stat,rise,dist0,dist1,threshold\n");
@@ -132,6 +133,7 @@ int Run(double seconds, uint64_t seed, int max_sources, double relative_floor, b
     options.hop_samples = kHop;
     options.min_relative_statistic = relative_floor;
     options.diffuse_weighting = diffuse_weighting;
+    options.signal_weighting = signal_weighting;
     auto srp = SrpPhat::Create(relative, options);
     DirectionTrackerOptions tracking = tracking_flags;
     tracking.frame_period_s = kHop / kFs;
@@ -238,7 +240,7 @@ int main(int argc, char** argv) {
   double relative = 0.0;
   std::string dump;
   localizer::engine::DirectionTrackerOptions tracking;
-  bool start_anywhere = false, no_continue = false, diffuse = false;
+  bool start_anywhere = false, no_continue = false, diffuse = false, signal = false;
   localizer::engine::SceneVariant variant;
   localizer::FlagSet flags("doa_room_report [flags]",
                            "Two talkers with pauses around a 4-microphone board in rooms of RT60 0.2, 0.4 and\n"
@@ -249,6 +251,8 @@ int main(int argc, char** argv) {
   flags.Double("relative", &relative, "R", "", "SrpOptions::min_relative_statistic, in [0, 1) (0: off)");
   flags.Bool("diffuse-weighting", &diffuse,
              "SrpOptions::diffuse_weighting: each pair's bins weighted by 1 - the diffuse field's coherence");
+  flags.Bool("signal-weighting", &signal,
+             "SrpOptions::signal_weighting: each frame's bins weighted by their share of signal");
   flags.Bool(
       "start-anywhere", &start_anywhere,
       "tracks start from any unexplained peak on any frame (DirectionTrackerOptions::start_at_onsets_only false)");
@@ -299,5 +303,5 @@ int main(int argc, char** argv) {
     return std::fprintf(stderr, "doa_room_report: --quiet-db must be in [0, 30]\n"), 2;
   tracking.start_at_onsets_only = !start_anywhere;
   tracking.continue_identities = !no_continue;
-  return localizer::engine::Run(seconds, seed, max_sources, relative, diffuse, dump, tracking, variant);
+  return localizer::engine::Run(seconds, seed, max_sources, relative, diffuse, signal, dump, tracking, variant);
 }

@@ -23,8 +23,14 @@ std::vector<float> PlaneWaveFrame(const PlaneWaveScene& scene, const std::vector
   std::vector<std::vector<std::complex<double>>> signal(sources.size(), std::vector<std::complex<double>>(bins));
   for (size_t s = 0; s < sources.size(); ++s) {
     const int of = sources[s].echo_of;
+    const double f0 = sources[s].harmonic_f0_hz;
+    const auto holds = [&](int k) {  // the source has power in bin k
+      if (f0 <= 0.0) return true;
+      const double f = k * fs / length, below = sources[s].harmonics_below_hz;
+      return (below <= 0.0 || f <= below) && std::abs(f - f0 * std::round(f / f0)) <= 20.0;
+    };
     for (int k = 0; k < bins; ++k) {
-      if (!in_band(k)) continue;
+      if (!in_band(k) || !holds(k)) continue;
       if (of >= 0 && static_cast<size_t>(of) < s) {
         const double w = 2.0 * std::numbers::pi * k / length;  // rad per sample
         signal[s][k] =
@@ -48,7 +54,9 @@ std::vector<float> PlaneWaveFrame(const PlaneWaveScene& scene, const std::vector
           const double t_s = -scene.sensors_m[m].dot(sources[s].direction) / scene.sound_speed_mps;
           x += signal[s][k] * std::polar(1.0, -w * t_s);
         }
-        x += std::sqrt(scene.noise_power) * std::complex<double>(normal(rng), normal(rng));
+        const double f = k * fs / length;
+        const double shape = scene.noise_corner_hz > 0.0 ? 1.0 / (1.0 + std::pow(f / scene.noise_corner_hz, 2)) : 1.0;
+        x += std::sqrt(scene.noise_power * shape) * std::complex<double>(normal(rng), normal(rng));
       }
       spectrum[2 * static_cast<size_t>(k)] = static_cast<float>(x.real());
       spectrum[2 * static_cast<size_t>(k) + 1] = static_cast<float>(x.imag());

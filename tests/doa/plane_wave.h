@@ -24,6 +24,10 @@ struct PlaneSource {
   int echo_of = -1;
   double gain = 1.0;
   double delay_samples = 0.0;
+  // A voiced talker's spectrum (> 0): power only in the bins within 20 Hz of a multiple of
+  // this fundamental, up to harmonics_below_hz (0: the scene's band).
+  double harmonic_f0_hz = 0.0;
+  double harmonics_below_hz = 0.0;
 };
 
 struct PlaneWaveScene {
@@ -34,6 +38,9 @@ struct PlaneWaveScene {
   double band_low_hz = 100.0;
   double band_high_hz = 7000.0;
   double noise_power = 0.1;  // per in-band bin, each sensor
+  // Coloured noise (> 0): each sensor's noise power falls as 1 / (1 + (f / this)^2) from
+  // noise_power (independent per sensor, as the white noise).
+  double noise_corner_hz = 0.0;
 };
 
 // sensors x frame_samples floats, channel-major. Seeded: the same seed gives the same frame.

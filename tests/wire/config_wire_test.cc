@@ -1,5 +1,5 @@
 // wire/config_wire: SessionConfig defaults and round trips (the multiple-model filters',
-// bounds, presence and localization fields included), refused names quoted, policy limits
+// bounds, presence, localization and direction fields included), refused names quoted, policy limits
 // and bad values answered INVALID_ARGUMENT naming the field.
 #include "wire/config_wire.h"
 
@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <tuple>
 #include <variant>
 #include <vector>
@@ -441,6 +442,33 @@ TEST(ConfigWire, SourcePlaneRoundTripsAndAZeroNormalIsNamed) {
   p.mutable_source_plane()->mutable_normal()->set_z(1.0);
   p.mutable_source_plane()->mutable_point_m()->set_y(std::numeric_limits<double>::quiet_NaN());
   EXPECT_NE(AudioFromProto(p, {}).status().message().find("source_plane"), std::string::npos);
+}
+
+TEST(ConfigWire, DirectionWeightingAndHoldRoundTripAndABadHoldIsNamed) {
+  v1::SessionConfig p = MinimalConfig();
+  auto config = AudioFromProto(p, {});
+  ASSERT_TRUE(config.ok());
+  const engine::AudioSessionConfig defaults;
+  EXPECT_EQ(config->direction_present_hold_s, defaults.direction_present_hold_s);  // unset: the engine's
+  EXPECT_TRUE(config->direction_diffuse_weighting);
+  EXPECT_FALSE(config->direction_signal_weighting.has_value());  // unset: by the array's shape
+  EXPECT_FALSE(ConfigToProto(*config, "").has_direction_signal_weighting());
+  p.set_direction_present_hold_s(0.0);  // stated 0 is honoured, not read as "unset"
+  p.set_direction_diffuse_weighting(false);
+  p.set_direction_signal_weighting(false);
+  config = AudioFromProto(p, {});
+  ASSERT_TRUE(config.ok()) << config.status().ToString();
+  EXPECT_EQ(config->direction_present_hold_s, 0.0);
+  EXPECT_FALSE(config->direction_diffuse_weighting);
+  EXPECT_EQ(config->direction_signal_weighting, std::optional<bool>(false));
+  const v1::SessionConfig effective = ConfigToProto(*config, "");
+  EXPECT_TRUE(effective.has_direction_present_hold_s());
+  EXPECT_EQ(effective.direction_present_hold_s(), 0.0);
+  EXPECT_FALSE(effective.direction_diffuse_weighting());
+  EXPECT_TRUE(effective.has_direction_signal_weighting());
+  EXPECT_FALSE(effective.direction_signal_weighting());
+  p.set_direction_present_hold_s(2.0);
+  EXPECT_NE(AudioFromProto(p, {}).status().message().find("direction_present_hold_s"), std::string::npos);
 }
 
 }  // namespace
