@@ -31,6 +31,8 @@ engine::Weighting WeightingFromProto(v1::Weighting w) {
       return engine::Weighting::kCc;
     case v1::WEIGHTING_PHAT_COHERENCE:
       return engine::Weighting::kPhatCoherence;
+    case v1::WEIGHTING_PHAT_SHARE:
+      return engine::Weighting::kPhatShare;
     default:
       return engine::Weighting::kPhat;
   }
@@ -46,6 +48,8 @@ v1::Weighting WeightingToProto(engine::Weighting w) {
       return v1::WEIGHTING_CC;
     case engine::Weighting::kPhatCoherence:
       return v1::WEIGHTING_PHAT_COHERENCE;
+    case engine::Weighting::kPhatShare:
+      return v1::WEIGHTING_PHAT_SHARE;
     case engine::Weighting::kPhat:
       break;
   }
@@ -161,8 +165,8 @@ Status CheckEnum(const char* field, int value, IsValid is_valid, const char* all
 }
 
 Status CheckEnums(const v1::SessionConfig& p) {
-  LOCALIZER_RETURN_IF_ERROR(
-      CheckEnum("weighting", p.weighting(), v1::Weighting_IsValid, "PHAT, PHAT_BETA, SCOT, CC, PHAT_COHERENCE"));
+  LOCALIZER_RETURN_IF_ERROR(CheckEnum("weighting", p.weighting(), v1::Weighting_IsValid,
+                                      "PHAT, PHAT_BETA, SCOT, CC, PHAT_COHERENCE, PHAT_SHARE"));
   LOCALIZER_RETURN_IF_ERROR(
       CheckEnum("filter.type", p.filter().type(), v1::FilterType_IsValid, "PF, EKF, UKF, MMPF, IMM"));
   LOCALIZER_RETURN_IF_ERROR(

@@ -12,8 +12,9 @@ void RegisterGccFlags(FlagSet& flags, SessionFlags* f) {
   flags.OptionalDouble("sound-speed", &f->array.sound_speed_mps, "MPS", "from the array file", "sound speed, m/s");
   flags.OptionalInt("reference", &f->array.reference_sensor, "K", "from the array file", "reference sensor index");
   flags.String("weighting", &f->weighting, "NAME",
-               "GCC weighting: phat|phat-beta|scot|cc|phat-coherence (learns the band; CPU only; "
-               "its presence test is not calibrated)");
+               "GCC weighting: phat|phat-beta|scot|cc|phat-coherence|phat-share (the last two need no "
+               "band: phat-coherence learns it over frames, phat-share weighs each frame's bins by "
+               "their share of signal; CPU only)");
   flags.Double("phat-beta", &c.phat_beta, "B", "", "exponent of --weighting phat-beta, in [0, 1]");
   flags.Double("band-low", &c.band_low_hz, "HZ", "Hz",
                "lower edge of the GCC band (0: DC, or the array file's band_hz)");

@@ -14,7 +14,7 @@
 //     "frame_samples": 2048,          int, samples per channel per frame      --frame
 //     "hop_samples": 1024,            int, samples between frame starts       --hop
 //     "weighting": "phat",            phat | phat-beta | scot | cc |          --weighting
-//                                     phat-coherence
+//                                     phat-coherence | phat-share
 //     "phat_beta": 0.8,               [0, 1]                                  --phat-beta
 //     "band_low_hz": 300,             the GCC band, Hz (given, the array's    --band-low
 //     "band_high_hz": 3000,           band_hz hint is not used)               --band-high

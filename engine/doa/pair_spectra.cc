@@ -5,25 +5,27 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <span>
 #include <string>
 
 namespace localizer::engine {
 namespace {
 constexpr double kRelativeFloor = 1e-12;  // of the frame's mean power: a silent bin
-// Each bin's share of signal (RemoveDelay): 1 - N / P_k (at least 0), P_k the bin's power
-// averaged over the sensors and kShareWindowBins neighbours, N the noise level: the
-// kFloorQuantile of those averages times kNoiseOverFloor (the 10th percentile of a mean of
-// 8 bins of noise, exponential each, is about 0.6 of its mean: noise-only bins get ~0, not
-// 0.4). All ones when the frame is flat (its upper quantile within kFlatSpread of the floor).
-constexpr size_t kShareWindowBins = 8;
-// With signal weighting the share weighs the bins too, and a talker's harmonics lie 3-8 bins
-// apart (90-250 Hz at 31 Hz per bin, 512 samples at 16 kHz): each bin's share reads its power
-// averaged with one neighbour each side (against the floor of the wide average). Measured on
-// seeded rooms against 9, 5 and 1 (ACCURACY.md, "A talker's harmonics").
-constexpr size_t kWeightingShareWindowBins = 3;
-constexpr double kFloorQuantile = 0.1;
-constexpr double kNoiseOverFloor = 1.7;
-constexpr double kFlatSpread = 4.0;
+// Each bin's share of signal (RemoveDelay; engine/tdoa/signal_share.h): its power averaged
+// over the sensors and 9 neighbouring bins against the frame's floor. With signal weighting
+// the share weighs the bins too, and a talker's harmonics lie 3-8 bins apart (90-250 Hz at
+// 31 Hz per bin, 512 samples at 16 kHz): each bin's share reads its power averaged with one
+// neighbour each side (against the floor of the wide average), and the flatness test the
+// true upper quantile. Measured on seeded rooms against 9, 5 and 1 (ACCURACY.md, "A talker's
+// harmonics").
+SignalShareOptions ShareOptions(bool signal_weighting) {
+  SignalShareOptions options;  // the weighting's
+  if (!signal_weighting) {     // the removal's alone, as it was tuned
+    options.share_window_bins = options.floor_window_bins;
+    options.exact_upper_quantile = false;
+  }
+  return options;
+}
 
 // Floats per channel, rounded up so every channel starts SIMD-aligned (FFTW's new-array
 // execute needs the alignment the plan was made with).
@@ -71,6 +73,7 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
 
   PairSpectra s;
   s.options_ = o;
+  s.share_finder_ = SignalShare(ShareOptions(o.signal_weighting));
   s.fft_size_ = NextFastFftSize(o.frame_samples + o.max_lag_samples + 1);
   if (2 * o.max_lag_samples + 1 > s.fft_size_ / 2)
     return InvalidArgument("the lag window (" + std::to_string(o.max_lag_samples) +
@@ -124,45 +127,10 @@ StatusOr<PairSpectra> PairSpectra::Create(const PairSpectraOptions& o) {
 void PairSpectra::FindSignalShare() {
   share_ready_ = true;
   const size_t n = bins_.size();
-  // Each bin's power averaged over `window` bins centred on it (clipped at the band's edges).
-  const auto smooth = [&](size_t window, std::vector<double>* out) {
-    out->assign(n, 0.0);
-    const size_t half = window / 2;
-    double sum = 0.0;
-    size_t lo = 0, hi = 0;  // the window [lo, hi)
-    for (size_t b = 0; b < n; ++b) {
-      const size_t want_lo = b > half ? b - half : 0, want_hi = std::min(n, b + half + 1);
-      while (hi < want_hi) sum += bin_power_[hi++];
-      while (lo < want_lo) sum -= bin_power_[lo++];
-      (*out)[b] = sum / static_cast<double>(hi - lo);
-    }
-  };
-  smooth(kShareWindowBins, &smoothed_power_);
-  // The floor and the flatness test read the wide average, for which kNoiseOverFloor and
-  // kFlatSpread hold; with signal weighting the shares read the narrow one.
-  sorted_power_ = smoothed_power_;
-  const auto rank = static_cast<size_t>(kFloorQuantile * static_cast<double>(n - 1));
-  const auto at = [&](size_t r) { return sorted_power_.begin() + static_cast<std::ptrdiff_t>(r); };
-  std::nth_element(sorted_power_.begin(), at(rank), sorted_power_.end());
-  const double floor = sorted_power_[rank];
-  // The flatness test's upper quantile. Without signal weighting the element read is the one
-  // the first partition left at that rank (some bin above the floor, seldom the upper
-  // quantile itself): the removal was measured and tuned with it, and keeps it. With signal
-  // weighting the weights are this frame's shares only where the frame is not flat, so the
-  // quantile is found: a white frame read as coloured would weigh its bins at random.
-  if (options_.signal_weighting) {
-    std::nth_element(at(rank), at(n - 1 - rank), sorted_power_.end());
-    smooth(kWeightingShareWindowBins, &smoothed_power_);
-  }
-  signal_share_.assign(n, 1.0);
-  // A frame whose power is flat (white sources, or noise alone) keeps every bin whole: the
-  // floor is then the signal, not the noise.
-  const bool flat = !(floor > 0.0 && !(sorted_power_[n - 1 - rank] < kFlatSpread * floor));
-  if (!flat) {
-    for (size_t b = 0; b < n; ++b) signal_share_[b] = std::max(0.0, 1.0 - kNoiseOverFloor * floor / smoothed_power_[b]);
-  }
+  const bool flat = share_finder_.Find(bin_power_);
+  const std::span<const double> signal_share = share_finder_.shares();
   share_norm_ = 0.0;
-  for (size_t b = 0; b < n; ++b) share_norm_ += signal_share_[b] * signal_share_[b];
+  for (size_t b = 0; b < n; ++b) share_norm_ += signal_share[b] * signal_share[b];
   // With signal weighting, the weight each pair's bins get this frame: share times the
   // diffuse weight, rescaled to sum_k weight^2 = B (a flat frame: the diffuse weight, or 1).
   const size_t pairs = pairs_.size();
@@ -173,7 +141,7 @@ void PairSpectra::FindSignalShare() {
       double* a = applied_weight_.data() + p * n;
       double sum_squares = 0.0;
       for (size_t k = 0; k < n; ++k) {
-        a[k] = (flat ? 1.0 : signal_share_[k]) * (v ? v[k] : 1.0);
+        a[k] = (flat ? 1.0 : signal_share[k]) * (v ? v[k] : 1.0);
         sum_squares += a[k] * a[k];
       }
       if (flat) continue;          // exactly the weights without signal weighting
@@ -196,7 +164,7 @@ void PairSpectra::FindSignalShare() {
     double* w = model_weight_.data() + p * n;
     double norm = 0.0;
     for (size_t k = 0; k < n; ++k) {
-      w[k] = signal_share_[k] * v[k];
+      w[k] = signal_share[k] * v[k];
       norm += w[k] * w[k];
     }
     model_norm_[p] = norm;
@@ -357,7 +325,7 @@ void PairSpectra::RemoveDelay(int p, double lag_samples, std::vector<std::comple
   const double* gv = reinterpret_cast<const double*>(g.data());  // (re, im) pairs
   // The model's bins carry the pair's diffuse or signal weights too (FindSignalShare).
   const bool weighted = !model_norm_.empty();
-  const double* w = weighted ? model_weight_.data() + static_cast<size_t>(p) * g.size() : signal_share_.data();
+  const double* w = weighted ? model_weight_.data() + static_cast<size_t>(p) * g.size() : share_finder_.shares().data();
   double norm = weighted ? model_norm_[static_cast<size_t>(p)] : share_norm_;
   double* re = phasor_re_.data();
   double* im = phasor_im_.data();

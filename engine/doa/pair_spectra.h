@@ -61,6 +61,7 @@
 #include "engine/core/types.h"
 #include "engine/tdoa/fftw_util.h"
 #include "engine/tdoa/packed_transforms.h"
+#include "engine/tdoa/signal_share.h"
 
 namespace localizer::engine {
 
@@ -149,9 +150,10 @@ class PairSpectra {
   std::vector<int> bins_;                             // in-band bin indices
   std::vector<double> omega_, omega_squared_;         // per in-band bin k: 2 pi k / M, its square
   std::vector<std::vector<std::complex<double>>> g_;  // per pair, per in-band bin
-  // Per in-band bin, its share of signal this frame (RemoveDelay), and scratch.
-  // bin_power_: the bin's power summed over the sensors (Analyse fills it).
-  std::vector<double> signal_share_, bin_power_, smoothed_power_, sorted_power_;
+  // Per in-band bin, its share of signal this frame (RemoveDelay; the weights with signal
+  // weighting), from bin_power_: the bin's power summed over the sensors (Analyse fills it).
+  SignalShare share_finder_;
+  std::vector<double> bin_power_;
   std::vector<double> bin_re_, bin_im_;              // per sensor, per in-band bin: the last frame's spectrum
   std::vector<std::vector<double>> diffuse_weight_;  // per pair, per in-band bin: v_p (empty: off)
   // Per pair, per in-band bin: the weight Analyse gave the bin this frame (signal weighting,
@@ -159,8 +161,8 @@ class PairSpectra {
   std::vector<double> applied_weight_;
   std::vector<double> model_weight_;  // per pair, per in-band bin: w_k times the bin's weight (this frame's)
   std::vector<double> model_norm_;    // per pair: sum_k (w_k times the bin's weight)^2
-  double share_norm_ = 0.0;           // sum of signal_share_^2
-  bool share_ready_ = false;          // signal_share_ and share_norm_ are this frame's
+  double share_norm_ = 0.0;           // sum of the shares squared
+  bool share_ready_ = false;          // share_finder_ and share_norm_ hold this frame's
   void FindSignalShare();
   // phasor_re_, phasor_im_ = e^(2 pi i k l / M) for every in-band bin k (RemoveDelay's scratch).
   void Phasors(double lag_samples);

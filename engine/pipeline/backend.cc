@@ -1,6 +1,7 @@
 #include "engine/pipeline/backend.h"
 
 #include <mutex>
+#include <string>
 
 #include "engine/core/enum_names.h"
 #include "engine/filters/handoff_tracker.h"
@@ -117,11 +118,13 @@ StatusOr<SessionComponents> BuildComponents(BackendChoice backend, const ArrayGe
                                             const TrackerOptions& tracker, bool moving_array) {
   const bool particle = tracker.kind == FilterKind::kPf;
   SessionComponents parts;
-  // The learnt coherence weighting keeps per-pair state across frames that the device GCC
-  // does not have yet: such sessions run on the CPU (auto) or are refused (gpu).
-  const bool cpu_weighting = gcc.weighting == Weighting::kPhatCoherence;
+  // The learnt coherence weighting keeps per-pair state across frames, and the share
+  // weighting reads every channel's spectrum before weighing a pair; the device GCC does
+  // neither yet: such sessions run on the CPU (auto) or are refused (gpu).
+  const bool cpu_weighting = gcc.weighting == Weighting::kPhatCoherence || gcc.weighting == Weighting::kPhatShare;
   if (backend == BackendChoice::kGpu && cpu_weighting) {
-    return FailedPrecondition("weighting phat-coherence runs on the CPU backend only (backend cpu or auto)");
+    return FailedPrecondition(std::string("weighting ") + WeightingName(gcc.weighting) +
+                              " runs on the CPU backend only (backend cpu or auto)");
   }
   if (backend != BackendChoice::kCpu && !cpu_weighting) {
     const auto provider = CurrentProvider();

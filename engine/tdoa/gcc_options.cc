@@ -35,9 +35,10 @@ StatusOr<Weighting> ParseWeighting(const std::string& name) {
   if (name == "scot") return Weighting::kScot;
   if (name == "cc") return Weighting::kCc;
   if (name == "phat-coherence") return Weighting::kPhatCoherence;
+  if (name == "phat-share") return Weighting::kPhatShare;
   return InvalidArgument("weighting \"" + name +
                          "\" is not one of \"phat\", \"phat-beta\", \"scot\", \"cc\", "
-                         "\"phat-coherence\"");
+                         "\"phat-coherence\", \"phat-share\"");
 }
 
 const char* WeightingName(Weighting w) {
@@ -52,6 +53,8 @@ const char* WeightingName(Weighting w) {
       return "cc";
     case Weighting::kPhatCoherence:
       return "phat-coherence";
+    case Weighting::kPhatShare:
+      return "phat-share";
   }
   return "unknown";
 }

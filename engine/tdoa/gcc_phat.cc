@@ -25,6 +25,11 @@ namespace {
 // tracked acoustic source does; a larger rate is a caller's error.
 constexpr double kMaxDelayRate = 0.05;
 
+// kPhatShare's floor: each bin's power averaged over 33 bins (a 4096-sample frame has 2049;
+// the direction search's 512-sample frames read 9), so that a source a few dB over the noise
+// over a quarter of the band is not read as a flat frame (signal_share.h).
+constexpr std::size_t kShareFloorWindowBins = 32;
+
 // Copies channels a and b into the zero-padded transform input, interleaved (a(i) at dst[2i],
 // b(i) at dst[2i + 1]: packed_transforms.h's real and imaginary parts; b null: zeros), each
 // times the frame's taper when `window` holds its n gains (gcc_math.h's TaperGain; empty: a
@@ -99,6 +104,7 @@ Status GccPhatEstimator::Impl::Init() {
   const int widest_lag = layout.widest_lag();
   window.assign(2 * (widest_lag + kPeakHalfWidth) + 1, 0.0f);
   energy.assign(array.sensor_count(), 0.0);
+  share_finder = SignalShare(SignalShareOptionsForNoise(array.sensor_count(), kShareFloorWindowBins));
 
   // One more channel slot than sensors: the partner of a channel transformed alone.
   spectra = AllocateFftwFloats(static_cast<std::size_t>(spectrum_stride) * (array.sensor_count() + 1));
@@ -164,6 +170,35 @@ void GccPhatEstimator::Impl::MeasureWarpedPairs(const float* frame, Measurement*
   }
 }
 
+void GccPhatEstimator::Impl::FindShares() {
+  const int lo = layout.band_first_bin;
+  const int hi = layout.band_end_bin;
+  band_power.assign(static_cast<std::size_t>(hi - lo), 0.0);
+  for (int c = 0; c < array.sensor_count(); ++c) {
+    const float* x = SpectrumOf(c);
+    for (int b = lo; b < hi; ++b) {
+      const double re = x[2 * b], im = x[2 * b + 1];
+      band_power[static_cast<std::size_t>(b - lo)] += re * re + im * im;
+    }
+  }
+  share_flat = share_finder.Find(band_power);
+  if (share_flat) return;
+  const std::span<const double> shares = share_finder.shares();
+  share_weight.assign(static_cast<std::size_t>(layout.bin_count), 0.0f);
+  for (int b = lo; b < hi; ++b) share_weight[static_cast<std::size_t>(b)] = static_cast<float>(shares[b - lo]);
+}
+
+bool GccPhatEstimator::Impl::WeighedBeyondPhat(int pair) const {
+  switch (options.weighting) {
+    case Weighting::kPhatCoherence:
+      return pair >= 0 && coherence_usable[pair];
+    case Weighting::kPhatShare:
+      return !share_flat;
+    default:
+      return false;
+  }
+}
+
 float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair, float* g) {
   return WeighSensors(array.reference_sensor(), array.sensor_of_pair(pair), pair, g);
 }
@@ -195,6 +230,13 @@ float GccPhatEstimator::Impl::WeighSensors(int ref, int sensor, int pair, float*
       break;
     case Weighting::kCc:
       half_sum = WeighBins(xr, xk, lo, hi, CcWeight{}, g);
+      break;
+    case Weighting::kPhatShare:
+      if (!share_flat) {
+        half_sum = WeighBins(xr, xk, lo, hi, CoherencePhatWeight{floor_mag, share_weight.data()}, g);
+      } else {  // nothing to tell signal from noise this frame: PHAT
+        half_sum = WeighBins(xr, xk, lo, hi, PhatWeight{floor_mag}, g);
+      }
       break;
     case Weighting::kPhatCoherence:
       if (pair >= 0 && coherence_usable[pair]) {
@@ -285,7 +327,7 @@ float GccPhatEstimator::Impl::WeighItem(int item, float* g) {
 void GccPhatEstimator::Impl::ReadItem(int item, float norm, const float* g, const float* corr, Measurement* out) {
   const int pairs = array.pair_count();
   if (item >= pairs) {
-    ReadCrossPair(item - pairs, norm, corr, &out->cross_pairs[static_cast<std::size_t>(item - pairs)]);
+    ReadCrossPair(item - pairs, norm, g, corr, &out->cross_pairs[static_cast<std::size_t>(item - pairs)]);
   } else if (norm > 0.0f) {
     ReadPair(item, norm, g, corr, &out->pairs[static_cast<std::size_t>(item)]);
   } else {  // no energy in the band: nothing to measure
@@ -322,8 +364,8 @@ void GccPhatEstimator::Impl::ReadPair(int pair, float norm, const float* g, cons
   const int searched_count = 2 * max_lag + 1;
   out->sensor = array.sensor_of_pair(pair);
   out->first_lag_samples = -max_lag;
-  const bool learnt = options.weighting == Weighting::kPhatCoherence && coherence_usable[pair];
-  const float noise_floor_inverse = learnt ? WeighedNoiseFloorInverse(norm, g) : layout.noise_floor_inverse;
+  const float noise_floor_inverse =
+      WeighedBeyondPhat(pair) ? WeighedNoiseFloorInverse(norm, g) : layout.noise_floor_inverse;
   const float scale = 1.0f / norm;
   GatherWindow(corr, max_lag, scale);
 
@@ -355,7 +397,8 @@ void GccPhatEstimator::Impl::ReadPair(int pair, float norm, const float* g, cons
     out->gcc.clear();
 }
 
-void GccPhatEstimator::Impl::ReadCrossPair(int index, float norm, const float* corr, CrossPairGcc* out) {
+void GccPhatEstimator::Impl::ReadCrossPair(int index, float norm, const float* g, const float* corr,
+                                           CrossPairGcc* out) {
   const auto [a, b] = layout.cross_sensors[static_cast<std::size_t>(index)];
   const int max_lag = layout.cross_max_lag_samples[static_cast<std::size_t>(index)];
   out->sensor_a = a;
@@ -367,7 +410,7 @@ void GccPhatEstimator::Impl::ReadCrossPair(int index, float norm, const float* c
     out->gcc_beyond.assign(2 * kPeakHalfWidth, 0.0f);
     return;
   }
-  out->noise_floor_inverse = layout.noise_floor_inverse;
+  out->noise_floor_inverse = WeighedBeyondPhat(-1) ? WeighedNoiseFloorInverse(norm, g) : layout.noise_floor_inverse;
   GatherWindow(corr, max_lag, 1.0f / norm);
   const float* searched = window.data() + kPeakHalfWidth;
   out->gcc.assign(searched, searched + 2 * max_lag + 1);
@@ -403,6 +446,7 @@ Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double 
     const int partner = ch + 1 < sensors ? ch + 1 : -1;
     LOCALIZER_RETURN_IF_ERROR(s.TransformChannels(channel(ch), ch, partner >= 0 ? channel(partner) : nullptr, partner));
   }
+  if (s.options.weighting == Weighting::kPhatShare) s.FindShares();
   out->t_s = t_s;
   out->sample_rate_hz = s.options.sample_rate_hz;
   const int pairs = s.array.pair_count();

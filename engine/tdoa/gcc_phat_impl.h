@@ -14,6 +14,7 @@
 #include "engine/tdoa/gcc_layout.h"
 #include "engine/tdoa/gcc_phat.h"
 #include "engine/tdoa/packed_transforms.h"
+#include "engine/tdoa/signal_share.h"
 
 namespace localizer::engine {
 
@@ -45,13 +46,19 @@ struct GccPhatEstimator::Impl {
   void ReadPair(int pair, float norm, const float* g, const float* corr, PairMeasurement* out);
   void MeasureWithoutEnergy(int pair, PairMeasurement* out) const;
   // Cross pair `index` of layout.cross_sensors: its GCC over its window and noise scale
-  // (norm 0: no energy in the band).
-  void ReadCrossPair(int index, float norm, const float* corr, CrossPairGcc* out);
+  // (norm 0: no energy in the band); g its weighted cross-spectrum.
+  void ReadCrossPair(int index, float norm, const float* g, const float* corr, CrossPairGcc* out);
   void GatherWindow(const float* corr, int max_lag, float scale);
   float LargestSidelobe(const float* corr, std::span<const float> searched, int peak, int peak_lag, float scale) const;
   // The moments of the pair's cross-spectrum g at the measured delay (delay_statistics.h).
   SpectrumMoments AnalyseSpectrum(int pair, double delay_samples, const float* g);
   void LearnCoherence(int pair);
+  // kPhatShare: this frame's shares of signal from every channel's in-band power, into
+  // share_weight (share_flat when the frame has none to give: weighed as PHAT).
+  void FindShares();
+  // Whether this frame's pairs are weighed by weights other than PHAT's unit ones (learnt
+  // coherence for `pair`, or this frame's shares), so R's noise scale is the weights' own.
+  bool WeighedBeyondPhat(int pair) const;
 
   ArrayGeometry array;
   GccOptions options;
@@ -75,6 +82,12 @@ struct GccPhatEstimator::Impl {
   std::vector<float> coherence_weight;
   std::vector<int> coherence_frames;
   std::vector<char> coherence_usable;
+  // kPhatShare: the frame's power per in-band bin summed over the channels, the shares found
+  // from it, and the weight of each bin (indexed by bin; 0 out of band).
+  std::vector<double> band_power;
+  SignalShare share_finder;
+  std::vector<float> share_weight;
+  bool share_flat = true;
   std::vector<WindowExtremum> extrema;  // scratch for PickDelayCandidates
   bool have_spectra = false;            // `spectra` hold the last frame Estimate took (MeasureCrossPairs)
   // Two channels per forward transform, two pairs per inverse (packed_transforms.h).

@@ -26,6 +26,11 @@ StatusOr<GccPlan> GccPlan::Create(const engine::ArrayGeometry& array, const engi
         "weighting phat-coherence learns from frame to frame and is not computed by the GPU "
         "batch (the GPU backend measures such sessions on the CPU)");
   }
+  if (options.weighting == engine::Weighting::kPhatShare) {
+    return InvalidArgument(
+        "weighting phat-share reads every channel's spectrum before weighing a pair and is not "
+        "computed by the GPU batch (the GPU backend measures such sessions on the CPU)");
+  }
   GccPlan plan;
   plan.options_ = options;
   plan.layout_ = std::move(layout).value();

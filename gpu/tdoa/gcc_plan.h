@@ -40,7 +40,8 @@ class GccPlan {
 
   // The same validation and errors as engine::GccPhatEstimator::Create: INVALID_ARGUMENT
   // naming the option and value when options.Validate() fails, or when the band holds no FFT
-  // bin; and for weighting phat-coherence, whose learned weights the batch does not keep.
+  // bin; and for weighting phat-coherence (learned weights the batch does not keep) and
+  // phat-share (weights from every channel before any pair).
   // (measure_fft_plans is ignored: cuFFT plans do not depend on it.)
   static StatusOr<GccPlan> Create(const engine::ArrayGeometry& array, const engine::GccOptions& options);
 

@@ -9,6 +9,8 @@
 //                                   stage_over_bare is the ratio, robust to a busy machine.
 //   BM_GccPhatCoherence/<fs>        Estimate with Weighting::kPhatCoherence (and no band), in
 //                                   steady state: the per-bin weights and the coherence update.
+//   BM_GccPhatShare/<fs>            Estimate with Weighting::kPhatShare (and no band): each
+//                                   frame's shares (signal_share.h) and the per-bin weights.
 //   BM_Despike/<coincidence>        Despike (despike.h) on the same 4 x 4096 frame, k = 5, with
 //                                   the coincidence gate off (0) or at 20 samples.
 //   BM_GccPhatDelayRates/<fs>       Estimate with a delay rate on every pair (SetDelayRates: each
@@ -159,12 +161,13 @@ void BM_StageOverBare(benchmark::State& state) {
   state.counters["stage_over_bare"] = stage_s / bare_s;
 }
 
-void BM_GccPhatCoherence(benchmark::State& state) {
+// Estimate with `weighting` (and no band) in steady state, after 8 frames.
+void WeighedSteadyState(benchmark::State& state, Weighting weighting) {
   const ArrayGeometry array = BenchArray();
   GccOptions options;
   options.frame_samples = kFrameSamples;
   options.sample_rate_hz = static_cast<double>(state.range(0));
-  options.weighting = Weighting::kPhatCoherence;
+  options.weighting = weighting;
   auto gcc = GccPhatEstimator::Create(array, options);
   if (!gcc.ok()) {
     state.SkipWithError(gcc.status().ToString().c_str());
@@ -179,6 +182,9 @@ void BM_GccPhatCoherence(benchmark::State& state) {
   }
   SetCounters(state);
 }
+
+void BM_GccPhatCoherence(benchmark::State& state) { WeighedSteadyState(state, Weighting::kPhatCoherence); }
+void BM_GccPhatShare(benchmark::State& state) { WeighedSteadyState(state, Weighting::kPhatShare); }
 
 void BM_GccPhatDelayRates(benchmark::State& state) {
   const ArrayGeometry array = BenchArray();
@@ -227,6 +233,7 @@ BENCHMARK(BM_BareFftw)->Apply(EstimatePlans);
 BENCHMARK(BM_GccPhatStage)->Apply(EstimatePlans);
 BENCHMARK(BM_StageOverBare)->Apply(EstimatePlans);
 BENCHMARK(BM_GccPhatCoherence)->Arg(11025)->Arg(44100)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GccPhatShare)->Arg(11025)->Arg(44100)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Despike)->Arg(0)->Arg(20)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_GccPhatDelayRates)->Apply(EstimatePlans);
 BENCHMARK(BM_BareFftw)->Apply(MeasuredPlans);

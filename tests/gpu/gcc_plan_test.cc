@@ -66,6 +66,16 @@ TEST(GccPlan, RefusesTheLearntCoherenceWeighting) {
   EXPECT_NE(plan.status().message().find("phat-coherence"), std::string::npos) << plan.status().message();
 }
 
+// PHAT-share reads every channel's spectrum before it weighs a pair, which the batch does not.
+TEST(GccPlan, RefusesTheShareWeighting) {
+  GccOptions options = Options(11025.0);
+  options.weighting = engine::Weighting::kPhatShare;
+  const auto plan = GccPlan::Create(ScenarioArray("tetra-water"), options);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_EQ(plan.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(plan.status().message().find("phat-share"), std::string::npos) << plan.status().message();
+}
+
 TEST(GccPlan, LayoutEqualsTheCpuEstimators) {
   for (const std::string& name : engine::ScenarioNames()) {
     auto scenario = engine::MakeScenario(name);

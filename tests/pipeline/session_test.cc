@@ -206,6 +206,23 @@ TEST(Session, GpuWithoutOneIsAClearErrorNeverAFallback) {
   EXPECT_TRUE(Session::Create(c).ok());
 }
 
+// The weightings the device GCC does not compute: refused on gpu (whether or not a device is
+// present), run on the CPU with auto.
+TEST(Session, CpuOnlyWeightingsAreRefusedOnTheGpuByName) {
+  const Fixture& f = WaterScene();
+  for (Weighting w : {Weighting::kPhatCoherence, Weighting::kPhatShare}) {
+    AudioSessionConfig c = ConfigFor(f.scenario);
+    c.weighting = w;
+    c.backend = BackendChoice::kGpu;
+    auto s = Session::Create(c);
+    ASSERT_FALSE(s.ok());
+    EXPECT_EQ(s.status().code(), StatusCode::kFailedPrecondition);
+    EXPECT_NE(s.status().message().find(WeightingName(w)), std::string::npos) << s.status().message();
+    c.backend = BackendChoice::kAuto;
+    EXPECT_TRUE(Session::Create(c).ok()) << WeightingName(w);
+  }
+}
+
 }  // namespace
 }  // namespace localizer::engine
 

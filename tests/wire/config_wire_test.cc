@@ -9,6 +9,7 @@
 #include <limits>
 #include <optional>
 #include <tuple>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -69,6 +70,26 @@ TEST(ConfigWire, EffectiveConfigRoundTrips) {
   EXPECT_EQ(effective.filter().particles(), 777u);
   EXPECT_EQ(effective.weighting(), v1::WEIGHTING_SCOT);
   EXPECT_EQ(effective.hop_samples(), 512u);
+}
+
+// Every weighting the engine has travels both ways under its own enum value.
+TEST(ConfigWire, EveryWeightingRoundTrips) {
+  const std::pair<v1::Weighting, engine::Weighting> all[] = {
+      {v1::WEIGHTING_PHAT, engine::Weighting::kPhat},
+      {v1::WEIGHTING_PHAT_BETA, engine::Weighting::kPhatBeta},
+      {v1::WEIGHTING_SCOT, engine::Weighting::kScot},
+      {v1::WEIGHTING_CC, engine::Weighting::kCc},
+      {v1::WEIGHTING_PHAT_COHERENCE, engine::Weighting::kPhatCoherence},
+      {v1::WEIGHTING_PHAT_SHARE, engine::Weighting::kPhatShare},
+  };
+  for (const auto& [wire, engine_weighting] : all) {
+    v1::SessionConfig p = MinimalConfig();
+    p.set_weighting(wire);
+    auto config = AudioFromProto(p, {});
+    ASSERT_TRUE(config.ok()) << config.status().ToString();
+    EXPECT_EQ(config->weighting, engine_weighting) << v1::Weighting_Name(wire);
+    EXPECT_EQ(ConfigToProto(*config, "label").weighting(), wire);
+  }
 }
 
 TEST(ConfigWire, MixtureLikelihoodAndItsOutlierProbabilityRoundTrip) {

@@ -40,7 +40,7 @@ __all__ = ["SESSION_KEYS", "CHOICES", "SessionFile", "read_session_file", "parse
 
 # The names each choice takes (the engine's tables: engine/filters/filter_kind.cc, ...).
 CHOICES: dict[str, tuple[str, ...]] = {
-    "weighting": ("phat", "phat-beta", "scot", "cc", "phat-coherence"),
+    "weighting": ("phat", "phat-beta", "scot", "cc", "phat-coherence", "phat-share"),
     "filter": ("pf", "ekf", "ukf", "mmpf", "imm"),
     "motion_model": ("cv", "ca", "ct", "singer"),
     "imm_variant": ("ekf", "ukf"),

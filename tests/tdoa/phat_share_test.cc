@@ -1,0 +1,185 @@
+// PHAT weighted by each bin's share of signal this frame (Weighting::kPhatShare,
+// engine/tdoa/signal_share.h): no band to guess, no memory between frames, and noise alone
+// still reads as noise.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "engine/tdoa/gcc_phat.h"
+#include "engine/tdoa/signal_share.h"
+#include "tests/tdoa/tdoa_test_signals.h"
+
+namespace localizer::engine {
+namespace {
+
+using testing::SignalSpec;
+
+double Median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// Per-bin powers of one frame: exponential noise of mean 1 (a periodogram's), times `gain`
+// in bins [first, end).
+std::vector<double> NoisePower(int bins, int first, int end, double gain, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::exponential_distribution<double> exponential(1.0);
+  std::vector<double> power(static_cast<std::size_t>(bins));
+  for (int b = 0; b < bins; ++b) power[b] = exponential(rng) * (b >= first && b < end ? gain : 1.0);
+  return power;
+}
+
+TEST(SignalShare, NoiseAloneIsFlatAndASourcesBandStandsOut) {
+  SignalShare finder;
+  EXPECT_TRUE(finder.Find(NoisePower(2048, 0, 0, 1.0, 1)));
+  for (double s : finder.shares()) EXPECT_EQ(s, 1.0);
+
+  ASSERT_FALSE(finder.Find(NoisePower(2048, 300, 700, 30.0, 2)));  // 15 dB over the floor
+  std::vector<double> inside, outside;
+  for (int b = 0; b < 2048; ++b) {
+    const double s = finder.shares()[b];
+    ASSERT_GE(s, 0.0);
+    ASSERT_LE(s, 1.0);
+    if (b >= 302 && b < 698) inside.push_back(s);
+    if (b < 295 || b >= 705) outside.push_back(s);
+  }
+  std::printf("shares: median %.3f in the source's bins, %.3f outside\n", Median(inside), Median(outside));
+  EXPECT_GT(Median(inside), 0.9);
+  EXPECT_LT(Median(outside), 0.05);
+
+  EXPECT_TRUE(finder.Find({}));
+  EXPECT_TRUE(finder.shares().empty());
+}
+
+GccOptions Options(const SignalSpec& spec, Weighting weighting, bool band_hint) {
+  GccOptions o;
+  o.sample_rate_hz = spec.sample_rate_hz;
+  o.frame_samples = spec.frame_samples;
+  o.weighting = weighting;
+  if (band_hint) {
+    o.band_low_hz = spec.band_low_hz;
+    o.band_high_hz = spec.band_high_hz;
+  }
+  return o;
+}
+
+struct Track {
+  double spread = 0.0;  // rms error, samples, over pairs and frames
+  int lost = 0;         // errors beyond one sample (not in the spread)
+};
+
+// A band-limited source in white noise over the whole band, 40 independent frames.
+Track RunFrames(const GccOptions& o, const SignalSpec& spec, double snr_db, uint64_t seed) {
+  auto gcc = std::move(*GccPhatEstimator::Create(testing::TetrahedronArray(), o));
+  const std::vector<double> delays = {0.0, 3.3, -7.6, 11.45};
+  double sum_sq = 0.0;
+  int count = 0;
+  Track t;
+  Measurement m;
+  for (int f = 0; f < 40; ++f) {
+    const auto frame = testing::DelayedNoiseFrame(spec, delays, snr_db, seed + f);
+    EXPECT_TRUE(gcc->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
+    for (const PairMeasurement& p : m.pairs) {
+      const double e = p.delay_s * spec.sample_rate_hz - delays[p.sensor];
+      if (std::abs(e) > 1.0) {
+        ++t.lost;
+        continue;
+      }
+      sum_sq += e * e;
+      ++count;
+    }
+  }
+  t.spread = std::sqrt(sum_sq / std::max(count, 1));
+  return t;
+}
+
+TEST(PhatShare, WithoutABandHintNearsPhatWithTheTrueBand) {
+  SignalSpec spec;
+  spec.band_low_hz = 500.0;
+  spec.band_high_hz = 2000.0;
+  // -10 dB (a source 4.3 dB under the noise in its own bins): a single frame does not show its
+  // band (flat_spread), and the frames are weighed as PHAT; phat-coherence learns it over
+  // frames (gcc_frontend_test).
+  for (double snr : {-10.0, -5.0, 0.0}) {
+    const Track hinted = RunFrames(Options(spec, Weighting::kPhat, true), spec, snr, 5000);
+    const Track blind = RunFrames(Options(spec, Weighting::kPhat, false), spec, snr, 5000);
+    const Track shared = RunFrames(Options(spec, Weighting::kPhatShare, false), spec, snr, 5000);
+    std::printf("%5.1f dB: PHAT with band %.4f (%d lost), without %.4f (%d lost), phat-share without %.4f (%d lost)\n",
+                snr, hinted.spread, hinted.lost, blind.spread, blind.lost, shared.spread, shared.lost);
+    if (snr < -7.0) {
+      EXPECT_EQ(shared.spread, blind.spread);
+      continue;
+    }
+    EXPECT_LE(shared.lost, hinted.lost) << snr;
+    EXPECT_LT(shared.spread, 1.2 * hinted.spread) << snr;  // measured 1.11 and 1.06
+    EXPECT_GT(blind.spread, 2.0 * shared.spread) << snr;   // the test has teeth: 3.2 and 4.7
+  }
+}
+
+// Independent noise on every channel, band-limited (coloured) or white, in independent
+// frames: peak_snr must read as noise, since the presence test's null is built on it. White
+// noise gives flat frames, weighed exactly as PHAT.
+std::vector<double> NoisePeakSnr(Weighting weighting, bool coloured, std::vector<double>* delays_s) {
+  SignalSpec spec;
+  spec.band_low_hz = 300.0;
+  spec.band_high_hz = 1500.0;
+  auto gcc = std::move(*GccPhatEstimator::Create(testing::TetrahedronArray(), Options(spec, weighting, false)));
+  std::vector<double> snr;
+  Measurement m;
+  std::vector<float> frame(4 * static_cast<std::size_t>(spec.frame_samples));
+  std::mt19937_64 rng(20261206);
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  for (int f = 0; f < 150; ++f) {
+    for (int c = 0; c < 4; ++c) {
+      // One channel of band-limited noise (its own seed: independent of the others), plus
+      // white noise 20 dB below it.
+      std::vector<float> channel(static_cast<std::size_t>(spec.frame_samples), 0.0f);
+      if (coloured) channel = testing::DelayedNoiseFrame(spec, {0.0}, 20.0, 1000 * f + c + 1);
+      for (float& v : channel) v += coloured ? 0.0f : gauss(rng);
+      std::copy(channel.begin(), channel.end(), frame.begin() + static_cast<std::ptrdiff_t>(c) * spec.frame_samples);
+    }
+    EXPECT_TRUE(gcc->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
+    for (const PairMeasurement& p : m.pairs) {
+      snr.push_back(p.peak_snr);
+      delays_s->push_back(p.delay_s);
+    }
+  }
+  return snr;
+}
+
+double Quantile95(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() * 95 / 100];
+}
+
+TEST(PhatShare, NoiseAloneReadsAsNoiseInPeakSnr) {
+  std::vector<double> phat_delays, share_delays;
+  const std::vector<double> phat_white = NoisePeakSnr(Weighting::kPhat, false, &phat_delays);
+  const std::vector<double> share_white = NoisePeakSnr(Weighting::kPhatShare, false, &share_delays);
+  EXPECT_EQ(phat_white, share_white);  // flat frames: PHAT, bit for bit
+  EXPECT_EQ(phat_delays, share_delays);
+
+  const double phat_p95 = Quantile95(NoisePeakSnr(Weighting::kPhat, true, &phat_delays));
+  const double share_p95 = Quantile95(NoisePeakSnr(Weighting::kPhatShare, true, &share_delays));
+  std::printf("peak_snr on coloured noise, 95th percentile: PHAT %.2f, phat-share %.2f (white: %.2f)\n", phat_p95,
+              share_p95, Quantile95(phat_white));
+  EXPECT_GT(share_p95, 2.0);  // the maximum of ~100 N(0, 1) lags
+  EXPECT_LT(share_p95, 1.25 * Quantile95(phat_white));
+}
+
+TEST(PhatShare, IsNamedAndParsed) {
+  auto parsed = ParseWeighting("phat-share");
+  ASSERT_TRUE(parsed.ok());
+  EXPECT_EQ(*parsed, Weighting::kPhatShare);
+  EXPECT_STREQ(WeightingName(Weighting::kPhatShare), "phat-share");
+  const Status bad = ParseWeighting("phat-shared").status();
+  EXPECT_EQ(bad.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.message().find("phat-share"), std::string::npos) << bad.message();
+}
+
+}  // namespace
+}  // namespace localizer::engine
