@@ -1,6 +1,7 @@
-// GccPhatEstimator's state and steps, shared by gcc_phat.cc (transforms, weighting, the main
-// peak and MeasurePair) and gcc_peak.cc (the spectrum statistics behind delay_sigma, the
-// coherence weights and the candidate peaks). Internal to engine/tdoa; see gcc_phat.h for
+// GccPhatEstimator's state and steps, shared by gcc_phat.cc (transforms, the main peak and
+// MeasurePair), gcc_weighing.cc (the weighted cross-spectra and their noise scale) and
+// gcc_peak.cc (the spectrum statistics behind delay_sigma, the coherence weights and the
+// candidate peaks). Internal to engine/tdoa; see gcc_phat.h for
 // what they compute.
 #pragma once
 
