@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "engine/tdoa/gcc_phat.h"
+#include "tests/tdoa/delay_track.h"
 #include "tests/tdoa/tdoa_test_signals.h"
 
 namespace localizer::engine {
@@ -196,36 +197,10 @@ TEST(Candidates, SinglePathLeavesOnlyWeakOthers) {
 
 // ---- phat-coherence ------------------------------------------------------------------------
 
-struct Track {
-  double spread = 0.0;  // rms error, samples, over pairs and frames after the warm-up
-  int lost = 0;         // errors beyond one sample (not in the spread)
-};
-
 // A 500-2000 Hz source in white noise over the whole band, 48 frames through one estimator
 // (the first 8 not scored).
-Track RunFrames(const GccOptions& o, const SignalSpec& spec, double snr_db, uint64_t seed) {
-  auto gcc = std::move(*GccPhatEstimator::Create(Tetrahedron(), o));
-  const std::vector<double> delays = {0.0, 3.3, -7.6, 11.45};
-  double sum_sq = 0.0;
-  int count = 0;
-  Track t;
-  Measurement m;
-  for (int f = 0; f < 48; ++f) {
-    const auto frame = DelayedNoiseFrame(spec, delays, snr_db, seed + f);
-    EXPECT_TRUE(gcc->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
-    if (f < 8) continue;
-    for (const PairMeasurement& p : m.pairs) {
-      const double e = p.delay_s * spec.sample_rate_hz - delays[p.sensor];
-      if (std::abs(e) > 1.0) {
-        ++t.lost;
-        continue;
-      }
-      sum_sq += e * e;
-      ++count;
-    }
-  }
-  t.spread = std::sqrt(sum_sq / std::max(count, 1));
-  return t;
+testing::DelayTrack RunFrames(const GccOptions& o, const SignalSpec& spec, double snr_db, uint64_t seed) {
+  return testing::RunDelayedNoiseFrames(o, spec, snr_db, seed, 48, 8);
 }
 
 TEST(PhatCoherence, WithoutABandHintMatchesPhatWithTheTrueBand) {
@@ -233,11 +208,11 @@ TEST(PhatCoherence, WithoutABandHintMatchesPhatWithTheTrueBand) {
   spec.band_low_hz = 500.0;
   spec.band_high_hz = 2000.0;
   for (double snr : {-10.0, -5.0, 0.0}) {
-    const Track hinted = RunFrames(Options(spec, true), spec, snr, 5000);
-    const Track blind = RunFrames(Options(spec, false), spec, snr, 5000);
+    const testing::DelayTrack hinted = RunFrames(Options(spec, true), spec, snr, 5000);
+    const testing::DelayTrack blind = RunFrames(Options(spec, false), spec, snr, 5000);
     GccOptions coherence = Options(spec, false);
     coherence.weighting = Weighting::kPhatCoherence;
-    const Track learnt = RunFrames(coherence, spec, snr, 5000);
+    const testing::DelayTrack learnt = RunFrames(coherence, spec, snr, 5000);
     std::printf(
         "%5.1f dB: PHAT with band %.4f (%d lost), without %.4f (%d lost), "
         "phat-coherence without %.4f (%d lost)\n",

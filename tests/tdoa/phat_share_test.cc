@@ -11,6 +11,7 @@
 
 #include "engine/tdoa/gcc_phat.h"
 #include "engine/tdoa/signal_share.h"
+#include "tests/tdoa/delay_track.h"
 #include "tests/tdoa/tdoa_test_signals.h"
 
 namespace localizer::engine {
@@ -67,34 +68,9 @@ GccOptions Options(const SignalSpec& spec, Weighting weighting, bool band_hint) 
   return o;
 }
 
-struct Track {
-  double spread = 0.0;  // rms error, samples, over pairs and frames
-  int lost = 0;         // errors beyond one sample (not in the spread)
-};
-
 // A band-limited source in white noise over the whole band, 40 independent frames.
-Track RunFrames(const GccOptions& o, const SignalSpec& spec, double snr_db, uint64_t seed) {
-  auto gcc = std::move(*GccPhatEstimator::Create(testing::TetrahedronArray(), o));
-  const std::vector<double> delays = {0.0, 3.3, -7.6, 11.45};
-  double sum_sq = 0.0;
-  int count = 0;
-  Track t;
-  Measurement m;
-  for (int f = 0; f < 40; ++f) {
-    const auto frame = testing::DelayedNoiseFrame(spec, delays, snr_db, seed + f);
-    EXPECT_TRUE(gcc->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
-    for (const PairMeasurement& p : m.pairs) {
-      const double e = p.delay_s * spec.sample_rate_hz - delays[p.sensor];
-      if (std::abs(e) > 1.0) {
-        ++t.lost;
-        continue;
-      }
-      sum_sq += e * e;
-      ++count;
-    }
-  }
-  t.spread = std::sqrt(sum_sq / std::max(count, 1));
-  return t;
+testing::DelayTrack RunFrames(const GccOptions& o, const SignalSpec& spec, double snr_db, uint64_t seed) {
+  return testing::RunDelayedNoiseFrames(o, spec, snr_db, seed, 40, 0);
 }
 
 TEST(PhatShare, WithoutABandHintNearsPhatWithTheTrueBand) {
@@ -105,9 +81,9 @@ TEST(PhatShare, WithoutABandHintNearsPhatWithTheTrueBand) {
   // band (flat_spread), and the frames are weighed as PHAT; phat-coherence learns it over
   // frames (gcc_frontend_test).
   for (double snr : {-10.0, -5.0, 0.0}) {
-    const Track hinted = RunFrames(Options(spec, Weighting::kPhat, true), spec, snr, 5000);
-    const Track blind = RunFrames(Options(spec, Weighting::kPhat, false), spec, snr, 5000);
-    const Track shared = RunFrames(Options(spec, Weighting::kPhatShare, false), spec, snr, 5000);
+    const testing::DelayTrack hinted = RunFrames(Options(spec, Weighting::kPhat, true), spec, snr, 5000);
+    const testing::DelayTrack blind = RunFrames(Options(spec, Weighting::kPhat, false), spec, snr, 5000);
+    const testing::DelayTrack shared = RunFrames(Options(spec, Weighting::kPhatShare, false), spec, snr, 5000);
     std::printf("%5.1f dB: PHAT with band %.4f (%d lost), without %.4f (%d lost), phat-share without %.4f (%d lost)\n",
                 snr, hinted.spread, hinted.lost, blind.spread, blind.lost, shared.spread, shared.lost);
     if (snr < -7.0) {
