@@ -44,7 +44,8 @@ float GccPhatEstimator::Impl::WeighCrossSpectrum(int pair, float* g) {
 }
 
 // Fills g with G = W X_k conj(X_r) B for sensors r = ref, k = sensor and returns S, the sum
-// of |G| over all N bins. `pair` picks kPhatCoherence's learnt weights (-1: plain PHAT).
+// of |G| over all N bins. `pair` picks kPhatCoherence's learnt weights (-1: plain PHAT);
+// kPhatShare weighs every pair, cross pairs too, by this frame's shares (FindShares).
 float GccPhatEstimator::Impl::WeighSensors(int ref, int sensor, int pair, float* g) {
   const float* xr = SpectrumOf(ref);
   const float* xk = SpectrumOf(sensor);
@@ -94,8 +95,8 @@ float GccPhatEstimator::Impl::WeighSensors(int ref, int sensor, int pair, float*
 // Noise alone gives each bin a uniform phase, so R(l) = (1/S) sum_k G_k e^{j w_k l} has
 // variance (sum over interior bins of 2 |G_k|^2 + |G_0|^2 + |G_N/2|^2) / S^2: 1 / (2 B) for
 // PHAT's B unit bins (the layout's constant), 1 / (2 B_eff) with B_eff = (sum w)^2 / sum w^2
-// for learnt weights, which gather on a few bins and would otherwise read noise as a source
-// many times over. Reads the pair's cross-spectrum g.
+// for other weights (learnt coherence, the frame's shares), which gather on a few bins and
+// would otherwise read noise as a source many times over. Reads the pair's cross-spectrum g.
 float GccPhatEstimator::Impl::WeighedNoiseFloorInverse(float norm, const float* g) const {
   const int lo = layout.band_first_bin;
   const int hi = layout.band_end_bin;
