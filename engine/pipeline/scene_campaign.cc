@@ -329,7 +329,7 @@ SceneRow RunRandomScene(uint64_t seed, const RandomSceneOptions& scene_options, 
 CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
   CampaignSummary s;
   std::vector<double> times_theory, times_reported;
-  std::vector<double> times_all, times_acquired, nees, rmse_gaussian, rmse_hard, rmse_theory;
+  std::vector<double> times_all, times_acquired, nees, rmse_gaussian, rmse_hard, rmse_theory, errors;
   std::vector<double> rmse_class[3];
   ClassSummary* classes[3] = {&s.gaussian, &s.multipath, &s.impulsive};
   for (const SceneRow& row : rows) {
@@ -363,6 +363,7 @@ CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
     times_acquired.push_back(score.time_to_acquire_s);
     nees.push_back(score.median_nees_per_dim);
     rmse_theory.push_back(score.rmse_over_crlb_theory);
+    errors.push_back(score.median_error_m);
     rmse_class[c].push_back(score.rmse_over_crlb);
     (row.scene_class == SceneClass::kGaussian ? rmse_gaussian : rmse_hard).push_back(score.rmse_over_crlb);
   }
@@ -378,6 +379,7 @@ CampaignSummary SummariseCampaign(std::vector<SceneRow> rows) {
   for (int c = 0; c < 3; ++c) classes[c]->median_rmse_over_crlb = Median(rmse_class[c]);
   s.median_nees_per_dim = Median(nees);
   s.median_rmse_over_crlb_theory = Median(rmse_theory);
+  s.median_error_m = Median(errors);
   s.rows = std::move(rows);
   return s;
 }

@@ -72,8 +72,8 @@ struct FrameScore {
   double range_apertures = std::numeric_limits<double>::quiet_NaN();  // the truth's, from the centroid
   double range_m = std::numeric_limits<double>::quiet_NaN();          // the truth's, from the centroid
   double range_error_m = std::numeric_limits<double>::quiet_NaN();    // estimate's range - truth's (signed)
-  double range_share = std::numeric_limits<double>::quiet_NaN();  // the truth's range bound / range
-  bool far_field = false;                                         // the estimate's Estimate::far_field
+  double range_share = std::numeric_limits<double>::quiet_NaN();      // the truth's range bound / range
+  bool far_field = false;                                             // the estimate's Estimate::far_field
   // What the frame is judged on as reported: bearing error and bound when far field, else
   // position error and bound.
   double reported_error = std::numeric_limits<double>::quiet_NaN();
@@ -180,9 +180,9 @@ struct CampaignSummary {
   int acquired_bearing = 0;                   // in bearing from the centroid (against its CRLB)
   int acquired_bearing_not_position = 0;      // of those, not acquired in position
   int acquired_bearing_not_position_far = 0;  // of those, the truth beyond 3 apertures (median)
-  int acquired_reported = 0;        // in what each frame reported (position, or bearing when far field)
-  int silent_failures_reported = 0;  // the same, for silent failures
-  int range_withheld = 0;            // scenes with more than 1 s of range withheld (see ScoreScene)
+  int acquired_reported = 0;                  // in what each frame reported (position, or bearing when far field)
+  int silent_failures_reported = 0;           // the same, for silent failures
+  int range_withheld = 0;                     // scenes with more than 1 s of range withheld (see ScoreScene)
   double median_time_to_acquire_reported_s = std::numeric_limits<double>::infinity();  // all scenes
   double p95_time_to_acquire_reported_s = std::numeric_limits<double>::infinity();
   double median_time_to_acquire_theory_s = std::numeric_limits<double>::infinity();  // all scenes
@@ -197,6 +197,9 @@ struct CampaignSummary {
   ClassSummary gaussian, multipath, impulsive;
   double median_nees_per_dim = std::numeric_limits<double>::quiet_NaN();           // acquired scenes
   double median_rmse_over_crlb_theory = std::numeric_limits<double>::quiet_NaN();  // acquired scenes
+  // The median over acquired scenes of each one's median position error, m: in absolute
+  // terms, beside the ratios to bounds that move with the front end's own spread.
+  double median_error_m = std::numeric_limits<double>::quiet_NaN();
   std::vector<SceneRow> rows;
 };
 

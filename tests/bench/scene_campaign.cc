@@ -336,14 +336,16 @@ void WriteJson(const std::string& path, const Args& a, const CampaignSummary& s)
                "\"p95_time_to_acquire_s\": %s, "
                "\"median_time_to_acquire_acquired_s\": %s, \"p95_time_to_acquire_acquired_s\": %s, "
                "\"median_rmse_over_crlb_gaussian\": %s, \"median_rmse_over_crlb_hard\": %s, "
-               "\"median_nees_per_dim\": %s, \"median_rmse_over_crlb_theory\": %s},\n  \"scenes\": [\n",
+               "\"median_nees_per_dim\": %s, \"median_rmse_over_crlb_theory\": %s, \"median_error_m\": %s},\n"
+               "  \"scenes\": [\n",
                s.scenes, s.run_errors, s.acquired, s.lost, s.silent_failures, s.acquired_theory, s.acquired_bearing,
                s.acquired_bearing_not_position, s.acquired_reported, s.silent_failures_reported, s.range_withheld,
                JsonNum(s.median_time_to_acquire_reported_s).c_str(), JsonNum(s.p95_time_to_acquire_reported_s).c_str(),
                JsonNum(s.median_time_to_acquire_s).c_str(), JsonNum(s.p95_time_to_acquire_s).c_str(),
                JsonNum(s.median_time_to_acquire_acquired_s).c_str(), JsonNum(s.p95_time_to_acquire_acquired_s).c_str(),
                JsonNum(s.median_rmse_over_crlb_gaussian).c_str(), JsonNum(s.median_rmse_over_crlb_hard).c_str(),
-               JsonNum(s.median_nees_per_dim).c_str(), JsonNum(s.median_rmse_over_crlb_theory).c_str());
+               JsonNum(s.median_nees_per_dim).c_str(), JsonNum(s.median_rmse_over_crlb_theory).c_str(),
+               JsonNum(s.median_error_m).c_str());
   for (size_t i = 0; i < s.rows.size(); ++i) {
     const SceneRow& r = s.rows[i];
     const SceneScore& c = r.score;
@@ -476,6 +478,8 @@ int main(int argc, char** argv) {
   std::printf("median NEES per dimension (position) after acquisition: %s\n", Num(s.median_nees_per_dim).c_str());
   std::printf("median RMSE / theoretical CRLB (Knapp-Carter sigma) after acquisition: %s\n",
               Num(s.median_rmse_over_crlb_theory).c_str());
+  std::printf("median position error after acquisition (median over acquired scenes): %s m\n",
+              Num(s.median_error_m).c_str());
   if (!a.json_path.empty()) WriteJson(a.json_path, a, s);
   return 0;
 }

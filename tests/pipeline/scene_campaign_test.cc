@@ -308,6 +308,10 @@ TEST(SceneCampaign, ShortRandomScenesRunAndAreScored) {
   EXPECT_EQ(s.scenes, 9);
   EXPECT_EQ(s.run_errors, 0);
   EXPECT_EQ(s.gaussian.scenes + s.multipath.scenes + s.impulsive.scenes, 9);
+  if (s.acquired > 0) {
+    EXPECT_GT(s.median_error_m, 0.0);
+    EXPECT_LT(s.median_error_m, 1e3);
+  }
 }
 
 // The median |measured - true TDOA| over a scene's initialised frames and pairs.
