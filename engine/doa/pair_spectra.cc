@@ -141,7 +141,7 @@ void PairSpectra::FindSignalShare() {
       double* a = applied_weight_.data() + p * n;
       double sum_squares = 0.0;
       for (size_t k = 0; k < n; ++k) {
-        a[k] = (flat ? 1.0 : signal_share[k]) * (v ? v[k] : 1.0);
+        a[k] = signal_share[k] * (v ? v[k] : 1.0);  // a flat frame's shares are all 1
         sum_squares += a[k] * a[k];
       }
       if (flat) continue;          // exactly the weights without signal weighting

@@ -105,6 +105,7 @@ Status GccPhatEstimator::Impl::Init() {
   window.assign(2 * (widest_lag + kPeakHalfWidth) + 1, 0.0f);
   energy.assign(array.sensor_count(), 0.0);
   share_finder = SignalShare(SignalShareOptionsForNoise(array.sensor_count(), kShareFloorWindowBins));
+  if (options.weighting == Weighting::kPhatShare) share_weight.assign(layout.bin_count, 0.0f);  // 0 out of band
 
   // One more channel slot than sensors: the partner of a channel transformed alone.
   spectra = AllocateFftwFloats(static_cast<std::size_t>(spectrum_stride) * (array.sensor_count() + 1));

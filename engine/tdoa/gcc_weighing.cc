@@ -24,7 +24,6 @@ void GccPhatEstimator::Impl::FindShares() {
   share_flat = share_finder.Find(band_power);
   if (share_flat) return;
   const std::span<const double> shares = share_finder.shares();
-  share_weight.assign(static_cast<std::size_t>(layout.bin_count), 0.0f);
   for (int b = lo; b < hi; ++b) share_weight[static_cast<std::size_t>(b)] = static_cast<float>(shares[b - lo]);
 }
 
