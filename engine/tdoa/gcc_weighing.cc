@@ -1,6 +1,7 @@
 // GccPhatEstimator's weighing of a pair's cross-spectrum (gcc_phat.h: PHAT, PHAT-beta, SCOT,
 // CC, the learnt coherence and the frame's shares) and the noise-only scale of weights that
 // are not PHAT's. Internal to engine/tdoa (gcc_phat_impl.h).
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <span>
@@ -9,6 +10,9 @@
 #include "engine/tdoa/gcc_phat_impl.h"
 
 namespace localizer::engine {
+namespace {
+constexpr double kShareWeightCapInverse = 0.1;  // the weight's cap, 10, inverted
+}  // namespace
 
 void GccPhatEstimator::Impl::FindShares() {
   const int lo = layout.band_first_bin;
@@ -24,7 +28,15 @@ void GccPhatEstimator::Impl::FindShares() {
   share_flat = share_finder.Find(band_power);
   if (share_flat) return;
   const std::span<const double> shares = share_finder.shares();
-  for (int b = lo; b < hi; ++b) share_weight[static_cast<std::size_t>(b)] = static_cast<float>(shares[b - lo]);
+  // The maximum-likelihood weight (Carter's |gamma|^2 / (1 - |gamma|^2), with the coherence
+  // |gamma| of two channels each holding share s of signal equal to s) is s^2 / (1 - s^2):
+  // noise bins, whose s is seldom above 0.3, weigh under a tenth of what s gave them, which
+  // is what costs a narrow source in a wide band. Capped at 10 (s = 0.95) so a few loud bins,
+  // a tone's, cannot carry the frame alone.
+  for (int b = lo; b < hi; ++b) {
+    const double s2 = shares[b - lo] * shares[b - lo];
+    share_weight[static_cast<std::size_t>(b)] = static_cast<float>(s2 / std::max(1.0 - s2, kShareWeightCapInverse));
+  }
 }
 
 bool GccPhatEstimator::Impl::WeighedBeyondPhat(int pair) const {

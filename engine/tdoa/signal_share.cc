@@ -8,15 +8,18 @@ namespace localizer::engine {
 
 SignalShareOptions SignalShareOptionsForNoise(int channels, std::size_t floor_window_bins) {
   constexpr double kZ90 = 1.2815515655446004;  // the standard normal's 90th percentile
+  constexpr double kZMax = 3.72;               // 1 % of frames, over ~100 independent windows
   constexpr double kOverMean = 1.35, kFlatMargin = 1.6;
+  const auto wilson_hilferty = [](double k, double z) {  // Gamma(k)'s quantile over its mean
+    const double c = 1.0 / (9.0 * k);                    // (X / k)^(1/3) ~ N(1 - c, c)
+    return std::pow(1.0 - c + z * std::sqrt(c), 3.0);
+  };
   const double k = std::max(1, channels) * static_cast<double>(floor_window_bins / 2 * 2 + 1);
-  const double c = 1.0 / (9.0 * k);  // Wilson-Hilferty: (X / k)^(1/3) ~ N(1 - c, c)
-  const double q10 = std::pow(1.0 - c - kZ90 * std::sqrt(c), 3.0);
-  const double q90 = std::pow(1.0 - c + kZ90 * std::sqrt(c), 3.0);
   SignalShareOptions options;
   options.floor_window_bins = floor_window_bins;
-  options.noise_over_floor = kOverMean / q10;
-  options.flat_spread = kFlatMargin * q90 / q10;
+  options.noise_over_floor = kOverMean / wilson_hilferty(k, -kZ90);
+  options.flat_spread = kFlatMargin * wilson_hilferty(k, kZ90) / wilson_hilferty(k, -kZ90);
+  options.flat_max_spread = kFlatMargin * wilson_hilferty(k / 2.0, kZMax) / wilson_hilferty(k / 2.0, -kZ90);
   return options;
 }
 
@@ -46,7 +49,11 @@ bool SignalShare::Find(std::span<const double> power) {
   std::nth_element(sorted_.begin(), at(rank), sorted_.end());
   const double floor = sorted_[rank];
   if (options_.exact_upper_quantile) std::nth_element(at(rank), at(n - 1 - rank), sorted_.end());
-  flat_ = !(floor > 0.0 && !(sorted_[n - 1 - rank] < options_.flat_spread * floor));
+  bool stands_out = !(sorted_[n - 1 - rank] < options_.flat_spread * floor);
+  if (options_.flat_max_spread > 0.0 && !stands_out) {
+    stands_out = !(*std::max_element(at(rank), sorted_.end()) < options_.flat_max_spread * floor);
+  }
+  flat_ = !(floor > 0.0 && stands_out);
   if (flat_) return flat_;
   if (options_.share_window_bins != options_.floor_window_bins) Smooth(power, options_.share_window_bins, &smoothed_);
   for (std::size_t b = 0; b < n; ++b) share_[b] = std::max(0.0, 1.0 - options_.noise_over_floor * floor / smoothed_[b]);
