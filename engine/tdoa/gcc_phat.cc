@@ -120,7 +120,11 @@ Status GccPhatEstimator::Impl::Init() {
   }
   extrema.reserve(2 * widest_lag + 1);
   const unsigned flags = options.measure_fft_plans ? FFTW_MEASURE : FFTW_ESTIMATE;
-  if (!packed.Init(fft_size, layout.band_first_bin, layout.band_end_bin, flags)) {
+  // kPhatShare reads its floor from every bin (gcc_weighing.cc, FindShares), so every bin is
+  // unpacked; the bins out of band stay unweighed (zero) in what the inverse reads.
+  const bool every_bin = options.weighting == Weighting::kPhatShare;
+  if (!packed.Init(fft_size, every_bin ? 0 : layout.band_first_bin, every_bin ? layout.bin_count : layout.band_end_bin,
+                   flags)) {
     return Internal("FFTW could not plan complex transforms of size " + std::to_string(fft_size));
   }
   return Status::Ok();

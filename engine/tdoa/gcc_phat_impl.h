@@ -83,8 +83,9 @@ struct GccPhatEstimator::Impl {
   std::vector<float> coherence_weight;
   std::vector<int> coherence_frames;
   std::vector<char> coherence_usable;
-  // kPhatShare: the frame's power per in-band bin summed over the channels, the shares found
-  // from it, and the weight of each bin (indexed by bin; 0 out of band).
+  // kPhatShare: the frame's power per bin (every bin, the band's floor read beside it) summed
+  // over the channels, the shares found from it, and the weight of each bin (indexed by bin;
+  // 0 out of band).
   std::vector<double> band_power;
   SignalShare share_finder;
   std::vector<float> share_weight;

@@ -11,18 +11,22 @@
 
 namespace localizer::engine {
 namespace {
-constexpr double kShareWeightCapInverse = 0.1;  // the weight's cap, 10, inverted
+constexpr float kShareWeightCapInverse = 0.1f;  // the weight's cap, 10, inverted
 }  // namespace
 
+// The shares are read over every bin, not only the band a hint gives: a source that fills its
+// band would otherwise be its own floor, and the weights would gather on its loudest bins
+// (ACCURACY.md, "Thirty-first pass"). Only the band's bins are weighed.
 void GccPhatEstimator::Impl::FindShares() {
   const int lo = layout.band_first_bin;
   const int hi = layout.band_end_bin;
-  band_power.assign(static_cast<std::size_t>(hi - lo), 0.0);
+  const int bins = layout.bin_count;
+  band_power.assign(static_cast<std::size_t>(bins), 0.0);
   for (int c = 0; c < array.sensor_count(); ++c) {
     const float* x = SpectrumOf(c);
-    for (int b = lo; b < hi; ++b) {
+    for (int b = 0; b < bins; ++b) {
       const double re = x[2 * b], im = x[2 * b + 1];
-      band_power[static_cast<std::size_t>(b - lo)] += re * re + im * im;
+      band_power[static_cast<std::size_t>(b)] += re * re + im * im;
     }
   }
   share_flat = share_finder.Find(band_power);
@@ -34,8 +38,8 @@ void GccPhatEstimator::Impl::FindShares() {
   // is what costs a narrow source in a wide band. Capped at 10 (s = 0.95) so a few loud bins,
   // a tone's, cannot carry the frame alone.
   for (int b = lo; b < hi; ++b) {
-    const double s2 = shares[b - lo] * shares[b - lo];
-    share_weight[static_cast<std::size_t>(b)] = static_cast<float>(s2 / std::max(1.0 - s2, kShareWeightCapInverse));
+    const float s2 = static_cast<float>(shares[b] * shares[b]);
+    share_weight[static_cast<std::size_t>(b)] = s2 / std::max(1.0f - s2, kShareWeightCapInverse);
   }
 }
 
