@@ -171,6 +171,9 @@ const std::pair<const char*, const char*> kFlagOfKey[] = {
     {"presence_false_alarm", "presence-false-alarm"},
     {"source_timeout_s", "source-timeout"},
     {"backend", "backend"},
+    {"direction_present_hold_s", "present-hold"},
+    {"direction_diffuse_weighting", "no-diffuse-weighting"},
+    {"direction_signal_weighting", "signal-weighting"},
 };
 
 // "a,b,c" -> {"a", "b", "c"} (empty parts kept: "1,,2" has three).

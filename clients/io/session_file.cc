@@ -53,6 +53,11 @@ StatusOr<uint64_t> ReadSeed(const json& v, const std::string& source, const std:
   return v.get<uint64_t>();
 }
 
+StatusOr<bool> ReadBool(const json& v, const std::string& source, const std::string& key) {
+  if (!v.is_boolean()) return InvalidArgument(Where(source, key) + " is " + v.dump() + ", not true or false");
+  return v.get<bool>();
+}
+
 StatusOr<double> ReadNumber(const json& v, const std::string& source, const std::string& key) {
   return FiniteNumber(v, source, "session." + key);
 }
@@ -94,6 +99,10 @@ Key Int(const std::string& name, std::optional<int> SessionSettings::*member, Fi
 template <typename Field>
 Key Double(const std::string& name, std::optional<double> SessionSettings::*member, Field field) {
   return MakeKey<double>(name, member, field, ReadNumber, [](const double& v) { return json(v); });
+}
+template <typename Field>
+Key Bool(const std::string& name, std::optional<bool> SessionSettings::*member, Field field) {
+  return MakeKey<bool>(name, member, field, ReadBool, [](const bool& v) { return json(v); });
 }
 template <typename T, typename Field, typename Parse, typename Name>
 Key Choice(const std::string& name, std::optional<T> SessionSettings::*member, Field field, Parse parse, Name to_name) {
@@ -162,6 +171,12 @@ const std::vector<Key>& Keys() {
       Choice(
           "backend", &S::backend, [](C& c) -> engine::BackendChoice& { return c.backend; }, engine::ParseBackendChoice,
           engine::BackendChoiceName),
+      Double("direction_present_hold_s", &S::direction_present_hold_s,
+             [](C& c) -> double& { return c.direction_present_hold_s; }),
+      Bool("direction_diffuse_weighting", &S::direction_diffuse_weighting,
+           [](C& c) -> bool& { return c.direction_diffuse_weighting; }),
+      Bool("direction_signal_weighting", &S::direction_signal_weighting,
+           [](C& c) -> std::optional<bool>& { return c.direction_signal_weighting; }),
   };
   return keys;
 }

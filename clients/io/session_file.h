@@ -40,7 +40,11 @@
 //     "search_radius_m": 0.0,         m, [0, 1e7] (0: 10 apertures)           --search-radius
 //     "presence_false_alarm": 0.001,  per frame, (0, 0.1]                     --presence-false-alarm
 //     "source_timeout_s": 2.0,        s, (0, 1e6]                             --source-timeout
-//     "backend": "cpu"                cpu | gpu | auto                        --backend
+//     "backend": "cpu",               cpu | gpu | auto                        --backend
+//     "direction_present_hold_s": 0,  s, [0, 1]: direction sessions' hold     --present-hold
+//     "direction_diffuse_weighting": true,   bool                             --no-diffuse-weighting
+//     "direction_signal_weighting": true     bool (unset: by the array's      --signal-weighting
+//                                     shape)
 //   }
 //
 // Not here, and why:
@@ -50,13 +54,15 @@
 //   - localizer.engine options with no localizer-cli flag (max_block_samples,
 //     init_speed_sigma_mps, init_region_min_m / init_region_max_m, divergence_window): a
 //     file the CLI reads must not carry what the CLI would ignore; refused, saying so;
+//   - direction options the wire does not carry (--echo-test, --present-drop-db): the Python
+//     gRPC client could not send them;
 //   - what a run reads rather than the session (the input, --out, --format, --block,
 //     --print-every, --server and the stream flags).
 //
 // Checks, each error INVALID_ARGUMENT naming the file and the key: an unknown key; a value of
 // the wrong JSON type (an integer key takes only integers, a number key any finite number, a
-// name key a string); a name the engine does not know (parsed by the engine's own Parse…);
-// and the ranges, by the engine's own validation (engine::AudioSessionConfig::Validate and
+// name key a string, a bool key true or false); a name the engine does not know (parsed by
+// the engine's own Parse…); and the ranges, by the engine's own validation (engine::AudioSessionConfig::Validate and
 // GccOptions::Validate) of the defaults with the file's settings applied: "<file>: session:
 // particles must be in [16, 4194304], got 0". So the settings must agree with each other
 // and with the defaults of what they leave out (hop_samples <= frame_samples, which is 4096
@@ -112,6 +118,10 @@ struct SessionSettings {
   std::optional<double> presence_false_alarm;
   std::optional<double> source_timeout_s;
   std::optional<engine::BackendChoice> backend;
+  // Direction sessions (engine/doa)
+  std::optional<double> direction_present_hold_s;
+  std::optional<bool> direction_diffuse_weighting;
+  std::optional<bool> direction_signal_weighting;
 
   bool empty() const;  // no key set
 };

@@ -40,7 +40,8 @@ constexpr const char* kEveryKey = R"({
   "outlier_probability": 0.1, "tdoa_sigma_s": 2.5e-05, "accel_noise_mps2": 0.5, "manoeuvre_share": 0.1,
   "manoeuvre_scale": 5, "accel_level_floor": 0.01, "accel_level_ceiling": 3, "accel_level_switch_hz": 2,
   "turn_rate_max_radps": 0.8, "speed_change_max_mps2": 1.5, "seed": 18446744073709551615, "search_radius_m": 30, "presence_false_alarm": 0.01, "source_timeout_s": 3,
-  "backend": "auto"
+  "backend": "auto", "direction_present_hold_s": 0.1, "direction_diffuse_weighting": false,
+  "direction_signal_weighting": false
 })";
 
 TEST(SessionFile, ReadsEveryKey) {
@@ -78,6 +79,9 @@ TEST(SessionFile, ReadsEveryKey) {
   EXPECT_EQ(s.presence_false_alarm, 0.01);
   EXPECT_EQ(s.source_timeout_s, 3.0);
   EXPECT_EQ(s.backend, engine::BackendChoice::kAuto);
+  EXPECT_EQ(s.direction_present_hold_s, 0.1);
+  EXPECT_EQ(s.direction_diffuse_weighting, false);
+  EXPECT_EQ(s.direction_signal_weighting, false);
   // The test names every key: a key added to the format must be added here.
   EXPECT_EQ(SessionSettingsToJson(s).size(), SessionKeys().size());
 }
@@ -140,6 +144,8 @@ TEST(SessionFile, WrongTypesNameTheKey) {
       {R"({"seed": -1})", "session.seed is -1, not an integer >= 0"},
       {R"({"accel_noise_mps2": "1"})", "session.accel_noise_mps2 is \"1\", not a number"},
       {R"({"filter": 2})", "session.filter is 2, not a name"},
+      {R"({"direction_diffuse_weighting": 1})", "session.direction_diffuse_weighting is 1, not true or false"},
+      {R"({"direction_signal_weighting": "on"})", "session.direction_signal_weighting is \"on\", not true or false"},
       {R"([1, 2])", "session is [1,2], not an object"},
   };
   for (const auto& [session, expected] : cases) {
@@ -173,6 +179,8 @@ TEST(SessionFile, RangesAreTheEnginesAgainstTheDefaultsOfWhatIsLeftOut) {
   EXPECT_NE(ErrorOf(R"({"phat_beta": 2})").find("dir/session.json: session: phat_beta"), std::string::npos);
   EXPECT_NE(ErrorOf(R"({"band_low_hz": 3000, "band_high_hz": 300})").find("dir/session.json: session: band_high_hz"),
             std::string::npos);
+  EXPECT_NE(ErrorOf(R"({"direction_present_hold_s": 2})").find("session: direction_present_hold_s must be in [0, 1]"),
+            std::string::npos);
   EXPECT_NE(ErrorOf(R"({"frame_samples": 32})").find("dir/session.json: session: frame_samples"), std::string::npos);
   // Checked together, against the default of what the file leaves out.
   EXPECT_NE(ErrorOf(R"({"hop_samples": 8192})").find("hop_samples must be in [1, frame_samples=4096]"),
@@ -194,6 +202,28 @@ TEST(SessionFile, ApplyLeavesTheKeysItIsToldToKeep) {
   EXPECT_EQ(config.tracker.particle.particles, engine::AudioSessionConfig{}.tracker.particle.particles);
   ApplySessionSettings(array->session, nullptr, &config);
   EXPECT_EQ(config.tracker.particle.particles, 1024);
+}
+
+// The direction keys land where the flags put them; direction_signal_weighting unset leaves
+// the engine's choice by the array's shape (the optional stays empty).
+TEST(SessionFile, DirectionKeysSetTheDirectionOptions) {
+  auto array = ParseArrayJson(WithSession(R"({"direction_present_hold_s": 0, "direction_diffuse_weighting": false,
+                                              "direction_signal_weighting": true})"),
+                              "session.json");
+  ASSERT_TRUE(array.ok()) << array.status().ToString();
+  engine::AudioSessionConfig config;
+  ApplySessionSettings(array->session, nullptr, &config);
+  EXPECT_EQ(config.direction_present_hold_s, 0.0);
+  EXPECT_FALSE(config.direction_diffuse_weighting);
+  EXPECT_EQ(config.direction_signal_weighting, std::optional<bool>(true));
+
+  auto unset = ParseArrayJson(WithSession(R"({"particles": 1024})"), "session.json");
+  ASSERT_TRUE(unset.ok()) << unset.status().ToString();
+  engine::AudioSessionConfig defaults;
+  ApplySessionSettings(unset->session, nullptr, &defaults);
+  EXPECT_FALSE(defaults.direction_signal_weighting.has_value());
+  EXPECT_EQ(defaults.direction_present_hold_s, engine::AudioSessionConfig{}.direction_present_hold_s);
+  EXPECT_TRUE(defaults.direction_diffuse_weighting);
 }
 
 }  // namespace

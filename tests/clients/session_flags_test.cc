@@ -71,7 +71,10 @@ std::string Fields(const engine::AudioSessionConfig& c) {
       " seed=" + std::to_string(c.seed) + " search_radius_m=" + Num(c.search_radius_m) +
       " presence_false_alarm=" + Num(c.presence_false_alarm) + " source_timeout_s=" + Num(c.source_timeout_s) +
       " backend=" + engine::BackendChoiceName(c.backend) + " c=" + Num(c.sound_speed_mps) +
-      " rate=" + Num(c.sample_rate_hz) + " localization=" + engine::LocalizationName(c.localization);
+      " rate=" + Num(c.sample_rate_hz) + " localization=" + engine::LocalizationName(c.localization) +
+      " present_hold_s=" + Num(c.direction_present_hold_s) +
+      " diffuse_weighting=" + std::to_string(c.direction_diffuse_weighting) + " signal_weighting=" +
+      (c.direction_signal_weighting ? std::to_string(*c.direction_signal_weighting) : std::string("by shape"));
   return out;
 }
 
@@ -125,7 +128,10 @@ TEST(SessionFileFlags, EveryKeyMeansWhatItsFlagMeans) {
                                                                      {"30", "30"},
                                                                      {"0.01", "0.01"},
                                                                      {"3", "3"},
-                                                                     {"\"auto\"", "auto"}};
+                                                                     {"\"auto\"", "auto"},
+                                                                     {"0.2", "0.2"},
+                                                                     {"false", ""},  // a switch
+                                                                     {"false", "off"}};
   ASSERT_EQ(settings.size(), io::SessionKeys().size()) << "one value per key, in SessionKeys() order";
   std::string session = "{";
   std::vector<std::string> args;
@@ -133,7 +139,7 @@ TEST(SessionFileFlags, EveryKeyMeansWhatItsFlagMeans) {
     const std::string& key = io::SessionKeys()[k];
     session += (k == 0 ? "\"" : ", \"") + key + "\": " + settings[k].first;
     args.push_back("--" + FlagOfSessionKey(key));
-    args.push_back(settings[k].second);
+    if (!settings[k].second.empty()) args.push_back(settings[k].second);
   }
   session += "}";
   const auto from_file = Build({}, ArrayText(session));
@@ -144,7 +150,8 @@ TEST(SessionFileFlags, EveryKeyMeansWhatItsFlagMeans) {
   const std::string defaults = FieldsOf(Build({}, ArrayText("")));
   for (size_t k = 0; k < settings.size(); ++k) {
     const std::string& key = io::SessionKeys()[k];
-    std::vector<std::string> one_args = {"--" + FlagOfSessionKey(key), settings[k].second};
+    std::vector<std::string> one_args = {"--" + FlagOfSessionKey(key)};
+    if (!settings[k].second.empty()) one_args.push_back(settings[k].second);
     if (key == "motion_model") one_args.insert(one_args.end(), {"--filter", "ekf"});  // pf takes only cv
     const auto one = Build(one_args, ArrayText(""));
     ASSERT_TRUE(one.ok()) << key << ": " << one.status().ToString();

@@ -77,6 +77,9 @@ BAD = [
     ({"despike_k": 0.5}, "despike_k"),
     ({"accel_level_floor": 4}, "accel_level_floor"),
     ({"manoeuvre_share": 1}, "manoeuvre_share"),
+    ({"direction_diffuse_weighting": 1}, "session.direction_diffuse_weighting"),
+    ({"direction_signal_weighting": "on"}, "session.direction_signal_weighting"),
+    ({"direction_present_hold_s": 2}, "direction_present_hold_s"),
 ]
 # Edge cases both accept.
 GOOD = [
@@ -85,6 +88,7 @@ GOOD = [
     {"motion_model": "ct", "filter": "ukf"},
     {"accel_level_floor": 0.01, "accel_level_ceiling": 3, "despike_k": 0, "tdoa_sigma_s": 0},
     {"seed": 2**64 - 1, "band_high_hz": 20000},
+    {"direction_present_hold_s": 0, "direction_diffuse_weighting": False, "direction_signal_weighting": True},
 ]
 
 
@@ -101,7 +105,7 @@ class ReaderTest(unittest.TestCase):
             "sound_speed_mps": 1500.0, "reference_sensor": 1, "localization": "position", "particles": 1024,
             "filter": "ekf", "imm_modes": "ca,cv", "band_low_hz": 300.0, "band_high_hz": 3000.0,
             "bounds_min_m": (-math.inf,) * 3, "bounds_max_m": (math.inf, math.inf, 7.0)})
-        self.assertEqual(len(SESSION_KEYS), 29)
+        self.assertEqual(len(SESSION_KEYS), 32)
 
     def test_an_array_file_without_session_reads_as_before(self):
         sf = parse_session_file(text())
@@ -150,7 +154,8 @@ class SessionConfigTest(unittest.TestCase):
              "likelihood": "mixture", "outlier_probability": 0.1, "tdoa_sigma_s": 2.5e-05, "accel_noise_mps2": 0.5,
              "manoeuvre_share": 0.0, "manoeuvre_scale": 5, "accel_level_floor": 0.01, "accel_level_ceiling": 3,
              "accel_level_switch_hz": 0, "turn_rate_max_radps": 0.8, "speed_change_max_mps2": 1.5, "seed": 42, "search_radius_m": 30, "presence_false_alarm": 0.01,
-             "source_timeout_s": 3, "backend": "auto"},
+             "source_timeout_s": 3, "backend": "auto", "direction_present_hold_s": 0.0,
+             "direction_diffuse_weighting": False, "direction_signal_weighting": True},
             sample_rate_hz=11025, reference_sensor=2, band_hz=[300, 8000], bottom_z_m=-5.0, max_sources=3,
             source_side={"normal": [0, 0, 1]}))
         c = sf.to_session_config(label="tank")
@@ -176,11 +181,16 @@ class SessionConfigTest(unittest.TestCase):
         self.assertEqual((c.bounds.min_z_m, c.bounds.HasField("max_z_m"), c.bounds.HasField("min_x_m")),
                          (-5.0, False, False))
         self.assertEqual((c.max_sources, c.source_side.z), (3, 1.0))
+        self.assertTrue(c.HasField("direction_present_hold_s"))  # 0 stated: optional, so carried
+        self.assertEqual((c.direction_present_hold_s, c.direction_diffuse_weighting, c.direction_signal_weighting),
+                         (0.0, False, True))
 
     def test_unstated_fields_are_left_to_the_server(self):
         c = parse_session_file(text()).to_session_config(16000.0)
         self.assertEqual((c.frame_samples, c.filter.particles, c.backend, c.band_high_hz), (0, 0, "", 0.0))
         self.assertFalse(c.HasField("seed") or c.HasField("despike_k") or c.HasField("bounds"))
+        self.assertFalse(c.HasField("direction_present_hold_s") or c.HasField("direction_diffuse_weighting")
+                         or c.HasField("direction_signal_weighting"))
 
     def test_what_the_wire_cannot_carry_is_refused(self):
         with self.assertRaisesRegex(ValueError, "no sample_rate_hz"):
@@ -203,6 +213,16 @@ class VocabularyTest(unittest.TestCase):
                         self.assertNotIn("is not one of", str(e))
         with self.assertRaisesRegex(ValueError, "is not one of"):
             le.Session(TETRA["sensors_m"], 16000.0, filter="kalman")
+
+    def test_the_direction_keys_are_engine_options(self):
+        defaults = le.Session.default_options()
+        self.assertIsNone(defaults["direction_signal_weighting"])  # unset: by the array's shape
+        self.assertIs(defaults["direction_diffuse_weighting"], True)
+        sf = parse_session_file(text({"direction_present_hold_s": 0.0, "direction_diffuse_weighting": False,
+                                      "direction_signal_weighting": True}))
+        le.Session(sf.sensors_m, 16000.0, **sf.engine_options(16000.0))  # accepted as the file states them
+        with self.assertRaisesRegex(TypeError, "direction_diffuse_weighting: expected True or False"):
+            le.Session(TETRA["sensors_m"], 16000.0, direction_diffuse_weighting=1)
 
 
 def run_cli(*args):

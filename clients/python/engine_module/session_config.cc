@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,36 @@ Option Double(const std::string& name, Field field) {
 template <typename Field>
 Option Int(const std::string& name, Field field) {
   return Number<int>(name, field, "an int");
+}
+
+// True or False only (an int is refused, not read as truth).
+bool BoolOption(const py::handle& v, const std::string& name) {
+  if (!py::isinstance<py::bool_>(v)) {
+    throw py::type_error("option " + name + ": expected True or False, got " +
+                         py::str(v.get_type().attr("__name__")).cast<std::string>());
+  }
+  return v.cast<bool>();
+}
+template <typename Field>
+Option Bool(const std::string& name, Field field) {
+  return {name, [=](Config& c, const py::handle& v) { field(c) = BoolOption(v, name); },
+          [=](const Config& c) { return py::cast(field(const_cast<Config&>(c))); }};
+}
+// None (the engine decides) or a bool.
+template <typename Field>
+Option OptionalBool(const std::string& name, Field field) {
+  return {name,
+          [=](Config& c, const py::handle& v) {
+            if (v.is_none()) {
+              field(c).reset();
+            } else {
+              field(c) = BoolOption(v, name);
+            }
+          },
+          [=](const Config& c) {
+            const std::optional<bool>& value = field(const_cast<Config&>(c));
+            return value ? py::object(py::bool_(*value)) : py::object(py::none());
+          }};
 }
 
 template <typename Field>
@@ -138,6 +169,10 @@ const std::vector<Option>& Options() {
       Choice(
           "backend", [](Config& c) -> engine::BackendChoice& { return c.backend; }, engine::ParseBackendChoice,
           engine::BackendChoiceName),
+      Double("direction_present_hold_s", [](Config& c) -> double& { return c.direction_present_hold_s; }),
+      Bool("direction_diffuse_weighting", [](Config& c) -> bool& { return c.direction_diffuse_weighting; }),
+      OptionalBool("direction_signal_weighting",
+                   [](Config& c) -> std::optional<bool>& { return c.direction_signal_weighting; }),
   };
   return options;
 }

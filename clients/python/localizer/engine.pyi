@@ -71,7 +71,9 @@ class Session:
                  localization: Literal["auto", "position", "direction"] = "auto",
                  max_sources: int = 0, source_side: Vec3 | None = None,
                  source_plane_point_m: Vec3 | None = None, source_plane_normal: Vec3 | None = None,
-                 backend: Literal["cpu", "gpu", "auto"] = "cpu") -> None: ...
+                 backend: Literal["cpu", "gpu", "auto"] = "cpu",
+                 direction_present_hold_s: float = 0.05, direction_diffuse_weighting: bool = True,
+                 direction_signal_weighting: bool | None = None) -> None: ...
 
     @overload
     def process(self, block: ArrayLike, with_sources: Literal[False] = False) -> np.ndarray:

@@ -53,6 +53,7 @@ _NUMBERS = ("phat_beta", "band_low_hz", "band_high_hz", "despike_k", "outlier_pr
             "accel_noise_mps2", "manoeuvre_share", "manoeuvre_scale", "accel_level_floor", "accel_level_ceiling",
             "accel_level_switch_hz", "turn_rate_max_radps", "speed_change_max_mps2", "search_radius_m",
             "presence_false_alarm", "source_timeout_s")
+_BOOLS = ("direction_diffuse_weighting", "direction_signal_weighting")
 # Every "session" key, in clients/io/session_file.h's order.
 SESSION_KEYS: tuple[str, ...] = (
     "frame_samples", "hop_samples", "weighting", "phat_beta", "band_low_hz", "band_high_hz", "despike_k",
@@ -60,7 +61,8 @@ SESSION_KEYS: tuple[str, ...] = (
     "outlier_probability", "tdoa_sigma_s", "accel_noise_mps2", "manoeuvre_share", "manoeuvre_scale",
     "accel_level_floor", "accel_level_ceiling", "accel_level_switch_hz", "turn_rate_max_radps",
     "speed_change_max_mps2", "seed", "search_radius_m",
-    "presence_false_alarm", "source_timeout_s", "backend")
+    "presence_false_alarm", "source_timeout_s", "backend", "direction_present_hold_s", "direction_diffuse_weighting",
+    "direction_signal_weighting")
 # Keys that belong at the top level (the top-level fields, and localizer.engine's names of the
 # source plane), refused in "session" saying so.
 _MISPLACED = tuple(k for k in TOP_LEVEL if k != "session") + ("source_plane_point_m", "source_plane_normal")
@@ -89,6 +91,8 @@ def _check_session(s: Any, where: str) -> dict[str, Any]:
             raise ValueError(f"{name} is {json.dumps(v)}, not an integer (or out of range)")
         if key == "seed" and not (is_int(v) and 0 <= v < 2**64):
             raise ValueError(f"{name} is {json.dumps(v)}, not an integer >= 0")
+        if key in _BOOLS and not isinstance(v, bool):
+            raise ValueError(f"{name} is {json.dumps(v)}, not true or false")
         if key in _NUMBERS and not is_number(v):
             raise ValueError(f"{name} is {json.dumps(v)}, not a finite number")
         if key in CHOICES or key == "imm_modes":
@@ -142,6 +146,7 @@ def _check_ranges(s: Mapping[str, Any], where: str) -> None:
     check("search_radius_m", 0.0 <= g("search_radius_m", 0.0) <= 1e7, "in [0, 1e7]")
     check("presence_false_alarm", 0.0 < g("presence_false_alarm", 1e-3) <= 0.1, "in (0, 0.1]")
     check("source_timeout_s", 0.0 < g("source_timeout_s", 1.0) <= 1e6, "in (0, 1e6]")
+    check("direction_present_hold_s", 0.0 <= g("direction_present_hold_s", 0.0) <= 1.0, "in [0, 1] s")
 
 
 @dataclass(frozen=True, eq=False)  # eq: sensors_m is an array
@@ -220,7 +225,8 @@ class SessionFile:
         if band is not None:
             config.band_low_hz, config.band_high_hz = band
         for key in ("frame_samples", "hop_samples", "phat_beta", "despike_k", "seed", "search_radius_m",
-                    "presence_false_alarm", "source_timeout_s", "backend"):
+                    "presence_false_alarm", "source_timeout_s", "backend", "direction_present_hold_s",
+                    "direction_diffuse_weighting", "direction_signal_weighting"):
             if key in s:
                 setattr(config, key, s[key])
         if "weighting" in s:
