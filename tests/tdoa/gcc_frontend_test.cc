@@ -82,11 +82,7 @@ struct SigmaCase {
 };
 
 TEST(DelaySigma, AgreesWithTheMeasuredSpread) {
-  SignalSpec air;
-  air.sample_rate_hz = 48000.0;
-  air.band_low_hz = 300.0;
-  air.band_high_hz = 3000.0;
-  air.frame_samples = 8192;
+  const SignalSpec air = testing::TalkerAt48kHz();
   SignalSpec narrow;
   narrow.band_low_hz = 500.0;
   narrow.band_high_hz = 2000.0;

@@ -133,11 +133,7 @@ TEST(PhatShare, WithoutABandHintNearsPhatWithTheTrueBand) {
 // share s itself the spread was 0.228 / 0.156 samples at 0 / 20 dB, 2.2x / 10.9x the true
 // band's; by s^2 / (1 - s^2) it is within 1.2x of it.
 TEST(PhatShare, ANarrowSourceAtAHighRateNearsTheTrueBand) {
-  SignalSpec air;
-  air.sample_rate_hz = 48000.0;
-  air.band_low_hz = 300.0;
-  air.band_high_hz = 3000.0;
-  air.frame_samples = 8192;
+  const SignalSpec air = testing::TalkerAt48kHz();
   for (double snr : {0.0, 20.0}) {
     const testing::DelayTrack hinted = RunFrames(Options(air, Weighting::kPhat, true), air, snr, 7000);
     const testing::DelayTrack shared = RunFrames(Options(air, Weighting::kPhatShare, false), air, snr, 7000);

@@ -28,6 +28,9 @@ struct SignalSpec {
   int frame_samples = 4096;
 };
 
+// A talker's band in air at 48 kHz, 8192-sample frames: the source holds 11 % of the bins.
+inline SignalSpec TalkerAt48kHz() { return {48000.0, 300.0, 3000.0, 8192}; }
+
 struct Path {
   double delay_samples = 0.0;  // x(t) = gain * s(t - delay)
   double gain = 1.0;
