@@ -75,7 +75,6 @@ int RunDoa(const std::vector<std::string>& args) {
                "weigh each frame's frequencies by their share of signal, or every frequency alike, as in track "
                "(default: on for planar and volumetric arrays, off for linear ones)");
   if (auto exit_code = ParseFlagsOrExit(kCommand, flags, args)) return *exit_code;
-  srp.diffuse_weighting = !no_diffuse;
   if (!signal_weighting.empty() && signal_weighting != "on" && signal_weighting != "off")
     return UsageError(kCommand, "--signal-weighting is '" + signal_weighting + "'; give on or off");
   if (!side_text.empty()) {
@@ -96,6 +95,10 @@ int RunDoa(const std::vector<std::string>& args) {
   if (!flags.seen("frame") && session.frame_samples) srp.frame_samples = *session.frame_samples;
   if (!flags.seen("hop") && session.hop_samples) hop_samples = *session.hop_samples;
   if (!flags.seen("false-alarm") && session.presence_false_alarm) srp.false_alarm = *session.presence_false_alarm;
+  srp.diffuse_weighting = !no_diffuse && session.direction_diffuse_weighting.value_or(true);
+  if (signal_weighting.empty() && session.direction_signal_weighting) {
+    signal_weighting = *session.direction_signal_weighting ? "on" : "off";
+  }
   const bool session_band = session.band_low_hz.value_or(0.0) != 0.0 || session.band_high_hz.value_or(0.0) != 0.0;
   const std::pair<double, double> band =
       session_band ? std::make_pair(session.band_low_hz.value_or(0.0), session.band_high_hz.value_or(0.0))

@@ -3,7 +3,8 @@
 //   - `track` with the settings in the file writes row for row the estimates it writes with
 //     the same settings as flags, and they differ from the defaults' (the settings arrive);
 //   - a flag given wins over the file: file + --particles 2048 is flags with --particles 2048;
-//   - `doa` reads the file's frame_samples and hop_samples as --frame and --hop;
+//   - `doa` reads the file's frame_samples and hop_samples as --frame and --hop, and its
+//     direction weightings as --no-diffuse-weighting and --signal-weighting;
 //   - a bad session object stops the command (exit 1) with a message naming the file and key.
 // "Row for row": every field of every row equal as text, except tdoa_ms and filter_ms (stage
 // wall times); the runs are seeded, so this holds exactly.
@@ -89,6 +90,29 @@ TEST_F(CliSessionFile, DoaReadsTheFramingFromTheFile) {
   ASSERT_EQ(Shell(doa + dir_.File("sim/array.json") + " --out " + dir_.File("defaults.csv"), dir_), 0);
   EXPECT_EQ(ReadText(dir_.File("file.csv")), ReadText(dir_.File("flags.csv")));
   EXPECT_NE(ReadText(dir_.File("defaults.csv")), ReadText(dir_.File("flags.csv")));
+}
+
+TEST_F(CliSessionFile, DoaReadsTheDirectionWeightingsFromTheFile) {
+  WriteSessionFile(dir_, R"({"direction_diffuse_weighting": false, "direction_signal_weighting": false})",
+                   dir_.File("session.json"));
+  const std::string doa = "\"$CLI\" doa --wav " + dir_.File("sim/signals.wav") + " --array ";
+  ASSERT_EQ(Shell(doa + dir_.File("session.json") + " --out " + dir_.File("file.csv"), dir_), 0)
+      << ReadText(dir_.File("stderr.txt"));
+  ASSERT_EQ(Shell(doa + dir_.File("sim/array.json") + " --no-diffuse-weighting --signal-weighting off --out " +
+                      dir_.File("flags.csv"),
+                  dir_),
+            0)
+      << ReadText(dir_.File("stderr.txt"));
+  ASSERT_EQ(Shell(doa + dir_.File("sim/array.json") + " --out " + dir_.File("defaults.csv"), dir_), 0);
+  EXPECT_EQ(ReadText(dir_.File("file.csv")), ReadText(dir_.File("flags.csv")));
+  EXPECT_NE(ReadText(dir_.File("defaults.csv")), ReadText(dir_.File("flags.csv")));
+  // A flag given wins over the file: the file's "off" with --signal-weighting on.
+  ASSERT_EQ(Shell(doa + dir_.File("session.json") + " --signal-weighting on --out " + dir_.File("on.csv"), dir_), 0);
+  ASSERT_EQ(Shell(doa + dir_.File("sim/array.json") + " --no-diffuse-weighting --signal-weighting on --out " +
+                      dir_.File("on_flags.csv"),
+                  dir_),
+            0);
+  EXPECT_EQ(ReadText(dir_.File("on.csv")), ReadText(dir_.File("on_flags.csv")));
 }
 
 TEST_F(CliSessionFile, ABadSessionObjectNamesTheFileAndTheKey) {
