@@ -130,16 +130,16 @@
 // bin and each bin's share of signal found, s = max(0, 1 - k N / P) (signal_share.h: P the
 // bin's power over 3 bins, N the 10th percentile of the 33-bin average, k read from the
 // noise's own statistics for this many channels); the bin is weighted W = w / |G| with
-// w = s^2 / (1 - s^2), at most 10: the maximum-likelihood weight for two channels whose
+// w = s^2 / (1 - s^2), at most 4: the maximum-likelihood weight for two channels whose
 // coherence is s (gcc_weighing.cc), which leaves noise bins almost nothing. Cross pairs alike.
 // No band hint and no memory between frames: a frame that does not show its band (no 33-bin
 // average stands out of the noise's own spread: white sound, noise alone, or a source a few
 // dB under the noise in its own bins) is weighed exactly as PHAT. peak_snr divides by the
 // weights' own noise-only scale, as kPhatCoherence's. Measured (tests/tdoa/phat_share_test.cc,
 // rms delay error in samples): the source and noise of PHAT-coherence's measurement above,
-// -5 dB 0.089 (PHAT with the true band 0.091, without 0.318), 0 dB 0.040 (0.045, 0.227), -10 dB
-// as PHAT without the band; a 300-3000 Hz source at 48 kHz (8192-sample frames) 0 dB 0.097
-// (PHAT with the band 0.109), 20 dB 0.016 (0.015), where w = s gave 2.2x and 10.9x the band's.
+// -5 dB 0.089 (PHAT with the true band 0.091, without 0.318), 0 dB 0.039 (0.045, 0.227), -10 dB
+// as PHAT without the band; a 300-3000 Hz source at 48 kHz (8192-sample frames) 0 dB 0.099
+// (PHAT with the band 0.109), 20 dB 0.021 (0.015), where w = s gave 2.2x and 10.9x the band's.
 // On the random campaign, without a band hint, the median RMSE over the theoretical bound
 // comes within a few per cent of the true band's (ACCURACY.md, "Thirty-first pass"). Cost:
 // one pass over the channels' in-band bins, two partial sorts and two running means per frame

@@ -11,7 +11,7 @@
 
 namespace localizer::engine {
 namespace {
-constexpr float kShareWeightCapInverse = 0.1f;  // the weight's cap, 10, inverted
+constexpr float kShareWeightCapInverse = 0.25f;  // the weight's cap, 4, inverted
 }  // namespace
 
 // The shares are read over every bin, not only the band a hint gives: a source that fills its
@@ -35,8 +35,9 @@ void GccPhatEstimator::Impl::FindShares() {
   // The maximum-likelihood weight (Carter's |gamma|^2 / (1 - |gamma|^2), with the coherence
   // |gamma| of two channels each holding share s of signal equal to s) is s^2 / (1 - s^2):
   // noise bins, whose s is seldom above 0.3, weigh under a tenth of what s gave them, which
-  // is what costs a narrow source in a wide band. Capped at 10 (s = 0.95) so a few loud bins,
-  // a tone's, cannot carry the frame alone.
+  // is what costs a narrow source in a wide band. Capped at 4 (s = 0.89) so a few loud bins,
+  // a tone's, cannot carry the frame alone: with a cap of 10, multipath scenes with tones lost
+  // their direct path 4x as often as with w = s (ACCURACY.md, "Thirty-first pass").
   for (int b = lo; b < hi; ++b) {
     const float s2 = static_cast<float>(shares[b] * shares[b]);
     share_weight[static_cast<std::size_t>(b)] = s2 / std::max(1.0f - s2, kShareWeightCapInverse);

@@ -122,7 +122,7 @@ TEST(PhatShare, WithoutABandHintNearsPhatWithTheTrueBand) {
       continue;
     }
     EXPECT_LE(shared.lost, hinted.lost) << snr;
-    EXPECT_LT(shared.spread, 1.1 * hinted.spread) << snr;  // measured 0.98 and 0.88
+    EXPECT_LT(shared.spread, 1.1 * hinted.spread) << snr;  // measured 0.98 and 0.87
     EXPECT_GT(blind.spread, 2.0 * shared.spread) << snr;   // the test has teeth: 3.6 and 5.7
   }
 }
@@ -131,7 +131,8 @@ TEST(PhatShare, WithoutABandHintNearsPhatWithTheTrueBand) {
 // bins outnumber the source's eight to one and sit at higher frequencies, where a delay's
 // slope is steeper, so what little weight each keeps decides the spread. Weighed by the
 // share s itself the spread was 0.228 / 0.156 samples at 0 / 20 dB, 2.2x / 10.9x the true
-// band's; by s^2 / (1 - s^2) it is within 1.2x of it.
+// band's; by s^2 / (1 - s^2), capped at 4, 0.90x / 1.39x (capped at 10: 0.89x / 1.05x; the
+// lower cap is for tones, ACCURACY.md "Thirty-first pass").
 TEST(PhatShare, ANarrowSourceAtAHighRateNearsTheTrueBand) {
   const SignalSpec air = testing::TalkerAt48kHz();
   for (double snr : {0.0, 20.0}) {
@@ -140,13 +141,13 @@ TEST(PhatShare, ANarrowSourceAtAHighRateNearsTheTrueBand) {
     std::printf("48 kHz %4.1f dB: PHAT with band %.4f (%d lost), phat-share without %.4f (%d lost)\n", snr,
                 hinted.spread, hinted.lost, shared.spread, shared.lost);
     EXPECT_EQ(shared.lost, 0) << snr;
-    EXPECT_LT(shared.spread, 1.3 * hinted.spread) << snr;
+    EXPECT_LT(shared.spread, 1.6 * hinted.spread) << snr;
   }
 }
 
 // A band hint the source fills: the shares' floor is read over every bin, so the source is
 // not its own floor. Read in the band alone, every frame was flat and weighed as PHAT (0.0885
-// and 0.0466 samples, PHAT's own); read over every bin, 0.0845 and 0.0422 (the band's edges,
+// and 0.0466 samples, PHAT's own); read over every bin, 0.0845 and 0.0431 (the band's edges,
 // where the source fades, weigh less).
 TEST(PhatShare, WithABandHintTheFloorIsReadOutsideTheBand) {
   SignalSpec spec;
