@@ -126,10 +126,11 @@
 // the weight array read in the weighing pass plus one O(bins) update per pair and frame:
 // BM_GccPhatCoherence 133 us per 4 x 4096 frame against 91-96 us for PHAT (same run).
 //
-// PHAT-share (weighting kPhatShare): each frame, every channel's power is summed per in-band
-// bin and each bin's share of signal found, s = max(0, 1 - k N / P) (signal_share.h: P the
-// bin's power over 3 bins, N the 10th percentile of the 33-bin average, k read from the
-// noise's own statistics for this many channels); the bin is weighted W = w / |G| with
+// PHAT-share (weighting kPhatShare): each frame, every channel's power is summed per bin (every
+// bin, so that a band hint's floor is read beside it) and each bin's share of signal found,
+// s = max(0, 1 - k N / P) (signal_share.h: P the bin's power over 3 bins, N the 10th
+// percentile of the 33-bin average, k read from the noise's own statistics for this many
+// channels); each in-band bin is weighted W = w / |G| with
 // w = s^2 / (1 - s^2), at most 4: the maximum-likelihood weight for two channels whose
 // coherence is s (gcc_weighing.cc), which leaves noise bins almost nothing. Cross pairs alike.
 // No band hint and no memory between frames: a frame that does not show its band (no 33-bin
@@ -142,7 +143,7 @@
 // (PHAT with the band 0.109), 20 dB 0.021 (0.015), where w = s gave 2.2x and 10.9x the band's.
 // On the random campaign, without a band hint, the median RMSE over the theoretical bound
 // comes within a few per cent of the true band's (ACCURACY.md, "Thirty-first pass"). Cost:
-// one pass over the channels' in-band bins, two partial sorts and two running means per frame
+// one pass over the channels' bins, two partial sorts and two running means per frame
 // (BM_GccPhatShare, about 10 us per 4 x 4096 frame over PHAT).
 //
 // Cost per frame: ceil(channels / 2) complex FFTs of N (two channels in one, packed_transforms.h)

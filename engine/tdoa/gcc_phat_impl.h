@@ -86,7 +86,7 @@ struct GccPhatEstimator::Impl {
   // kPhatShare: the frame's power per bin (every bin, the band's floor read beside it) summed
   // over the channels, the shares found from it, and the weight of each bin (indexed by bin;
   // 0 out of band).
-  std::vector<double> band_power;
+  std::vector<double> bin_power;
   SignalShare share_finder;
   std::vector<float> share_weight;
   bool share_flat = true;

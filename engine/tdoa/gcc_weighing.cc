@@ -21,15 +21,15 @@ void GccPhatEstimator::Impl::FindShares() {
   const int lo = layout.band_first_bin;
   const int hi = layout.band_end_bin;
   const int bins = layout.bin_count;
-  band_power.assign(static_cast<std::size_t>(bins), 0.0);
+  bin_power.assign(static_cast<std::size_t>(bins), 0.0);
   for (int c = 0; c < array.sensor_count(); ++c) {
     const float* x = SpectrumOf(c);
     for (int b = 0; b < bins; ++b) {
       const double re = x[2 * b], im = x[2 * b + 1];
-      band_power[static_cast<std::size_t>(b)] += re * re + im * im;
+      bin_power[static_cast<std::size_t>(b)] += re * re + im * im;
     }
   }
-  share_flat = share_finder.Find(band_power);
+  share_flat = share_finder.Find(bin_power);
   if (share_flat) return;
   const std::span<const double> shares = share_finder.shares();
   // The maximum-likelihood weight (Carter's |gamma|^2 / (1 - |gamma|^2), with the coherence

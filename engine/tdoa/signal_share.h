@@ -33,9 +33,9 @@ struct SignalShareOptions {
   bool exact_upper_quantile = true;
   // When > 0, the flatness test also reads the frame's largest floor-window average: a frame
   // whose upper quantile is within flat_spread is still not flat when that maximum reaches
-  // flat_max_spread x floor. A
-  // source in under a tenth of the bins (a 300-3000 Hz talker at 48 kHz holds 11 %) leaves the
-  // upper quantile on noise, and the frame would be weighed as if nothing stood out.
+  // flat_max_spread x floor. A source in under a tenth of the bins (a 300-3000 Hz talker at
+  // 48 kHz holds 11 %) leaves the upper quantile on noise, and the frame would be weighed as
+  // if nothing stood out.
   double flat_max_spread = 0.0;
 };
 
@@ -49,9 +49,10 @@ struct SignalShareOptions {
 // correlate in pairs). A frame stands out when either test says so.
 // For the GCC's long frames (kPhatShare), where a 9-bin floor would leave a source a few dB
 // over the noise flat: with 33 bins and 4 channels the factor is 1.52, flat_spread 2.0 and
-// flat_max_spread 2.9 (white noise's largest 33-bin average over its floor, 4 channels padded
-// twice, 300 frames: 99th percentile 2.0 with a 0.2 taper, 2.4 with Hann; tests/tdoa/
-// phat_share_test.cc, TheGccsOptionsSeeANarrowSourceAndNotNoise).
+// flat_max_spread 2.9 (white noise's largest 33-bin average over its floor, measured in numpy
+// for 4 channels padded twice, 300 frames: 99th percentile 2.0 with a 0.2 taper, 2.4 with
+// Hann; ACCURACY.md, "Thirty-first pass"; tests/tdoa/phat_share_test.cc asserts noise flat and
+// a narrow source seen).
 SignalShareOptions SignalShareOptionsForNoise(int channels, std::size_t floor_window_bins);
 
 class SignalShare {
