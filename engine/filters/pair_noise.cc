@@ -13,6 +13,7 @@ constexpr double kGateSigmas = 4.0;
 constexpr double kAnchoredCap = 6.0;  // |z| beyond this counts as 6 in the divergence test
 constexpr double kMinAnchorSamples = 0.02;
 constexpr double kStartSigmaSamples = 0.05;
+constexpr double kMaxStartScale = 2.0;
 constexpr double kConfirmedPeakSnr = 3.0;  // a confirmed pair's peak SNR floor
 // The fallback without an anchor: start at 0.1 sample, keep within [0.01, 2] samples.
 constexpr double kInitialSigmaSamples = 0.1;
@@ -53,9 +54,13 @@ int PairNoise::Select(const Measurement& m, double min_peak_snr) {
     anchors_s_[p] = AnchorSigmaS(m.pairs[p], m.sample_rate_hz);
     if (scale2_[p] == 0.0 && anchors_s_[p] > 0.0) {
       // Start at the anchor, or at kStartSigmaSamples if that is larger (the sub-sample
-      // interpolation's bias), and let the innovations adapt it.
+      // interpolation's bias) but at most kMaxStartScale anchors, and let the innovations
+      // adapt it. Why at most 2: with Mehra's excess at 0 while the cloud is wider than the
+      // innovations, the scale falls 5 % a frame, so a start at 8 anchors (a front end whose
+      // spread is 0.006 sample) took 14 s to come down: the covariance too wide for that
+      // long (campaign NEES 0.48 with phat-share; 0.55 with this cap, ACCURACY.md).
       const double start = kStartSigmaSamples / m.sample_rate_hz / anchors_s_[p];
-      scale2_[p] = std::clamp(start * start, 1.0, kMaxScale * kMaxScale);
+      scale2_[p] = std::clamp(start * start, 1.0, kMaxStartScale * kMaxStartScale);
     }
     sigmas_s_[p] = anchors_s_[p] > 0.0 ? std::sqrt(scale2_[p]) * anchors_s_[p] : free_sigma_s_[p];
   }

@@ -11,10 +11,11 @@
 // the peak (the delay's Cramér–Rao-type bound for the PHAT peak; floored at 0.02 sample).
 // The filter uses sigma_k = s_k anchor_k, where the scale s_k adapts to what the
 // innovations show (Mehra's estimate on the normalised innovation, a = 0.05, starting where
-// sigma = max(anchor, 0.05 sample): a start at 0.1 sample let a particle cloud spread along a
-// weakly observed direction (range, at a few apertures) faster than the scale came down, 40 m
-// in 6 s on one campaign scene; one at the anchor itself (down to 0.02 sample) slowed the
-// multiple-model particle filter's convergence 1.6x)
+// sigma = max(anchor, 0.05 sample) but at most 2 anchors: a start at 0.1 sample let a particle
+// cloud spread along a weakly observed direction (range, at a few apertures) faster than the
+// scale came down, 40 m in 6 s on one campaign scene; one at the anchor itself (down to 0.02
+// sample) slowed the multiple-model particle filter's convergence 1.6x; one at 8 anchors kept
+// a precise front end's covariance too wide for 14 s)
 //     s_k^2 <- (1 - a) s_k^2 + a max(0, (e_k^2 - Var[h_k']) / anchor_k^2),
 // kept within [0.5, 8] and fed only by innovations inside a 4-sigma
 // gate (an outlier is an outlier, not noise). So the adaptation can absorb a model that is

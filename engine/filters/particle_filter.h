@@ -155,7 +155,9 @@ struct ParticleFilterOptions {
                                     // bandwidth (0: plain bootstrap filter)
   int tempered_updates = 2;         // updates after each (re)start applied in 4 tempered
                                     // stages (progressive correction, particle_filter.cc),
-                                    // in [0, 100]; the GPU filter has none yet
+                                    // or, when the first would collapse the cloud and one
+                                    // label lives (tempering on, below), in up to 12
+                                    // ESS-chosen ones; in [0, 100]; the GPU filter has none yet
   // Adaptive tempering: an update (after the tempered ones above) whose ESS would fall
   // below this fraction of N is applied in up to 6 stages, each taking the largest share of
   // the likelihood that keeps the ESS near N / 5, with resampling and the kernel move
@@ -206,7 +208,8 @@ class ParticleFilter final : public Tracker {
  private:
   struct Impl;
   explicit ParticleFilter(std::unique_ptr<Impl> impl);
-  double AdaptiveUpdate(const Measurement& m, int* stages);  // returns the ESS
+  // Applies m in up to max_stages stages chosen by the ESS; returns the ESS.
+  double AdaptiveUpdate(const Measurement& m, int* stages, int max_stages);
   std::unique_ptr<Impl> impl_;
 };
 

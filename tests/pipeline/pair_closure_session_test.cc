@@ -29,7 +29,10 @@ double SilentSeconds(uint64_t seed, bool pair_closure, SceneRow* row) {
 // track near a branch point is chaotic), so the three are asserted together: they still fail
 // without the check, and the check removes most of it. The check alone is tested: the fusion
 // of every pair into the reference pairs (pair_fusion.h, the default since) also reads the
-// cross pairs, and with both (the defaults) these scenes give 0.00, 1.71 and 0.00 s.
+// cross pairs, and with both (the defaults) these scenes give 0.00, 1.71 and 0.00 s. Since a
+// fresh start's first update may go in ESS-chosen stages (particle_filter.cc, thirty-second
+// pass in ACCURACY.md) 16000031 no longer fails without the check either: 0.00, 1.37 and
+// 1.37 s without, 0.00, 0.17 and 0.34 s with.
 TEST(PairClosureSession, APairThatLeavesTheSourceIsReadWhereTheOtherPairsAgree) {
   double with_total_s = 0.0, without_total_s = 0.0;
   for (const uint64_t seed : {16000031u, 19000095u, 8000058u}) {
@@ -45,7 +48,7 @@ TEST(PairClosureSession, APairThatLeavesTheSourceIsReadWhereTheOtherPairsAgree) 
     with_total_s += with_s;
     without_total_s += without_s;
   }
-  EXPECT_GT(without_total_s, 3.0) << "the scenes no longer show the failure";
+  EXPECT_GT(without_total_s, 2.0) << "the scenes no longer show the failure";
   EXPECT_LE(with_total_s, 0.35 * without_total_s);
 }
 
