@@ -9,9 +9,7 @@
 #include <cstdio>
 #include <random>
 
-#include "engine/array/multilateration.h"
-#include "engine/filters/particle_filter.h"
-#include "tests/filters/tdoa_frames.h"
+#include "tests/filters/near_talker_start.h"
 
 namespace localizer::engine {
 namespace {
@@ -24,23 +22,10 @@ struct StartRun {
 };
 
 StartRun RunStart(double tempering, uint64_t noise_seed) {
-  const ArrayGeometry array = Tetrahedron(0.45, Vec3::Zero(), 343.0);
-  const Vec3 source(0.25, -0.2, 0.25);  // 0.41 m from the centre
-  const double fs = 48000.0, hop_s = 8192.0 / fs, sigma_s = 1e-7;
-  ParticleFilterOptions o;
-  o.particles = 4096;
-  o.accel_noise_mps2 = 1.0;  // the session's default
-  o.tdoa_sigma_s = sigma_s;
-  o.tempering_ess_fraction = tempering;  // 0: the first updates in 4 equal stages
-  o.seed = 7;
-  auto pf = ParticleFilter::Create(array, o);
-  EXPECT_TRUE(pf.ok());
-  const Mat3 fix_cov = TdoaPositionCrlb(array, source, sigma_s);
-  TrackState belief;
-  belief.mean.head<3>() = source + fix_cov.diagonal().cwiseSqrt();
-  belief.covariance.topLeftCorner<3, 3>() = fix_cov;
-  belief.covariance.bottomRightCorner<3, 3>() = 4.0 * Mat3::Identity();  // 2 m/s, the session's
-  EXPECT_TRUE((*pf)->Initialise(belief).ok());
+  const NearTalkerStart scene;
+  const auto& [array, source, fs, hop_s, sigma_s, fix_cov] = scene;
+  // 0: the first updates in 4 equal stages; 2 m/s, the session's init_speed_sigma_mps.
+  const std::unique_ptr<ParticleFilter> pf = scene.Start(tempering, 2.0);
   std::mt19937_64 rng(noise_seed);
   StartRun out;
   out.crlb_m = std::sqrt(fix_cov.trace());
@@ -49,10 +34,10 @@ StartRun RunStart(double tempering, uint64_t noise_seed) {
   int later = 0;
   for (int f = 0; f < frames; ++f) {
     const double t = f * hop_s;
-    if (f > 0) (*pf)->Predict(hop_s);
-    const auto report = (*pf)->Update(MakeMeasurement(array, source, Vec3::Zero(), t, sigma_s, fs, rng));
+    if (f > 0) pf->Predict(hop_s);
+    const auto report = pf->Update(MakeMeasurement(array, source, Vec3::Zero(), t, sigma_s, fs, rng));
     EXPECT_TRUE(report.ok());
-    const double e = ((*pf)->State().mean.head<3>() - source).norm();
+    const double e = (pf->State().mean.head<3>() - source).norm();
     if (f == 1) out.second_m = e;
     if (t <= 1.0) {
       out.worst_m = std::max(out.worst_m, e);

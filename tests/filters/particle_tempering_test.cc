@@ -9,39 +9,23 @@
 #include <cstdio>
 #include <random>
 
-#include "engine/array/multilateration.h"
-#include "engine/filters/particle_filter.h"
-#include "tests/filters/tdoa_frames.h"
+#include "tests/filters/near_talker_start.h"
 
 namespace localizer::engine {
 namespace {
 
 struct SharpRun {
-  double rmse_m = 0.0;       // after the first second
-  double crlb_m = 0.0;       // per-frame position CRLB at the source
-  double worst_m = 0.0;      // largest error after the first second
-  double median_ess = 0.0;   // of the updates after the first second
+  double rmse_m = 0.0;      // after the first second
+  double crlb_m = 0.0;      // per-frame position CRLB at the source
+  double worst_m = 0.0;     // largest error after the first second
+  double median_ess = 0.0;  // of the updates after the first second
 };
 
 SharpRun RunSharp(double tempering, uint64_t noise_seed) {
-  const ArrayGeometry array = Tetrahedron(0.45, Vec3::Zero(), 343.0);
-  const Vec3 source(0.25, -0.2, 0.25);  // 0.41 m from the centre
-  const double fs = 48000.0, hop_s = 8192.0 / fs, sigma_s = 1e-7;
-  ParticleFilterOptions o;
-  o.particles = 4096;
-  o.accel_noise_mps2 = 1.0;  // the session's default
-  o.tdoa_sigma_s = sigma_s;
-  o.tempering_ess_fraction = tempering;
-  o.seed = 7;
-  auto pf = ParticleFilter::Create(array, o);
-  EXPECT_TRUE(pf.ok());
-  const Mat3 fix_cov = TdoaPositionCrlb(array, source, sigma_s);
-  TrackState belief;
   // A session's start: a fix one bound off on every axis, its spread the bound, speed unknown.
-  belief.mean.head<3>() = source + fix_cov.diagonal().cwiseSqrt();
-  belief.covariance.topLeftCorner<3, 3>() = fix_cov;
-  belief.covariance.bottomRightCorner<3, 3>() = 0.25 * Mat3::Identity();
-  EXPECT_TRUE((*pf)->Initialise(belief).ok());
+  const NearTalkerStart scene;
+  const auto& [array, source, fs, hop_s, sigma_s, fix_cov] = scene;
+  const std::unique_ptr<ParticleFilter> pf = scene.Start(tempering, 0.5);
   std::mt19937_64 rng(noise_seed);
   SharpRun out;
   out.crlb_m = std::sqrt(fix_cov.trace());
@@ -51,11 +35,11 @@ SharpRun RunSharp(double tempering, uint64_t noise_seed) {
   const int frames = static_cast<int>(8.0 / hop_s);
   for (int f = 0; f < frames; ++f) {
     const double t = f * hop_s;
-    if (f > 0) (*pf)->Predict(hop_s);
-    const auto report = (*pf)->Update(MakeMeasurement(array, source, Vec3::Zero(), t, sigma_s, fs, rng));
+    if (f > 0) pf->Predict(hop_s);
+    const auto report = pf->Update(MakeMeasurement(array, source, Vec3::Zero(), t, sigma_s, fs, rng));
     EXPECT_TRUE(report.ok());
     if (t < 1.0) continue;
-    const double e = ((*pf)->State().mean.head<3>() - source).norm();
+    const double e = (pf->State().mean.head<3>() - source).norm();
     se += e * e;
     out.worst_m = std::max(out.worst_m, e);
     ess.push_back(report->ess);
@@ -74,10 +58,11 @@ SharpRun RunSharp(double tempering, uint64_t noise_seed) {
 TEST(ParticleFilterTempering, ASharpLikelihoodIsFollowedWithoutCollapsingTheCloud) {
   for (uint64_t seed : {1u, 2u, 3u}) {
     const SharpRun on = RunSharp(0.05, seed), off = RunSharp(0.0, seed);
-    std::printf("seed %llu: crlb %.3g m; tempered rmse %.3g m (worst %.3g, median ESS %.0f); untempered rmse %.3g m "
-                "(worst %.3g, median ESS %.0f)\n",
-                static_cast<unsigned long long>(seed), on.crlb_m, on.rmse_m, on.worst_m, on.median_ess, off.rmse_m,
-                off.worst_m, off.median_ess);
+    std::printf(
+        "seed %llu: crlb %.3g m; tempered rmse %.3g m (worst %.3g, median ESS %.0f); untempered rmse %.3g m "
+        "(worst %.3g, median ESS %.0f)\n",
+        static_cast<unsigned long long>(seed), on.crlb_m, on.rmse_m, on.worst_m, on.median_ess, off.rmse_m, off.worst_m,
+        off.median_ess);
     EXPECT_LT(on.rmse_m, 1.5 * on.crlb_m) << "seed " << seed;
     EXPECT_LT(on.worst_m, 5.0 * on.crlb_m) << "seed " << seed;
     EXPECT_GT(on.median_ess, 0.05 * 4096) << "seed " << seed;
