@@ -26,6 +26,7 @@ StartRun RunStart(double tempering, uint64_t noise_seed) {
   const auto& [array, source, fs, hop_s, sigma_s, fix_cov] = scene;
   // 0: the first updates in 4 equal stages; 2 m/s, the session's init_speed_sigma_mps.
   const std::unique_ptr<ParticleFilter> pf = scene.Start(tempering, 2.0);
+  if (!pf) return {};  // Start has already failed the test
   std::mt19937_64 rng(noise_seed);
   StartRun out;
   out.crlb_m = std::sqrt(fix_cov.trace());

@@ -26,6 +26,7 @@ SharpRun RunSharp(double tempering, uint64_t noise_seed) {
   const NearTalkerStart scene;
   const auto& [array, source, fs, hop_s, sigma_s, fix_cov] = scene;
   const std::unique_ptr<ParticleFilter> pf = scene.Start(tempering, 0.5);
+  if (!pf) return {};  // Start has already failed the test
   std::mt19937_64 rng(noise_seed);
   SharpRun out;
   out.crlb_m = std::sqrt(fix_cov.trace());
