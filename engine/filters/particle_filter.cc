@@ -227,7 +227,23 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
   if (s.tempered_updates_left == 0) {
     report.ess = AdaptiveUpdate(m, &report.likelihood_stages, kAdaptiveStages);
   } else {
+    // The first updates after a (re)start: where a label's cloud would collapse on the fix
+    // this frame gives near it, half its particles are redrawn around that fix, weighted so
+    // the label keeps its predicted density (ProposeLocalFixes, particle_set.h).
+    // Those particles need no stages to reach the likelihood, and equal stages would
+    // scatter them: each resampling moves every particle by a kernel sized by the whole
+    // label's spread, still decimetres while the tempered likelihood keeps the prior's
+    // particles alive. So such an update goes in whole (or in ESS-chosen stages).
+    // particle_proposal_test: a talker inside a 0.25 m tetrahedron, restarted on both exact
+    // solutions, 0.64-0.97 x the CRLB (the far solution won within a hop before);
+    // particle_start_test: 1.5-83 x after the second update.
     --s.tempered_updates_left;
+    if (ProposeLocalFixes(&s.set, s.array, m, s.noise.used(), s.noise.sigmas_s(), o.tempering_ess_fraction) > 0) {
+      report.ess = AdaptiveUpdate(m, &report.likelihood_stages, kStartStages);
+      s.noise.Finish(s.innovations, m.sample_rate_hz, &report);
+      impl_->ess = report.ess;
+      return report;
+    }
     report.likelihood_stages = kTemperedStages;
     const float step = 1.0f / static_cast<float>(kTemperedStages);
     for (int stage = 0; stage < kTemperedStages; ++stage) {

@@ -157,7 +157,13 @@ struct ParticleFilterOptions {
                                     // stages (progressive correction, particle_filter.cc),
                                     // or, when the first would collapse the cloud and one
                                     // label lives (tempering on, below), in up to 12
-                                    // ESS-chosen ones; in [0, 100]; the GPU filter has none yet
+                                    // ESS-chosen ones; in [0, 100]; the GPU filter has none yet.
+                                    // In these updates (tempering on) a label whose cloud
+                                    // would collapse on the fix the frame gives near it has
+                                    // half its particles redrawn around that fix, weighted
+                                    // to keep its predicted density (a two-point start:
+                                    // particle_set.h ProposeAroundFixes), and the update
+                                    // goes in whole or in ESS-chosen stages
   // Adaptive tempering: an update (after the tempered ones above) whose ESS would fall
   // below this fraction of N is applied in up to 6 stages, each taking the largest share of
   // the likelihood that keeps the ESS near N / 5, with resampling and the kernel move

@@ -409,3 +409,26 @@ void ParticleSet::ApplyBounds() {
 }
 
 }  // namespace localizer::engine
+
+namespace localizer::engine {
+
+std::vector<ParticleSet::LabelPrior> ParticleSet::LabelPriors() const {
+  if (labels_ <= 1) {
+    const TrackState all = MeanAndCovariance();
+    return {LabelPrior{0, 1.0, all.mean, all.covariance}};
+  }
+  const LabelMoments m =
+      MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()},
+                     label_, w_.data());
+  std::vector<LabelPrior> out;
+  for (int c = 0; c < kMaxComponents; ++c) {
+    const size_t k = static_cast<size_t>(c);
+    if (!(m.weight[k] > 0.0)) continue;
+    LabelPrior p{c, m.weight[k], m.mean[k], m.cov[k]};
+    p.mean.head<3>() += origin_m_;
+    out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace localizer::engine

@@ -181,6 +181,36 @@ class ParticleSet {
   // evidence leaves it.
   std::vector<WeightedBelief> Modes(double min_weight) const;
   int labels() const { return labels_; }
+
+  // Proposals that look at the measurement (particle_proposal.cc). A label's predicted cloud
+  // far wider than the likelihood (the first update after a start: a fix's position with an
+  // unknown velocity, decimetres wide after one hop, against TDOAs that place a near source
+  // to a millimetre) has almost no particle where the likelihood is: its best particle,
+  // which decides whether the label stays a contender, is poor whether the label is right or
+  // not, and a wide wrong mode wins.
+  // Per live label: its weight, mean and covariance (absolute positions); label 0 when
+  // single-mode.
+  struct LabelPrior {
+    int label = 0;
+    double weight = 0.0;
+    Vec6 mean = Vec6::Zero();
+    Mat6 covariance = Mat6::Zero();
+  };
+  std::vector<LabelPrior> LabelPriors() const;
+  struct FixProposal {
+    int label = 0;
+    Vec3 position_m = Vec3::Zero();  // absolute
+    Mat3 covariance_m2 = Mat3::Identity();
+  };
+  // For each proposal: a share s (in (0, 1)) of the label's particles is redrawn with the
+  // position ~ q = N(fix, covariance) and the velocity from the label's Gaussian prior
+  // given that position (a two-point start: the start's position and this fix give it);
+  // then every particle of the label has log p(x) - log((1 - s) p(x) + s q(x)) added to its
+  // log-weight, p the label's Gaussian position prior. So the label still carries its
+  // predicted density and weight (to the Gaussian approximation of its cloud) and now has
+  // particles where the likelihood is. Levels, turn rates and labels stay with the slots.
+  void ProposeAroundFixes(const std::vector<FixProposal>& proposals, double share);
+
   // Positions outside [min, max] (sides may be infinite) are impossible: after every
   // sampling and prediction a particle outside is put back on the wall it crossed and its
   // outward velocity removed.
@@ -276,5 +306,14 @@ class ParticleSet {
   bool bounded_ = false;
   Eigen::Vector3f bound_lo_, bound_hi_;  // relative to origin_m_
 };
+
+// Before the first update after a (re)start (particle_filter.cc): for each live label, the
+// fix this frame's used pairs give by Gauss-Newton from the label's predicted position; it
+// is proposed (ParticleSet::ProposeAroundFixes) where it lies inside the label's prior
+// (Mahalanobis distance < 5) and the label's cloud would collapse on it (the ESS share the
+// Gaussian prior and fix imply below collapse_fraction). Returns how many labels got one.
+// Needs 3 used pairs or more. Cost: a few 3 x 3 solves per label, then one pass over N.
+int ProposeLocalFixes(ParticleSet* set, const ArrayGeometry& array, const Measurement& m, const std::vector<int>& used,
+                      const std::vector<double>& sigmas_s, double collapse_fraction);
 
 }  // namespace localizer::engine

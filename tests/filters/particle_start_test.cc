@@ -51,8 +51,11 @@ StartRun RunStart(double tempering, uint64_t noise_seed) {
   return out;
 }
 
-// Measured (seeds 1-3): after the second update 2.6-22 x the per-frame CRLB, nothing worse in
-// the first second, then 0.62-1.06 x from 1 to 3 s. With the first updates in 4 equal stages
+// Measured (seeds 1-3): after the second update 1.5, 83 and 1.7 x the per-frame CRLB (with
+// the first updates' proposals, particle_set.h ProposeAroundFixes; 2.6-22 x with ESS-chosen
+// stages alone: seed 2's first update, no hop from the fix, pulls its velocities through the
+// delay-rate term and its prior is 5.5 sds from the fix, outside the proposal's gate),
+// nothing worse in the first second, then 0.64-1.03 x from 1 to 3 s. With the first updates in 4 equal stages
 // only (progressive correction: the former start, and what tempering off still does; printed)
 // seeds 2 and 3 ran off along range: 2400 and 450 x after the second update, 10500 and
 // 3000 x within the first second.

@@ -34,7 +34,9 @@ TEST(PairFusionSession, LargerArraysTrackNearerTheTruthOnScenesNeverUsedInDevelo
     const SceneRow without =
         RunRandomScene(seed, options, {}, /*keep_frames=*/false, [](AudioSessionConfig* c) { c->pair_fusion = false; });
     ASSERT_TRUE(with.error.empty() && without.error.empty()) << with.error << without.error;
-    if (without.score.acquired) EXPECT_TRUE(with.score.acquired) << seed << ": " << with.description;
+    if (without.score.acquired) {
+      EXPECT_TRUE(with.score.acquired) << seed << ": " << with.description;
+    }
     if (!with.score.acquired || !without.score.acquired || !(without.score.median_error_m > 0.0)) continue;
     const double ratio = with.score.median_error_m / without.score.median_error_m;
     std::printf("%llu: median error %.4f m with the fusion, %.4f m without (x %.2f; %s)\n",
