@@ -55,10 +55,10 @@ StartRun RunStart(double tempering, uint64_t noise_seed) {
 // the first updates' proposals, particle_set.h ProposeAroundFixes; 2.6-22 x with ESS-chosen
 // stages alone: seed 2's first update, no hop from the fix, pulls its velocities through the
 // delay-rate term and its prior is 5.5 sds from the fix, outside the proposal's gate),
-// nothing worse in the first second, then 0.64-1.03 x from 1 to 3 s. With the first updates in 4 equal stages
-// only (progressive correction: the former start, and what tempering off still does; printed)
-// seeds 2 and 3 ran off along range: 2400 and 450 x after the second update, 10500 and
-// 3000 x within the first second.
+// nothing worse in the first second, then 0.64-1.03 x from 1 to 3 s. With the first updates
+// in 4 equal stages only (progressive correction: the former start, and what tempering off
+// still does; printed) seeds 2 and 3 run off along range: 2400 and 450 x after the second
+// update, 10500 and 3000 x within the first second.
 TEST(ParticleFilterStart, AnUnknownVelocityDoesNotCarryTheFixAway) {
   for (uint64_t seed : {1u, 2u, 3u}) {
     const StartRun run = RunStart(0.05, seed), fixed = RunStart(0.0, seed);
