@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/core/covariance_repair.h"
 #include "engine/pipeline/session_impl.h"
 
 namespace localizer::engine {
@@ -312,7 +313,9 @@ void Session::Impl::Report(Estimate* e) {
   // the Kalman filters' Gaussian may straddle a wall).
   e->state.head<3>() = e->state.head<3>().cwiseMax(config.bounds_min_m).cwiseMin(config.bounds_max_m);
   // Innovations that disagree with the track widen what it reports (innovation_consistency.h).
-  e->covariance = covariance * consistency.Inflation();
+  // Positive definite even where float moments left a thin direction below zero
+  // (covariance_repair.h).
+  e->covariance = PositiveDefinite<6>(covariance * consistency.Inflation());
   e->modes = std::max(modes, 1);
   e->ambiguous = e->modes > 1;
   const RangeObservability range = JudgeRange(array, e->state.head<3>(), pair_sigmas.Median());
