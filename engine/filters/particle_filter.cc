@@ -240,23 +240,22 @@ StatusOr<UpdateReport> ParticleFilter::Update(const Measurement& m) {
     --s.tempered_updates_left;
     if (ProposeLocalFixes(&s.set, s.array, m, s.noise.used(), s.noise.sigmas_s(), o.tempering_ess_fraction) > 0) {
       report.ess = AdaptiveUpdate(m, &report.likelihood_stages, kStartStages);
-      s.noise.Finish(s.innovations, m.sample_rate_hz, &report);
-      impl_->ess = report.ess;
-      return report;
-    }
-    report.likelihood_stages = kTemperedStages;
-    const float step = 1.0f / static_cast<float>(kTemperedStages);
-    for (int stage = 0; stage < kTemperedStages; ++stage) {
-      std::vector<InnovationMoments>* innovations = stage == 0 ? &s.innovations : &s.later_innovations;
-      s.set.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness, innovations, step);
-      report.ess = s.set.NormaliseWeights();
-      if (stage == 0 && report.ess < o.tempering_ess_fraction * o.particles && s.set.labels() <= 1) {
-        s.set.Untemper(step);  // back to the prior's weights
-        report.ess = AdaptiveUpdate(m, &report.likelihood_stages, kStartStages);
-        break;
+    } else {
+      report.likelihood_stages = kTemperedStages;
+      const float step = 1.0f / static_cast<float>(kTemperedStages);
+      for (int stage = 0; stage < kTemperedStages; ++stage) {
+        std::vector<InnovationMoments>* innovations = stage == 0 ? &s.innovations : &s.later_innovations;
+        s.set.Weigh(m, s.noise.used(), o.likelihood, s.noise.sigmas_s(), o.peak_dof, o.gcc_sharpness, innovations,
+                    step);
+        report.ess = s.set.NormaliseWeights();
+        if (stage == 0 && report.ess < o.tempering_ess_fraction * o.particles && s.set.labels() <= 1) {
+          s.set.Untemper(step);  // back to the prior's weights
+          report.ess = AdaptiveUpdate(m, &report.likelihood_stages, kStartStages);
+          break;
+        }
+        const bool last = stage + 1 == kTemperedStages;
+        if (!last || report.ess < o.resample_threshold * o.particles) s.set.ResampleSystematic(o.kernel_scale);
       }
-      const bool last = stage + 1 == kTemperedStages;
-      if (!last || report.ess < o.resample_threshold * o.particles) s.set.ResampleSystematic(o.kernel_scale);
     }
   }
   s.noise.Finish(s.innovations, m.sample_rate_hz, &report);  // the prior's innovations

@@ -408,10 +408,6 @@ void ParticleSet::ApplyBounds() {
   }
 }
 
-}  // namespace localizer::engine
-
-namespace localizer::engine {
-
 std::vector<ParticleSet::LabelPrior> ParticleSet::LabelPriors() const {
   if (labels_ <= 1) {
     const TrackState all = MeanAndCovariance();

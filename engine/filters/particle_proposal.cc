@@ -32,9 +32,11 @@ struct LocalFix {
 };
 
 // Gauss-Newton on the used pairs' delays from `start`, steps halved until the cost falls:
-// the exact or least-squares solution in the basin the label sits in, and its CRLB.
+// the exact or least-squares solution in the basin the label sits in, and its CRLB over the
+// used pairs. Not Multilaterate (multilateration.h): that starts from the closed form's
+// candidates and keeps the best, where each label needs the solution nearest itself.
 std::optional<LocalFix> FixFrom(const ArrayGeometry& array, const Measurement& m, const std::vector<int>& used,
-                                const std::vector<double>& sigmas_s, const Vec3& start) {
+                                int used_pairs, const std::vector<double>& sigmas_s, const Vec3& start) {
   const int pairs = array.pair_count();
   auto cost_and_normal = [&](const Vec3& x, Mat3* a, Vec3* g) {
     const Eigen::VectorXd h = array.Tdoa(x);
@@ -77,9 +79,7 @@ std::optional<LocalFix> FixFrom(const ArrayGeometry& array, const Measurement& m
   if (info.info() != Eigen::Success || !(info.vectorD().minCoeff() > 0.0)) return std::nullopt;
   // Every used pair explained (an exact or near-exact solution): a fix the pairs disagree
   // about is no better a proposal than the prior.
-  int count = 0;
-  for (int p = 0; p < pairs; ++p) count += used[static_cast<size_t>(p)] != 0;
-  if (!(cost <= 4.0 * count)) return std::nullopt;
+  if (!(cost <= 4.0 * used_pairs)) return std::nullopt;
   LocalFix fix{x, info.solve(Mat3::Identity())};
   if (!fix.position_m.allFinite() || !fix.covariance_m2.allFinite()) return std::nullopt;
   return fix;
@@ -89,8 +89,9 @@ std::optional<LocalFix> FixFrom(const ArrayGeometry& array, const Measurement& m
 class Gaussian3 {
  public:
   explicit Gaussian3(const Mat3& cov) : llt_(cov) {
-    ok_ = llt_.info() == Eigen::Success && llt_.matrixL().toDenseMatrix().allFinite();
-    if (ok_) half_log_det_ = llt_.matrixL().toDenseMatrix().diagonal().array().log().sum();
+    const Mat3 root = llt_.matrixL();
+    ok_ = llt_.info() == Eigen::Success && root.allFinite();
+    if (ok_) half_log_det_ = root.diagonal().array().log().sum();
   }
   bool ok() const { return ok_; }
   Mat3 root() const { return llt_.matrixL(); }
@@ -134,7 +135,7 @@ int ProposeLocalFixes(ParticleSet* set, const ArrayGeometry& array, const Measur
   for (const ParticleSet::LabelPrior& label : set->LabelPriors()) {
     const Vec3 mean = label.mean.head<3>();
     const Mat3 prior = label.covariance.topLeftCorner<3, 3>();
-    const std::optional<LocalFix> fix = FixFrom(array, m, used, sigmas_s, mean);
+    const std::optional<LocalFix> fix = FixFrom(array, m, used, used_pairs, sigmas_s, mean);
     if (!fix) continue;
     const Vec3 d = fix->position_m - mean;
     const Mat3 spread = prior + fix->covariance_m2;
