@@ -16,6 +16,10 @@ namespace {
 // Chi-square 0.999 quantile with 3 x kWindowFrames = 24 degrees of freedom.
 constexpr double kWindowNisMax = 51.18;
 constexpr double kDistinctMahalanobis2 = 16.0;  // 4 sds, as the session's NearTrack
+// Chi-square 0.999 quantiles: the track landed where the mirror's filter predicted it (3
+// degrees of freedom); the kept pairing of root and track is implausible (6).
+constexpr double kLandedMahalanobis2 = 16.27;
+constexpr double kJumpMahalanobis2 = 22.46;
 constexpr double kStartSpeedSigmaMps = 2.0;
 
 bool Inside(const Vec3& p, const MirrorWatch::Region& region) {
@@ -155,7 +159,23 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
   // The track jumped onto the mirror's branch: each filter now follows the other branch.
   const double kept2 = mirror_.Distance2(*mirror, noise_m2) + track_.Distance2(track_m, track_cov_m2);
   const double swapped2 = track_.Distance2(*mirror, noise_m2) + mirror_.Distance2(track_m, track_cov_m2);
-  if (swapped2 < kept2) std::swap(mirror_, track_);
+  if (swapped2 < kept2) {
+    // A plain jump: the track left where its own filter predicted it (the kept pairing is
+    // implausible, not a near tie between branches that run close) and landed where the
+    // mirror's filter predicted it (before the swap).
+    const bool plain_jump =
+        kept2 > kJumpMahalanobis2 && mirror_.Distance2(track_m, track_cov_m2) <= kLandedMahalanobis2;
+    std::swap(mirror_, track_);
+    if (plain_jump) {
+      // The filter now on the branch the track left had learnt the track's motion (a drift,
+      // say), not the branch's: it restarts at the root, live at once (the header says why).
+      mirror_.Start(t_s, *mirror, noise_m2);
+      mirror_.frames = kWindowFrames;
+      mirror_.nis.fill(0.0);
+      track_.Update(track_m, track_cov_m2);
+      return;
+    }
+  }
   mirror_.Update(*mirror, noise_m2);
   track_.Update(track_m, track_cov_m2);
 }
