@@ -197,10 +197,11 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
   // Refines from `start`; keeps a new mode (or the stronger of two that coincide). With
   // `siblings`, the closed form's other exact solutions of a new mode's lags are refined too
   // (a 4-sensor array's second solution lies where no cell order guarantees a visit).
-  std::function<void(const Vec3&, const std::vector<double>&, const std::vector<double>&, bool)> consider =
-      [&](const Vec3& start, const std::vector<double>& a, const std::vector<double>& b, bool siblings) {
+  std::function<void(const Vec3&, const std::vector<double>&, const std::vector<double>&, bool, bool)> consider =
+      [&](const Vec3& start, const std::vector<double>& a, const std::vector<double>& b, bool siblings, bool earlier) {
         PositionMode mode;
         if (!Refine(start, a, b, &mode)) return;
+        mode.earlier_arrival = earlier;
         // A solution beyond the searched sphere says "far, that way": it stands on the sphere
         // (scored there), its range spread below reaching back over the volume.
         const double reach_m = (mode.position_m - centre).norm();
@@ -234,7 +235,9 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
           const Vec3 delta = mode.position_m - other.position_m;
           if ((within(delta, mode.covariance_m2) && within(delta, other.covariance_m2)) || both_parked_alike(other) ||
               delta.norm() < 1e-3 * array_.aperture_m()) {
+            const bool kept = other.earlier_arrival || earlier;
             if (mode.score > other.score) other = mode;
+            other.earlier_arrival = kept;
             best = std::max(best, mode.score);
             return;
           }
@@ -251,7 +254,7 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
             c_lo[static_cast<size_t>(p)] = lag(p) - 3.0;
             c_hi[static_cast<size_t>(p)] = lag(p) + 3.0;
           }
-          consider(candidate, c_lo, c_hi, /*siblings=*/false);
+          consider(candidate, c_lo, c_hi, /*siblings=*/false, earlier);
         }
       };
   for (size_t i = 0; i < keep && refined < options_.refinement_budget; ++i) {
@@ -271,12 +274,37 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
       hi[static_cast<size_t>(p)] = lags[static_cast<size_t>(p)] + widths[static_cast<size_t>(p)];
     }
     ++refined;
-    consider(x, lo, hi, /*siblings=*/true);
+    consider(x, lo, hi, /*siblings=*/true, /*earlier=*/false);
+  }
+  // One channel's earlier arrival (acquisition.h): the direct path where that channel's
+  // strongest arrival was an echo. Its modes survive whatever their score.
+  if (options_.earlier_arrivals) {
+    const std::vector<PositionMode> found = modes;
+    for (const PositionMode& mode : found) {
+      if (mode.score < best - margin) continue;
+      {
+        std::vector<double> shifted;
+        if (!EarlierArrival(mode.position_m, &shifted)) continue;
+        Eigen::VectorXd tdoa_s(pairs);
+        std::vector<double> a(static_cast<size_t>(pairs)), b(static_cast<size_t>(pairs));
+        for (int p = 0; p < pairs; ++p) {
+          tdoa_s(p) = shifted[static_cast<size_t>(p)] / fs;
+          a[static_cast<size_t>(p)] = shifted[static_cast<size_t>(p)] - 2.0;
+          b[static_cast<size_t>(p)] = shifted[static_cast<size_t>(p)] + 2.0;
+        }
+        std::vector<Vec3> starts = ClosedFormCandidates(array_, tdoa_s);
+        if (starts.empty()) starts.push_back(mode.position_m);
+        for (const Vec3& start : starts) {
+          if (!start.allFinite()) continue;
+          consider(start, a, b, /*siblings=*/true, /*earlier=*/true);
+        }
+      }
+    }
   }
   std::sort(modes.begin(), modes.end(), [](const PositionMode& a, const PositionMode& b) { return a.score > b.score; });
   for (const PositionMode& mode : modes) {
-    if (static_cast<int>(out.modes.size()) >= options_.max_modes || mode.score < best - margin) break;
-    out.modes.push_back(mode);
+    if (static_cast<int>(out.modes.size()) >= options_.max_modes) break;
+    if (mode.score >= best - margin || mode.earlier_arrival) out.modes.push_back(mode);
   }
   // The search chose among at most M lag combinations (3 degrees of freedom).
   double product = 1.0, widest = 1.0;

@@ -35,6 +35,20 @@
 // the truth with them, 2200 sd without). They cannot tell apart what every pair agrees on:
 // a 4-sensor array's second exact solution, or one channel's echo louder than its direct path.
 //
+// Earlier arrivals. An echo arrives after its direct path. Where one channel's echo is louder
+// than its direct path, every pair holding that channel peaks on the echo, the reference and
+// cross pairs agree on a position that is not the source, and the truth (the other pairs'
+// peaks plus the weaker direct path) scores lower, by more than the margin at any useful
+// SNR (campaign scene 16000131: 62.9 against 55.0 over 6 pairs). So, for each mode within the
+// margin and each sensor, the shift of that sensor's arrival to an earlier time (out of the
+// main lobe, the largest sum over the sensor's usable pairs) where every one of those pairs
+// reads at least 3 (a peak, not noise) is sought. Where exactly one sensor has one (an echo
+// delayed alike at every sensor gives each channel an earlier cross term), the position is
+// solved as above from the shifted lags, and its modes (flagged earlier_arrival) survive
+// whatever their score: the tracker starts on both, and the motion decides. It needs a cross
+// pair holding the sensor (a shift of one channel moves one reference pair alone, or, for the
+// reference sensor, all of them alike: nothing confirms it).
+//
 // Presence (presence.h): statistic = best mode's score / sqrt(P) (with no mode solved, the
 // sum of each pair's largest value / sqrt(P), which no position can exceed; never present
 // then); the combinations the
@@ -43,8 +57,9 @@
 // +-(3 sqrt(J_p C J_p^T) fs + 1) lags about the track's predicted lags (C its position
 // covariance; a cross pair's J is J_b - J_a) and M = prod_p W_p over every usable pair.
 //
-// Cost: (cells x (sensors + pairs)) + refinements x ~10 solves; ~1-3 ms for the default grid
-// on one core. Not thread-safe; one per session.
+// Cost: (cells x (sensors + pairs)) + refinements x ~10 solves, plus the earlier arrivals'
+// modes x sensors x (lag window) x (pairs per sensor) field reads; ~1-3 ms for the default
+// grid on one core. Not thread-safe; one per session.
 #pragma once
 
 #include <limits>
@@ -68,7 +83,8 @@ struct AcquisitionOptions {
   int azimuth_cells = 32;
   int polar_cells = 16;
   int range_cells = 12;
-  int refinement_budget = 64;  // cells refined at most
+  int refinement_budget = 64;    // cells refined at most
+  bool earlier_arrivals = true;  // each channel's earlier arrival is solved too (above)
 
   Status Validate() const;
 };
@@ -79,6 +95,8 @@ struct PositionMode {
   Mat3 covariance_m2 = Mat3::Identity();
   double score = 0.0;  // normalised spatial spectrum at the position, summed over pairs
   int pairs_used = 0;  // pairs in the consensus subset of its solve
+  // Found from a stronger mode as one channel's earlier arrival: kept whatever its score.
+  bool earlier_arrival = false;
 };
 
 struct PresenceResult {
@@ -107,6 +125,12 @@ class Acquisition {
   AcquisitionResult Search(const Measurement& m);
   // Presence near a track: position and its covariance (m, m^2).
   PresenceResult Around(const Measurement& m, const Vec3& position_m, const Mat3& covariance_m2);
+  // On the field of the last Search or Around: the one channel whose strongest arrival at
+  // `at_m` follows an earlier one that every pair holding it reads (above), and the
+  // reference pairs' lags with that channel's earlier arrival. False when no channel, or more
+  // than one, has such an arrival (a common echo delay gives every channel one), or the field
+  // holds no cross pairs.
+  bool EarlierArrival(const Vec3& at_m, std::vector<double>* reference_lags) const;
   // The field built for the last Search or Around (the same measurement).
   const LagField& field() const { return field_; }
   const AcquisitionOptions& options() const { return options_; }
@@ -126,6 +150,9 @@ class Acquisition {
   // Field pair q >= reference_pairs() (a cross pair (a, b)): its lag from the reference
   // pairs' lags, lag_b - lag_a.
   double CrossLag(int q, const Eigen::VectorXd& pair_lags) const;
+  // `sensor`'s earlier arrival at a position (above): the reference pairs' lags with that
+  // sensor's arrival moved to it. False when there is none or no cross pair to confirm it.
+  bool ChannelEarlierArrival(const Vec3& at_m, int sensor, std::vector<double>* reference_lags) const;
 
   ArrayGeometry array_;
   AcquisitionOptions options_;

@@ -50,19 +50,23 @@ const char* const kScenes[] = {"tetra-water", "tetra-air", "turn-multipath"};
 
 void BM_Search(benchmark::State& state) {
   // Second argument: cross_pairs_max_sensors (4, a session's default: the 4-sensor scenes
-  // search six pairs instead of three; 0: the reference pairs only).
+  // search six pairs instead of three; 0: the reference pairs only). Third: 1 with
+  // AcquisitionOptions::earlier_arrivals (the default), 0 without.
   const Frame f = MakeFrame(kScenes[state.range(0)], static_cast<int>(state.range(1)));
-  auto acquisition = *Acquisition::Create(f.array, AcquisitionOptions{});
+  AcquisitionOptions options;
+  options.earlier_arrivals = state.range(2) != 0;
+  auto acquisition = *Acquisition::Create(f.array, options);
   size_t modes = 0;
   for (auto _ : state) {
     const AcquisitionResult r = acquisition.Search(f.measurement);
     modes = r.modes.size();
     benchmark::DoNotOptimize(r.presence.statistic);
   }
-  state.SetLabel(std::string(kScenes[state.range(0)]) + (f.measurement.cross_pairs.empty() ? "" : " cross-pairs"));
+  state.SetLabel(std::string(kScenes[state.range(0)]) + (f.measurement.cross_pairs.empty() ? "" : " cross-pairs") +
+                 (options.earlier_arrivals ? " earlier-arrivals" : ""));
   state.counters["modes"] = static_cast<double>(modes);
 }
-BENCHMARK(BM_Search)->ArgsProduct({{0, 1, 2}, {0, 4}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Search)->ArgsProduct({{0, 1, 2}, {0, 4}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
 void BM_PresenceAroundTrack(benchmark::State& state) {
   const Frame f = MakeFrame(kScenes[state.range(0)]);
