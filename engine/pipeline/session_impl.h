@@ -61,7 +61,15 @@ struct Session::Impl {
   // kAuditSpacingFrames): no mode near the track scoring within the margin of the best, in
   // kOutscoredAudits audits in a row, restarts the track from the modes and the track
   // itself. Catches a track that locked on a wrong position while every test near it passes.
+  // A frame where one channel has an earlier arrival at the track (Acquisition::EarlierArrival:
+  // the track may sit on that channel's louder echo) is audited too, every kAuditSpacingFrames:
+  // a mode that is one side of such a pair (its earlier arrival, or the echo whose earlier
+  // arrival it is) counts as the track's own, and the other side is the contender (covered,
+  // never a restart: no single frame tells them apart).
   void Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e);
+  // One channel has an earlier arrival at the track's predicted position, on a field with the
+  // pairs without the reference (measured here once per frame).
+  bool EchoedChannelAtTrack(const TrackState& predicted);
   // After an updated frame: follows the track's mirror (4-sensor arrays, mirror_watch.h).
   void WatchMirror(double t_s, double fallback_sigma_s, int pairs_used);
   // Conditions the tracker on this frame, fills e's filter fields, and restarts the tracker

@@ -45,21 +45,34 @@ std::vector<PositionMode> WithOwnTrack(std::vector<PositionMode> modes, const Tr
 
 void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& near, Estimate* e) {
   ++frames_since_audit;
+  if (frames_since_audit < kAuditSpacingFrames) return;
   const double pairs = std::max(1, acquisition.field().usable_pairs());
   // Both statistics are sums over pairs / sqrt(P), so a gap of kAuditMargin here is the
   // acquisition's mode margin (kAuditMargin sqrt(P) in summed units).
   // Fewer than 3 pairs in the update leave the position unobservable: the track may drift
   // along the unobserved directions while every test near it passes.
-  const bool suspicious = near.unconstrained - near.statistic > kAuditMargin || e->pairs_used < 3;
-  if (!suspicious || frames_since_audit < kAuditSpacingFrames) return;
+  const bool suspicious = near.unconstrained - near.statistic > kAuditMargin || e->pairs_used < 3 ||
+                          (frames_since_audit % kAuditSpacingFrames == 0 && EchoedChannelAtTrack(predicted));
+  if (!suspicious) return;
   frames_since_audit = 0;
   const AcquisitionResult found = SearchAllPairs();
   if (!found.presence.present || found.modes.empty()) return;
   const double best = found.modes.front().score;
+  // One side of a channel's echo and its earlier arrival, away from the track.
+  const auto other_side = [&]() -> std::optional<PositionMode> {
+    for (const PositionMode& mode : found.modes) {
+      if (mode.earlier_arrival && !NearTrack(predicted, mode)) return mode;
+    }
+    return std::nullopt;
+  };
   for (const PositionMode& mode : found.modes) {
-    if (NearTrack(predicted, mode) && mode.score >= best - kAuditMargin * std::sqrt(pairs)) {
+    if (NearTrack(predicted, mode) && (mode.score >= best - kAuditMargin * std::sqrt(pairs) || mode.earlier_arrival)) {
       outscored = 0;
-      contender.reset();
+      // On the earlier arrival, the echo that outscores it is the other side; on a mode
+      // within the margin, a lone channel's earlier arrival elsewhere is.
+      contender =
+          mode.earlier_arrival && !NearTrack(predicted, found.modes.front()) ? found.modes.front() : other_side();
+      contender_frames = 0;
       return;
     }
   }
@@ -71,6 +84,15 @@ void Session::Impl::Audit(const TrackState& predicted, const PresenceResult& nea
   outscored = 0;
   // Restart from every mode and the track's own position: the data decide.
   e->reinitialised = StartFromModes(WithOwnTrack(found.modes, predicted));
+}
+
+bool Session::Impl::EchoedChannelAtTrack(const TrackState& predicted) {
+  if (array.sensor_count() > config.cross_pairs_max_sensors) return false;
+  MeasureCrossPairsOnce();
+  if (measurement.cross_pairs.empty()) return false;
+  (void)acquisition.Around(measurement, predicted.mean.head<3>(), predicted.covariance.topLeftCorner<3, 3>());
+  std::vector<double> lags;
+  return acquisition.EarlierArrival(predicted.mean.head<3>(), &lags);
 }
 
 constexpr double kCandidateShare = 0.3;

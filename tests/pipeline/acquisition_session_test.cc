@@ -282,6 +282,49 @@ TEST(AcquisitionSession, CrosstalkOnOnePairOfAFourSensorArrayIsOutvotedAtAcquisi
   EXPECT_GT(PositionNees(without, truth), 100.0);
 }
 
+// A still source whose channel 1 hears an echo 1.2 times louder than its direct path, 9
+// samples later: every pair with sensor 1 peaks on the echo and the six pairs agree on a
+// position 4 m from the source (Acquisition.AChannelWhoseEchoIsLouderKeepsItsEarlierArrivalAsAMode).
+// No frame tells the two apart, and the echo scores higher in every one. Acquisition keeps
+// sensor 1's earlier arrival, the source, as a mode too, so the first estimate's covariance
+// covers the truth; the audits then find the echo's earlier arrival away from the track and
+// keep it covered (before: every frame sure of the echo's position; campaign scene 16000131
+// claimed 2 mm 1.7 m off for 1.4 s).
+TEST(AcquisitionSession, AChannelWhoseEchoIsLouderIsNotReportedAsSureOnTheEcho) {
+  const std::vector<Vec3> sensors = testing::TetrahedronSensors();
+  const auto array = *ArrayGeometry::Create(sensors, 1500.0);
+  const Vec3 truth(5.0, 3.0, -1.0);
+  testing::SignalSpec spec;
+  spec.frame_samples = 65536;  // one block of 5.9 s: thirty 4096-sample frames
+  const std::vector<double> delays = testing::ChannelDelaysSamples(array, truth, spec.sample_rate_hz);
+  std::vector<std::vector<testing::Path>> channels;
+  for (size_t c = 0; c < 4; ++c) channels.push_back({{delays[c] + 40.0, 1.0}});
+  channels[1].push_back({delays[1] + 49.0, 1.2});
+  const std::vector<float> samples = testing::MultipathFrame(spec, channels, 10.0, /*seed=*/41);
+  AudioSessionConfig config;
+  config.sensors_m = sensors;
+  config.sound_speed_mps = 1500.0;
+  config.sample_rate_hz = spec.sample_rate_hz;
+  config.seed = 3;
+  auto session = std::move(*Session::Create(config));
+  std::vector<Estimate> out;
+  ASSERT_TRUE(session->Process({1, 4, spec.frame_samples, samples.data()}, &out).ok());
+  int initialised = 0, sure_and_wrong = 0;
+  for (const Estimate& e : out) {
+    if (!e.initialised) continue;
+    const double nees = PositionNees(e, truth);
+    if (++initialised == 1) {
+      EXPECT_LT(nees, 16.0) << "the first estimate must cover the source";
+    }
+    sure_and_wrong += !e.ambiguous && nees > 16.0;
+  }
+  std::printf("%d estimates, %d sure and wrong (position NEES > 16, not ambiguous)\n", initialised, sure_and_wrong);
+  EXPECT_GE(initialised, 25);
+  // The start's earlier-arrival label may lose to the echo before the first audit; from that
+  // audit on the echo's other side is covered.
+  EXPECT_LE(sure_and_wrong, 8);
+}
+
 TEST(AcquisitionSession, SixtySecondsOfNoiseHoldNoSource) {
   const Scenario scenario = *MakeScenario("tetra-water", 1);
   AudioSessionConfig config = SessionConfigFor(scenario);
