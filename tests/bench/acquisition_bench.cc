@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include <string>
+#include <vector>
 
 #include "engine/acquisition/acquisition.h"
 #include "engine/pipeline/session.h"
@@ -77,6 +78,20 @@ void BM_PresenceAroundTrack(benchmark::State& state) {
   state.SetLabel(kScenes[state.range(0)]);
 }
 BENCHMARK(BM_PresenceAroundTrack)->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
+
+// A session's audit check every 8 tracked frames (session_impl.h, EchoedChannelAtTrack): the
+// field about the track rebuilt with every pair, then each channel's earlier arrival sought.
+void BM_EarlierArrivalAtTrack(benchmark::State& state) {
+  const Frame f = MakeFrame(kScenes[state.range(0)], 8);
+  auto acquisition = *Acquisition::Create(f.array, AcquisitionOptions{});
+  std::vector<double> lags;
+  for (auto _ : state) {
+    (void)acquisition.Around(f.measurement, f.truth_m, 0.01 * Mat3::Identity());
+    benchmark::DoNotOptimize(acquisition.EarlierArrival(f.truth_m, &lags));
+  }
+  state.SetLabel(kScenes[state.range(0)]);
+}
+BENCHMARK(BM_EarlierArrivalAtTrack)->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace localizer::engine

@@ -231,6 +231,29 @@ TEST(AcquisitionSession, APersistentlyBiasedPairTripsTheDivergenceTest) {
   EXPECT_LE(fired_at, 12);
 }
 
+// tests/tdoa's tetrahedron in water and a still source 3 apertures out, in frames made by its
+// independent signal generator: the whole signal is one block of spec.frame_samples.
+struct TetraScene {
+  std::vector<Vec3> sensors = testing::TetrahedronSensors();
+  ArrayGeometry array = *ArrayGeometry::Create(sensors, 1500.0);
+  Vec3 truth = Vec3(5.0, 3.0, -1.0);
+  testing::SignalSpec spec;
+
+  // The session's estimates of `samples` (channel-major, spec.frame_samples per channel).
+  std::vector<Estimate> Track(const std::vector<float>& samples, int cross_pairs_max_sensors = 8) const {
+    AudioSessionConfig config;
+    config.sensors_m = sensors;
+    config.sound_speed_mps = 1500.0;
+    config.sample_rate_hz = spec.sample_rate_hz;
+    config.seed = 3;
+    config.cross_pairs_max_sensors = cross_pairs_max_sensors;
+    auto session = std::move(*Session::Create(config));
+    std::vector<Estimate> out;
+    EXPECT_TRUE(session->Process({1, 4, spec.frame_samples, samples.data()}, &out).ok());
+    return out;
+  }
+};
+
 // Noise alone for 60 s (11025 Hz, 4096/2048 frames: 322 frames): at a stated per-frame
 // false-alarm probability of 1e-3, at least 99 % of frames say no source, none starts a track
 // that survives, and the statistic stays below its threshold.
@@ -243,28 +266,18 @@ TEST(AcquisitionSession, APersistentlyBiasedPairTripsTheDivergenceTest) {
 // after 1.5 s); with them, association picks pair (0, 3)'s own peak near the track in every
 // later frame, and the track stays 1.6-2.3 m off in range, 2.2 apertures out.
 TEST(AcquisitionSession, CrosstalkOnOnePairOfAFourSensorArrayIsOutvotedAtAcquisition) {
-  const std::vector<Vec3> sensors = testing::TetrahedronSensors();
-  const auto array = *ArrayGeometry::Create(sensors, 1500.0);
-  const Vec3 truth(5.0, 3.0, -1.0);
-  testing::SignalSpec spec;
-  spec.frame_samples = 16384;  // one block of 1.5 s: seven 4096-sample frames
+  TetraScene scene;
+  scene.spec.frame_samples = 16384;  // one block of 1.5 s: seven 4096-sample frames
+  const testing::SignalSpec& spec = scene.spec;
+  const Vec3& truth = scene.truth;
   std::vector<float> samples = testing::DelayedNoiseFrame(
-      spec, testing::ChannelDelaysSamples(array, truth, spec.sample_rate_hz), 10.0, /*seed=*/31);
+      spec, testing::ChannelDelaysSamples(scene.array, truth, spec.sample_rate_hz), 10.0, /*seed=*/31);
   const std::vector<float> crosstalk = testing::MultipathFrame(
       spec, {{testing::Path{0.0, 1.0}}, {}, {}, {testing::Path{0.0, 1.0}}}, testing::kNoiseless, /*seed=*/32);
   for (size_t i = 0; i < samples.size(); ++i) samples[i] += 1.5f * crosstalk[i];
 
   auto first_estimate = [&](int cross_pairs_max_sensors) {
-    AudioSessionConfig config;
-    config.sensors_m = sensors;
-    config.sound_speed_mps = 1500.0;
-    config.sample_rate_hz = spec.sample_rate_hz;
-    config.seed = 3;
-    config.cross_pairs_max_sensors = cross_pairs_max_sensors;
-    auto session = std::move(*Session::Create(config));
-    std::vector<Estimate> out;
-    EXPECT_TRUE(session->Process({1, 4, spec.frame_samples, samples.data()}, &out).ok());
-    for (const Estimate& e : out) {
+    for (const Estimate& e : scene.Track(samples, cross_pairs_max_sensors)) {
       if (e.initialised) return e;
     }
     return Estimate{};
@@ -291,24 +304,14 @@ TEST(AcquisitionSession, CrosstalkOnOnePairOfAFourSensorArrayIsOutvotedAtAcquisi
 // keep it covered (before: every frame sure of the echo's position; campaign scene 16000131
 // claimed 2 mm 1.7 m off for 1.4 s).
 TEST(AcquisitionSession, AChannelWhoseEchoIsLouderIsNotReportedAsSureOnTheEcho) {
-  const std::vector<Vec3> sensors = testing::TetrahedronSensors();
-  const auto array = *ArrayGeometry::Create(sensors, 1500.0);
-  const Vec3 truth(5.0, 3.0, -1.0);
-  testing::SignalSpec spec;
-  spec.frame_samples = 65536;  // one block of 5.9 s: thirty 4096-sample frames
-  const std::vector<double> delays = testing::ChannelDelaysSamples(array, truth, spec.sample_rate_hz);
+  TetraScene scene;
+  scene.spec.frame_samples = 65536;  // one block of 5.9 s: thirty 4096-sample frames
+  const Vec3& truth = scene.truth;
+  const std::vector<double> delays = testing::ChannelDelaysSamples(scene.array, truth, scene.spec.sample_rate_hz);
   std::vector<std::vector<testing::Path>> channels;
   for (size_t c = 0; c < 4; ++c) channels.push_back({{delays[c] + 40.0, 1.0}});
   channels[1].push_back({delays[1] + 49.0, 1.2});
-  const std::vector<float> samples = testing::MultipathFrame(spec, channels, 10.0, /*seed=*/41);
-  AudioSessionConfig config;
-  config.sensors_m = sensors;
-  config.sound_speed_mps = 1500.0;
-  config.sample_rate_hz = spec.sample_rate_hz;
-  config.seed = 3;
-  auto session = std::move(*Session::Create(config));
-  std::vector<Estimate> out;
-  ASSERT_TRUE(session->Process({1, 4, spec.frame_samples, samples.data()}, &out).ok());
+  const std::vector<Estimate> out = scene.Track(testing::MultipathFrame(scene.spec, channels, 10.0, /*seed=*/41));
   int initialised = 0, sure_and_wrong = 0;
   for (const Estimate& e : out) {
     if (!e.initialised) continue;
