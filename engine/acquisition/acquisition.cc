@@ -281,23 +281,19 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
   if (options_.earlier_arrivals) {
     const std::vector<PositionMode> found = modes;
     for (const PositionMode& mode : found) {
-      if (mode.score < best - margin) continue;
-      {
-        std::vector<double> shifted;
-        if (!EarlierArrival(mode.position_m, &shifted)) continue;
-        Eigen::VectorXd tdoa_s(pairs);
-        std::vector<double> a(static_cast<size_t>(pairs)), b(static_cast<size_t>(pairs));
-        for (int p = 0; p < pairs; ++p) {
-          tdoa_s(p) = shifted[static_cast<size_t>(p)] / fs;
-          a[static_cast<size_t>(p)] = shifted[static_cast<size_t>(p)] - 2.0;
-          b[static_cast<size_t>(p)] = shifted[static_cast<size_t>(p)] + 2.0;
-        }
-        std::vector<Vec3> starts = ClosedFormCandidates(array_, tdoa_s);
-        if (starts.empty()) starts.push_back(mode.position_m);
-        for (const Vec3& start : starts) {
-          if (!start.allFinite()) continue;
-          consider(start, a, b, /*siblings=*/true, /*earlier=*/true);
-        }
+      std::vector<double> shifted;
+      if (mode.score < best - margin || !EarlierArrival(mode.position_m, &shifted)) continue;
+      Eigen::VectorXd tdoa_s(pairs);
+      std::vector<double> a(static_cast<size_t>(pairs)), b(static_cast<size_t>(pairs));
+      for (int p = 0; p < pairs; ++p) {
+        tdoa_s(p) = shifted[static_cast<size_t>(p)] / fs;
+        a[static_cast<size_t>(p)] = shifted[static_cast<size_t>(p)] - 2.0;
+        b[static_cast<size_t>(p)] = shifted[static_cast<size_t>(p)] + 2.0;
+      }
+      std::vector<Vec3> starts = ClosedFormCandidates(array_, tdoa_s);
+      if (starts.empty()) starts.push_back(mode.position_m);
+      for (const Vec3& start : starts) {
+        if (start.allFinite()) consider(start, a, b, /*siblings=*/true, /*earlier=*/true);
       }
     }
   }

@@ -40,9 +40,11 @@
 // cross pairs agree on a position that is not the source, and the truth (the other pairs'
 // peaks plus the weaker direct path) scores lower, by more than the margin at any useful
 // SNR (campaign scene 16000131: 62.9 against 55.0 over 6 pairs). So, for each mode within the
-// margin and each sensor, the shift of that sensor's arrival to an earlier time (out of the
-// main lobe, the largest sum over the sensor's usable pairs) where every one of those pairs
-// reads at least 3 (a peak, not noise) is sought. Where exactly one sensor has one (an echo
+// margin and each sensor, the shift of that sensor's arrival to an earlier time is sought:
+// out of the main lobe, the shift whose sum over the sensor's usable pairs most exceeds its
+// mirror image about the lobe's top (a source's GCC is symmetric about its peak, so sidelobes
+// read alike on both sides), by at least 3 sqrt(pairs), with every one of those pairs reading
+// at least 3 (a peak, not noise). Where exactly one sensor has one (an echo
 // delayed alike at every sensor gives each channel an earlier cross term), the position is
 // solved as above from the shifted lags, and its modes (flagged earlier_arrival) survive
 // whatever their score: the tracker starts on both, and the motion decides. It needs a cross

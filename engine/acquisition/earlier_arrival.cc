@@ -66,9 +66,17 @@ bool Acquisition::ChannelEarlierArrival(const Vec3& at_m, int sensor, std::vecto
   // then down while the sum falls.
   int shift = 0;
   double previous = sum_at(0);
-  while (shift > -widest && sum_at(shift - 1) >= previous) previous = sum_at(--shift);
+  // Steps earlier while the next sum keeps `previous` in order (rising, then falling).
+  const auto walk = [&](auto keeps_on) {
+    for (; shift > -widest; --shift) {
+      const double next = sum_at(shift - 1);
+      if (!keeps_on(next)) return;
+      previous = next;
+    }
+  };
+  walk([&](double next) { return next >= previous; });
   const int top = shift;
-  while (shift > -widest && sum_at(shift - 1) <= previous) previous = sum_at(--shift);
+  walk([&](double next) { return next <= previous; });
   // A source's own GCC is symmetric about its peak (the whitened spectrum's autocorrelation):
   // a sidelobe, or an echo's cross term delayed alike at every sensor, reads as high on the
   // later side as on the earlier one. An earlier arrival reads above its mirror image.

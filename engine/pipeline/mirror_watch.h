@@ -31,10 +31,10 @@
 // quantile for 6 degrees of freedom: not a near tie between branches that run close, as
 // inside a small array) and landed where the mirror's filter predicted it (0.999, 3), the
 // jump is plain and the filter now on the branch the track left restarts at that branch's
-// root, live at once: it had followed the track, and a track drifting off the source before it jumped
-// taught it the drift, so it predicted the source metres away and failed the window test for
-// a second and more (campaign scene 12000128: 1.3 s claiming 0.1-0.2 m 6-7 m off). The
-// mirror is live while
+// root, live at once: it had followed the track, and a track drifting off the source before
+// it jumped taught it the drift, so it predicted the source metres away and failed the window
+// test for a second and more (campaign scene 12000128: 1.3 s claiming 0.1-0.2 m 6-7 m off).
+// The mirror is live while
 //   * it is an exact root (residual under kExactShare of the smallest pair sigma), inside
 //     the bounds and the acquisition's search sphere,
 //   * it is a hypothesis of its own: more than 4 sds (track's and its own) from the track,
