@@ -21,16 +21,20 @@ constexpr double kMinSigmaSamples = 0.01;
 constexpr double kMaxSigmaSamples = 2.0;
 }  // namespace
 
-double AnchorSigmaS(const PairMeasurement& pair, double sample_rate_hz) {
-  if (pair.delay_sigma_s > 0.0) return pair.delay_sigma_s;
-  if (pair.gcc.size() < 3 || !(pair.peak_snr > 0.0) || !(sample_rate_hz > 0.0)) return 0.0;
+double PeakSigmaS(const PairMeasurement& pair, double peak_snr, double sample_rate_hz) {
+  if (pair.gcc.size() < 3 || !(peak_snr > 0.0) || !(sample_rate_hz > 0.0)) return 0.0;
   const long i = std::lround(pair.delay_s * sample_rate_hz) - pair.first_lag_samples;
   if (i < 1 || i + 1 >= static_cast<long>(pair.gcc.size())) return 0.0;
   const double g = pair.gcc[static_cast<size_t>(i)];
   const double curvature = 2.0 * g - pair.gcc[static_cast<size_t>(i - 1)] - pair.gcc[static_cast<size_t>(i + 1)];
   if (!(g > 0.0) || !(curvature > 0.0)) return 0.0;
-  const double sigma_samples = 1.0 / (pair.peak_snr * std::sqrt(curvature / g));
+  const double sigma_samples = 1.0 / (peak_snr * std::sqrt(curvature / g));
   return std::max(sigma_samples, kMinAnchorSamples) / sample_rate_hz;
+}
+
+double AnchorSigmaS(const PairMeasurement& pair, double sample_rate_hz) {
+  if (pair.delay_sigma_s > 0.0) return pair.delay_sigma_s;
+  return PeakSigmaS(pair, pair.peak_snr, sample_rate_hz);
 }
 
 int PairNoise::Select(const Measurement& m, double min_peak_snr) {

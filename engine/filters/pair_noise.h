@@ -6,9 +6,11 @@
 // >= 3 for a pair the session confirmed near its track (PairMeasurement::confirmed).
 //
 // Anchored noise (the default, fixed sigma 0). Each frame's pair says how precise its own
-// peak is: anchor_k = delay_sigma_s when the front end reports it, else, when the frame kept
-// its GCC, 1 / (peak_snr sqrt(-g''/g)) samples from the GCC's height g and curvature g'' at
-// the peak (the delay's Cramér–Rao-type bound for the PHAT peak; floored at 0.02 sample).
+// peak is: anchor_k = delay_sigma_s when the front end reports it (or the session's
+// association, for a smaller peak it measured the pair at: PeakSigmaS at that peak's own
+// SNR), else, when the frame kept its GCC, 1 / (peak_snr sqrt(-g''/g)) samples from the
+// GCC's height g and curvature g'' at the peak (the delay's Cramér–Rao-type bound for the
+// PHAT peak; floored at 0.02 sample).
 // The filter uses sigma_k = s_k anchor_k, where the scale s_k adapts to what the
 // innovations show (Mehra's estimate on the normalised innovation, a = 0.05, starting where
 // sigma = max(anchor, 0.05 sample) but at most 2 anchors: a start at 0.1 sample let a particle
@@ -46,6 +48,10 @@ struct InnovationMoments {
 // The anchor of one pair for one frame (seconds): delay_sigma_s if set, else from the kept
 // GCC's peak; 0 when neither is available.
 double AnchorSigmaS(const PairMeasurement& pair, double sample_rate_hz);
+// 1 / (peak_snr sqrt(-g''/g)) at the kept GCC's integer lag nearest delay_s (seconds, floored
+// at 0.02 sample); 0 without a GCC there or a peak. For a peak other than the tallest, pass
+// its own SNR (the tallest's peak_snr times its height over peak_value).
+double PeakSigmaS(const PairMeasurement& pair, double peak_snr, double sample_rate_hz);
 
 class PairNoise {
  public:

@@ -83,8 +83,10 @@ struct Session::Impl {
   // Multipath: a pair whose main peak is far from where the track predicts it, while its GCC
   // has another peak (a local maximum at least kCandidateShare of the main peak's height)
   // within kAssociationGate predicted sigmas, is measured at that peak instead (the tallest
-  // in the gate; returns how many pairs were changed). Only while the tracker holds one
-  // hypothesis (`hypotheses`, the tracker's count): the measurement is shared by all of them.
+  // in the gate; returns how many pairs were changed), its sigma that peak's own (its
+  // curvature at its own SNR, pair_noise.h PeakSigmaS): a smaller peak is a less precise one.
+  // Only while the tracker holds one hypothesis (`hypotheses`, the tracker's count): the
+  // measurement is shared by all of them.
   int AssociateCandidates(const TrackState& predicted, size_t hypotheses);
   // Small arrays (AudioSessionConfig::pair_closure, cross_pairs_max_sensors): measures the
   // pairs without the reference and moves a reference pair they contradict (pair_closure.h).

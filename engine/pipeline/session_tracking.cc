@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "engine/core/covariance_repair.h"
+#include "engine/filters/pair_noise.h"
 #include "engine/pipeline/session_impl.h"
 
 namespace localizer::engine {
@@ -133,7 +134,10 @@ int Session::Impl::AssociateCandidates(const TrackState& predicted, size_t hypot
     const double a = g[k - 1], b = g[k], c = g[k + 1], denom = a - 2.0 * b + c;
     const double offset = denom < 0.0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0;
     pair.delay_s = (static_cast<double>(pair.first_lag_samples + best) + offset) / fs;
-    pair.delay_sigma_s = 0.0;  // the anchor then comes from this peak's own curvature
+    // The pair's tallest peak says it hears the source (the filters' peak SNR floor); this
+    // peak's precision is its own: its curvature at its own height (0: the filters fall
+    // back on the tallest's SNR).
+    pair.delay_sigma_s = PeakSigmaS(pair, pair.peak_snr * b / pair.peak_value, fs);
     pair.confirmed = true;
     ++changed;
   }
