@@ -157,14 +157,15 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
   mirror_.Predict(t_s, accel_noise_mps2_);
   track_.Predict(t_s, accel_noise_mps2_);
   // The track jumped onto the mirror's branch: each filter now follows the other branch.
+  // landed2: how far the track is from where the mirror's filter predicted it.
+  const double landed2 = mirror_.Distance2(track_m, track_cov_m2);
   const double kept2 = mirror_.Distance2(*mirror, noise_m2) + track_.Distance2(track_m, track_cov_m2);
-  const double swapped2 = track_.Distance2(*mirror, noise_m2) + mirror_.Distance2(track_m, track_cov_m2);
+  const double swapped2 = track_.Distance2(*mirror, noise_m2) + landed2;
   if (swapped2 < kept2) {
     // A plain jump: the track left where its own filter predicted it (the kept pairing is
     // implausible, not a near tie between branches that run close) and landed where the
     // mirror's filter predicted it (before the swap).
-    const bool plain_jump =
-        kept2 > kJumpMahalanobis2 && mirror_.Distance2(track_m, track_cov_m2) <= kLandedMahalanobis2;
+    const bool plain_jump = kept2 > kJumpMahalanobis2 && landed2 <= kLandedMahalanobis2;
     std::swap(mirror_, track_);
     if (plain_jump) {
       // The filter now on the branch the track left had learnt the track's motion (a drift,

@@ -137,7 +137,7 @@ int Session::Impl::AssociateCandidates(const TrackState& predicted, size_t hypot
     // The pair's tallest peak says it hears the source (the filters' peak SNR floor); this
     // peak's precision is its own: its curvature at its own height (0: the filters fall
     // back on the tallest's SNR).
-    pair.delay_sigma_s = PeakSigmaS(pair, pair.peak_snr * b / pair.peak_value, fs);
+    pair.delay_sigma_s = PeakSigmaS(pair, pair.peak_snr * (b / pair.peak_value), fs);
     pair.confirmed = true;
     ++changed;
   }
