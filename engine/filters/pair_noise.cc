@@ -94,11 +94,14 @@ void PairNoise::Finish(const std::vector<InnovationMoments>& innovations, double
     } else if (anchor_s > 0.0) {
       const double capped = std::min(std::sqrt(scale2_[p]), kDivergenceScaleCap) * anchor_s;
       anchored(p, in.mean_s, capped * capped + in.predicted_var_s2);
-      // Mehra on the normalised innovation, outliers gated out.
-      if (e2 <= kGateSigmas * kGateSigmas * (sigma_s * sigma_s + in.predicted_var_s2)) {
-        const double excess = std::max(0.0, e2 - in.predicted_var_s2) / (anchor_s * anchor_s);
-        scale2_[p] = std::clamp((1.0 - kSmoothing) * scale2_[p] + kSmoothing * excess, kMinScale * kMinScale,
-                                kMaxScale * kMaxScale);
+      // Mehra on the normalised innovation, outliers gated out, and innovations whose excess
+      // over the prior's spread no admissible noise gives (beyond the gate at the largest
+      // scale): only a wrong prior explains those, e.g. a track converging from a wrong start.
+      const double excess = std::max(0.0, e2 - in.predicted_var_s2) / (anchor_s * anchor_s);
+      if (e2 <= kGateSigmas * kGateSigmas * (sigma_s * sigma_s + in.predicted_var_s2) &&
+          excess <= kGateSigmas * kGateSigmas * kMaxScale * kMaxScale) {
+        scale2_[p] =
+            std::clamp(scale2_[p] + kSmoothing * (excess - scale2_[p]), kMinScale * kMinScale, kMaxScale * kMaxScale);
       }
     } else {
       anchored(p, in.mean_s, sigma_s * sigma_s + in.predicted_var_s2);

@@ -18,9 +18,13 @@
 // scale came down, 40 m in 6 s on one campaign scene; one at the anchor itself (down to 0.02
 // sample) slowed the multiple-model particle filter's convergence 1.6x; one at 8 anchors kept
 // a precise front end's covariance too wide for 14 s)
-//     s_k^2 <- (1 - a) s_k^2 + a max(0, (e_k^2 - Var[h_k']) / anchor_k^2),
-// kept within [0.5, 8] and fed only by innovations inside a 4-sigma
-// gate (an outlier is an outlier, not noise). So the adaptation can absorb a model that is
+//     x_k = max(0, (e_k^2 - Var[h_k']) / anchor_k^2),   s_k^2 <- s_k^2 + a (x_k - s_k^2),
+// kept within [0.5, 8] and fed only by innovations inside a 4-sigma gate (an outlier is an
+// outlier, not noise) whose excess x_k some admissible noise could give, x_k <= (4 x 8)^2:
+// beyond that only a wrong prior explains the innovation, e.g. a track converging from a
+// wrong start whose cloud spreads the delays by milliseconds (one such frame used to set the
+// scale to 8, where it stayed ~10 s while the track, weighing its pairs 8 times too little,
+// ran off in range: campaign scene 7000013). So the adaptation can absorb a model that is
 // several times too optimistic (multipath biases peaks beyond their curvature's
 // bound), never a divergence: the divergence test caps the scale at 2 (below). Without an anchor (no GCC and no
 // delay_sigma_s) the pair falls back to the former absolute adaptation: sigma from 0.1 sample, kept within [0.01, 2]

@@ -70,5 +70,46 @@ TEST(PairNoise, NoPeakThereStatesNoSigma) {
   EXPECT_EQ(AnchorSigmaS(pair, kRateHz), 0.0);
 }
 
+// Adaptation (pair_noise.h): one pair, anchored by its front end at 1 us, fed `frames`
+// innovations of `innovation_s` against a prior whose predicted delays spread by
+// `prior_sd_s`; returns the sigma the next frame would use.
+double SigmaAfter(int frames, double innovation_s, double prior_sd_s) {
+  Measurement m;
+  m.sample_rate_hz = kRateHz;
+  m.pairs.push_back(PairWithPeaks(0.5, 3.0, 12.0, 10.0));
+  m.pairs[0].delay_sigma_s = 1e-6;
+  PairNoise noise(0.0);
+  for (int k = 0; k < frames; ++k) {
+    if (noise.Select(m, 3.0) != 1) return 0.0;
+    UpdateReport report;
+    noise.Finish({InnovationMoments{(k % 2 ? -1.0 : 1.0) * innovation_s, prior_sd_s * prior_sd_s}}, kRateHz, &report);
+  }
+  noise.Select(m, 3.0);
+  return noise.sigmas_s()[0];
+}
+
+// Innovations steadily 3.5 anchors off a tight prior (inside the gate): the peaks are less
+// precise than they say (multipath, a whitened band the source does not fill), and the
+// scale follows towards sqrt(3.5^2 - 0.5^2) = 3.46 anchors (5 % a frame).
+TEST(PairNoise, PersistentExcessAgainstATightPriorRaisesTheSigma) {
+  const double start_s = SigmaAfter(0, 0.0, 0.0);
+  const double after_s = SigmaAfter(60, 3.5e-6, 0.5e-6);
+  EXPECT_GT(after_s, 2.0 * start_s);
+  EXPECT_NEAR(after_s, 3.4e-6, 0.1e-6);
+}
+
+// A track converging from a wrong start: its cloud spreads the predicted delays by 1.5 ms
+// and the innovations are 3 of those (inside the gate), thousands of anchors. No noise the
+// adaptation admits (8 anchors) gives that; before, one such frame set the scale to 8 and
+// it took ~10 s to come down while the track, weighing its pairs 8 times too little, ran
+// off in range (campaign scene 7000013). The sigma stays where it started.
+TEST(PairNoise, InnovationsOnlyAWrongPriorExplainsDoNotRaiseTheSigma) {
+  const double start_s = SigmaAfter(0, 0.0, 0.0);
+  EXPECT_DOUBLE_EQ(SigmaAfter(5, 4.5e-3, 1.5e-3), start_s);
+  // An excess just inside what the largest admissible noise gives ((4 x 8)^2 anchors^2) still counts.
+  const double inside_s = std::sqrt(1.5e-3 * 1.5e-3 + 0.99 * 32.0 * 32.0 * 1e-12);
+  EXPECT_GT(SigmaAfter(5, inside_s, 1.5e-3), 2.0 * start_s);
+}
+
 }  // namespace
 }  // namespace localizer::engine
