@@ -116,7 +116,7 @@ ClosureRepair PairClosure::Repair(Measurement* m) {
     found.gain = best - at_peak;
     double lag = 0.0;
     found.own_peak = OwnPeakNear(field, p, best_x, &lag);
-    found.sigma_s = 0.0;  // the filters take it from the own peak's curvature
+    found.sigma_s = 0.0;  // the caller takes it from the own peak's curvature
     if (!found.own_peak) {
       // No path of its own where the others agree (its peak smeared or masked): the
       // consensus's peak, refined by a parabola, read through the witnesses' reference pairs.

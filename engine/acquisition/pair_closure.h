@@ -16,8 +16,8 @@
 // deviation). A pair is moved only when it is the frame's one contradicted pair (two
 // contradicted pairs leave no majority of witnesses to trust):
 //   - onto a peak of its own GCC near x (a local maximum within 2 samples, at least 3 noise
-//     sds), refined by a parabola; its delay sigma is cleared (the filters take it from that
-//     peak's curvature);
+//     sds), refined by a parabola; its delay sigma is cleared (the session then sets it from
+//     that peak's curvature at that peak's own height: OwnPeakSigmaS, pair_noise.h);
 //   - else (its own peak smeared by the source's motion, or masked) onto the consensus's peak,
 //     refined by a parabola, with sqrt(2) x the smallest witness's reference-pair sigma (the
 //     witness's pair and its cross pair taken as equally precise); not moved when no witness

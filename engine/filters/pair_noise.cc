@@ -32,6 +32,14 @@ double PeakSigmaS(const PairMeasurement& pair, double peak_snr, double sample_ra
   return std::max(sigma_samples, kMinAnchorSamples) / sample_rate_hz;
 }
 
+double OwnPeakSigmaS(const PairMeasurement& pair, double sample_rate_hz) {
+  if (!(pair.peak_value > 0.0) || !(sample_rate_hz > 0.0)) return 0.0;
+  const long i = std::lround(pair.delay_s * sample_rate_hz) - pair.first_lag_samples;
+  if (i < 0 || i >= static_cast<long>(pair.gcc.size())) return 0.0;
+  const double height = pair.gcc[static_cast<size_t>(i)];
+  return PeakSigmaS(pair, pair.peak_snr * (height / pair.peak_value), sample_rate_hz);
+}
+
 double AnchorSigmaS(const PairMeasurement& pair, double sample_rate_hz) {
   if (pair.delay_sigma_s > 0.0) return pair.delay_sigma_s;
   return PeakSigmaS(pair, pair.peak_snr, sample_rate_hz);

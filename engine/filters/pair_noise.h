@@ -56,6 +56,10 @@ double AnchorSigmaS(const PairMeasurement& pair, double sample_rate_hz);
 // at 0.02 sample); 0 without a GCC there or a peak. For a peak other than the tallest, pass
 // its own SNR (the tallest's peak_snr times its height over peak_value).
 double PeakSigmaS(const PairMeasurement& pair, double peak_snr, double sample_rate_hz);
+// PeakSigmaS of the peak at delay_s at its own SNR: peak_snr times the kept GCC's height there
+// over peak_value. For a pair measured at a peak other than its tallest (the session's
+// association and closure repair); 0 without a GCC there.
+double OwnPeakSigmaS(const PairMeasurement& pair, double sample_rate_hz);
 
 class PairNoise {
  public:

@@ -137,7 +137,7 @@ int Session::Impl::AssociateCandidates(const TrackState& predicted, size_t hypot
     // The pair's tallest peak says it hears the source (the filters' peak SNR floor); this
     // peak's precision is its own: its curvature at its own height (0: the filters fall
     // back on the tallest's SNR).
-    pair.delay_sigma_s = PeakSigmaS(pair, pair.peak_snr * (b / pair.peak_value), fs);
+    pair.delay_sigma_s = OwnPeakSigmaS(pair, fs);
     pair.confirmed = true;
     ++changed;
   }
@@ -263,7 +263,13 @@ void Session::Impl::TrackFrame(double dt_s, bool measured, Estimate* e) {
 void Session::Impl::CheckClosure() {
   if (!config.pair_closure || array.sensor_count() > config.cross_pairs_max_sensors) return;
   MeasureCrossPairsOnce();  // none measured: nothing is checked
-  (void)closure.Repair(&measurement);
+  const ClosureRepair repair = closure.Repair(&measurement);
+  // A pair moved onto a peak of its own states that peak's precision, not its tallest's
+  // (the repair leaves the sigma to the filters, which would read it at the tallest's SNR).
+  if (repair.pair >= 0 && repair.own_peak) {
+    PairMeasurement& pair = measurement.pairs[static_cast<size_t>(repair.pair)];
+    pair.delay_sigma_s = OwnPeakSigmaS(pair, config.sample_rate_hz);
+  }
 }
 
 void Session::Impl::FusePairs(const TrackState& predicted) {

@@ -60,6 +60,18 @@ TEST(PairNoise, ASmallerPeakStatesAWiderSigma) {
   EXPECT_NEAR(second_s / tallest_s, 2.5, 0.01);
 }
 
+// OwnPeakSigmaS reads the height at delay_s itself: the smaller peak's 2.5 x, the tallest's
+// own anchor at the tallest.
+TEST(PairNoise, OwnPeakSigmaReadsThePeakWhereTheDelayIs) {
+  PairMeasurement pair = PairWithPeaks(0.5, 3.0, 12.0, 10.0, /*second_height=*/0.2);
+  const double tallest_s = AnchorSigmaS(pair, kRateHz);
+  EXPECT_NEAR(OwnPeakSigmaS(pair, kRateHz), tallest_s, 1e-6 * tallest_s);
+  pair.delay_s = 52.0 / kRateHz;
+  EXPECT_NEAR(OwnPeakSigmaS(pair, kRateHz) / tallest_s, 2.5, 0.01);
+  pair.delay_s = 150.0 / kRateHz;  // outside the kept window
+  EXPECT_EQ(OwnPeakSigmaS(pair, kRateHz), 0.0);
+}
+
 TEST(PairNoise, NoPeakThereStatesNoSigma) {
   PairMeasurement pair = PairWithPeaks(0.5, 3.0, 12.0, 10.0);
   pair.delay_s = 99.5 / kRateHz;  // the window's last lag: no neighbour on one side
