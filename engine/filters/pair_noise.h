@@ -7,10 +7,10 @@
 //
 // Anchored noise (the default, fixed sigma 0). Each frame's pair says how precise its own
 // peak is: anchor_k = delay_sigma_s when the front end reports it (or the session's
-// association, for a smaller peak it measured the pair at: PeakSigmaS at that peak's own
-// SNR), else, when the frame kept its GCC, 1 / (peak_snr sqrt(-g''/g)) samples from the
-// GCC's height g and curvature g'' at the peak (the delay's Cramér–Rao-type bound for the
-// PHAT peak; floored at 0.02 sample).
+// association or closure repair, for a smaller peak it measured the pair at: OwnPeakSigmaS,
+// that peak's own SNR), else, when the frame kept its GCC, 1 / (peak_snr sqrt(-g''/g))
+// samples from the GCC's height g and curvature g'' at the peak (the delay's Cramér–Rao-type
+// bound for the PHAT peak; floored at 0.02 sample).
 // The filter uses sigma_k = s_k anchor_k, where the scale s_k adapts to what the
 // innovations show (Mehra's estimate on the normalised innovation, a = 0.05, starting where
 // sigma = max(anchor, 0.05 sample) but at most 2 anchors: a start at 0.1 sample let a particle

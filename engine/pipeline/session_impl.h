@@ -84,7 +84,7 @@ struct Session::Impl {
   // has another peak (a local maximum at least kCandidateShare of the main peak's height)
   // within kAssociationGate predicted sigmas, is measured at that peak instead (the tallest
   // in the gate; returns how many pairs were changed), its sigma that peak's own (its
-  // curvature at its own SNR, pair_noise.h PeakSigmaS): a smaller peak is a less precise one.
+  // curvature at its own SNR, pair_noise.h OwnPeakSigmaS): a smaller peak is a less precise one.
   // Only while the tracker holds one hypothesis (`hypotheses`, the tracker's count): the
   // measurement is shared by all of them.
   int AssociateCandidates(const TrackState& predicted, size_t hypotheses);

@@ -208,7 +208,7 @@ TEST(AcquisitionSession, AssociationDoesNotPickPeaksForOneHypothesisWhileOthersL
 // silent failure: over 1 s). Each such peak now states its own sigma (its height's SNR), the
 // track leans on the one strong pair, and the divergence test restarts it sooner.
 TEST(AcquisitionSession, APeakPickedNearTheTrackStatesItsOwnPrecision) {
-  const SceneRow row = RunRandomScene(3000179, RandomSceneOptions{}, {}, /*keep_frames=*/true);
+  const SceneRow row = RunRandomScene(3000179, RandomSceneOptions{}, {}, /*keep_frames=*/false);
   ASSERT_TRUE(row.error.empty()) << row.error;
   ASSERT_NE(row.description.find("4 sensors over 3.11 m"), std::string::npos)
       << "the generator changed: " << row.description;
@@ -225,7 +225,7 @@ TEST(AcquisitionSession, APeakPickedNearTheTrackStatesItsOwnPrecision) {
 // that no admissible noise gives no longer feeds the adaptation (pair_noise.h): 0.68 s,
 // acquired at 2.4 s.
 TEST(AcquisitionSession, AConvergingTracksInnovationsDoNotInflateTheNoise) {
-  const SceneRow row = RunRandomScene(7000013, RandomSceneOptions{}, {}, /*keep_frames=*/true);
+  const SceneRow row = RunRandomScene(7000013, RandomSceneOptions{}, {}, /*keep_frames=*/false);
   ASSERT_TRUE(row.error.empty()) << row.error;
   ASSERT_NE(row.description.find("4 sensors over 4.29 m"), std::string::npos)
       << "the generator changed: " << row.description;
