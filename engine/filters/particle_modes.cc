@@ -242,9 +242,12 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   std::array<Eigen::Matrix<float, 6, 1>, kMaxComponents> shift;
   const double h = KernelBandwidth(kernel_scale, n_);
   const double a = kernel_scale > 0.0 ? KernelShrinkage(h) : 1.0;
-  const LabelMoments moments =
-      MomentsByLabel(n_, {cur_.x.data(), cur_.y.data(), cur_.z.data(), cur_.vx.data(), cur_.vy.data(), cur_.vz.data()},
-                     label_, w_.data());
+  const std::array<const float*, 6> state{cur_.x.data(),  cur_.y.data(),  cur_.z.data(),
+                                          cur_.vx.data(), cur_.vy.data(), cur_.vz.data()};
+  LabelMoments moments = MomentsByLabel(n_, state, label_, w_.data());
+  if (MergeCoincidentLabels(moments.weight, moments.mean, moments.cov)) {
+    moments = MomentsByLabel(n_, state, label_, w_.data());
+  }
   for (size_t c = 0; c < kMaxComponents; ++c) {
     l[c].setZero();
     shift[c].setZero();
@@ -336,6 +339,41 @@ void ParticleSet::ResampleModes(double kernel_scale) {
   for (uint8_t& lab : label_) lab = static_cast<uint8_t>(remap[lab]);
   label_deficit_ = deficit;
   SetLabelWeights(weight);
+}
+
+bool ParticleSet::MergeCoincidentLabels(const std::array<double, kMaxLabels>& weight,
+                                        const std::array<Vec6, kMaxLabels>& mean,
+                                        const std::array<Mat6, kMaxLabels>& covariance) {
+  constexpr double kWithinSd2 = 6.0;  // Mahalanobis squared over 6 dimensions: one sd each
+  std::array<int, kMaxComponents> into{};
+  for (int c = 0; c < kMaxComponents; ++c) into[static_cast<size_t>(c)] = c;
+  bool merged = false;
+  // Lighter into heavier; a label already merged is not a target.
+  for (size_t b = 0; b < kMaxComponents; ++b) {
+    if (!(weight[b] > 0.0)) continue;
+    for (size_t a = 0; a < kMaxComponents; ++a) {
+      if (a == b || !(weight[a] > weight[b] || (weight[a] == weight[b] && a < b)) || into[a] != static_cast<int>(a)) {
+        continue;
+      }
+      const Vec6 delta = mean[a] - mean[b];
+      const auto within = [&delta](const Mat6& cov) {
+        const Eigen::LDLT<Mat6> ldlt(cov + 1e-12 * Mat6::Identity());
+        return ldlt.info() == Eigen::Success && delta.dot(ldlt.solve(delta)) < kWithinSd2;
+      };
+      if (!within(covariance[a]) || !within(covariance[b])) continue;
+      into[b] = static_cast<int>(a);
+      merged = true;
+      break;
+    }
+  }
+  if (!merged) return false;
+  // A label merged into one that later merged on follows it.
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    while (into[static_cast<size_t>(into[c])] != into[c]) into[c] = into[static_cast<size_t>(into[c])];
+  }
+  for (uint8_t& lab : label_) lab = static_cast<uint8_t>(into[lab]);
+  moments_valid_ = false;
+  return true;
 }
 
 std::array<double, ParticleSet::kMaxLabels> ParticleSet::HoldContenders(const std::array<double, kMaxLabels>& weight) {

@@ -301,6 +301,15 @@ class ParticleSet {
   // the slots; returns the weight each label carries out (its marginal weight).
   std::array<double, kMaxLabels> HoldContenders(const std::array<double, kMaxLabels>& weight);
   void SetLabelWeights(const std::array<double, kMaxLabels>& weight);  // after resampling
+  // Before resampling: a label whose state (position and velocity) lies within one sd of a
+  // heavier label's by each one's own covariance (6-D Mahalanobis squared < 6 both ways) has
+  // converged onto it and becomes part of it (its particles relabelled; the heavier label's
+  // deficit kept). Two exact TDOA solutions that cross pass with different velocities and stay
+  // apart. Why: a label started on a wide mode (a far solution with a range spread of tens of
+  // metres) can gather on the true one; held up as a contender, it made the estimate report
+  // two modes for as long as the track lived. Returns whether any label was merged.
+  bool MergeCoincidentLabels(const std::array<double, kMaxLabels>& weight, const std::array<Vec6, kMaxLabels>& mean,
+                             const std::array<Mat6, kMaxLabels>& covariance);
   static constexpr double kMinHeldWeight = 1e-6;
   bool Contender(int label) const { return label_deficit_[static_cast<size_t>(label)] < kContenderMarginNats; }
   bool bounded_ = false;
