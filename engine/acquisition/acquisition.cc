@@ -193,7 +193,7 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
   std::vector<PositionMode> modes;
   double best = -std::numeric_limits<double>::infinity();
   int refined = 0;
-  std::vector<double> lo(static_cast<size_t>(pairs)), hi(static_cast<size_t>(pairs));
+  std::vector<double> lo(static_cast<size_t>(all_pairs)), hi(static_cast<size_t>(all_pairs));
   // Refines from `start`; keeps a new mode (or the stronger of two that coincide). With
   // `siblings`, the closed form's other exact solutions of a new mode's lags are refined too
   // (a 4-sensor array's second solution lies where no cell order guarantees a visit).
@@ -207,7 +207,15 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
         const double reach_m = (mode.position_m - centre).norm();
         const bool parked = reach_m > 1.5 * radius;
         if (parked) {
-          mode.position_m = centre + radius / reach_m * (mode.position_m - centre);
+          // Across the bearing the spread is angular, so it shrinks with the range it is parked
+          // at (a least-squares solve over redundant pairs can slide out to millions of metres,
+          // where the same angles span kilometres); along it, the whole sphere.
+          const Vec3 out_unit = (mode.position_m - centre) / reach_m;
+          const Mat3 across = Mat3::Identity() - out_unit * out_unit.transpose();
+          const double shrink = radius / reach_m;
+          mode.covariance_m2 = shrink * shrink * across * mode.covariance_m2 * across +
+                               radius * radius * out_unit * out_unit.transpose();
+          mode.position_m = centre + radius * out_unit;
           mode.score = Score(mode.position_m);
         }
         if (!InBounds(mode.position_m)) return;
@@ -249,10 +257,11 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
         for (const Vec3& candidate : ClosedFormCandidates(array_, array_.Tdoa(found))) {
           if ((candidate - found).norm() < 1e-3 * array_.aperture_m()) continue;
           const Eigen::VectorXd lag = array_.Tdoa(candidate) * fs;
-          std::vector<double> c_lo(static_cast<size_t>(pairs)), c_hi(static_cast<size_t>(pairs));
-          for (int p = 0; p < pairs; ++p) {
-            c_lo[static_cast<size_t>(p)] = lag(p) - 3.0;
-            c_hi[static_cast<size_t>(p)] = lag(p) + 3.0;
+          std::vector<double> c_lo(static_cast<size_t>(all_pairs)), c_hi(static_cast<size_t>(all_pairs));
+          for (int p = 0; p < all_pairs; ++p) {
+            const double at = p < pairs ? lag(p) : CrossLag(p, lag);
+            c_lo[static_cast<size_t>(p)] = at - 3.0;
+            c_hi[static_cast<size_t>(p)] = at + 3.0;
           }
           consider(candidate, c_lo, c_hi, /*siblings=*/false, earlier);
         }
@@ -269,7 +278,7 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
     for (const PositionMode& mode : modes) holds_mode |= (mode.position_m - x).norm() <= rad;
     if (holds_mode) continue;
     lag_windows(x, rad);
-    for (int p = 0; p < pairs; ++p) {
+    for (int p = 0; p < all_pairs; ++p) {
       lo[static_cast<size_t>(p)] = lags[static_cast<size_t>(p)] - widths[static_cast<size_t>(p)];
       hi[static_cast<size_t>(p)] = lags[static_cast<size_t>(p)] + widths[static_cast<size_t>(p)];
     }
@@ -284,11 +293,12 @@ AcquisitionResult Acquisition::Search(const Measurement& m) {
       std::vector<double> shifted;
       if (mode.score < best - margin || !EarlierArrival(mode.position_m, &shifted)) continue;
       Eigen::VectorXd tdoa_s(pairs);
-      std::vector<double> a(static_cast<size_t>(pairs)), b(static_cast<size_t>(pairs));
-      for (int p = 0; p < pairs; ++p) {
-        tdoa_s(p) = shifted[static_cast<size_t>(p)] / fs;
-        a[static_cast<size_t>(p)] = shifted[static_cast<size_t>(p)] - 2.0;
-        b[static_cast<size_t>(p)] = shifted[static_cast<size_t>(p)] + 2.0;
+      for (int p = 0; p < pairs; ++p) tdoa_s(p) = shifted[static_cast<size_t>(p)] / fs;
+      std::vector<double> a(static_cast<size_t>(all_pairs)), b(static_cast<size_t>(all_pairs));
+      for (int p = 0; p < all_pairs; ++p) {
+        const double at = p < pairs ? shifted[static_cast<size_t>(p)] : CrossLag(p, tdoa_s * fs);
+        a[static_cast<size_t>(p)] = at - 2.0;
+        b[static_cast<size_t>(p)] = at + 2.0;
       }
       std::vector<Vec3> starts = ClosedFormCandidates(array_, tdoa_s);
       if (starts.empty()) starts.push_back(mode.position_m);

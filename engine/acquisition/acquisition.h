@@ -28,11 +28,16 @@
 // GccOptions::cross_pairs_max_sensors), the spatial spectrum sums them too, each at the lag
 // lag_b - lag_a its position predicts: cell bounds, mode scores, the mode margin and the
 // presence statistics count every usable pair (P above is then reference plus cross pairs),
-// while the solve and the count of lag combinations M use the reference pairs. Why: a
-// 4-sensor array's three reference pairs have an exact solution through any one pair's wrong
-// peak (an echo's cross term, crosstalk, noise), which scores as well as the truth; the
-// cross pairs read low there (acquisition_test: crosstalk on one pair, best mode 1.7 sd from
-// the truth with them, 2200 sd without). They cannot tell apart what every pair agrees on:
+// and so does the solve: a cross pair's pick is a residual of lag_b - lag_a, its gradient the
+// difference of its sensors' reference rows, in the weighted least squares, the consensus
+// subset and the variance factor alike. The count of lag combinations M uses the reference
+// pairs. Why: a 4-sensor array's three reference pairs have an exact solution through any one
+// pair's wrong peak (an echo's cross term, crosstalk, noise), which scores as well as the
+// truth; the cross pairs read low there (acquisition_test: crosstalk on one pair, best mode
+// 1.7 sd from the truth with them, 2200 sd without). And where one reference pair hears
+// nothing (tonal sidelobes, a lost path) two reference pairs cannot fix a position, while the
+// cross pairs holding its sensor can (acquisition_test: no mode from the reference pairs
+// alone, 3.5 cm off with the cross pairs). They cannot tell apart what every pair agrees on:
 // a 4-sensor array's second exact solution, or one channel's echo louder than its direct path.
 //
 // Earlier arrivals. An echo arrives after its direct path. Where one channel's echo is louder
@@ -59,7 +64,7 @@
 // +-(3 sqrt(J_p C J_p^T) fs + 1) lags about the track's predicted lags (C its position
 // covariance; a cross pair's J is J_b - J_a) and M = prod_p W_p over every usable pair.
 //
-// Cost: (cells x (sensors + pairs)) + refinements x ~10 solves, plus the earlier arrivals'
+// Cost: (cells x (sensors + pairs)) + refinements x ~10 solves over every pair, plus the earlier arrivals'
 // modes x sensors x (lag window) x (pairs per sensor) field reads; ~1-3 ms for the default
 // grid on one core. Not thread-safe; one per session.
 #pragma once
@@ -145,6 +150,8 @@ class Acquisition {
     double angular_radius_rad = 0.0;
     double chord_per_range = 0.0;  // 2 sin(angular radius / 2): the cell's half-width per metre of range
   };
+  // Picks, solves and scores from `start_m` (above); lo/hi: each field pair's lag window
+  // (reference pairs first; cross pairs beyond their sizes are neither picked nor solved).
   bool Refine(const Vec3& start_m, const std::vector<double>& lo, const std::vector<double>& hi,
               PositionMode* mode) const;
   bool InBounds(const Vec3& p) const;

@@ -67,7 +67,7 @@ void BM_Search(benchmark::State& state) {
                  (options.earlier_arrivals ? " earlier-arrivals" : ""));
   state.counters["modes"] = static_cast<double>(modes);
 }
-BENCHMARK(BM_Search)->ArgsProduct({{0, 1, 2}, {0, 4}, {0, 1}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Search)->ArgsProduct({{0, 1, 2}, {0, 4, 8}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
 void BM_PresenceAroundTrack(benchmark::State& state) {
   const Frame f = MakeFrame(kScenes[state.range(0)]);
