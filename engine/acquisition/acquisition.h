@@ -18,11 +18,13 @@
 // is off the solution by more than 3 sigma and 1.5 samples is left out of the solve, the
 // consensus subset, keeping at least 3 pairs). The mode's score is the normalised spectrum at the
 // solution, summed over all usable pairs; a mode within 3 position standard deviations of a
-// stronger one, by each one's own covariance, is merged into it. A solution beyond 1.5 x
-// the radius is parked on the sphere in its direction (its range spread clipped to the
-// radius), and two parked within one search direction's radius are one mode. Every mode within mode_margin sqrt(P) of
-// the best survives (a 4-sensor array's two exact TDOA solutions score alike and both survive), at most max_modes,
-// strongest first, each with its fix covariance (H^T W H)^-1.
+// stronger one, by each one's own covariance, is merged into it. The solve is kept inside the
+// bounds (projected) and within 3 radii of the centre; a solution beyond 1.5 x the radius is
+// parked on the sphere in its direction (its spread across the bearing scaled to the radius,
+// along it the radius), and two parked within one search direction's radius are one mode.
+// Every mode within mode_margin sqrt(P) of the best survives (a 4-sensor array's two exact
+// TDOA solutions score alike and both survive), at most max_modes, strongest first, each
+// with its fix covariance (H^T W H)^-1.
 //
 // Cross pairs. When the measurement holds pairs without the reference (Measurement::cross_pairs,
 // GccOptions::cross_pairs_max_sensors), the spatial spectrum sums them too, each at the lag
