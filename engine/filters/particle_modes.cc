@@ -345,6 +345,14 @@ bool ParticleSet::MergeCoincidentLabels(const std::array<double, kMaxLabels>& we
                                         const std::array<Vec6, kMaxLabels>& mean,
                                         const std::array<Mat6, kMaxLabels>& covariance) {
   constexpr double kWithinSd2 = 6.0;  // Mahalanobis squared over 6 dimensions: one sd each
+  // Each live label's covariance factored once.
+  std::array<Eigen::LDLT<Mat6>, kMaxComponents> factor;
+  for (size_t c = 0; c < kMaxComponents; ++c) {
+    if (weight[c] > 0.0) factor[c].compute(covariance[c] + 1e-12 * Mat6::Identity());
+  }
+  const auto within = [&factor](size_t c, const Vec6& delta) {
+    return factor[c].info() == Eigen::Success && delta.dot(factor[c].solve(delta)) < kWithinSd2;
+  };
   std::array<int, kMaxComponents> into{};
   for (int c = 0; c < kMaxComponents; ++c) into[static_cast<size_t>(c)] = c;
   bool merged = false;
@@ -356,11 +364,7 @@ bool ParticleSet::MergeCoincidentLabels(const std::array<double, kMaxLabels>& we
         continue;
       }
       const Vec6 delta = mean[a] - mean[b];
-      const auto within = [&delta](const Mat6& cov) {
-        const Eigen::LDLT<Mat6> ldlt(cov + 1e-12 * Mat6::Identity());
-        return ldlt.info() == Eigen::Success && delta.dot(ldlt.solve(delta)) < kWithinSd2;
-      };
-      if (!within(covariance[a]) || !within(covariance[b])) continue;
+      if (!within(a, delta) || !within(b, delta)) continue;
       into[b] = static_cast<int>(a);
       merged = true;
       break;
