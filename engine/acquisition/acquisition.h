@@ -58,6 +58,15 @@
 // pair holding the sensor (a shift of one channel moves one reference pair alone, or, for the
 // reference sensor, all of them alike: nothing confirms it).
 //
+// Open curves. Three picks always have an exact solution, and a pick at noise height is
+// anywhere in its window, not where its curvature says: where a mode's consensus holds only
+// two pairs whose picks stand clear of noise (>= 4.5, which noise reaches in a window of
+// 10^4 independent lags about once in 20), its position along the curve those two leave open
+// is unknown (campaign scene 15000105: a tonal source heard by 2 of 6 pairs, the first mode
+// 7 m along that curve from the source with a 0.19 m spread). Such a mode carries up to 9
+// points spread evenly along the curve (traced in steps of radius/16), so that a tracker
+// starts along all of it and the motion and later frames decide.
+//
 // Presence (presence.h): statistic = best mode's score / sqrt(P) (with no mode solved, the
 // sum of each pair's largest value / sqrt(P), which no position can exceed; never present
 // then); the combinations the
@@ -98,6 +107,13 @@ struct AcquisitionOptions {
   Status Validate() const;
 };
 
+// A point of an open curve (PositionMode::open_curve) with its spread: across the curve the
+// pairs that fix it, along it half the spacing between points.
+struct CurvePoint {
+  Vec3 position_m = Vec3::Zero();
+  Mat3 covariance_m2 = Mat3::Identity();
+};
+
 // One position hypothesis.
 struct PositionMode {
   Vec3 position_m = Vec3::Zero();
@@ -106,6 +122,10 @@ struct PositionMode {
   int pairs_used = 0;  // pairs in the consensus subset of its solve
   // Found from a stronger mode as one channel's earlier arrival: kept whatever its score.
   bool earlier_arrival = false;
+  // Where only two of the solve's pairs read clear of noise (Open curves, above): points along
+  // the curve those two leave open, within 1.5 search radii and the bounds, the solution
+  // among them. Empty otherwise. A tracker starts on all of them.
+  std::vector<CurvePoint> open_curve;
 };
 
 struct PresenceResult {
@@ -164,6 +184,10 @@ class Acquisition {
   // `sensor`'s earlier arrival at a position (above): the reference pairs' lags with that
   // sensor's arrival moved to it. False when there is none or no cross pair to confirm it.
   bool ChannelEarlierArrival(const Vec3& at_m, int sensor, std::vector<double>* reference_lags) const;
+  // Points along the curve where field pairs pair[0] and pair[1] read lag[i] (sigma[i], samples),
+  // from `on_m` (on it) both ways, within 1.5 search radii and the bounds (Open curves).
+  std::vector<CurvePoint> OpenCurve(const Vec3& on_m, const int pair[2], const double lag[2],
+                                    const double sigma[2]) const;
 
   ArrayGeometry array_;
   AcquisitionOptions options_;

@@ -9,7 +9,10 @@
 namespace localizer::engine {
 namespace {
 
-constexpr double kMinPickValue = 3.0;     // a pick below this normalised height is noise
+constexpr double kMinPickValue = 3.0;  // a pick below this normalised height is noise
+// A pick at least this high stands clear of noise in any window the search picks from
+// (acquisition.h, "Open curves").
+constexpr double kSurePickValue = 4.5;
 constexpr double kMinSigmaSamples = 0.1;  // ~ the sub-sample interpolation's bias (DESIGN.md)
 constexpr double kMinFrontEndSigmaSamples = 0.02;
 constexpr double kMaxSigmaSamples = 5.0;
@@ -30,6 +33,7 @@ bool Acquisition::Refine(const Vec3& start_m, const std::vector<double>& lo, con
   const double fs = field_.sample_rate_hz();
   std::vector<double> pick(static_cast<size_t>(solved), 0.0), sigma(static_cast<size_t>(solved), 1.0);
   std::vector<char> used(static_cast<size_t>(solved), 0);
+  std::vector<double> height(static_cast<size_t>(solved), 0.0);
   // Pair p's pick in [a, b]: its lag, and a curvature-based sigma; false when too weak.
   auto pick_in = [&](int p, double a, double b) {
     double lag = 0.0, value = 0.0;
@@ -39,6 +43,7 @@ bool Acquisition::Refine(const Vec3& start_m, const std::vector<double>& lo, con
     const double curvature = -(left - 2.0 * mid + right);  // -g'' in normalised units per sample^2
     const double s = curvature > 0.0 && mid > 0.0 ? 1.0 / std::sqrt(curvature * mid) : kMaxSigmaSamples;
     pick[static_cast<size_t>(p)] = lag;
+    height[static_cast<size_t>(p)] = value;
     sigma[static_cast<size_t>(p)] = std::clamp(s, kMinSigmaSamples, kMaxSigmaSamples);
     // The main peak: the front end's own delay and sigma (from the whole cross-spectrum,
     // gcc_phat.h) are better than a parabola through three samples.
@@ -181,6 +186,19 @@ bool Acquisition::Refine(const Vec3& start_m, const std::vector<double>& lo, con
   mode->covariance_m2 = 0.5 * (cov + cov.transpose());
   mode->pairs_used = count;
   mode->score = Score(x);
+  // Only two picks clear of noise: the curve they leave open (acquisition.h, "Open curves").
+  int sure[2] = {-1, -1}, sure_count = 0;
+  for (int p = 0; p < solved; ++p) {
+    if (!used[static_cast<size_t>(p)] || height[static_cast<size_t>(p)] < kSurePickValue) continue;
+    if (sure_count < 2) sure[sure_count] = p;
+    ++sure_count;
+  }
+  mode->open_curve.clear();
+  if (sure_count == 2) {
+    const double lag[2] = {pick[static_cast<size_t>(sure[0])], pick[static_cast<size_t>(sure[1])]};
+    const double sd[2] = {sigma[static_cast<size_t>(sure[0])], sigma[static_cast<size_t>(sure[1])]};
+    mode->open_curve = OpenCurve(x, sure, lag, sd);
+  }
   return true;
 }
 

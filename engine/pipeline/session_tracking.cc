@@ -3,6 +3,7 @@
 // hypotheses. See session.h for the behaviour these implement.
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "engine/core/covariance_repair.h"
 #include "engine/filters/pair_noise.h"
@@ -147,14 +148,34 @@ int Session::Impl::AssociateCandidates(const TrackState& predicted, size_t hypot
 bool Session::Impl::StartFromModes(const std::vector<PositionMode>& modes) {
   if (modes.empty()) return false;
   std::vector<WeightedBelief> mixture;
-  for (const PositionMode& mode : modes) {
+  auto add = [&](double weight, const Vec3& position_m, const Mat3& covariance_m2) {
     WeightedBelief b;
-    b.weight = 1.0;  // equal: the measurements and the dynamics decide between them
-    b.belief.mean.head<3>() = mode.position_m;
-    b.belief.covariance.topLeftCorner<3, 3>() = mode.covariance_m2;
+    b.weight = weight;
+    b.belief.mean.head<3>() = position_m;
+    b.belief.covariance.topLeftCorner<3, 3>() = covariance_m2;
     b.belief.covariance.bottomRightCorner<3, 3>() =
         config.init_speed_sigma_mps * config.init_speed_sigma_mps * Mat3::Identity();
     mixture.push_back(b);
+  };
+  // Equal weights: the measurements and the dynamics decide between the modes. A mode whose
+  // position along a curve is open keeps its own point and adds the others along the curve,
+  // which share one more weight among them. Every mode comes first: the filter keeps at most
+  // ParticleSet::kMaxLabels components, and what it leaves out is then points along a curve,
+  // never a mode (the track's own among them).
+  std::vector<const CurvePoint*> along;
+  for (const PositionMode& mode : modes) {
+    add(1.0, mode.position_m, mode.covariance_m2);
+    if (mode.open_curve.empty()) continue;
+    const CurvePoint* own = &mode.open_curve.front();
+    for (const CurvePoint& point : mode.open_curve) {
+      if ((point.position_m - mode.position_m).norm() < (own->position_m - mode.position_m).norm()) own = &point;
+    }
+    for (const CurvePoint& point : mode.open_curve) {
+      if (&point != own) along.push_back(&point);
+    }
+  }
+  for (const CurvePoint* point : along) {
+    add(1.0 / static_cast<double>(along.size()), point->position_m, point->covariance_m2);
   }
   if (!components.tracker->InitialiseMixture(mixture).ok()) return false;
   live = true;
