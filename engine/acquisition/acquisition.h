@@ -61,7 +61,7 @@
 // Open curves. Three picks always have an exact solution, and a pick at noise height is
 // anywhere in its window, not where its curvature says: where a mode's consensus holds only
 // two pairs whose picks stand clear of noise (>= 4.5, which noise reaches in a window of
-// 10^4 independent lags about once in 20), its position along the curve those two leave open
+// 10^4 independent lags about once in 30), its position along the curve those two leave open
 // is unknown (campaign scene 15000105: a tonal source heard by 2 of 6 pairs, the first mode
 // 7 m along that curve from the source with a 0.19 m spread). Such a mode carries up to 9
 // points spread evenly along the curve (traced in steps of radius/16), so that a tracker
