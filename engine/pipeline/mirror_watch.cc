@@ -13,8 +13,9 @@
 namespace localizer::engine {
 namespace {
 
-// Chi-square 0.999 quantile with 3 x kWindowFrames = 24 degrees of freedom.
-constexpr double kWindowNisMax = 51.18;
+// Chi-square 0.999 quantiles with 3 n degrees of freedom, n = 0 ... kWindowFrames frames.
+constexpr std::array<double, MirrorWatch::kWindowFrames + 1> kWindowNisMax = {0.0,   16.27, 22.46, 27.88, 32.91,
+                                                                              37.70, 42.31, 46.80, 51.18};
 constexpr double kDistinctMahalanobis2 = 16.0;  // 4 sds, as the session's NearTrack
 // Chi-square 0.999 quantiles: the track landed where the mirror's filter predicted it (3
 // degrees of freedom); the kept pairing of root and track is implausible (6).
@@ -43,6 +44,7 @@ void MirrorWatch::Follower::Start(double at_t_s, const Vec3& at_m, const Mat3& n
   cov.topLeftCorner<3, 3>() = noise_m2;
   cov.bottomRightCorner<3, 3>() = kStartSpeedSigmaMps * kStartSpeedSigmaMps * Mat3::Identity();
   frames = 0;
+  nis.fill(0.0);
 }
 
 void MirrorWatch::Follower::Predict(double to_t_s, double accel_noise_mps2) {
@@ -58,6 +60,14 @@ void MirrorWatch::Follower::Predict(double to_t_s, double accel_noise_mps2) {
   process.bottomRightCorner<3, 3>() = q * dt * dt * Mat3::Identity();
   mean = f * mean;
   cov = f * cov * f.transpose() + process;
+}
+
+bool MirrorWatch::Follower::MovedAsASourceCan() const {
+  if (frames < kMinLiveFrames) return false;
+  // The window holds the last min(frames, kWindowFrames) NIS values (the others are 0).
+  const int n = std::min(frames, kWindowFrames);
+  const double window_nis = std::accumulate(nis.begin(), nis.end(), 0.0);
+  return window_nis <= kWindowNisMax[static_cast<size_t>(n)];
 }
 
 double MirrorWatch::Follower::Distance2(const Vec3& at_m, const Mat3& noise_m2) const {
@@ -145,6 +155,7 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
   for (Eigen::Index p = 0; p < seen_sigma_s.size(); ++p) seen_sigma_s(p) = std::max(seen_sigma_s(p), fallback_sigma_s);
   const Mat3 noise_m2 = TdoaPositionCrlb(array, *mirror, seen_sigma_s);
   const Vec3 apart_m = *mirror - track_m;
+  const bool was_distinct = distinct_;
   distinct_ = apart_m.dot((track_cov_m2 + bound_m2).ldlt().solve(apart_m)) > kDistinctMahalanobis2;
   last_noise_m2_ = noise_m2;
   last_root_m_ = *mirror;
@@ -152,6 +163,15 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
   if (!mirror_.following || !track_.following) {
     mirror_.Start(t_s, *mirror, noise_m2);
     track_.Start(t_s, track_m, track_cov_m2);
+    return;
+  }
+  if (distinct_ && !was_distinct && !mirror_.MovedAsASourceCan()) {
+    // The branches have just parted, and the mirror's filter failed its window while its root
+    // was within the track's own uncertainty (near the branch point, where the roots move
+    // fastest and bend): that history says nothing of how the mirror moves now.
+    mirror_.Start(t_s, *mirror, noise_m2);
+    track_.Predict(t_s, accel_noise_mps2_);
+    track_.Update(track_m, track_cov_m2);
     return;
   }
   mirror_.Predict(t_s, accel_noise_mps2_);
@@ -182,10 +202,7 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
 }
 
 std::optional<MirrorWatch::Mirror> MirrorWatch::Live() const {
-  if (!mirror_.following || !distinct_ || mirror_.frames < kWindowFrames) return std::nullopt;
-  // The window holds the last kWindowFrames NIS values once frames >= kWindowFrames.
-  const double window_nis = std::accumulate(mirror_.nis.begin(), mirror_.nis.end(), 0.0);
-  if (!(window_nis <= kWindowNisMax)) return std::nullopt;
+  if (!mirror_.following || !distinct_ || !mirror_.MovedAsASourceCan()) return std::nullopt;
   return Mirror{last_root_m_, last_noise_m2_};
 }
 

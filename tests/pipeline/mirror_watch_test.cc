@@ -72,14 +72,15 @@ std::optional<Vec3> OtherRoot(const ArrayGeometry& array, const Vec3& at_m) {
   return std::nullopt;
 }
 
-// A still source: its mirror stands still too, which no motion can rule out.
-TEST(MirrorWatch, AStillSourcesMirrorIsLiveAfterAWindow) {
+// A still source: its mirror stands still too, which no motion can rule out. Live once its
+// filter has been updated kMinLiveFrames times (the first frame starts it).
+TEST(MirrorWatch, AStillSourcesMirrorIsLiveAfterItsFirstFrames) {
   const Walk w = FindWalk();
   ASSERT_GT(w.start_m.norm(), 0.0) << "no bearing of the list has a second exact solution";
   const auto at = [&](int) { return w.start_m; };
   const auto live = Follow(w.array, 30, at);
-  for (int f = 0; f < MirrorWatch::kWindowFrames; ++f) EXPECT_FALSE(live[f]) << "live before a window, frame " << f;
-  for (int f = MirrorWatch::kWindowFrames; f < 30; ++f) {
+  for (int f = 0; f < MirrorWatch::kMinLiveFrames; ++f) EXPECT_FALSE(live[f]) << "live too soon, frame " << f;
+  for (int f = MirrorWatch::kMinLiveFrames; f < 30; ++f) {
     ASSERT_TRUE(live[f]) << "frame " << f;
     EXPECT_LT((live[f]->position_m - *OtherRoot(w.array, w.start_m)).norm(), 1e-6);
     EXPECT_GT(live[f]->covariance_m2.trace(), 0.0);
