@@ -88,6 +88,11 @@ double Acquisition::CrossLag(int q, const Eigen::VectorXd& pair_lags) const {
          pair_lags(array_.pair_of_sensor(field_.cross_sensor_a(q)));
 }
 
+Eigen::RowVector3d Acquisition::CrossGradient(int q, const Eigen::MatrixXd& pair_jacobian) const {
+  return pair_jacobian.row(array_.pair_of_sensor(field_.cross_sensor_b(q))) -
+         pair_jacobian.row(array_.pair_of_sensor(field_.cross_sensor_a(q)));
+}
+
 double Acquisition::Score(const Vec3& p) const {
   const double scale = field_.sample_rate_hz();
   const Eigen::VectorXd lags = array_.Tdoa(p) * scale;
@@ -359,10 +364,8 @@ PresenceResult Acquisition::Around(const Measurement& m, const Vec3& position_m,
       row = jac.row(p).transpose();
       lag_p = pair_lag(p);
     } else {
-      const int a = array_.pair_of_sensor(field_.cross_sensor_a(p)),
-                b = array_.pair_of_sensor(field_.cross_sensor_b(p));
-      row = (jac.row(b) - jac.row(a)).transpose();
-      lag_p = pair_lag(b) - pair_lag(a);
+      row = CrossGradient(p, jac).transpose();
+      lag_p = CrossLag(p, pair_lag);
     }
     const double spread = std::sqrt(std::max(0.0, row.dot(covariance_m2 * row)));
     const double half = std::min(3.0 * spread + 1.0, static_cast<double>(field_.last_lag(p) - field_.first_lag(p)));

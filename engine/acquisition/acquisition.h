@@ -181,6 +181,8 @@ class Acquisition {
   // Field pair q >= reference_pairs() (a cross pair (a, b)): its lag from the reference
   // pairs' lags, lag_b - lag_a.
   double CrossLag(int q, const Eigen::VectorXd& pair_lags) const;
+  // Its gradient from the reference pairs' (rows of pair_jacobian), row_b - row_a.
+  Eigen::RowVector3d CrossGradient(int q, const Eigen::MatrixXd& pair_jacobian) const;
   // `sensor`'s earlier arrival at a position (above): the reference pairs' lags with that
   // sensor's arrival moved to it. False when there is none or no cross pair to confirm it.
   bool ChannelEarlierArrival(const Vec3& at_m, int sensor, std::vector<double>* reference_lags) const;

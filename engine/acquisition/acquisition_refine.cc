@@ -66,10 +66,7 @@ bool Acquisition::Refine(const Vec3& start_m, const std::vector<double>& lo, con
     const Eigen::MatrixXd ref_jac = array_.TdoaJacobian(x) * fs;
     jac->resize(solved, 3);
     jac->topRows(pairs) = ref_jac;
-    for (int q = pairs; q < solved; ++q) {
-      jac->row(q) = ref_jac.row(array_.pair_of_sensor(field_.cross_sensor_b(q))) -
-                    ref_jac.row(array_.pair_of_sensor(field_.cross_sensor_a(q)));
-    }
+    for (int q = pairs; q < solved; ++q) jac->row(q) = CrossGradient(q, ref_jac);
   };
   int count = 0;
   for (int p = 0; p < solved; ++p) {

@@ -29,15 +29,8 @@ std::vector<CurvePoint> Acquisition::OpenCurve(const Vec3& on_m, const int pair[
     const Eigen::MatrixXd ref_jac = array_.TdoaJacobian(x) * fs;
     for (int i = 0; i < 2; ++i) {
       const int q = pair[i];
-      if (q < pairs) {
-        (*r)(i) = lag[i] - ref_lag(q);
-        jac->row(i) = ref_jac.row(q);
-      } else {
-        const int a = array_.pair_of_sensor(field_.cross_sensor_a(q));
-        const int b = array_.pair_of_sensor(field_.cross_sensor_b(q));
-        (*r)(i) = lag[i] - (ref_lag(b) - ref_lag(a));
-        jac->row(i) = ref_jac.row(b) - ref_jac.row(a);
-      }
+      (*r)(i) = lag[i] - (q < pairs ? ref_lag(q) : CrossLag(q, ref_lag));
+      jac->row(i) = q < pairs ? Eigen::RowVector3d(ref_jac.row(q)) : CrossGradient(q, ref_jac);
     }
   };
   // Onto the curve: minimum-norm Gauss–Newton steps on the two residuals.
