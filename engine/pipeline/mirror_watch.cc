@@ -34,10 +34,12 @@ void MirrorWatch::Reset() {
   mirror_ = Follower{};
   track_ = Follower{};
   distinct_ = false;
+  frames_since_parting_ = kWindowFrames;
 }
 
-void MirrorWatch::Follower::Start(double at_t_s, const Vec3& at_m, const Mat3& noise_m2) {
+void MirrorWatch::Follower::Start(double at_t_s, const Vec3& at_m, const Mat3& noise_m2, bool presumed_live) {
   following = true;
+  presumed = presumed_live;
   t_s = at_t_s;
   mean << at_m, Vec3::Zero();
   cov.setZero();
@@ -161,15 +163,17 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
   last_root_m_ = *mirror;
 
   if (!mirror_.following || !track_.following) {
-    mirror_.Start(t_s, *mirror, noise_m2);
-    track_.Start(t_s, track_m, track_cov_m2);
+    mirror_.Start(t_s, *mirror, noise_m2, true);
+    track_.Start(t_s, track_m, track_cov_m2, true);
     return;
   }
+  frames_since_parting_ = std::min(frames_since_parting_ + 1, kWindowFrames);
   if (distinct_ && !was_distinct && !mirror_.MovedAsASourceCan()) {
     // The branches have just parted, and the mirror's filter failed its window while its root
     // was within the track's own uncertainty (near the branch point, where the roots move
     // fastest and bend): that history says nothing of how the mirror moves now.
-    mirror_.Start(t_s, *mirror, noise_m2);
+    mirror_.Start(t_s, *mirror, noise_m2, frames_since_parting_ >= kWindowFrames);
+    frames_since_parting_ = 0;
     track_.Predict(t_s, accel_noise_mps2_);
     track_.Update(track_m, track_cov_m2);
     return;
@@ -190,7 +194,7 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
     if (plain_jump) {
       // The filter now on the branch the track left had learnt the track's motion (a drift,
       // say), not the branch's: it restarts at the root, live at once (the header says why).
-      mirror_.Start(t_s, *mirror, noise_m2);
+      mirror_.Start(t_s, *mirror, noise_m2, true);
       mirror_.frames = kWindowFrames;
       mirror_.nis.fill(0.0);
       track_.Update(track_m, track_cov_m2);
@@ -202,7 +206,7 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
 }
 
 std::optional<MirrorWatch::Mirror> MirrorWatch::Live() const {
-  if (!mirror_.following || !distinct_ || !mirror_.MovedAsASourceCan()) return std::nullopt;
+  if (!mirror_.following || !distinct_ || !mirror_.Counts()) return std::nullopt;
   return Mirror{last_root_m_, last_noise_m2_};
 }
 

@@ -38,16 +38,26 @@
 //   * it is an exact root (residual under kExactShare of the smallest pair sigma), inside
 //     the bounds and the acquisition's search sphere,
 //   * it is a hypothesis of its own: more than 4 sds (track's and its own) from the track,
-//   * and it moves as a source can: its filter has been updated at least kMinLiveFrames
-//     times since it (re)started and their NIS, over the last kWindowFrames at most, is
-//     within the chi-square 0.999 quantile for that many frames (a mirror that jumps or bends
-//     faster than the motion model allows, as the branches separate, fails here and is
-//     dropped until it has moved plausibly for a whole window again).
+//   * and nothing has ruled it out: only motion tells a source from its mirror, so the
+//     mirror of a track that has just (re)started counts until its filter can test it
+//     (kMinLiveFrames updates: two give it a velocity, a third tests it), and from then on
+//     while their NIS, over the last kWindowFrames at most, is within the chi-square 0.999
+//     quantile for that many frames (a mirror that jumps or bends faster than the motion
+//     model allows, as the branches separate, fails here and is dropped until it has moved
+//     plausibly for a whole window again). Before, a mirror counted only once it had passed:
+//     a new or restarted filter then left the track alone for its first frames, where the
+//     track is as likely on the wrong branch as on the right one (campaign scene 28000102:
+//     three frames just after its start claimed 0.03-0.36 m while 1.3-2.7 m off; PHAT draws
+//     1-30, summed silent time 14.8 -> 13.3 s, down in six scenes, up in none: ACCURACY.md,
+//     "Forty-first pass").
 // Where the root becomes a hypothesis of its own (it was within the track's spread, as near
 // the branch point) while its filter fails that test, the filter restarts at the root: what it
 // learnt from a root that jumped about the branch point says nothing of how the mirror moves
 // now, and kept, it held the source uncovered for a whole window (campaign scene 28000102:
-// 1.0-1.8 m off claiming 0.1-0.3 m for 0.7 s). A filter that passes keeps its history.
+// 1.0-1.8 m off claiming 0.1-0.3 m for 0.7 s). A filter that passes keeps its history. The
+// restarted filter counts until it is tested, as a new one does, unless the branches parted
+// within the last kWindowFrames frames before: a root that keeps parting from the track and
+// closing on it again would otherwise be restarted, and counted, for ever.
 // The session then reports the estimate ambiguous with a covariance that covers the mirror
 // (session_tracking.cc, Report). Reporting only: the track is not changed.
 // Cost: one closed form, one 3x3 bound and a 6-state Kalman step per frame, 4-sensor arrays only.
@@ -92,7 +102,8 @@ class MirrorWatch {
   void Update(const ArrayGeometry& array, double t_s, const Vec3& track_m, const Mat3& track_cov_m2,
               const Eigen::VectorXd& measured_tdoa_s, const Eigen::VectorXd& pair_sigma_s, double fallback_sigma_s,
               const Region& region);
-  // The mirror's position and covariance while it is live (above); nothing otherwise.
+  // The mirror's position and covariance while it is live (above: distinct, inside the
+  // region, not ruled out); nothing otherwise.
   struct Mirror {
     Vec3 position_m = Vec3::Zero();
     Mat3 covariance_m2 = Mat3::Zero();
@@ -108,8 +119,13 @@ class MirrorWatch {
     Mat6 cov = Mat6::Zero();
     std::array<double, kWindowFrames> nis{};
     int frames = 0;  // measured frames since the filter (re)started
+    // Counts before it is tested: a watch's first follower does (nothing has told the branches
+    // apart yet), and one restarted because the branches parted, unless they last parted
+    // within kWindowFrames frames (a root that keeps parting from the track and closing on it
+    // again would otherwise be restarted, and counted, for ever).
+    bool presumed = false;
 
-    void Start(double at_t_s, const Vec3& at_m, const Mat3& noise_m2);
+    void Start(double at_t_s, const Vec3& at_m, const Mat3& noise_m2, bool presumed_live);
     void Predict(double to_t_s, double accel_noise_mps2);
     // Squared Mahalanobis distance of a measurement from the prediction.
     double Distance2(const Vec3& at_m, const Mat3& noise_m2) const;
@@ -117,12 +133,17 @@ class MirrorWatch {
     // At least kMinLiveFrames updates since the (re)start, and the NIS of the last
     // min(frames, kWindowFrames) within their chi-square 0.999 quantile.
     bool MovedAsASourceCan() const;
+    // Whether the branch counts as a hypothesis: untested (fewer than kMinLiveFrames
+    // updates), as `presumed` says; tested, MovedAsASourceCan.
+    bool Counts() const { return frames < kMinLiveFrames ? presumed : MovedAsASourceCan(); }
   };
 
   double accel_noise_mps2_;
   Follower mirror_;
   Follower track_;
   bool distinct_ = false;
+  // Updates since the mirror's filter last restarted where the branches parted (capped).
+  int frames_since_parting_ = kWindowFrames;
   Mat3 last_noise_m2_ = Mat3::Zero();
   Vec3 last_root_m_ = Vec3::Zero();
 };
