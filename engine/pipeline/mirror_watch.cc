@@ -195,8 +195,7 @@ void MirrorWatch::Update(const ArrayGeometry& array, double t_s, const Vec3& tra
       // The filter now on the branch the track left had learnt the track's motion (a drift,
       // say), not the branch's: it restarts at the root, live at once (the header says why).
       mirror_.Start(t_s, *mirror, noise_m2, true);
-      mirror_.frames = kWindowFrames;
-      mirror_.nis.fill(0.0);
+      mirror_.frames = kWindowFrames;  // a window of zero NIS (Start cleared it): passes at once
       track_.Update(track_m, track_cov_m2);
       return;
     }
