@@ -79,6 +79,12 @@ struct Measurement {
   // reference at t_s - delay_s / 2 (the centre of the overlap of the two windows).
   double t_s = 0.0;
   double sample_rate_hz = 0.0;
+  // The variance of time about the frame's centre under the weight the pairs' cross-power
+  // gives each instant (the product of the two channels' tapers), s^2: T^2 / 12 for a
+  // rectangular frame of T seconds, 0.02 T^2 for Hann. A pair whose delay changes at rate r
+  // (s/s) within the frame spreads its GCC peak over a spread of variance r^2 times this.
+  // 0: not stated (a front end that does not fill it).
+  double window_time_var_s2 = 0.0;
   std::vector<PairMeasurement> pairs;  // one per non-reference sensor, ascending sensor index
   // Every pair of non-reference sensors (a < b, ascending a then b) once the front end was
   // asked for them (TdoaEstimator::MeasureCrossPairs); empty otherwise (not asked, the GPU

@@ -85,6 +85,9 @@ Status ParticleFilterOptions::Validate() const {
     return InvalidArgument(
         "speed changes need constant velocity: velocity_time_constant_s > 0 needs speed_change_max_mps2 = 0");
   }
+  if (!(motion_blur >= 0.0 && motion_blur <= 1.0)) {
+    return InvalidArgument("motion_blur must be in [0, 1], got " + std::to_string(motion_blur));
+  }
   if (!(kernel_scale >= 0.0 && kernel_scale <= 2.0)) {
     return InvalidArgument("kernel_scale must be in [0, 2], got " + std::to_string(kernel_scale));
   }

@@ -146,6 +146,23 @@ struct ParticleFilterOptions {
                                       // likelihood's, > 0
   double outlier_probability = 0.05;  // mixture likelihood: eps, the chance a pair's peak
                                       // is an outlier, in [0, 1)
+  // Motion blur (peak and mixture likelihoods; the GCC likelihood reads the smeared GCC
+  // itself): a particle whose velocity moves pair p's delay at rate r_p (s/s) within the
+  // frame sees that pair's peak spread into a bell of variance r_p^2 V (V =
+  // Measurement::window_time_var_s2, 0.02 T^2 for a Hann frame of T s); where the bell's top
+  // is flat beside the noise the peak lies anywhere on it, so the particle's likelihood of the
+  // pair takes sigma_p^2 + K_p r_p^2 V with K_p = motion_blur x min(1, 2 / peak_snr)
+  // (particle_math.h, MotionBlurVariance). Why: a PHAT peak of a delay that moves by tens of
+  // samples within a frame is a ridge whose highest ripple has the band's sharpness, and its
+  // curvature claims a precision the ridge does not have: a source at 3.35 m/s in 0.34-s
+  // frames was tracked 0.25-0.93 m off claiming 0.03-0.15 m for a second. Measured at 1
+  // (ACCURACY.md, "Forty-second pass"): thirty campaign draws, summed silent-failure time
+  // 13.3 -> 8.6 s and p95 time to acquire -0.25 s, error ratios within their scatter, median
+  // NEES per dimension 0.61 -> 0.52; but the named water scenes' RMSE rose by a fifth to a
+  // half (a start learns its velocity in 3 s instead of 1: particles with the wrong velocity
+  // are judged less sharply), so it is off by default. In [0, 1]; 0: off; a front end that
+  // leaves V at 0 turns it off too. The CPU and GPU filters both apply it.
+  double motion_blur = 0.0;
   Likelihood likelihood = Likelihood::kPeak;
   double min_peak_snr = 5.0;        // pairs whose peak_snr is below are not used: the
                                     // frame holds no coherent source for them (noise

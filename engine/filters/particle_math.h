@@ -35,6 +35,21 @@ LOCALIZER_HOST_DEVICE_INLINE void PredictAxisReverting(float& p, float& v, float
   v = d * v + a_to_v * a;
 }
 
+// Motion blur (ParticleFilterOptions::motion_blur): the variance a pair's peak takes per
+// (s/s)^2 of a particle's delay rate, s^2. A delay moving at rate r within a frame spreads the
+// PHAT peak into a bell of variance b^2 = r^2 V (V = Measurement::window_time_var_s2), height
+// A = peak_snr noise sds, whose top is flat beside the noise's ripples: the highest point lies
+// about uniformly where the bell is within the largest ripple (about 2.5 sds) of its top,
+// x^2 < 5 b^2 / peak_snr, a variance of 5/3 b^2 / peak_snr, i.e. kMotionBlurSnr / peak_snr of
+// r^2 V, and all of it once the bell is no higher than that. `share`: the option (0: off);
+// V <= 0 (a front end that does not state it): off.
+inline constexpr double kMotionBlurSnr = 2.0;
+inline double MotionBlurVariance(double share, double window_time_var_s2, double peak_snr) {
+  if (!(share > 0.0) || !(window_time_var_s2 > 0.0) || !std::isfinite(window_time_var_s2)) return 0.0;
+  const double of_bell = peak_snr > kMotionBlurSnr ? kMotionBlurSnr / peak_snr : 1.0;
+  return share * of_bell * window_time_var_s2;
+}
+
 // Range r = |d| + 1e-6 (m; the epsilon keeps 1/r finite) and range rate vr = d.v / r (m/s)
 // of a particle at offset d = p - m from a sensor m, moving at v.
 struct RangeRate {

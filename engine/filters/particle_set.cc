@@ -31,6 +31,7 @@ ParticleSet::ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions
       origin_m_(array.centroid_m()),
       reference_(array.reference_sensor()),
       outlier_probability_(static_cast<float>(options.outlier_probability)),
+      motion_blur_(static_cast<float>(options.motion_blur)),
       inv_c_(static_cast<float>(1.0 / array.sound_speed_mps())) {
   SetSensors(array);
   for (int p = 0; p < array.pair_count(); ++p) {
@@ -40,6 +41,7 @@ ParticleSet::ParticleSet(const ArrayGeometry& array, const ParticleFilterOptions
   cur_.Resize(n_);
   next_.Resize(n_);
   for (auto* v : {&logw_, &w_, &r_ref_, &vr_ref_, &loglik_, &delay_}) v->assign(n_, 0.0f);
+  if (motion_blur_ > 0.0f) widen_.assign(n_, 1.0f);
   for (auto& column : noise_) column.assign(n_, 0.0f);
   index_.assign(n_, 0);
   accel_.assign(2 * ((3 * static_cast<size_t>(n_) + 1) / 2), 0.0f);
@@ -198,11 +200,27 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
         use_gcc ? static_cast<float>(GccGain(fine_gcc_, sigma_s * m.sample_rate_hz * kGccUpsampling, gcc_sharpness))
                 : 0.0f;
     float* __restrict hk = delay_.data();
+    // Motion blur (ParticleFilterOptions::motion_blur): each particle's pair variance in
+    // sigma_p^2 units, 1 + r^2 V / sigma_p^2 with r its delay rate.
+    const double blur_var_s2 = use_gcc ? 0.0 : MotionBlurVariance(motion_blur_, m.window_time_var_s2, pm.peak_snr);
+    const bool blurred = blur_var_s2 > 0.0;
+    if (blurred) {
+      const auto blur = static_cast<float>(blur_var_s2 / (sigma_s * sigma_s)) * inv_c * inv_c;
+      float* __restrict wide = widen_.data();
 #pragma omp simd
-    for (int i = 0; i < n_; ++i) {
-      const RangeRate sensor = RangeAndRate(x[i] - sx, y[i] - sy, z[i] - sz, vx[i], vy[i], vz[i]);
-      // Delay at the instant the pair describes: d/2 before the frame centre (first order).
-      hk[i] = PairDelay(sensor.r, sensor.vr, r_ref[i], vr_ref[i], half_d, inv_c);
+      for (int i = 0; i < n_; ++i) {
+        const RangeRate sensor = RangeAndRate(x[i] - sx, y[i] - sy, z[i] - sz, vx[i], vy[i], vz[i]);
+        hk[i] = PairDelay(sensor.r, sensor.vr, r_ref[i], vr_ref[i], half_d, inv_c);
+        const float range_rate_mps = sensor.vr - vr_ref[i];
+        wide[i] = 1.0f + blur * range_rate_mps * range_rate_mps;
+      }
+    } else {
+#pragma omp simd
+      for (int i = 0; i < n_; ++i) {
+        const RangeRate sensor = RangeAndRate(x[i] - sx, y[i] - sy, z[i] - sz, vx[i], vy[i], vz[i]);
+        // Delay at the instant the pair describes: d/2 before the frame centre (first order).
+        hk[i] = PairDelay(sensor.r, sensor.vr, r_ref[i], vr_ref[i], half_d, inv_c);
+      }
     }
     {
       float sums[2];
@@ -226,10 +244,26 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
       // floor = (eps / W) / ((1 - eps) / (sigma sqrt(2 pi))).
       const double eps = outlier_probability_;
       const auto floor = static_cast<float>(eps / pair_span_s_[p] * sigma_s * 2.5066282746310002 / (1.0 - eps));
+      if (blurred) {
+        const float* __restrict wide = widen_.data();
+#pragma omp simd
+        for (int i = 0; i < n_; ++i) {
+          const float e = (d - hk[i]) * inv_sigma;
+          ll[i] += FastLog(FastExp(-0.5f * (e * e / wide[i] + FastLog(wide[i]))) + floor);
+        }
+      } else {
+#pragma omp simd
+        for (int i = 0; i < n_; ++i) {
+          const float e = (d - hk[i]) * inv_sigma;
+          ll[i] += FastLog(FastExp(-0.5f * e * e) + floor);
+        }
+      }
+    } else if (blurred) {
+      const float* __restrict wide = widen_.data();
 #pragma omp simd
       for (int i = 0; i < n_; ++i) {
         const float e = (d - hk[i]) * inv_sigma;
-        ll[i] += FastLog(FastExp(-0.5f * e * e) + floor);
+        ll[i] -= half_dof_plus_1 * FastLog(1.0f + e * e * inv_dof / wide[i]) + 0.5f * FastLog(wide[i]);
       }
     } else {
 #pragma omp simd

@@ -119,6 +119,8 @@ class ParticleSet {
   // reports, per pair, the innovation of the peak delay against the prior predicted delays.
   // sigmas_s holds one TDOA noise std per pair; pairs with used[p] == 0 are skipped.
   // `exponent` < 1 tempers the likelihood (log-weights += exponent x log-likelihood).
+  // With ParticleFilterOptions::motion_blur, the peak and mixture likelihoods widen by each
+  // particle's own delay rates (particle_filter.h); the innovations use sigmas_s alone.
   void Weigh(const Measurement& m, const std::vector<int>& used, Likelihood likelihood,
              const std::vector<double>& sigmas_s, double peak_dof, double gcc_sharpness,
              std::vector<InnovationMoments>* innovations, float exponent = 1.0f);
@@ -260,10 +262,12 @@ class ParticleSet {
   std::vector<int> pair_sensor_;
   std::vector<float> pair_span_s_;  // 2 max_delay_s per pair: the mixture's uniform width
   float outlier_probability_;
+  float motion_blur_;  // ParticleFilterOptions::motion_blur
   float inv_c_;
   Columns cur_, next_;
   AlignedVector<float> logw_, w_;                         // log-weights; normalised linear weights
   AlignedVector<float> r_ref_, vr_ref_, loglik_, delay_;  // scratch for Weigh
+  AlignedVector<float> widen_;                            // Weigh's motion blur, n when on
   std::array<AlignedVector<float>, 6> noise_;             // scratch: kernel draws
   AlignedVector<float> accel_;                            // scratch: 3N process-noise normals
   std::vector<float> fine_gcc_;                           // scratch: a pair's GCC upsampled

@@ -40,6 +40,19 @@ std::vector<float> TaperGains(int n, double taper_fraction) {
   return gains;
 }
 
+double WindowTimeVariance(const std::vector<float>& gains, int n, double sample_rate_hz) {
+  double sum_w = 0.0, sum_wt2 = 0.0;
+  const double centre = 0.5 * (n - 1);
+  for (int i = 0; i < n; ++i) {
+    const double gain = gains.empty() ? 1.0 : static_cast<double>(gains[static_cast<std::size_t>(i)]);
+    const double w = gain * gain;
+    const double t_s = (i - centre) / sample_rate_hz;
+    sum_w += w;
+    sum_wt2 += w * t_s * t_s;
+  }
+  return sum_w > 0.0 ? sum_wt2 / sum_w : 0.0;
+}
+
 int GccLayout::widest_lag() const {
   int widest = 0;
   for (int lag : max_lag_samples) widest = std::max(widest, lag);

@@ -58,4 +58,8 @@ StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOption
 // sample tapered (a rectangle): the CPU estimator's table and the source of G above.
 std::vector<float> TaperGains(int n, double taper_fraction);
 
+// Measurement::window_time_var_s2 for frames of n samples at fs under `gains` (TaperGains;
+// empty: a rectangle): the variance of t about the centre weighted by gain(t)^2.
+double WindowTimeVariance(const std::vector<float>& gains, int n, double sample_rate_hz);
+
 }  // namespace localizer::engine

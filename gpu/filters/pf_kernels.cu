@@ -138,6 +138,12 @@ __global__ void __launch_bounds__(kBlockThreads)
     if (pp.gcc_offset >= 0) {
       ll += pp.gcc_gain *
             engine::CatmullRomRead(gcc + pp.gcc_offset, engine::GccFineLag(h, pp.lag_scale, pp.lag0), pp.last_lag);
+    } else if (pp.blur_var_s2 > 0.0f) {
+      // Motion blur: this particle's delay rate widens the pair's likelihood (the engine's
+      // ParticleSet::Weigh).
+      const float rate = (rk.vr - ref.vr) * s.inv_c * pp.inv_sigma;
+      const float widen = 1.0f + pp.blur_var_s2 * rate * rate;
+      ll += StudentTLogLikelihood(e * rsqrtf(widen), s.inv_dof, s.half_dof_plus_1) - 0.5f * logf(widen);
     } else {
       ll += StudentTLogLikelihood(e, s.inv_dof, s.half_dof_plus_1);
     }

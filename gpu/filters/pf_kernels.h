@@ -79,6 +79,7 @@ struct PairParams {
   float lag0;          // first_lag_samples * upsampling
   float last_lag;      // fine length - 3 - 1e-3
   float gcc_gain;      // GccGain of the fine window
+  float blur_var_s2;   // > 0: motion blur, the share of V this pair takes (engine particle_set.h)
 };
 
 // One request of a Step, as the kernels read it.

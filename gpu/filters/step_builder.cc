@@ -102,6 +102,11 @@ Status FillSessionStep(const SessionConfig& config, const StepInputs& in, std::v
     pp.delay_s = static_cast<float>(pm.delay_s);
     pp.half_delay_s = 0.5f * pp.delay_s;
     pp.inv_sigma = static_cast<float>(1.0 / sigma_s);
+    // Motion blur widens the peak likelihood as the engine's filter does (particle_set.h).
+    if (o.likelihood != engine::Likelihood::kGcc) {
+      pp.blur_var_s2 =
+          static_cast<float>(engine::MotionBlurVariance(o.motion_blur, m->window_time_var_s2, pm.peak_snr));
+    }
     const bool use_gcc = o.likelihood == engine::Likelihood::kGcc && pm.gcc.size() >= 4;
     if (use_gcc) {
       if (!(m->sample_rate_hz > 0.0) || !std::isfinite(m->sample_rate_hz)) {

@@ -45,6 +45,27 @@ AudioSessionConfig BenchConfig(const Scenario& scenario, const SimResult& sim, i
   return config;
 }
 
+// Runs `config` over the benchmark's audio in 0.1-s blocks, as a streaming client would send
+// them, and sets the counters: CPU ms per audio-second, TDOA and filter stage us per frame.
+void MeasurePerAudioSecond(benchmark::State& state, const SimResult& sim, const AudioSessionConfig& config) {
+  const int64_t block = 4410;
+  const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
+  const double audio_s = static_cast<double>(blocks.size() * block) / sim.sample_rate_hz;
+  std::vector<Estimate> out;
+  bench::StageTotals totals;
+  for (auto _ : state) {
+    state.PauseTiming();  // session set-up (FFT planning, allocation) is not per-audio work
+    auto session = std::move(*Session::Create(config));
+    state.ResumeTiming();
+    bench::RunBlocks(*session, blocks, sim.channel_count, block, &out, &totals);
+  }
+  const double runs = static_cast<double>(state.iterations());
+  state.counters["ms_per_audio_s"] =
+      benchmark::Counter(runs * audio_s * 1e-3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["tdoa_us_per_frame"] = 1e6 * totals.tdoa_s / static_cast<double>(totals.frames);
+  state.counters["filter_us_per_frame"] = 1e6 * totals.filter_s / static_cast<double>(totals.frames);
+}
+
 void BM_PipelinePerAudioSecond(benchmark::State& state) {
   Scenario scenario;
   const SimResult& sim = Audio(44100.0, &scenario);
@@ -62,23 +83,7 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
   // Sixth: pair_fusion (1, the default: tracked frames fold the cross pairs into the reference
   // pairs' delays, pair_fusion.h; 0: the cost before it).
   config.pair_fusion = state.range(5) == 1;
-  // 0.1 s blocks, as a streaming client would send them.
-  const int64_t block = 4410;
-  const std::vector<std::vector<float>> blocks = bench::SplitIntoBlocks(sim, block);
-  const double audio_s = static_cast<double>(blocks.size() * block) / sim.sample_rate_hz;
-  std::vector<Estimate> out;
-  bench::StageTotals totals;
-  for (auto _ : state) {
-    state.PauseTiming();  // session set-up (FFT planning, allocation) is not per-audio work
-    auto session = std::move(*Session::Create(config));
-    state.ResumeTiming();
-    bench::RunBlocks(*session, blocks, sim.channel_count, block, &out, &totals);
-  }
-  const double runs = static_cast<double>(state.iterations());
-  state.counters["ms_per_audio_s"] =
-      benchmark::Counter(runs * audio_s * 1e-3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["tdoa_us_per_frame"] = 1e6 * totals.tdoa_s / static_cast<double>(totals.frames);
-  state.counters["filter_us_per_frame"] = 1e6 * totals.filter_s / static_cast<double>(totals.frames);
+  MeasurePerAudioSecond(state, sim, config);
   state.SetLabel(std::string(LikelihoodName(config.tracker.particle.likelihood)) +
                  (config.tracker.particle.single_motion() ? " one-std" : " levels+turns+speed") +
                  (config.cross_pairs_max_sensors >= 4 ? " cross-pairs" : "") +
@@ -88,6 +93,18 @@ void BM_PipelinePerAudioSecond(benchmark::State& state) {
 BENCHMARK(BM_PipelinePerAudioSecond)
     ->ArgsProduct({{4096}, {0, 1}, {0, 1}, {0, 4}, {0, 1}, {0, 1}})
     ->Unit(benchmark::kMillisecond);
+
+// The default session (/4096/0/1/4/1/1 above) with the particle filter's motion blur on (1)
+// and off (0, the default): what widening each particle's pairs by its own delay rates costs
+// (ParticleFilterOptions::motion_blur).
+void BM_PipelineMotionBlur(benchmark::State& state) {
+  Scenario scenario;
+  const SimResult& sim = Audio(44100.0, &scenario);
+  AudioSessionConfig config = BenchConfig(scenario, sim, 4096, Likelihood::kPeak);
+  config.tracker.particle.motion_blur = static_cast<double>(state.range(0));
+  MeasurePerAudioSecond(state, sim, config);
+}
+BENCHMARK(BM_PipelineMotionBlur)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 // Several sessions fed in turn, one 4096-sample block each, as the server's workers take
 // them: each block finds its session's state (particles, filter scratch, transform buffers)

@@ -54,6 +54,7 @@ struct Args {
   int delay_rates = -1;              // --delay-rates 0|1; < 0: the session default
   int closure = -1;                  // --closure 0|1; < 0: the session default
   int fusion = -1;                   // --fusion 0|1; < 0: the session default
+  double motion_blur = -1.0;         // --motion-blur K; < 0: the session default
   bool help = false;                 // --help: print the usage and exit 0
 };
 
@@ -74,6 +75,7 @@ void Adjust(const Args& a, const RandomSceneOptions& scene_options, AudioSession
   if (a.delay_rates >= 0) c->delay_rate_compensation = a.delay_rates == 1;
   if (a.closure >= 0) c->pair_closure = a.closure == 1;
   if (a.fusion >= 0) c->pair_fusion = a.fusion == 1;
+  if (a.motion_blur >= 0.0) c->tracker.particle.motion_blur = a.motion_blur;
   if (a.filter) c->tracker.kind = *a.filter;
   if (a.particles > 0) c->tracker.particle.particles = a.particles;
   if (a.manoeuvre_share >= 0.0) c->tracker.particle.manoeuvre_share = a.manoeuvre_share;
@@ -107,7 +109,7 @@ void Usage(FILE* out) {
       "                      [--likelihood peak|gcc|mixture] [--outlier-probability EPS]\n"
       "                      [--kernel-scale H] [--accel-levels FLOOR,CEILING,HZ] [--turn-rates MAX]\n"
       "                      [--speed-changes MAX] [--band-hint] [--frame-samples N] [--cross-pairs N]\n"
-      "                      [--delay-rates 0|1] [--closure 0|1] [--fusion 0|1]\n"
+      "                      [--delay-rates 0|1] [--closure 0|1] [--fusion 0|1] [--motion-blur K]\n"
       "                      [--trace SEED]\n"
       "Runs N random scenes (scene i has seed S*1000000+i) through an engine Session with a default\n"
       "config (no band hint) and scores each against the per-frame CRLB: time to acquire (error\n"
@@ -141,6 +143,8 @@ void Usage(FILE* out) {
       "move a reference pair they contradict (session_config.h, pair_closure; default 1).\n"
       "--fusion 0|1: arrays that measure the pairs without the reference fold every pair's peak\n"
       "into the reference pairs' delays on tracked frames (session_config.h, pair_fusion; default 1).\n"
+      "--motion-blur K: the particle filter widens each particle's pair likelihood by K x the spread its\n"
+      "own delay rate gives the frame's peak (particle_filter.h, motion_blur; default 0: off).\n"
       "--band-hint gives each session its scene's true source band (an oracle: what a perfect band\n"
       "estimate from the data would give; the campaign's default gives none).\n"
       "--trace SEED runs that one scene (a full seed, e.g. 1000021) and prints every frame: time,\n"
@@ -259,6 +263,10 @@ bool ParseArgs(int argc, char** argv, Args* a) {
       if (value != "0" && value != "1")
         return std::fprintf(stderr, "scene_campaign: --closure must be 0 or 1\n"), false;
       a->closure = value == "1" ? 1 : 0;
+    } else if (flag == "--motion-blur") {
+      a->motion_blur = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(a->motion_blur >= 0.0 && a->motion_blur <= 1.0))
+        return std::fprintf(stderr, "scene_campaign: --motion-blur must be in [0, 1]\n"), false;
     } else if (flag == "--fusion") {
       if (value != "0" && value != "1") return std::fprintf(stderr, "scene_campaign: --fusion must be 0 or 1\n"), false;
       a->fusion = value == "1" ? 1 : 0;

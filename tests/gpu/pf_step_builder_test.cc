@@ -142,6 +142,34 @@ TEST(PfStepBuilder, PeakPairsCarryDelayAndSigmaAndOnlyUsedPairsCount) {
   EXPECT_EQ(step.do_predict, 1);
 }
 
+// Motion blur (engine ParticleFilterOptions::motion_blur, off by default): a used pair carries the variance
+// the engine's filter gives its peak per (s/s)^2 of delay rate, K V with K = min(1, 2 /
+// peak_snr); a front end that states no window time (V = 0) leaves it off.
+TEST(PfStepBuilder, UsedPairsCarryTheEnginesMotionBlur) {
+  const engine::ArrayGeometry array = Tetrahedron(2.0, engine::Vec3::Zero(), 343.0);
+  engine::ParticleFilterOptions blurred = Options();
+  blurred.motion_blur = 1.0;  // off by default
+  SessionConfig config = *MakeSessionConfig(array, blurred);
+  engine::Measurement m = PeakMeasurement(array);
+  m.window_time_var_s2 = 0.02 * 0.1 * 0.1;
+  const int used[3] = {1, 1, 1};
+  const double sigmas[3] = {2e-5, 2e-5, 2e-5};
+  std::vector<float> gcc;
+  SessionStep step{};
+  ASSERT_TRUE(FillSessionStep(config, {0.0, &m, used, sigmas}, &gcc, &step).ok());
+  for (int p = 0; p < 3; ++p) {
+    EXPECT_FLOAT_EQ(step.pair[p].blur_var_s2, static_cast<float>(m.window_time_var_s2 * 2.0 / 30.0)) << p;
+  }
+  const engine::Measurement stated = m;
+  m.window_time_var_s2 = 0.0;
+  ASSERT_TRUE(FillSessionStep(config, {0.0, &m, used, sigmas}, &gcc, &step).ok());
+  for (int p = 0; p < 3; ++p) EXPECT_EQ(step.pair[p].blur_var_s2, 0.0f) << p;
+  // The default (off) leaves it out whatever the front end states.
+  config = *MakeSessionConfig(array, Options());
+  ASSERT_TRUE(FillSessionStep(config, {0.0, &stated, used, sigmas}, &gcc, &step).ok());
+  for (int p = 0; p < 3; ++p) EXPECT_EQ(step.pair[p].blur_var_s2, 0.0f) << p;
+}
+
 TEST(PfStepBuilder, BadMeasurementsAreInvalidArguments) {
   const engine::ArrayGeometry array = Tetrahedron(2.0, engine::Vec3::Zero(), 343.0);
   const SessionConfig config = *MakeSessionConfig(array, Options());

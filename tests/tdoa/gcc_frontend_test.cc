@@ -311,6 +311,29 @@ TEST(PhatCoherence, NoiseAloneReadsAsNoiseInPeakSnr) {
   EXPECT_LT(learnt_p95, 1.25 * phat_p95);
 }
 
+// Measurement::window_time_var_s2: the variance of time under the frame's squared taper (the
+// two channels' gains multiply in their cross-power), T^2 / 12 for a rectangle and 0.0200 T^2
+// for Hann, whose gain^2 is cos^4 (numerically integrated). The trackers' motion blur reads it.
+TEST(WindowTime, EveryMeasurementStatesItsFramesTimeSpread) {
+  const SignalSpec spec;
+  const double frame_s = spec.frame_samples / spec.sample_rate_hz;
+  struct Case {
+    double taper_fraction;
+    double want_over_t2;
+  };
+  for (const Case& c : {Case{0.0, 1.0 / 12.0}, Case{1.0, 0.0200}}) {
+    GccOptions o = Options(spec, true);
+    o.taper_fraction = c.taper_fraction;
+    auto gcc = GccPhatEstimator::Create(Tetrahedron(), o);
+    ASSERT_TRUE(gcc.ok()) << gcc.status().message();
+    const auto frame = DelayedNoiseFrame(spec, {0.0, 3.3, -7.6, 11.45}, 10.0, 5);
+    Measurement m;
+    ASSERT_TRUE((*gcc)->Estimate(frame.data(), spec.frame_samples, 0.0, &m).ok());
+    EXPECT_NEAR(m.window_time_var_s2 / (frame_s * frame_s), c.want_over_t2, 0.01 * c.want_over_t2)
+        << "taper " << c.taper_fraction;
+  }
+}
+
 TEST(GccOptions, NewOptionsAreValidatedNamingTheField) {
   GccOptions good;
   good.sample_rate_hz = 11025.0;
