@@ -200,8 +200,9 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
         use_gcc ? static_cast<float>(GccGain(fine_gcc_, sigma_s * m.sample_rate_hz * kGccUpsampling, gcc_sharpness))
                 : 0.0f;
     float* __restrict hk = delay_.data();
-    // Motion blur (ParticleFilterOptions::motion_blur): each particle's pair variance in
-    // sigma_p^2 units, 1 + r^2 V / sigma_p^2 with r its delay rate.
+    // The delay at the instant the pair describes: d/2 before the frame centre (first order).
+    // With motion blur (ParticleFilterOptions::motion_blur) also each particle's pair variance
+    // in sigma_p^2 units, 1 + K r^2 V / sigma_p^2 with r its delay rate.
     const double blur_var_s2 = use_gcc ? 0.0 : MotionBlurVariance(motion_blur_, m.window_time_var_s2, pm.peak_snr);
     const bool blurred = blur_var_s2 > 0.0;
     if (blurred) {
@@ -218,7 +219,6 @@ void ParticleSet::Weigh(const Measurement& m, const std::vector<int>& used, Like
 #pragma omp simd
       for (int i = 0; i < n_; ++i) {
         const RangeRate sensor = RangeAndRate(x[i] - sx, y[i] - sy, z[i] - sz, vx[i], vy[i], vz[i]);
-        // Delay at the instant the pair describes: d/2 before the frame centre (first order).
         hk[i] = PairDelay(sensor.r, sensor.vr, r_ref[i], vr_ref[i], half_d, inv_c);
       }
     }

@@ -29,18 +29,9 @@ float TaperNoiseFactor(int n, double taper_fraction) {
   return sum4 > 0.0 ? static_cast<float>(sum2 / std::sqrt(n * sum4)) : 1.0f;
 }
 
-}  // namespace
-
-std::vector<float> TaperGains(int n, double taper_fraction) {
-  const int edge = TaperEdgeSamples(n, static_cast<float>(taper_fraction));
-  std::vector<float> gains;
-  if (edge <= 0) return gains;
-  gains.reserve(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) gains.push_back(TaperGain(i, n, edge));
-  return gains;
-}
-
-double WindowTimeVariance(const std::vector<float>& gains, int n, double sample_rate_hz) {
+// sum w^2 t^2 / sum w^2 over the frame's taper w (gcc_layout.h), t seconds from its centre.
+double WindowTimeVariance(int n, double taper_fraction, double sample_rate_hz) {
+  const std::vector<float> gains = TaperGains(n, taper_fraction);
   double sum_w = 0.0, sum_wt2 = 0.0;
   const double centre = 0.5 * (n - 1);
   for (int i = 0; i < n; ++i) {
@@ -51,6 +42,17 @@ double WindowTimeVariance(const std::vector<float>& gains, int n, double sample_
     sum_wt2 += w * t_s * t_s;
   }
   return sum_w > 0.0 ? sum_wt2 / sum_w : 0.0;
+}
+
+}  // namespace
+
+std::vector<float> TaperGains(int n, double taper_fraction) {
+  const int edge = TaperEdgeSamples(n, static_cast<float>(taper_fraction));
+  std::vector<float> gains;
+  if (edge <= 0) return gains;
+  gains.reserve(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) gains.push_back(TaperGain(i, n, edge));
+  return gains;
 }
 
 int GccLayout::widest_lag() const {
@@ -91,6 +93,7 @@ StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOption
                            "] Hz holds no FFT bin (bin spacing " + Value(fs / layout.fft_size) + " Hz)");
   }
   layout.taper_noise_factor = TaperNoiseFactor(options.frame_samples, options.taper_fraction);
+  layout.window_time_var_s2 = WindowTimeVariance(options.frame_samples, options.taper_fraction, options.sample_rate_hz);
   layout.noise_floor_inverse =
       layout.taper_noise_factor * static_cast<float>(std::sqrt(2.0 * (layout.band_end_bin - layout.band_first_bin)));
 

@@ -17,6 +17,8 @@
 //           1 for a rectangle, 1.12 for the default Tukey 0.2, 1.94 for Hann): a taper
 //           correlates neighbouring bins, which widens R's noise-only spread by sqrt(G)
 //           (gcc_detection_test measures 1.04, 1.13 and 1.35 against 1.06, 1.16 and 1.39)
+//   window_time_var_s2 = sum w^2 t^2 / sum w^2 over the frame's samples, t from its centre
+//           (Measurement::window_time_var_s2: T^2 / 12 for a rectangle, 0.0200 T^2 for Hann)
 // Cost: O(pairs). Thread-safe (a pure function).
 #pragma once
 
@@ -38,6 +40,7 @@ struct GccLayout {
   int band_end_bin = 0;              // band_first_bin < band_end_bin <= bin_count
   float noise_floor_inverse = 0.0f;  // sqrt(2 * (band_end_bin - band_first_bin)) * taper_noise_factor
   float taper_noise_factor = 1.0f;   // 1 / sqrt(G), G as above: applies to any bin weighting
+  double window_time_var_s2 = 0.0;   // as above, s^2
   std::vector<int> max_lag_samples;  // L_p per pair, in [0, N/2 - 1 - kPeakHalfWidth]
   // Pairs of non-reference sensors measured for redundancy (GccOptions::cross_pairs_max_sensors;
   // empty unless the array has at most that many sensors and the GCC is kept): sensors
@@ -57,9 +60,5 @@ StatusOr<GccLayout> ComputeGccLayout(const ArrayGeometry& array, const GccOption
 // The frame's taper as n gains (gcc_math.h's TaperGain), empty when taper_fraction leaves no
 // sample tapered (a rectangle): the CPU estimator's table and the source of G above.
 std::vector<float> TaperGains(int n, double taper_fraction);
-
-// Measurement::window_time_var_s2 for frames of n samples at fs under `gains` (TaperGains;
-// empty: a rectangle): the variance of t about the centre weighted by gain(t)^2.
-double WindowTimeVariance(const std::vector<float>& gains, int n, double sample_rate_hz);
 
 }  // namespace localizer::engine

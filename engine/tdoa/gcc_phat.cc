@@ -97,7 +97,6 @@ Status GccPhatEstimator::Impl::Init() {
   if (!computed.ok()) return computed.status();
   layout = std::move(computed).value();
   taper_gains = TaperGains(options.frame_samples, options.taper_fraction);
-  window_time_var_s2 = WindowTimeVariance(taper_gains, options.frame_samples, options.sample_rate_hz);
   warped.assign(options.frame_samples, 0.0f);
   const int fft_size = layout.fft_size;
   spectrum_stride = (2 * layout.bin_count + 15) / 16 * 16;
@@ -347,7 +346,7 @@ Status GccPhatEstimator::Estimate(const float* frame, int frame_samples, double 
   if (s.options.weighting == Weighting::kPhatShare) s.FindShares();
   out->t_s = t_s;
   out->sample_rate_hz = s.options.sample_rate_hz;
-  out->window_time_var_s2 = s.window_time_var_s2;
+  out->window_time_var_s2 = s.layout.window_time_var_s2;
   const int pairs = s.array.pair_count();
   out->pairs.resize(pairs);
   // The cross pairs along with the frame's when asked for, unless warped readings may still

@@ -67,7 +67,6 @@ struct GccPhatEstimator::Impl {
   GccLayout layout;
   int spectrum_stride = 0;           // floats from one channel's spectrum to the next (64-byte multiple)
   std::vector<float> taper_gains;    // the frame's taper, TaperGain per sample; empty without one
-  double window_time_var_s2 = 0.0;   // Measurement::window_time_var_s2 of this taper
   std::vector<double> energy;        // sum of squares per channel, this frame
   std::vector<double> sensor_rate;   // SetDelayRates per sensor (the reference's 0); empty: none
   std::vector<float> warped;         // frame_samples: one channel read along its delay rate

@@ -388,7 +388,7 @@ void GccBatch::Impl::Fill(const GccJob& job, int frame, Status* first_error) {
   engine::Measurement* out = job.out;
   out->t_s = job.t_s;
   out->sample_rate_hz = plan.options().sample_rate_hz;
-  out->window_time_var_s2 = plan.window_time_var_s2();
+  out->window_time_var_s2 = plan.layout().window_time_var_s2;
   out->pairs.resize(pairs);
   std::vector<GccPairTail>& tails = job.tails != nullptr ? *job.tails : own_tails;
   tails.resize(static_cast<std::size_t>(pairs));

@@ -2,7 +2,6 @@
 
 #include <functional>
 
-#include "engine/tdoa/gcc_layout.h"
 #include "engine/tdoa/peak_math.h"
 
 namespace localizer::gpu {
@@ -36,8 +35,6 @@ StatusOr<GccPlan> GccPlan::Create(const engine::ArrayGeometry& array, const engi
   plan.options_ = options;
   plan.layout_ = std::move(layout).value();
   plan.reference_sensor_ = array.reference_sensor();
-  plan.window_time_var_s2_ = engine::WindowTimeVariance(
-      engine::TaperGains(options.frame_samples, options.taper_fraction), options.frame_samples, options.sample_rate_hz);
   for (int p = 0; p < array.pair_count(); ++p) {
     plan.sensor_of_pair_.push_back(array.sensor_of_pair(p));
     if (options.keep_gcc)

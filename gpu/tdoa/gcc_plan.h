@@ -56,8 +56,6 @@ class GccPlan {
   // Floats of GCC window a frame returns: sum over pairs of 2 (L_p + K) + 1 with keep_gcc
   // (K = engine::kPeakHalfWidth lags either side for the candidates' refinement), else 0.
   std::size_t gcc_floats() const { return gcc_floats_; }
-  // engine::Measurement::window_time_var_s2 of this plan's frames and taper.
-  double window_time_var_s2() const { return window_time_var_s2_; }
 
  private:
   GccPlan() = default;
@@ -67,7 +65,6 @@ class GccPlan {
   int reference_sensor_ = 0;
   std::vector<int> sensor_of_pair_;
   std::size_t gcc_floats_ = 0;
-  double window_time_var_s2_ = 0.0;
 };
 
 }  // namespace localizer::gpu
